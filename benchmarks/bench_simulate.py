@@ -1,0 +1,98 @@
+"""Speed of springlab's simulate path, side by side in one run.
+
+1. springlab.simulate vs raw mujoco.rollout on the same compiled slider model
+   and integrator (steps/s and their ratio; the target is >= 0.9).
+2. The slider's default validated setting (rk4, 2 ms) on `free` against
+   scipy's solve_ivp methods tuned to the same accuracy (max relative error
+   <= 1e-6 against the exact solution): wall time of each.
+
+Run: python benchmarks/bench_simulate.py
+"""
+
+from __future__ import annotations
+
+import time
+
+import mujoco
+import numpy as np
+from mujoco import rollout
+
+import springlab
+from springlab import analytic, scenes
+from springlab.simulate import initial_state, simulate
+
+
+def best_of(fn, repeat=7):
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - start)
+    return min(times)
+
+
+def simulate_vs_rollout() -> None:
+    scene = scenes.get("slider")
+    scenario = scene.scenario("free")
+    params = scene.resolve(scenario, {})
+    model = scene.build(params, scenario)
+    duration, dt = 20.0, scene.dt
+    steps = round(duration / dt)
+    setup = scene.setup(model, params, scenario, steps, dt)
+    print(f"1) simulate vs raw rollout, slider, {steps} steps per run")
+    print(f"   {'integrator':<13}{'springlab steps/s':>20}{'raw rollout steps/s':>22}{'ratio':>8}")
+    for integrator in ("rk4", "euler", "implicitfast"):
+        springlab_time = best_of(lambda: simulate(model, integrator=integrator, dt=dt, duration=duration,
+                                                  qpos=setup.qpos, qvel=setup.qvel, control=setup.control))
+        data = mujoco.MjData(model)
+        state0 = initial_state(model, setup.qpos, setup.qvel)
+        control = np.zeros((1, steps, model.nu))
+        raw_time = best_of(lambda: rollout.rollout(model, data, state0[None], control, nstep=steps))
+        print(f"   {integrator:<13}{steps / springlab_time:>20,.0f}{steps / raw_time:>22,.0f}"
+              f"{raw_time / springlab_time:>8.2f}")
+
+
+def default_setting_vs_scipy() -> None:
+    from scipy.integrate import solve_ivp
+
+    result = springlab.run("slider", "free")
+    m, k, d = (result.parameters[n] for n in ("mass", "stiffness", "damping"))
+    x0, v0 = result.parameters["x0"], result.parameters["v0"]
+    duration = result.summary["duration"]
+    t_eval = result.time
+    x_exact, _ = analytic.free_response(t_eval, m, k, d, x0, v0)
+    scale = np.max(np.abs(x_exact))
+
+    springlab_time = best_of(lambda: springlab.run("slider", "free"))
+    springlab_error = result.summary["errors"]["slider_pos"]["max_rel"]
+    print("\n2) slider 'free' to max relative error <= 1e-6, whole call timed")
+    print(f"   springlab rk4 dt={result.summary['dt']:g}: {springlab_time * 1e3:8.2f} ms,"
+          f" error {springlab_error:.2e} (stepping alone {result.summary['wall_time_s'] * 1e3:.2f} ms)")
+
+    def rhs(t, y):
+        return [y[1], -(k * y[0] + d * y[1]) / m]
+
+    fastest = None
+    for method in ("RK45", "DOP853", "LSODA", "Radau", "BDF"):
+        # loosen rtol until the error just meets 1e-6: the cheapest honest setting per method
+        chosen = None
+        for rtol in 10.0 ** -np.arange(4, 13.5, 0.5):
+            sol = solve_ivp(rhs, (0, duration), [x0, v0], method=method, rtol=rtol, atol=rtol * 1e-3,
+                            dense_output=True)
+            error = np.max(np.abs(sol.sol(t_eval)[0] - x_exact)) / scale
+            if error <= 1e-6:
+                chosen = rtol
+                break
+        if chosen is None:
+            print(f"   scipy {method:<7}: could not reach 1e-6")
+            continue
+        elapsed = best_of(lambda: solve_ivp(rhs, (0, duration), [x0, v0], method=method, rtol=chosen,
+                                            atol=chosen * 1e-3, dense_output=True).sol(t_eval), repeat=5)
+        print(f"   scipy {method:<7} rtol={chosen:.0e}: {elapsed * 1e3:8.2f} ms, error {error:.2e}")
+        fastest = elapsed if fastest is None else min(fastest, elapsed)
+    print(f"   ratio fastest scipy / springlab = {fastest / springlab_time:.2f}")
+
+
+if __name__ == "__main__":
+    simulate_vs_rollout()
+    default_setting_vs_scipy()

@@ -1,0 +1,27 @@
+"""springlab: MuJoCo scenes of the textbook vibration problems, checked against exact solutions.
+
+    >>> import springlab
+    >>> result = springlab.run("slider", "free", integrator="rk4", dt=1e-3, duration=5.0,
+    ...                        mass=2.0, stiffness=800.0, damping=4.0, x0=0.05)
+    >>> result.summary["passed"]
+    True
+"""
+
+from . import analytic, errors
+from .api import Result, run, validate
+from .errors import BadInputError, DivergedError, SpringlabError, UnknownNameError
+from .scenes import SCENES
+
+__all__ = [
+    "analytic",
+    "errors",
+    "run",
+    "validate",
+    "Result",
+    "SCENES",
+    "SpringlabError",
+    "BadInputError",
+    "UnknownNameError",
+    "DivergedError",
+]
+__version__ = "0.1.0"

@@ -1,0 +1,242 @@
+"""springlab's Python API: run a scene's scenario, validate scenes.
+
+    >>> import springlab
+    >>> result = springlab.run("slider", "exercise")
+    >>> result.summary["quantities"]["regime"]
+    'overdamped'
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from . import compare, scenes
+from .errors import BadInputError, DivergedError
+from .scene import Reference, Scene, Scenario
+from .simulate import Trajectory, check_timing, integrator_id, simulate, stability_limit
+
+#: a run whose error exceeds this many times its signal has blown up, flagged or not
+BLOWUP_RATIO = 1e3
+
+
+@dataclasses.dataclass
+class Result:
+    """One run of a scenario: the trajectory, its reference, errors and summary.
+
+    Attributes:
+      scene, scenario: the names run.
+      parameters: parameter name -> value used (SI).
+      time: (n,) [s], one row per physics step, t = 0 included.
+      pos, vel: joint -> simulated position [m] / velocity [m/s] series.
+      ref_pos, ref_vel: joint -> exact series (empty where no reference exists).
+      summary: the summary.json dict (see README).
+      model: the compiled MjModel that ran.
+      trajectory: the raw Trajectory.
+    """
+
+    scene: str
+    scenario: str
+    parameters: dict[str, float]
+    time: np.ndarray
+    pos: dict[str, np.ndarray]
+    vel: dict[str, np.ndarray]
+    ref_pos: dict[str, np.ndarray]
+    ref_vel: dict[str, np.ndarray]
+    summary: dict[str, Any]
+    model: mujoco.MjModel
+    trajectory: Trajectory
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """trajectory.csv's columns in order: time, <joint>_pos/_vel, then the references."""
+        out = {"time": self.time}
+        for joint in self.pos:
+            out[f"{joint}_pos"] = self.pos[joint]
+            out[f"{joint}_vel"] = self.vel[joint]
+        for joint in self.ref_pos:
+            out[f"{joint}_pos_ref"] = self.ref_pos[joint]
+            out[f"{joint}_vel_ref"] = self.ref_vel[joint]
+        return out
+
+
+def prepare(scene: str | Scene, scenario: str | None, parameters: dict[str, Any]):
+    """Resolve names and parameters; return (Scene, Scenario, params)."""
+    scene = scenes.get(scene) if isinstance(scene, str) else scene
+    chosen = scene.scenario(scenario)
+    return scene, chosen, scene.resolve(chosen, parameters)
+
+
+def run(
+    scene: str,
+    scenario: str | None = None,
+    *,
+    integrator: str | None = None,
+    dt: float | None = None,
+    duration: float | None = None,
+    tol: float | None = None,
+    **parameters: Any,
+) -> Result:
+    """Simulate a scenario headless in MuJoCo and compare it with its exact solution.
+
+    Args:
+      scene: scene name (see `springlab list`).
+      scenario: scenario name (None: the scene's default).
+      integrator: one of 'euler', 'implicit', 'implicitfast', 'rk4', 'discrete'
+        (None: the scene's validated default).
+      dt: timestep [s] (None: the scene's validated default).
+      duration: simulated time [s] (None: the scenario's).
+      tol: relative accuracy [-] to hold the run to instead of the integrator's
+        predicted error (see springlab.compare).
+      **parameters: scene parameters in SI units, e.g. mass=2.0 [kg].
+
+    Returns:
+      The Result; `result.summary["passed"]` says whether every compared column
+      is within its tolerance.
+
+    Raises:
+      BadInputError: unknown names, non-physical values, bad dt/duration.
+      DivergedError: the simulation blew up (nothing is returned for it).
+    """
+    scene_obj, chosen, params = prepare(scene, scenario, parameters)
+    integrator = scene_obj.integrator if integrator is None else integrator
+    integrator_id(integrator)
+    dt = scene_obj.dt if dt is None else dt
+    duration = chosen.duration if duration is None else duration
+    steps = check_timing(dt, duration)
+    if tol is not None and not (isinstance(tol, (int, float)) and math.isfinite(tol) and tol > 0):
+        raise BadInputError(f"tol must be a finite number > 0 (relative error), got {tol!r}")
+    model = scene_obj.build(params, chosen)
+    setup = scene_obj.setup(model, params, chosen, steps, dt)
+    try:
+        trajectory = simulate(model, integrator=integrator, dt=dt, duration=duration, qpos=setup.qpos,
+                              qvel=setup.qvel, act=setup.act, control=setup.control)
+    except DivergedError as error:
+        raise DivergedError(f"{error}{_stability_advice(scene_obj, model, params, chosen, integrator, dt)}") from None
+    return _result(scene_obj, chosen, params, model, trajectory, tol)
+
+
+def _result(scene: Scene, scenario: Scenario, params, model, trajectory: Trajectory,
+            tol: float | None = None) -> Result:
+    columns = scene.joint_columns(model, trajectory)
+    pos = {j: c[0] for j, c in columns.items()}
+    vel = {j: c[1] for j, c in columns.items()}
+    reference = scene.reference(model, params, scenario, trajectory.time) if scenario.exact else None
+    errors, tolerance, basis, passed = {}, None, "", None
+    if reference is not None:
+        simulated = {f"{j}_{k}": (pos if k == "pos" else vel)[j] for j in reference.pos for k in ("pos", "vel")}
+        exact = {f"{j}_{k}": (reference.pos if k == "pos" else reference.vel)[j]
+                 for j in reference.pos for k in ("pos", "vel")}
+        errors = compare.column_errors(simulated, exact)
+        worst = max(e["max_rel"] for e in errors.values())
+        if not math.isfinite(worst) or worst > BLOWUP_RATIO:
+            raise DivergedError(
+                f"simulation diverged: error {worst:.3g} times the signal ({trajectory.integrator},"
+                f" dt = {trajectory.dt:g} s){_stability_advice(scene, model, params, scenario, trajectory.integrator, trajectory.dt)}"
+            )
+        if tol is not None:
+            per_column = {column: tol for column in errors}
+            basis = "requested tolerance"
+        elif reference.system is not None:
+            per_column = compare.tolerances(reference, trajectory.integrator, trajectory.dt, trajectory.time)
+            basis = compare.TOLERANCE_BASIS
+        else:
+            per_column = {column: reference.tolerance for column in errors}
+            basis = reference.tolerance_basis
+        tolerance = max(per_column.values())
+        passed = all(errors[c]["max_rel"] <= per_column[c] for c in errors)
+    summary = {
+        "scene": scene.name,
+        "scenario": scenario.name,
+        "integrator": trajectory.integrator,
+        "dt": trajectory.dt,
+        "duration": float(trajectory.time[-1]),
+        "steps": trajectory.steps,
+        "wall_time_s": trajectory.wall_time_s,
+        "parameters": dict(params),
+        "quantities": scene.quantities(model, params, scenario, trajectory),
+        "errors": errors,
+        "tolerance": tolerance,
+        "tolerance_basis": basis,
+        "passed": passed,
+    }
+    return Result(
+        scene=scene.name,
+        scenario=scenario.name,
+        parameters=dict(params),
+        time=trajectory.time,
+        pos=pos,
+        vel=vel,
+        ref_pos=dict(reference.pos) if reference else {},
+        ref_vel=dict(reference.vel) if reference else {},
+        summary=summary,
+        model=model,
+        trajectory=trajectory,
+    )
+
+
+def _stability_advice(scene: Scene, model, params, scenario, integrator: str, dt: float) -> str:
+    """': omega*dt = ... exceeds the <integrator> stability limit ...; use ...' or ''."""
+    worst = None
+    for omega, zeta in scene.modes(model, params, scenario):
+        limit = stability_limit(integrator, zeta)
+        ratio = omega * dt / limit
+        if worst is None or ratio > worst[0]:
+            worst = (ratio, omega, zeta, limit)
+    if worst is None:
+        return ""
+    ratio, omega, zeta, limit = worst
+    if not math.isfinite(limit):
+        return f": omega*dt = {omega * dt:.4g} (zeta = {zeta:.3g})"
+    verdict = "exceeds" if ratio > 1 else "is within"
+    return (
+        f": omega*dt = {omega * dt:.4g} {verdict} the {integrator} stability limit {limit:.4g}"
+        f" (omega = {omega:.4g} rad/s, zeta = {zeta:.3g}); use dt < {limit / omega:.3g} s or integrator 'discrete'"
+    )
+
+
+def validate(
+    scene_names: list[str] | None = None,
+    *,
+    integrator: str | None = None,
+    dt: float | None = None,
+) -> list[dict[str, Any]]:
+    """Run every scenario that has an exact reference at the scene's validated setting.
+
+    Args:
+      scene_names: scenes to validate (None: all).
+      integrator, dt: override the scenes' default setting.
+
+    Returns:
+      One row per scenario: scene, scenario, integrator, dt, steps, max_rel_error,
+      tolerance, tolerance_basis, passed, wall_time_s.
+    """
+    names = list(scenes.SCENES) if not scene_names else scene_names
+    rows = []
+    for name in names:
+        scene = scenes.get(name)
+        for scenario in scene.scenarios.values():
+            if not scenario.exact:
+                continue
+            rows.append(validation_row(run(name, scenario.name, integrator=integrator, dt=dt)))
+    return rows
+
+
+def validation_row(result: Result) -> dict[str, Any]:
+    """The `validate` table row of a run that has an exact reference."""
+    s = result.summary
+    return {
+        "scene": s["scene"],
+        "scenario": s["scenario"],
+        "integrator": s["integrator"],
+        "dt": s["dt"],
+        "steps": s["steps"],
+        "max_rel_error": max(e["max_rel"] for e in s["errors"].values()),
+        "tolerance": s["tolerance"],
+        "tolerance_basis": s["tolerance_basis"],
+        "passed": s["passed"],
+        "wall_time_s": s["wall_time_s"],
+    }

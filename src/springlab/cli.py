@@ -1,0 +1,202 @@
+"""The `springlab` command line: argparse only, every command calls the library.
+
+Exit codes: 0 ok; 1 a validation fell outside its tolerance; 2 bad input;
+3 the simulation diverged (nothing written). Errors are one line on stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+import sys
+import time
+from collections.abc import Callable, Sequence
+from typing import Any
+
+from . import api, demo, outputs, scenes
+from .errors import BadInputError, SpringlabError
+from .simulate import INTEGRATORS
+
+EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_DIVERGED = 0, 1, 2, 3
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors and exit code 2."""
+
+    def error(self, message: str) -> None:  # noqa: D401 - argparse hook
+        raise BadInputError(f"{message} (see '{self.prog} --help')")
+
+
+def _parse_sets(pairs: Sequence[str]) -> dict[str, str]:
+    """['mass=2', ...] -> {'mass': '2'}; values are checked by the scene."""
+    out = {}
+    for pair in pairs or ():
+        name, sep, value = pair.partition("=")
+        if not sep or not name.strip():
+            raise BadInputError(f"--set takes NAME=VALUE, got {pair!r}")
+        out[name.strip()] = value.strip()
+    return out
+
+
+def _scene_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("scene", help="scene name (see 'springlab list')")
+    parser.add_argument("scenario", nargs="?", help="scenario name (default: the scene's first)")
+    parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                        help="override a parameter, SI units (repeatable)")
+
+
+def _timing_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--integrator", choices=None, metavar="NAME",
+                        help=f"one of {', '.join(INTEGRATORS)} (default: the scene's validated one)")
+    parser.add_argument("--dt", type=float, metavar="SECONDS", help="timestep [s]")
+    parser.add_argument("--duration", type=float, metavar="SECONDS", help="simulated time [s]")
+    parser.add_argument("--tol", type=float, metavar="TOL",
+                        help="relative tolerance to hold the run to (default: the integrator's predicted error)")
+
+
+def _print_json(value: Any) -> None:
+    print(outputs.dumps(value))
+
+
+# -- commands -----------------------------------------------------------------
+
+
+def cmd_list(args) -> int:
+    catalogue = []
+    for scene in scenes.SCENES.values():
+        catalogue.append({
+            "scene": scene.name,
+            "title": scene.title,
+            "joints": list(scene.joints),
+            "default_integrator": scene.integrator,
+            "default_dt": scene.dt,
+            "scenarios": {s.name: s.description for s in scene.scenarios.values()},
+            "parameters": {p.name: {"unit": p.unit, "description": p.description, "valid": p.valid_range()}
+                           for p in scene.parameters.values()},
+        })
+    if args.json:
+        _print_json(catalogue)
+        return EXIT_OK
+    for entry in catalogue:
+        print(f"{entry['scene']}: {entry['title']}")
+        print(f"  default setting: {entry['default_integrator']}, dt = {entry['default_dt']:g} s")
+        print("  scenarios:")
+        for name, text in entry["scenarios"].items():
+            print(f"    {name:<14} {text}")
+        print("  parameters:")
+        for name, p in entry["parameters"].items():
+            print(f"    {name:<16} [{p['unit']}] {p['description']} ({p['valid']})")
+    return EXIT_OK
+
+
+def cmd_run(args) -> int:
+    if args.record_every < 1:
+        raise BadInputError(f"--record-every must be an integer >= 1, got {args.record_every}")
+    result = api.run(args.scene, args.scenario, integrator=args.integrator, dt=args.dt,
+                     duration=args.duration, tol=args.tol, **_parse_sets(args.set))
+    if args.output:
+        outputs.write_run(args.output, result, every=args.record_every)
+    summary = result.summary
+    if args.json:
+        _print_json(summary)
+    else:
+        _print_run(summary, args.output)
+    return EXIT_FAILED if summary["passed"] is False else EXIT_OK
+
+
+def _print_run(summary: dict, output: str | None) -> None:
+    print(f"{summary['scene']} / {summary['scenario']}: {summary['integrator']}, dt = {summary['dt']:g} s,"
+          f" {summary['steps']} steps in {summary['wall_time_s'] * 1e3:.1f} ms")
+    for name, value in summary["quantities"].items():
+        print(f"  {name:<26} {value:.10g}" if isinstance(value, float) else f"  {name:<26} {value}")
+    for column, error in summary["errors"].items():
+        print(f"  error {column:<20} max_abs {error['max_abs']:.3e}  max_rel {error['max_rel']:.3e}")
+    if summary["tolerance"] is not None:
+        verdict = "PASS" if summary["passed"] else "FAIL (outside tolerance)"
+        print(f"  tolerance {summary['tolerance']:.3e}: {verdict}")
+    if output:
+        print(f"  wrote {pathlib.Path(output) / 'trajectory.csv'} and summary.json")
+
+
+def _validation_table(rows: list[dict]) -> str:
+    lines = [f"{'scene':<13}{'scenario':<14}{'integrator':<11}{'dt [s]':>9}{'max rel err':>13}"
+             f"{'tolerance':>11}  result"]
+    for r in rows:
+        lines.append(f"{r['scene']:<13}{r['scenario']:<14}{r['integrator']:<11}{r['dt']:>9.2g}"
+                     f"{r['max_rel_error']:>13.2e}{r['tolerance']:>11.2e}  {'pass' if r['passed'] else 'FAIL'}")
+    return "\n".join(lines)
+
+
+def cmd_validate(args) -> int:
+    rows = api.validate(args.scenes, integrator=args.integrator, dt=args.dt)
+    if args.json:
+        _print_json(rows)
+    else:
+        print(_validation_table(rows))
+        if rows:
+            print(f"tolerance = {rows[0]['tolerance_basis']}")
+        failed = sum(not r["passed"] for r in rows)
+        print(f"{len(rows) - failed} passed, {failed} failed")
+    return EXIT_FAILED if any(not r["passed"] for r in rows) else EXIT_OK
+
+
+def cmd_demo(args) -> int:
+    """The main job: validate every scene and write everything under the output folder."""
+    start = time.perf_counter()
+    state = demo.run_demo(args.output)
+    print(_validation_table(state.validation))
+    failed = sum(not r["passed"] for r in state.validation)
+    print(f"{len(state.validation) - failed} passed, {failed} failed; wrote {len(state.artifacts)} files"
+          f" under {state.out}/ in {time.perf_counter() - start:.1f} s")
+    return EXIT_FAILED if failed else EXIT_OK
+
+
+# -- parser --------------------------------------------------------------------
+
+COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="springlab", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser, metavar="COMMAND")
+
+    p = sub.add_parser("list", help="scenes, scenarios and parameters")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    COMMANDS["list"] = cmd_list
+
+    p = sub.add_parser("run", help="simulate one scenario and compare it with its exact solution")
+    _scene_arguments(p)
+    _timing_arguments(p)
+    p.add_argument("--output", metavar="DIR", help="write DIR/trajectory.csv and DIR/summary.json")
+    p.add_argument("--record-every", type=int, default=1, metavar="N", help="keep every N-th step in the CSV")
+    p.add_argument("--json", action="store_true", help="print summary.json")
+    COMMANDS["run"] = cmd_run
+
+    p = sub.add_parser("validate", help="check every exact scenario against its tolerance")
+    p.add_argument("scenes", nargs="*", help="scene names (default: all)")
+    p.add_argument("--integrator", metavar="NAME", help="override the scenes' integrator")
+    p.add_argument("--dt", type=float, metavar="SECONDS", help="override the scenes' timestep [s]")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    COMMANDS["validate"] = cmd_validate
+
+    p = sub.add_parser("demo", help="the main job: validate everything, write out/")
+    p.add_argument("--output", default="out", metavar="DIR", help="output folder (default: out)")
+    COMMANDS["demo"] = cmd_demo
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the `springlab` console script; returns the exit code."""
+    try:
+        args = build_parser().parse_args(argv)
+        return COMMANDS[args.command](args)
+    except SpringlabError as error:
+        print(f"springlab: error: {error}", file=sys.stderr)
+        return error.exit_code
+    except KeyboardInterrupt:
+        print("springlab: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,77 @@
+"""`springlab demo`, the main job: validate every scene and write everything a user looks at.
+
+The demo runs in steps. The core step validates every scene and writes each
+scenario's trajectory.csv and summary.json under out/<scene>/<scenario>/.
+Features that add to the demo (videos, plots, trade-off charts, design
+studies) append a step to STEPS; each step takes the output folder and returns
+the artifacts it wrote, for the report.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import pathlib
+import time
+from collections.abc import Callable
+
+from . import api, outputs, scenes
+
+
+@dataclasses.dataclass
+class Artifact:
+    """A file the demo wrote, for the report.
+
+    Attributes:
+      path: the file, relative to the output folder.
+      kind: 'data', 'plot', 'video' or 'report'.
+      title: one line saying what it shows.
+      scene, scenario: what it belongs to ('' for cross-scene artifacts).
+    """
+
+    path: str
+    kind: str
+    title: str
+    scene: str = ""
+    scenario: str = ""
+
+
+@dataclasses.dataclass
+class DemoState:
+    """What the steps share: the output folder, the validation rows and every run's Result."""
+
+    out: pathlib.Path
+    validation: list[dict] = dataclasses.field(default_factory=list)
+    results: dict[tuple[str, str], api.Result] = dataclasses.field(default_factory=dict)
+    artifacts: list[Artifact] = dataclasses.field(default_factory=list)
+
+
+def core_step(state: DemoState) -> list[Artifact]:
+    """Validate every scene; run every scenario at its default setting and write its outputs."""
+    written = []
+    for scene in scenes.SCENES.values():
+        for scenario in scene.scenarios.values():
+            result = api.run(scene.name, scenario.name)
+            state.results[(scene.name, scenario.name)] = result
+            if scenario.exact:
+                state.validation.append(api.validation_row(result))
+            folder = pathlib.Path(scene.name) / scenario.name
+            outputs.write_run(state.out / folder, result)
+            written.append(Artifact(str(folder / "trajectory.csv"), "data", "trajectory", scene.name, scenario.name))
+            written.append(Artifact(str(folder / "summary.json"), "data", "summary", scene.name, scenario.name))
+    outputs.write_text_files(state.out, {"validation.json": outputs.dumps(state.validation) + "\n"})
+    written.append(Artifact("validation.json", "data", "validation table"))
+    return written
+
+
+#: the demo's steps, in order; features append theirs
+STEPS: list[Callable[[DemoState], list[Artifact]]] = [core_step]
+
+
+def run_demo(out: str | pathlib.Path, log: Callable[[str], None] = print) -> DemoState:
+    """Run every step into `out`; return the shared state (validation rows, artifacts)."""
+    state = DemoState(out=outputs.prepare_directory(out))
+    for step in STEPS:
+        start = time.perf_counter()
+        state.artifacts.extend(step(state))
+        log(f"demo: {step.__name__} done in {time.perf_counter() - start:.1f} s")
+    return state

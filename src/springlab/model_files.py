@@ -1,0 +1,19 @@
+"""Where the MJCF files are: inside the installed package, or models/ of a checkout."""
+
+from __future__ import annotations
+
+import pathlib
+
+_PACKAGED = pathlib.Path(__file__).resolve().parent / "models"
+_CHECKOUT = pathlib.Path(__file__).resolve().parents[2] / "models"
+
+
+def directory() -> pathlib.Path:
+    """The folder holding the scene MJCF files."""
+    # a wheel carries springlab/models; an editable install reads the checkout's models/
+    return _PACKAGED if _PACKAGED.is_dir() else _CHECKOUT
+
+
+def path(scene: str) -> pathlib.Path:
+    """Path of the MJCF file of `scene` (models/<scene>.xml)."""
+    return directory() / f"{scene}.xml"

@@ -1,0 +1,109 @@
+"""Writing results: trajectory.csv and summary.json, atomically.
+
+Every file is written to a temporary name in its target folder and renamed
+into place, so an interrupted or failed write never leaves a partial file.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import math
+import os
+import pathlib
+import tempfile
+from collections.abc import Iterator, Mapping
+from typing import Any
+
+import numpy as np
+
+from .errors import BadInputError
+
+
+def prepare_directory(directory: str | os.PathLike) -> pathlib.Path:
+    """Create `directory` (and parents) or raise BadInputError saying why it cannot be."""
+    path = pathlib.Path(directory)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise BadInputError(f"cannot create output directory {str(path)!r}: {error.strerror or error}") from None
+    if not os.access(path, os.W_OK | os.X_OK):
+        raise BadInputError(f"output directory {str(path)!r} is not writable")
+    return path
+
+
+@contextlib.contextmanager
+def atomic_path(target: str | os.PathLike) -> Iterator[pathlib.Path]:
+    """Yield a temporary path beside `target`; rename it onto `target` on success, delete it on failure."""
+    target = pathlib.Path(target)
+    try:
+        handle, temporary = tempfile.mkstemp(prefix=f".{target.name}.", suffix=target.suffix or ".tmp",
+                                             dir=target.parent)
+    except OSError as error:
+        raise BadInputError(f"cannot write {str(target)!r}: {error.strerror or error}") from None
+    os.close(handle)
+    temporary = pathlib.Path(temporary)
+    try:
+        yield temporary
+        os.replace(temporary, target)
+    except BaseException:
+        temporary.unlink(missing_ok=True)
+        raise
+
+
+def json_ready(value: Any) -> Any:
+    """Plain JSON types; inf/nan become strings so the file stays standard JSON."""
+    if isinstance(value, Mapping):
+        return {str(k): json_ready(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [json_ready(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return json_ready(value.tolist())
+    if isinstance(value, (np.floating, float)):
+        value = float(value)
+        return value if math.isfinite(value) else str(value)
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, np.bool_):
+        return bool(value)
+    return value
+
+
+def dumps(value: Any) -> str:
+    """JSON text of `value` (indented, full float precision)."""
+    return json.dumps(json_ready(value), indent=2)
+
+
+def csv_text(columns: Mapping[str, np.ndarray], every: int = 1) -> str:
+    """CSV with a header row and every `every`-th row at full double precision (%.17g)."""
+    names = list(columns)
+    table = np.column_stack([np.asarray(columns[n], float)[::every] for n in names])
+    buffer = io.StringIO()
+    buffer.write(",".join(names) + "\n")
+    np.savetxt(buffer, table, fmt="%.17g", delimiter=",")
+    return buffer.getvalue()
+
+
+def write_text_files(directory: str | os.PathLike, files: Mapping[str, str]) -> list[pathlib.Path]:
+    """Write name -> text into `directory`; all files appear, or none of them do."""
+    path = prepare_directory(directory)
+    written: list[pathlib.Path] = []
+    try:
+        for name, text in files.items():
+            with atomic_path(path / name) as temporary:
+                temporary.write_text(text)
+            written.append(path / name)
+    except BaseException:
+        for done in written:
+            done.unlink(missing_ok=True)
+        raise
+    return written
+
+
+def write_run(directory: str | os.PathLike, result, every: int = 1) -> list[pathlib.Path]:
+    """Write a Result's trajectory.csv and summary.json into `directory`."""
+    return write_text_files(directory, {
+        "trajectory.csv": csv_text(result.columns(), every),
+        "summary.json": dumps(result.summary) + "\n",
+    })

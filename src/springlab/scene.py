@@ -1,0 +1,270 @@
+"""What every scene provides, and the shared machinery to build and check it.
+
+A scene is one MJCF file under models/ and one module of the same name under
+springlab/scenes/. The module subclasses `Scene` and says:
+
+* its parameters (SI, with units and valid ranges) and which MJCF values they
+  read back from the compiled model as defaults;
+* its scenarios (named questions, with parameter presets and a duration);
+* how parameters edit the model (MjSpec edits, so the physics stays in MJCF);
+* the initial state and the open-loop control sequence of a scenario;
+* the exact reference where one exists, and the scenario's named quantities.
+
+Data flows one way: parameters -> MjModel -> Trajectory -> (reference, errors)
+-> summary, plots and video.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from . import model_files
+from .errors import ParameterError, UnknownNameError
+from .simulate import Trajectory, quiet_mujoco
+
+
+@dataclasses.dataclass(frozen=True)
+class Parameter:
+    """A scene parameter in SI units.
+
+    Attributes:
+      name: as used by `--set NAME=VALUE` and keyword arguments.
+      unit: SI unit, e.g. 'kg', 'N/m', 'N s/m', 'm', 'm/s', 'Hz', '-' for none.
+      description: one line.
+      minimum: lowest valid value (None: unbounded).
+      minimum_inclusive: whether `minimum` itself is valid.
+      maximum: highest valid value (None: unbounded).
+      default: default value, or None when it is read back from the model.
+    """
+
+    name: str
+    unit: str
+    description: str
+    minimum: float | None = None
+    minimum_inclusive: bool = True
+    maximum: float | None = None
+    default: float | None = None
+
+    def valid_range(self) -> str:
+        """Human-readable valid range, e.g. '> 0 kg'."""
+        unit = "" if self.unit == "-" else f" {self.unit}"
+        parts = []
+        if self.minimum is not None:
+            parts.append(f"{'>=' if self.minimum_inclusive else '>'} {self.minimum:g}")
+        if self.maximum is not None:
+            parts.append(f"<= {self.maximum:g}")
+        return (" and ".join(parts) or "any finite value") + unit
+
+    def check(self, value: Any) -> float:
+        """Return `value` as a float, or raise ParameterError saying what is valid."""
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            raise ParameterError(
+                f"{self.name} must be a number {self.valid_range()}, got {value!r}"
+            ) from None
+        low_ok = (
+            self.minimum is None
+            or number > self.minimum
+            or (self.minimum_inclusive and number == self.minimum)
+        )
+        high_ok = self.maximum is None or number <= self.maximum
+        if not math.isfinite(number) or not low_ok or not high_ok:
+            raise ParameterError(
+                f"{self.name} must be a finite number {self.valid_range()}, got {value!r}"
+            )
+        return number
+
+
+@dataclasses.dataclass(frozen=True)
+class Scenario:
+    """A named question a scene answers.
+
+    Attributes:
+      name: scenario name.
+      description: one line.
+      duration: default simulated time [s].
+      presets: parameter values this scenario sets (user overrides win).
+      derive: optional function(params, explicitly_set_names) -> extra values,
+        for presets that depend on other parameters (e.g. damping from a ratio).
+      exact: whether an exact reference exists (validated by `validate`).
+    """
+
+    name: str
+    description: str
+    duration: float
+    presets: Mapping[str, float] = dataclasses.field(default_factory=dict)
+    derive: Callable[[dict[str, float], set[str]], dict[str, float]] | None = None
+    exact: bool = True
+
+
+@dataclasses.dataclass
+class Reference:
+    """The exact solution of a scenario at the trajectory's times.
+
+    Attributes:
+      pos, vel: joint name -> exact position [m or rad] and velocity [m/s or rad/s].
+      system: for linear scenes, the matrix A [1/s] of the autonomous system
+        z' = A z that generated the reference (forcing included as generator
+        states); None otherwise. Used to derive the error bound.
+      states: (n, dim) exact z(t), or None.
+      rows: joint name -> (row of its position, row of its velocity) in z.
+      tolerance: for scenes without `system`, the relative tolerance [-] every
+        compared column is held to, and `tolerance_basis` says why.
+    """
+
+    pos: dict[str, np.ndarray]
+    vel: dict[str, np.ndarray]
+    system: np.ndarray | None = None
+    states: np.ndarray | None = None
+    rows: dict[str, tuple[int, int]] = dataclasses.field(default_factory=dict)
+    tolerance: float | None = None
+    tolerance_basis: str = ""
+
+
+@dataclasses.dataclass
+class Setup:
+    """Initial state and inputs of one run.
+
+    Attributes:
+      qpos, qvel, act: initial state (None: the model's rest state).
+      control: (nu,) or (steps, nu) open-loop controls, held over each step.
+    """
+
+    qpos: np.ndarray | None = None
+    qvel: np.ndarray | None = None
+    act: np.ndarray | None = None
+    control: np.ndarray | None = None
+
+
+class Scene:
+    """Base class of the scenes; subclasses fill in the class attributes and hooks."""
+
+    #: scene name, also the MJCF file stem under models/.
+    name: str = ""
+    #: one-line question the scene answers.
+    title: str = ""
+    #: joints whose pos/vel are reported (columns of trajectory.csv).
+    joints: tuple[str, ...] = ()
+    parameters: Mapping[str, Parameter] = {}
+    scenarios: Mapping[str, Scenario] = {}
+    default_scenario: str = ""
+    #: the validated default setting.
+    integrator: str = "rk4"
+    dt: float = 1e-3
+    #: named camera for rendering.
+    camera: str | None = None
+
+    # -- names ---------------------------------------------------------------
+
+    def scenario(self, name: str | None) -> Scenario:
+        """The scenario called `name` (None: the default one)."""
+        name = self.default_scenario if name is None else name
+        if name not in self.scenarios:
+            raise UnknownNameError(f"scenario of {self.name}", name, self.scenarios)
+        return self.scenarios[name]
+
+    def model_spec(self) -> mujoco.MjSpec:
+        """A fresh MjSpec of this scene's MJCF."""
+        with quiet_mujoco():
+            return mujoco.MjSpec.from_file(str(model_files.path(self.name)))
+
+    # -- parameters ----------------------------------------------------------
+
+    def model_defaults(self, model: mujoco.MjModel) -> dict[str, float]:
+        """Parameter defaults read back from the compiled MJCF (override)."""
+        return {}
+
+    @functools.cache
+    def _mjcf_defaults(self) -> dict[str, float]:
+        with quiet_mujoco():
+            return self.model_defaults(self.model_spec().compile())
+
+    def resolve(self, scenario: Scenario, overrides: Mapping[str, Any]) -> dict[str, float]:
+        """Final parameter values: MJCF defaults < scenario presets < overrides.
+
+        Raises:
+          UnknownNameError: an override names no parameter of this scene.
+          ParameterError: a value is not a finite number in its valid range.
+        """
+        for name in overrides:
+            if name not in self.parameters:
+                raise UnknownNameError(f"parameter of {self.name}", name, self.parameters)
+        checked = {name: self.parameters[name].check(v) for name, v in overrides.items()}
+        values = {p.name: p.default for p in self.parameters.values() if p.default is not None}
+        values.update(self._mjcf_defaults())
+        values.update(scenario.presets)
+        values.update(checked)
+        if scenario.derive is not None:
+            derived = scenario.derive(dict(values), set(checked))
+            values.update({k: v for k, v in derived.items() if k not in checked})
+        values = {name: self.parameters[name].check(v) for name, v in values.items()}
+        self.check_consistency(values, scenario)
+        return values
+
+    def check_consistency(self, params: dict[str, float], scenario: Scenario) -> None:
+        """Raise ParameterError for combinations that are non-physical (override)."""
+
+    # -- model and run -------------------------------------------------------
+
+    def edit(self, spec: mujoco.MjSpec, params: dict[str, float], scenario: Scenario) -> None:
+        """Apply parameters to the spec (override)."""
+
+    def build(self, params: dict[str, float], scenario: Scenario) -> mujoco.MjModel:
+        """Compile the model for these parameters and scenario."""
+        spec = self.model_spec()
+        self.edit(spec, params, scenario)
+        with quiet_mujoco():
+            return spec.compile()
+
+    def setup(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, steps: int, dt: float
+    ) -> Setup:
+        """Initial state and controls of a run (override)."""
+        return Setup()
+
+    def reference(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, time: np.ndarray
+    ) -> Reference | None:
+        """Exact solution at `time` [s], or None where none exists (override)."""
+        return None
+
+    def quantities(
+        self,
+        model: mujoco.MjModel,
+        params: dict[str, float],
+        scenario: Scenario,
+        trajectory: Trajectory,
+    ) -> dict[str, Any]:
+        """Named results of the scenario, SI, names ending in their unit (override)."""
+        return {}
+
+    def modes(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[tuple[float, float]]:
+        """[(natural frequency [rad/s], damping ratio [-])] of the run, for stability advice."""
+        return []
+
+    def phase_field(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario
+    ) -> Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None:
+        """For a scene with one reported joint: (x [m], v [m/s]) -> (dx/dt [m/s], dv/dt [m/s^2])
+        of the unforced equations of motion, for phase-plane vector fields (None: no plane)."""
+        return None
+
+    def equilibria(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[dict]:
+        """Equilibria of the unforced motion: [{"x": position [m], "stable": bool}]."""
+        return []
+
+    def joint_columns(self, model: mujoco.MjModel, trajectory: Trajectory) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """Reported joint name -> (position, velocity) series of a trajectory."""
+        columns = {}
+        for joint in self.joints:
+            j = model.joint(joint)
+            columns[joint] = (trajectory.qpos[:, j.qposadr[0]], trajectory.qvel[:, j.dofadr[0]])
+        return columns

@@ -1,0 +1,281 @@
+"""Headless MuJoCo runs: integrators, timesteps, batched rollouts, divergence.
+
+One run is one call to `mujoco.rollout` on the calling thread: no Python work
+per step. Inputs are open-loop control sequences (one row per step, held over
+the step) and MJCF-native generators, so RK4 keeps its order wherever the scene
+says so.
+
+MuJoCo resets a blown-up simulation *silently* (time jumps back, qpos zeroed).
+`simulate` checks every run for that, for non-finite values and for MuJoCo's
+BADQPOS/BADQVEL/BADQACC warnings, and raises `DivergedError` instead of
+returning such a run.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import math
+import threading
+import time as _time
+from collections.abc import Iterator, Mapping
+
+import mujoco
+import numpy as np
+from mujoco import rollout as _rollout
+
+from .errors import BadInputError, DivergedError, UnknownNameError
+
+#: MuJoCo's five integrators by springlab name.
+INTEGRATORS: Mapping[str, int] = {
+    "euler": int(mujoco.mjtIntegrator.mjINT_EULER),
+    "implicit": int(mujoco.mjtIntegrator.mjINT_IMPLICIT),
+    "implicitfast": int(mujoco.mjtIntegrator.mjINT_IMPLICITFAST),
+    "rk4": int(mujoco.mjtIntegrator.mjINT_RK4),
+    "discrete": int(mujoco.mjtIntegrator.mjINT_DISCRETE),
+}
+
+#: Order of accuracy of each integrator on smooth problems.
+ORDERS: Mapping[str, int] = {
+    "euler": 1,
+    "implicit": 1,
+    "implicitfast": 1,
+    "rk4": 4,
+    "discrete": 1,
+}
+
+_FULL = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
+_CTRL = int(mujoco.mjtState.mjSTATE_CTRL)
+_BAD_WARNINGS = (
+    int(mujoco.mjtWarning.mjWARN_BADQPOS),
+    int(mujoco.mjtWarning.mjWARN_BADQVEL),
+    int(mujoco.mjtWarning.mjWARN_BADQACC),
+)
+
+#: Most steps one run may take (memory: 8 bytes x state size per step).
+MAX_STEPS = 20_000_000
+
+
+@dataclasses.dataclass
+class Trajectory:
+    """A recorded run, one row per physics step, t = 0 included.
+
+    Attributes:
+      time: (n,) simulation time [s].
+      qpos: (n, nq) joint positions [m or rad].
+      qvel: (n, nv) joint velocities [m/s or rad/s].
+      act: (n, na) actuator activations (units of the actuator).
+      integrator: springlab integrator name.
+      dt: timestep [s].
+      wall_time_s: wall time of the stepping itself [s].
+    """
+
+    time: np.ndarray
+    qpos: np.ndarray
+    qvel: np.ndarray
+    act: np.ndarray
+    integrator: str
+    dt: float
+    wall_time_s: float
+
+    @property
+    def steps(self) -> int:
+        """Number of physics steps taken."""
+        return len(self.time) - 1
+
+
+_log = threading.local()
+
+
+def _collect_warning(message: str) -> None:
+    # MuJoCo's default handler prints and writes MUJOCO_LOG.TXT into the cwd;
+    # springlab reports problems itself, in one clear line.
+    getattr(_log, "messages", []).append(message)
+
+
+@contextlib.contextmanager
+def quiet_mujoco() -> Iterator[list[str]]:
+    """Route MuJoCo's warnings into a list for the duration (no log file, no print)."""
+    previous = mujoco.get_mju_user_warning()
+    _log.messages = []
+    mujoco.set_mju_user_warning(_collect_warning)
+    try:
+        yield _log.messages
+    finally:
+        mujoco.set_mju_user_warning(previous)
+
+
+def integrator_id(name: str) -> int:
+    """MuJoCo's enum value for an integrator name; UnknownNameError lists the valid names."""
+    try:
+        return INTEGRATORS[name]
+    except KeyError:
+        raise UnknownNameError("integrator", str(name), INTEGRATORS) from None
+
+
+def check_timing(dt: float, duration: float) -> int:
+    """Validate dt [s] and duration [s]; return the number of steps."""
+    for label, value in (("dt", dt), ("duration", duration)):
+        if not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+            raise BadInputError(f"{label} must be a finite number > 0 s, got {value!r}")
+    steps = round(duration / dt)
+    if steps < 1:
+        raise BadInputError(f"duration {duration} s is shorter than one step of dt = {dt} s")
+    if steps > MAX_STEPS:
+        raise BadInputError(
+            f"duration/dt = {steps} steps exceeds the limit of {MAX_STEPS}; use a larger dt"
+            " or a shorter duration"
+        )
+    return steps
+
+
+def initial_state(
+    model: mujoco.MjModel,
+    qpos: np.ndarray | None = None,
+    qvel: np.ndarray | None = None,
+    act: np.ndarray | None = None,
+) -> np.ndarray:
+    """The full physics state vector at t = 0 (defaults: the model's qpos0, rest)."""
+    data = mujoco.MjData(model)
+    if qpos is not None:
+        data.qpos[:] = qpos
+    if qvel is not None:
+        data.qvel[:] = qvel
+    if act is not None:
+        data.act[:] = act
+    state = np.empty(mujoco.mj_stateSize(model, _FULL))
+    mujoco.mj_getState(model, data, state, _FULL)
+    return state
+
+
+def simulate(
+    model: mujoco.MjModel,
+    *,
+    integrator: str,
+    dt: float,
+    duration: float,
+    qpos: np.ndarray | None = None,
+    qvel: np.ndarray | None = None,
+    act: np.ndarray | None = None,
+    control: np.ndarray | None = None,
+    data: mujoco.MjData | None = None,
+) -> Trajectory:
+    """Run `model` headless and record every step.
+
+    Args:
+      model: compiled model; its opt.integrator and opt.timestep are set here.
+      integrator: one of INTEGRATORS.
+      dt: timestep [s].
+      duration: simulated time [s]; steps = round(duration / dt).
+      qpos, qvel, act: initial state (defaults: the model's rest state).
+      control: (nu,) constant or (steps, nu) per-step controls [actuator units];
+        row k is held over step k, from t_k to t_k + dt.
+      data: scratch MjData to reuse (optional).
+
+    Returns:
+      The Trajectory, t = 0 included.
+
+    Raises:
+      DivergedError: MuJoCo flagged or silently reset the run, or it went non-finite.
+    """
+    steps = check_timing(dt, duration)
+    model.opt.integrator = integrator_id(integrator)
+    model.opt.timestep = dt
+    state0 = initial_state(model, qpos, qvel, act)
+    controls = None
+    if model.nu:
+        controls = np.zeros((1, model.nu)) if control is None else np.asarray(control, float)
+        controls = np.ascontiguousarray(np.broadcast_to(controls, (steps, model.nu)))[None]
+    data = mujoco.MjData(model) if data is None else data
+    out = np.empty((1, steps, state0.size))
+    sensors = np.empty((1, steps, model.nsensordata))
+    with quiet_mujoco() as messages:
+        start = _time.perf_counter()
+        # skip_checks: the shapes are right by construction, and the checks cost per call
+        _rollout.rollout([model], [data], state0[None], controls, control_spec=_CTRL, state=out,
+                         sensordata=sensors, nstep=steps, skip_checks=True)
+        wall = _time.perf_counter() - start
+    states = np.concatenate([state0[None], out[0]])
+    trajectory = _split(model, states, integrator, dt, wall)
+    check_diverged(trajectory, dt, messages)
+    return trajectory
+
+
+def _split(model, states, integrator, dt, wall) -> Trajectory:
+    nq, nv, na = model.nq, model.nv, model.na
+    return Trajectory(
+        time=states[:, 0],
+        qpos=states[:, 1 : 1 + nq],
+        qvel=states[:, 1 + nq : 1 + nq + nv],
+        act=states[:, 1 + nq + nv : 1 + nq + nv + na],
+        integrator=integrator,
+        dt=dt,
+        wall_time_s=wall,
+    )
+
+
+def divergence_step(trajectory: Trajectory) -> int | None:
+    """Index of the first step that shows a blow-up or a silent MuJoCo reset, else None."""
+    t = trajectory.time
+    dt = trajectory.dt
+    # a reset sets time back to 0; rollout then repeats its last record
+    bad_time = np.flatnonzero(np.abs(np.diff(t) - dt) > 1e-6 * dt + 1e-12 * np.abs(t[1:]))
+    finite = np.isfinite(trajectory.qpos).all(axis=1) & np.isfinite(trajectory.qvel).all(axis=1)
+    candidates = []
+    if bad_time.size:
+        candidates.append(int(bad_time[0]) + 1)
+    if not finite.all():
+        candidates.append(int(np.flatnonzero(~finite)[0]))
+    return min(candidates) if candidates else None
+
+
+def check_diverged(trajectory: Trajectory, dt: float, messages: list[str] | None = None) -> None:
+    """Raise DivergedError if the run blew up (see module docstring)."""
+    index = divergence_step(trajectory)
+    flagged = any(("unstable" in m.lower() or "nan" in m.lower()) for m in (messages or []))
+    if index is None and not flagged:
+        return
+    when = trajectory.time[index - 1] + dt if index else float("nan")
+    where = f" at t = {when:.6g} s" if index else ""
+    raise DivergedError(f"simulation diverged{where} ({trajectory.integrator}, dt = {dt:g} s)")
+
+
+def _rk4_amplification(z: np.ndarray) -> np.ndarray:
+    return 1 + z + z**2 / 2 + z**3 / 6 + z**4 / 24
+
+
+def stability_limit(integrator: str, zeta: float) -> float:
+    """Largest omega_n*dt [-] at which `integrator` is stable on m x'' + d x' + k x = 0.
+
+    euler, implicit and implicitfast treat joint damping implicitly and springs
+    explicitly: stable while omega*dt < 2 zeta + 2 sqrt(zeta^2 + 1).
+    rk4 is explicit in both: the bound where a root's hλ leaves RK4's stability
+    region (2.83 at zeta = 0, shrinking like 2.79/(2 zeta) for heavy damping).
+    discrete makes springs implicit: unconditionally stable (inf).
+
+    Args:
+      integrator: one of INTEGRATORS.
+      zeta: damping ratio [-], >= 0.
+    """
+    integrator_id(integrator)
+    if integrator == "discrete":
+        return math.inf
+    if integrator != "rk4":
+        return 2 * zeta + 2 * math.sqrt(zeta * zeta + 1)
+    # roots of s^2 + 2 zeta s + 1 (omega_n = 1), then the first omega*dt whose
+    # amplification leaves the unit disc, by a scan and a bisection
+    disc = np.sqrt(complex(zeta * zeta - 1))
+    roots = np.array([-zeta + disc, -zeta - disc])
+
+    def unstable(h: float) -> bool:
+        return bool(np.max(np.abs(_rk4_amplification(h * roots))) > 1 + 1e-13)
+
+    grid = np.linspace(1e-3, 3.0, 3000) / max(1.0, zeta + math.sqrt(max(zeta * zeta - 1, 0)))
+    first = next((h for h in grid if unstable(h)), None)
+    if first is None:
+        return math.inf
+    low, high = first - (grid[1] - grid[0]), first
+    for _ in range(60):
+        mid = 0.5 * (low + high)
+        low, high = (low, mid) if unstable(mid) else (mid, high)
+    return low

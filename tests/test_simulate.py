@@ -1,0 +1,74 @@
+"""The simulate path: same numbers as a plain mj_step loop, deterministic, never a silent blow-up."""
+
+import math
+
+import mujoco
+import numpy as np
+import pytest
+
+import springlab
+from springlab import scenes
+from springlab.errors import DivergedError
+from springlab.simulate import INTEGRATORS, simulate, stability_limit
+
+
+def _slider_model(scenario="step"):
+    scene = scenes.get("slider")
+    chosen = scene.scenario(scenario)
+    params = scene.resolve(chosen, {})
+    model = scene.build(params, chosen)
+    return scene, chosen, params, model
+
+
+@pytest.mark.parametrize("integrator", list(INTEGRATORS))
+@pytest.mark.parametrize("scenario", ["step", "harmonic"])
+def test_rollout_path_is_bit_identical_to_a_plain_mj_step_loop(integrator, scenario):
+    scene, chosen, params, model = _slider_model(scenario)
+    setup = scene.setup(model, params, chosen, 500, 1e-3)
+    trajectory = simulate(model, integrator=integrator, dt=1e-3, duration=0.5, qpos=setup.qpos,
+                          qvel=setup.qvel, control=setup.control)
+    data = mujoco.MjData(model)
+    data.qpos[:], data.qvel[:], data.ctrl[:] = setup.qpos, setup.qvel, setup.control
+    qpos = [data.qpos.copy()]
+    for _ in range(500):
+        mujoco.mj_step(model, data)
+        qpos.append(data.qpos.copy())
+    np.testing.assert_array_equal(trajectory.qpos, np.array(qpos))
+    assert trajectory.time[0] == 0.0 and trajectory.time[-1] == pytest.approx(0.5)
+
+
+def test_runs_are_deterministic():
+    a = springlab.run("slider", "harmonic", duration=1.0)
+    b = springlab.run("slider", "harmonic", duration=1.0)
+    np.testing.assert_array_equal(a.pos["slider"], b.pos["slider"])
+    np.testing.assert_array_equal(a.vel["slider"], b.vel["slider"])
+
+
+def test_a_blow_up_that_mujoco_resets_silently_is_reported_as_divergence():
+    # euler at omega*dt = 3 > 2.1: MuJoCo hits its 1e10 limit and auto-resets qpos to 0
+    with pytest.raises(DivergedError, match="exceeds the euler stability limit"):
+        springlab.run("slider", "free", integrator="euler", dt=0.3, duration=60.0)
+
+
+def test_growth_below_mujoco_limits_is_still_divergence():
+    # rk4 just past its limit grows slowly: no MuJoCo warning yet, but the error dwarfs the signal
+    with pytest.raises(DivergedError, match="rk4 stability limit"):
+        springlab.run("slider", "undamped", integrator="rk4", dt=0.3, duration=30.0)
+
+
+def test_discrete_integrator_never_diverges_even_far_past_explicit_limits():
+    result = springlab.run("slider", "undamped", integrator="discrete", dt=1.0, duration=100.0)
+    assert np.all(np.abs(result.pos["slider"]) <= result.parameters["x0"] + 1e-12)
+
+
+@pytest.mark.parametrize("zeta", [0.0, 0.05, 1.0, 10.0])
+def test_euler_family_limit_is_2zeta_plus_2sqrt_zeta2_plus_1(zeta):
+    expected = 2 * zeta + 2 * math.sqrt(zeta**2 + 1)
+    for name in ("euler", "implicit", "implicitfast"):
+        assert stability_limit(name, zeta) == pytest.approx(expected)
+
+
+def test_rk4_limit_is_2_sqrt2_undamped():
+    # |1 - y^2/2 + y^4/24 + i(y - y^3/6)| = 1 at y = 2 sqrt(2)
+    assert stability_limit("rk4", 0.0) == pytest.approx(2 * math.sqrt(2), rel=1e-9)
+    assert math.isinf(stability_limit("discrete", 3.0))
