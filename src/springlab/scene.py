@@ -261,6 +261,10 @@ class Scene:
         """Equilibria of the unforced motion: [{"x": position [m], "stable": bool}]."""
         return []
 
+    def separatrices(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Separatrix curves of the unforced phase plane: [(x [m], v [m/s]) arrays] (none by default)."""
+        return []
+
     def joint_columns(self, model: mujoco.MjModel, trajectory: Trajectory) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """Reported joint name -> (position, velocity) series of a trajectory."""
         columns = {}
