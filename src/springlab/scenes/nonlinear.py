@@ -208,11 +208,30 @@ def level_crossings(level: float, k1: float, k3: float) -> np.ndarray:
     return np.unique(roots)
 
 
+def crossings_through(x_ref: float, k1: float, k3: float) -> np.ndarray:
+    """Real positions x [m] where V(x) = V(x_ref), ascending, double roots once.
+
+    One root pair is +-x_ref itself; the other follows from Vieta (the two values of x^2 add up
+    to -2 k1 / k3), so no root is lost to the ill-conditioning of a near-double root.
+    """
+    squares = [x_ref * x_ref] + ([-2.0 * k1 / k3 - x_ref * x_ref] if k3 != 0 else [])
+    roots = [sign * math.sqrt(u) for u in squares if u >= 0 for sign in (-1.0, 1.0)]
+    return np.unique(roots)
+
+
+def gap_below(x_ref: float, x, k1: float, k3: float):
+    """V(x_ref) - V(x) [J], factored as (x_ref^2 - x^2) (k1/2 + k3 (x_ref^2 + x^2) / 4): exact
+    next to x_ref, and next to a saddle x_ref, where it vanishes quadratically."""
+    x = np.asarray(x, float)
+    return (x_ref * x_ref - x * x) * (0.5 * k1 + 0.25 * k3 * (x_ref * x_ref + x * x))
+
+
 def turning_points(x0: float, v0: float, mass: float, k1: float, k3: float) -> tuple[float, float]:
     """(a, b) [m]: the turning points that bracket the motion through (x0, v0); -inf/inf when the
     motion is unbounded on that side, (x0, x0) at an equilibrium."""
     level = float(energy(x0, v0, mass, k1, k3))
-    roots = level_crossings(level, k1, k3)
+    # released from rest, x0 is a turning point: take the roots through it exactly
+    roots = crossings_through(x0, k1, k3) if v0 == 0 else level_crossings(level, k1, k3)
     scale = max(abs(x0), math.sqrt(abs(k1 / k3)) if k3 else 0.0, 1e-300)
     near = np.abs(roots - x0) <= 1e-9 * scale
     if v0 == 0:
@@ -229,36 +248,52 @@ def turning_points(x0: float, v0: float, mass: float, k1: float, k3: float) -> t
     return (float(left[-1]) if left.size else -math.inf, float(right[0]) if right.size else math.inf)
 
 
-def _gauss_legendre(integrand, low: float, high: float, rtol: float = 1e-14, max_nodes: int = 1 << 14):
-    """(integral, error estimate) of a smooth integrand on [low, high], doubling Gauss-Legendre nodes."""
-    previous = None
-    n = 32
-    while True:
-        nodes, weights = np.polynomial.legendre.leggauss(n)
-        half = 0.5 * (high - low)
-        value = float(half * np.sum(weights * integrand(low + half * (nodes + 1.0))))
-        if previous is not None:
-            error = abs(value - previous)
-            if error <= rtol * abs(value) or 2 * n > max_nodes:
-                return value, error
-        previous, n = value, 2 * n
+def tanh_sinh(integrand, half_width: float, rtol: float = 1e-14, max_level: int = 12) -> tuple[float, float]:
+    """(integral, error estimate) of integrand(left, right) over an interval of half-width
+    `half_width`, where left/right are the distances of the abscissa from the interval's ends.
+
+    Tanh-sinh (double-exponential) quadrature: converges double-exponentially for analytic
+    integrands even with integrable endpoint singularities, and passes the endpoint distances
+    directly (1 -+ tanh computed as 2 / (1 + e^(+-2y))) so nothing cancels next to an end. The
+    step halves until two levels agree to `rtol`; the error estimate is their difference.
+    """
+
+    def level(step: float) -> float:
+        t = np.arange(-4.0, 4.0 + step / 2, step)
+        y = 0.5 * math.pi * np.sinh(t)
+        with np.errstate(over="ignore"):
+            right = half_width * 2.0 / (1.0 + np.exp(2.0 * y))  # half_width (1 - s)
+            left = half_width * 2.0 / (1.0 + np.exp(-2.0 * y))  # half_width (1 + s)
+            weight = 0.5 * math.pi * np.cosh(t) / np.cosh(y) ** 2
+        keep = (left > 0) & (right > 0) & (weight > 0)
+        return float(step * half_width * np.sum(weight[keep] * integrand(left[keep], right[keep])))
+
+    step, previous = 0.5, level(0.5)
+    for _ in range(max_level):
+        step /= 2
+        value = level(step)
+        error = abs(value - previous)
+        if error <= rtol * abs(value):
+            break
+        previous = value
+    return value, error
 
 
 def oscillation_period(mass: float, k1: float, k3: float, x0: float, v0: float) -> tuple[float, float]:
     """Period [s] of the undamped, unforced motion through (x0, v0) from the energy integral,
     T = 2 int_a^b dx / sqrt(2 (E - V(x)) / m), and its quadrature error estimate [s].
 
-    The substitution x = (a + b)/2 + (b - a)/2 sin(theta) and the exact factorization
-    E - V(x) = (x - a)(b - x) R(x) turn the integrand into 1 / sqrt(2 R(x) / m), smooth on
-    [-pi/2, pi/2], so Gauss-Legendre converges exponentially. inf when the motion is unbounded,
-    nan at an equilibrium.
+    With the turning points a < b, E - V(x) = (x - a)(b - x) R(x) exactly (R a quadratic, or
+    k1/2), so the integrand is 1 / sqrt(2 (x - a)(b - x) R(x) / m): the square-root endpoint
+    singularities are factored out and handled by tanh-sinh quadrature, which is also robust
+    near the separatrix, where R nearly vanishes at an end and the period grows like a logarithm.
+    inf when the motion is unbounded, nan at an equilibrium.
     """
     a, b = turning_points(x0, v0, mass, k1, k3)
     if not (math.isfinite(a) and math.isfinite(b)):
         return math.inf, 0.0
     if a == b:
         return math.nan, 0.0
-    mid, half = 0.5 * (a + b), 0.5 * (b - a)
     if k3 == 0:
         def reduced(x):
             return np.full_like(x, 0.5 * k1)
@@ -269,10 +304,11 @@ def oscillation_period(mass: float, k1: float, k3: float, x0: float, v0: float) 
         def reduced(x):
             return 0.25 * k3 * (x * x + s * x + c)
 
-    def integrand(theta):
-        return 1.0 / np.sqrt(2.0 * reduced(mid + half * np.sin(theta)) / mass)
+    def integrand(left, right):
+        x = np.where(left <= right, a + left, b - right)
+        return 1.0 / np.sqrt(2.0 * left * right * reduced(x) / mass)
 
-    value, error = _gauss_legendre(integrand, -0.5 * math.pi, 0.5 * math.pi)
+    value, error = tanh_sinh(integrand, 0.5 * (b - a))
     return 2.0 * value, 2.0 * error
 
 
@@ -280,8 +316,9 @@ def transit_time(mass: float, k1: float, k3: float, x_from: float, v_from: float
     """Time [s] the undamped, unforced block needs from x_from (velocity v_from [m/s], heading for
     x_to) to x_to [m], t = int dx / |v(x)|, and its quadrature error estimate [s].
 
-    The substitution x = x_from + L sin^2(phi), L = x_to - x_from, removes the square-root
-    singularity when x_from is a turning point; E - V(x) uses the exact divided difference of V.
+    v(x)^2 = v_from^2 + 2 (x - x_from) D(x) / m with D the exact divided difference of V, so a
+    start at a turning point (v_from = 0) is an integrable 1/sqrt singularity, which the
+    tanh-sinh quadrature handles.
 
     Raises:
       ValueError: the block turns back before reaching x_to.
@@ -293,18 +330,18 @@ def transit_time(mass: float, k1: float, k3: float, x_from: float, v_from: float
     def divided(x):  # (V(x_from) - V(x)) / (x - x_from), exactly
         return -(x + x_from) * (0.5 * k1 + 0.25 * k3 * (x * x + x_from * x_from))
 
-    phi_probe = np.linspace(0, 0.5 * math.pi, 2001)[1:]
-    x_probe = x_from + length * np.sin(phi_probe) ** 2
-    if np.any(v_from**2 + 2.0 * length * np.sin(phi_probe) ** 2 * divided(x_probe) / mass <= 0):
+    def speed_squared(travelled):  # travelled = |x - x_from|
+        x = x_from + math.copysign(1.0, length) * travelled
+        return v_from**2 + 2.0 * math.copysign(1.0, length) * travelled * divided(x) / mass
+
+    probe = abs(length) * np.linspace(0.0, 1.0, 4001)[1:]
+    if np.any(speed_squared(probe) <= 0):
         raise ValueError(f"the block turns back before reaching x = {x_to:g} m")
 
-    def integrand(phi):
-        sin_phi = np.sin(phi)
-        x = x_from + length * sin_phi**2
-        speed = np.sqrt(v_from**2 + 2.0 * length * sin_phi**2 * divided(x) / mass)
-        return abs(length) * 2.0 * sin_phi * np.cos(phi) / speed
+    def integrand(left, right):
+        return 1.0 / np.sqrt(speed_squared(np.where(left <= right, left, abs(length) - right)))
 
-    return _gauss_legendre(integrand, 0.0, 0.5 * math.pi)
+    return tanh_sinh(integrand, 0.5 * abs(length))
 
 
 # -- measuring the trajectory ---------------------------------------------------------
@@ -562,16 +599,22 @@ class Nonlinear(Scene):
         m, k1, k3, d = self.physical(model)
         saddles = [x for x in equilibrium_positions(k1, k3) if curvature(x, k1, k3) < 0]
         curves = []
-        for level in sorted({float(potential(x, k1, k3)) for x in saddles}):
-            crossings = level_crossings(level, k1, k3)
+        done: list[float] = []
+        for saddle in saddles:
+            level = float(potential(saddle, k1, k3))
+            if any(abs(level - other) <= 1e-12 * max(abs(level), 1e-300) for other in done):
+                continue  # symmetric saddles share one level set
+            done.append(level)
+            crossings = crossings_through(saddle, k1, k3)
             extent = 2.0 * max(np.max(np.abs(crossings)), np.max(np.abs(equilibrium_positions(k1, k3))))
             edges = np.unique(np.concatenate([[-extent, extent], crossings]))
             for low, high in zip(edges[:-1], edges[1:]):
-                if energy_gap(0.5 * (low + high), level, k1, k3) <= 0:
+                if gap_below(saddle, 0.5 * (low + high), k1, k3) <= 0:
                     continue
                 # cosine spacing: dense where the branch meets the axis
                 x = low + (high - low) * 0.5 * (1 - np.cos(np.linspace(0, math.pi, points)))
-                v = np.sqrt(np.maximum(2.0 * energy_gap(x, level, k1, k3) / m, 0.0))
+                x[0], x[-1] = low, high
+                v = np.sqrt(np.maximum(2.0 * gap_below(saddle, x, k1, k3) / m, 0.0))
                 curves.append((x, v))
                 curves.append((x.copy(), -v))
         return curves
@@ -599,9 +642,16 @@ class Nonlinear(Scene):
         def centred(h):
             return (acceleration(x_e + h, 0.0) - acceleration(x_e - h, 0.0)) / (2 * h)
 
-        da_dx = (4 * centred(step / 2) - centred(step)) / 3
-        velocity_step = 1.0  # [m/s]; the damping force is linear in v
-        da_dv = (acceleration(x_e, velocity_step) - acceleration(x_e, -velocity_step)) / (2 * velocity_step)
+        # the 'discrete' integrator folds h^2 K into qacc itself; the continuous dynamics is
+        # what every explicit setting's forward pass computes
+        integrator = model.opt.integrator
+        model.opt.integrator = mujoco.mjtIntegrator.mjINT_RK4
+        try:
+            da_dx = (4 * centred(step / 2) - centred(step)) / 3
+            velocity_step = 1.0  # [m/s]; the damping force is linear in v
+            da_dv = (acceleration(x_e, velocity_step) - acceleration(x_e, -velocity_step)) / (2 * velocity_step)
+        finally:
+            model.opt.integrator = integrator
         return np.array([[0.0, 1.0], [da_dx, da_dv]])
 
     def _linearization_checks(self, model, params) -> list[Check]:
