@@ -234,7 +234,8 @@ class Kinematics(Scene):
 
     def quantities(self, model, params, scenario, trajectory: Trajectory) -> dict:
         m = self.mass(model)
-        t_end = float(trajectory.time[-1])
+        # the nominal end time; MuJoCo's accumulated time differs from it by round-off only
+        t_end = trajectory.steps * trajectory.dt
         x_sim = float(trajectory.qpos[-1, 0])
         v_sim = float(trajectory.qvel[-1, 0])
         if scenario.name == "tachograph":

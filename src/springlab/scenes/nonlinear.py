@@ -711,6 +711,10 @@ class Nonlinear(Scene):
         orbit = {"energy_J": e0, "turning_points_m": [a, b]}
         if saddle_levels:
             orbit["separatrix_energy_J"] = min(saddle_levels, key=lambda s: abs(s - e0))
+            wells = [float(potential(x, k1, k3)) for x in equilibrium_positions(k1, k3) if curvature(x, k1, k3) > 0]
+            if wells:
+                # how much energy a block resting in a well needs to get over the lowest saddle
+                orbit["barrier_height_J"] = min(saddle_levels) - min(wells)
         if math.isfinite(a) and math.isfinite(b) and a != b:
             orbit["motion"] = "bounded"
             orbit["period_quadrature_s"], orbit["period_quadrature_error_s"] = oscillation_period(m, k1, k3, x0, v0)
