@@ -201,7 +201,9 @@ class Kinematics(Scene):
     def reference(self, model, params, scenario, time) -> Reference:
         m = self.mass(model)
         if scenario.name == "tachograph":
-            x, v, a = analytic.piecewise_linear_velocity(time, TACHOGRAPH_TIMES, TACHOGRAPH_VELOCITIES,
+            # MuJoCo's accumulated time may overshoot the record's end by round-off
+            inside = np.clip(time, TACHOGRAPH_TIMES[0], TACHOGRAPH_TIMES[-1])
+            x, v, a = analytic.piecewise_linear_velocity(inside, TACHOGRAPH_TIMES, TACHOGRAPH_VELOCITIES,
                                                          x0=params["x0"])
             # z = (x, v, F): the force is constant on every step
             system = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0 / m], [0.0, 0.0, 0.0]])
@@ -279,7 +281,7 @@ class Kinematics(Scene):
                 v_text = f"{lead}{abs(slope):g} {shifted}"
             pieces.append(f"{v_text} m/s for {start:g} <= t <= {times[i + 1]:g} s")
         x_end, v_end, a_end = analytic.piecewise_linear_velocity(
-            np.array([t_end]), TACHOGRAPH_TIMES, TACHOGRAPH_VELOCITIES, x0=params["x0"])
+            np.array([min(t_end, TACHOGRAPH_TIMES[-1])]), TACHOGRAPH_TIMES, TACHOGRAPH_VELOCITIES, x0=params["x0"])
         return {
             "velocity_profile": "v(t) = " + "; ".join(pieces),
             "acceleration_profile": "a(t) = " + "; ".join(
