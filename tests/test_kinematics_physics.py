@@ -29,6 +29,9 @@ def test_polynomial_position_gives_the_textbook_velocity_and_acceleration():
     t = result.time
     np.testing.assert_allclose(result.pos["vehicle"], 0.03 * t**3 + 0.2 * t**2 + 1.2 * t + 3.0, rtol=1e-13)
     np.testing.assert_allclose(result.vel["vehicle"], 0.09 * t**2 + 0.4 * t + 1.2, rtol=1e-13)
+    # the exact reference written beside it (analytic.integrate_acceleration) is the hand polynomial too
+    np.testing.assert_allclose(result.ref_pos["vehicle"], 0.03 * t**3 + 0.2 * t**2 + 1.2 * t + 3.0, rtol=1e-15)
+    np.testing.assert_allclose(result.ref_vel["vehicle"], 0.09 * t**2 + 0.4 * t + 1.2, rtol=1e-15)
     # MuJoCo's own force divided by the mass is the textbook acceleration
     np.testing.assert_allclose(result.trajectory.act[:, 0] / 1000.0, 0.18 * t + 0.4, rtol=1e-13)
 
@@ -67,6 +70,11 @@ def test_tachograph_displacement_is_the_area_under_v_and_acceleration_its_slope(
         i = int(np.argmin(np.abs(t - when)))
         assert x[i] == pytest.approx(position, abs=1e-11)
         assert v[i] == pytest.approx(velocity, abs=1e-11)
+    # the exact reference (analytic.piecewise_linear_velocity) against the hand-integrated record
+    hand_x = np.where(t < 4, 0.75 * t**2, np.where(t < 8, 12 + 6 * (t - 4), 36 + 6 * (t - 8) - 0.75 * (t - 8) ** 2))
+    np.testing.assert_allclose(result.ref_pos["vehicle"], hand_x, rtol=0, atol=1e-12)
+    hand_v = np.where(t < 4, 1.5 * t, np.where(t < 8, 6.0, 6.0 - 1.5 * (t - 8)))
+    np.testing.assert_allclose(result.ref_vel["vehicle"], hand_v, rtol=0, atol=1e-12)
     # the displacement read off the simulated v(t) by the trapezoid rule (exact for piecewise-linear v)
     assert np.sum(0.5 * (v[1:] + v[:-1]) * np.diff(t)) == pytest.approx(48.0, abs=1e-9)
     assert q["x_end_simulated_m"] == pytest.approx(48.0, abs=1e-11)
