@@ -224,6 +224,13 @@ def test_escape_time_matches_scipy_event_detection():
     assert nonlinear.transit_time(M, K1, K3, 0.11, 0.0, 0.25)[0] == pytest.approx(sol.t_events[0][0], rel=1e-9)
 
 
+def test_a_numerical_blow_up_of_a_bounded_orbit_is_a_divergence_not_an_escape():
+    # inside the separatrix the block cannot escape; an RK4 step far beyond its stability limit
+    # throws it out anyway, and that must be reported as a divergence (exit 3), never as an escape
+    with pytest.raises(springlab.DivergedError, match="stability limit"):
+        springlab.run("nonlinear", "softening", dt=0.3)
+
+
 def test_bounded_motion_inside_the_separatrix_never_escapes():
     result = springlab.run("nonlinear", "softening", x0=0.0999, duration=10.0)
     assert not result.trajectory.stopped

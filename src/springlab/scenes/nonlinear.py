@@ -525,10 +525,22 @@ class Nonlinear(Scene):
         reach = max(self._length_scale({"k1": k1, "k3": k3}), abs(params["x0"]))
         return ESCAPE_FACTOR * reach if reach > 0 else math.inf
 
+    def can_escape(self, model: mujoco.MjModel, params: dict[str, float]) -> bool:
+        """Whether the block can physically reach the escape radius: not if the run is unforced
+        and the undamped orbit through (x0, v0) is bounded (damping only lowers the energy)."""
+        if not math.isfinite(self.escape_radius(model, params)):
+            return False
+        if self._forcing(params) != "none":
+            return True
+        m, k1, k3, d = self.physical(model)
+        a, b = turning_points(params["x0"], params["v0"], m, k1, k3)
+        return not (math.isfinite(a) and math.isfinite(b))
+
     def stop_condition(self, model, params, scenario):
-        radius = self.escape_radius(model, params)
-        if not math.isfinite(radius):
+        # a bounded orbit that reaches the radius is a numerical blow-up, left to divergence detection
+        if not self.can_escape(model, params):
             return None
+        radius = self.escape_radius(model, params)
         column = model.joint("block").qposadr[0]
         return lambda qpos, qvel: np.abs(qpos[:, column]) >= radius
 
@@ -539,8 +551,13 @@ class Nonlinear(Scene):
             stiffness = abs(float(curvature(x_e, k1, k3)))
             if stiffness > 0:
                 modes.append((math.sqrt(stiffness / m), d / (2 * math.sqrt(stiffness * m))))
-        radius = self.escape_radius(model, params)
-        reach = radius if math.isfinite(radius) else 1.5 * max(abs(params["x0"]), self._length_scale(params))
+        # the stiffest point the block can reach: the escape radius, or the bounded orbit's turning points
+        if self.can_escape(model, params):
+            reach = self.escape_radius(model, params)
+        else:
+            a, b = turning_points(params["x0"], params["v0"], m, k1, k3)
+            bounded = math.isfinite(a) and math.isfinite(b)
+            reach = max(abs(a), abs(b)) if bounded else 1.5 * max(abs(params["x0"]), self._length_scale(params))
         stiffness = abs(float(curvature(reach, k1, k3)))
         if stiffness > 0:
             modes.append((math.sqrt(stiffness / m), d / (2 * math.sqrt(stiffness * m))))
