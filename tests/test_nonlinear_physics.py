@@ -129,7 +129,13 @@ def test_damped_equilibria_are_stable_foci_or_nodes():
     kinds = [e["kind"] for e in SCENE.equilibria(model, params, scenario)]
     assert kinds == ["stable focus", "saddle", "stable focus"]  # d^2 = 4 < 4 m V'' = 800
     model, params, scenario = _built("double_well", damping=40.0)
-    assert [e["kind"] for e in SCENE.equilibria(model, params, scenario)] == ["stable node", "saddle", "stable node"]
+    found = SCENE.equilibria(model, params, scenario)
+    assert [e["kind"] for e in found] == ["stable node", "saddle", "stable node"]
+    # the reported eigenvalues are those of MuJoCo's own Jacobian (damping included)
+    for e in found:
+        reported = np.sort_complex([complex(re, im) for re, im in e["eigenvalues_per_s"]])
+        mujocos = np.sort_complex(np.linalg.eigvals(SCENE.mujoco_jacobian(model, e["x"], 1e-5)).astype(complex))
+        np.testing.assert_allclose(reported, mujocos, rtol=1e-9)
 
 
 # -- periods and the energy integral ---------------------------------------------------------

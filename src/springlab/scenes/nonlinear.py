@@ -577,8 +577,8 @@ class Nonlinear(Scene):
         return field
 
     def equilibria(self, model, params, scenario) -> list[dict]:
-        """Every equilibrium with its linearization: x [m], stable, kind, eigenvalues [1/s] (of
-        m s^2 + d s + V''(x) = 0), and omega_rad_s = sqrt(V''/m) (small-oscillation frequency
+        """Every equilibrium with its linearization: x [m], stable, kind, eigenvalues_per_s
+        ([real, imaginary] pairs [1/s] of the roots of m s^2 + d s + V''(x) = 0), and omega_rad_s = sqrt(V''/m) (small-oscillation frequency
         without damping, where V'' > 0) or saddle_rate_per_s = sqrt(-V''/m) (where V'' < 0: the
         undamped growth rate, and the slope dv/dx of the separatrices through the saddle)."""
         m, k1, k3, d = self.physical(model)
@@ -588,7 +588,7 @@ class Nonlinear(Scene):
             eigenvalues = linear_eigenvalues(m, stiffness, d)
             kind = equilibrium_kind(eigenvalues)
             entry = {"x": float(x_e), "stable": kind in ("center", "stable focus", "stable node"),
-                     "kind": kind, "eigenvalues": [complex(s) for s in eigenvalues]}
+                     "kind": kind, "eigenvalues_per_s": [[float(s.real), float(s.imag)] for s in eigenvalues]}
             if stiffness > 0:
                 entry["omega_rad_s"] = math.sqrt(stiffness / m)
             elif stiffness < 0:
