@@ -814,17 +814,20 @@ class Nonlinear(Scene):
         estimate = 2**order / (2**order - 1) * np.abs(x[:n] - xh[:n])
         wrong = np.flatnonzero(estimate > ACCURACY_FRACTION * well)
         out["accurate_until_s"] = float(trajectory.time[wrong[0]]) if wrong.size else float(trajectory.time[n - 1])
-        out["lyapunov_exponent_per_s"] = self.lyapunov_exponent(params, scenario, trajectory.integrator,
-                                                                trajectory.dt)
+        out["lyapunov_exponent_per_s"], out["lyapunov_standard_error_per_s"] = self.lyapunov_exponent(
+            params, scenario, trajectory.integrator, trajectory.dt)
         return out
 
     def lyapunov_exponent(self, params, scenario, integrator: str, dt: float,
                           transient: float = LYAPUNOV_TRANSIENT, total: float = LYAPUNOV_TIME,
-                          interval: float = LYAPUNOV_INTERVAL) -> float:
-        """Largest Lyapunov exponent [1/s] by Benettin's renormalization: a companion run
-        PERTURBATION away (in the block's (x, v / omega) plane) is pulled back to that distance
-        every `interval` [s]; the exponent is the mean log growth per second over `total` [s]
-        after `transient` [s]."""
+                          interval: float = LYAPUNOV_INTERVAL) -> tuple[float, float]:
+        """Largest Lyapunov exponent [1/s] by Benettin's renormalization, and its standard error [1/s].
+
+        A companion run PERTURBATION away (in the block's (x, v / omega) plane) is pulled back
+        to that distance every `interval` [s]; the exponent is the mean log growth per second
+        over `total` [s] after `transient` [s]. The standard error treats the segments' growth
+        rates as independent, so it is a statistical uncertainty of a finite average, not a bound.
+        """
         model = self.build(params, scenario)
         m, k1, k3, d = self.physical(model)
         omega = math.sqrt(abs(float(curvature(self._well_size(params, model), k1, k3))) / m) or 1.0
@@ -833,7 +836,7 @@ class Nonlinear(Scene):
         state = (lead.qpos[-1].copy(), lead.qvel[-1].copy())
         twin = (state[0].copy(), state[1].copy())
         twin[0][qpos_adr] += PERTURBATION
-        log_growth = 0.0
+        rates = []
         segments = max(1, round(total / interval))
         for _ in range(segments):
             lead = self._rerun(params, scenario, integrator, dt, interval, state=state, model=model)
@@ -842,12 +845,13 @@ class Nonlinear(Scene):
             dx = follow.qpos[-1][qpos_adr] - state[0][qpos_adr]
             dv = follow.qvel[-1][dof] - state[1][dof]
             distance = math.hypot(dx, dv / omega)
-            log_growth += math.log(distance / PERTURBATION)
+            rates.append(math.log(distance / PERTURBATION) / interval)
             # the companion restarts on the same exciter state, PERTURBATION away along the current direction
             twin = (state[0].copy(), state[1].copy())
             twin[0][qpos_adr] += dx * PERTURBATION / distance
             twin[1][dof] += dv * PERTURBATION / distance
-        return log_growth / (segments * interval)
+        rates = np.array(rates)
+        return float(np.mean(rates)), float(np.std(rates, ddof=1) / math.sqrt(len(rates))) if len(rates) > 1 else math.inf
 
     # -- validation ------------------------------------------------------------------
 
