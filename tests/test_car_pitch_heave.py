@@ -26,6 +26,8 @@ MASS = np.diag([M, I])
 # q = (heave [m], pitch [rad], + nose down): front height x - a theta, rear x + b theta
 STIFFNESS = np.array([[KF + KR, KR * B - KF * A], [KR * B - KF * A, KF * A**2 + KR * B**2]])
 DAMPING = np.array([[CF + CR, CR * B - CF * A], [CR * B - CF * A, CF * A**2 + CR * B**2]])
+STATE = np.block([[np.zeros((2, 2)), np.eye(2)],
+                  [-np.linalg.solve(MASS, STIFFNESS), -np.linalg.solve(MASS, DAMPING)]])
 
 
 @pytest.fixture(scope="module")
@@ -66,7 +68,7 @@ def test_natural_frequencies_and_mode_shapes_agree_with_the_2x2_eigenproblem(res
 
 def test_modal_damping_ratios_agree_with_the_damped_eigenvalues(result):
     q = result.summary["quantities"]
-    state = np.block([[np.zeros((2, 2)), np.eye(2)], [-np.linalg.solve(MASS, STIFFNESS), -np.linalg.solve(MASS, DAMPING)]])
+    state = STATE
     roots = sorted((r for r in np.linalg.eigvals(state) if r.imag > 0), key=abs)
     for i, root in enumerate(roots, start=1):
         assert q[f"mode_{i}_damping_ratio"] == pytest.approx(-root.real / abs(root), rel=1e-8)
@@ -84,7 +86,7 @@ def test_transition_fd_of_a_fine_euler_step_converges_to_the_same_eigenvalues(re
     a = np.zeros((2 * model.nv, 2 * model.nv))
     mujoco.mjd_transitionFD(model, data, 1e-7, True, a, None, None, None)
     discrete = np.log(np.linalg.eigvals(a).astype(complex)) / model.opt.timestep
-    state = np.block([[np.zeros((2, 2)), np.eye(2)], [-np.linalg.solve(MASS, STIFFNESS), -np.linalg.solve(MASS, DAMPING)]])
+    state = STATE
     exact = np.linalg.eigvals(state)
     for root in exact:
         # first order: |error| ~ |lambda|^2 dt / 2 = 0.7 % of |lambda| ... here 1e-5 s: < 1e-3 relative
@@ -94,7 +96,7 @@ def test_transition_fd_of_a_fine_euler_step_converges_to_the_same_eigenvalues(re
 def test_release_after_a_push_over_the_front_axle_is_the_exact_linear_motion(result):
     force = 250 * G
     q0 = np.array([0.10, 0.0]) + np.linalg.solve(STIFFNESS, [-force, force * A])
-    state = np.block([[np.zeros((2, 2)), np.eye(2)], [-np.linalg.solve(MASS, STIFFNESS), -np.linalg.solve(MASS, DAMPING)]])
+    state = STATE
     # deviation from the equilibrium (0.10 m, 0 rad) moves as exp(A t) z0
     z0 = np.concatenate([q0 - [0.10, 0.0], [0.0, 0.0]])
     t = result.time

@@ -98,7 +98,8 @@ def test_modes_are_the_quarter_cars_body_bounce_and_wheel_hop(bump):
     mass = np.diag([MS, MU])
     stiffness = np.array([[KS, -KS], [-KS, KS + KT]])
     damping = np.array([[CS, -CS], [-CS, CS]])
-    state = np.block([[np.zeros((2, 2)), np.eye(2)], [-np.linalg.solve(mass, stiffness), -np.linalg.solve(mass, damping)]])
+    state = np.block([[np.zeros((2, 2)), np.eye(2)],
+                      [-np.linalg.solve(mass, stiffness), -np.linalg.solve(mass, damping)]])
     roots = sorted((r for r in np.linalg.eigvals(state) if r.imag > 0), key=abs)
     assert q["body_frequency_hz"] == pytest.approx(abs(roots[0]) / (2 * math.pi), rel=1e-10)
     assert q["wheel_hop_frequency_hz"] == pytest.approx(abs(roots[1]) / (2 * math.pi), rel=1e-10)
