@@ -104,7 +104,7 @@ def run(
     scene_obj, chosen, params = prepare(scene, scenario, parameters)
     integrator = scene_obj.integrator if integrator is None else integrator
     integrator_id(integrator)
-    dt = scene_obj.dt if dt is None else dt
+    dt = (chosen.dt or scene_obj.dt) if dt is None else dt
     duration = chosen.duration if duration is None else duration
     steps = check_timing(dt, duration)
     if tol is not None and not (isinstance(tol, (int, float)) and math.isfinite(tol) and tol > 0):

@@ -95,6 +95,7 @@ class Scenario:
       derive: optional function(params, explicitly_set_names) -> extra values,
         for presets that depend on other parameters (e.g. damping from a ratio).
       exact: whether an exact reference exists (validated by `validate`).
+      dt: the scenario's validated timestep [s] (None: the scene's `dt`).
     """
 
     name: str
@@ -103,6 +104,7 @@ class Scenario:
     presets: Mapping[str, float] = dataclasses.field(default_factory=dict)
     derive: Callable[[dict[str, float], set[str]], dict[str, float]] | None = None
     exact: bool = True
+    dt: float | None = None
 
 
 @dataclasses.dataclass
