@@ -37,6 +37,8 @@ def test_validate_car_passes_every_scenario(capsys):
     assert code == 0
     assert [r["scenario"] for r in rows] == ["push_release", "damped_release", "pitch_heave", "road_bump"]
     assert all(r["passed"] for r in rows)
+    # each scenario's default dt is the largest whose predicted bound meets 1e-6
+    assert all(r["tolerance"] <= 1e-6 for r in rows)
 
 
 def test_run_prints_the_textbook_answers(capsys):

