@@ -360,7 +360,7 @@ class Car(Scene):
             m, k, d, springref, g = _one_dof(model)
             qpos[heave] = springref - (m + params["push_mass"]) * g / k  # pushed down by the passers-by
         elif scenario.name == "pitch_heave":
-            linear = _pitch_heave_linear(model)
+            linear = _Linear2Dof(model)
             q0 = linear.equilibrium + np.linalg.solve(linear.stiffness, _push_force(model, params))
             qpos[heave], qpos[model.joint("pitch").qposadr[0]] = q0
         else:
@@ -378,7 +378,7 @@ class Car(Scene):
         """ParameterError if the exact motion lifts the car off its springs or puts its bottom below ground."""
         reference = self.reference(model, params, scenario, time)
         if scenario.name == "pitch_heave":
-            linear = _pitch_heave_linear(model)
+            linear = _Linear2Dof(model)
             x, theta = reference.pos["heave"], reference.pos["pitch"]
             what = f"push_mass = {params['push_mass']:g} kg at push_position = {params['push_position']:g} m"
             stations = {"front axle": linear.a, "rear axle": -linear.b, "push position": params["push_position"]}
@@ -428,7 +428,7 @@ class Car(Scene):
 
     @staticmethod
     def _pitch_heave_reference(model, params, time) -> Reference:
-        linear = _pitch_heave_linear(model)
+        linear = _Linear2Dof(model)
         q0 = linear.equilibrium + np.linalg.solve(linear.stiffness, _push_force(model, params))
         q, v = analytic.linear_response(time, linear.mass, linear.damping, linear.stiffness, q0, np.zeros(2),
                                         force=linear.preload)
@@ -467,7 +467,7 @@ class Car(Scene):
             m, k, d, _, _ = _one_dof(model)
             return [(math.sqrt(k / m), analytic.damping_ratio(m, k, d))]
         if scenario.name == "pitch_heave":
-            linear = _pitch_heave_linear(model)
+            linear = _Linear2Dof(model)
             return _damped_modes(analytic.state_matrix(linear.mass, linear.damping, linear.stiffness))
         quarter = _QuarterCar(model, params)
         return _damped_modes(quarter.on_road[:4, :4]) + [(quarter.omega, 0.0)]
@@ -539,7 +539,7 @@ class Car(Scene):
 
     @staticmethod
     def _pitch_heave_quantities(model, params, trajectory) -> dict:
-        linear = _pitch_heave_linear(model)
+        linear = _Linear2Dof(model)
         measured = linearize(model, linear.equilibrium)
         analytic_modes = _undamped_modes(linear.mass, linear.stiffness)
         mujoco_modes = _undamped_modes(measured["M"], measured["K"])
@@ -662,10 +662,6 @@ class _Linear2Dof:
         # constant generalized force: spring preloads and gravity
         self.preload = jac.T @ (np.array(stiff) * np.array(rest)) + np.array([-m * g, 0.0])
         self.equilibrium = np.linalg.solve(self.stiffness, self.preload)
-
-
-def _pitch_heave_linear(model: mujoco.MjModel) -> _Linear2Dof:
-    return _Linear2Dof(model)
 
 
 def _push_force(model: mujoco.MjModel, params: dict[str, float]) -> np.ndarray:
