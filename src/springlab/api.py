@@ -143,7 +143,7 @@ def _result(scene: Scene, scenario: Scenario, params, model, trajectory: Traject
             basis = "requested tolerance"
         elif reference.system is not None:
             per_column = compare.tolerances(reference, trajectory.integrator, trajectory.dt, trajectory.time)
-            basis = compare.TOLERANCE_BASIS
+            basis = compare.TOLERANCE_BASIS + (f"; {reference.tolerance_basis}" if reference.tolerance_basis else "")
         else:
             per_column = {column: reference.tolerance for column in errors}
             basis = reference.tolerance_basis

@@ -129,11 +129,13 @@ def _check_line(check: dict) -> str:
 
 
 def _validation_table(rows: list[dict]) -> str:
-    width = max([14] + [len(r["scenario"]) + 2 for r in rows])
-    lines = [f"{'scene':<13}{'scenario':<{width}}{'integrator':<11}{'dt [s]':>9}{'max rel err':>13}"
-             f"{'tolerance':>11}  result"]
+    # columns as wide as their longest name, so long scenario names stay readable
+    scene_width = max([12] + [len(r["scene"]) for r in rows]) + 1
+    scenario_width = max([13] + [len(r["scenario"]) for r in rows]) + 1
+    lines = [f"{'scene':<{scene_width}}{'scenario':<{scenario_width}}{'integrator':<11}{'dt [s]':>9}"
+             f"{'max rel err':>13}{'tolerance':>11}  result"]
     for r in rows:
-        lines.append(f"{r['scene']:<13}{r['scenario']:<{width}}{r['integrator']:<11}{r['dt']:>9.2g}"
+        lines.append(f"{r['scene']:<{scene_width}}{r['scenario']:<{scenario_width}}{r['integrator']:<11}{r['dt']:>9.2g}"
                      f"{r['max_rel_error']:>13.2e}{r['tolerance']:>11.2e}  {'pass' if r['passed'] else 'FAIL'}")
         lines.extend(f"    check {_check_line(c)}" for c in r.get("checks", []))
     return "\n".join(lines)

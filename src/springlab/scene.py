@@ -120,6 +120,12 @@ class Reference:
       rows: joint name -> (row of its position, row of its velocity) in z.
       tolerance: for scenes without `system`, the relative tolerance [-] every
         compared column is held to, and `tolerance_basis` says why.
+      switches: for a linear scene whose input is switched on a step boundary:
+        [(time [s], A after it)], in time order; `system` holds before the first.
+        The states z(t) stay continuous across a switch.
+      input_error: column -> exact max absolute difference [m or m/s] between the
+        responses to the input the model realizes and the true input, added to
+        that column's tolerance (`tolerance_basis` says where it comes from).
     """
 
     pos: dict[str, np.ndarray]
@@ -129,6 +135,8 @@ class Reference:
     rows: dict[str, tuple[int, int]] = dataclasses.field(default_factory=dict)
     tolerance: float | None = None
     tolerance_basis: str = ""
+    switches: list[tuple[float, np.ndarray]] = dataclasses.field(default_factory=list)
+    input_error: dict[str, float] = dataclasses.field(default_factory=dict)
 
 
 @dataclasses.dataclass(frozen=True)
