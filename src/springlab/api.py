@@ -158,7 +158,7 @@ def _result(scene: Scene, scenario: Scenario, params, model, trajectory: Traject
         "scenario": scenario.name,
         "integrator": trajectory.integrator,
         "dt": trajectory.dt,
-        "duration": float(trajectory.time[-1]),
+        "duration": trajectory.steps * trajectory.dt,  # MuJoCo's time accumulates dt: rounding
         "steps": trajectory.steps,
         "wall_time_s": trajectory.wall_time_s,
         "parameters": dict(params),
