@@ -57,6 +57,7 @@ def ensure_gl_backend() -> None:
 
 ensure_gl_backend()  # must run before `import mujoco` picks its GL backend
 
+import copy  # noqa: E402
 import importlib.util  # noqa: E402
 import queue  # noqa: E402
 import sys  # noqa: E402
@@ -75,7 +76,8 @@ try:  # springlab's usage error (a ValueError subclass the CLI maps to exit code
 except ImportError:  # pragma: no cover - module used outside the package
     BadInputError = ValueError
 
-__all__ = ["ensure_gl_backend", "frame_times", "sample_states", "render_video"]
+__all__ = ["ensure_gl_backend", "frame_times", "sample_states", "render_video", "check_video_arguments",
+           "framed_model"]
 
 #: Output formats render_video can write, by file extension.
 SUPPORTED_EXTENSIONS = (".mp4", ".gif")
@@ -231,6 +233,19 @@ def _output_kind(output) -> tuple[Path, str]:
     return path, ext
 
 
+def check_video_arguments(output, fps, width, height) -> tuple[Path, str, int | float, int, int]:
+    """Validate a video request before any work: (path, extension, fps, width, height).
+
+    Raises ``BadInputError`` (a ``ValueError``) for an extension other than
+    .mp4/.gif, fps <= 0 (or > 50 for GIF), or a size outside 1..MAX_SIZE px.
+    """
+    out_path, ext = _output_kind(output)
+    fps = _check_fps(fps)
+    if ext == ".gif" and fps > GIF_MAX_FPS:
+        raise BadInputError(f"GIF supports at most {GIF_MAX_FPS} fps (got {fps}); use .mp4")
+    return out_path, ext, fps, _check_size("width", width), _check_size("height", height)
+
+
 def _normalize_quaternions(model: mujoco.MjModel, q: np.ndarray) -> None:
     """Renormalise free/ball joint quaternions after linear interpolation (in place)."""
     for j in range(model.njnt):
@@ -243,6 +258,92 @@ def _normalize_quaternions(model: mujoco.MjModel, q: np.ndarray) -> None:
         quat = q[:, adr:adr + 4]
         norm = np.linalg.norm(quat, axis=1, keepdims=True)
         np.divide(quat, norm, out=quat, where=norm > 0)
+
+
+# ------------------------------------------------------------------ framing
+
+#: fraction of the view the moving parts may fill before the camera backs off
+_FRAME_MARGIN = 0.92
+
+
+def _moving_geoms(model: mujoco.MjModel) -> np.ndarray:
+    """Ids of the geoms on bodies that can move (not welded to the world)."""
+    return np.flatnonzero(model.body_weldid[model.geom_bodyid] != 0)
+
+
+_CORNERS = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], dtype=float)
+
+
+def _camera_points(model, data, cam_id, geoms) -> np.ndarray:
+    """(n, 3) rows (right [m], up [m], depth [m]) of the geoms' bounding-box corners in camera axes."""
+    aabb = model.geom_aabb[geoms]  # local centre (3) and half sizes (3)
+    local = aabb[:, None, :3] + _CORNERS[None] * aabb[:, None, 3:]  # (g, 8, 3)
+    rot = data.geom_xmat[geoms].reshape(-1, 3, 3)
+    world = data.geom_xpos[geoms][:, None] + np.einsum("gij,gcj->gci", rot, local)
+    cam = data.cam_xmat[cam_id].reshape(3, 3)  # columns: right, up, backward
+    rel = (world.reshape(-1, 3) - data.cam_xpos[cam_id]) @ cam
+    return np.column_stack([rel[:, 0], rel[:, 1], -rel[:, 2]])
+
+
+def framed_model(model: mujoco.MjModel, states: np.ndarray, camera_id: int, width: int,
+                 height: int) -> mujoco.MjModel:
+    """The model, or a copy whose fixed camera backs off so every moving part stays in view.
+
+    A scene's MJCF camera frames its usual motion; a parameter choice can carry
+    a body out of it (the slider's exercise starts 5 m out). For a fixed camera
+    on the world body, the bounding-box corners of every moving geom at every frame
+    state (``states``, shape ``(n, nq)``) are projected into the camera; if any
+    leaves the central ``_FRAME_MARGIN`` of the view, a copy of the model gets
+    the camera shifted in its image plane and pulled back along its axis (same
+    direction and field of view, so the look stays the scene's own) just enough
+    to hold them all, plus what the original view showed of the static scene.
+    Geoms are bounded by their boxes (``geom_aabb``), not spheres, so long
+    flat bodies (a car hull) are not over-estimated.
+    Tracking cameras and the free camera are left alone. ``model`` is never
+    modified.
+    """
+    if camera_id < 0 or model.cam_bodyid[camera_id] != 0 or \
+            model.cam_mode[camera_id] != mujoco.mjtCamLight.mjCAMLIGHT_FIXED:
+        return model
+    moving = _moving_geoms(model)
+    if moving.size == 0:
+        return model
+    tan_v = math.tan(math.radians(model.cam_fovy[camera_id]) / 2)
+    tan_h = tan_v * width / height
+    data = mujoco.MjData(model)
+    points = []
+    for q in states:
+        data.qpos[:] = q
+        mujoco.mj_kinematics(model, data)
+        mujoco.mj_camlight(model, data)
+        points.append(_camera_points(model, data, camera_id, moving))
+    points = np.concatenate(points)
+
+    def inside(p):
+        right, up, depth = p.T
+        return ((np.abs(right) <= _FRAME_MARGIN * tan_h * depth)
+                & (np.abs(up) <= _FRAME_MARGIN * tan_v * depth) & (depth > 0))
+
+    if np.all(inside(points)):
+        return model
+    # keep the static scene that was in view (e.g. the wall the spring hangs on)
+    static = np.flatnonzero(model.body_weldid[model.geom_bodyid] == 0)
+    static = static[model.geom_type[static] != mujoco.mjtGeom.mjGEOM_PLANE]
+    if static.size:
+        seen = _camera_points(model, data, camera_id, static)
+        points = np.concatenate([points, seen[inside(seen)]])
+    right, up, depth = points.T
+    shift_r = 0.5 * (np.max(right) + np.min(right))
+    shift_u = 0.5 * (np.max(up) + np.min(up))
+    back = max(0.0, float(np.max(np.maximum(np.abs(right - shift_r) / (_FRAME_MARGIN * tan_h),
+                                            np.abs(up - shift_u) / (_FRAME_MARGIN * tan_v)) - depth)))
+    framed = copy.copy(model)
+    axes = data.cam_xmat[camera_id].reshape(3, 3)
+    framed.cam_pos[camera_id] = model.cam_pos[camera_id] + axes @ np.array([shift_r, shift_u, back])
+    # the far clipping plane (vis.map.zfar x extent) must still reach past everything
+    far = float(np.max(depth)) + back
+    framed.vis.map.zfar = max(float(model.vis.map.zfar), 2.0 * far / max(float(model.stat.extent), 1e-9))
+    return framed
 
 
 # ----------------------------------------------------------------- GL renderer
@@ -732,12 +833,7 @@ def render_video(
     # ---- validate everything before touching the file system or GL
     if not isinstance(model, mujoco.MjModel):
         raise TypeError(f"model must be a mujoco.MjModel, got {type(model).__name__}")
-    out_path, ext = _output_kind(output)
-    fps = _check_fps(fps)
-    if ext == ".gif" and fps > GIF_MAX_FPS:
-        raise BadInputError(f"GIF supports at most {GIF_MAX_FPS} fps (got {fps}); use .mp4")
-    width = _check_size("width", width)
-    height = _check_size("height", height)
+    out_path, ext, fps, width, height = check_video_arguments(output, fps, width, height)
     cam_id = _resolve_camera(model, camera)
     if panel is not None and not callable(panel):
         raise TypeError(f"panel must be callable(frame_index, t) or None, got {panel!r}")
@@ -774,12 +870,16 @@ def render_video(
         )
     states = sample_states(t_rec, q_rec, at)  # validates time ordering
     _normalize_quaternions(model, states)
+    model = framed_model(model, states, cam_id, width, height)
     if progress is None:
         progress = _stderr_is_terminal()
 
-    out_path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{out_path.name}.", suffix=f".part{ext}",
-                                    dir=out_path.parent)
+    try:
+        out_path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{out_path.name}.", suffix=f".part{ext}",
+                                        dir=out_path.parent)
+    except OSError as err:
+        raise BadInputError(f"cannot write {str(out_path)!r}: {err.strerror or err}") from None
     os.close(fd)
 
     scene = None
