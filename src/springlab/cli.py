@@ -154,6 +154,49 @@ def cmd_validate(args) -> int:
     return EXIT_FAILED if any(not r["passed"] for r in rows) else EXIT_OK
 
 
+def cmd_render(args) -> int:
+    """Simulate a scenario and film it off-screen (mp4 H.264 or gif), optionally with its phase plane."""
+    from . import media, render  # GL and matplotlib only for the commands that draw
+
+    render.check_video_arguments(args.output, args.fps, args.width, args.height)
+    result = api.run(args.scene, args.scenario, integrator=args.integrator, dt=args.dt,
+                     duration=args.duration, tol=args.tol, **_parse_sets(args.set))
+    outputs.prepare_directory(pathlib.Path(args.output).parent)
+    info = media.render_run(result, args.output, fps=args.fps, width=args.width, height=args.height,
+                            composite=args.composite)
+    print(f"wrote {info['path']}: {info['frames']} frames, {info['width']}x{info['height']} at {info['fps']:g} fps"
+          f" ({info['frames'] / info['fps']:.2f} s of simulation) in {info['seconds']:.1f} s"
+          f" ({info['frames'] / max(info['seconds'], 1e-9):.0f} frames/s)")
+    return _verdict(result.summary)
+
+
+def cmd_plot(args) -> int:
+    """Plot a scenario: time series (default), phase plane, family of displacements or zeta family."""
+    from . import plots
+
+    plots.check_output(args.output)
+    timing = dict(integrator=args.integrator, dt=args.dt, duration=args.duration)
+    params = _parse_sets(args.set)
+    if args.kind in ("time", "phase"):
+        result = api.run(args.scene, args.scenario, tol=args.tol, **timing, **params)
+        figure = plots.time_series(result) if args.kind == "time" else plots.phase_plane(result)
+        verdict = _verdict(result.summary)
+    else:
+        figure = plots.figure_for(args.kind, args.scene, args.scenario, **timing, **params)
+        verdict = EXIT_OK
+    print(f"wrote {plots.save(figure, args.output)}")
+    return verdict
+
+
+def _verdict(summary: dict) -> int:
+    """Exit code of a run whose outputs were written: 1 when outside its tolerance."""
+    if summary["passed"] is False:
+        print(f"  note: {summary['scene']}/{summary['scenario']} is outside its tolerance"
+              f" (max error above {summary['tolerance']:.2e}); see 'springlab run'", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
 def cmd_demo(args) -> int:
     """The main job: validate every scene and write everything under the output folder."""
     start = time.perf_counter()
@@ -192,6 +235,28 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--dt", type=float, metavar="SECONDS", help="override the scenes' timestep [s]")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     COMMANDS["validate"] = cmd_validate
+
+    p = sub.add_parser("render", help="film a scenario off-screen: mp4 (H.264) or gif, optionally beside its phase plane")
+    _scene_arguments(p)
+    _timing_arguments(p)
+    p.add_argument("--output", required=True, metavar="FILE", help="FILE.mp4 (H.264, plays in browsers) or FILE.gif")
+    p.add_argument("--fps", type=float, default=30, help="frames per second; video time = simulation time (default 30)")
+    p.add_argument("--width", type=int, default=640, help="width of the 3D view [px] (default 640)")
+    p.add_argument("--height", type=int, default=480, help="height of the 3D view [px] (default 480)")
+    p.add_argument("--composite", action="store_true",
+                   help="add the phase-plane trace drawn as time advances, a height x height panel on the right")
+    COMMANDS["render"] = cmd_render
+
+    p = sub.add_parser("plot", help="plot a scenario: time series, phase plane, family, zeta family")
+    _scene_arguments(p)
+    _timing_arguments(p)
+    p.add_argument("--output", required=True, metavar="FILE", help="FILE.png, FILE.svg or FILE.pdf")
+    p.add_argument("--kind", default="time", choices=("time", "phase", "family", "zeta"),
+                   help="time: x(t), v(t) with the exact solution and the error on a log axis (default); "
+                        "phase: phase plane with vector field, equilibria, separatrices; "
+                        "family: phase trajectories from several initial displacements; "
+                        "zeta: responses for damping ratios 0 to 2")
+    COMMANDS["plot"] = cmd_plot
 
     p = sub.add_parser("demo", help="the main job: validate everything, write out/")
     p.add_argument("--output", default="out", metavar="DIR", help="output folder (default: out)")

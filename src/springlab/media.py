@@ -1,0 +1,120 @@
+"""Videos and plots of runs, for the CLI (`render`, `plot`) and the demo's media step.
+
+`render_run` turns a Result into a video (the 3D scene, optionally beside its
+phase-plane trace: the composite video); `media_step` is the demo step that
+writes every scenario's video and plots; `plot_files` writes one scenario's
+plots. Nothing here knows a particular scene: everything comes from the Scene
+hooks (camera, phase_field, equilibria, separatrices) and the Result.
+"""
+
+from __future__ import annotations
+
+import os
+import pathlib
+import time
+from typing import Any
+
+from . import api, plots, render, scenes
+from .errors import BadInputError, SpringlabError
+
+#: the demo's video settings: small enough that every scenario fits in the demo's time budget
+DEMO_VIDEO = dict(fps=30, width=480, height=360)
+#: longest stretch of a scenario the demo films [s] (the time overlay shows where it is)
+DEMO_CLIP_SECONDS = 10.0
+
+
+def render_run(result: api.Result, output: str | os.PathLike, *, fps: float = 30, width: int = 640,
+               height: int = 480, duration: float | None = None, composite: bool = False,
+               progress: bool | None = None) -> dict[str, Any]:
+    """Render a run to `output` (.mp4 H.264 or .gif); see render.render_video for the result dict.
+
+    Args:
+      result: the run (api.run).
+      output: video file; written completely or not at all.
+      fps: frames per second of the video (video time = simulation time).
+      width, height: size of the 3D view [px].
+      duration: seconds of simulation to show (default: the whole run).
+      composite: put the phase-plane trace (a height x height panel, one
+        phase plane per reported joint, up to 3, stacked) to the right of the
+        3D view; the video is then (width + height) x height.
+      progress: progress bar on stderr (None: when stderr is a terminal).
+
+    Raises:
+      BadInputError: bad size, fps, extension or unwritable output.
+      SpringlabError: no off-screen OpenGL context or the encoder failed.
+    """
+    render.check_video_arguments(output, fps, width, height)
+    scene = scenes.get(result.scene)
+    end = float(result.time[-1])
+    if duration is not None:
+        duration = min(float(duration), end) if end > 0 else float(duration)
+    panel = plots.PhasePanel(result, height) if composite else None
+    try:
+        return render.render_video(result.model, result.time, result.trajectory.qpos, output, fps=fps,
+                                   width=width, height=height, camera=scene.camera, duration=duration,
+                                   label=f"{result.scene} / {result.scenario}", progress=progress,
+                                   panel=panel)
+    except RuntimeError as error:  # GL context or ffmpeg: not the user's input, still one clean line
+        raise SpringlabError(f"cannot render {str(output)!r}: {error}") from None
+
+
+def plot_files(result: api.Result, folder: pathlib.Path, out: pathlib.Path) -> list[tuple[str, str, str]]:
+    """Write a run's plots into `folder`: [(path relative to `out`, kind of plot, title)].
+
+    Time series and phase plane always; the family of initial displacements
+    and the zeta family where the scene defines them (skipped otherwise).
+    """
+    written = []
+    figures = [("time_series.png", "time series with the exact solution and the error",
+                lambda: plots.time_series(result)),
+               ("phase_plane.png", "phase plane", lambda: plots.phase_plane(result))]
+    scene = scenes.get(result.scene)
+    scenario = scene.scenario(result.scenario)
+    if len(result.pos) == 1 and scene.phase_field(result.model, result.parameters, scenario) is not None \
+            and scene.equilibria(result.model, result.parameters, scenario):
+        figures.append(("phase_family.png", "phase trajectories from several initial displacements",
+                        lambda: plots.family_of(result)))
+    for name, title, make in figures:
+        try:
+            figure = make()
+        except BadInputError:
+            continue  # the scene does not define this figure for the scenario
+        plots.save(figure, folder / name)
+        written.append((str((folder / name).relative_to(out)), name, title))
+    return written
+
+
+def media_step(state) -> list:
+    """Demo step: every scenario's composite video and plots, and each scene's zeta family.
+
+    Videos are 480 x 360 (+ a 360 x 360 phase panel) at 30 fps and show at
+    most the first DEMO_CLIP_SECONDS of a run, which keeps the demo within a
+    few minutes on two cores.
+    """
+    from .demo import Artifact
+
+    written = []
+    for (scene_name, scenario_name), result in state.results.items():
+        folder = state.out / scene_name / scenario_name
+        start = time.perf_counter()
+        video = folder / "video.mp4"
+        clip = min(DEMO_CLIP_SECONDS, float(result.time[-1]))
+        info = render_run(result, video, duration=clip, composite=True, progress=False, **DEMO_VIDEO)
+        shown = "" if clip >= float(result.time[-1]) else f", first {clip:g} s of {float(result.time[-1]):g} s"
+        written.append(Artifact(str(video.relative_to(state.out)), "video",
+                                f"3D scene beside its phase-plane trace, {info['fps']:g} fps{shown}",
+                                scene_name, scenario_name))
+        for path, _, title in plot_files(result, folder, state.out):
+            written.append(Artifact(path, "plot", title, scene_name, scenario_name))
+        state.timings.append((f"media {scene_name}/{scenario_name}", time.perf_counter() - start))
+    for scene in scenes.SCENES.values():
+        target = state.out / scene.name / "zeta_family.png"
+        try:
+            figure = plots.zeta_family(scene.name, scene.default_scenario)
+        except BadInputError:
+            continue  # no damping parameter, no exact linear reference, or several modes
+        plots.save(figure, target)
+        written.append(Artifact(str(target.relative_to(state.out)), "plot",
+                                "the damping ratio from 0 to 2 (the chapter's zeta slider)", scene.name,
+                                scene.default_scenario))
+    return written
