@@ -43,6 +43,10 @@ class DemoState:
     validation: list[dict] = dataclasses.field(default_factory=list)
     results: dict[tuple[str, str], api.Result] = dataclasses.field(default_factory=dict)
     artifacts: list[Artifact] = dataclasses.field(default_factory=list)
+    #: (what, wall time [s]) of each step (and of finer parts a step wants to report)
+    timings: list[tuple[str, float]] = dataclasses.field(default_factory=list)
+    #: time.perf_counter() when the demo started, for the total wall time
+    started: float = dataclasses.field(default_factory=time.perf_counter)
 
 
 def core_step(state: DemoState) -> list[Artifact]:
@@ -63,15 +67,34 @@ def core_step(state: DemoState) -> list[Artifact]:
     return written
 
 
+def media_step(state: DemoState) -> list[Artifact]:
+    """Every scenario's composite video and plots, each scene's zeta family (springlab.media)."""
+    from . import media  # GL and matplotlib are imported only when the demo draws
+
+    return media.media_step(state)
+
+
+def report_step(state: DemoState) -> list[Artifact]:
+    """out/index.html: validation table, plots, videos and a link to every artifact (springlab.report)."""
+    from . import report
+
+    path = report.write_report(state, wall_time_s=time.perf_counter() - state.started)
+    return [Artifact(path.name, "report", "this report")]
+
+
 #: the demo's steps, in order; features append theirs
-STEPS: list[Callable[[DemoState], list[Artifact]]] = [core_step]
+STEPS: list[Callable[[DemoState], list[Artifact]]] = [core_step, media_step]
+#: steps that run after every step in STEPS, whatever was appended (the report lists everything)
+FINAL_STEPS: list[Callable[[DemoState], list[Artifact]]] = [report_step]
 
 
 def run_demo(out: str | pathlib.Path, log: Callable[[str], None] = print) -> DemoState:
     """Run every step into `out`; return the shared state (validation rows, artifacts)."""
     state = DemoState(out=outputs.prepare_directory(out))
-    for step in STEPS:
+    for step in [*STEPS, *FINAL_STEPS]:
         start = time.perf_counter()
         state.artifacts.extend(step(state))
-        log(f"demo: {step.__name__} done in {time.perf_counter() - start:.1f} s")
+        seconds = time.perf_counter() - start
+        state.timings.append((step.__name__, seconds))
+        log(f"demo: {step.__name__} done in {seconds:.1f} s")
     return state
