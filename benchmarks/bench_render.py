@@ -1,0 +1,135 @@
+"""Speed of springlab's video path, side by side in one run.
+
+1. Frames per second of springlab.render.render_video against a naive loop on
+   the same slider trajectory (10 s at 30 fps = 300 frames, 640 x 480):
+   the naive loop is what one writes first with MuJoCo's own tools:
+   `mujoco.Renderer` with MuJoCo's default visual settings (shadows,
+   reflections, skybox and haze on; the model's `shadowsize` restored to
+   MuJoCo's default 4096), one `update_scene` + `render` call per frame
+   collecting the frames, and the mp4 encoded afterwards with the same x264
+   settings. render_video reuses one GL context, switches the extra passes
+   off, and encodes on ffmpeg's own process while the next frames render.
+   Also the composite video (the same plus the 480 x 480 phase-plane panel).
+   All are run alternately, best of N, and the ratios printed.
+2. End to end: `springlab render slider undamped --duration 10 --output x.mp4`
+   as a fresh process (interpreter start, imports, simulation, rendering,
+   encoding): wall time and frames per second; the target is >= 30 frames/s,
+   i.e. faster than real time.
+
+The machine may be shared: ratios measured side by side hold better than
+absolute numbers. Run: python benchmarks/bench_render.py [--repeat N]
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import os
+import pathlib
+import subprocess
+import sys
+import tempfile
+import time
+
+# mujoco.Renderer (the naive path) takes its GL backend from MUJOCO_GL when mujoco is first imported
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+import imageio_ffmpeg  # noqa: E402
+import mujoco  # noqa: E402
+import numpy as np  # noqa: E402
+
+import springlab  # noqa: E402
+from springlab import render  # noqa: E402
+
+DURATION, FPS, WIDTH, HEIGHT = 10.0, 30, 640, 480
+MUJOCO_DEFAULT_SHADOWSIZE = 4096
+
+
+def naive_video(model: mujoco.MjModel, time_s: np.ndarray, qpos: np.ndarray, output: str) -> int:
+    """The straightforward version: default visuals, one frame per call, encode afterwards."""
+    model = copy.copy(model)
+    model.vis.quality.shadowsize = MUJOCO_DEFAULT_SHADOWSIZE
+    data = mujoco.MjData(model)
+    at = render.frame_times(DURATION, FPS)
+    states = render.sample_states(time_s, qpos, at)
+    frames = []
+    with mujoco.Renderer(model, HEIGHT, WIDTH) as renderer:
+        for q in states:
+            data.qpos[:] = q
+            mujoco.mj_forward(model, data)
+            renderer.update_scene(data, camera="side")
+            frames.append(renderer.render())
+    writer = imageio_ffmpeg.write_frames(output, (WIDTH, HEIGHT), fps=FPS, codec="libx264", quality=None,
+                                         pix_fmt_out="yuv420p", macro_block_size=1, ffmpeg_log_level="error",
+                                         output_params=["-preset", render.X264_PRESET, "-crf", str(render.X264_CRF)])
+    writer.send(None)
+    for frame in frames:
+        writer.send(frame)
+    writer.close()
+    return len(frames)
+
+
+def fast_video(model, time_s, qpos, output, panel=None) -> int:
+    info = render.render_video(model, time_s, qpos, output, fps=FPS, width=WIDTH, height=HEIGHT,
+                               duration=DURATION, camera="side", progress=False, panel=panel)
+    return info["frames"]
+
+
+def frames_per_second(repeat: int, folder: pathlib.Path) -> None:
+    from springlab import plots
+
+    result = springlab.run("slider", "undamped", duration=DURATION)
+    args = (result.model, result.time, result.trajectory.qpos)
+    paths = {"naive": naive_video, "springlab": fast_video,
+             # the composite video: the same plus a 480 x 480 phase-plane panel (built anew each run)
+             "composite": lambda *a: fast_video(*a, panel=plots.PhasePanel(result, HEIGHT))}
+    best = {name: np.inf for name in paths}
+    frames = {}
+    for _ in range(repeat):  # alternate, so all see the same machine load
+        for name, make in paths.items():
+            start = time.perf_counter()
+            frames[name] = make(*args, str(folder / f"{name}.mp4"))
+            best[name] = min(best[name], time.perf_counter() - start)
+    print(f"1) render + encode, slider undamped, {frames['springlab']} frames {WIDTH}x{HEIGHT}, best of {repeat}")
+    print(f"   {'path':<42}{'wall [s]':>10}{'frames/s':>10}")
+    print(f"   {'naive: mujoco.Renderer, default visuals':<42}{best['naive']:>10.2f}"
+          f"{frames['naive'] / best['naive']:>10.1f}")
+    print(f"   {'springlab.render.render_video':<42}{best['springlab']:>10.2f}"
+          f"{frames['springlab'] / best['springlab']:>10.1f}")
+    print(f"   {'springlab composite (+ 480x480 phase panel)':<42}{best['composite']:>10.2f}"
+          f"{frames['composite'] / best['composite']:>10.1f}")
+    print(f"   speed-up over naive: {best['naive'] / best['springlab']:.2f}x;"
+          f" the composite costs {best['composite'] / best['springlab']:.2f}x a plain video")
+
+
+def end_to_end(repeat: int, folder: pathlib.Path) -> None:
+    output = folder / "e2e.mp4"
+    command = [sys.executable, "-m", "springlab.cli", "render", "slider", "undamped", "--duration", str(DURATION),
+               "--fps", str(FPS), "--width", str(WIDTH), "--height", str(HEIGHT), "--output", str(output)]
+    walls = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        subprocess.run(command, check=True, capture_output=True)
+        walls.append(time.perf_counter() - start)
+    frames = round(DURATION * FPS)
+    wall = min(walls)
+    print(f"2) end to end, a fresh process: {' '.join(command[1:4])} ... {frames} frames")
+    print(f"   wall {wall:.2f} s (best of {repeat}; all: {', '.join(f'{w:.2f}' for w in walls)}),"
+          f" {frames / wall:.1f} frames/s, {DURATION / wall:.2f}x real time;"
+          f" target >= {FPS} frames/s: {'met' if frames / wall >= FPS else 'NOT met'}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=3, help="runs per path (best is kept)")
+    args = parser.parse_args()
+    print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f} at start;"
+          f" MUJOCO_GL={os.environ.get('MUJOCO_GL')}")
+    with tempfile.TemporaryDirectory() as folder:
+        frames_per_second(args.repeat, pathlib.Path(folder))
+        end_to_end(args.repeat, pathlib.Path(folder))
+    print(f"load average {os.getloadavg()[0]:.2f} at the end")
+
+
+if __name__ == "__main__":
+    main()
