@@ -72,7 +72,7 @@ def test_an_inaccurate_run_is_written_flagged_and_exits_1(tmp_path, capsys):
     (["run", "slider", "--set", "mass=heavy"], "mass must be a number"),
     (["run", "slider", "--set", "colour=3"], "unknown parameter of slider 'colour'; valid: damping"),
     (["run", "slider", "--set", "mass"], "--set takes NAME=VALUE"),
-    (["run", "slidr"], "unknown scene 'slidr'; valid: slider"),
+    (["run", "slidr"], "unknown scene 'slidr'; valid:"),
     (["run", "slider", "bounce"], "unknown scenario of slider 'bounce'; valid: critical"),
     (["run", "slider", "--integrator", "leapfrog"], "unknown integrator 'leapfrog'; valid: discrete, euler"),
     (["run", "slider", "--dt", "0"], "dt must be a finite number > 0 s"),

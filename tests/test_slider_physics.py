@@ -123,3 +123,9 @@ def test_overrides_reach_the_compiled_model():
     assert result.model.jnt_stiffness[0] == 800.0
     assert result.model.dof_damping[0] == 4.0
     assert result.summary["quantities"]["omega_n_rad_s"] == pytest.approx(20.0)
+
+
+@pytest.mark.parametrize("scenario", list(springlab.SCENES["slider"].scenarios))
+def test_default_setting_is_predicted_to_meet_1e6(scenario):
+    # the per-scenario dt is chosen so that the order-based bound itself is <= 1e-6
+    assert springlab.run("slider", scenario).summary["tolerance"] <= 1e-6

@@ -109,7 +109,7 @@ def run(
     scene_obj, chosen, params = prepare(scene, scenario, parameters)
     integrator = scene_obj.integrator if integrator is None else integrator
     integrator_id(integrator)
-    dt = scene_obj.dt if dt is None else dt
+    dt = (chosen.dt or scene_obj.dt) if dt is None else dt
     duration = chosen.duration if duration is None else duration
     steps = check_timing(dt, duration)
     if tol is not None and not (isinstance(tol, (int, float)) and math.isfinite(tol) and tol > 0):
@@ -147,7 +147,7 @@ def _result(scene: Scene, scenario: Scenario, params, model, trajectory: Traject
             basis = "requested tolerance"
         elif reference.system is not None:
             per_column = compare.tolerances(reference, trajectory.integrator, trajectory.dt, trajectory.time)
-            basis = compare.TOLERANCE_BASIS
+            basis = compare.TOLERANCE_BASIS + (f"; {reference.tolerance_basis}" if reference.tolerance_basis else "")
         else:
             per_column = {column: reference.tolerance for column in errors}
             basis = reference.tolerance_basis
@@ -158,7 +158,7 @@ def _result(scene: Scene, scenario: Scenario, params, model, trajectory: Traject
         "scenario": scenario.name,
         "integrator": trajectory.integrator,
         "dt": trajectory.dt,
-        "duration": float(trajectory.time[-1]),
+        "duration": trajectory.steps * trajectory.dt,  # MuJoCo's time accumulates dt: rounding
         "steps": trajectory.steps,
         "wall_time_s": trajectory.wall_time_s,
         "parameters": dict(params),

@@ -120,10 +120,13 @@ def _print_run(summary: dict, output: str | None) -> None:
 
 
 def _validation_table(rows: list[dict]) -> str:
-    lines = [f"{'scene':<13}{'scenario':<14}{'integrator':<11}{'dt [s]':>9}{'max rel err':>13}"
-             f"{'tolerance':>11}  result"]
+    # columns as wide as their longest name, so long scenario names stay readable
+    scene_width = max([12] + [len(r["scene"]) for r in rows]) + 1
+    scenario_width = max([13] + [len(r["scenario"]) for r in rows]) + 1
+    lines = [f"{'scene':<{scene_width}}{'scenario':<{scenario_width}}{'integrator':<11}{'dt [s]':>9}"
+             f"{'max rel err':>13}{'tolerance':>11}  result"]
     for r in rows:
-        lines.append(f"{r['scene']:<13}{r['scenario']:<14}{r['integrator']:<11}{r['dt']:>9.2g}"
+        lines.append(f"{r['scene']:<{scene_width}}{r['scenario']:<{scenario_width}}{r['integrator']:<11}{r['dt']:>9.2g}"
                      f"{r['max_rel_error']:>13.2e}{r['tolerance']:>11.2e}  {'pass' if r['passed'] else 'FAIL'}")
     return "\n".join(lines)
 

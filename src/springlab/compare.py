@@ -21,12 +21,25 @@ error grows more slowly than t. The bound on column `<joint>_pos` is
 
 (velocity columns likewise, in the scaled norm |(x, v / rho)| with rho the
 spectral radius of A), the last term the round-off of N steps.
+
+Piecewise-constant systems: an input switched on or off on a step boundary
+changes A at that instant (`Reference.switches`). The errors committed before
+the switch are then carried on by the exact flow of the new system, and the
+new segment adds its own, so on segment j (from s_j, matrix A_j)
+
+    e(t) = exp(A_j (t - s_j)) e(s_j) + C h^p (t - s_j) A_j^(p+1) z(t)
+
+which reduces to the formula above when nothing switches. A scene whose model
+can only approximate its true input states the exact size of the difference
+(`Reference.input_error`, absolute per column); it is added to the tolerance
+as it is (it is computed exactly, not estimated).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from . import analytic
 from .scene import Reference
 from .simulate import ORDERS
 
@@ -56,19 +69,40 @@ def predicted_error(reference: Reference, integrator: str, dt: float, time: np.n
     """Leading-order max absolute error per column [m or m/s] (see module docstring).
 
     Args:
-      reference: exact solution with its `system` matrix A and `states` z(t).
+      reference: exact solution with its `system` matrix A, `states` z(t) and
+        optional `switches` (A changes on step boundaries).
       integrator: integrator name.
       dt: timestep [s].
-      time: (n,) times of the states [s].
+      time: (n,) times of the states [s], uniformly dt apart.
     """
-    a, z = reference.system, reference.states
+    z = reference.states
     order = ORDERS[integrator]
-    local = z @ np.linalg.matrix_power(a, order + 1).T  # rows: A^(p+1) z(t)
-    rho = max(float(np.max(np.abs(np.linalg.eigvals(a)))), 1.0 / max(float(time[-1]), 1e-300))
-    growth = ERROR_CONSTANTS[integrator] * dt**order * time
+    scale = ERROR_CONSTANTS[integrator] * dt**order
+    segments = [(float(time[0]), np.asarray(reference.system, float))]
+    segments += [(float(s), np.asarray(a, float)) for s, a in reference.switches if time[0] < s < time[-1]]
+    error = np.zeros_like(z)  # signed leading-order global error vectors e(t)
+    carried = np.zeros(z.shape[1])
+    for j, (start, a) in enumerate(segments):
+        first = int(np.argmin(np.abs(time - start)))
+        if abs(time[first] - start) > 1e-6 * dt:  # MuJoCo accumulates time by t += dt
+            raise ValueError(f"system switch at t = {start} s is not on the step grid (dt = {dt} s)")
+        last = int(np.argmin(np.abs(time - segments[j + 1][0]))) if j + 1 < len(segments) else len(time) - 1
+        rows = slice(first, last + 1)
+        elapsed = time[rows] - start
+        error[rows] = scale * elapsed[:, None] * (z[rows] @ np.linalg.matrix_power(a, order + 1).T)
+        if carried.any():
+            step = analytic.expm(a * dt)
+            propagated = np.empty((last + 1 - first, z.shape[1]))
+            propagated[0] = carried
+            for i in range(1, len(propagated)):
+                propagated[i] = step @ propagated[i - 1]
+            error[rows] += propagated
+        carried = error[last].copy()
+    rho = max(max(float(np.max(np.abs(np.linalg.eigvals(a)))) for _, a in segments),
+              1.0 / max(float(time[-1]), 1e-300))
     out = {}
     for joint, (ip, iv) in reference.rows.items():
-        scaled = growth * np.hypot(local[:, ip], local[:, iv] / rho)
+        scaled = np.hypot(error[:, ip], error[:, iv] / rho)
         out[f"{joint}_pos"] = float(np.max(scaled))
         out[f"{joint}_vel"] = float(np.max(scaled)) * rho
     return out
@@ -84,7 +118,8 @@ def tolerances(reference: Reference, integrator: str, dt: float, time: np.ndarra
             column = f"{joint}_{kind}"
             scale = float(np.max(np.abs(series)))
             rel = predicted[column] / scale if scale > 0 else predicted[column]
-            out[column] = SAFETY * rel + floor
+            known = reference.input_error.get(column, 0.0)
+            out[column] = SAFETY * rel + (known / scale if scale > 0 else known) + floor
     return out
 
 

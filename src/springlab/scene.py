@@ -95,6 +95,7 @@ class Scenario:
       derive: optional function(params, explicitly_set_names) -> extra values,
         for presets that depend on other parameters (e.g. damping from a ratio).
       exact: whether an exact reference exists (validated by `validate`).
+      dt: the scenario's validated timestep [s] (None: the scene's `dt`).
     """
 
     name: str
@@ -103,6 +104,7 @@ class Scenario:
     presets: Mapping[str, float] = dataclasses.field(default_factory=dict)
     derive: Callable[[dict[str, float], set[str]], dict[str, float]] | None = None
     exact: bool = True
+    dt: float | None = None
 
 
 @dataclasses.dataclass
@@ -118,6 +120,12 @@ class Reference:
       rows: joint name -> (row of its position, row of its velocity) in z.
       tolerance: for scenes without `system`, the relative tolerance [-] every
         compared column is held to, and `tolerance_basis` says why.
+      switches: for a linear scene whose input is switched on a step boundary:
+        [(time [s], A after it)], in time order; `system` holds before the first.
+        The states z(t) stay continuous across a switch.
+      input_error: column -> exact max absolute difference [m or m/s] between the
+        responses to the input the model realizes and the true input, added to
+        that column's tolerance (`tolerance_basis` says where it comes from).
     """
 
     pos: dict[str, np.ndarray]
@@ -127,6 +135,8 @@ class Reference:
     rows: dict[str, tuple[int, int]] = dataclasses.field(default_factory=dict)
     tolerance: float | None = None
     tolerance_basis: str = ""
+    switches: list[tuple[float, np.ndarray]] = dataclasses.field(default_factory=list)
+    input_error: dict[str, float] = dataclasses.field(default_factory=dict)
 
 
 @dataclasses.dataclass

@@ -134,9 +134,16 @@ def initial_state(
     qpos: np.ndarray | None = None,
     qvel: np.ndarray | None = None,
     act: np.ndarray | None = None,
+    data: mujoco.MjData | None = None,
 ) -> np.ndarray:
-    """The full physics state vector at t = 0 (defaults: the model's qpos0, rest)."""
-    data = mujoco.MjData(model)
+    """The full physics state vector at t = 0 (defaults: the model's qpos0, rest).
+
+    `data` (optional) is reset and used as scratch.
+    """
+    if data is None:
+        data = mujoco.MjData(model)
+    else:
+        mujoco.mj_resetData(model, data)
     if qpos is not None:
         data.qpos[:] = qpos
     if qvel is not None:
@@ -181,12 +188,12 @@ def simulate(
     steps = check_timing(dt, duration)
     model.opt.integrator = integrator_id(integrator)
     model.opt.timestep = dt
-    state0 = initial_state(model, qpos, qvel, act)
+    data = mujoco.MjData(model) if data is None else data
+    state0 = initial_state(model, qpos, qvel, act, data)
     controls = None
     if model.nu:
         controls = np.zeros((1, model.nu)) if control is None else np.asarray(control, float)
         controls = np.ascontiguousarray(np.broadcast_to(controls, (steps, model.nu)))[None]
-    data = mujoco.MjData(model) if data is None else data
     out = np.empty((1, steps, state0.size))
     sensors = np.empty((1, steps, model.nsensordata))
     with quiet_mujoco() as messages:
