@@ -105,6 +105,17 @@ def test_order_fit_ignores_round_off_and_pre_asymptotic_points():
     assert tradeoff.observed_order(runs[4:6]) is None
 
 
+def test_order_fit_uses_the_finest_steps_and_refuses_errors_that_follow_no_power_law():
+    # second order at coarse steps, first order as dt -> 0 (symplectic Euler: phase error vs bounded O(dt) error)
+    dts = np.geomspace(0.03, 3e-5, 13)
+    mixed = [tradeoff.Run("euler", float(dt), round(1 / dt), float(40 * dt**2 + 0.4 * dt), 1.0) for dt in dts]
+    assert tradeoff.observed_order(mixed) == pytest.approx(1.0, abs=0.05)
+    # errors set by where an input switch falls on the step grid scatter around no line
+    scattered = [tradeoff.Run("rk4", float(dt), round(1 / dt), float(e), 1.0)
+                 for dt, e in zip(dts, [1e-2, 1e-3, 4e-4, 1e-5, 4e-5, 1e-4, 3e-6, 3e-8, 4e-6, 8e-7, 2e-7, 7e-9, 4e-8])]
+    assert tradeoff.observed_order(scattered) is None
+
+
 def test_pareto_front_is_exactly_the_non_dominated_runs(slider_free_sweep):
     runs = [r for r in slider_free_sweep.runs if not r.diverged]
     front = slider_free_sweep.pareto

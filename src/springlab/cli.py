@@ -199,12 +199,17 @@ def _print_stability(report: dict, output: str | None) -> None:
         print(f"  {r['integrator']:<13}{r['zeta']:>7g}{r['measured_omega_dt']:>12.5g}{r['theory_omega_dt']:>12.5g}"
               f"{r['relative_difference']:>10.1e}")
     print(f"extremes (accurate: max rel error <= {report['accuracy_threshold']:g})")
-    print(f"  {'case':<15}{'integrator':<13}{'x limit':>8}{'omega*dt':>10}{'steps':>7}  {'outcome':<11}"
+    print(f"  {'case':<15}{'integrator':<13}{'x limit':>8}{'omega*dt':>10}{'steps':>8}  {'outcome':<11}"
           f"{'error':>9}  advice")
     for r in report["extremes"]:
         error = "-" if r["max_rel_error"] is None else f"{r['max_rel_error']:.1e}"
-        print(f"  {r['case']:<15}{r['integrator']:<13}{r['fraction']:>8g}{r['omega_dt']:>10.4g}{r['steps']:>7}"
+        if r["fraction"] is None:
+            fraction = "advised"
+        else:
+            fraction = f"{r['fraction']:g}" + ("*" if r["limit_of"] != r["integrator"] else "")
+        print(f"  {r['case']:<15}{r['integrator']:<13}{fraction:>8}{r['omega_dt']:>10.4g}{r['steps']:>8}"
               f"  {r['outcome']:<11}{error:>9}  {r['advice']}")
+    print("  * discrete has no stability limit: fractions of the euler limit")
     print("undamped energy E/E0 vs the exact step-map formulas")
     for r in report["energy"]:
         print(f"  {r['integrator']:<13} omega*dt {r['omega_dt']:g}, {r['steps']} steps: E/E0 in"
