@@ -112,11 +112,21 @@ def _print_run(summary: dict, output: str | None) -> None:
         print(f"  {name:<26} {value:.10g}" if isinstance(value, float) else f"  {name:<26} {value}")
     for column, error in summary["errors"].items():
         print(f"  error {column:<20} max_abs {error['max_abs']:.3e}  max_rel {error['max_rel']:.3e}")
-    if summary["tolerance"] is not None:
+    for check in summary.get("checks", []):
+        print(f"  check {_check_line(check)}")
+    if summary["tolerance"] is not None or summary.get("checks"):
         verdict = "PASS" if summary["passed"] else "FAIL (outside tolerance)"
-        print(f"  tolerance {summary['tolerance']:.3e}: {verdict}")
+        print(f"  tolerance {summary['tolerance']:.3e}: {verdict}" if summary["tolerance"] is not None
+              else f"  checks: {verdict}")
     if output:
         print(f"  wrote {pathlib.Path(output) / 'trajectory.csv'} and summary.json")
+
+
+def _check_line(check: dict) -> str:
+    """'period_s  value 1.234  ref 1.234  error 1.0e-09 <= 1.0e-06 pass' for a Check dict."""
+    return (f"{check['name']:<30} value {check['value']:<14.10g} ref {check['reference']:<14.10g}"
+            f" error {check['error']:.2e} {'<=' if check['passed'] else '>'} {check['tolerance']:.2e}"
+            f"  {'pass' if check['passed'] else 'FAIL'}")
 
 
 def _validation_table(rows: list[dict]) -> str:
@@ -128,6 +138,7 @@ def _validation_table(rows: list[dict]) -> str:
     for r in rows:
         lines.append(f"{r['scene']:<{scene_width}}{r['scenario']:<{scenario_width}}{r['integrator']:<11}{r['dt']:>9.2g}"
                      f"{r['max_rel_error']:>13.2e}{r['tolerance']:>11.2e}  {'pass' if r['passed'] else 'FAIL'}")
+        lines.extend(f"    check {_check_line(c)}" for c in r.get("checks", []))
     return "\n".join(lines)
 
 
@@ -137,8 +148,8 @@ def cmd_validate(args) -> int:
         _print_json(rows)
     else:
         print(_validation_table(rows))
-        if rows:
-            print(f"tolerance = {rows[0]['tolerance_basis']}")
+        for basis in dict.fromkeys(r["tolerance_basis"] for r in rows):
+            print(f"tolerance = {basis}")
         failed = sum(not r["passed"] for r in rows)
         print(f"{len(rows) - failed} passed, {failed} failed")
     return EXIT_FAILED if any(not r["passed"] for r in rows) else EXIT_OK

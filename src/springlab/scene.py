@@ -139,6 +139,46 @@ class Reference:
     input_error: dict[str, float] = dataclasses.field(default_factory=dict)
 
 
+@dataclasses.dataclass(frozen=True)
+class Check:
+    """A validated scalar claim of a scenario: a measured value against an independent reference.
+
+    For scenes without an exact trajectory (non-linear ones), `validate` holds a
+    scenario to its checks instead of (or besides) the compared columns.
+
+    Attributes:
+      name: what is checked, ending in its unit like a quantity, e.g. 'period_s'.
+      value: measured from the simulation (in the name's unit).
+      reference: the independent expectation (closed form, quadrature, ...).
+      tolerance: bound on `error` [-]: relative, or absolute in the name's unit
+        when the reference is 0.
+      basis: why the tolerance is what it is (one line).
+    """
+
+    name: str
+    value: float
+    reference: float
+    tolerance: float
+    basis: str
+
+    @property
+    def error(self) -> float:
+        """|value - reference| / |reference|, or |value - reference| when the reference is 0."""
+        difference = abs(float(self.value) - float(self.reference))
+        return difference / abs(float(self.reference)) if self.reference != 0 else difference
+
+    @property
+    def passed(self) -> bool:
+        """Whether the error is within the tolerance (False for a non-finite value)."""
+        return bool(math.isfinite(self.error) and self.error <= self.tolerance)
+
+    def as_dict(self) -> dict[str, Any]:
+        """The summary.json form: name, value, reference, error, tolerance, basis, passed."""
+        return {"name": self.name, "value": float(self.value), "reference": float(self.reference),
+                "error": self.error, "tolerance": float(self.tolerance), "basis": self.basis,
+                "passed": self.passed}
+
+
 @dataclasses.dataclass
 class Setup:
     """Initial state and inputs of one run.
@@ -274,6 +314,24 @@ class Scene:
     def separatrices(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[tuple[np.ndarray, np.ndarray]]:
         """Separatrix curves of the unforced phase plane: [(x [m], v [m/s]) arrays] (none by default)."""
         return []
+
+    def checks(
+        self,
+        model: mujoco.MjModel,
+        params: dict[str, float],
+        scenario: Scenario,
+        trajectory: Trajectory,
+    ) -> list[Check]:
+        """Scalar claims `validate` holds an exact scenario to, beyond its compared columns (override)."""
+        return []
+
+    def stop_condition(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario
+    ) -> Callable[[np.ndarray, np.ndarray], np.ndarray] | None:
+        """An event that ends a run early: (qpos (n, nq), qvel (n, nv)) -> (n,) bool, True once it
+        has happened (e.g. a mass escaping to infinity in finite time). The run is cut at the first
+        such step and is a result, not a divergence. None: runs last their full duration."""
+        return None
 
     def joint_columns(self, model: mujoco.MjModel, trajectory: Trajectory) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """Reported joint name -> (position, velocity) series of a trajectory."""

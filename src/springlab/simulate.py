@@ -18,7 +18,7 @@ import dataclasses
 import math
 import threading
 import time as _time
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 
 import mujoco
 import numpy as np
@@ -68,6 +68,7 @@ class Trajectory:
       integrator: springlab integrator name.
       dt: timestep [s].
       wall_time_s: wall time of the stepping itself [s].
+      stopped: True when a stop condition ended the run before its duration.
     """
 
     time: np.ndarray
@@ -77,6 +78,7 @@ class Trajectory:
     integrator: str
     dt: float
     wall_time_s: float
+    stopped: bool = False
 
     @property
     def steps(self) -> int:
@@ -166,6 +168,7 @@ def simulate(
     act: np.ndarray | None = None,
     control: np.ndarray | None = None,
     data: mujoco.MjData | None = None,
+    stop: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
 ) -> Trajectory:
     """Run `model` headless and record every step.
 
@@ -178,6 +181,10 @@ def simulate(
       control: (nu,) constant or (steps, nu) per-step controls [actuator units];
         row k is held over step k, from t_k to t_k + dt.
       data: scratch MjData to reuse (optional).
+      stop: optional event (qpos (n, nq), qvel (n, nv)) -> (n,) bool; the
+        trajectory ends at the first step where it is True (`stopped` set), and
+        whatever MuJoCo did after that step (e.g. a finite-time escape hitting
+        its 1e10 limit) is discarded, not reported as a divergence.
 
     Returns:
       The Trajectory, t = 0 included.
@@ -204,8 +211,27 @@ def simulate(
         wall = _time.perf_counter() - start
     states = np.concatenate([state0[None], out[0]])
     trajectory = _split(model, states, integrator, dt, wall)
+    if stop is not None:
+        trajectory, stopped = _cut_at_stop(trajectory, stop)
+        if stopped:
+            # MuJoCo's warnings may come from steps after the event; a blow-up before it
+            # still shows in the kept part (time jumping back, non-finite values)
+            messages = []
     check_diverged(trajectory, dt, messages)
     return trajectory
+
+
+def _cut_at_stop(trajectory: Trajectory, stop) -> tuple[Trajectory, bool]:
+    """The trajectory up to and including the first step where `stop` holds, and whether it did."""
+    end = divergence_step(trajectory)
+    end = len(trajectory.time) if end is None else end
+    with np.errstate(all="ignore"):
+        hits = np.flatnonzero(np.asarray(stop(trajectory.qpos[:end], trajectory.qvel[:end]), bool))
+    if not hits.size:
+        return trajectory, False
+    keep = int(hits[0]) + 1
+    return dataclasses.replace(trajectory, time=trajectory.time[:keep], qpos=trajectory.qpos[:keep],
+                               qvel=trajectory.qvel[:keep], act=trajectory.act[:keep], stopped=True), True
 
 
 def _split(model, states, integrator, dt, wall) -> Trajectory:
