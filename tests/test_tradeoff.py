@@ -216,3 +216,38 @@ def test_timestep_grid_spans_three_decades_below_omega_dt_1():
     long = tradeoff.timestep_grid(10.0, 100.0)
     assert 100.0 / long[-1] <= tradeoff.MAX_SWEEP_STEPS * 1.01 and len(long) >= 12
     assert math.isclose(long[0], 0.1)
+
+
+def test_a_stop_condition_ends_batched_runs_exactly_where_simulate_ends_them():
+    scene, chosen, params, model = _scene_model("free")
+
+    def crossed(qpos, qvel):  # the block reaches the relaxed length
+        return qpos[:, 0] <= 0.0
+
+    jobs = [tradeoff.Job(model, name, 0.01, 300, scene.setup(model, params, chosen, 300, 0.01), crossed)
+            for name in ("euler", "rk4")]
+    for job, batched in zip(jobs, tradeoff.run_batched(jobs)):
+        single = simulate(model, integrator=job.integrator, dt=0.01, duration=3.0, qpos=job.setup.qpos,
+                          qvel=job.setup.qvel, control=job.setup.control, stop=crossed)
+        assert batched.stopped and single.stopped and batched.steps < 300
+        np.testing.assert_array_equal(batched.qpos, single.qpos)
+
+
+def test_a_scenario_without_an_exact_trajectory_cannot_be_swept():
+    from springlab.scenes.slider import Slider
+
+    class ChecksOnly(Slider):  # validated by scalar checks alone, like the non-linear scenes
+        def reference(self, model, params, scenario, time):
+            return None
+
+    with pytest.raises(BadInputError, match="no exact reference trajectory.*valid: none in this scene"):
+        tradeoff.sweep(ChecksOnly(), "free")
+
+
+def test_timesteps_a_scene_rejects_are_replaced_by_accepted_ones():
+    # a scene whose input switches at t = 4 s accepts only dt dividing 4 s
+    def setup(dt):
+        return object() if abs(4.0 / dt - round(4.0 / dt)) < 1e-9 else None
+
+    grid = tradeoff._accepted_grid(tradeoff.timestep_grid(None, 12.0), setup)
+    assert len(grid) >= 12 and all(setup(dt) is not None for dt in grid)

@@ -150,6 +150,9 @@ def cmd_validate(args) -> int:
         print(_validation_table(rows))
         for basis in dict.fromkeys(r["tolerance_basis"] for r in rows):
             print(f"tolerance = {basis}")
+        for r in rows:
+            if r.get("note"):
+                print(f"{r['scene']} {r['scenario']}: {r['note']}")
         failed = sum(not r["passed"] for r in rows)
         print(f"{len(rows) - failed} passed, {failed} failed")
     return EXIT_FAILED if any(not r["passed"] for r in rows) else EXIT_OK

@@ -70,6 +70,7 @@ from .simulate import (
     INTEGRATORS,
     ORDERS,
     Trajectory,
+    _cut_at_stop,
     check_diverged,
     check_timing,
     initial_state,
@@ -130,6 +131,7 @@ class Job:
       dt: timestep [s].
       steps: number of steps.
       setup: initial state and controls (control: (nu,) or (steps, nu), held over each step).
+      stop: the scene's stop condition (Scene.stop_condition), applied as `simulate` applies it.
     """
 
     model: mujoco.MjModel
@@ -137,6 +139,7 @@ class Job:
     dt: float
     steps: int
     setup: Setup
+    stop: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None
 
 
 def _controls(job: Job) -> np.ndarray | None:
@@ -220,6 +223,10 @@ def run_batched(jobs: Sequence[Job], *, nthread: int = 0) -> list[Trajectory | D
                                 act=states[:, 1 + nq + nv :], integrator=job.integrator, dt=job.dt,
                                 wall_time_s=math.nan)
         fired = [name for name, w in zip(("BADQPOS", "BADQVEL", "BADQACC"), _BAD_WARNINGS) if warnings[i, w, 1] > 0]
+        if job.stop is not None:
+            trajectory, stopped = _cut_at_stop(trajectory, job.stop)
+            if stopped:
+                fired = []  # as simulate: warnings may come from steps after the event
         try:
             check_diverged(trajectory, job.dt, ["unstable"] if fired else [])
         except DivergedError as error:
@@ -412,42 +419,84 @@ def sweep(
     """
     started = _time.perf_counter()
     scene_obj, chosen, params = api.prepare(scene, scenario, parameters)
-    if not chosen.exact:
-        exact = [s.name for s in scene_obj.scenarios.values() if s.exact]
-        raise BadInputError(f"scenario {chosen.name!r} of {scene_obj.name} has no exact reference to measure"
-                            f" errors against; valid: {', '.join(exact)}")
+    model = scene_obj.build(params, chosen)
+    if not sweepable(scene_obj, chosen, params, model):
+        valid = [s.name for s in scene_obj.scenarios.values() if sweepable(scene_obj, s, None)]
+        raise BadInputError(f"scenario {chosen.name!r} of {scene_obj.name} has no exact reference trajectory to"
+                            f" measure errors against; valid: {', '.join(valid) or 'none in this scene'}")
     integrators = list(integrators)
     for name in integrators:
         integrator_id(name)
     duration = chosen.duration if duration is None else duration
     check_timing(duration / 2, duration)
-    model = scene_obj.build(params, chosen)
     if dts is None:
         dts = timestep_grid(fastest_rate(scene_obj, model, params, chosen), duration)
+        dts = _accepted_grid(dts, lambda dt: _setup_or_none(scene_obj, model, params, chosen, dt, duration))
+    stop = scene_obj.stop_condition(model, params, chosen)
     jobs = []
     for dt in dts:
         steps = check_timing(dt, duration)
         setup = scene_obj.setup(model, params, chosen, steps, dt)
-        jobs.extend(Job(model, name, dt, steps, setup) for name in integrators)
+        jobs.extend(Job(model, name, dt, steps, setup, stop) for name in integrators)
     outcomes = run_batched(jobs, nthread=nthread)
     runs = []
     for job, outcome in zip(jobs, outcomes):
-        error, detail = None, ""
+        error, detail, steps = None, "", job.steps
         if isinstance(outcome, DivergedError):
             detail = str(outcome)
         else:
+            steps = outcome.steps  # a stop condition may end a run early, as in `springlab run`
             try:
                 result = api._result(scene_obj, chosen, params, model, outcome)
                 error = max(e["max_rel"] for e in result.summary["errors"].values())
             except DivergedError as blown:
                 detail = str(blown)
         wall = time_run(job, repeats=timing_repeats)
-        runs.append(Run(job.integrator, job.dt, job.steps, error, wall, diverged=error is None, detail=detail))
+        runs.append(Run(job.integrator, job.dt, steps, error, wall, diverged=error is None, detail=detail))
     runs.sort(key=lambda r: (integrators.index(r.integrator), -r.dt))
     orders = {name: observed_order([r for r in runs if r.integrator == name]) for name in integrators}
     return Tradeoff(scene=scene_obj.name, scenario=chosen.name, parameters=params, overrides=dict(parameters),
                     duration=duration, runs=runs, orders=orders, pareto=pareto_front(runs),
                     sweep_wall_time_s=_time.perf_counter() - started)
+
+
+def sweepable(scene: Scene, scenario: Scenario, params: dict[str, float] | None,
+              model: mujoco.MjModel | None = None) -> bool:
+    """Whether the scenario has an exact reference trajectory to sweep errors against (scenarios
+    validated by scalar checks alone, like the non-linear ones, have none)."""
+    if not scenario.exact:
+        return False
+    if params is None:
+        params = scene.resolve(scenario, {})
+    model = scene.build(params, scenario) if model is None else model
+    return scene.reference(model, params, scenario, np.zeros(1)) is not None
+
+
+def _setup_or_none(scene: Scene, model, params, scenario, dt: float, duration: float) -> Setup | None:
+    """The scenario's setup at dt [s], or None when the scene rejects that dt."""
+    try:
+        return scene.setup(model, params, scenario, check_timing(dt, duration), dt)
+    except BadInputError:
+        return None
+
+
+def _accepted_grid(dts: Sequence[float], setup: Callable[[float], Setup | None]) -> list[float]:
+    """The grid with every dt the scene rejects (e.g. a dt that must divide an input's switching times)
+    replaced by the nearest accepted value 2^a 5^b within a factor 2, or dropped."""
+    grid = []
+    for dt in dts:
+        if setup(dt) is not None:
+            grid.append(dt)
+            continue
+        decade = 10.0 ** math.floor(math.log10(dt))
+        nice = [m * decade * f for m in (1, 1.25, 1.6, 2, 2.5, 3.2, 4, 5, 6.25, 8) for f in (0.1, 1, 10)]
+        nice = sorted((c for c in nice if dt / 2 <= c <= dt * 2), key=lambda c: abs(math.log(c / dt)))
+        grid.extend(next(([_round_sig(c)] for c in nice if _round_sig(c) not in grid and _round_sig(c) not in dts
+                          and setup(_round_sig(c)) is not None), []))
+    if len(grid) < 3:
+        raise BadInputError(f"the scene accepts too few of the timesteps {', '.join(f'{d:g}' for d in dts)} s"
+                            " to sweep; pass dts the scene accepts")
+    return sorted(set(grid), reverse=True)
 
 
 def asymptotic_runs(runs: Iterable[Run]) -> list[Run]:
