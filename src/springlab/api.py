@@ -86,7 +86,8 @@ def run(
       scene: scene name (see `springlab list`).
       scenario: scenario name (None: the scene's default).
       integrator: one of 'euler', 'implicit', 'implicitfast', 'rk4', 'discrete'
-        (None: the scene's validated default).
+        (None: the scene's validated default), or 'auto': the cheapest setting
+        that meets `tol`, measured by springlab.tradeoff (then dt must be None).
       dt: timestep [s] (None: the scene's validated default).
       duration: simulated time [s] (None: the scenario's).
       tol: relative accuracy [-] to hold the run to instead of the integrator's
@@ -101,6 +102,10 @@ def run(
       BadInputError: unknown names, non-physical values, bad dt/duration.
       DivergedError: the simulation blew up (nothing is returned for it).
     """
+    if integrator == "auto":
+        from . import tradeoff  # here, not at the top: tradeoff builds on this module
+
+        integrator, dt = tradeoff.auto_setting(scene, scenario, tol=tol, dt=dt, duration=duration, **parameters)
     scene_obj, chosen, params = prepare(scene, scenario, parameters)
     integrator = scene_obj.integrator if integrator is None else integrator
     integrator_id(integrator)
@@ -209,12 +214,15 @@ def validate(
     *,
     integrator: str | None = None,
     dt: float | None = None,
+    tol: float | None = None,
 ) -> list[dict[str, Any]]:
     """Run every scenario that has an exact reference at the scene's validated setting.
 
     Args:
       scene_names: scenes to validate (None: all).
-      integrator, dt: override the scenes' default setting.
+      integrator, dt: override the scenes' default setting ('auto': per
+        scenario the cheapest setting that meets `tol`, see `run`).
+      tol: relative tolerance [-] to hold every run to (None: the predicted error).
 
     Returns:
       One row per scenario: scene, scenario, integrator, dt, steps, max_rel_error,
@@ -229,7 +237,16 @@ def validate(
         for scenario in scene.scenarios.values():
             if not scenario.exact:
                 continue
-            rows.append(validation_row(run(name, scenario.name, integrator=integrator, dt=dt)))
+            if integrator == "auto":
+                from . import tradeoff  # here, not at the top: tradeoff builds on this module
+
+                if not tradeoff.sweepable(scene, scenario, None):
+                    # validated by its scalar checks at its own setting: nothing to sweep errors against
+                    row = validation_row(run(name, scenario.name))
+                    row["note"] = "no reference trajectory for 'auto' to sweep: the scene's validated setting"
+                    rows.append(row)
+                    continue
+            rows.append(validation_row(run(name, scenario.name, integrator=integrator, dt=dt, tol=tol)))
     return rows
 
 

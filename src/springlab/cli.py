@@ -13,7 +13,7 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from . import api, demo, outputs, scenes
+from . import api, demo, outputs, scenes, tradeoff
 from .errors import BadInputError, SpringlabError
 from .simulate import INTEGRATORS
 
@@ -47,7 +47,8 @@ def _scene_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _timing_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--integrator", choices=None, metavar="NAME",
-                        help=f"one of {', '.join(INTEGRATORS)} (default: the scene's validated one)")
+                        help=f"one of {', '.join(INTEGRATORS)} (default: the scene's validated one), or auto:"
+                             " the cheapest setting that meets --tol (see 'springlab tradeoff')")
     parser.add_argument("--dt", type=float, metavar="SECONDS", help="timestep [s]")
     parser.add_argument("--duration", type=float, metavar="SECONDS", help="simulated time [s]")
     parser.add_argument("--tol", type=float, metavar="TOL",
@@ -142,13 +143,16 @@ def _validation_table(rows: list[dict]) -> str:
 
 
 def cmd_validate(args) -> int:
-    rows = api.validate(args.scenes, integrator=args.integrator, dt=args.dt)
+    rows = api.validate(args.scenes, integrator=args.integrator, dt=args.dt, tol=args.tol)
     if args.json:
         _print_json(rows)
     else:
         print(_validation_table(rows))
         for basis in dict.fromkeys(r["tolerance_basis"] for r in rows):
             print(f"tolerance = {basis}")
+        for r in rows:
+            if r.get("note"):
+                print(f"{r['scene']} {r['scenario']}: {r['note']}")
         failed = sum(not r["passed"] for r in rows)
         print(f"{len(rows) - failed} passed, {failed} failed")
     return EXIT_FAILED if any(not r["passed"] for r in rows) else EXIT_OK
@@ -197,6 +201,82 @@ def _verdict(summary: dict) -> int:
     return EXIT_OK
 
 
+def cmd_tradeoff(args) -> int:
+    result = tradeoff.tradeoff(args.scene, args.scenario, tol=args.tol, duration=args.duration,
+                               **_parse_sets(args.set))
+    if args.output:
+        tradeoff.write_tradeoff(result, args.output)
+    if args.json:
+        _print_json(result.as_json())
+    else:
+        _print_tradeoff(result, args.output)
+    pick = result.recommendation
+    return EXIT_FAILED if pick is not None and pick["integrator"] is None else EXIT_OK
+
+
+def _print_tradeoff(result, output: str | None) -> None:
+    print(f"{result.scene} / {result.scenario}: {len(result.runs)} runs over {result.duration:g} s"
+          f" in {result.sweep_wall_time_s:.1f} s")
+    print(f"  {'integrator':<13}{'dt [s]':>10}{'steps':>9}{'max rel err':>13}{'wall [ms]':>11}"
+          f"{'wall/sim s':>12}  pareto")
+    front = {id(r) for r in result.pareto}
+    for r in result.runs:
+        error = "diverged" if r.diverged else f"{r.max_rel_error:.3e}"
+        print(f"  {r.integrator:<13}{r.dt:>10.3g}{r.steps:>9}{error:>13}{r.wall_time_s * 1e3:>11.3f}"
+              f"{r.wall_time_s / result.duration * 1e3:>10.3f}ms  {'*' if id(r) in front else ''}")
+    orders = ", ".join(f"{name} {p:.2f}" if p is not None else f"{name} -" for name, p in result.orders.items())
+    print(f"  observed order: {orders}")
+    pick = result.recommendation
+    if pick is not None:
+        if pick["integrator"] is None:
+            print(f"  tol {pick['tol']:g}: no setting of the sweep meets it")
+        else:
+            print(f"  tol {pick['tol']:g}: use {pick['integrator']} at dt = {pick['dt']:g} s (verified: error"
+                  f" {pick['max_rel_error']:.3e}, {pick['wall_time_s'] * 1e3:.3f} ms)")
+    print(f"  wall time: {tradeoff.WALL_TIME_BASIS}")
+    if output:
+        print(f"  wrote {pathlib.Path(output) / 'tradeoff.json'} and tradeoff.png")
+
+
+def cmd_stability(args) -> int:
+    report = tradeoff.stability_report(full=args.full)
+    if args.output:
+        tradeoff.write_stability(report, args.output)
+    if args.json:
+        _print_json(tradeoff.report_json(report))
+    else:
+        _print_stability(report, args.output)
+    return EXIT_OK if all(r["within_tolerance"] for r in report["boundaries"]) else EXIT_FAILED
+
+
+def _print_stability(report: dict, output: str | None) -> None:
+    print("stability boundary omega*dt (measured by a growth test vs theory)")
+    print(f"  {'integrator':<13}{'zeta':>7}{'measured':>12}{'theory':>12}{'rel diff':>10}")
+    for r in report["boundaries"]:
+        print(f"  {r['integrator']:<13}{r['zeta']:>7g}{r['measured_omega_dt']:>12.5g}{r['theory_omega_dt']:>12.5g}"
+              f"{r['relative_difference']:>10.1e}")
+    print(f"extremes (accurate: max rel error <= {report['accuracy_threshold']:g})")
+    print(f"  {'case':<15}{'integrator':<13}{'x limit':>8}{'omega*dt':>10}{'steps':>8}  {'outcome':<11}"
+          f"{'error':>9}  advice")
+    for r in report["extremes"]:
+        error = "-" if r["max_rel_error"] is None else f"{r['max_rel_error']:.1e}"
+        if r["fraction"] is None:
+            fraction = "advised"
+        else:
+            fraction = f"{r['fraction']:g}" + ("*" if r["limit_of"] != r["integrator"] else "")
+        print(f"  {r['case']:<15}{r['integrator']:<13}{fraction:>8}{r['omega_dt']:>10.4g}{r['steps']:>8}"
+              f"  {r['outcome']:<11}{error:>9}  {r['advice']}")
+    print("  * discrete has no stability limit: fractions of the euler limit")
+    print("undamped energy E/E0 vs the exact step-map formulas")
+    for r in report["energy"]:
+        print(f"  {r['integrator']:<13} omega*dt {r['omega_dt']:g}, {r['steps']} steps: E/E0 in"
+              f" [{r['min_ratio']:.6g}, {r['max_ratio']:.6g}], final {r['final_ratio']:.6g};"
+              f" {r['formula']}: max deviation {r['max_relative_deviation']:.1e}")
+    print(f"done in {report['wall_time_s']:.1f} s")
+    if output:
+        print(f"  wrote {pathlib.Path(output) / 'stability.json'}, stability.png and energy.png")
+
+
 def cmd_demo(args) -> int:
     """The main job: validate every scene and write everything under the output folder."""
     start = time.perf_counter()
@@ -233,6 +313,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("scenes", nargs="*", help="scene names (default: all)")
     p.add_argument("--integrator", metavar="NAME", help="override the scenes' integrator")
     p.add_argument("--dt", type=float, metavar="SECONDS", help="override the scenes' timestep [s]")
+    p.add_argument("--tol", type=float, metavar="TOL",
+                   help="relative tolerance to hold every run to (needed by --integrator auto)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     COMMANDS["validate"] = cmd_validate
 
@@ -257,6 +339,21 @@ def build_parser() -> argparse.ArgumentParser:
                         "family: phase trajectories from several initial displacements; "
                         "zeta: responses for damping ratios 0 to 2")
     COMMANDS["plot"] = cmd_plot
+
+    p = sub.add_parser("tradeoff", help="error vs cost of every integrator and timestep; cheapest setting for --tol")
+    _scene_arguments(p)
+    p.add_argument("--tol", type=float, metavar="TOL", help="recommend the cheapest setting meeting this relative error")
+    p.add_argument("--duration", type=float, metavar="SECONDS", help="simulated time [s] (default: the scenario's)")
+    p.add_argument("--output", metavar="DIR", help="write DIR/tradeoff.json and DIR/tradeoff.png")
+    p.add_argument("--json", action="store_true", help="print tradeoff.json")
+    COMMANDS["tradeoff"] = cmd_tradeoff
+
+    p = sub.add_parser("stability", help="stability boundaries vs theory, extremes table, undamped energy")
+    p.add_argument("--full", action="store_true",
+                   help="more damping ratios and extreme cases, advice verified by running it (slower)")
+    p.add_argument("--output", metavar="DIR", help="write DIR/stability.json, stability.png and energy.png")
+    p.add_argument("--json", action="store_true", help="print stability.json")
+    COMMANDS["stability"] = cmd_stability
 
     p = sub.add_parser("demo", help="the main job: validate everything, write out/")
     p.add_argument("--output", default="out", metavar="DIR", help="output folder (default: out)")

@@ -98,3 +98,27 @@ def run_demo(out: str | pathlib.Path, log: Callable[[str], None] = print) -> Dem
         state.timings.append((step.__name__, seconds))
         log(f"demo: {step.__name__} done in {seconds:.1f} s")
     return state
+
+
+def tradeoff_step(state: DemoState) -> list[Artifact]:
+    """The slider's speed-accuracy trade (with the setting for 1e-6) and the stability map, extremes, energy."""
+    from . import tradeoff  # here: tradeoff builds on api, which this module's users import first
+
+    result = tradeoff.tradeoff("slider", "free", tol=1e-6)
+    tradeoff.write_tradeoff(result, state.out / "tradeoff")
+    report = tradeoff.stability_report()
+    tradeoff.write_stability(report, state.out / "stability")
+    return [
+        Artifact("tradeoff/tradeoff.json", "data", "slider free: error, steps and wall time of every integrator"
+                 " x timestep; orders, Pareto front, cheapest setting for 1e-6", "slider", "free"),
+        Artifact("tradeoff/tradeoff.png", "plot", "slider free: error vs timestep and error vs cost (Pareto front)",
+                 "slider", "free"),
+        Artifact("stability/stability.json", "data", "measured stability boundaries vs theory, extremes table,"
+                 " undamped energy vs formulas"),
+        Artifact("stability/stability.png", "plot", "stability map: measured per-step amplification over"
+                 " (zeta, omega*dt), theory and measured boundaries"),
+        Artifact("stability/energy.png", "plot", "undamped energy of each integrator vs its exact formula"),
+    ]
+
+
+STEPS.append(tradeoff_step)

@@ -78,16 +78,11 @@ import math
 import mujoco
 import numpy as np
 
+from .. import exciter
 from ..errors import ParameterError
 from ..scene import Check, Parameter, Scenario, Scene, Setup
 from ..simulate import ORDERS, Trajectory, simulate
 
-#: exciter amplitude [m]; the force scale lives in the coupling coefficient (as in slider.py)
-EXCITER_AMPLITUDE = 1.0
-#: coupling tendon stiffness [N/m]; compensated in the joint's own k1
-COUPLING_STIFFNESS = 1.0
-#: exciter spring stiffness relative to everything it drives
-EXCITER_STIFFNESS_RATIO = 1e12
 #: escape criterion: |x| >= ESCAPE_FACTOR x the saddle distance (or x the start, whichever is larger)
 ESCAPE_FACTOR = 3.0
 #: promised energy conservation of undamped runs at the default setting [-]
@@ -459,24 +454,14 @@ class Nonlinear(Scene):
             self._add_exciter(spec, params)
 
     def _add_exciter(self, spec: mujoco.MjSpec, params: dict[str, float]) -> None:
-        """The sinusoidal force generator of slider.py (see its module docstring)."""
+        """The sinusoidal force generator (springlab.exciter)."""
         omega = 2 * math.pi * params["force_frequency"]
-        coef = params["force_amplitude"] / (COUPLING_STIFFNESS * EXCITER_AMPLITUDE)
-        spec.joint("block").stiffness = [params["k1"] - COUPLING_STIFFNESS, 0.0, params["k3"]]
         # everything the exciter drives, as a stiffness scale: the spring at the escape radius too
         reach = ESCAPE_FACTOR * max(abs(params["x0"]), self._length_scale(params))
         driven = (abs(params["k1"]) + 3 * abs(params["k3"]) * reach**2 + params["mass"] * omega**2
-                  + params["damping"] * omega + COUPLING_STIFFNESS * coef**2 + 1.0)
-        exciter_stiffness = EXCITER_STIFFNESS_RATIO * driven
-        body = spec.worldbody.add_body(name="exciter", pos=[0, 0, -1])
-        body.mass = exciter_stiffness / omega**2
-        body.inertia = [1.0, 1.0, 1.0]
-        body.explicitinertial = True
-        body.add_joint(name="exciter", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0],
-                       stiffness=[exciter_stiffness - COUPLING_STIFFNESS * coef**2, 0, 0])
-        tendon = spec.add_tendon(name="exciter_coupling", stiffness=[COUPLING_STIFFNESS, 0, 0])
-        tendon.wrap_joint("block", 1.0)
-        tendon.wrap_joint("exciter", coef)
+                  + params["damping"] * omega)
+        exciter.add(spec, "block", force_amplitude=params["force_amplitude"],
+                    force_frequency=params["force_frequency"], driven_stiffness=driven)
 
     @staticmethod
     def _length_scale(params: dict[str, float]) -> float:
@@ -493,9 +478,7 @@ class Nonlinear(Scene):
         qvel[model.joint("block").dofadr[0]] = v0
         forcing = self._forcing(params)
         if forcing == "harmonic":
-            # e(t) = -E sin(omega t) makes the coupling force +F0 sin(omega t)
-            omega = 2 * math.pi * params["force_frequency"]
-            qvel[model.joint("exciter").dofadr[0]] = -EXCITER_AMPLITUDE * omega
+            exciter.start(model, qvel, params["force_frequency"])
         control = np.array([params["force_amplitude"] if forcing == "constant" else 0.0])
         return Setup(qpos=qpos, qvel=qvel, control=control)
 
@@ -508,10 +491,8 @@ class Nonlinear(Scene):
         k1 includes a coupling tendon's share when the exciter is present.
         """
         joint = model.joint("block")
-        k1 = float(joint.stiffness[0])
-        coupling = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TENDON, "exciter_coupling")
-        if coupling >= 0:
-            k1 += float(model.tendon_stiffness[coupling])  # its coefficient on the block is 1
+        # the coupling tendon's coefficient on the block is 1
+        k1 = float(joint.stiffness[0]) + exciter.coupling_stiffness(model)
         k2, k3 = (float(c) for c in model.jnt_stiffnesspoly[joint.id])
         if k2 != 0:
             raise ParameterError("the nonlinear scene's spring has no x^2 term (jnt_stiffnesspoly[0] must be 0)")

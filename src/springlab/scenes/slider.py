@@ -33,17 +33,9 @@ import math
 import mujoco
 import numpy as np
 
-from .. import analytic
+from .. import analytic, exciter
 from ..scene import Parameter, Reference, Scenario, Scene, Setup
 from ..simulate import Trajectory
-
-#: exciter amplitude [m]; the force scale lives in the coupling coefficient
-EXCITER_AMPLITUDE = 1.0
-#: coupling tendon stiffness [N/m]; compensated in the joint's own stiffness
-COUPLING_STIFFNESS = 1.0
-#: exciter spring stiffness relative to everything it drives
-EXCITER_STIFFNESS_RATIO = 1e12
-
 
 def _damping_for_ratio(zeta: float) -> callable:
     """Scenario preset: damping [N s/m] = 2 zeta sqrt(k m) from the other parameters."""
@@ -140,22 +132,11 @@ class Slider(Scene):
             self._add_exciter(spec, params)
 
     def _add_exciter(self, spec: mujoco.MjSpec, params: dict[str, float]) -> None:
-        """The harmonic force generator described in the module docstring."""
+        """The harmonic force generator (springlab.exciter)."""
         omega = 2 * math.pi * params["force_frequency"]
-        coef = params["force_amplitude"] / (COUPLING_STIFFNESS * EXCITER_AMPLITUDE)
-        spec.joint("slider").stiffness = [params["stiffness"] - COUPLING_STIFFNESS, 0.0, 0.0]
-        driven = (params["stiffness"] + params["mass"] * omega**2 + params["damping"] * omega
-                  + COUPLING_STIFFNESS * coef**2 + 1.0)
-        exciter_stiffness = EXCITER_STIFFNESS_RATIO * driven
-        body = spec.worldbody.add_body(name="exciter", pos=[0, 0, -1])
-        body.mass = exciter_stiffness / omega**2
-        body.inertia = [1.0, 1.0, 1.0]
-        body.explicitinertial = True
-        body.add_joint(name="exciter", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0],
-                       stiffness=[exciter_stiffness - COUPLING_STIFFNESS * coef**2, 0, 0])
-        tendon = spec.add_tendon(name="exciter_coupling", stiffness=[COUPLING_STIFFNESS, 0, 0])
-        tendon.wrap_joint("slider", 1.0)
-        tendon.wrap_joint("exciter", coef)
+        exciter.add(spec, "slider", force_amplitude=params["force_amplitude"],
+                    force_frequency=params["force_frequency"],
+                    driven_stiffness=params["stiffness"] + params["mass"] * omega**2 + params["damping"] * omega)
 
     def setup(self, model, params, scenario, steps, dt) -> Setup:
         qpos = np.zeros(model.nq)
@@ -164,9 +145,7 @@ class Slider(Scene):
         qvel[model.joint("slider").dofadr[0]] = params["v0"]
         forcing = self._forcing(params, scenario)
         if forcing == "harmonic":
-            # e(t) = -E sin(omega t) makes the coupling force +F0 sin(omega t)
-            omega = 2 * math.pi * params["force_frequency"]
-            qvel[model.joint("exciter").dofadr[0]] = -EXCITER_AMPLITUDE * omega
+            exciter.start(model, qvel, params["force_frequency"])
         control = np.array([params["force_amplitude"] if forcing == "step" else 0.0])
         return Setup(qpos=qpos, qvel=qvel, control=control)
 
@@ -180,10 +159,8 @@ class Slider(Scene):
         """
         joint = model.joint("slider")
         dof = joint.dofadr[0]
-        stiffness = float(joint.stiffness[0])
-        coupling = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TENDON, "exciter_coupling")
-        if coupling >= 0:
-            stiffness += float(model.tendon_stiffness[coupling])  # its coefficient on the block is 1
+        # the coupling tendon's coefficient on the block is 1
+        stiffness = float(joint.stiffness[0]) + exciter.coupling_stiffness(model)
         return float(model.body("block").mass[0]), stiffness, float(model.dof_damping[dof])
 
     def reference(self, model, params, scenario, time) -> Reference:

@@ -1,0 +1,78 @@
+"""Speed of springlab's trade-off sweep, side by side in one run.
+
+1. The accuracy pass of the full slider `free` sweep (5 integrators x 13
+   timesteps, 65 runs, 0.5 M steps): springlab.tradeoff.run_batched (one
+   mujoco.batch.Batch, all CPUs, and on one thread) against a plain loop of
+   springlab.simulate.simulate calls; best of 3 each, and the ratios.
+2. The whole `springlab tradeoff slider free --tol 1e-6` (sweep, timing pass,
+   verified recommendation) against its 10 s budget.
+
+Run: python benchmarks/bench_tradeoff.py
+"""
+
+from __future__ import annotations
+
+import os
+import time
+
+import numpy as np
+
+from springlab import scenes, tradeoff
+from springlab.simulate import INTEGRATORS, simulate
+
+
+def best_of(fn, repeat=3):
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - start)
+    return min(times)
+
+
+def sweep_jobs():
+    scene = scenes.get("slider")
+    chosen = scene.scenario("free")
+    params = scene.resolve(chosen, {})
+    model = scene.build(params, chosen)
+    dts = tradeoff.timestep_grid(tradeoff.fastest_rate(scene, model, params, chosen), chosen.duration)
+    jobs = []
+    for dt in dts:
+        steps = round(chosen.duration / dt)
+        setup = scene.setup(model, params, chosen, steps, dt)
+        jobs.extend(tradeoff.Job(model, name, dt, steps, setup) for name in INTEGRATORS)
+    return jobs
+
+
+def batched_vs_loop() -> None:
+    jobs = sweep_jobs()
+    steps = sum(job.steps for job in jobs)
+
+    def loop():
+        return [simulate(job.model, integrator=job.integrator, dt=job.dt, duration=job.steps * job.dt,
+                         qpos=job.setup.qpos, qvel=job.setup.qvel, control=job.setup.control) for job in jobs]
+
+    # same numbers first: the comparison is only fair if both compute the same thing
+    for a, b in zip(tradeoff.run_batched(jobs), loop()):
+        assert np.array_equal(a.qpos, b.qpos) and np.array_equal(a.qvel, b.qvel)
+    loop_time = best_of(loop)
+    batch_all = best_of(lambda: tradeoff.run_batched(jobs, nthread=0))
+    batch_one = best_of(lambda: tradeoff.run_batched(jobs, nthread=1))
+    print(f"1) accuracy pass of the slider/free sweep: {len(jobs)} runs, {steps:,} steps, {os.cpu_count()} CPUs")
+    print(f"   plain loop of simulate()       {loop_time:8.3f} s  ({steps / loop_time:,.0f} steps/s)")
+    print(f"   run_batched, one thread        {batch_one:8.3f} s  ratio loop/batched {loop_time / batch_one:5.2f}")
+    print(f"   run_batched, all CPUs          {batch_all:8.3f} s  ratio loop/batched {loop_time / batch_all:5.2f}")
+
+
+def full_tradeoff() -> None:
+    start = time.perf_counter()
+    result = tradeoff.tradeoff("slider", "free", tol=1e-6)
+    elapsed = time.perf_counter() - start
+    pick = result.recommendation
+    print(f"2) tradeoff slider free --tol 1e-6: {len(result.runs)} runs in {elapsed:.2f} s (budget 10 s);"
+          f" recommendation {pick['integrator']} dt = {pick['dt']:g} s, error {pick['max_rel_error']:.2e}")
+
+
+if __name__ == "__main__":
+    batched_vs_loop()
+    full_tradeoff()
