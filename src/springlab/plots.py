@@ -522,7 +522,7 @@ class PhasePanel:
         self.width = int(width or height)
         self.joints = list(joints or list(result.pos)[:3])
         dpi = 100.0
-        scale = max(0.9, min(1.6, self.height / 480.0))  # legible labels even in a small panel
+        scale = min(1.6, max(0.5, self.height / 400.0))  # labels legible at 360 px, not crowding 120 px
         figure = Figure(figsize=(self.width / dpi, self.height / dpi), dpi=dpi, layout="constrained")
         canvas = FigureCanvasAgg(figure)
         axes = figure.subplots(len(self.joints), 1, squeeze=False)[:, 0]

@@ -23,6 +23,11 @@ Design notes
   label are drawn with Pillow (antialiased TrueType DejaVu Sans from
   matplotlib, Unicode-capable, e.g. Greek letters) in dark text on a
   translucent white box.
+* **Everything moving stays in the picture.** A scene's MJCF camera frames
+  its usual motion; when a run carries a body out of a fixed camera's view
+  (:func:`framed_model`), a copy of the model gets that camera backed off
+  along its own axis, same direction and lens, just enough to hold every
+  moving geom at every frame. The caller's model is never changed.
 * **Frames follow the clock, not the integrator.** Frames are sampled at
   :func:`frame_times` (``k / fps``) by linear interpolation of the recorded
   states (:func:`sample_states`), so video time equals simulation time no
@@ -796,6 +801,8 @@ def render_video(
     camera:
         Camera name or index from the model, ``-1`` for MuJoCo's free camera,
         or ``None``: the model's first camera if it has one, else the free camera.
+        A fixed camera on the world body backs off if the motion would leave
+        its view (see :func:`framed_model`).
     duration:
         Seconds of simulation to show (default ``time[-1]``). Frames are
         sampled at ``frame_times(duration, fps)`` by linear interpolation of the
