@@ -42,7 +42,7 @@ def _browse(chromium, profile, *args, timeout=120):
 
 
 @pytest.fixture(scope="module")
-def demo_out(tmp_path_factory, monkeypatch_module=None):
+def demo_out(tmp_path_factory):
     """A small demo: two scenes' runs through the real media and report steps, plus foreign artifacts."""
     out = tmp_path_factory.mktemp("demo")
     state = demo.DemoState(out=out)
