@@ -193,7 +193,7 @@ def _stability_advice(scene: Scene, model, params, scenario, integrator: str, dt
     """': omega*dt = ... exceeds the <integrator> stability limit ...; use ...' or ''."""
     worst = None
     for omega, zeta in scene.modes(model, params, scenario):
-        limit = stability_limit(integrator, zeta)
+        limit = scene.stability_limit(model, params, scenario, integrator, omega, zeta)
         ratio = omega * dt / limit
         if worst is None or ratio > worst[0]:
             worst = (ratio, omega, zeta, limit)

@@ -27,7 +27,7 @@ import numpy as np
 
 from . import model_files
 from .errors import ParameterError, UnknownNameError
-from .simulate import Trajectory, quiet_mujoco
+from .simulate import Trajectory, quiet_mujoco, stability_limit
 
 
 @dataclasses.dataclass(frozen=True)
@@ -299,6 +299,17 @@ class Scene:
     def modes(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[tuple[float, float]]:
         """[(natural frequency [rad/s], damping ratio [-])] of the run, for stability advice."""
         return []
+
+    def stability_limit(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, integrator: str,
+        omega: float, zeta: float,
+    ) -> float:
+        """Largest omega*dt [-] at which `integrator` is stable on the mode (omega [rad/s], zeta [-]).
+
+        Default: simulate.stability_limit, which assumes the damping is joint damping;
+        a scene whose damping MuJoCo treats differently (e.g. tendon damping) overrides this.
+        """
+        return stability_limit(integrator, zeta)
 
     def phase_field(
         self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario

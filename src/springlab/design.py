@@ -1,0 +1,642 @@
+"""The printer-head design study: how fast can the carriage be positioned, and which properties matter?
+
+The chapter's two design questions (section 5.7), answered by simulation:
+the `move` scenario of the `printer_head` scene (a bang-bang point-to-point move
+at the motor's force limit, then the residual belt vibration) is run for every
+combination of four properties,
+
+    belt_stiffness k [N/m], carriage_mass m_c [kg], damping_ratio zeta [-], drive_force F [N],
+
+each on a log-symmetric grid around the scene's default (default x span^u,
+u in [-1, 1], the default in the middle), with the motor-side mass, move
+distance and positioning band held at the scene's values. For each
+configuration the positioning time is the move time plus the settling time
+(until the carriage stays inside +-band of the target for good).
+
+How the runs are made: one `mujoco.batch.Batch` holds every configuration as
+its own simulation, with per-simulation carriage mass (body_mass), belt
+stiffness and damping (tendon_stiffness, tendon_damping), force limit
+(actuator_ctrlrange) and timestep (opt.timestep). Each simulation gets
+dt = omega_dt / omega_n of its own belt mode (RK4; omega_dt = 0.1: 63 steps per
+period, relative phase error (omega dt)^4 / 120 = 1e-6 per radian), so every
+configuration is resolved equally well and slow ones take no more steps than
+fast ones. The runs advance in chunks of steps through `Batch.rollout` (controls
+(n, steps, 1), the bang-bang switches on each simulation's own step grid) and a
+simulation stops as soon as its settling is certified: once the move is over
+the carriage stays within |X - D| + (m_m / M) sqrt(2 E / k) of the target for
+ever (printer_head.after_force_bound), and when that is inside the band its
+last exit from the band is final.
+
+Sensitivities: the elasticity d ln T / d ln p of positioning time T with
+respect to each property p, (1) by least squares of ln T on all ln p over the
+whole grid (global, the ranking), and (2) by central differences between the
+grid neighbours of the default (local). The properties are ranked by |global
+elasticity|, and the positioning time is plotted over the two most
+influential ones, the other two at their defaults.
+
+The analytic estimate beside every simulated time:
+
+    T ~= 2 sqrt(D M / F) + ln(A / band) / (zeta omega_n)
+
+the minimum bang-bang move time plus the time for the residual vibration's
+envelope A e^(-zeta omega_n t) to shrink into the band, with A the exact
+envelope of the carriage's residual vibration after the (grid-aligned) move
+(for a release at rest from a0, A = a0 / sqrt(1 - zeta^2): the chapter's
+ln(1 / (band / a0 sqrt(1 - zeta^2))) / (zeta omega_n)). A worst-case form needs
+no simulation at all: the residual envelope is at most 4 F m_c m_m / (M^2 k)
+(the residual stretch of an undamped belt is 4 sin^2(omega_n T / 4) times the
+static stretch F m_c / (M k)), so
+
+    T_worst = 2 sqrt(D M / F) + ln(4 F m_c m_m / (M^2 k band)) / (zeta omega_n).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import pathlib
+import time as _time
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import mujoco
+import numpy as np
+from mujoco import batch as mjbatch
+
+from . import outputs, scenes
+from .errors import BadInputError, DivergedError, UnknownNameError
+from .scenes.printer_head import (
+    PrinterHead,
+    after_force_bound,
+    minimum_move_time,
+    move_residual_stretch,
+    settling_estimate,
+)
+from .simulate import quiet_mujoco
+
+#: the scenes that have a design study
+STUDIES = ("printer_head",)
+
+#: the swept properties, in order, with units
+PROPERTIES: Mapping[str, str] = {
+    "belt_stiffness": "N/m",
+    "carriage_mass": "kg",
+    "damping_ratio": "-",
+    "drive_force": "N",
+}
+
+#: each property spans default x SPANS^[-1, 1]: softer/narrower to steel-cord belts (x/4..x4),
+#: a bare head to a head with large cartridges (x/2..x2), belt rubber to an added damper
+#: (x/3..x3), a weaker motor to a stronger one (x/4..x4)
+SPANS: Mapping[str, float] = {
+    "belt_stiffness": 4.0,
+    "carriage_mass": 2.0,
+    "damping_ratio": 3.0,
+    "drive_force": 4.0,
+}
+
+#: default grid points per property (7^4 = 2401 configurations)
+DEFAULT_LEVELS = 7
+#: omega_n * dt of every simulation
+OMEGA_DT = 0.1
+#: steps per batched rollout call
+CHUNK = 256
+#: simulated time [s] after which an unsettled configuration is given up (reported as inf)
+MAX_DURATION = 5.0
+
+
+@dataclasses.dataclass
+class Study:
+    """A finished design sweep; arrays are per configuration, (n,).
+
+    Attributes:
+      base: the scene parameters the sweep starts from (SI).
+      grids: property -> its grid levels (the default in the middle).
+      values: property -> per-configuration value.
+      move_time_s: realized bang-bang move time [s].
+      settling_time_s: time after the move until the carriage stays in the band [s] (inf: never).
+      positioning_time_s: move + settling [s].
+      residual_amplitude_m: largest carriage deviation from the target after the move [m].
+      estimate_s: analytic estimate of positioning time [s] (module docstring).
+      worst_case_estimate_s: the phase-independent upper estimate [s].
+      natural_frequency_hz: belt mode [Hz].
+      dt_s: timestep of each simulation [s].
+      steps: physics steps taken in total.
+      wall_time_s: wall time of the batched simulation [s].
+      nthread: threads the batch ran on.
+    """
+
+    base: dict[str, float]
+    grids: dict[str, np.ndarray]
+    values: dict[str, np.ndarray]
+    move_time_s: np.ndarray
+    settling_time_s: np.ndarray
+    positioning_time_s: np.ndarray
+    residual_amplitude_m: np.ndarray
+    estimate_s: np.ndarray
+    worst_case_estimate_s: np.ndarray
+    natural_frequency_hz: np.ndarray
+    dt_s: np.ndarray
+    steps: int
+    wall_time_s: float
+    nthread: int
+
+    @property
+    def size(self) -> int:
+        """Number of configurations."""
+        return len(self.positioning_time_s)
+
+    @property
+    def levels(self) -> int:
+        """Grid points per property."""
+        return len(next(iter(self.grids.values())))
+
+    def default_index(self) -> int:
+        """Index of the configuration at every property's default (the grid centre)."""
+        centre = self.levels // 2
+        return int(np.ravel_multi_index((centre,) * len(self.grids), (self.levels,) * len(self.grids)))
+
+    def elasticities(self) -> dict[str, float]:
+        """Global elasticity d ln T / d ln p [-] per property: least squares over the grid."""
+        return _regression(self.values, self.positioning_time_s)[0]
+
+    def regression_r2(self) -> float:
+        """Coefficient of determination [-] of the log-log fit."""
+        return _regression(self.values, self.positioning_time_s)[1]
+
+    def local_elasticities(self, times: np.ndarray | None = None) -> dict[str, float]:
+        """Elasticity [-] at the default by central differences between grid neighbours."""
+        times = self.positioning_time_s if times is None else times
+        shape = (self.levels,) * len(self.grids)
+        grid_times = np.log(times).reshape(shape)
+        centre = self.levels // 2
+        out = {}
+        for axis, name in enumerate(self.grids):
+            index = [centre] * len(shape)
+            index[axis] = centre + 1
+            upper = grid_times[tuple(index)]
+            index[axis] = centre - 1
+            lower = grid_times[tuple(index)]
+            levels = np.log(self.grids[name])
+            out[name] = float((upper - lower) / (levels[centre + 1] - levels[centre - 1]))
+        return out
+
+    def ranking(self) -> list[str]:
+        """Properties by decreasing |global elasticity|."""
+        elasticity = self.elasticities()
+        return sorted(elasticity, key=lambda name: -abs(elasticity[name]))
+
+
+# -- grids -----------------------------------------------------------------------
+
+
+def base_parameters(overrides: Mapping[str, Any] | None = None) -> dict[str, float]:
+    """The printer_head `move` parameters the sweep starts from (MJCF defaults < overrides).
+
+    Raises:
+      UnknownNameError, ParameterError: as for `springlab run`.
+    """
+    scene = scenes.get("printer_head")
+    return scene.resolve(scene.scenario("move"), dict(overrides or {}))
+
+
+def default_properties(base: Mapping[str, float]) -> dict[str, float]:
+    """The swept properties' values at `base`: damping ratio from the belt damping."""
+    m_c, m_m = base["carriage_mass"], base["motor_mass"]
+    reduced = m_c * m_m / (m_c + m_m)
+    return {
+        "belt_stiffness": base["belt_stiffness"],
+        "carriage_mass": m_c,
+        "damping_ratio": base["belt_damping"] / (2.0 * math.sqrt(base["belt_stiffness"] * reduced)),
+        "drive_force": base["drive_force"],
+    }
+
+
+def make_grids(base: Mapping[str, float], levels: int = DEFAULT_LEVELS) -> dict[str, np.ndarray]:
+    """Property -> `levels` values, default x span^u for u evenly in [-1, 1].
+
+    Raises:
+      BadInputError: `levels` is not an odd integer >= 3 (the default must be a grid point).
+    """
+    if not isinstance(levels, (int, np.integer)) or levels < 3 or levels % 2 == 0:
+        raise BadInputError(f"levels must be an odd integer >= 3 (the default is the middle one), got {levels!r}")
+    defaults = default_properties(base)
+    if defaults["damping_ratio"] <= 0:
+        raise BadInputError("the design study needs belt_damping > 0 (it sweeps the damping ratio around it)")
+    exponents = np.linspace(-1.0, 1.0, levels)
+    return {name: defaults[name] * SPANS[name] ** exponents for name in PROPERTIES}
+
+
+def configurations(grids: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Full factorial of the grids: property -> (n,) values, the last property fastest."""
+    mesh = np.meshgrid(*grids.values(), indexing="ij")
+    return {name: axis.ravel() for name, axis in zip(grids, mesh)}
+
+
+# -- the batched simulation --------------------------------------------------------
+
+
+def belt_damping(values: Mapping[str, np.ndarray], motor_mass: float) -> np.ndarray:
+    """Belt damping c = 2 zeta sqrt(k mu) [N s/m] of each configuration."""
+    m_c = np.asarray(values["carriage_mass"], float)
+    reduced = m_c * motor_mass / (m_c + motor_mass)
+    return 2.0 * np.asarray(values["damping_ratio"]) * np.sqrt(np.asarray(values["belt_stiffness"]) * reduced)
+
+
+def config_parameters(base: Mapping[str, float], values: Mapping[str, np.ndarray], i: int) -> dict[str, float]:
+    """The scene parameters of configuration i (belt damping from its damping ratio)."""
+    params = dict(base)
+    for name in ("belt_stiffness", "carriage_mass", "drive_force"):
+        params[name] = float(values[name][i])
+    params["belt_damping"] = float(belt_damping({n: np.atleast_1d(values[n][i]) for n in PROPERTIES},
+                                                base["motor_mass"])[0])
+    return params
+
+
+def timesteps(values: Mapping[str, np.ndarray], motor_mass: float, omega_dt: float = OMEGA_DT) -> np.ndarray:
+    """dt = omega_dt / omega_n [s] of each configuration's belt mode."""
+    m_c = np.asarray(values["carriage_mass"], float)
+    reduced = m_c * motor_mass / (m_c + motor_mass)
+    return omega_dt / np.sqrt(np.asarray(values["belt_stiffness"]) / reduced)
+
+
+def move_profiles(base: Mapping[str, float], values: Mapping[str, np.ndarray],
+                  dt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(steps per half-move, force [N]) per configuration, as PrinterHead.move_profile."""
+    half_steps = np.empty(len(dt), int)
+    force = np.empty(len(dt))
+    for i in range(len(dt)):
+        half_steps[i], force[i] = PrinterHead.move_profile(config_parameters(base, values, i), float(dt[i]))
+    return half_steps, force
+
+
+def simulate_moves(
+    base: Mapping[str, float],
+    values: Mapping[str, np.ndarray],
+    *,
+    omega_dt: float = OMEGA_DT,
+    nthread: int = 0,
+    chunk: int = CHUNK,
+    max_duration: float = MAX_DURATION,
+) -> dict[str, Any]:
+    """Run the `move` scenario for every configuration in one mujoco.batch.Batch.
+
+    Args:
+      base: scene parameters (move_distance [m], positioning_band [m], motor_mass [kg], ...).
+      values: property -> (n,) values (PROPERTIES).
+      omega_dt: omega_n dt [-] of every simulation (RK4).
+      nthread: batch threads (0: one per CPU).
+      chunk: steps per rollout call.
+      max_duration: simulated time [s] after which an unsettled configuration is given up.
+
+    Returns:
+      dict of (n,) arrays: move_time_s, settling_time_s, positioning_time_s,
+      residual_amplitude_m, dt_s, steps (per configuration); and steps_total,
+      wall_time_s, nthread.
+
+    Raises:
+      DivergedError: a simulation blew up (MuJoCo's warning counters rose).
+    """
+    scene: PrinterHead = scenes.get("printer_head")
+    scenario = scene.scenario("move")
+    params = dict(base)
+    model = scene.build(params, scenario)
+    model.opt.integrator = mujoco.mjtIntegrator.mjINT_RK4
+    n = len(values["belt_stiffness"])
+    m_m = params["motor_mass"]
+    m_c = np.asarray(values["carriage_mass"], float)
+    total = m_c + m_m
+    stiffness = np.asarray(values["belt_stiffness"], float)
+    damping = belt_damping(values, m_m)
+    limit = np.asarray(values["drive_force"], float)
+    distance, band = params["move_distance"], params["positioning_band"]
+    dt = timesteps(values, m_m, omega_dt)
+    half_steps, force = move_profiles(params, values, dt)
+    move_steps = 2 * half_steps
+
+    with quiet_mujoco():
+        batch = mjbatch.Batch(model, nsim=n, nthread=nthread)
+        batch.body("carriage").mass = m_c[:, None]
+        belt = model.tendon("belt").id
+        batch.expand("tendon_stiffness")[:, belt] = stiffness
+        batch.expand("tendon_damping")[:, belt] = damping
+        batch.actuator("drive").ctrlrange = np.column_stack([-limit, limit])
+        batch.expand("opt.timestep")[:] = dt
+        batch.set_const()
+        # start: belt stretched by `deflection`, centre of mass at rest at 0 (as the scene)
+        stretch0 = params["deflection"]
+        batch.joint("carriage").qpos = (-m_m * stretch0 / total)[:, None]
+        batch.joint("motor").qpos = (m_c * stretch0 / total)[:, None]
+    carriage = model.joint("carriage").qposadr[0]
+    motor = model.joint("motor").qposadr[0]
+
+    steps = np.zeros(n, int)  # steps taken by each simulation
+    excess = np.abs(-m_m * stretch0 / total - distance) - band  # |q_c - D| - band at the current state
+    last_exit = np.zeros(n)  # time [s] of the last exit from the band so far
+    residual = np.zeros(n)
+    settled = np.zeros(n, bool)
+    active = np.arange(n)
+    offsets = np.arange(chunk)
+    start = _time.perf_counter()
+    while active.size:
+        taken = steps[active][:, None] + offsets[None, :]  # index of each step about to be taken
+        half = half_steps[active][:, None]
+        f = force[active][:, None]
+        control = np.where(taken < half, f, np.where(taken < 2 * half, -f, 0.0))[..., None]
+        with quiet_mujoco():
+            record = batch.rollout(chunk, control, record=("qpos", "qvel"), ids=active)
+        if np.any(batch.warning[active, :, 1] > 0):
+            bad = active[np.any(batch.warning[active, :, 1] > 0, axis=1)]
+            raise DivergedError(f"design sweep: {len(bad)} simulations diverged (first: configuration {bad[0]})")
+        qpos, qvel = record["qpos"], record["qvel"]
+        deviation = qpos[:, :, carriage] - distance
+        chunk_excess = np.column_stack([excess[active], np.abs(deviation) - band])
+        # the last sample outside the band in [current state, chunk end]; exits interpolated linearly
+        outside = chunk_excess > 0
+        has = outside.any(axis=1)
+        last = chunk - np.argmax(outside[:, ::-1], axis=1)  # column of the last True
+        rows = np.flatnonzero(has)
+        sims = active[rows]
+        col = last[rows]
+        inner = col < chunk
+        t_col = (steps[sims] + col) * dt[sims]
+        a = chunk_excess[rows, col]
+        b = chunk_excess[rows, np.minimum(col + 1, chunk)]
+        last_exit[sims] = np.where(inner, t_col + dt[sims] * a / np.where(inner, a - b, 1.0), t_col)
+        # the residual vibration: samples at or after the end of the move (state index taken + 1)
+        after = (taken + 1) >= move_steps[active][:, None]
+        residual[active] = np.maximum(residual[active], np.max(np.where(after, np.abs(deviation), 0.0), axis=1))
+        excess[active] = chunk_excess[:, -1]
+        steps[active] += chunk
+        # certify: force off, and the energy bound inside the band
+        q_c, q_m = qpos[:, -1, carriage], qpos[:, -1, motor]
+        v_c, v_m = qvel[:, -1, carriage], qvel[:, -1, motor]
+        centre = (m_c[active] * q_c + m_m * q_m) / total[active]
+        bound = after_force_bound(centre - distance, q_m - q_c, v_m - v_c, m_c[active], m_m, stiffness[active])
+        certified = (steps[active] >= move_steps[active]) & (bound <= band)
+        settled[active[certified]] = True
+        active = active[~certified & (steps[active] * dt[active] <= max_duration)]
+    wall = _time.perf_counter() - start
+
+    move_time = move_steps * dt
+    settling = np.where(settled, np.maximum(last_exit - move_time, 0.0), np.inf)
+    return {
+        "move_time_s": move_time,
+        "settling_time_s": settling,
+        "positioning_time_s": move_time + settling,
+        "residual_amplitude_m": residual,
+        "dt_s": dt,
+        "steps": steps,
+        "steps_total": int(steps.sum()),
+        "wall_time_s": wall,
+        "nthread": batch.nthread,
+    }
+
+
+# -- the analytic estimate ---------------------------------------------------------
+
+
+def estimates(base: Mapping[str, float], values: Mapping[str, np.ndarray],
+              dt: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(estimate [s], worst-case estimate [s], natural frequency [Hz]) per configuration.
+
+    estimate: realized move time + ln(A / band) / (zeta omega_n), A the exact
+    residual envelope after the grid-aligned move; worst case: the minimum move
+    time 2 sqrt(D M / F) + ln(4 F m_c m_m / (M^2 k band)) / (zeta omega_n).
+    """
+    n = len(dt)
+    estimate, worst, frequency = np.empty(n), np.empty(n), np.empty(n)
+    m_m, distance, band = base["motor_mass"], base["move_distance"], base["positioning_band"]
+    for i in range(n):
+        params = config_parameters(base, values, i)
+        m_c, k, force = params["carriage_mass"], params["belt_stiffness"], params["drive_force"]
+        total = m_c + m_m
+        reduced = m_c * m_m / total
+        omega = math.sqrt(k / reduced)
+        zeta = float(values["damping_ratio"][i])
+        frequency[i] = omega / (2 * math.pi)
+        half_steps, _ = PrinterHead.move_profile(params, float(dt[i]))
+        stretch, rate = move_residual_stretch(params, float(dt[i]))
+        omega_d = omega * math.sqrt(1 - zeta * zeta)
+        envelope = (m_m / total) * math.hypot(stretch, (rate + zeta * omega * stretch) / omega_d)
+        estimate[i] = 2 * half_steps * dt[i] + settling_estimate(envelope, band, zeta, omega)
+        worst_envelope = 4 * force * m_c * m_m / (total**2 * k)
+        worst[i] = minimum_move_time(distance, total, force) + settling_estimate(worst_envelope, band, zeta, omega)
+    return estimate, worst, frequency
+
+
+# -- the study -------------------------------------------------------------------------
+
+
+def run_study(
+    scene: str = "printer_head",
+    *,
+    levels: int = DEFAULT_LEVELS,
+    nthread: int = 0,
+    omega_dt: float = OMEGA_DT,
+    **overrides: Any,
+) -> Study:
+    """Sweep the four properties, simulate every configuration, and estimate each analytically.
+
+    Args:
+      scene: the scene to study (only 'printer_head' has a design study).
+      levels: odd number of grid points per property (levels^4 configurations).
+      nthread: batch threads (0: one per CPU).
+      omega_dt: omega_n dt [-] of every simulation.
+      **overrides: printer_head parameters to start from (SI), e.g. move_distance=0.2 [m].
+
+    Raises:
+      UnknownNameError: an unknown scene or parameter.
+      BadInputError: bad levels, threads or parameter values.
+    """
+    if scene not in STUDIES:
+        raise UnknownNameError("design study", str(scene), STUDIES)
+    if not isinstance(nthread, (int, np.integer)) or nthread < 0:
+        raise BadInputError(f"threads must be an integer >= 0 (0: one per CPU), got {nthread!r}")
+    if not (isinstance(omega_dt, (int, float)) and 0 < omega_dt <= 1.0):
+        raise BadInputError(f"omega_dt must be a number in (0, 1] (RK4 resolution), got {omega_dt!r}")
+    base = base_parameters(overrides)
+    grids = make_grids(base, levels)
+    values = configurations(grids)
+    runs = simulate_moves(base, values, omega_dt=omega_dt, nthread=nthread)
+    estimate, worst, frequency = estimates(base, values, runs["dt_s"])
+    return Study(
+        base=base, grids=grids, values=values,
+        move_time_s=runs["move_time_s"], settling_time_s=runs["settling_time_s"],
+        positioning_time_s=runs["positioning_time_s"], residual_amplitude_m=runs["residual_amplitude_m"],
+        estimate_s=estimate, worst_case_estimate_s=worst, natural_frequency_hz=frequency,
+        dt_s=runs["dt_s"], steps=runs["steps_total"], wall_time_s=runs["wall_time_s"], nthread=runs["nthread"],
+    )
+
+
+def _regression(values: Mapping[str, np.ndarray], times: np.ndarray) -> tuple[dict[str, float], float]:
+    """Least squares ln T = a + sum e_p ln p over the finite times: ({p: e_p}, R^2)."""
+    finite = np.isfinite(times) & (times > 0)
+    design = np.column_stack([np.ones(finite.sum())] + [np.log(values[p][finite]) for p in PROPERTIES])
+    target = np.log(times[finite])
+    coefficients, *_ = np.linalg.lstsq(design, target, rcond=None)
+    residual = target - design @ coefficients
+    r2 = 1.0 - float(residual @ residual) / float(np.sum((target - target.mean()) ** 2))
+    return {p: float(e) for p, e in zip(PROPERTIES, coefficients[1:])}, r2
+
+
+def summary(study: Study) -> dict[str, Any]:
+    """The study as a JSON-ready dict (what `springlab design --json` prints)."""
+    i = study.default_index()
+    finite = np.isfinite(study.positioning_time_s)
+    ratio = study.estimate_s[finite] / study.positioning_time_s[finite]
+    fastest = int(np.argmin(study.positioning_time_s))
+    return {
+        "scene": "printer_head",
+        "configurations": study.size,
+        "levels": study.levels,
+        "properties": {name: {"unit": PROPERTIES[name], "grid": study.grids[name]} for name in PROPERTIES},
+        "fixed": {name: study.base[name] for name in ("motor_mass", "move_distance", "positioning_band")},
+        "default": {
+            "properties": {name: float(study.values[name][i]) for name in PROPERTIES},
+            "natural_frequency_hz": float(study.natural_frequency_hz[i]),
+            "move_time_s": float(study.move_time_s[i]),
+            "settling_time_s": float(study.settling_time_s[i]),
+            "positioning_time_s": float(study.positioning_time_s[i]),
+            "residual_amplitude_m": float(study.residual_amplitude_m[i]),
+            "estimate_s": float(study.estimate_s[i]),
+            "worst_case_estimate_s": float(study.worst_case_estimate_s[i]),
+        },
+        "fastest": {
+            "properties": {name: float(study.values[name][fastest]) for name in PROPERTIES},
+            "positioning_time_s": float(study.positioning_time_s[fastest]),
+            "move_time_s": float(study.move_time_s[fastest]),
+        },
+        "positioning_time_s": {
+            "min": float(np.min(study.positioning_time_s)),
+            "median": float(np.median(study.positioning_time_s)),
+            "max": float(np.max(study.positioning_time_s)),
+            "unsettled": int(np.sum(~finite)),
+        },
+        "elasticities": study.elasticities(),
+        "regression_r2": study.regression_r2(),
+        "local_elasticities": study.local_elasticities(),
+        "local_elasticities_of_estimate": study.local_elasticities(study.estimate_s),
+        "ranking": study.ranking(),
+        "estimate_over_simulation": {
+            "median": float(np.median(ratio)),
+            "p05": float(np.percentile(ratio, 5)),
+            "p95": float(np.percentile(ratio, 95)),
+        },
+        "worst_case_covers": float(np.mean(study.worst_case_estimate_s[finite] >= study.positioning_time_s[finite]
+                                           - study.dt_s[finite] * 2)),
+        "steps": study.steps,
+        "wall_time_s": study.wall_time_s,
+        "configurations_per_s": study.size / study.wall_time_s,
+        "nthread": study.nthread,
+    }
+
+
+# -- plot and files ----------------------------------------------------------------------
+
+_LABELS = {
+    "belt_stiffness": "belt stiffness k [N/m]",
+    "carriage_mass": "carriage mass m_c [kg]",
+    "damping_ratio": "belt damping ratio zeta [-]",
+    "drive_force": "drive force F [N]",
+}
+
+
+def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
+    """PNG: positioning time over the two most influential properties (the others at their
+    defaults), and simulated vs analytic positioning time of every configuration."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    first, second = study.ranking()[:2]
+    axes_order = list(study.grids)
+    shape = (study.levels,) * len(axes_order)
+    centre = study.levels // 2
+    index = [centre] * len(shape)
+    index[axes_order.index(first)] = slice(None)
+    index[axes_order.index(second)] = slice(None)
+    plane = study.positioning_time_s.reshape(shape)[tuple(index)] * 1e3  # ms
+    if axes_order.index(first) > axes_order.index(second):
+        plane = plane.T  # rows: first property
+    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 5), constrained_layout=True)
+    x, y = study.grids[second], study.grids[first]
+    mesh = left.pcolormesh(x, y, plane, shading="nearest", cmap="viridis")
+    contours = left.contour(x, y, plane, colors="white", linewidths=0.8)
+    left.clabel(contours, fmt="%.0f ms", fontsize=8)
+    left.plot(x[centre], y[centre], "w*", markersize=14, markeredgecolor="k", label="default")
+    left.set_xscale("log")
+    left.set_yscale("log")
+    left.set_xlabel(_LABELS[second])
+    left.set_ylabel(_LABELS[first])
+    elasticity = study.elasticities()
+    others = [p for p in axes_order if p not in (first, second)]
+    left.set_title(f"positioning time [ms], {study.base['move_distance'] * 1e3:.4g} mm to "
+                   f"+-{study.base['positioning_band'] * 1e6:.3g} um\n"
+                   + ", ".join(f"{p} = {study.grids[p][centre]:.3g}" for p in others), fontsize=10)
+    left.legend(loc="upper right", fontsize=8)
+    fig.colorbar(mesh, ax=left, label="positioning time [ms]")
+
+    finite = np.isfinite(study.positioning_time_s)
+    sim, est = study.positioning_time_s[finite] * 1e3, study.estimate_s[finite] * 1e3
+    right.loglog(sim, est, ".", markersize=3, alpha=0.5, label="analytic estimate")
+    right.loglog(sim, study.worst_case_estimate_s[finite] * 1e3, ".", markersize=2, alpha=0.3,
+                 label="worst-case estimate")
+    span = [min(sim.min(), est.min()) * 0.9, max(sim.max(), est.max()) * 1.1]
+    right.plot(span, span, "k-", linewidth=0.8, label="equal")
+    right.set_xlabel("simulated positioning time [ms] (MuJoCo, batched)")
+    right.set_ylabel("estimated positioning time [ms]")
+    right.set_title(f"{study.size} configurations; elasticities "
+                    + ", ".join(f"{p.split('_')[0]} {elasticity[p]:+.2f}" for p in study.ranking()), fontsize=10)
+    right.legend(fontsize=8)
+    path = pathlib.Path(path)
+    with outputs.atomic_path(path) as temporary:
+        fig.savefig(temporary, dpi=110, format="png")
+    plt.close(fig)
+    return path
+
+
+def write(study: Study, directory: str | pathlib.Path) -> list[pathlib.Path]:
+    """Write design.json, configurations.csv and positioning_time.png into `directory`."""
+    folder = outputs.prepare_directory(directory)
+    columns = {name: study.values[name] for name in PROPERTIES}
+    columns.update({
+        "natural_frequency_hz": study.natural_frequency_hz,
+        "dt_s": study.dt_s,
+        "move_time_s": study.move_time_s,
+        "settling_time_s": study.settling_time_s,
+        "positioning_time_s": study.positioning_time_s,
+        "residual_amplitude_m": study.residual_amplitude_m,
+        "estimate_s": study.estimate_s,
+        "worst_case_estimate_s": study.worst_case_estimate_s,
+    })
+    written = outputs.write_text_files(folder, {
+        "design.json": outputs.dumps(summary(study)) + "\n",
+        "configurations.csv": outputs.csv_text(columns),
+    })
+    written.append(plot(study, folder / "positioning_time.png"))
+    return written
+
+
+def answer(study: Study) -> str:
+    """The two design questions answered in words, with the study's numbers."""
+    s = summary(study)
+    d = s["default"]
+    e = s["elasticities"]
+    ranking = s["ranking"]
+    base = study.base
+    return (
+        f"How fast? With the defaults (carriage {d['properties']['carriage_mass']:.3g} kg, motor side "
+        f"{base['motor_mass']:.3g} kg, belt {d['properties']['belt_stiffness']:.3g} N/m at zeta = "
+        f"{d['properties']['damping_ratio']:.3g}, belt mode {d['natural_frequency_hz']:.0f} Hz, "
+        f"{d['properties']['drive_force']:.3g} N) a {base['move_distance'] * 1e3:.4g} mm move to "
+        f"+-{base['positioning_band'] * 1e6:.3g} um takes {d['positioning_time_s'] * 1e3:.1f} ms: "
+        f"{d['move_time_s'] * 1e3:.1f} ms of bang-bang move (the minimum at this force) and "
+        f"{d['settling_time_s'] * 1e3:.1f} ms of settling (estimate {d['estimate_s'] * 1e3:.1f} ms total, "
+        f"worst case {d['worst_case_estimate_s'] * 1e3:.1f} ms). Over the {s['configurations']} configurations "
+        f"it ranges {s['positioning_time_s']['min'] * 1e3:.1f}-{s['positioning_time_s']['max'] * 1e3:.0f} ms. "
+        f"Which properties? By elasticity d ln T / d ln p: "
+        + ", ".join(f"{p} {e[p]:+.2f}" for p in ranking)
+        + "."
+    )

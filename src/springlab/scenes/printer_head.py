@@ -1,0 +1,468 @@
+"""printer_head: an inkjet carriage driven through a flexible belt (chapter section 5.7).
+
+Two slide joints along the rail, displacements from rest [m]: `carriage` (q_c,
+mass m_c) and `motor` (q_m, the belt's drive point on the motor pulley; the
+motor's reflected inertia J/r^2 is its mass m_m). The belt is a fixed tendon of
+length s = q_m - q_c with stiffness k [N/m] and damping c [N s/m]; the motor
+pushes the drive point with force F(t) [N]:
+
+    m_c q_c'' = k s + c s'            m_m q_m'' = F - k s - c s'
+
+With M = m_c + m_m and mu = m_c m_m / M this splits exactly into
+
+* the rigid-body motion of the centre of mass X = (m_c q_c + m_m q_m) / M:
+  M X'' = F (no stiffness to ground: K is singular);
+* one flexible mode, the belt stretch: mu s'' + c s' + k s = (m_c / M) F,
+  natural frequency omega_n = sqrt(k / mu), damping ratio c / (2 sqrt(k mu)).
+
+The carriage is q_c = X - (m_m / M) s: it follows the centre of mass and
+vibrates with the belt at a fraction m_m / M of its stretch.
+
+Parameters (SI): carriage_mass [kg], motor_mass [kg], belt_stiffness [N/m],
+belt_damping [N s/m], drive_force [N] (the motor's force limit),
+move_distance [m], positioning_band [m] (half-width of the band around the
+target), deflection [m] (belt stretch at t = 0, centre of mass at rest at 0).
+All but `deflection` default to models/printer_head.xml and are read back from
+the compiled model; the XML says where each default comes from.
+
+Scenarios, each with its exact solution (analytic.linear_response):
+
+* `step_force`: F = drive_force from rest: constant control, exact for every
+  integrator.
+* `move` (default): a point-to-point move of move_distance D, bang-bang (the
+  minimum-time profile under a force limit: +F for the first half, -F for the
+  second), then the residual vibration. The minimum move time at full force is
+  2 sqrt(D M / F); the switch times are put on the step grid (half-move time
+  rounded up to n dt) and the force lowered to M D / (n dt)^2 so the centre of
+  mass still stops exactly at D. A piecewise-constant control switched on step
+  boundaries is exact for every integrator, so RK4 keeps its order. The
+  realized move time and force are reported.
+* `settle`: release at rest from a deflected belt (default: the stretch the
+  belt has while the motor accelerates at full force, F m_c / (M k)).
+
+Quantities: the flexible mode's `natural_frequency_hz` and `damping_ratio` from
+M, C, K, and the same from MuJoCo's linearization of its own step map at the
+run's integrator and dt (`linearized_*`: eigenvalues lambda of the one-step
+Jacobian, s = ln(lambda) / dt); `move_time_s`, `residual_amplitude_m` (largest
+carriage deviation from the target after the move), `settling_time_s` (time
+after the move ends, or after release, from which the carriage stays inside
++-positioning_band for good), `positioning_time_s` = move + settling, and the
+analytic estimates. "For good" is certified, not assumed: after the force is
+off the belt's energy E = mu s'^2/2 + k s^2/2 cannot grow, so the carriage
+stays within |X - target| + (m_m / M) sqrt(2 E / k) of the target for ever;
+a run that ends before that bound is inside the band reports
+settled_for_good = False and settling_time_s = inf.
+
+Measured on mujoco 4.0 (tests/test_printer_head_integrators.py): RK4 treats the
+belt like any force; `euler` treats TENDON damping explicitly (unlike joint
+damping), so its stability limit on the belt mode is omega dt < 2 sqrt(zeta^2 +
+1) - 2 zeta, below the joint-damping limit 2 sqrt(zeta^2 + 1) + 2 zeta;
+`implicit` and `implicitfast` solve with M + h diag(C): the damping on each
+joint's own row is implicit, the belt's coupling term explicit (and momentum is
+then conserved only to first order). `stability_limit` computes the limit from
+MuJoCo's own step map, so divergence advice is right for every integrator.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+
+import mujoco
+import numpy as np
+
+from .. import analytic
+from ..scene import Parameter, Reference, Scenario, Scene, Setup
+from ..simulate import Trajectory, integrator_id, quiet_mujoco
+from ..simulate import stability_limit as joint_damping_stability_limit
+
+#: relative round-off allowed in the centre-of-mass target (the bang-bang stops it at D exactly)
+_TARGET_ROUNDOFF = 1e-12
+
+
+def _quasi_static_deflection(params: dict[str, float], explicit: set[str]) -> dict[str, float]:
+    """Scenario preset: the belt stretch [m] while the motor accelerates at full force."""
+    m_c, m_m, k = params["carriage_mass"], params["motor_mass"], params["belt_stiffness"]
+    return {"deflection": params["drive_force"] * m_c / ((m_c + m_m) * k)}
+
+
+class PrinterHead(Scene):
+    name = "printer_head"
+    title = "inkjet carriage driven through a flexible belt: how fast can it be positioned?"
+    joints = ("carriage", "motor")
+    camera = "front"
+    # RK4 at 0.1 ms: omega_n dt = 0.12 on the default belt mode (1225 rad/s);
+    # predicted relative error about omega t (omega dt)^4 / 120 of the vibration
+    # amplitude, i.e. below 1e-7 of the move distance.
+    integrator = "rk4"
+    dt = 1e-4
+    default_scenario = "move"
+    parameters = {
+        p.name: p
+        for p in (
+            Parameter("carriage_mass", "kg", "mass of the carriage with the print head", minimum=0.0,
+                      minimum_inclusive=False),
+            Parameter("motor_mass", "kg", "motor-side mass: rotor+pulley inertia J / r^2", minimum=0.0,
+                      minimum_inclusive=False),
+            Parameter("belt_stiffness", "N/m", "belt stiffness k between drive point and carriage",
+                      minimum=0.0, minimum_inclusive=False),
+            Parameter("belt_damping", "N s/m", "belt damping c", minimum=0.0),
+            Parameter("drive_force", "N", "the motor's force limit on the belt", minimum=0.0,
+                      minimum_inclusive=False),
+            Parameter("move_distance", "m", "point-to-point move distance D", minimum=0.0,
+                      minimum_inclusive=False),
+            Parameter("positioning_band", "m", "half-width of the band around the target", minimum=0.0,
+                      minimum_inclusive=False),
+            Parameter("deflection", "m", "belt stretch at t = 0 (centre of mass at rest at 0)",
+                      default=0.0),
+        )
+    }
+    scenarios = {
+        s.name: s
+        for s in (
+            Scenario("move", "bang-bang move of move_distance at the force limit, then residual vibration",
+                     0.3),
+            Scenario("step_force", "constant drive_force from rest: rigid-body motion + one belt mode", 0.05),
+            Scenario("settle", "release at rest from the belt stretch of full-force acceleration", 0.2,
+                     derive=_quasi_static_deflection),
+        )
+    }
+
+    # -- model ---------------------------------------------------------------
+
+    def model_defaults(self, model: mujoco.MjModel) -> dict[str, float]:
+        m_c, m_m, k, c = self.physical(model)
+        return {
+            "carriage_mass": m_c,
+            "motor_mass": m_m,
+            "belt_stiffness": k,
+            "belt_damping": c,
+            "drive_force": float(model.actuator("drive").ctrlrange[1]),
+            "move_distance": float(model.numeric("move_distance").data[0]),
+            "positioning_band": float(model.numeric("positioning_band").data[0]),
+        }
+
+    def edit(self, spec: mujoco.MjSpec, params: dict[str, float], scenario: Scenario) -> None:
+        spec.body("carriage").mass = params["carriage_mass"]
+        spec.body("motor").mass = params["motor_mass"]
+        belt = spec.tendon("belt")
+        belt.stiffness = [params["belt_stiffness"], 0.0, 0.0]
+        belt.damping = [params["belt_damping"], 0.0, 0.0]
+        spec.actuator("drive").ctrlrange = [-params["drive_force"], params["drive_force"]]
+        spec.numeric("move_distance").data = [params["move_distance"]]
+        spec.numeric("positioning_band").data = [params["positioning_band"]]
+
+    @staticmethod
+    def physical(model: mujoco.MjModel) -> tuple[float, float, float, float]:
+        """(carriage mass [kg], motor-side mass [kg], belt stiffness [N/m], belt damping [N s/m]) of `model`."""
+        belt = model.tendon("belt").id  # (MjModel's tendon view names these _stiffness, _damping)
+        return (float(model.body("carriage").mass[0]), float(model.body("motor").mass[0]),
+                float(model.tendon_stiffness[belt]), float(model.tendon_damping[belt]))
+
+    @staticmethod
+    def matrices(model: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Mass [kg], damping [N s/m] and stiffness [N/m] matrices in (q_c, q_m) of `model`."""
+        m_c, m_m, k, c = PrinterHead.physical(model)
+        coupling = np.array([[1.0, -1.0], [-1.0, 1.0]])  # the belt stretches by q_m - q_c
+        return np.diag([m_c, m_m]), c * coupling, k * coupling
+
+    # -- the force profile ---------------------------------------------------
+
+    @staticmethod
+    def move_profile(params: dict[str, float], dt: float) -> tuple[int, float]:
+        """(steps per half-move n, force [N]) of the bang-bang move on a grid of dt [s].
+
+        The half-move time is the minimum sqrt(D M / F) rounded up to whole steps,
+        and the force is lowered to M D / (n dt)^2 so the centre of mass stops at D.
+        """
+        total = params["carriage_mass"] + params["motor_mass"]
+        half = math.sqrt(params["move_distance"] * total / params["drive_force"])
+        n = max(1, math.ceil(half / dt - 1e-9))
+        force = min(params["drive_force"], total * params["move_distance"] / (n * dt) ** 2)
+        return n, force
+
+    def _segments(self, params, scenario, dt) -> tuple[np.ndarray, np.ndarray]:
+        """(breakpoints [s], motor force per segment [N]) of the scenario's input."""
+        if scenario.name == "step_force":
+            return np.array([0.0]), np.array([params["drive_force"]])
+        if scenario.name == "move":
+            n, force = self.move_profile(params, dt)
+            return np.array([0.0, n * dt, 2 * n * dt]), np.array([force, -force, 0.0])
+        return np.array([0.0]), np.array([0.0])
+
+    def _initial(self, params) -> tuple[np.ndarray, np.ndarray]:
+        """(q0, v0) in (q_c, q_m): belt stretched by `deflection`, centre of mass at rest at 0."""
+        m_c, m_m = params["carriage_mass"], params["motor_mass"]
+        s0 = params["deflection"]
+        return np.array([-m_m * s0, m_c * s0]) / (m_c + m_m), np.zeros(2)
+
+    def setup(self, model, params, scenario, steps, dt) -> Setup:
+        q0, v0 = self._initial(params)
+        qpos, qvel = np.zeros(model.nq), np.zeros(model.nv)
+        for joint, q, v in zip(self.joints, q0, v0):
+            qpos[model.joint(joint).qposadr[0]] = q
+            qvel[model.joint(joint).dofadr[0]] = v
+        breaks, forces = self._segments(params, scenario, dt)
+        # segment i holds from step round(breaks[i]/dt): switches on step boundaries are exact
+        first = np.round(breaks / dt).astype(int)
+        control = np.zeros((steps, model.nu))
+        for start, force in zip(first, forces):
+            control[min(start, steps):, 0] = force
+        return Setup(qpos=qpos, qvel=qvel, control=control)
+
+    # -- exact solution ------------------------------------------------------
+
+    def reference(self, model, params, scenario, time) -> Reference:
+        mass, damping, stiffness = self.matrices(model)
+        q0, v0 = self._initial(params)
+        breaks, forces = self._segments(params, scenario, float(model.opt.timestep))
+        values = np.column_stack([np.zeros_like(forces), forces])  # the motor joint carries the force
+        q, v = analytic.linear_response(time, mass, damping, stiffness, q0, v0, force=(breaks, values))
+        # z = (q_c, q_m, v_c, v_m, F): the force is a generator state, constant within each step
+        inverse = np.linalg.inv(mass)
+        system = np.zeros((5, 5))
+        system[0:2, 2:4] = np.eye(2)
+        system[2:4, 0:2] = -inverse @ stiffness
+        system[2:4, 2:4] = -inverse @ damping
+        system[2:4, 4] = inverse @ np.array([0.0, 1.0])
+        segment = np.clip(np.searchsorted(breaks, time, side="right") - 1, 0, len(forces) - 1)
+        states = np.column_stack([q, v, forces[segment]])
+        return Reference(pos={"carriage": q[:, 0], "motor": q[:, 1]},
+                         vel={"carriage": v[:, 0], "motor": v[:, 1]},
+                         system=system, states=states, rows={"carriage": (0, 2), "motor": (1, 3)})
+
+    # -- the belt mode -------------------------------------------------------
+
+    @staticmethod
+    def belt_mode(model: mujoco.MjModel) -> tuple[float, float]:
+        """(natural frequency omega_n [rad/s], damping ratio [-]) of the flexible mode from M, C, K."""
+        m_c, m_m, k, c = PrinterHead.physical(model)
+        reduced = m_c * m_m / (m_c + m_m)
+        return analytic.natural_frequency(reduced, k), analytic.damping_ratio(reduced, k, c)
+
+    def modes(self, model, params, scenario) -> list[tuple[float, float]]:
+        return [self.belt_mode(model)]
+
+    def stability_limit(self, model, params, scenario, integrator: str, omega: float, zeta: float) -> float:
+        """Largest omega_n dt [-] at which `integrator` is stable on this model's belt mode.
+
+        Measured from MuJoCo's own step map (see `linearized_mode`) by bisection,
+        because MuJoCo's integrators treat tendon damping differently from joint
+        damping (module docstring). inf where no step up to omega dt = 100 is unstable.
+        """
+        integrator_id(integrator)
+
+        def unstable(omega_dt: float) -> bool:
+            return linearized_mode(model, integrator, omega_dt / omega)[2] > 1.0 + 1e-9
+
+        grid = np.linspace(0.05, 4.0, 80)
+        first = next((h for h in grid if unstable(h)), None)
+        if first is None:
+            return math.inf if not unstable(100.0) else joint_damping_stability_limit(integrator, zeta)
+        low, high = first - (grid[1] - grid[0]), first
+        for _ in range(50):
+            mid = 0.5 * (low + high)
+            low, high = (low, mid) if unstable(mid) else (mid, high)
+        return low
+
+    # -- results -------------------------------------------------------------
+
+    def quantities(self, model, params, scenario, trajectory: Trajectory) -> dict:
+        m_c, m_m, k, c = self.physical(model)
+        total, reduced = m_c + m_m, m_c * m_m / (m_c + m_m)
+        omega_n, zeta = self.belt_mode(model)
+        dt = trajectory.dt
+        out: dict = {
+            "natural_frequency_hz": omega_n / (2 * math.pi),
+            "damping_ratio": zeta,
+        }
+        lin_omega, lin_zeta, _ = linearized_mode(model, trajectory.integrator, dt)
+        out["linearized_natural_frequency_hz"] = lin_omega / (2 * math.pi)
+        out["linearized_damping_ratio"] = lin_zeta
+        out["omega_n_rad_s"] = omega_n
+        out["total_mass_kg"] = total
+        out["reduced_mass_kg"] = reduced
+        out["vibration_share"] = m_m / total  # carriage deviation per metre of belt stretch
+        columns = self.joint_columns(model, trajectory)
+        q_c, v_c = columns["carriage"]
+        q_m, v_m = columns["motor"]
+        band = params["positioning_band"]
+        if scenario.name == "step_force":
+            force = params["drive_force"]
+            out["rigid_acceleration_m_s2"] = force / total
+            out["static_belt_stretch_m"] = force * m_c / (total * k)
+            out["max_belt_stretch_m"] = float(np.max(np.abs(q_m - q_c)))
+            return out
+        out["settling_band_m"] = band
+        if scenario.name == "move":
+            n, force = self.move_profile(params, dt)
+            end = 2 * n
+            out["move_distance_m"] = params["move_distance"]
+            out["move_force_n"] = force
+            out["move_time_s"] = end * dt
+            out["minimum_move_time_s"] = minimum_move_time(params["move_distance"], total, params["drive_force"])
+            target, start = params["move_distance"], end
+        else:  # settle: release at t = 0, the centre of mass stays at 0
+            out["initial_deviation_m"] = abs(float(q_c[0]))
+            target, start = 0.0, 0
+        if start >= len(q_c):
+            out["settled_for_good"] = False
+            out["settling_time_s"] = math.inf
+            return out
+        deviation = q_c[start:] - target
+        out["residual_amplitude_m"] = float(np.max(np.abs(deviation)))
+        centre = (m_c * q_c[-1] + m_m * q_m[-1]) / total
+        stretch, stretch_rate = q_m[-1] - q_c[-1], v_m[-1] - v_c[-1]
+        bound = after_force_bound(centre - target, stretch, stretch_rate, m_c, m_m, k)
+        out["final_deviation_bound_m"] = float(bound)
+        out["settled_for_good"] = bool(bound <= band)
+        settle = settling_time(trajectory.time[start:] - trajectory.time[start], deviation, band)
+        out["settling_time_s"] = settle if out["settled_for_good"] else math.inf
+        if scenario.name == "move":
+            out["positioning_time_s"] = out["move_time_s"] + out["settling_time_s"]
+        # the analytic estimate: envelope of the residual vibration down to the band
+        if zeta < 1.0 and k > 0:
+            omega_d = omega_n * math.sqrt(1 - zeta * zeta)
+            s0 = q_m[start] - q_c[start]
+            s0_rate = v_m[start] - v_c[start]
+            if scenario.name == "move":
+                s0, s0_rate = move_residual_stretch(params, dt)
+            envelope = (m_m / total) * math.hypot(s0, (s0_rate + zeta * omega_n * s0) / omega_d)
+            out["residual_envelope_m"] = envelope
+            out["settling_time_estimate_s"] = settling_estimate(envelope, band, zeta, omega_n)
+            if scenario.name == "move":
+                out["positioning_time_estimate_s"] = out["move_time_s"] + out["settling_time_estimate_s"]
+        return out
+
+
+# -- helpers shared with the design study ------------------------------------------
+
+
+def minimum_move_time(distance: float, mass: float, force: float) -> float:
+    """Minimum time [s] of a rigid move of `distance` [m] of `mass` [kg] at force limit `force` [N].
+
+    Bang-bang: accelerate for half the time at +F, decelerate at -F: T = 2 sqrt(D m / F).
+    """
+    return 2.0 * math.sqrt(distance * mass / force)
+
+
+def settling_estimate(envelope: float, band: float, zeta: float, omega_n: float) -> float:
+    """Time [s] for a vibration envelope `envelope` e^(-zeta omega_n t) [m] to shrink into `band` [m].
+
+    ln(envelope / band) / (zeta omega_n), 0 if already inside, inf if undamped. For a
+    release at rest from amplitude a0 the envelope is a0 / sqrt(1 - zeta^2), giving
+    the chapter-style ln(1 / (band / a0 sqrt(1 - zeta^2))) / (zeta omega_n).
+    """
+    if envelope <= band:
+        return 0.0
+    if zeta <= 0.0:
+        return math.inf
+    return math.log(envelope / band) / (zeta * omega_n)
+
+
+def after_force_bound(centre_offset, stretch, stretch_rate, carriage_mass, motor_mass, stiffness):
+    """Bound [m] on the carriage's future distance from the target once the force is off.
+
+    The carriage is q_c = X - (m_m / M) s; with no force the centre of mass X
+    stays where it is (at rest after a bang-bang move or a release) and the belt
+    energy E = mu s'^2 / 2 + k s^2 / 2 cannot grow, so |s| <= sqrt(2 E / k) for
+    ever and |q_c - target| <= |X - target| + (m_m / M) sqrt(2 E / k).
+
+    Every argument may be a float or an array (elementwise).
+
+    Args:
+      centre_offset: X - target [m].
+      stretch, stretch_rate: belt stretch s [m] and its rate s' [m/s].
+      carriage_mass, motor_mass: [kg].
+      stiffness: belt stiffness k [N/m].
+    """
+    total = carriage_mass + motor_mass
+    reduced = carriage_mass * motor_mass / total
+    energy = 0.5 * reduced * stretch_rate**2 + 0.5 * stiffness * stretch**2
+    return np.abs(centre_offset) + (motor_mass / total) * np.sqrt(2.0 * energy / stiffness)
+
+
+def settling_time(time: np.ndarray, deviation: np.ndarray, band: float) -> float:
+    """Time [s] after which |deviation| [m] stays within `band` [m] in this record.
+
+    The last exit from the band, interpolated linearly between the samples
+    around it; 0 if the record never leaves the band.
+    """
+    outside = np.flatnonzero(np.abs(deviation) > band)
+    if outside.size == 0:
+        return 0.0
+    i = int(outside[-1])
+    if i + 1 >= len(time):
+        return float(time[-1])
+    excess = np.abs(deviation[i]) - band
+    inside = np.abs(deviation[i + 1]) - band
+    return float(time[i] + (time[i + 1] - time[i]) * excess / (excess - inside))
+
+
+def move_residual_stretch(params: dict[str, float], dt: float) -> tuple[float, float]:
+    """Exact belt stretch [m] and rate [m/s] at the end of the bang-bang move on a grid of dt [s].
+
+    The belt mode obeys mu s'' + c s' + k s = (m_c / M) F(t) with F = +F', -F', 0 on
+    [0, T/2), [T/2, T), [T, ...): superposed step responses (analytic), from the
+    initial stretch `deflection` at rest.
+    """
+    m_c, m_m = params["carriage_mass"], params["motor_mass"]
+    k, c = params["belt_stiffness"], params["belt_damping"]
+    total, reduced = m_c + m_m, m_c * m_m / (m_c + m_m)
+    n, force = PrinterHead.move_profile(params, dt)
+    half = n * dt
+    modal = force * m_c / total
+    t = np.array([2 * half])
+    s, v = analytic.step_response(t, reduced, k, c, modal, params["deflection"], 0.0)
+    s2, v2 = analytic.step_response(t - half, reduced, k, c, -2.0 * modal)
+    return float(s[0] + s2[0]), float(v[0] + v2[0])
+
+
+def step_matrix(model: mujoco.MjModel, integrator: str, dt: float) -> np.ndarray:
+    """MuJoCo's one-step Jacobian d(qpos, qvel)_{n+1} / d(qpos, qvel)_n at rest, (2 nv, 2 nv).
+
+    Central differences of mj_step on a copy of `model` (controls zero). The
+    model is linear, so the differences are exact up to round-off. Works for
+    every integrator, RK4 included (mjd_transitionFD refuses RK4).
+    """
+    model = copy.copy(model)
+    model.opt.integrator = integrator_id(integrator)
+    model.opt.timestep = dt
+    data = mujoco.MjData(model)
+    nv = model.nv
+    step = 1e-6
+    jacobian = np.empty((2 * nv, 2 * nv))
+    with quiet_mujoco():
+        for j in range(2 * nv):
+            columns = []
+            for sign in (1.0, -1.0):
+                mujoco.mj_resetData(model, data)
+                if j < nv:
+                    data.qpos[j] += sign * step
+                else:
+                    data.qvel[j - nv] += sign * step
+                mujoco.mj_step(model, data)
+                columns.append(np.concatenate([data.qpos - model.qpos0, data.qvel]))
+            jacobian[:, j] = (columns[0] - columns[1]) / (2 * step)
+    return jacobian
+
+
+def linearized_mode(model: mujoco.MjModel, integrator: str, dt: float) -> tuple[float, float, float]:
+    """The belt mode as MuJoCo integrates it: (omega_n [rad/s], damping ratio [-], |lambda| [-]).
+
+    The one-step Jacobian's eigenvalues are 1, 1 (the rigid-body motion) and the
+    belt mode's pair lambda; s = ln(lambda) / dt are the continuous roots the
+    integrator realizes, omega_n^2 = s1 s2 and 2 zeta omega_n = -(s1 + s2).
+    |lambda| > 1 means the integrator is unstable at this dt.
+    """
+    eigenvalues = np.linalg.eigvals(step_matrix(model, integrator, dt))
+    roots = np.log(eigenvalues.astype(complex)) / dt
+    belt = roots[np.argsort(-np.abs(roots))[:2]]  # the rigid-body roots are 0
+    omega_sq = float(np.real(belt[0] * belt[1]))
+    omega = math.sqrt(max(omega_sq, 0.0))
+    zeta = -float(np.real(belt[0] + belt[1])) / (2 * omega) if omega > 0 else math.nan
+    radius = float(np.max(np.abs(eigenvalues[np.argsort(-np.abs(roots))[:2]])))
+    return omega, zeta, radius
+
+
+SCENE = PrinterHead()
