@@ -277,6 +277,38 @@ def _print_stability(report: dict, output: str | None) -> None:
         print(f"  wrote {pathlib.Path(output) / 'stability.json'}, stability.png and energy.png")
 
 
+def cmd_design(args) -> int:
+    from . import design  # here, not at the top: mujoco.batch is only needed by this command
+
+    study = design.run_study(args.scene, levels=args.levels, nthread=args.threads, **_parse_sets(args.set))
+    if args.output:
+        design.write(study, args.output)
+    if args.json:
+        _print_json(design.summary(study))
+    else:
+        _print_design(design, study, args.output)
+    return EXIT_OK
+
+
+def _print_design(design, study, output: str | None) -> None:
+    s = design.summary(study)
+    print(f"{s['scene']} design study: {s['configurations']} configurations ({s['levels']} levels of "
+          f"{', '.join(design.PROPERTIES)}) in {s['wall_time_s']:.1f} s, {s['configurations_per_s']:.0f}/s"
+          f" on {s['nthread']} threads")
+    print(f"  {'property':<16}{'default':>11}{'range':>22}{'elasticity':>12}{'local':>9}")
+    for name in s["ranking"]:
+        grid = s["properties"][name]["grid"]
+        unit = design.PROPERTIES[name]
+        print(f"  {name:<16}{s['default']['properties'][name]:>11.4g}{f'{grid[0]:.3g}..{grid[-1]:.3g} {unit}':>22}"
+              f"{s['elasticities'][name]:>+12.3f}{s['local_elasticities'][name]:>+9.3f}")
+    ratio = s["estimate_over_simulation"]
+    print(f"  log-log fit R^2 {s['regression_r2']:.3f}; analytic estimate / simulation: median"
+          f" {ratio['median']:.3f}, 5-95% {ratio['p05']:.3f}-{ratio['p95']:.3f}")
+    print(design.answer(study))
+    if output:
+        print(f"  wrote {pathlib.Path(output) / 'design.json'}, configurations.csv and design.png")
+
+
 def cmd_demo(args) -> int:
     """The main job: validate every scene and write everything under the output folder."""
     start = time.perf_counter()
@@ -354,6 +386,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--output", metavar="DIR", help="write DIR/stability.json, stability.png and energy.png")
     p.add_argument("--json", action="store_true", help="print stability.json")
     COMMANDS["stability"] = cmd_stability
+
+    p = sub.add_parser("design", help="design study: positioning time over a property sweep, ranked sensitivities")
+    p.add_argument("scene", help="scene with a design study: printer_head")
+    p.add_argument("--levels", type=int, default=7, metavar="N",
+                   help="odd number of grid points per property, N^4 configurations (default 7: 2401)")
+    p.add_argument("--threads", type=int, default=0, metavar="N", help="batch threads (default 0: one per CPU)")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                   help="start the sweep from another parameter value, SI units (repeatable)")
+    p.add_argument("--output", metavar="DIR", help="write DIR/design.json, DIR/configurations.csv, DIR/design.png")
+    p.add_argument("--json", action="store_true", help="print design.json")
+    COMMANDS["design"] = cmd_design
 
     p = sub.add_parser("demo", help="the main job: validate everything, write out/")
     p.add_argument("--output", default="out", metavar="DIR", help="output folder (default: out)")

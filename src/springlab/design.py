@@ -549,6 +549,7 @@ def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import matplotlib.ticker
 
     first, second = study.ranking()[:2]
     axes_order = list(study.grids)
@@ -587,7 +588,9 @@ def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
     right.plot(span, span, "k-", linewidth=0.8, label="equal")
     right.set_xlabel("simulated positioning time [ms] (MuJoCo, batched)")
     right.set_ylabel("estimated positioning time [ms]")
-    right.set_title(f"{study.size} configurations; elasticities "
+    right.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())  # log minor labels collide
+    right.yaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    right.set_title(f"{study.size} configurations; elasticities d ln T / d ln p:\n"
                     + ", ".join(f"{p.split('_')[0]} {elasticity[p]:+.2f}" for p in study.ranking()), fontsize=10)
     right.legend(fontsize=8)
     path = pathlib.Path(path)
@@ -598,7 +601,7 @@ def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
 
 
 def write(study: Study, directory: str | pathlib.Path) -> list[pathlib.Path]:
-    """Write design.json, configurations.csv and positioning_time.png into `directory`."""
+    """Write design.json, configurations.csv and design.png (the plot) into `directory`."""
     folder = outputs.prepare_directory(directory)
     columns = {name: study.values[name] for name in PROPERTIES}
     columns.update({
@@ -615,7 +618,7 @@ def write(study: Study, directory: str | pathlib.Path) -> list[pathlib.Path]:
         "design.json": outputs.dumps(summary(study)) + "\n",
         "configurations.csv": outputs.csv_text(columns),
     })
-    written.append(plot(study, folder / "positioning_time.png"))
+    written.append(plot(study, folder / "design.png"))
     return written
 
 
