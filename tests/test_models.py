@@ -42,5 +42,5 @@ def test_slider_has_nothing_the_textbook_does_not():
     assert np.all(model.opt.gravity == 0)
     assert model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONTACT
     assert model.dof_armature[0] == 0 and model.dof_frictionloss[0] == 0
-    assert model.tendon_stiffness.sum() == 0 and model.tendon_damping.sum() == 0  # the spring is a picture
+    assert model.ntendon == 0  # the drawn spring is a render-time picture, not a tendon computed every step
     assert model.camera("side").id >= 0

@@ -181,3 +181,13 @@ def test_render_run_clips_to_the_requested_seconds(undamped, tmp_path):
     info = media.render_run(undamped, tmp_path / "v.mp4", fps=10, width=64, height=48, duration=1.0)
     assert info["frames"] == 10
     assert math.isclose(info["frames"] / info["fps"], 1.0)
+
+
+def test_declared_springs_are_drawn_between_their_sites():
+    # the slider's spring is a custom "spring:" text, drawn as a capsule from the wall to the block
+    result = api.run("slider", "free", duration=0.1)
+    springs = render.drawn_springs(result.model)
+    assert len(springs) == 1
+    first, second, width, rgba = springs[0]
+    assert result.model.site(first).name == "spring_anchor" and result.model.site(second).name == "spring_hook"
+    assert width > 0 and rgba.shape == (4,)

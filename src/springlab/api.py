@@ -122,11 +122,16 @@ def run(
                               stop=scene_obj.stop_condition(model, params, chosen))
     except DivergedError as error:
         raise DivergedError(f"{error}{_stability_advice(scene_obj, model, params, chosen, integrator, dt)}") from None
-    return _result(scene_obj, chosen, params, model, trajectory, tol)
+    return evaluate(scene_obj, chosen, params, model, trajectory, tol)
 
 
-def _result(scene: Scene, scenario: Scenario, params, model, trajectory: Trajectory,
-            tol: float | None = None) -> Result:
+def evaluate(scene: Scene, scenario: Scenario, params, model, trajectory: Trajectory,
+             tol: float | None = None) -> Result:
+    """Compare a finished run with its reference: errors, tolerance, checks, summary -> Result.
+
+    Shared by `run` and the batched sweeps of springlab.tradeoff, so every path judges a run
+    the same way. Raises DivergedError for a run whose error dwarfs its signal.
+    """
     columns = scene.joint_columns(model, trajectory)
     pos = {j: c[0] for j, c in columns.items()}
     vel = {j: c[1] for j, c in columns.items()}

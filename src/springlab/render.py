@@ -380,6 +380,30 @@ def _gl_context_class():
     return GLContext
 
 
+#: prefix of the MJCF custom texts that declare a drawn spring
+SPRING_PREFIX = "spring:"
+
+
+def drawn_springs(model: mujoco.MjModel) -> list[tuple[int, int, float, np.ndarray]]:
+    """Springs to draw: [(site id, site id, width [m], rgba)] from the model's custom texts.
+
+    A spring that is only a picture (its physics is a joint's stiffness) is declared as
+    <custom><text name="spring:NAME" data="SITE1 SITE2 WIDTH R G B A"/></custom>
+    rather than as a zero-stiffness tendon, which MuJoCo would compute at every step.
+    """
+    springs = []
+    for i in range(model.ntext):
+        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_TEXT, i) or ""
+        if not name.startswith(SPRING_PREFIX):
+            continue
+        start = model.text_adr[i]
+        text = bytes(model.text_data[start:start + model.text_size[i] - 1]).decode()  # drop the NUL
+        first, second, width, *rgba = text.split()
+        springs.append((model.site(first).id, model.site(second).id, float(width),
+                        np.array([float(c) for c in rgba], dtype=np.float32)))
+    return springs
+
+
 class _OffscreenScene:
     """One GL context + MjrContext + MjvScene, reused for every frame."""
 
@@ -436,6 +460,7 @@ class _OffscreenScene:
             self.camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
             self.camera.fixedcamid = camera_id
 
+        self._springs = drawn_springs(model)
         self._rect = mujoco.MjrRect(0, 0, width, height)
         self._pixels = np.empty((height, width, 3), dtype=np.uint8)
         self._eye = np.eye(3)
@@ -472,10 +497,25 @@ class _OffscreenScene:
         geom.segid = -1
         scn.ngeom += 1
 
+    def _add_springs(self, data: mujoco.MjData) -> None:
+        """Draw each declared spring as a capsule between its two sites (see drawn_springs)."""
+        scn = self.scene
+        for first, second, width, rgba in self._springs:
+            if scn.ngeom >= scn.maxgeom:
+                return
+            geom = scn.geoms[scn.ngeom]
+            mujoco.mjv_initGeom(geom, mujoco.mjtGeom.mjGEOM_CAPSULE, np.zeros(3), np.zeros(3),
+                                np.eye(3).ravel(), rgba)
+            mujoco.mjv_connector(geom, mujoco.mjtGeom.mjGEOM_CAPSULE, width,
+                                 data.site_xpos[first], data.site_xpos[second])
+            geom.category = mujoco.mjtCatBit.mjCAT_DECOR
+            scn.ngeom += 1
+
     def render(self, data: mujoco.MjData, out: np.ndarray) -> None:
         """Render ``data`` (kinematics already computed) into ``out`` (H x W x 3)."""
         mujoco.mjv_updateScene(self.model, data, self.option, None, self.camera,
                                mujoco.mjtCatBit.mjCAT_ALL, self.scene)
+        self._add_springs(data)
         self._add_backdrop()
         mujoco.mjr_render(self._rect, self.scene, self._con)
         mujoco.mjr_readPixels(self._pixels, None, self._rect, self._con)

@@ -212,7 +212,7 @@ def simulate(
     states = np.concatenate([state0[None], out[0]])
     trajectory = _split(model, states, integrator, dt, wall)
     if stop is not None:
-        trajectory, stopped = _cut_at_stop(trajectory, stop)
+        trajectory, stopped = cut_at_stop(trajectory, stop)
         if stopped:
             # MuJoCo's warnings may come from steps after the event; a blow-up before it
             # still shows in the kept part (time jumping back, non-finite values)
@@ -221,7 +221,7 @@ def simulate(
     return trajectory
 
 
-def _cut_at_stop(trajectory: Trajectory, stop) -> tuple[Trajectory, bool]:
+def cut_at_stop(trajectory: Trajectory, stop) -> tuple[Trajectory, bool]:
     """The trajectory up to and including the first step where `stop` holds, and whether it did."""
     end = divergence_step(trajectory)
     end = len(trajectory.time) if end is None else end

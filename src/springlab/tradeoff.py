@@ -70,7 +70,7 @@ from .simulate import (
     INTEGRATORS,
     ORDERS,
     Trajectory,
-    _cut_at_stop,
+    cut_at_stop,
     check_diverged,
     check_timing,
     initial_state,
@@ -224,7 +224,7 @@ def run_batched(jobs: Sequence[Job], *, nthread: int = 0) -> list[Trajectory | D
                                 wall_time_s=math.nan)
         fired = [name for name, w in zip(("BADQPOS", "BADQVEL", "BADQACC"), _BAD_WARNINGS) if warnings[i, w, 1] > 0]
         if job.stop is not None:
-            trajectory, stopped = _cut_at_stop(trajectory, job.stop)
+            trajectory, stopped = cut_at_stop(trajectory, job.stop)
             if stopped:
                 fired = []  # as simulate: warnings may come from steps after the event
         try:
@@ -447,7 +447,7 @@ def sweep(
         else:
             steps = outcome.steps  # a stop condition may end a run early, as in `springlab run`
             try:
-                result = api._result(scene_obj, chosen, params, model, outcome)
+                result = api.evaluate(scene_obj, chosen, params, model, outcome)
                 error = max(e["max_rel"] for e in result.summary["errors"].values())
             except DivergedError as blown:
                 detail = str(blown)
@@ -1074,7 +1074,7 @@ def _classify(model, scene, chosen, params, outcome) -> tuple[str, float | None,
     if isinstance(outcome, DivergedError):
         return "diverged", None, str(outcome)
     try:
-        result = api._result(scene, chosen, params, model, outcome)
+        result = api.evaluate(scene, chosen, params, model, outcome)
     except DivergedError as error:
         return "diverged", None, str(error)
     error = max(e["max_rel"] for e in result.summary["errors"].values())
