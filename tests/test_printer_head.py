@@ -15,6 +15,7 @@ import pytest
 import scipy.linalg
 
 import springlab
+import springlab.model_files
 from springlab.cli import main
 
 BELT = np.array([[1.0, -1.0], [-1.0, 1.0]])  # the belt stretches by q_m - q_c
@@ -225,3 +226,12 @@ def test_non_physical_values_exit_2_with_one_line(argv, needle, capsys):
     assert out == ""
     assert len(err.strip().splitlines()) == 1
     assert needle in err
+
+
+def test_model_is_lean_the_belt_is_the_only_tendon():
+    model = mujoco.MjModel.from_xml_path(str(springlab.model_files.path("printer_head")))
+    assert np.all(model.opt.gravity == 0)
+    assert model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONTACT
+    assert np.all(model.dof_armature == 0) and np.all(model.dof_frictionloss == 0)
+    assert model.ntendon == 1  # the belt; its picture is drawn by the renderer, not computed every step
+    assert model.tendon("belt").id == 0
