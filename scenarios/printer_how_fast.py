@@ -21,7 +21,7 @@ print(f"default carriage (belt mode {q['natural_frequency_hz']:.1f} Hz, zeta {q[
       f" positioned in {q['positioning_time_s'] * 1e3:.1f} ms (estimate {q['positioning_time_estimate_s'] * 1e3:.1f} ms;"
       f" passed {result.summary['passed']})")
 
-study = springlab.design.run_study("printer_head")
+study = springlab.design.run_study("printer_head", plane_levels=0)  # the plane is for the plot
 summary = springlab.design.summary(study)
 print()
 print(springlab.design.answer(study))

@@ -19,15 +19,15 @@ from springlab.cli import main
 
 @pytest.fixture(scope="module")
 def small_study():
-    """3^4 = 81 configurations: the grid's corners and centre."""
-    return design.run_study(levels=3)
+    """3^4 = 81 configurations: the grid's corners and centre, and a 9 x 9 plane."""
+    return design.run_study(levels=3, plane_levels=9)
 
 
 @pytest.fixture(scope="module")
 def default_study():
     """5^4 = 625 configurations over the default spans (the default 7^4 takes 10-20 s on 2 shared
     cores: it runs in the demo and `springlab design`, not here)."""
-    return design.run_study(levels=5)
+    return design.run_study(levels=5, plane_levels=0)
 
 
 def test_default_sweep_has_at_least_1000_configurations():
@@ -48,9 +48,9 @@ def test_no_configuration_beats_its_bang_bang_minimum(default_study):
     s = default_study
     total = s.values["carriage_mass"] + s.base["motor_mass"]
     minimum = 2 * np.sqrt(s.base["move_distance"] * total / s.values["drive_force"])
-    assert np.all(s.move_time_s >= minimum * (1 - 1e-12))
-    assert np.all(s.move_time_s <= minimum + 2 * s.dt_s + 1e-15)  # rounded up to each grid by < 1 step/half
-    assert np.all(s.positioning_time_s >= minimum)
+    # each simulation's dt divides the half-move: the move is the minimum itself
+    np.testing.assert_allclose(s.move_time_s, minimum, rtol=1e-12)
+    assert np.all(s.positioning_time_s >= minimum * (1 - 1e-12))
 
 
 def test_ranking_is_sorted_by_absolute_elasticity(default_study):
@@ -91,9 +91,11 @@ def test_default_configuration_settles_as_the_exact_trajectory_says(small_study)
     total, reduced = m_c + m_m, m_c * m_m / (m_c + m_m)
     c = 2 * zeta * math.sqrt(k * reduced)
     dt = study.dt_s[i]
-    assert dt == pytest.approx(0.1 / math.sqrt(k / reduced), rel=1e-12)
-    n = math.ceil(math.sqrt(base["move_distance"] * total / limit) / dt - 1e-9)
-    force = total * base["move_distance"] / (n * dt) ** 2
+    # the largest step <= 0.1 / omega_n that divides the minimum half-move time sqrt(D M / F)
+    half = math.sqrt(base["move_distance"] * total / limit)
+    n = math.ceil(half / (design.OMEGA_DT / math.sqrt(k / reduced)))
+    assert dt == pytest.approx(half / n, rel=1e-12)
+    force = limit  # the switch falls on the grid: the full force, the true minimum time
     belt = np.array([[1.0, -1.0], [-1.0, 1.0]])
     a = np.zeros((5, 5))
     a[0:2, 2:4] = np.eye(2)
@@ -116,7 +118,8 @@ def test_default_configuration_settles_as_the_exact_trajectory_says(small_study)
 
 
 def test_design_json_has_the_documented_shape(capsys, tmp_path):
-    code = main(["design", "printer_head", "--levels", "3", "--json", "--output", str(tmp_path / "d")])
+    code = main(["design", "printer_head", "--levels", "3", "--plane", "5", "--json", "--output",
+                 str(tmp_path / "d")])
     out, err = capsys.readouterr()
     assert code == 0, err
     summary = json.loads(out)
@@ -134,7 +137,7 @@ def test_design_json_has_the_documented_shape(capsys, tmp_path):
 
 
 def test_design_text_answers_both_questions(capsys):
-    code = main(["design", "printer_head", "--levels", "3"])
+    code = main(["design", "printer_head", "--levels", "3", "--plane", "0"])
     out, _ = capsys.readouterr()
     assert code == 0
     assert "How fast?" in out and "Which properties?" in out
@@ -143,6 +146,7 @@ def test_design_text_answers_both_questions(capsys):
 @pytest.mark.parametrize("argv, needle", [
     (["design", "slider"], "printer_head"),
     (["design", "printer_head", "--levels", "4"], "odd"),
+    (["design", "printer_head", "--levels", "3", "--plane", "4"], "plane"),
     (["design", "printer_head", "--levels", "3", "--set", "drive_force=-5"], "drive_force"),
     (["design", "printer_head", "--levels", "3", "--set", "belt_damping=0"], "belt_damping"),
 ])
@@ -153,3 +157,23 @@ def test_design_bad_input_exits_2_with_one_line(argv, needle, capsys):
     assert out == ""
     assert len(err.strip().splitlines()) == 1
     assert needle in err
+
+
+def test_plane_spans_the_two_most_influential_properties_around_the_default(small_study):
+    plane = small_study.plane
+    assert (plane.y_name, plane.x_name) == tuple(small_study.ranking()[:2])
+    assert plane.positioning_time_s.shape == (9, 9) == plane.estimate_s.shape
+    # its axes cover the study's grid ranges, with the default in the middle
+    np.testing.assert_allclose(plane.y[[0, 4, 8]], small_study.grids[plane.y_name], rtol=1e-12)
+    np.testing.assert_allclose(plane.x[[0, 4, 8]], small_study.grids[plane.x_name], rtol=1e-12)
+    # the same configurations as the grid's corners and centre, on the same step grids: the same times
+    axes = list(small_study.grids)
+    shape = (3,) * len(axes)
+    index = [1] * len(shape)
+    index[axes.index(plane.y_name)] = slice(None)
+    index[axes.index(plane.x_name)] = slice(None)
+    coarse = small_study.positioning_time_s.reshape(shape)[tuple(index)]
+    if axes.index(plane.y_name) > axes.index(plane.x_name):
+        coarse = coarse.T
+    np.testing.assert_allclose(plane.positioning_time_s[::4, ::4], coarse, rtol=1e-12)
+    assert np.all(np.isfinite(plane.positioning_time_s))

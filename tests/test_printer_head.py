@@ -232,6 +232,32 @@ def test_model_is_lean_the_belt_is_the_only_tendon():
     model = mujoco.MjModel.from_xml_path(str(springlab.model_files.path("printer_head")))
     assert np.all(model.opt.gravity == 0)
     assert model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONTACT
+    assert model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONSTRAINT  # nothing is limited
     assert np.all(model.dof_armature == 0) and np.all(model.dof_frictionloss == 0)
     assert model.ntendon == 1  # the belt; its picture is drawn by the renderer, not computed every step
     assert model.tendon("belt").id == 0
+
+
+@pytest.mark.parametrize("periods", [6.5, 7.0, 7.25])
+def test_undamped_residual_vibration_is_4_sin_squared_of_omega_t_over_4_times_the_static_stretch(periods):
+    # superposed force steps +F', -2F', +F' at 0, T/2, T leave an undamped belt oscillating with
+    # amplitude |1 - exp(i omega T / 2)|^2 = 4 sin^2(omega T / 4) times the static stretch F' m_c/(M k);
+    # the carriage sees m_m / M of it. The stiffness is chosen so each half-move lasts `periods` belt
+    # periods (whole numbers cancel the vibration: input shaping by the move time alone).
+    default = springlab.run("printer_head", "move", duration=0.001).parameters
+    m_c, m_m = default["carriage_mass"], default["motor_mass"]
+    total, reduced = m_c + m_m, m_c * m_m / (m_c + m_m)
+    half = math.sqrt(default["move_distance"] * total / default["drive_force"])
+    stiffness = reduced * (2 * math.pi * periods / half) ** 2
+    result = springlab.run("printer_head", "move", belt_stiffness=stiffness, belt_damping=0.0, duration=0.1)
+    q, dt = result.summary["quantities"], result.summary["dt"]
+    omega = math.sqrt(stiffness / reduced)
+    assert q["half_move_belt_periods"] == pytest.approx(q["move_time_s"] / 2 * omega / (2 * math.pi), rel=1e-12)
+    assert q["half_move_belt_periods"] == pytest.approx(periods, abs=omega * dt / (2 * math.pi))  # grid rounding
+    static = q["move_force_n"] * m_c / (total * stiffness)
+    amplitude = (m_m / total) * 4 * static * math.sin(omega * q["move_time_s"] / 4) ** 2
+    # sampled peaks fall short of the amplitude by at most a factor cos(omega dt / 2)
+    rk4 = 2 * omega * 0.1 * (omega * dt) ** 4 / 120 * 4 * static
+    assert amplitude * math.cos(omega * dt / 2) - rk4 <= q["residual_amplitude_m"] <= amplitude + rk4
+    if periods == 7.0:
+        assert q["residual_amplitude_m"] < 0.01 * (m_m / total) * 4 * static

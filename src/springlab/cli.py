@@ -280,7 +280,8 @@ def _print_stability(report: dict, output: str | None) -> None:
 def cmd_design(args) -> int:
     from . import design  # here, not at the top: mujoco.batch is only needed by this command
 
-    study = design.run_study(args.scene, levels=args.levels, nthread=args.threads, **_parse_sets(args.set))
+    study = design.run_study(args.scene, levels=args.levels, plane_levels=args.plane, nthread=args.threads,
+                             **_parse_sets(args.set))
     if args.output:
         design.write(study, args.output)
     if args.json:
@@ -391,6 +392,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("scene", help="scene with a design study: printer_head")
     p.add_argument("--levels", type=int, default=7, metavar="N",
                    help="odd number of grid points per property, N^4 configurations (default 7: 2401)")
+    p.add_argument("--plane", type=int, default=31, metavar="N",
+                   help="odd grid points per axis of the plotted plane over the two most influential properties,"
+                        " N^2 more configurations (default 31: 961; 0: plot the grid's slice)")
     p.add_argument("--threads", type=int, default=0, metavar="N", help="batch threads (default 0: one per CPU)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="start the sweep from another parameter value, SI units (repeatable)")

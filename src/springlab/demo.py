@@ -125,7 +125,7 @@ STEPS.append(tradeoff_step)
 
 
 def design_step(state: DemoState) -> list[Artifact]:
-    """The printer head's design study: positioning time of 7^4 = 2401 configurations (10 s on 2 free cores)."""
+    """The printer head's design study: 7^4 = 2401 configurations, plus a 31 x 31 plane for the plot."""
     from . import design  # here: mujoco.batch is only needed by this step
 
     study = design.run_study("printer_head")

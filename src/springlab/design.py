@@ -17,10 +17,16 @@ How the runs are made: one `mujoco.batch.Batch` holds every configuration as
 its own simulation, with per-simulation carriage mass (body_mass), belt
 stiffness and damping (tendon_stiffness, tendon_damping), force limit
 (actuator_ctrlrange) and timestep (opt.timestep). Each simulation gets
-dt = omega_dt / omega_n of its own belt mode (RK4; omega_dt = 0.1: 63 steps per
-period, relative phase error (omega dt)^4 / 120 = 1e-6 per radian), so every
-configuration is resolved equally well and slow ones take no more steps than
-fast ones. The runs advance in chunks of steps through `Batch.rollout` (controls
+dt <= omega_dt / omega_n of its own belt mode (RK4; omega_dt = 0.1: at least 63
+steps per period, relative phase error (omega dt)^4 / 120 = 1e-6 per radian), so
+every configuration is resolved equally well and slow ones take no more steps
+than fast ones; dt also divides the minimum half-move time sqrt(D M / F)
+exactly, so every configuration makes the true minimum-time move at its full
+force (rounding the switch onto a fixed grid would shift the residual
+vibration's phase, and with it the settling time, with the resolution). Above
+the band, whether a vibration peak that just grazes it counts decides half a
+period of settling time: between omega_dt = 0.1 and 0.2, 26 of the 2401
+default configurations differ by more than one step. The runs advance in chunks of steps through `Batch.rollout` (controls
 (n, steps, 1), the bang-bang switches on each simulation's own step grid) and a
 simulation stops as soon as its settling is certified: once the move is over
 the carriage stays within |X - D| + (m_m / M) sqrt(2 E / k) of the target for
@@ -97,12 +103,37 @@ SPANS: Mapping[str, float] = {
 
 #: default grid points per property (7^4 = 2401 configurations)
 DEFAULT_LEVELS = 7
+#: default grid points per property of the dense plane over the two most influential properties
+#: (31^2 = 961 more configurations; 0: plot the coarse grid's slice instead)
+PLANE_LEVELS = 31
 #: omega_n * dt of every simulation
 OMEGA_DT = 0.1
 #: steps per batched rollout call
 CHUNK = 256
 #: simulated time [s] after which an unsettled configuration is given up (reported as inf)
 MAX_DURATION = 5.0
+
+
+@dataclasses.dataclass
+class Plane:
+    """Positioning time on a dense grid of the two most influential properties, the others at default.
+
+    Attributes:
+      x_name, y_name: the properties along x and y (y the most influential).
+      x, y: their grid values, (nx,) and (ny,).
+      positioning_time_s, estimate_s: (ny, nx) simulated and estimated positioning time [s].
+      steps: physics steps taken.
+      wall_time_s: wall time of the batched simulation [s].
+    """
+
+    x_name: str
+    y_name: str
+    x: np.ndarray
+    y: np.ndarray
+    positioning_time_s: np.ndarray
+    estimate_s: np.ndarray
+    steps: int
+    wall_time_s: float
 
 
 @dataclasses.dataclass
@@ -124,6 +155,7 @@ class Study:
       steps: physics steps taken in total.
       wall_time_s: wall time of the batched simulation [s].
       nthread: threads the batch ran on.
+      plane: the dense plane over the two most influential properties (None: not run).
     """
 
     base: dict[str, float]
@@ -140,6 +172,7 @@ class Study:
     steps: int
     wall_time_s: float
     nthread: int
+    plane: Plane | None = None
 
     @property
     def size(self) -> int:
@@ -253,11 +286,18 @@ def config_parameters(base: Mapping[str, float], values: Mapping[str, np.ndarray
     return params
 
 
-def timesteps(values: Mapping[str, np.ndarray], motor_mass: float, omega_dt: float = OMEGA_DT) -> np.ndarray:
-    """dt = omega_dt / omega_n [s] of each configuration's belt mode."""
+def timesteps(values: Mapping[str, np.ndarray], base: Mapping[str, float], omega_dt: float = OMEGA_DT) -> np.ndarray:
+    """Each configuration's timestep [s]: at most omega_dt / omega_n of its belt mode, and a whole
+    fraction of its minimum half-move time sqrt(D M / F), so the bang-bang switches fall on the step
+    grid exactly and every configuration makes the true minimum-time move at its full force (a
+    rounded switch time would shift the residual vibration's phase with the resolution)."""
     m_c = np.asarray(values["carriage_mass"], float)
-    reduced = m_c * motor_mass / (m_c + motor_mass)
-    return omega_dt / np.sqrt(np.asarray(values["belt_stiffness"]) / reduced)
+    motor_mass = base["motor_mass"]
+    total = m_c + motor_mass
+    reduced = m_c * motor_mass / total
+    largest = omega_dt / np.sqrt(np.asarray(values["belt_stiffness"]) / reduced)
+    half = np.sqrt(base["move_distance"] * total / np.asarray(values["drive_force"], float))
+    return half / np.ceil(half / largest)
 
 
 def move_profiles(base: Mapping[str, float], values: Mapping[str, np.ndarray],
@@ -310,7 +350,7 @@ def simulate_moves(
     damping = belt_damping(values, m_m)
     limit = np.asarray(values["drive_force"], float)
     distance, band = params["move_distance"], params["positioning_band"]
-    dt = timesteps(values, m_m, omega_dt)
+    dt = timesteps(values, params, omega_dt)
     half_steps, force = move_profiles(params, values, dt)
     move_steps = 2 * half_steps
 
@@ -432,6 +472,7 @@ def run_study(
     scene: str = "printer_head",
     *,
     levels: int = DEFAULT_LEVELS,
+    plane_levels: int = PLANE_LEVELS,
     nthread: int = 0,
     omega_dt: float = OMEGA_DT,
     **overrides: Any,
@@ -441,6 +482,8 @@ def run_study(
     Args:
       scene: the scene to study (only 'printer_head' has a design study).
       levels: odd number of grid points per property (levels^4 configurations).
+      plane_levels: odd number of grid points per axis of the dense plane over the two most
+        influential properties (plane_levels^2 more configurations), 0 for none.
       nthread: batch threads (0: one per CPU).
       omega_dt: omega_n dt [-] of every simulation.
       **overrides: printer_head parameters to start from (SI), e.g. move_distance=0.2 [m].
@@ -455,18 +498,44 @@ def run_study(
         raise BadInputError(f"threads must be an integer >= 0 (0: one per CPU), got {nthread!r}")
     if not (isinstance(omega_dt, (int, float)) and 0 < omega_dt <= 1.0):
         raise BadInputError(f"omega_dt must be a number in (0, 1] (RK4 resolution), got {omega_dt!r}")
+    if not isinstance(plane_levels, (int, np.integer)) or not (
+            plane_levels == 0 or (plane_levels >= 3 and plane_levels % 2 == 1)):
+        raise BadInputError(f"plane levels must be 0 (no plane) or an odd integer >= 3, got {plane_levels!r}")
     base = base_parameters(overrides)
     grids = make_grids(base, levels)
     values = configurations(grids)
     runs = simulate_moves(base, values, omega_dt=omega_dt, nthread=nthread)
     estimate, worst, frequency = estimates(base, values, runs["dt_s"])
-    return Study(
+    study = Study(
         base=base, grids=grids, values=values,
         move_time_s=runs["move_time_s"], settling_time_s=runs["settling_time_s"],
         positioning_time_s=runs["positioning_time_s"], residual_amplitude_m=runs["residual_amplitude_m"],
         estimate_s=estimate, worst_case_estimate_s=worst, natural_frequency_hz=frequency,
         dt_s=runs["dt_s"], steps=runs["steps_total"], wall_time_s=runs["wall_time_s"], nthread=runs["nthread"],
     )
+    if plane_levels:
+        study.plane = dense_plane(study, plane_levels, omega_dt=omega_dt, nthread=nthread)
+    return study
+
+
+def dense_plane(study: Study, levels: int = PLANE_LEVELS, *, omega_dt: float = OMEGA_DT,
+                nthread: int = 0) -> Plane:
+    """Simulate the `levels` x `levels` plane of the study's two most influential properties.
+
+    Each spans the study's range (default x SPANS^[-1, 1]); the other two stay at their defaults.
+    """
+    first, second = study.ranking()[:2]
+    defaults = default_properties(study.base)
+    exponents = np.linspace(-1.0, 1.0, levels)
+    axis = {name: defaults[name] * SPANS[name] ** exponents for name in (first, second)}
+    y, x = np.meshgrid(axis[first], axis[second], indexing="ij")
+    values = {name: np.full(y.size, defaults[name]) for name in PROPERTIES}
+    values[first], values[second] = y.ravel(), x.ravel()
+    runs = simulate_moves(study.base, values, omega_dt=omega_dt, nthread=nthread)
+    estimate, _, _ = estimates(study.base, values, runs["dt_s"])
+    return Plane(x_name=second, y_name=first, x=axis[second], y=axis[first],
+                 positioning_time_s=runs["positioning_time_s"].reshape(y.shape),
+                 estimate_s=estimate.reshape(y.shape), steps=runs["steps_total"], wall_time_s=runs["wall_time_s"])
 
 
 def _regression(values: Mapping[str, np.ndarray], times: np.ndarray) -> tuple[dict[str, float], float]:
@@ -529,6 +598,16 @@ def summary(study: Study) -> dict[str, Any]:
         "wall_time_s": study.wall_time_s,
         "configurations_per_s": study.size / study.wall_time_s,
         "nthread": study.nthread,
+        "plane": None if study.plane is None else {
+            "x": study.plane.x_name,
+            "y": study.plane.y_name,
+            "levels": len(study.plane.x),
+            "configurations": int(study.plane.positioning_time_s.size),
+            "positioning_time_s": {"min": float(np.min(study.plane.positioning_time_s)),
+                                   "max": float(np.max(study.plane.positioning_time_s))},
+            "steps": study.plane.steps,
+            "wall_time_s": study.plane.wall_time_s,
+        },
     }
 
 
@@ -544,40 +623,66 @@ _LABELS = {
 
 def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
     """PNG: positioning time over the two most influential properties (the others at their
-    defaults), and simulated vs analytic positioning time of every configuration."""
+    defaults; the dense plane if the study has one, else the grid's slice), and simulated vs
+    analytic positioning time of every configuration."""
     import matplotlib
 
     matplotlib.use("Agg")
+    import matplotlib.colors
     import matplotlib.pyplot as plt
     import matplotlib.ticker
 
     first, second = study.ranking()[:2]
     axes_order = list(study.grids)
-    shape = (study.levels,) * len(axes_order)
     centre = study.levels // 2
-    index = [centre] * len(shape)
-    index[axes_order.index(first)] = slice(None)
-    index[axes_order.index(second)] = slice(None)
-    plane = study.positioning_time_s.reshape(shape)[tuple(index)] * 1e3  # ms
-    if axes_order.index(first) > axes_order.index(second):
-        plane = plane.T  # rows: first property
-    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 5), constrained_layout=True)
-    x, y = study.grids[second], study.grids[first]
-    mesh = left.pcolormesh(x, y, plane, shading="nearest", cmap="viridis")
-    contours = left.contour(x, y, plane, colors="white", linewidths=0.8)
-    left.clabel(contours, fmt="%.0f ms", fontsize=8)
-    left.plot(x[centre], y[centre], "w*", markersize=14, markeredgecolor="k", label="default")
+    estimate_plane = None
+    if study.plane is not None:
+        x, y = study.plane.x, study.plane.y
+        plane = study.plane.positioning_time_s * 1e3  # ms, rows: the most influential property
+        estimate_plane = study.plane.estimate_s * 1e3
+        first, second = study.plane.y_name, study.plane.x_name
+    else:
+        shape = (study.levels,) * len(axes_order)
+        index = [centre] * len(shape)
+        index[axes_order.index(first)] = slice(None)
+        index[axes_order.index(second)] = slice(None)
+        plane = study.positioning_time_s.reshape(shape)[tuple(index)] * 1e3  # ms
+        if axes_order.index(first) > axes_order.index(second):
+            plane = plane.T  # rows: first property
+        x, y = study.grids[second], study.grids[first]
+    fig, (left, right) = plt.subplots(1, 2, figsize=(12.5, 5.2), constrained_layout=True)
+    norm = matplotlib.colors.LogNorm(vmin=float(np.min(plane)), vmax=float(np.max(plane)))
+    mesh = left.pcolormesh(x, y, plane, shading="nearest", cmap="viridis", norm=norm)
+    candidates = np.array([50, 100, 200, 400, 800, 1600])  # few, so the phase stripes stay readable
+    levels = candidates[(candidates > np.min(plane)) & (candidates < np.max(plane))]
+    if levels.size:
+        contours = left.contour(x, y, plane, levels=levels, colors="white", linewidths=0.8)
+        left.clabel(contours, fmt="%.0f ms", fontsize=8)
+        if estimate_plane is not None:
+            left.contour(x, y, estimate_plane, levels=levels, colors="white", linewidths=0.6,
+                         linestyles="dashed")
+    default = default_properties(study.base)
+    left.plot(default[second], default[first], "w*", markersize=14, markeredgecolor="k", label="default")
+    if estimate_plane is not None:
+        left.plot([], [], "w--", linewidth=0.6, label="analytic estimate (contours)")
     left.set_xscale("log")
     left.set_yscale("log")
+    for axis in (left.xaxis, left.yaxis):  # plain numbers at 1, 2, 5 x 10^n: scientific minor labels collide
+        axis.set_major_locator(matplotlib.ticker.LogLocator(subs=(1.0, 2.0, 5.0)))
+        axis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda value, _: f"{value:g}"))
+        axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     left.set_xlabel(_LABELS[second])
     left.set_ylabel(_LABELS[first])
     elasticity = study.elasticities()
     others = [p for p in axes_order if p not in (first, second)]
     left.set_title(f"positioning time [ms], {study.base['move_distance'] * 1e3:.4g} mm to "
                    f"+-{study.base['positioning_band'] * 1e6:.3g} um\n"
-                   + ", ".join(f"{p} = {study.grids[p][centre]:.3g}" for p in others), fontsize=10)
-    left.legend(loc="upper right", fontsize=8)
-    fig.colorbar(mesh, ax=left, label="positioning time [ms]")
+                   + ", ".join(f"{p} = {default[p]:.3g}" for p in others), fontsize=10)
+    legend = left.legend(loc="upper right", fontsize=8, facecolor="0.3", labelcolor="white")
+    legend.get_frame().set_alpha(0.6)
+    bar = fig.colorbar(mesh, ax=left, label="positioning time [ms]")
+    bar.ax.yaxis.set_major_formatter(matplotlib.ticker.FormatStrFormatter("%.0f"))
+    bar.ax.yaxis.set_minor_formatter(matplotlib.ticker.FormatStrFormatter("%.0f"))
 
     finite = np.isfinite(study.positioning_time_s)
     sim, est = study.positioning_time_s[finite] * 1e3, study.estimate_s[finite] * 1e3
@@ -588,8 +693,10 @@ def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
     right.plot(span, span, "k-", linewidth=0.8, label="equal")
     right.set_xlabel("simulated positioning time [ms] (MuJoCo, batched)")
     right.set_ylabel("estimated positioning time [ms]")
-    right.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())  # log minor labels collide
-    right.yaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    for axis in (right.xaxis, right.yaxis):  # plain numbers at 1, 2, 5 x 10^n
+        axis.set_major_locator(matplotlib.ticker.LogLocator(subs=(1.0, 2.0, 5.0)))
+        axis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda value, _: f"{value:g}"))
+        axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     right.set_title(f"{study.size} configurations; elasticities d ln T / d ln p:\n"
                     + ", ".join(f"{p.split('_')[0]} {elasticity[p]:+.2f}" for p in study.ranking()), fontsize=10)
     right.legend(fontsize=8)

@@ -40,6 +40,12 @@ Scenarios, each with its exact solution (analytic.linear_response):
 * `settle`: release at rest from a deflected belt (default: the stretch the
   belt has while the motor accelerates at full force, F m_c / (M k)).
 
+The residual vibration of an undamped belt after the move is 4 sin^2(omega_n T / 4)
+times the static stretch F m_c / (M k) (superposed steps +F, -2F, +F at 0, T/2,
+T): it vanishes when each half-move lasts a whole number of belt periods
+(`half_move_belt_periods`), which is why positioning time depends on the belt
+stiffness in stripes, not smoothly.
+
 Quantities: the flexible mode's `natural_frequency_hz` and `damping_ratio` from
 M, C, K, and the same from MuJoCo's linearization of its own step map at the
 run's integrator and dt (`linearized_*`: eigenvalues lambda of the one-step
@@ -305,6 +311,9 @@ class PrinterHead(Scene):
             out["move_force_n"] = force
             out["move_time_s"] = end * dt
             out["minimum_move_time_s"] = minimum_move_time(params["move_distance"], total, params["drive_force"])
+            # an undamped belt is left vibrating at 4 sin^2(omega_n T / 4) times the static stretch:
+            # nothing when each half of the move lasts a whole number of belt periods
+            out["half_move_belt_periods"] = n * dt * omega_n / (2 * math.pi)
             target, start = params["move_distance"], end
         else:  # settle: release at t = 0, the centre of mass stays at 0
             out["initial_deviation_m"] = abs(float(q_c[0]))
