@@ -134,3 +134,13 @@ def test_list_json_names_scenes_scenarios_and_units(capsys):
     slider = next(s for s in catalogue if s["scene"] == "slider")
     assert slider["parameters"]["mass"]["unit"] == "kg"
     assert "exercise" in slider["scenarios"]
+
+
+def test_outputs_get_ordinary_file_permissions(tmp_path, capsys):
+    # written through a temporary file and renamed: the result must not inherit mkstemp's 0600
+    code, _, _ = _run(capsys, "run", "slider", "--duration", "0.1", "--output", str(tmp_path))
+    assert code == 0
+    umask = os.umask(0)
+    os.umask(umask)
+    for name in ("trajectory.csv", "summary.json"):
+        assert (tmp_path / name).stat().st_mode & 0o777 == 0o666 & ~umask
