@@ -545,11 +545,8 @@ _LABELS = {
 def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
     """PNG: positioning time over the two most influential properties (the others at their
     defaults), and simulated vs analytic positioning time of every configuration."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     import matplotlib.ticker
+    from matplotlib.figure import Figure  # no pyplot: a caller's backend and figures stay untouched
 
     first, second = study.ranking()[:2]
     axes_order = list(study.grids)
@@ -561,7 +558,8 @@ def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
     plane = study.positioning_time_s.reshape(shape)[tuple(index)] * 1e3  # ms
     if axes_order.index(first) > axes_order.index(second):
         plane = plane.T  # rows: first property
-    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 5), constrained_layout=True)
+    fig = Figure(figsize=(12, 5), layout="constrained")
+    left, right = fig.subplots(1, 2)
     x, y = study.grids[second], study.grids[first]
     mesh = left.pcolormesh(x, y, plane, shading="nearest", cmap="viridis")
     contours = left.contour(x, y, plane, colors="white", linewidths=0.8)
@@ -596,7 +594,6 @@ def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
     path = pathlib.Path(path)
     with outputs.atomic_path(path) as temporary:
         fig.savefig(temporary, dpi=110, format="png")
-    plt.close(fig)
     return path
 
 
