@@ -11,8 +11,6 @@ Run: python benchmarks/bench_simulate.py
 
 from __future__ import annotations
 
-import time
-
 import mujoco
 import numpy as np
 from mujoco import rollout
@@ -20,15 +18,7 @@ from mujoco import rollout
 import springlab
 from springlab import analytic, scenes
 from springlab.simulate import initial_state, simulate
-
-
-def best_of(fn, repeat=7):
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return min(times)
+from timing import best_of
 
 
 def simulate_vs_rollout() -> None:

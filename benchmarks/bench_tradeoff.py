@@ -19,15 +19,7 @@ import numpy as np
 
 from springlab import scenes, tradeoff
 from springlab.simulate import INTEGRATORS, simulate
-
-
-def best_of(fn, repeat=3):
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return min(times)
+from timing import best_of
 
 
 def sweep_jobs():
@@ -55,9 +47,9 @@ def batched_vs_loop() -> None:
     # same numbers first: the comparison is only fair if both compute the same thing
     for a, b in zip(tradeoff.run_batched(jobs), loop()):
         assert np.array_equal(a.qpos, b.qpos) and np.array_equal(a.qvel, b.qvel)
-    loop_time = best_of(loop)
-    batch_all = best_of(lambda: tradeoff.run_batched(jobs, nthread=0))
-    batch_one = best_of(lambda: tradeoff.run_batched(jobs, nthread=1))
+    loop_time = best_of(loop, repeat=3)
+    batch_all = best_of(lambda: tradeoff.run_batched(jobs, nthread=0), repeat=3)
+    batch_one = best_of(lambda: tradeoff.run_batched(jobs, nthread=1), repeat=3)
     print(f"1) accuracy pass of the slider/free sweep: {len(jobs)} runs, {steps:,} steps, {os.cpu_count()} CPUs")
     print(f"   plain loop of simulate()       {loop_time:8.3f} s  ({steps / loop_time:,.0f} steps/s)")
     print(f"   run_batched, one thread        {batch_one:8.3f} s  ratio loop/batched {loop_time / batch_one:5.2f}")

@@ -134,3 +134,23 @@ def test_list_json_names_scenes_scenarios_and_units(capsys):
     slider = next(s for s in catalogue if s["scene"] == "slider")
     assert slider["parameters"]["mass"]["unit"] == "kg"
     assert "exercise" in slider["scenarios"]
+
+
+def test_outputs_get_ordinary_file_permissions(tmp_path, capsys):
+    # written through a temporary file and renamed: the result must not inherit mkstemp's 0600
+    code, _, _ = _run(capsys, "run", "slider", "--duration", "0.1", "--output", str(tmp_path))
+    assert code == 0
+    umask = os.umask(0)
+    os.umask(umask)
+    for name in ("trajectory.csv", "summary.json"):
+        assert (tmp_path / name).stat().st_mode & 0o777 == 0o666 & ~umask
+
+
+def test_a_closed_pipe_ends_quietly_without_a_traceback():
+    # `springlab list | head -1`: the reader leaves early
+    proc = subprocess.Popen([sys.executable, "-m", "springlab.cli", "list"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE)
+    proc.stdout.close()  # before the child writes: its first write hits a closed pipe
+    err = proc.stderr.read().decode()
+    proc.wait(timeout=60)
+    assert "Traceback" not in err and "BrokenPipe" not in err

@@ -150,3 +150,16 @@ def test_plotting_never_touches_pyplot_global_state():
             "p.phase_plane(a.run('slider', 'free'))\n"
             "assert 'matplotlib.pyplot' not in sys.modules, 'pyplot imported'\n")
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_tradeoff_stability_and_design_charts_leave_the_callers_backend_alone(tmp_path):
+    # a library must not switch a notebook's backend (matplotlib.use) or import pyplot
+    code = ("import sys, matplotlib\n"
+            "matplotlib.use('svg')\n"
+            "from springlab import tradeoff, design\n"
+            f"tradeoff.plot_tradeoff(tradeoff.sweep('slider', 'free', duration=0.5), {str(tmp_path / 't.png')!r})\n"
+            f"design.plot(design.run_study(levels=3), {str(tmp_path / 'd.png')!r})\n"
+            "assert matplotlib.get_backend() == 'svg', matplotlib.get_backend()\n"
+            "assert 'matplotlib.pyplot' not in sys.modules, 'pyplot imported'\n")
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=300)
+    assert (tmp_path / "t.png").stat().st_size > 0 and (tmp_path / "d.png").stat().st_size > 0

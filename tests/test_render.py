@@ -1,6 +1,7 @@
 """Off-screen video: the file decodes, its clock is the simulation's, and the picture shows the physics."""
 
 import math
+import os
 
 import imageio_ffmpeg
 import numpy as np
@@ -191,3 +192,22 @@ def test_declared_springs_are_drawn_between_their_sites():
     first, second, width, rgba = springs[0]
     assert result.model.site(first).name == "spring_anchor" and result.model.site(second).name == "spring_hook"
     assert width > 0 and rgba.shape == (4,)
+
+
+def test_odd_sizes_are_padded_to_even_for_h264(undamped, tmp_path):
+    info = render.render_video(undamped.model, undamped.time, undamped.trajectory.qpos, tmp_path / "v.mp4",
+                               fps=10, width=81, height=61, duration=0.5)
+    meta, frames = _decode(tmp_path / "v.mp4")
+    assert (info["width"], info["height"]) == (82, 62) == tuple(meta["size"])  # yuv420p needs even sizes
+    assert frames.shape == (5, 62, 82, 3)
+
+
+def test_the_video_gets_ordinary_file_permissions_not_the_temp_files(undamped, tmp_path):
+    umask = os.umask(0o022)
+    try:
+        render.render_video(undamped.model, undamped.time, undamped.trajectory.qpos, tmp_path / "v.mp4",
+                            fps=10, width=64, height=48, duration=0.3)
+    finally:
+        os.umask(umask)
+    assert (tmp_path / "v.mp4").stat().st_mode & 0o777 == 0o644
+    assert [p.name for p in tmp_path.iterdir()] == ["v.mp4"]  # no temporary file left next to it

@@ -7,6 +7,7 @@ Exit codes: 0 ok; 1 a validation fell outside its tolerance; 2 bad input;
 from __future__ import annotations
 
 import argparse
+import os
 import pathlib
 import sys
 import time
@@ -419,6 +420,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("springlab: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # the reader went away (`springlab list | head`): stop quietly, as Unix tools do;
+        # point stdout at devnull so the interpreter's final flush cannot raise again
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
 
 
 if __name__ == "__main__":

@@ -625,12 +625,9 @@ def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
     """PNG: positioning time over the two most influential properties (the others at their
     defaults; the dense plane if the study has one, else the grid's slice), and simulated vs
     analytic positioning time of every configuration."""
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.colors
-    import matplotlib.pyplot as plt
     import matplotlib.ticker
+    from matplotlib.figure import Figure  # no pyplot: a caller's backend and figures stay untouched
 
     first, second = study.ranking()[:2]
     axes_order = list(study.grids)
@@ -650,7 +647,8 @@ def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
         if axes_order.index(first) > axes_order.index(second):
             plane = plane.T  # rows: first property
         x, y = study.grids[second], study.grids[first]
-    fig, (left, right) = plt.subplots(1, 2, figsize=(12.5, 5.2), constrained_layout=True)
+    fig = Figure(figsize=(12.5, 5.2), layout="constrained")
+    left, right = fig.subplots(1, 2)
     norm = matplotlib.colors.LogNorm(vmin=float(np.min(plane)), vmax=float(np.max(plane)))
     mesh = left.pcolormesh(x, y, plane, shading="nearest", cmap="viridis", norm=norm)
     candidates = np.array([50, 100, 200, 400, 800, 1600])  # few, so the phase stripes stay readable
@@ -703,7 +701,6 @@ def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
     path = pathlib.Path(path)
     with outputs.atomic_path(path) as temporary:
         fig.savefig(temporary, dpi=110, format="png")
-    plt.close(fig)
     return path
 
 

@@ -12,7 +12,7 @@ import json
 import math
 import os
 import pathlib
-import tempfile
+import secrets
 from collections.abc import Iterator, Mapping
 from typing import Any
 
@@ -33,17 +33,30 @@ def prepare_directory(directory: str | os.PathLike) -> pathlib.Path:
     return path
 
 
+def temporary_beside(target: pathlib.Path) -> pathlib.Path:
+    """Create a hidden, unique, empty file next to `target` and return its path.
+
+    Mode 0666 & ~umask, like any new file: tempfile.mkstemp's 0600 would survive
+    the final rename and leave the user's results unreadable to others.
+    """
+    for _ in range(100):
+        name = target.parent / f".{target.name}.{secrets.token_hex(4)}.part{target.suffix}"
+        try:
+            os.close(os.open(name, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o666))
+        except FileExistsError:
+            continue
+        return name
+    raise FileExistsError(f"no free temporary file name next to {str(target)!r}")
+
+
 @contextlib.contextmanager
 def atomic_path(target: str | os.PathLike) -> Iterator[pathlib.Path]:
     """Yield a temporary path beside `target`; rename it onto `target` on success, delete it on failure."""
     target = pathlib.Path(target)
     try:
-        handle, temporary = tempfile.mkstemp(prefix=f".{target.name}.", suffix=target.suffix or ".tmp",
-                                             dir=target.parent)
+        temporary = temporary_beside(target)
     except OSError as error:
         raise BadInputError(f"cannot write {str(target)!r}: {error.strerror or error}") from None
-    os.close(handle)
-    temporary = pathlib.Path(temporary)
     try:
         yield temporary
         os.replace(temporary, target)

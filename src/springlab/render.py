@@ -66,7 +66,6 @@ import copy  # noqa: E402
 import importlib.util  # noqa: E402
 import queue  # noqa: E402
 import sys  # noqa: E402
-import tempfile  # noqa: E402
 import threading  # noqa: E402
 import time as _time  # noqa: E402
 from collections.abc import Callable  # noqa: E402
@@ -76,10 +75,8 @@ from pathlib import Path  # noqa: E402
 import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
-try:  # springlab's usage error (a ValueError subclass the CLI maps to exit code 2)
-    from .errors import BadInputError
-except ImportError:  # pragma: no cover - module used outside the package
-    BadInputError = ValueError
+from . import outputs  # noqa: E402
+from .errors import BadInputError  # noqa: E402  (a ValueError; the CLI maps it to exit 2)
 
 __all__ = ["ensure_gl_backend", "frame_times", "sample_states", "render_video", "check_video_arguments",
            "framed_model"]
@@ -866,7 +863,7 @@ def render_video(
 
     Raises
     ------
-    ValueError
+    BadInputError (a ValueError)
         For bad arguments (non-positive fps or size, unknown camera, unsupported
         extension, mismatched ``time``/``qpos``, bad panel images, ...).
     RuntimeError
@@ -923,11 +920,9 @@ def render_video(
 
     try:
         out_path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp_name = tempfile.mkstemp(prefix=f".{out_path.name}.", suffix=f".part{ext}",
-                                        dir=out_path.parent)
+        tmp_name = str(outputs.temporary_beside(out_path))
     except OSError as err:
         raise BadInputError(f"cannot write {str(out_path)!r}: {err.strerror or err}") from None
-    os.close(fd)
 
     scene = None
     writer = None

@@ -1209,13 +1209,12 @@ _COLORS = {"euler": "#1f77b4", "implicit": "#17becf", "implicitfast": "#2ca02c",
 _STYLES = {"euler": "-", "implicit": "--", "implicitfast": ":", "rk4": "-", "discrete": "-"}
 
 
-def _pyplot():
-    import matplotlib
+def _figure(ncols: int, figsize: tuple[float, float], **options):
+    """A bare matplotlib Figure and its axes: no pyplot, so a caller's backend and figures stay untouched."""
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+    fig = Figure(figsize=figsize, layout=options.pop("layout", None))
+    return fig, fig.subplots(1, ncols, **options)
 
 
 def _save(fig, path: str | pathlib.Path) -> pathlib.Path:
@@ -1228,8 +1227,7 @@ def _save(fig, path: str | pathlib.Path) -> pathlib.Path:
 
 def plot_tradeoff(result: Tradeoff, path: str | pathlib.Path) -> pathlib.Path:
     """Two log-log panels: error vs dt (with the observed orders) and error vs wall time (Pareto front)."""
-    plt = _pyplot()
-    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 5))
+    fig, (left, right) = _figure(2, (12, 5))
     diverged = sum(r.diverged for r in result.runs)
     floor = 1e-17
     for name in dict.fromkeys(r.integrator for r in result.runs):
@@ -1262,23 +1260,18 @@ def plot_tradeoff(result: Tradeoff, path: str | pathlib.Path) -> pathlib.Path:
     note = f"; {diverged} diverged runs not shown" if diverged else ""
     fig.suptitle(f"{result.scene} / {result.scenario}: {len(result.runs)} runs over {result.duration:g} s{note}")
     fig.tight_layout()
-    try:
-        return _save(fig, path)
-    finally:
-        plt.close(fig)
+    return _save(fig, path)
 
 
 def plot_stability(report: dict[str, Any], path: str | pathlib.Path,
                    amplification: dict[str, Any] | None = None) -> pathlib.Path:
     """Per integrator: measured per-step amplification over (zeta, omega*dt), theory boundary, measured boundary."""
-    plt = _pyplot()
     from matplotlib.colors import TwoSlopeNorm
 
     amplification = amplification_map() if amplification is None else amplification
     zetas, omega_dts = amplification["zetas"], amplification["omega_dts"]
     names = list(amplification["radius"])
-    fig, axes = plt.subplots(1, len(names), figsize=(3.4 * len(names) + 1.5, 4.4), sharey=True,
-                             layout="constrained")
+    fig, axes = _figure(len(names), (3.4 * len(names) + 1.5, 4.4), sharey=True, layout="constrained")
     axes = np.atleast_1d(axes)
     norm = TwoSlopeNorm(vmin=-3.0, vcenter=0.0, vmax=3.0)
     theory_zetas = np.concatenate([[0.0], np.geomspace(1e-2, 100.0, 200)])
@@ -1304,16 +1297,12 @@ def plot_stability(report: dict[str, Any], path: str | pathlib.Path,
     axes[0].set_ylabel("omega * dt [-]")
     fig.colorbar(image, ax=list(axes), label="log10 per-step amplification (> 0: grows)", shrink=0.85)
     fig.suptitle("stability map: MuJoCo's measured one-step amplification, theory (line), measured boundary (o)")
-    try:
-        return _save(fig, path)
-    finally:
-        plt.close(fig)
+    return _save(fig, path)
 
 
 def plot_energy(series: dict[str, Any], path: str | pathlib.Path) -> pathlib.Path:
     """E/E0 over time of every integrator on the undamped slider, each against its exact formula."""
-    plt = _pyplot()
-    fig, (euler, rk4, discrete) = plt.subplots(1, 3, figsize=(15, 4.4))
+    fig, (euler, rk4, discrete) = _figure(3, (15, 4.4))
     t = series["time_periods"]
     y = series["omega_dt"]
     n = np.arange(len(t))
@@ -1343,10 +1332,7 @@ def plot_energy(series: dict[str, Any], path: str | pathlib.Path) -> pathlib.Pat
         axis.legend(fontsize=8)
     fig.suptitle(f"undamped slider, omega*dt = y = {y:g}: energy from qpos/qvel vs each step map's exact formula")
     fig.tight_layout()
-    try:
-        return _save(fig, path)
-    finally:
-        plt.close(fig)
+    return _save(fig, path)
 
 
 def write_tradeoff(result: Tradeoff, directory: str | pathlib.Path) -> list[pathlib.Path]:
