@@ -1,36 +1,32 @@
-"""Chapter 5.7's printer head: How fast can we position the printer head? Which system properties
-play an important role?
+"""Chapter 5.7's printer head, first question: How fast can we position the printer head?
 
-One bang-bang move of the default carriage through the scene (exact 2-DOF solution alongside), then
-the design study: 7^4 = 2401 configurations of belt stiffness, carriage mass, belt damping ratio and
-drive force through batched MuJoCo (about 10 s on 2 cores), ranked by elasticity.
+One bang-bang move of the default carriage through the scene (validated against the exact 2-DOF
+solution), split into the move and the settling, beside the analytic estimate and the
+phase-independent worst case 2 sqrt(D M / F) + ln(4 F m_c m_m / (M^2 k band)) / (zeta omega_n).
+The second question is scenarios/printer_which_properties.py.
 
 Run: python scenarios/printer_how_fast.py
 """
 
+import math
+
 import springlab
-import springlab.design
 
 result = springlab.run("printer_head", "move")
-q = result.summary["quantities"]
-print(f"default carriage (belt mode {q['natural_frequency_hz']:.1f} Hz, zeta {q['damping_ratio']:.3f};"
-      f" MuJoCo's linearization {q['linearized_natural_frequency_hz']:.1f} Hz, {q['linearized_damping_ratio']:.3f}):"
-      f" {q['move_distance_m'] * 1e3:.1f} mm in {q['move_time_s'] * 1e3:.1f} ms of bang-bang move"
-      f" (minimum {q['minimum_move_time_s'] * 1e3:.2f} ms), residual vibration {q['residual_amplitude_m'] * 1e6:.1f} um,"
-      f" inside +-{q['settling_band_m'] * 1e6:.0f} um for good {q['settling_time_s'] * 1e3:.2f} ms later:"
-      f" positioned in {q['positioning_time_s'] * 1e3:.1f} ms (estimate {q['positioning_time_estimate_s'] * 1e3:.1f} ms;"
-      f" passed {result.summary['passed']})")
+p, q = result.parameters, result.summary["quantities"]
+print(f"belt mode {q['natural_frequency_hz']:.1f} Hz, zeta {q['damping_ratio']:.3f} (MuJoCo's linearization"
+      f" {q['linearized_natural_frequency_hz']:.1f} Hz, {q['linearized_damping_ratio']:.3f});"
+      f" exact-solution check passed: {result.summary['passed']}")
+print(f"{q['move_distance_m'] * 1e3:.1f} mm in {q['move_time_s'] * 1e3:.1f} ms of bang-bang move"
+      f" (minimum 2 sqrt(D M / F) = {q['minimum_move_time_s'] * 1e3:.2f} ms; each half"
+      f" {q['half_move_belt_periods']:.2f} belt periods), residual vibration {q['residual_amplitude_m'] * 1e6:.1f} um,"
+      f" inside +-{q['settling_band_m'] * 1e6:.0f} um for good {q['settling_time_s'] * 1e3:.2f} ms later:")
+print(f"positioned in {q['positioning_time_s'] * 1e3:.1f} ms (estimate {q['positioning_time_estimate_s'] * 1e3:.1f} ms)")
 
-study = springlab.design.run_study("printer_head", plane_levels=0)  # the plane is for the plot
-summary = springlab.design.summary(study)
-print()
-print(springlab.design.answer(study))
-print()
-print("Elasticity of positioning time d ln T / d ln p (global fit over the grid; local at the default):")
-for name in summary["ranking"]:
-    print(f"  {name:<15} {summary['elasticities'][name]:+.3f}   local {summary['local_elasticities'][name]:+.3f}")
-fastest = summary["fastest"]
-print(f"fastest configuration: {fastest['positioning_time_s'] * 1e3:.1f} ms with "
-      + ", ".join(f"{k} {v:.3g}" for k, v in fastest["properties"].items()))
-print(f"({summary['configurations']} configurations in {summary['wall_time_s']:.1f} s,"
-      f" {summary['configurations_per_s']:.0f}/s)")
+# the worst case over the vibration's phase: residual envelope 4 F m_c m_m / (M^2 k)
+m_c, m_m, k, force = p["carriage_mass"], p["motor_mass"], p["belt_stiffness"], p["drive_force"]
+total = m_c + m_m
+omega, zeta = 2 * math.pi * q["natural_frequency_hz"], q["damping_ratio"]
+envelope = 4 * force * m_c * m_m / (total**2 * k)
+worst = q["minimum_move_time_s"] + math.log(envelope / p["positioning_band"]) / (zeta * omega)
+print(f"worst case over the vibration's phase (envelope {envelope * 1e6:.0f} um): {worst * 1e3:.1f} ms")
