@@ -91,11 +91,16 @@ def cmd_list(args) -> int:
     return EXIT_OK
 
 
+def _run_scenario(args) -> api.Result:
+    """api.run from the scene, timing and --set arguments that run, render and plot share."""
+    return api.run(args.scene, args.scenario, integrator=args.integrator, dt=args.dt,
+                   duration=args.duration, tol=args.tol, **_parse_sets(args.set))
+
+
 def cmd_run(args) -> int:
     if args.record_every < 1:
         raise BadInputError(f"--record-every must be an integer >= 1, got {args.record_every}")
-    result = api.run(args.scene, args.scenario, integrator=args.integrator, dt=args.dt,
-                     duration=args.duration, tol=args.tol, **_parse_sets(args.set))
+    result = _run_scenario(args)
     if args.output:
         outputs.write_run(args.output, result, every=args.record_every)
     summary = result.summary
@@ -164,8 +169,7 @@ def cmd_render(args) -> int:
     from . import media, render  # GL and matplotlib only for the commands that draw
 
     render.check_video_arguments(args.output, args.fps, args.width, args.height)
-    result = api.run(args.scene, args.scenario, integrator=args.integrator, dt=args.dt,
-                     duration=args.duration, tol=args.tol, **_parse_sets(args.set))
+    result = _run_scenario(args)
     outputs.prepare_directory(pathlib.Path(args.output).parent)
     info = media.render_run(result, args.output, fps=args.fps, width=args.width, height=args.height,
                             composite=args.composite)
@@ -180,14 +184,13 @@ def cmd_plot(args) -> int:
     from . import plots
 
     plots.check_output(args.output)
-    timing = dict(integrator=args.integrator, dt=args.dt, duration=args.duration)
-    params = _parse_sets(args.set)
     if args.kind in ("time", "phase"):
-        result = api.run(args.scene, args.scenario, tol=args.tol, **timing, **params)
+        result = _run_scenario(args)
         figure = plots.time_series(result) if args.kind == "time" else plots.phase_plane(result)
         verdict = _verdict(result.summary)
     else:
-        figure = plots.figure_for(args.kind, args.scene, args.scenario, **timing, **params)
+        figure = plots.figure_for(args.kind, args.scene, args.scenario, integrator=args.integrator,
+                                  dt=args.dt, duration=args.duration, **_parse_sets(args.set))
         verdict = EXIT_OK
     print(f"wrote {plots.save(figure, args.output)}")
     return verdict
