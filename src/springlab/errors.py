@@ -1,5 +1,8 @@
 """springlab's exceptions: one base class, each with the CLI exit code it maps to.
 
+A run outside its tolerance is not an exception: it is a result with
+summary["passed"] False (exit 1), so its outputs are still written.
+
 Messages are one line that says what was wrong and what is valid, so the CLI can
 print them as they are.
 """
@@ -37,10 +40,3 @@ class DivergedError(SpringlabError):
     """The simulation blew up; nothing is reported or written for it (exit 3)."""
 
     exit_code = 3
-
-
-class ValidationError(SpringlabError):
-    """A validated quantity fell outside its stated tolerance (exit 1)."""
-
-    exit_code = 1
-
