@@ -16,9 +16,9 @@ import mujoco
 import numpy as np
 
 from . import compare, scenes
-from .errors import BadInputError, DivergedError
-from .scene import Reference, Scene, Scenario
-from .simulate import Trajectory, check_timing, integrator_id, simulate, stability_limit
+from .errors import DivergedError
+from .scene import Scene, Scenario
+from .simulate import Trajectory, check_timing, integrator_id, simulate
 
 #: a run whose error exceeds this many times its signal has blown up, flagged or not
 BLOWUP_RATIO = 1e3
@@ -112,8 +112,8 @@ def run(
     dt = (chosen.dt or scene_obj.dt) if dt is None else dt
     duration = chosen.duration if duration is None else duration
     steps = check_timing(dt, duration)
-    if tol is not None and not (isinstance(tol, (int, float)) and math.isfinite(tol) and tol > 0):
-        raise BadInputError(f"tol must be a finite number > 0 (relative error), got {tol!r}")
+    if tol is not None:
+        tol = compare.check_tolerance(tol)
     model = scene_obj.build(params, chosen)
     setup = scene_obj.setup(model, params, chosen, steps, dt)
     try:

@@ -37,9 +37,13 @@ as it is (it is computed exactly, not estimated).
 
 from __future__ import annotations
 
+import math
+from typing import Any
+
 import numpy as np
 
 from . import analytic
+from .errors import BadInputError
 from .scene import Reference
 from .simulate import ORDERS
 
@@ -49,6 +53,13 @@ SAFETY = 2.0
 ERROR_CONSTANTS = {name: (1.0 / 120.0 if order == 4 else 0.5) for name, order in ORDERS.items()}
 #: round-off allowance per step, relative
 ROUNDOFF_PER_STEP = 100 * np.finfo(float).eps
+
+
+def check_tolerance(tol: Any) -> float:
+    """A requested relative tolerance [-] as a float, or BadInputError saying what is valid."""
+    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not math.isfinite(tol) or tol <= 0:
+        raise BadInputError(f"tol must be a finite number > 0 (relative error), got {tol!r}")
+    return float(tol)
 
 
 def column_errors(simulated: dict[str, np.ndarray], reference: dict[str, np.ndarray]) -> dict[str, dict]:

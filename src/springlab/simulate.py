@@ -46,11 +46,12 @@ ORDERS: Mapping[str, int] = {
 
 _FULL = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
 _CTRL = int(mujoco.mjtState.mjSTATE_CTRL)
-_BAD_WARNINGS = (
+#: MuJoCo's warnings that mean a blow-up (it then resets the state silently)
+BAD_WARNINGS = [
     int(mujoco.mjtWarning.mjWARN_BADQPOS),
     int(mujoco.mjtWarning.mjWARN_BADQVEL),
     int(mujoco.mjtWarning.mjWARN_BADQACC),
-)
+]
 
 #: Most steps one run may take (memory: 8 bytes x state size per step).
 MAX_STEPS = 20_000_000

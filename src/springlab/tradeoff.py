@@ -67,6 +67,7 @@ from . import api, compare, outputs, scenes
 from .errors import BadInputError, DivergedError
 from .scene import Scene, Scenario, Setup
 from .simulate import (
+    BAD_WARNINGS,
     INTEGRATORS,
     ORDERS,
     Trajectory,
@@ -87,8 +88,6 @@ _STATE = mujoco.mjtState
 _RECORD_SPEC = int(_STATE.mjSTATE_TIME | _STATE.mjSTATE_QPOS | _STATE.mjSTATE_QVEL | _STATE.mjSTATE_ACT)
 _FULL = int(_STATE.mjSTATE_FULLPHYSICS)
 _CTRL = int(_STATE.mjSTATE_CTRL)
-_BAD_WARNINGS = [int(w) for w in (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
-                                  mujoco.mjtWarning.mjWARN_BADQACC)]
 
 #: the sweep spans omega_max*dt from SWEEP_TOP down by SWEEP_DECADES decades
 SWEEP_TOP = 1.0
@@ -222,7 +221,7 @@ def run_batched(jobs: Sequence[Job], *, nthread: int = 0) -> list[Trajectory | D
         trajectory = Trajectory(time=states[:, 0], qpos=states[:, 1 : 1 + nq], qvel=states[:, 1 + nq : 1 + nq + nv],
                                 act=states[:, 1 + nq + nv :], integrator=job.integrator, dt=job.dt,
                                 wall_time_s=math.nan)
-        fired = [name for name, w in zip(("BADQPOS", "BADQVEL", "BADQACC"), _BAD_WARNINGS) if warnings[i, w, 1] > 0]
+        fired = [name for name, w in zip(("BADQPOS", "BADQVEL", "BADQACC"), BAD_WARNINGS) if warnings[i, w, 1] > 0]
         if job.stop is not None:
             trajectory, stopped = cut_at_stop(trajectory, job.stop)
             if stopped:
@@ -547,12 +546,6 @@ def pareto_front(runs: Iterable[Run]) -> list[Run]:
 # -- the recommendation ------------------------------------------------------------
 
 
-def _check_tol(tol: Any) -> float:
-    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not math.isfinite(tol) or tol <= 0:
-        raise BadInputError(f"tol must be a finite number > 0 (relative error), got {tol!r}")
-    return float(tol)
-
-
 def _candidates(result: Tradeoff, tol: float) -> list[tuple[float, str, float, bool]]:
     """(predicted wall time [s], integrator, dt [s], refined) settings expected to meet tol.
 
@@ -599,7 +592,7 @@ def recommend(result: Tradeoff, tol: float, *, timing_repeats: int = 3) -> dict[
       dt, max_rel_error and wall_time_s are None when no setting of the sweep
       meets tol.
     """
-    tol = _check_tol(tol)
+    tol = compare.check_tolerance(tol)
     for _, name, dt, _refined in _candidates(result, tol):
         try:
             run = api.run(result.scene, result.scenario, integrator=name, dt=dt, duration=result.duration,
@@ -622,7 +615,7 @@ def tradeoff(scene: str | Scene, scenario: str | None = None, *, tol: float | No
              duration: float | None = None, **parameters: Any) -> Tradeoff:
     """`sweep` plus, with `tol` [-], the verified cheapest setting that meets it (`recommend`)."""
     if tol is not None:
-        tol = _check_tol(tol)
+        tol = compare.check_tolerance(tol)
     started = _time.perf_counter()
     result = sweep(scene, scenario, duration=duration, **parameters)
     if tol is not None:
@@ -703,7 +696,7 @@ class _GrowthTester:
         radius = np.hypot(out[:, :, 1], out[:, :, 2])  # |(omega x, v)| with omega = 1
         early = np.maximum(np.max(radius[:, :half], axis=1), 1.0)
         late = np.max(radius[:, half:], axis=1)
-        flagged = np.array(batch.warning)[ids][:, _BAD_WARNINGS, 1].sum(axis=1) > 0
+        flagged = np.array(batch.warning)[ids][:, BAD_WARNINGS, 1].sum(axis=1) > 0
         finite = np.isfinite(radius).all(axis=1)
         with np.errstate(invalid="ignore"):
             return flagged | ~finite | ~(late <= GROWTH_FACTOR * early)
