@@ -62,7 +62,7 @@ import dataclasses
 import math
 import pathlib
 import time as _time
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from typing import Any
 
 import mujoco

@@ -26,7 +26,6 @@ and [rad/s].
 
 from __future__ import annotations
 
-import math
 import os
 import pathlib
 from collections.abc import Sequence

@@ -48,7 +48,6 @@ analytic.piecewise_linear_velocity (tachograph).
 
 from __future__ import annotations
 
-import math
 
 import mujoco
 import numpy as np
