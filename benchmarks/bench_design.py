@@ -67,14 +67,22 @@ def main() -> None:
     single_rate = n / single["wall_time_s"]
     loop_rate = n / loop_full
     print(f"  {'runner':<34}{'wall [s]':>10}{'config/s':>11}{'Msteps/s':>10}{'x loop':>8}")
-    print(f"  {'batch, ' + str(runs['nthread']) + ' threads':<34}{runs['wall_time_s']:>10.2f}{batched_rate:>11.1f}"
-          f"{steps / runs['wall_time_s'] / 1e6:>10.2f}{batched_rate / loop_rate:>8.1f}")
-    print(f"  {'batch, 1 thread':<34}{single['wall_time_s']:>10.2f}{single_rate:>11.1f}"
-          f"{steps / single['wall_time_s'] / 1e6:>10.2f}{single_rate / loop_rate:>8.1f}")
-    print(f"  {'python mj_step loop (scaled)':<34}{loop_full:>10.2f}{loop_rate:>11.1f}"
-          f"{loop_steps / loop_wall / 1e6:>10.2f}{1.0:>8.1f}")
-    print(f"  loop measured on {len(indices)} configurations, {loop_steps} steps in {loop_wall:.2f} s;"
-          f" the sweep is {steps} steps ({steps / n:.0f} per configuration)")
+    print(
+        f"  {'batch, ' + str(runs['nthread']) + ' threads':<34}{runs['wall_time_s']:>10.2f}{batched_rate:>11.1f}"
+        f"{steps / runs['wall_time_s'] / 1e6:>10.2f}{batched_rate / loop_rate:>8.1f}"
+    )
+    print(
+        f"  {'batch, 1 thread':<34}{single['wall_time_s']:>10.2f}{single_rate:>11.1f}"
+        f"{steps / single['wall_time_s'] / 1e6:>10.2f}{single_rate / loop_rate:>8.1f}"
+    )
+    print(
+        f"  {'python mj_step loop (scaled)':<34}{loop_full:>10.2f}{loop_rate:>11.1f}"
+        f"{loop_steps / loop_wall / 1e6:>10.2f}{1.0:>8.1f}"
+    )
+    print(
+        f"  loop measured on {len(indices)} configurations, {loop_steps} steps in {loop_wall:.2f} s;"
+        f" the sweep is {steps} steps ({steps / n:.0f} per configuration)"
+    )
 
 
 if __name__ == "__main__":

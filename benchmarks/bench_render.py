@@ -59,9 +59,17 @@ def naive_video(model: mujoco.MjModel, time_s: np.ndarray, qpos: np.ndarray, out
             mujoco.mj_forward(model, data)
             renderer.update_scene(data, camera="side")
             frames.append(renderer.render())
-    writer = imageio_ffmpeg.write_frames(output, (WIDTH, HEIGHT), fps=FPS, codec="libx264", quality=None,
-                                         pix_fmt_out="yuv420p", macro_block_size=1, ffmpeg_log_level="error",
-                                         output_params=["-preset", render.X264_PRESET, "-crf", str(render.X264_CRF)])
+    writer = imageio_ffmpeg.write_frames(
+        output,
+        (WIDTH, HEIGHT),
+        fps=FPS,
+        codec="libx264",
+        quality=None,
+        pix_fmt_out="yuv420p",
+        macro_block_size=1,
+        ffmpeg_log_level="error",
+        output_params=["-preset", render.X264_PRESET, "-crf", str(render.X264_CRF)],
+    )
     writer.send(None)
     for frame in frames:
         writer.send(frame)
@@ -70,8 +78,19 @@ def naive_video(model: mujoco.MjModel, time_s: np.ndarray, qpos: np.ndarray, out
 
 
 def fast_video(model, time_s, qpos, output, panel=None) -> int:
-    info = render.render_video(model, time_s, qpos, output, fps=FPS, width=WIDTH, height=HEIGHT,
-                               duration=DURATION, camera="side", progress=False, panel=panel)
+    info = render.render_video(
+        model,
+        time_s,
+        qpos,
+        output,
+        fps=FPS,
+        width=WIDTH,
+        height=HEIGHT,
+        duration=DURATION,
+        camera="side",
+        progress=False,
+        panel=panel,
+    )
     return info["frames"]
 
 
@@ -80,9 +99,12 @@ def frames_per_second(repeat: int, folder: pathlib.Path) -> None:
 
     result = springlab.run("slider", "undamped", duration=DURATION)
     args = (result.model, result.time, result.trajectory.qpos)
-    paths = {"naive": naive_video, "springlab": fast_video,
-             # the composite video: the same plus a 480 x 480 phase-plane panel (built anew each run)
-             "composite": lambda *a: fast_video(*a, panel=plots.PhasePanel(result, HEIGHT))}
+    paths = {
+        "naive": naive_video,
+        "springlab": fast_video,
+        # the composite video: the same plus a 480 x 480 phase-plane panel (built anew each run)
+        "composite": lambda *a: fast_video(*a, panel=plots.PhasePanel(result, HEIGHT)),
+    }
     best = {name: np.inf for name in paths}
     frames = {}
     for _ in range(repeat):  # alternate, so all see the same machine load
@@ -92,20 +114,44 @@ def frames_per_second(repeat: int, folder: pathlib.Path) -> None:
             best[name] = min(best[name], time.perf_counter() - start)
     print(f"1) render + encode, slider undamped, {frames['springlab']} frames {WIDTH}x{HEIGHT}, best of {repeat}")
     print(f"   {'path':<42}{'wall [s]':>10}{'frames/s':>10}")
-    print(f"   {'naive: mujoco.Renderer, default visuals':<42}{best['naive']:>10.2f}"
-          f"{frames['naive'] / best['naive']:>10.1f}")
-    print(f"   {'springlab.render.render_video':<42}{best['springlab']:>10.2f}"
-          f"{frames['springlab'] / best['springlab']:>10.1f}")
-    print(f"   {'springlab composite (+ 480x480 phase panel)':<42}{best['composite']:>10.2f}"
-          f"{frames['composite'] / best['composite']:>10.1f}")
-    print(f"   speed-up over naive: {best['naive'] / best['springlab']:.2f}x;"
-          f" the composite costs {best['composite'] / best['springlab']:.2f}x a plain video")
+    print(
+        f"   {'naive: mujoco.Renderer, default visuals':<42}{best['naive']:>10.2f}"
+        f"{frames['naive'] / best['naive']:>10.1f}"
+    )
+    print(
+        f"   {'springlab.render.render_video':<42}{best['springlab']:>10.2f}"
+        f"{frames['springlab'] / best['springlab']:>10.1f}"
+    )
+    print(
+        f"   {'springlab composite (+ 480x480 phase panel)':<42}{best['composite']:>10.2f}"
+        f"{frames['composite'] / best['composite']:>10.1f}"
+    )
+    print(
+        f"   speed-up over naive: {best['naive'] / best['springlab']:.2f}x;"
+        f" the composite costs {best['composite'] / best['springlab']:.2f}x a plain video"
+    )
 
 
 def end_to_end(repeat: int, folder: pathlib.Path) -> None:
     output = folder / "e2e.mp4"
-    command = [sys.executable, "-m", "springlab.cli", "render", "slider", "undamped", "--duration", str(DURATION),
-               "--fps", str(FPS), "--width", str(WIDTH), "--height", str(HEIGHT), "--output", str(output)]
+    command = [
+        sys.executable,
+        "-m",
+        "springlab.cli",
+        "render",
+        "slider",
+        "undamped",
+        "--duration",
+        str(DURATION),
+        "--fps",
+        str(FPS),
+        "--width",
+        str(WIDTH),
+        "--height",
+        str(HEIGHT),
+        "--output",
+        str(output),
+    ]
     walls = []
     for _ in range(repeat):
         start = time.perf_counter()
@@ -114,17 +160,21 @@ def end_to_end(repeat: int, folder: pathlib.Path) -> None:
     frames = round(DURATION * FPS)
     wall = min(walls)
     print(f"2) end to end, a fresh process: {' '.join(command[1:4])} ... {frames} frames")
-    print(f"   wall {wall:.2f} s (best of {repeat}; all: {', '.join(f'{w:.2f}' for w in walls)}),"
-          f" {frames / wall:.1f} frames/s, {DURATION / wall:.2f}x real time;"
-          f" target >= {FPS} frames/s: {'met' if frames / wall >= FPS else 'NOT met'}")
+    print(
+        f"   wall {wall:.2f} s (best of {repeat}; all: {', '.join(f'{w:.2f}' for w in walls)}),"
+        f" {frames / wall:.1f} frames/s, {DURATION / wall:.2f}x real time;"
+        f" target >= {FPS} frames/s: {'met' if frames / wall >= FPS else 'NOT met'}"
+    )
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=3, help="runs per path (best is kept)")
     args = parser.parse_args()
-    print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f} at start;"
-          f" MUJOCO_GL={os.environ.get('MUJOCO_GL')}")
+    print(
+        f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f} at start;"
+        f" MUJOCO_GL={os.environ.get('MUJOCO_GL')}"
+    )
     with tempfile.TemporaryDirectory() as folder:
         frames_per_second(args.repeat, pathlib.Path(folder))
         end_to_end(args.repeat, pathlib.Path(folder))

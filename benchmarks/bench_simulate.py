@@ -32,14 +32,25 @@ def simulate_vs_rollout() -> None:
     print(f"1) simulate vs raw rollout, slider, {steps} steps per run")
     print(f"   {'integrator':<13}{'springlab steps/s':>20}{'raw rollout steps/s':>22}{'ratio':>8}")
     for integrator in ("rk4", "euler", "implicitfast"):
-        springlab_time = best_of(lambda: simulate(model, integrator=integrator, dt=dt, duration=duration,
-                                                  qpos=setup.qpos, qvel=setup.qvel, control=setup.control))
+        springlab_time = best_of(
+            lambda: simulate(
+                model,
+                integrator=integrator,
+                dt=dt,
+                duration=duration,
+                qpos=setup.qpos,
+                qvel=setup.qvel,
+                control=setup.control,
+            )
+        )
         data = mujoco.MjData(model)
         state0 = initial_state(model, setup.qpos, setup.qvel)
         control = np.zeros((1, steps, model.nu))
         raw_time = best_of(lambda: rollout.rollout(model, data, state0[None], control, nstep=steps))
-        print(f"   {integrator:<13}{steps / springlab_time:>20,.0f}{steps / raw_time:>22,.0f}"
-              f"{raw_time / springlab_time:>8.2f}")
+        print(
+            f"   {integrator:<13}{steps / springlab_time:>20,.0f}{steps / raw_time:>22,.0f}"
+            f"{raw_time / springlab_time:>8.2f}"
+        )
 
 
 def default_setting_vs_scipy() -> None:
@@ -62,11 +73,17 @@ def default_setting_vs_scipy() -> None:
     model = scene.build(params, scenario)
     dt = result.summary["dt"]
     setup = scene.setup(model, params, scenario, result.summary["steps"], dt)
-    path_time = best_of(lambda: simulate(model, integrator="rk4", dt=dt, duration=duration, qpos=setup.qpos,
-                                         qvel=setup.qvel, control=setup.control), repeat=15)
+    path_time = best_of(
+        lambda: simulate(
+            model, integrator="rk4", dt=dt, duration=duration, qpos=setup.qpos, qvel=setup.qvel, control=setup.control
+        ),
+        repeat=15,
+    )
     print("\n2) slider 'free' to max relative error <= 1e-6 (default validated setting vs scipy)")
-    print(f"   springlab rk4 dt={dt:g}: simulate path {path_time * 1e3:6.2f} ms; whole springlab.run call"
-          f" {whole_time * 1e3:6.2f} ms (MJCF parse + compile + exact reference + tolerance); error {springlab_error:.2e}")
+    print(
+        f"   springlab rk4 dt={dt:g}: simulate path {path_time * 1e3:6.2f} ms; whole springlab.run call"
+        f" {whole_time * 1e3:6.2f} ms (MJCF parse + compile + exact reference + tolerance); error {springlab_error:.2e}"
+    )
 
     def rhs(t, y):
         return [y[1], -(k * y[0] + d * y[1]) / m]
@@ -76,8 +93,7 @@ def default_setting_vs_scipy() -> None:
         # loosen rtol until the error just meets 1e-6: the cheapest honest setting per method
         chosen = None
         for rtol in 10.0 ** -np.arange(4, 13.5, 0.5):
-            sol = solve_ivp(rhs, (0, duration), [x0, v0], method=method, rtol=rtol, atol=rtol * 1e-3,
-                            dense_output=True)
+            sol = solve_ivp(rhs, (0, duration), [x0, v0], method=method, rtol=rtol, atol=rtol * 1e-3, dense_output=True)
             error = np.max(np.abs(sol.sol(t_eval)[0] - x_exact)) / scale
             if error <= 1e-6:
                 chosen = rtol
@@ -85,12 +101,18 @@ def default_setting_vs_scipy() -> None:
         if chosen is None:
             print(f"   scipy {method:<7}: could not reach 1e-6")
             continue
-        elapsed = best_of(lambda: solve_ivp(rhs, (0, duration), [x0, v0], method=method, rtol=chosen,
-                                            atol=chosen * 1e-3, dense_output=True).sol(t_eval), repeat=5)
+        elapsed = best_of(
+            lambda: solve_ivp(
+                rhs, (0, duration), [x0, v0], method=method, rtol=chosen, atol=chosen * 1e-3, dense_output=True
+            ).sol(t_eval),
+            repeat=5,
+        )
         print(f"   scipy {method:<7} rtol={chosen:.0e}: {elapsed * 1e3:8.2f} ms, error {error:.2e}")
         fastest = elapsed if fastest is None else min(fastest, elapsed)
-    print(f"   fastest scipy / springlab simulate path = {fastest / path_time:.2f}"
-          f"   (/ whole springlab.run call = {fastest / whole_time:.2f})")
+    print(
+        f"   fastest scipy / springlab simulate path = {fastest / path_time:.2f}"
+        f"   (/ whole springlab.run call = {fastest / whole_time:.2f})"
+    )
 
 
 if __name__ == "__main__":

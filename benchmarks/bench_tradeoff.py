@@ -41,8 +41,18 @@ def batched_vs_loop() -> None:
     steps = sum(job.steps for job in jobs)
 
     def loop():
-        return [simulate(job.model, integrator=job.integrator, dt=job.dt, duration=job.steps * job.dt,
-                         qpos=job.setup.qpos, qvel=job.setup.qvel, control=job.setup.control) for job in jobs]
+        return [
+            simulate(
+                job.model,
+                integrator=job.integrator,
+                dt=job.dt,
+                duration=job.steps * job.dt,
+                qpos=job.setup.qpos,
+                qvel=job.setup.qvel,
+                control=job.setup.control,
+            )
+            for job in jobs
+        ]
 
     # same numbers first: the comparison is only fair if both compute the same thing
     for a, b in zip(tradeoff.run_batched(jobs), loop()):
@@ -61,8 +71,10 @@ def full_tradeoff() -> None:
     result = tradeoff.tradeoff("slider", "free", tol=1e-6)
     elapsed = time.perf_counter() - start
     pick = result.recommendation
-    print(f"2) tradeoff slider free --tol 1e-6: {len(result.runs)} runs in {elapsed:.2f} s (budget 10 s);"
-          f" recommendation {pick['integrator']} dt = {pick['dt']:g} s, error {pick['max_rel_error']:.2e}")
+    print(
+        f"2) tradeoff slider free --tol 1e-6: {len(result.runs)} runs in {elapsed:.2f} s (budget 10 s);"
+        f" recommendation {pick['integrator']} dt = {pick['dt']:g} s, error {pick['max_rel_error']:.2e}"
+    )
 
 
 if __name__ == "__main__":

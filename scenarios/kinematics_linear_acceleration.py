@@ -11,7 +11,9 @@ q = result.summary["quantities"]
 print(q["acceleration_expression"])
 print(q["velocity_expression"], " (v(0) + integral of a)")
 print(q["position_expression"], " (x(0) + integral of v)")
-print(f"at t = {q['end_time_s']:.3g} s: v = {q['v_end_m_s']:.6g} m/s, x = {q['x_end_m']:.6g} m"
-      f" (MuJoCo: {q['v_end_simulated_m_s']:.6g} m/s, {q['x_end_simulated_m']:.6g} m)")
+print(
+    f"at t = {q['end_time_s']:.3g} s: v = {q['v_end_m_s']:.6g} m/s, x = {q['x_end_m']:.6g} m"
+    f" (MuJoCo: {q['v_end_simulated_m_s']:.6g} m/s, {q['x_end_simulated_m']:.6g} m)"
+)
 worst = max(e["max_rel"] for e in result.summary["errors"].values())
 print(f"max relative error: {worst:.1e}")

@@ -12,9 +12,13 @@ q = result.summary["quantities"]
 print(q["position_expression"])
 print(q["velocity_expression"], " (dx/dt)")
 print(q["acceleration_expression"], " (dv/dt)")
-print(f"at t = {q['end_time_s']:.3g} s: x = {q['x_end_m']:.6g} m, v = {q['v_end_m_s']:.6g} m/s,"
-      f" a = {q['a_end_m_s2']:.6g} m/s^2")
-print(f"MuJoCo:            x = {q['x_end_simulated_m']:.6g} m, v = {q['v_end_simulated_m_s']:.6g} m/s,"
-      f" a = {q['a_end_simulated_m_s2']:.6g} m/s^2")
+print(
+    f"at t = {q['end_time_s']:.3g} s: x = {q['x_end_m']:.6g} m, v = {q['v_end_m_s']:.6g} m/s,"
+    f" a = {q['a_end_m_s2']:.6g} m/s^2"
+)
+print(
+    f"MuJoCo:            x = {q['x_end_simulated_m']:.6g} m, v = {q['v_end_simulated_m_s']:.6g} m/s,"
+    f" a = {q['a_end_simulated_m_s2']:.6g} m/s^2"
+)
 worst = max(e["max_rel"] for e in result.summary["errors"].values())
 print(f"max relative error of the simulated x(t), v(t): {worst:.1e} (tolerance {result.summary['tolerance']:.1e})")

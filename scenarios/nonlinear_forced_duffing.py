@@ -10,14 +10,22 @@ import springlab
 result = springlab.run("nonlinear", "forced_duffing")
 q = result.summary["quantities"]
 p = result.parameters
-print(f"m x'' + {p['damping']:g} x' + ({p['k1']:g}) x + {p['k3']:g} x^3 = {p['force_amplitude']:g} N"
-      f" sin(2 pi {p['force_frequency']:.6g} Hz t), x(0) = {p['x0']:g} m")
-print(f"a second run from x(0) + {q['perturbation_m']:g} m is {q['well_size_m']:g} m (the well distance) away"
-      f" after {q['separation_time_s']:.4g} s")
-print(f"finite-time Lyapunov exponent over that time: {q['ftle_per_s']:.3g} 1/s;"
-      f" long-time largest Lyapunov exponent: {q['lyapunov_exponent_per_s']:.3g}"
-      f" +- {q['lyapunov_standard_error_per_s']:.2g} 1/s")
-print(f"the trajectory itself stays within 1 % of the well distance of the exact one until"
-      f" t = {q['accurate_until_s']:.4g} s (Richardson estimate)")
+print(
+    f"m x'' + {p['damping']:g} x' + ({p['k1']:g}) x + {p['k3']:g} x^3 = {p['force_amplitude']:g} N"
+    f" sin(2 pi {p['force_frequency']:.6g} Hz t), x(0) = {p['x0']:g} m"
+)
+print(
+    f"a second run from x(0) + {q['perturbation_m']:g} m is {q['well_size_m']:g} m (the well distance) away"
+    f" after {q['separation_time_s']:.4g} s"
+)
+print(
+    f"finite-time Lyapunov exponent over that time: {q['ftle_per_s']:.3g} 1/s;"
+    f" long-time largest Lyapunov exponent: {q['lyapunov_exponent_per_s']:.3g}"
+    f" +- {q['lyapunov_standard_error_per_s']:.2g} 1/s"
+)
+print(
+    f"the trajectory itself stays within 1 % of the well distance of the exact one until"
+    f" t = {q['accurate_until_s']:.4g} s (Richardson estimate)"
+)
 check = next(c for c in result.summary["checks"] if c["name"] == "observed_order")
 print(f"self-convergence: observed order {check['value']:.3f} (RK4: 4)")

@@ -14,14 +14,20 @@ import springlab
 
 result = springlab.run("printer_head", "move")
 p, q = result.parameters, result.summary["quantities"]
-print(f"belt mode {q['natural_frequency_hz']:.1f} Hz, zeta {q['damping_ratio']:.3f} (MuJoCo's linearization"
-      f" {q['linearized_natural_frequency_hz']:.1f} Hz, {q['linearized_damping_ratio']:.3f});"
-      f" exact-solution check passed: {result.summary['passed']}")
-print(f"{q['move_distance_m'] * 1e3:.1f} mm in {q['move_time_s'] * 1e3:.1f} ms of bang-bang move"
-      f" (minimum 2 sqrt(D M / F) = {q['minimum_move_time_s'] * 1e3:.2f} ms; each half"
-      f" {q['half_move_belt_periods']:.2f} belt periods), residual vibration {q['residual_amplitude_m'] * 1e6:.1f} um,"
-      f" inside +-{q['settling_band_m'] * 1e6:.0f} um for good {q['settling_time_s'] * 1e3:.2f} ms later:")
-print(f"positioned in {q['positioning_time_s'] * 1e3:.1f} ms (estimate {q['positioning_time_estimate_s'] * 1e3:.1f} ms)")
+print(
+    f"belt mode {q['natural_frequency_hz']:.1f} Hz, zeta {q['damping_ratio']:.3f} (MuJoCo's linearization"
+    f" {q['linearized_natural_frequency_hz']:.1f} Hz, {q['linearized_damping_ratio']:.3f});"
+    f" exact-solution check passed: {result.summary['passed']}"
+)
+print(
+    f"{q['move_distance_m'] * 1e3:.1f} mm in {q['move_time_s'] * 1e3:.1f} ms of bang-bang move"
+    f" (minimum 2 sqrt(D M / F) = {q['minimum_move_time_s'] * 1e3:.2f} ms; each half"
+    f" {q['half_move_belt_periods']:.2f} belt periods), residual vibration {q['residual_amplitude_m'] * 1e6:.1f} um,"
+    f" inside +-{q['settling_band_m'] * 1e6:.0f} um for good {q['settling_time_s'] * 1e3:.2f} ms later:"
+)
+print(
+    f"positioned in {q['positioning_time_s'] * 1e3:.1f} ms (estimate {q['positioning_time_estimate_s'] * 1e3:.1f} ms)"
+)
 
 # the worst case over the vibration's phase: residual envelope 4 F m_c m_m / (M^2 k)
 m_c, m_m, k, force = p["carriage_mass"], p["motor_mass"], p["belt_stiffness"], p["drive_force"]

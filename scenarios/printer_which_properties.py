@@ -17,9 +17,13 @@ print("Elasticity of positioning time d ln T / d ln p (global fit over the grid;
 for name in summary["ranking"]:
     print(f"  {name:<15} {summary['elasticities'][name]:+.3f}   local {summary['local_elasticities'][name]:+.3f}")
 fastest = summary["fastest"]
-print(f"fastest configuration: {fastest['positioning_time_s'] * 1e3:.1f} ms with "
-      + ", ".join(f"{k} {v:.3g}" for k, v in fastest["properties"].items()))
+print(
+    f"fastest configuration: {fastest['positioning_time_s'] * 1e3:.1f} ms with "
+    + ", ".join(f"{k} {v:.3g}" for k, v in fastest["properties"].items())
+)
 ratio = summary["estimate_over_simulation"]
 print(f"analytic estimate / simulation: median {ratio['median']:.3f}, 5-95 % {ratio['p05']:.3f}-{ratio['p95']:.3f}")
-print(f"({summary['configurations']} configurations in {summary['wall_time_s']:.1f} s,"
-      f" {summary['configurations_per_s']:.0f}/s)")
+print(
+    f"({summary['configurations']} configurations in {summary['wall_time_s']:.1f} s,"
+    f" {summary['configurations_per_s']:.0f}/s)"
+)

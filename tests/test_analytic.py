@@ -163,6 +163,7 @@ REGIMES = {
 # parameters and roots
 # ---------------------------------------------------------------------------
 
+
 def test_frequencies_and_damping_ratio_follow_their_definitions():
     m, k, d = 2.0, 8.0, 2.0
     assert an.natural_frequency(m, k) == pytest.approx(2.0, rel=1e-15)
@@ -233,6 +234,7 @@ def test_free_mass_with_damping_has_a_zero_root():
 # ---------------------------------------------------------------------------
 # free response
 # ---------------------------------------------------------------------------
+
 
 def test_undamped_release_is_a_cosine():
     # Chapter eq. 5.9: x(t) = x0 cos(omega t).
@@ -354,8 +356,7 @@ def test_free_response_satisfies_equation_of_motion(name):
     m, k, d = REGIMES[name]
     rate = max(math.sqrt(k / m), d / (2 * m), 0.1)
     t = np.linspace(1.0 / rate, 10.0 / rate, 50)
-    res = eom_residual(lambda s: an.free_response(s, m, k, d, 0.7, -0.4), t, m, k, d,
-                       lambda s: 0.0 * s, h=1e-4 / rate)
+    res = eom_residual(lambda s: an.free_response(s, m, k, d, 0.7, -0.4), t, m, k, d, lambda s: 0.0 * s, h=1e-4 / rate)
     assert res < 1e-8
 
 
@@ -379,6 +380,7 @@ def test_free_response_returns_arrays_shaped_like_t():
 # ---------------------------------------------------------------------------
 # step response
 # ---------------------------------------------------------------------------
+
 
 @pytest.mark.parametrize("name", [n for n in REGIMES if REGIMES[n][1] > 0])
 def test_step_response_matches_static_offset_plus_free_vibration(name):
@@ -444,8 +446,10 @@ def test_step_response_starts_quadratically_from_rest():
             with localcontext() as ctx:
                 ctx.prec = _PREC
                 dm = Decimal(d) / Decimal(m)
-                xr = [float(Decimal(2.0) / Decimal(d) * (Decimal(float(s)) - (1 - (-dm * Decimal(float(s))).exp()) / dm))
-                      for s in t]
+                xr = [
+                    float(Decimal(2.0) / Decimal(d) * (Decimal(float(s)) - (1 - (-dm * Decimal(float(s))).exp()) / dm))
+                    for s in t
+                ]
         np.testing.assert_allclose(x, xr, rtol=1e-13)
 
 
@@ -454,14 +458,16 @@ def test_step_response_satisfies_equation_of_motion(name):
     m, k, d = REGIMES[name]
     rate = max(math.sqrt(k / m), d / (2 * m), 0.1)
     t = np.linspace(1.0 / rate, 10.0 / rate, 50)
-    res = eom_residual(lambda s: an.step_response(s, m, k, d, 3.0, 0.2, -0.1), t, m, k, d,
-                       lambda s: 3.0 + 0.0 * s, h=1e-4 / rate)
+    res = eom_residual(
+        lambda s: an.step_response(s, m, k, d, 3.0, 0.2, -0.1), t, m, k, d, lambda s: 3.0 + 0.0 * s, h=1e-4 / rate
+    )
     assert res < 1e-8
 
 
 # ---------------------------------------------------------------------------
 # harmonic forcing
 # ---------------------------------------------------------------------------
+
 
 @pytest.mark.parametrize("name", [n for n in REGIMES if n != "very-overdamped"])  # too stiff for DOP853
 @pytest.mark.parametrize("ratio", [0.37, 1.0, 2.6])
@@ -584,8 +590,15 @@ def test_harmonic_response_satisfies_equation_of_motion(name):
     rate = max(math.sqrt(k / m), d / (2 * m), 0.5)
     omega = 1.3 * rate
     t = np.linspace(1.0 / rate, 10.0 / rate, 50)
-    res = eom_residual(lambda s: an.harmonic_response(s, m, k, d, 2.0, omega / (2 * math.pi), 0.1, 0.0),
-                       t, m, k, d, lambda s: 2.0 * np.sin(omega * s), h=1e-4 / rate)
+    res = eom_residual(
+        lambda s: an.harmonic_response(s, m, k, d, 2.0, omega / (2 * math.pi), 0.1, 0.0),
+        t,
+        m,
+        k,
+        d,
+        lambda s: 2.0 * np.sin(omega * s),
+        h=1e-4 / rate,
+    )
     assert res < 1e-8
 
 
@@ -599,6 +612,7 @@ def test_harmonic_response_survives_huge_times():
 # ---------------------------------------------------------------------------
 # invalid input
 # ---------------------------------------------------------------------------
+
 
 @pytest.mark.parametrize(
     "m, k, d, message",
@@ -645,6 +659,7 @@ def test_bad_times_and_initial_conditions_are_rejected():
 # matrix exponential
 # ---------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("n", [2, 3, 5, 8])
 @pytest.mark.parametrize("scale", [1e-8, 1e-3, 0.1, 0.5, 1.0])
 def test_expm_matches_scipy(n, scale):
@@ -667,9 +682,9 @@ def test_expm_matches_exact_exponential_of_rotation_scaling_blocks(scale):
     exact_blocks = np.zeros((6, 6))
     for i in range(3):
         j = 2 * i
-        blocks[j:j + 2, j:j + 2] = [[a_re[i], -a_im[i]], [a_im[i], a_re[i]]]
+        blocks[j : j + 2, j : j + 2] = [[a_re[i], -a_im[i]], [a_im[i], a_re[i]]]
         c, s = math.cos(a_im[i]), math.sin(a_im[i])
-        exact_blocks[j:j + 2, j:j + 2] = math.exp(a_re[i]) * np.array([[c, -s], [s, c]])
+        exact_blocks[j : j + 2, j : j + 2] = math.exp(a_re[i]) * np.array([[c, -s], [s, c]])
     a = q @ blocks @ q.T
     exact = q @ exact_blocks @ q.T
     # A itself carries rounding ~eps ||A||, which exp amplifies by ~||A||.
@@ -711,17 +726,20 @@ def test_expm_rejects_non_square_or_non_finite_input():
 # state space and multi-DOF responses
 # ---------------------------------------------------------------------------
 
+
 def test_state_matrix_has_first_order_layout():
     mm = np.diag([2.0, 4.0])
     cc = np.array([[1.0, -1.0], [-1.0, 1.0]])
     kk = np.array([[6.0, -2.0], [-2.0, 2.0]])
     a = an.state_matrix(mm, cc, kk)
-    expected = np.array([
-        [0.0, 0.0, 1.0, 0.0],
-        [0.0, 0.0, 0.0, 1.0],
-        [-3.0, 1.0, -0.5, 0.5],
-        [0.5, -0.5, 0.25, -0.25],
-    ])
+    expected = np.array(
+        [
+            [0.0, 0.0, 1.0, 0.0],
+            [0.0, 0.0, 0.0, 1.0],
+            [-3.0, 1.0, -0.5, 0.5],
+            [0.5, -0.5, 0.25, -0.25],
+        ]
+    )
     np.testing.assert_allclose(a, expected, rtol=0, atol=1e-16)
 
 
@@ -768,8 +786,9 @@ def test_linear_response_with_rigid_body_mode_and_switching_force_matches_solve_
             return np.concatenate([y[2:], minv @ (f - cc @ y[2:] - kk @ y[:2])])
 
         sel = (t >= lo) & (t < hi)
-        sol = solve_ivp(rhs, (lo, hi), z, method="DOP853", rtol=1e-12, atol=1e-15,
-                        t_eval=np.concatenate([t[sel], [hi]]))
+        sol = solve_ivp(
+            rhs, (lo, hi), z, method="DOP853", rtol=1e-12, atol=1e-15, t_eval=np.concatenate([t[sel], [hi]])
+        )
         ref[sel] = sol.y[:, :-1].T
         z = sol.y[:, -1]
         lo = hi
@@ -832,12 +851,14 @@ def test_lti_response_with_harmonic_generator_reproduces_forced_vibration():
     # drive it with F0 y1: exact forcing without any time-dependent input.
     m, k, f0 = 1.0, 9.0, 2.0
     for d, omega in [(0.0, 3.0), (0.0, 2.2), (0.4, 3.0), (7.0, 1.1)]:
-        a = np.array([
-            [0.0, 1.0, 0.0, 0.0],
-            [-k / m, -d / m, f0 / m, 0.0],
-            [0.0, 0.0, 0.0, omega],
-            [0.0, 0.0, -omega, 0.0],
-        ])
+        a = np.array(
+            [
+                [0.0, 1.0, 0.0, 0.0],
+                [-k / m, -d / m, f0 / m, 0.0],
+                [0.0, 0.0, 0.0, omega],
+                [0.0, 0.0, -omega, 0.0],
+            ]
+        )
         t = np.linspace(0.0, 30.0, 3001)
         z = an.lti_response(t, a, [0.1, 0.0, 0.0, 1.0])
         x, v = an.harmonic_response(t, m, k, d, f0, omega / (2 * math.pi), x0=0.1)
@@ -895,6 +916,7 @@ def test_lti_response_rejects_bad_input():
 # ---------------------------------------------------------------------------
 # kinematics
 # ---------------------------------------------------------------------------
+
 
 def test_polynomial_motion_differentiates_exactly():
     t = np.linspace(-2.0, 3.0, 11)

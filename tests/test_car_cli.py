@@ -14,11 +14,14 @@ def _run(capsys, *argv):
     return code, out, err
 
 
-@pytest.mark.parametrize("scenario, joints", [
-    ("push_release", ["heave"]),
-    ("pitch_heave", ["heave", "pitch"]),
-    ("road_bump", ["heave", "wheel"]),
-])
+@pytest.mark.parametrize(
+    "scenario, joints",
+    [
+        ("push_release", ["heave"]),
+        ("pitch_heave", ["heave", "pitch"]),
+        ("road_bump", ["heave", "wheel"]),
+    ],
+)
 def test_trajectory_has_the_scenarios_joints_and_their_references(tmp_path, capsys, scenario, joints):
     code, _, err = _run(capsys, "run", "car", scenario, "--duration", "0.6", "--output", str(tmp_path))
     assert code == 0, err
@@ -49,10 +52,13 @@ def test_run_prints_the_textbook_answers(capsys):
     assert "omega_rad_s                31.6227766" in out
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["--set", "speed=0"], "speed must be a finite number > 0 m/s"),
-    (["--set", "bump_height=0.2"], "through the ground"),
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--set", "speed=0"], "speed must be a finite number > 0 m/s"),
+        (["--set", "bump_height=0.2"], "through the ground"),
+    ],
+)
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, argv, message):
     code, out, err = _run(capsys, "run", "car", "road_bump", *argv, "--output", str(tmp_path / "d"))
     assert code == 2
@@ -66,8 +72,9 @@ def test_the_textbook_script_prints_the_three_answers(tmp_path):
     import sys
 
     script = pathlib.Path(__file__).parents[1] / "scenarios" / "car_push_release.py"
-    out = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True,
-                         timeout=300).stdout
+    out = subprocess.run(
+        [sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=300
+    ).stdout
     assert "= 2.4525 mm" in out and "97.5475 mm above the ground" in out
     assert "x_s = 100.0000 mm, A = -2.4525 mm" in out and "omega = sqrt(k/m) = 31.6228 rad/s" in out
     assert "an ellipse centred at (x_s, 0)" in out and "omega |A| = 0.07755 m/s" in out

@@ -18,16 +18,15 @@ from springlab import scenes
 from springlab.scenes import car as car_scene
 
 G = 9.81
-M, I, A, B = 1000.0, 1500.0, 1.2, 1.5
+M, J, A, B = 1000.0, 1500.0, 1.2, 1.5
 KF, KR = 0.45e6, 0.55e6
 CF = 2 * 0.3 * math.sqrt(KF * M * B / (A + B))
 CR = 2 * 0.3 * math.sqrt(KR * M * A / (A + B))
-MASS = np.diag([M, I])
+MASS = np.diag([M, J])
 # q = (heave [m], pitch [rad], + nose down): front height x - a theta, rear x + b theta
 STIFFNESS = np.array([[KF + KR, KR * B - KF * A], [KR * B - KF * A, KF * A**2 + KR * B**2]])
 DAMPING = np.array([[CF + CR, CR * B - CF * A], [CR * B - CF * A, CF * A**2 + CR * B**2]])
-STATE = np.block([[np.zeros((2, 2)), np.eye(2)],
-                  [-np.linalg.solve(MASS, STIFFNESS), -np.linalg.solve(MASS, DAMPING)]])
+STATE = np.block([[np.zeros((2, 2)), np.eye(2)], [-np.linalg.solve(MASS, STIFFNESS), -np.linalg.solve(MASS, DAMPING)]])
 
 
 @pytest.fixture(scope="module")
@@ -37,7 +36,7 @@ def result():
 
 def test_parameters_are_the_models_geometry_and_the_stated_split(result):
     p = result.parameters
-    assert (p["front_axle_distance"], p["rear_axle_distance"], p["pitch_inertia"]) == (A, B, I)
+    assert (p["front_axle_distance"], p["rear_axle_distance"], p["pitch_inertia"]) == (A, B, J)
     assert p["front_stiffness"] == pytest.approx(KF, rel=1e-14)
     assert p["rear_stiffness"] == pytest.approx(KR, rel=1e-14)
     assert p["front_damping"] == pytest.approx(CF, rel=1e-14)
@@ -47,7 +46,7 @@ def test_parameters_are_the_models_geometry_and_the_stated_split(result):
 
 def test_mujoco_linearization_gives_exactly_the_textbook_m_c_k(result):
     linear = car_scene.linearize(result.model, np.array([0.10, 0.0]))
-    np.testing.assert_allclose(linear["M"], MASS, rtol=1e-9, atol=1e-9 * I)
+    np.testing.assert_allclose(linear["M"], MASS, rtol=1e-9, atol=1e-9 * J)
     np.testing.assert_allclose(linear["K"], STIFFNESS, rtol=1e-8, atol=1e-8 * KF)
     np.testing.assert_allclose(linear["C"], DAMPING, rtol=1e-8, atol=1e-8 * CF)
     assert result.summary["quantities"]["linearization_max_rel_diff"] < 1e-8
@@ -147,13 +146,16 @@ def test_static_equilibrium_is_at_the_clearance_with_the_load_split_by_the_lever
     assert forces[model.tendon("rear_suspension").id] == pytest.approx(M * G * A / (A + B), rel=1e-12)
 
 
-@pytest.mark.parametrize("overrides, message", [
-    ({"push_mass": 5000.0}, "through the ground"),
-    ({"push_mass": 2000.0}, "off its front springs"),
-    ({"pitch_inertia": 0.0}, "pitch_inertia must be"),
-    ({"front_damping": 100.0, "damping_ratio": 0.2}, "not both"),
-    ({"stiffness": 2e6}, "does not apply"),
-])
+@pytest.mark.parametrize(
+    "overrides, message",
+    [
+        ({"push_mass": 5000.0}, "through the ground"),
+        ({"push_mass": 2000.0}, "off its front springs"),
+        ({"pitch_inertia": 0.0}, "pitch_inertia must be"),
+        ({"front_damping": 100.0, "damping_ratio": 0.2}, "not both"),
+        ({"stiffness": 2e6}, "does not apply"),
+    ],
+)
 def test_bad_pitch_heave_input_is_rejected(overrides, message):
     with pytest.raises(springlab.BadInputError, match=message):
         springlab.run("car", "pitch_heave", **overrides)

@@ -131,8 +131,9 @@ def test_damped_release_matches_the_underdamped_closed_form(damped):
     omega_d = OMEGA * math.sqrt(1 - zeta**2)
     t = damped.time
     # x - x_s = e^(-zeta w t) (A cos wd t + zeta w A / wd sin wd t), A = -sag, released at rest
-    expected = CLEARANCE - SAG * np.exp(-zeta * OMEGA * t) * (np.cos(omega_d * t)
-                                                             + zeta * OMEGA / omega_d * np.sin(omega_d * t))
+    expected = CLEARANCE - SAG * np.exp(-zeta * OMEGA * t) * (
+        np.cos(omega_d * t) + zeta * OMEGA / omega_d * np.sin(omega_d * t)
+    )
     # validated to 1e-6 at its default 2 ms (predicted bound 5.6e-7)
     assert np.max(np.abs(damped.pos["heave"] - expected)) < 1e-6 * SAG
     q = damped.summary["quantities"]
@@ -154,14 +155,17 @@ def test_setting_damping_directly_reports_its_damping_ratio():
     assert result.parameters["damping_ratio"] == pytest.approx(0.25, rel=1e-12)
 
 
-@pytest.mark.parametrize("overrides, message", [
-    ({"push_mass": 20000.0}, "through the ground"),
-    ({"push_mass": 1500.0}, "off its springs"),
-    ({"mass": 0.0}, "mass must be"),
-    ({"stiffness": -1.0}, "stiffness must be"),
-    ({"damping": -5.0}, "damping must be"),
-    ({"speed": 3.0}, "does not apply"),
-])
+@pytest.mark.parametrize(
+    "overrides, message",
+    [
+        ({"push_mass": 20000.0}, "through the ground"),
+        ({"push_mass": 1500.0}, "off its springs"),
+        ({"mass": 0.0}, "mass must be"),
+        ({"stiffness": -1.0}, "stiffness must be"),
+        ({"damping": -5.0}, "damping must be"),
+        ({"speed": 3.0}, "does not apply"),
+    ],
+)
 def test_non_physical_or_irrelevant_input_is_rejected_with_one_line(overrides, message):
     with pytest.raises(springlab.BadInputError, match=message) as error:
         springlab.run("car", "push_release", **overrides)

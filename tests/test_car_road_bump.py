@@ -98,8 +98,9 @@ def test_modes_are_the_quarter_cars_body_bounce_and_wheel_hop(bump):
     mass = np.diag([MS, MU])
     stiffness = np.array([[KS, -KS], [-KS, KS + KT]])
     damping = np.array([[CS, -CS], [-CS, CS]])
-    state = np.block([[np.zeros((2, 2)), np.eye(2)],
-                      [-np.linalg.solve(mass, stiffness), -np.linalg.solve(mass, damping)]])
+    state = np.block(
+        [[np.zeros((2, 2)), np.eye(2)], [-np.linalg.solve(mass, stiffness), -np.linalg.solve(mass, damping)]]
+    )
     roots = sorted((r for r in np.linalg.eigvals(state) if r.imag > 0), key=abs)
     assert q["body_frequency_hz"] == pytest.approx(abs(roots[0]) / (2 * math.pi), rel=1e-10)
     assert q["wheel_hop_frequency_hz"] == pytest.approx(abs(roots[1]) / (2 * math.pi), rel=1e-10)
@@ -138,15 +139,18 @@ def test_the_input_needs_no_python_callback():
     assert model.nu == 2 and model.actuator("tire_on_bump").trntype == mujoco.mjtTrn.mjTRN_TENDON
 
 
-@pytest.mark.parametrize("overrides, message", [
-    ({"speed": 0.0}, "speed must be"),
-    ({"speed": -8.0}, "speed must be"),
-    ({"bump_height": 0.2}, "through the ground"),
-    ({"bump_height": 0.12, "bump_length": 0.5}, "off its suspension springs"),
-    ({"tire_stiffness": 0.0}, "tire_stiffness must be"),
-    ({"unsprung_mass": -1.0}, "unsprung_mass must be"),
-    ({"push_mass": 100.0}, "does not apply"),
-])
+@pytest.mark.parametrize(
+    "overrides, message",
+    [
+        ({"speed": 0.0}, "speed must be"),
+        ({"speed": -8.0}, "speed must be"),
+        ({"bump_height": 0.2}, "through the ground"),
+        ({"bump_height": 0.12, "bump_length": 0.5}, "off its suspension springs"),
+        ({"tire_stiffness": 0.0}, "tire_stiffness must be"),
+        ({"unsprung_mass": -1.0}, "unsprung_mass must be"),
+        ({"push_mass": 100.0}, "does not apply"),
+    ],
+)
 def test_bad_road_bump_input_is_rejected(overrides, message):
     with pytest.raises(springlab.BadInputError, match=message):
         springlab.run("car", "road_bump", **overrides)

@@ -16,7 +16,7 @@ from springlab.scene import Reference
 
 
 def _oscillator_reference(time, omega=30.0, zeta=0.1):
-    a = np.array([[0.0, 1.0], [-omega**2, -2 * zeta * omega]])
+    a = np.array([[0.0, 1.0], [-(omega**2), -2 * zeta * omega]])
     lam, vec = np.linalg.eig(a)
     coef = np.linalg.solve(vec, [1.0, 0.0])
     z = (vec @ (coef[:, None] * np.exp(np.outer(lam, time)))).real.T
@@ -28,8 +28,9 @@ def test_a_switch_that_changes_nothing_leaves_the_prediction_unchanged(integrato
     time = np.arange(2001) * 1e-3
     a, z = _oscillator_reference(time)
     plain = Reference(pos={"x": z[:, 0]}, vel={"x": z[:, 1]}, system=a, states=z, rows={"x": (0, 1)})
-    split = Reference(pos={"x": z[:, 0]}, vel={"x": z[:, 1]}, system=a, states=z, rows={"x": (0, 1)},
-                      switches=[(0.7, a), (1.3, a)])
+    split = Reference(
+        pos={"x": z[:, 0]}, vel={"x": z[:, 1]}, system=a, states=z, rows={"x": (0, 1)}, switches=[(0.7, a), (1.3, a)]
+    )
     expected = compare.predicted_error(plain, integrator, 1e-3, time)
     got = compare.predicted_error(split, integrator, 1e-3, time)
     for column in expected:
@@ -39,8 +40,9 @@ def test_a_switch_that_changes_nothing_leaves_the_prediction_unchanged(integrato
 def test_a_switch_off_the_step_grid_is_refused():
     time = np.arange(101) * 1e-3
     a, z = _oscillator_reference(time)
-    reference = Reference(pos={"x": z[:, 0]}, vel={"x": z[:, 1]}, system=a, states=z, rows={"x": (0, 1)},
-                          switches=[(0.0505, a)])
+    reference = Reference(
+        pos={"x": z[:, 0]}, vel={"x": z[:, 1]}, system=a, states=z, rows={"x": (0, 1)}, switches=[(0.0505, a)]
+    )
     with pytest.raises(ValueError, match="not on the step grid"):
         compare.predicted_error(reference, "rk4", 1e-3, time)
 

@@ -26,8 +26,20 @@ def test_run_exercise_writes_the_csv_and_json_contract(tmp_path, capsys):
     assert rows[0] == ["time", "slider_pos", "slider_vel", "slider_pos_ref", "slider_vel_ref"]
     summary = json.loads((tmp_path / "d" / "summary.json").read_text())
     assert len(rows) - 1 == summary["steps"] + 1  # t = 0 included
-    for key in ("scene", "scenario", "integrator", "dt", "duration", "steps", "wall_time_s", "parameters",
-                "quantities", "errors", "tolerance", "passed"):
+    for key in (
+        "scene",
+        "scenario",
+        "integrator",
+        "dt",
+        "duration",
+        "steps",
+        "wall_time_s",
+        "parameters",
+        "quantities",
+        "errors",
+        "tolerance",
+        "passed",
+    ):
         assert key in summary
     assert summary["quantities"]["regime"] == "overdamped"
     # full double precision: the CSV reproduces the textbook answer to 1e-12 where the physics allows
@@ -44,8 +56,9 @@ def test_run_json_prints_the_summary(capsys):
 
 
 def test_record_every_thins_the_csv(tmp_path, capsys):
-    code, _, _ = _run(capsys, "run", "slider", "--duration", "1", "--dt", "0.001", "--record-every", "10",
-                      "--output", str(tmp_path))
+    code, _, _ = _run(
+        capsys, "run", "slider", "--duration", "1", "--dt", "0.001", "--record-every", "10", "--output", str(tmp_path)
+    )
     assert code == 0
     lines = (tmp_path / "trajectory.csv").read_text().splitlines()
     assert len(lines) == 1 + 101
@@ -53,8 +66,21 @@ def test_record_every_thins_the_csv(tmp_path, capsys):
 
 def test_an_inaccurate_run_is_written_flagged_and_exits_1(tmp_path, capsys):
     # first-order euler at 10 ms cannot meet a 1e-6 demand: a result, clearly flagged
-    code, out, _ = _run(capsys, "run", "slider", "undamped", "--integrator", "euler", "--dt", "0.01",
-                        "--tol", "1e-6", "--output", str(tmp_path), "--json")
+    code, out, _ = _run(
+        capsys,
+        "run",
+        "slider",
+        "undamped",
+        "--integrator",
+        "euler",
+        "--dt",
+        "0.01",
+        "--tol",
+        "1e-6",
+        "--output",
+        str(tmp_path),
+        "--json",
+    )
     summary = json.loads(out)
     assert code == 1
     assert summary["passed"] is False and summary["tolerance"] == 1e-6
@@ -62,27 +88,30 @@ def test_an_inaccurate_run_is_written_flagged_and_exits_1(tmp_path, capsys):
     assert (tmp_path / "trajectory.csv").exists() and (tmp_path / "summary.json").exists()
 
 
-@pytest.mark.parametrize("argv,needle", [
-    (["run", "slider", "--set", "mass=-1"], "mass must be a finite number > 0 kg"),
-    (["run", "slider", "--set", "mass=0"], "mass must be a finite number > 0 kg"),
-    (["run", "slider", "--set", "stiffness=-5"], "stiffness must be a finite number >= 0 N/m"),
-    (["run", "slider", "--set", "damping=-1"], "damping must be a finite number >= 0 N s/m"),
-    (["run", "slider", "--set", "x0=nan"], "x0 must be a finite number"),
-    (["run", "slider", "--set", "v0=inf"], "v0 must be a finite number"),
-    (["run", "slider", "--set", "mass=heavy"], "mass must be a number"),
-    (["run", "slider", "--set", "colour=3"], "unknown parameter of slider 'colour'; valid: damping"),
-    (["run", "slider", "--set", "mass"], "--set takes NAME=VALUE"),
-    (["run", "slidr"], "unknown scene 'slidr'; valid:"),
-    (["run", "slider", "bounce"], "unknown scenario of slider 'bounce'; valid: critical"),
-    (["run", "slider", "--integrator", "leapfrog"], "unknown integrator 'leapfrog'; valid: discrete, euler"),
-    (["run", "slider", "--dt", "0"], "dt must be a finite number > 0 s"),
-    (["run", "slider", "--dt=-1e-3"], "dt must be a finite number > 0 s"),
-    (["run", "slider", "--dt", "fast"], "invalid float value"),
-    (["run", "slider", "--duration", "0"], "duration must be a finite number > 0 s"),
-    (["run", "slider", "--record-every", "0"], "--record-every must be an integer >= 1"),
-    (["run", "slider", "--tol", "-1"], "tol must be a finite number > 0"),
-    (["fly"], "invalid choice"),
-])
+@pytest.mark.parametrize(
+    "argv,needle",
+    [
+        (["run", "slider", "--set", "mass=-1"], "mass must be a finite number > 0 kg"),
+        (["run", "slider", "--set", "mass=0"], "mass must be a finite number > 0 kg"),
+        (["run", "slider", "--set", "stiffness=-5"], "stiffness must be a finite number >= 0 N/m"),
+        (["run", "slider", "--set", "damping=-1"], "damping must be a finite number >= 0 N s/m"),
+        (["run", "slider", "--set", "x0=nan"], "x0 must be a finite number"),
+        (["run", "slider", "--set", "v0=inf"], "v0 must be a finite number"),
+        (["run", "slider", "--set", "mass=heavy"], "mass must be a number"),
+        (["run", "slider", "--set", "colour=3"], "unknown parameter of slider 'colour'; valid: damping"),
+        (["run", "slider", "--set", "mass"], "--set takes NAME=VALUE"),
+        (["run", "slidr"], "unknown scene 'slidr'; valid:"),
+        (["run", "slider", "bounce"], "unknown scenario of slider 'bounce'; valid: critical"),
+        (["run", "slider", "--integrator", "leapfrog"], "unknown integrator 'leapfrog'; valid: discrete, euler"),
+        (["run", "slider", "--dt", "0"], "dt must be a finite number > 0 s"),
+        (["run", "slider", "--dt=-1e-3"], "dt must be a finite number > 0 s"),
+        (["run", "slider", "--dt", "fast"], "invalid float value"),
+        (["run", "slider", "--duration", "0"], "duration must be a finite number > 0 s"),
+        (["run", "slider", "--record-every", "0"], "--record-every must be an integer >= 1"),
+        (["run", "slider", "--tol", "-1"], "tol must be a finite number > 0"),
+        (["fly"], "invalid choice"),
+    ],
+)
 def test_bad_input_exits_2_with_one_line_naming_what_is_valid(argv, needle, capsys):
     code, out, err = _run(capsys, *argv)
     assert code == 2
@@ -101,8 +130,19 @@ def test_unwritable_output_is_a_clear_error_and_leaves_nothing(tmp_path, capsys)
 
 
 def test_divergence_exits_3_names_the_limit_and_writes_nothing(tmp_path, capsys):
-    code, _, err = _run(capsys, "run", "slider", "--integrator", "euler", "--dt", "0.3", "--duration", "60",
-                        "--output", str(tmp_path / "d"))
+    code, _, err = _run(
+        capsys,
+        "run",
+        "slider",
+        "--integrator",
+        "euler",
+        "--dt",
+        "0.3",
+        "--duration",
+        "60",
+        "--output",
+        str(tmp_path / "d"),
+    )
     assert code == 3
     assert "omega*dt = 3 exceeds the euler stability limit" in err
     assert len(err.strip().splitlines()) == 1
@@ -111,9 +151,26 @@ def test_divergence_exits_3_names_the_limit_and_writes_nothing(tmp_path, capsys)
 
 def test_console_script_prints_no_traceback_and_leaves_no_mujoco_log(tmp_path):
     env = dict(os.environ)
-    proc = subprocess.run([sys.executable, "-m", "springlab.cli", "run", "slider", "--integrator", "euler",
-                           "--dt", "0.3", "--duration", "60"], cwd=tmp_path, capture_output=True, text=True,
-                          env=env, timeout=120)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "springlab.cli",
+            "run",
+            "slider",
+            "--integrator",
+            "euler",
+            "--dt",
+            "0.3",
+            "--duration",
+            "60",
+        ],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=120,
+    )
     assert proc.returncode == 3
     assert proc.stderr.startswith("springlab: error: simulation diverged")
     assert "Traceback" not in proc.stderr and "WARNING" not in proc.stderr + proc.stdout
@@ -148,8 +205,9 @@ def test_outputs_get_ordinary_file_permissions(tmp_path, capsys):
 
 def test_a_closed_pipe_ends_quietly_without_a_traceback():
     # `springlab list | head -1`: the reader leaves early
-    proc = subprocess.Popen([sys.executable, "-m", "springlab.cli", "list"], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "springlab.cli", "list"], stdout=subprocess.PIPE, stderr=subprocess.PIPE
+    )
     proc.stdout.close()  # before the child writes: its first write hits a closed pipe
     err = proc.stderr.read().decode()
     proc.wait(timeout=60)

@@ -35,8 +35,9 @@ def test_default_sweep_has_at_least_1000_configurations():
     values = design.configurations(grids)
     assert len(values["belt_stiffness"]) == design.DEFAULT_LEVELS ** len(design.PROPERTIES) >= 1000
     # a full factorial: every combination once
-    assert len({tuple(values[p][i] for p in design.PROPERTIES) for i in range(len(values["drive_force"]))}) \
-        == len(values["drive_force"])
+    assert len({tuple(values[p][i] for p in design.PROPERTIES) for i in range(len(values["drive_force"]))}) == len(
+        values["drive_force"]
+    )
 
 
 def test_every_configuration_settles_for_good(default_study):
@@ -118,21 +119,32 @@ def test_default_configuration_settles_as_the_exact_trajectory_says(small_study)
 
 
 def test_design_json_has_the_documented_shape(capsys, tmp_path):
-    code = main(["design", "printer_head", "--levels", "3", "--plane", "5", "--json", "--output",
-                 str(tmp_path / "d")])
+    code = main(["design", "printer_head", "--levels", "3", "--plane", "5", "--json", "--output", str(tmp_path / "d")])
     out, err = capsys.readouterr()
     assert code == 0, err
     summary = json.loads(out)
-    for key in ("scene", "configurations", "levels", "properties", "fixed", "default", "fastest",
-                "positioning_time_s", "elasticities", "local_elasticities", "ranking",
-                "estimate_over_simulation", "wall_time_s", "configurations_per_s"):
+    for key in (
+        "scene",
+        "configurations",
+        "levels",
+        "properties",
+        "fixed",
+        "default",
+        "fastest",
+        "positioning_time_s",
+        "elasticities",
+        "local_elasticities",
+        "ranking",
+        "estimate_over_simulation",
+        "wall_time_s",
+        "configurations_per_s",
+    ):
         assert key in summary
     assert summary["configurations"] == 81 and summary["levels"] == 3
     assert set(summary["elasticities"]) == set(design.PROPERTIES)
     default = summary["default"]
     assert default["positioning_time_s"] == pytest.approx(default["move_time_s"] + default["settling_time_s"])
-    assert sorted(p.name for p in (tmp_path / "d").iterdir()) == ["configurations.csv", "design.json",
-                                                                  "design.png"]
+    assert sorted(p.name for p in (tmp_path / "d").iterdir()) == ["configurations.csv", "design.json", "design.png"]
     assert json.loads((tmp_path / "d" / "design.json").read_text())["configurations"] == 81
 
 
@@ -143,13 +155,16 @@ def test_design_text_answers_both_questions(capsys):
     assert "How fast?" in out and "Which properties?" in out
 
 
-@pytest.mark.parametrize("argv, needle", [
-    (["design", "slider"], "printer_head"),
-    (["design", "printer_head", "--levels", "4"], "odd"),
-    (["design", "printer_head", "--levels", "3", "--plane", "4"], "plane"),
-    (["design", "printer_head", "--levels", "3", "--set", "drive_force=-5"], "drive_force"),
-    (["design", "printer_head", "--levels", "3", "--set", "belt_damping=0"], "belt_damping"),
-])
+@pytest.mark.parametrize(
+    "argv, needle",
+    [
+        (["design", "slider"], "printer_head"),
+        (["design", "printer_head", "--levels", "4"], "odd"),
+        (["design", "printer_head", "--levels", "3", "--plane", "4"], "plane"),
+        (["design", "printer_head", "--levels", "3", "--set", "drive_force=-5"], "drive_force"),
+        (["design", "printer_head", "--levels", "3", "--set", "belt_damping=0"], "belt_damping"),
+    ],
+)
 def test_design_bad_input_exits_2_with_one_line(argv, needle, capsys):
     code = main(argv)
     out, err = capsys.readouterr()

@@ -1,8 +1,6 @@
 """Section 5.2 as a MuJoCo scene: position, velocity and acceleration by differentiation and
 integration, checked against hand-derived answers of the chapter's examples."""
 
-import math
-
 import mujoco
 import numpy as np
 import pytest
@@ -107,8 +105,11 @@ def test_semi_implicit_euler_errors_match_the_hand_derivation():
     result = springlab.run("kinematics", "polynomial_position", integrator="euler", dt=h)
     t = np.arange(len(result.time)) * h
     np.testing.assert_allclose(result.vel["vehicle"] - (0.09 * t**2 + 0.4 * t + 1.2), -j * h * t / 2, atol=1e-11)
-    np.testing.assert_allclose(result.pos["vehicle"] - (0.03 * t**3 + 0.2 * t**2 + 1.2 * t + 3.0),
-                               a0 * h * t / 2 - j * h**2 * t / 6, atol=1e-11)
+    np.testing.assert_allclose(
+        result.pos["vehicle"] - (0.03 * t**3 + 0.2 * t**2 + 1.2 * t + 3.0),
+        a0 * h * t / 2 - j * h**2 * t / 6,
+        atol=1e-11,
+    )
 
 
 def test_actuator_force_is_the_integrated_control():
@@ -178,11 +179,14 @@ def test_constant_acceleration_phase_field_is_tangent_to_its_parabola():
     assert scene.equilibria(model, params, scenario) == []
 
 
-@pytest.mark.parametrize("coefficients, text", [
-    ([3.0, 1.2, 0.2, 0.03], "x(t) = 0.03 t^3 + 0.2 t^2 + 1.2 t + 3 m"),
-    ([0.0, -1.0, 1.0], "x(t) = t^2 - t m"),
-    ([-2.5], "x(t) = -2.5 m"),
-    ([0.0, 0.0], "x(t) = 0 m"),
-])
+@pytest.mark.parametrize(
+    "coefficients, text",
+    [
+        ([3.0, 1.2, 0.2, 0.03], "x(t) = 0.03 t^3 + 0.2 t^2 + 1.2 t + 3 m"),
+        ([0.0, -1.0, 1.0], "x(t) = t^2 - t m"),
+        ([-2.5], "x(t) = -2.5 m"),
+        ([0.0, 0.0], "x(t) = 0 m"),
+    ],
+)
 def test_polynomial_expressions_read_like_the_textbook(coefficients, text):
     assert polynomial_expression("x", coefficients, "m") == text

@@ -32,6 +32,7 @@ def _energy(x, v, k1, k3, m=M):
 def _duffing_ode(k1, k3, damping=0.0, amplitude=0.0, omega=0.0, m=M):
     def rhs(t, s):
         return [s[1], (-k1 * s[0] - k3 * s[0] ** 3 - damping * s[1] + amplitude * np.sin(omega * t)) / m]
+
     return rhs
 
 
@@ -77,10 +78,13 @@ def _transition_jacobian(model, x_e):
     return np.array([[0.0, 1.0], [a[model.nv, 0] / h, (a[model.nv, model.nv] - 1) / h]])
 
 
-@pytest.mark.parametrize("scenario_name, expected", [
-    ("softening", [(-0.1, False, "saddle"), (0.0, True, "center"), (0.1, False, "saddle")]),
-    ("double_well", [(-0.1, True, "center"), (0.0, False, "saddle"), (0.1, True, "center")]),
-])
+@pytest.mark.parametrize(
+    "scenario_name, expected",
+    [
+        ("softening", [(-0.1, False, "saddle"), (0.0, True, "center"), (0.1, False, "saddle")]),
+        ("double_well", [(-0.1, True, "center"), (0.0, False, "saddle"), (0.1, True, "center")]),
+    ],
+)
 def test_equilibria_are_where_the_spring_force_vanishes_with_stability_from_the_jacobian(scenario_name, expected):
     model, params, scenario = _built(scenario_name)
     model.opt.integrator = mujoco.mjtIntegrator.mjINT_RK4
@@ -88,7 +92,8 @@ def test_equilibria_are_where_the_spring_force_vanishes_with_stability_from_the_
     found = SCENE.equilibria(model, params, scenario)
     field = SCENE.phase_field(model, params, scenario)
     assert [(e["x"], e["stable"], e["kind"]) for e in found] == [
-        (pytest.approx(x, rel=1e-15, abs=0), s, k) for x, s, k in expected]
+        (pytest.approx(x, rel=1e-15, abs=0), s, k) for x, s, k in expected
+    ]
     for e in found:
         dx, dv = field(np.array([e["x"]]), np.array([0.0]))
         assert dx[0] == 0.0 and abs(dv[0]) < 1e-13
@@ -99,8 +104,9 @@ def test_equilibria_are_where_the_spring_force_vanishes_with_stability_from_the_
             assert np.max(np.abs(eigenvalues.real)) < 1e-6 * math.sqrt(stiffness / M)
             np.testing.assert_allclose(np.sort(np.abs(eigenvalues.imag)), math.sqrt(stiffness / M), rtol=1e-6)
         else:
-            np.testing.assert_allclose(np.sort(eigenvalues.real), [-math.sqrt(-stiffness / M), math.sqrt(-stiffness / M)],
-                                       rtol=1e-6)
+            np.testing.assert_allclose(
+                np.sort(eigenvalues.real), [-math.sqrt(-stiffness / M), math.sqrt(-stiffness / M)], rtol=1e-6
+            )
 
 
 def test_scene_linearization_agrees_with_mujocos_transition_derivatives():
@@ -108,8 +114,9 @@ def test_scene_linearization_agrees_with_mujocos_transition_derivatives():
     model.opt.integrator = mujoco.mjtIntegrator.mjINT_RK4
     model.opt.timestep = 1e-3
     for x_e in (-0.1, 0.0, 0.1):
-        np.testing.assert_allclose(SCENE.mujoco_jacobian(model, x_e, 1e-5), _transition_jacobian(model, x_e),
-                                   rtol=1e-6, atol=1e-6)
+        np.testing.assert_allclose(
+            SCENE.mujoco_jacobian(model, x_e, 1e-5), _transition_jacobian(model, x_e), rtol=1e-6, atol=1e-6
+        )
 
 
 def test_double_well_small_oscillation_frequency_is_sqrt_minus_2_k1_over_m():
@@ -166,12 +173,14 @@ def test_double_well_periods_match_the_jacobi_dn_and_cn_closed_forms():
     # launched from the bottom of the well with a velocity: the same orbit as from its turning point
     a, top = nonlinear.turning_points(0.1, 0.3, M, k1, k3)
     assert nonlinear.oscillation_period(M, k1, k3, 0.1, 0.3)[0] == pytest.approx(
-        nonlinear.oscillation_period(M, k1, k3, top, 0.0)[0], rel=1e-10)
+        nonlinear.oscillation_period(M, k1, k3, top, 0.0)[0], rel=1e-10
+    )
 
 
 def test_linear_spring_period_and_quarter_period_transit():
-    assert nonlinear.oscillation_period(2.0, 50.0, 0.0, 0.3, 0.1)[0] == pytest.approx(2 * math.pi * math.sqrt(2 / 50),
-                                                                                     rel=1e-14)
+    assert nonlinear.oscillation_period(2.0, 50.0, 0.0, 0.3, 0.1)[0] == pytest.approx(
+        2 * math.pi * math.sqrt(2 / 50), rel=1e-14
+    )
     assert nonlinear.transit_time(1.0, 100.0, 0.0, 0.2, 0.0, 0.0)[0] == pytest.approx(math.pi / 20, rel=1e-14)
 
 
@@ -179,8 +188,7 @@ def test_simulated_period_matches_scipy_event_detection():
     result = springlab.run("nonlinear", "softening")
     event = lambda t, s: s[1]  # noqa: E731 - v = 0
     event.direction = -1
-    sol = solve_ivp(_duffing_ode(K1, K3), (0, 5), [0.09, 0.0], events=event, rtol=1e-12, atol=1e-15,
-                    method="DOP853")
+    sol = solve_ivp(_duffing_ode(K1, K3), (0, 5), [0.09, 0.0], events=event, rtol=1e-12, atol=1e-15, method="DOP853")
     maxima = sol.t_events[0]
     independent = (maxima[-1] - maxima[0]) / (len(maxima) - 1)
     q = result.summary["quantities"]
@@ -303,8 +311,15 @@ def test_forced_duffing_agrees_with_an_independent_solver_until_its_accuracy_hor
     omega = 2 * math.pi * p["force_frequency"]
     assert omega == pytest.approx(10.0)  # Holmes' Duffing in units of 0.1 m and 0.1 s: forcing at 1
     t = forced.time
-    sol = solve_ivp(_duffing_ode(p["k1"], p["k3"], p["damping"], p["force_amplitude"], omega), (0, t[-1]),
-                    [p["x0"], p["v0"]], t_eval=t, rtol=1e-12, atol=1e-15, method="DOP853")
+    sol = solve_ivp(
+        _duffing_ode(p["k1"], p["k3"], p["damping"], p["force_amplitude"], omega),
+        (0, t[-1]),
+        [p["x0"], p["v0"]],
+        t_eval=t,
+        rtol=1e-12,
+        atol=1e-15,
+        method="DOP853",
+    )
     difference = np.abs(sol.y[0] - forced.pos["block"])
     # the exciter's sinusoidal force keeps RK4 at fourth order: a 1 s run is good to ~1e-10 m
     assert np.max(difference[t <= 1.0]) < 1e-9
@@ -325,8 +340,15 @@ def test_twin_runs_separate_like_the_variational_equation(forced):
         return base(t, s[:2]) + [dx[1], (-(p["k1"] + 3 * p["k3"] * s[0] ** 2) * dx[0] - p["damping"] * dx[1]) / M]
 
     t_end = 8.0
-    sol = solve_ivp(with_tangent, (0, t_end), [p["x0"], p["v0"], 1.0, 0.0], dense_output=True, rtol=1e-11,
-                    atol=1e-14, method="DOP853")
+    sol = solve_ivp(
+        with_tangent,
+        (0, t_end),
+        [p["x0"], p["v0"], 1.0, 0.0],
+        dense_output=True,
+        rtol=1e-11,
+        atol=1e-14,
+        method="DOP853",
+    )
     twin = springlab.run("nonlinear", "forced_duffing", x0=p["x0"] + 1e-9, duration=t_end)
     lead = springlab.run("nonlinear", "forced_duffing", duration=t_end)
     for when in (4.0, 6.0, 8.0):
@@ -356,8 +378,9 @@ def test_lyapunov_estimator_recovers_the_exact_exponent_of_a_damped_linear_oscil
 
 
 def test_forced_runs_are_checked_at_the_integrators_own_order():
-    result = springlab.run("nonlinear", "forced_duffing", integrator="euler", dt=1e-3, duration=5.0,
-                           force_amplitude=3.0)
+    result = springlab.run(
+        "nonlinear", "forced_duffing", integrator="euler", dt=1e-3, duration=5.0, force_amplitude=3.0
+    )
     observed = next(c for c in result.summary["checks"] if c["name"] == "observed_order")
     assert observed["reference"] == 1
     assert abs(observed["value"] - 1) < 0.5
@@ -381,8 +404,12 @@ def test_validation_row_of_a_checked_scenario_shows_its_tightest_check():
     result = springlab.run("nonlinear", "double_well")
     row = validation_row(result)
     checks = result.summary["checks"]
-    assert {c["name"] for c in checks} >= {"energy_drift_relative", "period_s", "omega_at_+0.1_m_rad_s",
-                                           "saddle_rate_at_0_m_per_s"}
+    assert {c["name"] for c in checks} >= {
+        "energy_drift_relative",
+        "period_s",
+        "omega_at_+0.1_m_rad_s",
+        "saddle_rate_at_0_m_per_s",
+    }
     tightest = max(checks, key=lambda c: c["error"] / c["tolerance"])
     assert (row["max_rel_error"], row["tolerance"]) == (tightest["error"], tightest["tolerance"])
     assert row["passed"] is True and row["checks"] == checks

@@ -66,10 +66,12 @@ def test_phase_plane_of_the_softening_spring_shows_field_equilibria_and_separatr
     (separatrix,) = _lines(ax, "separatrix")
     x, v = separatrix.get_xdata(), separatrix.get_ydata()
     m = result.parameters["mass"]
+
     def potential(x):
         return k1 * x**2 / 2 + k3 * x**4 / 4
+
     np.testing.assert_allclose(m * v**2 / 2 + potential(x), potential(saddle), atol=1e-9 * abs(potential(saddle)))
-    (sim,), (start,) = _lines(ax, "MuJoCo"), _lines(ax, "start")
+    (sim,), (_start,) = _lines(ax, "MuJoCo"), _lines(ax, "start")
     np.testing.assert_array_equal(sim.get_xdata(), result.pos["block"])
     assert ax.get_xlabel() == "block [m]" and ax.get_ylabel() == "block velocity [m/s]"
 
@@ -146,20 +148,24 @@ def test_plot_command_writes_png_and_svg_and_refuses_other_formats(tmp_path, cap
 
 
 def test_plotting_never_touches_pyplot_global_state():
-    code = ("import sys, springlab.plots as p, springlab.api as a\n"
-            "p.phase_plane(a.run('slider', 'free'))\n"
-            "assert 'matplotlib.pyplot' not in sys.modules, 'pyplot imported'\n")
+    code = (
+        "import sys, springlab.plots as p, springlab.api as a\n"
+        "p.phase_plane(a.run('slider', 'free'))\n"
+        "assert 'matplotlib.pyplot' not in sys.modules, 'pyplot imported'\n"
+    )
     subprocess.run([sys.executable, "-c", code], check=True)
 
 
 def test_tradeoff_stability_and_design_charts_leave_the_callers_backend_alone(tmp_path):
     # a library must not switch a notebook's backend (matplotlib.use) or import pyplot
-    code = ("import sys, matplotlib\n"
-            "matplotlib.use('svg')\n"
-            "from springlab import tradeoff, design\n"
-            f"tradeoff.plot_tradeoff(tradeoff.sweep('slider', 'free', duration=0.5), {str(tmp_path / 't.png')!r})\n"
-            f"design.plot(design.run_study(levels=3), {str(tmp_path / 'd.png')!r})\n"
-            "assert matplotlib.get_backend() == 'svg', matplotlib.get_backend()\n"
-            "assert 'matplotlib.pyplot' not in sys.modules, 'pyplot imported'\n")
+    code = (
+        "import sys, matplotlib\n"
+        "matplotlib.use('svg')\n"
+        "from springlab import tradeoff, design\n"
+        f"tradeoff.plot_tradeoff(tradeoff.sweep('slider', 'free', duration=0.5), {str(tmp_path / 't.png')!r})\n"
+        f"design.plot(design.run_study(levels=3), {str(tmp_path / 'd.png')!r})\n"
+        "assert matplotlib.get_backend() == 'svg', matplotlib.get_backend()\n"
+        "assert 'matplotlib.pyplot' not in sys.modules, 'pyplot imported'\n"
+    )
     subprocess.run([sys.executable, "-c", code], check=True, timeout=300)
     assert (tmp_path / "t.png").stat().st_size > 0 and (tmp_path / "d.png").stat().st_size > 0

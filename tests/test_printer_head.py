@@ -23,8 +23,7 @@ BELT = np.array([[1.0, -1.0], [-1.0, 1.0]])  # the belt stretches by q_m - q_c
 
 def _matrices(p):
     """M [kg], C [N s/m], K [N/m] in (q_c, q_m) from the run's parameters."""
-    return (np.diag([p["carriage_mass"], p["motor_mass"]]), p["belt_damping"] * BELT,
-            p["belt_stiffness"] * BELT)
+    return (np.diag([p["carriage_mass"], p["motor_mass"]]), p["belt_damping"] * BELT, p["belt_stiffness"] * BELT)
 
 
 def _segments(p, scenario, dt):
@@ -172,11 +171,14 @@ def test_mujoco_linearization_converges_to_the_analytic_belt_mode_at_first_order
     assert 5 <= errors[0] / errors[1] <= 20
 
 
-@pytest.mark.parametrize("scenario, overrides", [
-    ("move", {}),
-    ("settle", {}),
-    ("move", {"belt_stiffness": 2e4, "belt_damping": 3.0}),
-])
+@pytest.mark.parametrize(
+    "scenario, overrides",
+    [
+        ("move", {}),
+        ("settle", {}),
+        ("move", {"belt_stiffness": 2e4, "belt_damping": 3.0}),
+    ],
+)
 def test_settling_time_matches_the_exact_trajectory_within_one_step(scenario, overrides):
     result = springlab.run("printer_head", scenario, **overrides)
     p, dt = result.parameters, result.summary["dt"]
@@ -212,13 +214,16 @@ def test_bang_bang_move_takes_the_minimum_time_2_sqrt_dm_over_f():
     assert q["positioning_time_s"] == pytest.approx(q["move_time_s"] + q["settling_time_s"])
 
 
-@pytest.mark.parametrize("argv, needle", [
-    (["run", "printer_head", "move", "--set", "carriage_mass=-0.2"], "carriage_mass"),
-    (["run", "printer_head", "move", "--set", "belt_stiffness=0"], "belt_stiffness"),
-    (["run", "printer_head", "move", "--set", "belt_damping=-1"], "belt_damping"),
-    (["run", "printer_head", "move", "--set", "drive_force=nan"], "drive_force"),
-    (["run", "printer_head", "jump"], "move"),
-])
+@pytest.mark.parametrize(
+    "argv, needle",
+    [
+        (["run", "printer_head", "move", "--set", "carriage_mass=-0.2"], "carriage_mass"),
+        (["run", "printer_head", "move", "--set", "belt_stiffness=0"], "belt_stiffness"),
+        (["run", "printer_head", "move", "--set", "belt_damping=-1"], "belt_damping"),
+        (["run", "printer_head", "move", "--set", "drive_force=nan"], "drive_force"),
+        (["run", "printer_head", "jump"], "move"),
+    ],
+)
 def test_non_physical_values_exit_2_with_one_line(argv, needle, capsys):
     code = main(argv)
     out, err = capsys.readouterr()

@@ -80,8 +80,9 @@ def test_euler_treats_tendon_damping_explicitly(omega_dt):
     inverse = np.linalg.inv(mass)
     measured = _measured_map(model, "euler", dt)
     explicit = _semi_implicit(dt, inverse, inverse, stiffness, damping)
-    implicit = _semi_implicit(dt, np.linalg.inv(mass + dt * damping), np.linalg.inv(mass + dt * damping),
-                              stiffness, damping)
+    implicit = _semi_implicit(
+        dt, np.linalg.inv(mass + dt * damping), np.linalg.inv(mass + dt * damping), stiffness, damping
+    )
     scale = np.max(np.abs(measured))
     assert np.max(np.abs(measured - explicit)) <= 1e-9 * scale
     assert np.max(np.abs(measured - implicit)) > 1e-3 * scale  # the test tells the two apart
@@ -100,8 +101,9 @@ def test_implicit_solves_with_the_diagonal_of_the_belt_damping(integrator):
     assert np.max(np.abs(measured - _semi_implicit(dt, full, full, stiffness, damping))) > 1e-3 * scale
     # so a step moves the centre of mass's momentum by the belt force times the h c / m mismatch
     momentum = np.array([params["carriage_mass"], params["motor_mass"]])
-    assert abs(momentum @ measured[2:4, 0]) > 1e-3 * params["belt_stiffness"] * dt * params["carriage_mass"] \
-        / (params["carriage_mass"] + dt * params["belt_damping"])
+    assert abs(momentum @ measured[2:4, 0]) > 1e-3 * params["belt_stiffness"] * dt * params["carriage_mass"] / (
+        params["carriage_mass"] + dt * params["belt_damping"]
+    )
 
 
 def test_rk4_step_is_the_fourth_order_taylor_polynomial_of_the_exact_flow():
@@ -161,16 +163,18 @@ def test_runs_just_inside_the_measured_limit_stay_bounded_and_just_outside_diver
     if integrator == "implicit":  # between the explicit and the joint-damping bounds, as measured above
         assert 2 * math.sqrt(zeta * zeta + 1) - 2 * zeta < limit < joint_damping_limit("euler", zeta)
     inside = 0.97 * limit / omega
-    result = springlab.run("printer_head", "settle", integrator=integrator, dt=inside, duration=3000 * inside,
-                           belt_damping=20.0)
+    result = springlab.run(
+        "printer_head", "settle", integrator=integrator, dt=inside, duration=3000 * inside, belt_damping=20.0
+    )
     # bounded: no growth from the first half of the run to the second (a near-limit step map is
     # non-normal, so the first steps may overshoot the initial deflection)
     carriage = np.abs(result.pos["carriage"])
     assert np.max(carriage[1500:]) <= np.max(carriage[:1500])
     outside = 1.03 * limit / omega
     with pytest.raises(DivergedError, match=f"stability limit {limit:.4g}"):
-        springlab.run("printer_head", "settle", integrator=integrator, dt=outside, duration=3000 * outside,
-                      belt_damping=20.0)
+        springlab.run(
+            "printer_head", "settle", integrator=integrator, dt=outside, duration=3000 * outside, belt_damping=20.0
+        )
 
 
 @pytest.mark.parametrize("integrator", ["implicit", "implicitfast"])

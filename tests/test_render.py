@@ -34,8 +34,17 @@ def undamped():
 
 
 def test_video_decodes_with_duration_times_fps_frames_of_the_asked_size(undamped, tmp_path):
-    info = render.render_video(undamped.model, undamped.time, undamped.trajectory.qpos, tmp_path / "v.mp4",
-                               fps=20, width=320, height=240, duration=2.5, camera="side")
+    info = render.render_video(
+        undamped.model,
+        undamped.time,
+        undamped.trajectory.qpos,
+        tmp_path / "v.mp4",
+        fps=20,
+        width=320,
+        height=240,
+        duration=2.5,
+        camera="side",
+    )
     meta, frames = _decode(tmp_path / "v.mp4")
     assert frames.shape == (50, 240, 320, 3)  # 2.5 s x 20 fps
     assert info["frames"] == 50 and (info["width"], info["height"]) == (320, 240)
@@ -45,8 +54,9 @@ def test_video_decodes_with_duration_times_fps_frames_of_the_asked_size(undamped
 
 
 def test_block_centroid_in_the_picture_tracks_the_simulated_position(undamped, tmp_path):
-    info = render.render_video(undamped.model, undamped.time, undamped.trajectory.qpos, tmp_path / "v.mp4",
-                               fps=15, width=320, height=240)
+    info = render.render_video(
+        undamped.model, undamped.time, undamped.trajectory.qpos, tmp_path / "v.mp4", fps=15, width=320, height=240
+    )
     _, frames = _decode(tmp_path / "v.mp4")
     mask = _block_mask(frames)
     columns = np.arange(frames.shape[2])
@@ -75,8 +85,16 @@ def test_frames_are_sampled_at_the_video_clock_not_the_physics_steps():
 def test_gif_frames_last_one_over_fps_each(undamped, tmp_path):
     from PIL import Image
 
-    render.render_video(undamped.model, undamped.time, undamped.trajectory.qpos, tmp_path / "v.gif",
-                        fps=12, width=160, height=120, duration=1.0)
+    render.render_video(
+        undamped.model,
+        undamped.time,
+        undamped.trajectory.qpos,
+        tmp_path / "v.gif",
+        fps=12,
+        width=160,
+        height=120,
+        duration=1.0,
+    )
     with Image.open(tmp_path / "v.gif") as gif:
         assert gif.size == (160, 120)
         delays = []
@@ -90,21 +108,32 @@ def test_camera_backs_off_when_the_motion_leaves_the_view(tmp_path):
     # the chapter's exercise starts 5 m out, far outside the camera's 0.9 m wide view of the rail
     result = api.run("slider", "exercise")
     position = result.model.cam_pos[0].copy()
-    render.render_video(result.model, result.time, result.trajectory.qpos, tmp_path / "v.mp4",
-                        fps=5, width=640, height=480, duration=6.0)
+    render.render_video(
+        result.model,
+        result.time,
+        result.trajectory.qpos,
+        tmp_path / "v.mp4",
+        fps=5,
+        width=640,
+        height=480,
+        duration=6.0,
+    )
     np.testing.assert_array_equal(result.model.cam_pos[0], position)  # the caller's model is untouched
     _, frames = _decode(tmp_path / "v.mp4")
     assert np.all(_block_mask(frames).sum(axis=(1, 2)) > 0), "the block stays in the picture, at 5 m and at 0"
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(output="v.avi"), "unsupported output extension"),
-    (dict(fps=0), "fps must be > 0"),
-    (dict(width=0), "width must be between"),
-    (dict(height=10_000), "height must be between"),
-    (dict(output="v.gif", fps=60), "GIF supports at most 50 fps"),
-    (dict(camera="nope"), "unknown camera 'nope'; the model's cameras are: 'side'"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(output="v.avi"), "unsupported output extension"),
+        (dict(fps=0), "fps must be > 0"),
+        (dict(width=0), "width must be between"),
+        (dict(height=10_000), "height must be between"),
+        (dict(output="v.gif", fps=60), "GIF supports at most 50 fps"),
+        (dict(camera="nope"), "unknown camera 'nope'; the model's cameras are: 'side'"),
+    ],
+)
 def test_bad_arguments_are_refused_before_anything_is_written(undamped, tmp_path, kwargs, message):
     arguments = dict(output="v.mp4", fps=30, width=64, height=48)
     arguments.update(kwargs)
@@ -121,8 +150,15 @@ def test_a_failure_mid_video_leaves_no_partial_file(undamped, tmp_path):
         return np.zeros((48, 20, 3), np.uint8)
 
     with pytest.raises(RuntimeError, match="panel failed"):
-        render.render_video(undamped.model, undamped.time, undamped.trajectory.qpos, tmp_path / "v.mp4",
-                            width=64, height=48, panel=panel)
+        render.render_video(
+            undamped.model,
+            undamped.time,
+            undamped.trajectory.qpos,
+            tmp_path / "v.mp4",
+            width=64,
+            height=48,
+            panel=panel,
+        )
     assert list(tmp_path.iterdir()) == []
 
 
@@ -150,19 +186,38 @@ def test_composite_panel_marker_follows_the_phase_point(undamped):
 
 def test_render_command_writes_a_composite_video(tmp_path, capsys):
     output = tmp_path / "sub" / "c.mp4"
-    code = main(["render", "car", "pitch_heave", "--duration", "0.5", "--fps", "20", "--width", "160",
-                 "--height", "120", "--composite", "--output", str(output)])
+    code = main(
+        [
+            "render",
+            "car",
+            "pitch_heave",
+            "--duration",
+            "0.5",
+            "--fps",
+            "20",
+            "--width",
+            "160",
+            "--height",
+            "120",
+            "--composite",
+            "--output",
+            str(output),
+        ]
+    )
     assert code == 0, capsys.readouterr().err
     meta, frames = _decode(output)
     assert frames.shape == (10, 120, 160 + 120, 3)  # the phase panel is height x height
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["--output", "v.webm"], "unsupported output extension '.webm'"),
-    (["--output", "v.mp4", "--fps", "-5"], "fps must be > 0"),
-    (["--output", "v.mp4", "--width", "0"], "width must be between 1 and 8192"),
-    (["--output", "v.mp4", "--set", "mass=-1"], "mass must be a finite number > 0"),
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--output", "v.webm"], "unsupported output extension '.webm'"),
+        (["--output", "v.mp4", "--fps", "-5"], "fps must be > 0"),
+        (["--output", "v.mp4", "--width", "0"], "width must be between 1 and 8192"),
+        (["--output", "v.mp4", "--set", "mass=-1"], "mass must be a finite number > 0"),
+    ],
+)
 def test_render_command_bad_input_exits_2_with_one_line(tmp_path, capsys, monkeypatch, argv, message):
     monkeypatch.chdir(tmp_path)
     code = main(["render", "slider", *argv])
@@ -195,8 +250,16 @@ def test_declared_springs_are_drawn_between_their_sites():
 
 
 def test_odd_sizes_are_padded_to_even_for_h264(undamped, tmp_path):
-    info = render.render_video(undamped.model, undamped.time, undamped.trajectory.qpos, tmp_path / "v.mp4",
-                               fps=10, width=81, height=61, duration=0.5)
+    info = render.render_video(
+        undamped.model,
+        undamped.time,
+        undamped.trajectory.qpos,
+        tmp_path / "v.mp4",
+        fps=10,
+        width=81,
+        height=61,
+        duration=0.5,
+    )
     meta, frames = _decode(tmp_path / "v.mp4")
     assert (info["width"], info["height"]) == (82, 62) == tuple(meta["size"])  # yuv420p needs even sizes
     assert frames.shape == (5, 62, 82, 3)
@@ -205,8 +268,16 @@ def test_odd_sizes_are_padded_to_even_for_h264(undamped, tmp_path):
 def test_the_video_gets_ordinary_file_permissions_not_the_temp_files(undamped, tmp_path):
     umask = os.umask(0o022)
     try:
-        render.render_video(undamped.model, undamped.time, undamped.trajectory.qpos, tmp_path / "v.mp4",
-                            fps=10, width=64, height=48, duration=0.3)
+        render.render_video(
+            undamped.model,
+            undamped.time,
+            undamped.trajectory.qpos,
+            tmp_path / "v.mp4",
+            fps=10,
+            width=64,
+            height=48,
+            duration=0.3,
+        )
     finally:
         os.umask(umask)
     assert (tmp_path / "v.mp4").stat().st_mode & 0o777 == 0o644

@@ -14,11 +14,20 @@ import subprocess
 import numpy as np
 import pytest
 
-from springlab import api, demo, media, report
+from springlab import api, demo, media
 
-CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                  "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                  "--hide-scrollbars", "--mute-audio"]
+CHROMIUM_FLAGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--hide-scrollbars",
+    "--mute-audio",
+]
 SCENARIOS = [("slider", "undamped"), ("car", "pitch_heave")]
 CLIP_SECONDS = 1.0
 
@@ -30,14 +39,20 @@ def _chromium() -> str:
             return path
     if os.environ.get("SPRINGLAB_REQUIRE_CHROMIUM"):
         pytest.fail("chromium is required here (SPRINGLAB_REQUIRE_CHROMIUM) but not on PATH")
-    pytest.skip("headless check of the report needs Debian's chromium (apt-get install chromium; "
-                ".ci/run installs it when run as root)")
+    pytest.skip(
+        "headless check of the report needs Debian's chromium (apt-get install chromium; "
+        ".ci/run installs it when run as root)"
+    )
 
 
 def _browse(chromium, profile, *args, timeout=120):
     """Run headless chromium with a fresh profile; (stdout, stderr)."""
-    done = subprocess.run([chromium, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", *args],
-                          capture_output=True, text=True, timeout=timeout)
+    done = subprocess.run(
+        [chromium, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
     return done.stdout, done.stderr
 
 
@@ -49,8 +64,9 @@ def _browse_until(chromium, profile, url, finished, *args):
     Returns (dom, log) of the last attempt; the caller's assertions judge it.
     """
     for attempt, budget in enumerate((10000, 30000, 90000)):
-        dom, log = _browse(chromium, f"{profile}-{attempt}", *args, f"--virtual-time-budget={budget}",
-                           "--dump-dom", url, timeout=240)
+        dom, log = _browse(
+            chromium, f"{profile}-{attempt}", *args, f"--virtual-time-budget={budget}", "--dump-dom", url, timeout=240
+        )
         if finished(dom):
             break
     return dom, log
@@ -74,11 +90,14 @@ def demo_out(tmp_path_factory):
     # artifacts from steps this report does not know (e.g. a trade-off study): listed by kind alone
     (out / "tradeoff").mkdir()
     (out / "tradeoff" / "pareto.csv").write_text("dt,error\n0.001,1e-9\n")
-    (out / "tradeoff" / "pareto.svg").write_text("<svg xmlns='http://www.w3.org/2000/svg' width='20' height='20'>"
-                                                  "<rect width='20' height='20'/></svg>")
-    state.artifacts += [demo.Artifact("tradeoff/pareto.csv", "data", "error vs wall time"),
-                        demo.Artifact("tradeoff/pareto.svg", "plot", "Pareto front"),
-                        demo.Artifact("tradeoff/pareto.csv", "data", "the same sweep for the slider", "slider")]
+    (out / "tradeoff" / "pareto.svg").write_text(
+        "<svg xmlns='http://www.w3.org/2000/svg' width='20' height='20'><rect width='20' height='20'/></svg>"
+    )
+    state.artifacts += [
+        demo.Artifact("tradeoff/pareto.csv", "data", "error vs wall time"),
+        demo.Artifact("tradeoff/pareto.svg", "plot", "Pareto front"),
+        demo.Artifact("tradeoff/pareto.csv", "data", "the same sweep for the slider", "slider"),
+    ]
     state.artifacts += demo.report_step(state)
     return out, state
 
@@ -112,16 +131,21 @@ def test_report_links_every_artifact_and_nothing_outside_the_folder(demo_out):
     # the validation table: one row per validated run with its error, tolerance and verdict
     for row in state.validation:
         assert f"{row['max_rel_error']:.2e}" in page and f"{row['tolerance']:.2e}" in page
-    assert page.count("class=\"pass\"") + page.count("class='pass'") >= len(state.validation)
+    assert page.count('class="pass"') + page.count("class='pass'") >= len(state.validation)
 
 
 def test_report_loads_in_headless_chromium_with_playing_videos_and_no_errors(demo_out, tmp_path):
     chromium = _chromium()
     out, state = demo_out
     url = (out / "index.html").as_uri()
-    dom, log = _browse_until(chromium, tmp_path / "profile-dom", url,
-                             lambda d: len(re.findall(r'data-duration="', d)) == len(SCENARIOS),
-                             "--enable-logging=stderr", "--v=0")
+    dom, log = _browse_until(
+        chromium,
+        tmp_path / "profile-dom",
+        url,
+        lambda d: len(re.findall(r'data-duration="', d)) == len(SCENARIOS),
+        "--enable-logging=stderr",
+        "--v=0",
+    )
     assert 'data-ready="true"' in dom, "the page finished loading"
     assert re.search(r'<pre id="load-errors"[^>]*hidden[^>]*></pre>', dom), "no resource failed to load"
     durations = [float(d) for d in re.findall(r'data-duration="([^"]+)"', dom)]
@@ -129,13 +153,20 @@ def test_report_loads_in_headless_chromium_with_playing_videos_and_no_errors(dem
     np.testing.assert_allclose(durations, CLIP_SECONDS, atol=0.05)  # non-zero and the clip's length
     loaded = re.findall(r'data-loaded="(\w+)"', dom)
     assert loaded and set(loaded) == {"true"}, "every image decoded"
-    console_errors = [line for line in log.splitlines()
-                      if "CONSOLE" in line and re.search(r"Uncaught|Error|error", line)]
+    console_errors = [
+        line for line in log.splitlines() if "CONSOLE" in line and re.search(r"Uncaught|Error|error", line)
+    ]
     assert not console_errors, console_errors
 
     shot = tmp_path / "shot.png"
-    _browse(chromium, tmp_path / "profile-shot", "--window-size=1280,1600", "--virtual-time-budget=8000",
-            f"--screenshot={shot}", url)
+    _browse(
+        chromium,
+        tmp_path / "profile-shot",
+        "--window-size=1280,1600",
+        "--virtual-time-budget=8000",
+        f"--screenshot={shot}",
+        url,
+    )
     from PIL import Image
 
     with Image.open(shot) as image:
@@ -150,23 +181,29 @@ def test_chromium_decodes_the_h264_videos_to_the_rendered_pictures(demo_out, tmp
     out, state = demo_out
     videos = [a.path for a in state.artifacts if a.kind == "video"]
     probe = out / "probe.html"
-    probe.write_text("<!doctype html><body><pre id='r'></pre><script>\n"
-                     "const r = document.getElementById('r'); const done = [];\n"
-                     f"for (const src of {videos!r}) {{\n"
-                     "  const v = document.createElement('video'); v.muted = true; v.preload = 'auto';\n"
-                     "  v.addEventListener('loadeddata', () => {\n"
-                     "    const c = document.createElement('canvas'); c.width = v.videoWidth; c.height = v.videoHeight;\n"
-                     "    const g = c.getContext('2d'); g.drawImage(v, 0, 0);\n"
-                     "    const d = g.getImageData(0, 0, c.width, c.height).data; let s = 0;\n"
-                     "    for (let i = 0; i < d.length; i += 4) s += (d[i] + d[i + 1] + d[i + 2]) / 3;\n"
-                     "    done.push(src + ' ' + (s / (d.length / 4)).toFixed(1)); r.textContent = done.join('\\n'); });\n"
-                     "  v.addEventListener('error', () => { done.push(src + ' error'); r.textContent = done.join('\\n'); });\n"
-                     "  v.src = src; document.body.appendChild(v); }\n"
-                     "</script></body>")
+    probe.write_text(
+        "<!doctype html><body><pre id='r'></pre><script>\n"
+        "const r = document.getElementById('r'); const done = [];\n"
+        f"for (const src of {videos!r}) {{\n"
+        "  const v = document.createElement('video'); v.muted = true; v.preload = 'auto';\n"
+        "  v.addEventListener('loadeddata', () => {\n"
+        "    const c = document.createElement('canvas'); c.width = v.videoWidth; c.height = v.videoHeight;\n"
+        "    const g = c.getContext('2d'); g.drawImage(v, 0, 0);\n"
+        "    const d = g.getImageData(0, 0, c.width, c.height).data; let s = 0;\n"
+        "    for (let i = 0; i < d.length; i += 4) s += (d[i] + d[i + 1] + d[i + 2]) / 3;\n"
+        "    done.push(src + ' ' + (s / (d.length / 4)).toFixed(1)); r.textContent = done.join('\\n'); });\n"
+        "  v.addEventListener('error', () => { done.push(src + ' error'); r.textContent = done.join('\\n'); });\n"
+        "  v.src = src; document.body.appendChild(v); }\n"
+        "</script></body>"
+    )
     try:
-        dom, _ = _browse_until(chromium, tmp_path / "profile-probe", probe.as_uri(),
-                               lambda d: len(re.findall(r"\.mp4 ", d)) == len(videos),
-                               "--allow-file-access-from-files")
+        dom, _ = _browse_until(
+            chromium,
+            tmp_path / "profile-probe",
+            probe.as_uri(),
+            lambda d: len(re.findall(r"\.mp4 ", d)) == len(videos),
+            "--allow-file-access-from-files",
+        )
     finally:
         probe.unlink()
     means = dict(re.findall(r"([\w/]+\.mp4) ([\d.]+|error)", dom))

@@ -11,8 +11,7 @@ SCRIPTS = sorted((pathlib.Path(__file__).parents[1] / "scenarios").glob("*.py"))
 
 @pytest.mark.parametrize("script", SCRIPTS, ids=lambda p: p.stem)
 def test_scenario_script_runs_headless(script, tmp_path):
-    proc = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True,
-                          timeout=300)
+    proc = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.strip()
     assert "Traceback" not in proc.stderr
@@ -20,7 +19,8 @@ def test_scenario_script_runs_headless(script, tmp_path):
 
 def test_exercise_script_prints_the_textbook_answer(tmp_path):
     script = next(s for s in SCRIPTS if s.stem == "under_or_overdamped")
-    out = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True,
-                         timeout=300).stdout
+    out = subprocess.run(
+        [sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=300
+    ).stdout
     assert "overdamped" in out
     assert "x(t) = 10 e^(-1 t) + -5 e^(-2 t)" in out

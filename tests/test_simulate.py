@@ -25,8 +25,9 @@ def _slider_model(scenario="step"):
 def test_rollout_path_is_bit_identical_to_a_plain_mj_step_loop(integrator, scenario):
     scene, chosen, params, model = _slider_model(scenario)
     setup = scene.setup(model, params, chosen, 500, 1e-3)
-    trajectory = simulate(model, integrator=integrator, dt=1e-3, duration=0.5, qpos=setup.qpos,
-                          qvel=setup.qvel, control=setup.control)
+    trajectory = simulate(
+        model, integrator=integrator, dt=1e-3, duration=0.5, qpos=setup.qpos, qvel=setup.qvel, control=setup.control
+    )
     data = mujoco.MjData(model)
     data.qpos[:], data.qvel[:], data.ctrl[:] = setup.qpos, setup.qvel, setup.control
     qpos = [data.qpos.copy()]

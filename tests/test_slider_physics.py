@@ -6,12 +6,13 @@ import numpy as np
 import pytest
 
 import springlab
-from springlab import analytic
 from springlab.simulate import ORDERS
 
 
-@pytest.mark.parametrize("scenario", ["free", "undamped", "underdamped", "critical", "overdamped",
-                                      "step", "harmonic", "resonance", "exercise"])
+@pytest.mark.parametrize(
+    "scenario",
+    ["free", "undamped", "underdamped", "critical", "overdamped", "step", "harmonic", "resonance", "exercise"],
+)
 def test_default_setting_reaches_1e6_relative_accuracy(scenario):
     result = springlab.run("slider", scenario)
     worst = max(e["max_rel"] for e in result.summary["errors"].values())
@@ -95,8 +96,9 @@ def _observed_order(integrator, scenario):
     return np.polyfit(np.log(dts), np.log(errors), 1)[0]
 
 
-@pytest.mark.parametrize("integrator,order", [("euler", 1), ("implicit", 1), ("implicitfast", 1),
-                                              ("discrete", 1), ("rk4", 4)])
+@pytest.mark.parametrize(
+    "integrator,order", [("euler", 1), ("implicit", 1), ("implicitfast", 1), ("discrete", 1), ("rk4", 4)]
+)
 def test_observed_convergence_order_matches_the_integrator(integrator, order):
     # underdamped free response; the harmonic case checks that forcing keeps the order too
     assert _observed_order(integrator, "underdamped") == pytest.approx(order, abs=0.3)
@@ -109,7 +111,9 @@ def test_rk4_keeps_fourth_order_under_harmonic_forcing():
 def test_model_values_are_read_back_from_the_mjcf():
     # the defaults come from models/slider.xml, not from a Python copy
     import mujoco
+
     from springlab import model_files
+
     model = mujoco.MjModel.from_xml_path(str(model_files.path("slider")))
     result = springlab.run("slider", "free", duration=0.1)
     assert result.parameters["mass"] == model.body("block").mass[0]

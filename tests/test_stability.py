@@ -171,18 +171,27 @@ def test_extremes_cover_stiff_light_long_and_overdamped_at_three_fractions_of_ea
     for case in cases:
         for integrator in INTEGRATORS:
             assert sorted(r["fraction"] for r in rows if r["case"] == case and r["integrator"] == integrator) == [
-                0.5, 0.99, 1.01]
+                0.5,
+                0.99,
+                1.01,
+            ]
 
 
 def test_every_run_just_past_a_stability_limit_is_reported_diverged(report):
-    past = [r for r in report["extremes"] if r["kind"] == "limit" and r["fraction"] > 1
-            and r["integrator"] != "discrete"]
+    past = [
+        r for r in report["extremes"] if r["kind"] == "limit" and r["fraction"] > 1 and r["integrator"] != "discrete"
+    ]
     assert past and all(r["outcome"] == "diverged" for r in past)
 
 
 def test_no_run_inside_a_limit_diverges_while_mujoco_values_stay_in_range(report):
-    inside = [r for r in report["extremes"] if r["kind"] == "limit" and r["case"] != "stiff-large-x0"
-              and (r["fraction"] < 1 or r["integrator"] == "discrete")]
+    inside = [
+        r
+        for r in report["extremes"]
+        if r["kind"] == "limit"
+        and r["case"] != "stiff-large-x0"
+        and (r["fraction"] < 1 or r["integrator"] == "discrete")
+    ]
     assert inside and all(r["outcome"] != "diverged" for r in inside)
 
 
@@ -229,8 +238,21 @@ def test_a_diverged_run_always_exits_3_and_writes_nothing(tmp_path, capsys, inte
     dt = 1.05 * min(stability_limit(integrator, zeta) / omega for omega, zeta in _fast_mode(scenario))
     dt = float(dt)
     out = tmp_path / "d"
-    code = main(["run", "slider", scenario, "--integrator", integrator, "--dt", repr(dt),
-                 "--duration", repr(3000 * dt), "--output", str(out)])
+    code = main(
+        [
+            "run",
+            "slider",
+            scenario,
+            "--integrator",
+            integrator,
+            "--dt",
+            repr(dt),
+            "--duration",
+            repr(3000 * dt),
+            "--output",
+            str(out),
+        ]
+    )
     err = capsys.readouterr().err
     assert code == 3, err
     assert err.count("\n") == 1 and "diverged" in err and "Traceback" not in err
@@ -239,8 +261,23 @@ def test_a_diverged_run_always_exits_3_and_writes_nothing(tmp_path, capsys, inte
 
 @pytest.mark.parametrize("integrator", list(INTEGRATORS))
 def test_a_run_beyond_mujocos_value_limit_exits_3_for_every_integrator(capsys, integrator):
-    code = main(["run", "slider", "free", "--integrator", integrator, "--dt", "1e-8", "--duration", "1e-5",
-                 "--set", "stiffness=1e12", "--set", "x0=0.1"])
+    code = main(
+        [
+            "run",
+            "slider",
+            "free",
+            "--integrator",
+            integrator,
+            "--dt",
+            "1e-8",
+            "--duration",
+            "1e-5",
+            "--set",
+            "stiffness=1e12",
+            "--set",
+            "x0=0.1",
+        ]
+    )
     err = capsys.readouterr().err
     assert code == 3 and "diverged" in err
 

@@ -38,8 +38,15 @@ def test_batched_runs_are_bit_identical_to_single_simulate_calls(scenario):
         steps = round(1.0 / dt)
         jobs.append(tradeoff.Job(model, name, dt, steps, scene.setup(model, params, chosen, steps, dt)))
     for job, batched in zip(jobs, tradeoff.run_batched(jobs)):
-        single = simulate(model, integrator=job.integrator, dt=job.dt, duration=1.0, qpos=job.setup.qpos,
-                          qvel=job.setup.qvel, control=job.setup.control)
+        single = simulate(
+            model,
+            integrator=job.integrator,
+            dt=job.dt,
+            duration=1.0,
+            qpos=job.setup.qpos,
+            qvel=job.setup.qvel,
+            control=job.setup.control,
+        )
         np.testing.assert_array_equal(batched.time, single.time)
         np.testing.assert_array_equal(batched.qpos, single.qpos)
         np.testing.assert_array_equal(batched.qvel, single.qvel)
@@ -53,8 +60,15 @@ def test_batched_runs_of_different_models_are_bit_identical_to_single_runs():
         models.append(model)
         jobs.append(tradeoff.Job(model, name, 1e-4, 700, scene.setup(model, params, chosen, 700, 1e-4)))
     for job, batched in zip(jobs, tradeoff.run_batched(jobs)):
-        single = simulate(job.model, integrator=job.integrator, dt=job.dt, duration=0.07, qpos=job.setup.qpos,
-                          qvel=job.setup.qvel, control=job.setup.control)
+        single = simulate(
+            job.model,
+            integrator=job.integrator,
+            dt=job.dt,
+            duration=0.07,
+            qpos=job.setup.qpos,
+            qvel=job.setup.qvel,
+            control=job.setup.control,
+        )
         np.testing.assert_array_equal(batched.qpos, single.qpos)
         np.testing.assert_array_equal(batched.qvel, single.qvel)
 
@@ -79,8 +93,9 @@ def test_the_sweep_covers_five_integrators_at_12_or_more_timesteps(slider_free_s
     assert all(r.wall_time_s > 0 and r.steps == round(5.0 / r.dt) for r in runs)
 
 
-@pytest.mark.parametrize("name, order", [("euler", 1), ("implicit", 1), ("implicitfast", 1), ("rk4", 4),
-                                         ("discrete", 1)])
+@pytest.mark.parametrize(
+    "name, order", [("euler", 1), ("implicit", 1), ("implicitfast", 1), ("rk4", 4), ("discrete", 1)]
+)
 def test_observed_order_matches_the_integrators_theoretical_order(slider_free_sweep, name, order):
     assert slider_free_sweep.orders[name] == pytest.approx(order, abs=0.3)
 
@@ -111,8 +126,10 @@ def test_order_fit_uses_the_finest_steps_and_refuses_errors_that_follow_no_power
     mixed = [tradeoff.Run("euler", float(dt), round(1 / dt), float(40 * dt**2 + 0.4 * dt), 1.0) for dt in dts]
     assert tradeoff.observed_order(mixed) == pytest.approx(1.0, abs=0.05)
     # errors set by where an input switch falls on the step grid scatter around no line
-    scattered = [tradeoff.Run("rk4", float(dt), round(1 / dt), float(e), 1.0)
-                 for dt, e in zip(dts, [1e-2, 1e-3, 4e-4, 1e-5, 4e-5, 1e-4, 3e-6, 3e-8, 4e-6, 8e-7, 2e-7, 7e-9, 4e-8])]
+    scattered = [
+        tradeoff.Run("rk4", float(dt), round(1 / dt), float(e), 1.0)
+        for dt, e in zip(dts, [1e-2, 1e-3, 4e-4, 1e-5, 4e-5, 1e-4, 3e-6, 3e-8, 4e-6, 8e-7, 2e-7, 7e-9, 4e-8])
+    ]
     assert tradeoff.observed_order(scattered) is None
 
 
@@ -121,8 +138,11 @@ def test_pareto_front_is_exactly_the_non_dominated_runs(slider_free_sweep):
     front = slider_free_sweep.pareto
 
     def dominates(a, b):
-        return (a.wall_time_s <= b.wall_time_s and a.max_rel_error <= b.max_rel_error
-                and (a.wall_time_s < b.wall_time_s or a.max_rel_error < b.max_rel_error))
+        return (
+            a.wall_time_s <= b.wall_time_s
+            and a.max_rel_error <= b.max_rel_error
+            and (a.wall_time_s < b.wall_time_s or a.max_rel_error < b.max_rel_error)
+        )
 
     for r in runs:
         dominated = any(dominates(other, r) for other in runs)
@@ -161,19 +181,34 @@ def test_run_auto_meets_the_tolerance_with_the_recommended_setting():
     assert max(e["max_rel"] for e in summary["errors"].values()) <= 1e-5
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    ({}, "needs tol"),
-    ({"tol": 1e-6, "dt": 0.01}, "chooses dt itself"),
-    ({"tol": -1.0}, "tol must be a finite number > 0"),
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({}, "needs tol"),
+        ({"tol": 1e-6, "dt": 0.01}, "chooses dt itself"),
+        ({"tol": -1.0}, "tol must be a finite number > 0"),
+    ],
+)
 def test_auto_rejects_incomplete_requests_with_one_clear_line(kwargs, match):
     with pytest.raises(BadInputError, match=match):
         springlab.run("slider", "exercise", integrator="auto", **kwargs)
 
 
 def test_tradeoff_cli_json_and_outputs_follow_the_contract(tmp_path, capsys):
-    code = main(["tradeoff", "slider", "exercise", "--tol", "1e-4", "--duration", "2", "--json",
-                 "--output", str(tmp_path / "t")])
+    code = main(
+        [
+            "tradeoff",
+            "slider",
+            "exercise",
+            "--tol",
+            "1e-4",
+            "--duration",
+            "2",
+            "--json",
+            "--output",
+            str(tmp_path / "t"),
+        ]
+    )
     out, err = capsys.readouterr()
     assert code == 0, err
     data = json.loads(out)
@@ -224,11 +259,21 @@ def test_a_stop_condition_ends_batched_runs_exactly_where_simulate_ends_them():
     def crossed(qpos, qvel):  # the block reaches the relaxed length
         return qpos[:, 0] <= 0.0
 
-    jobs = [tradeoff.Job(model, name, 0.01, 300, scene.setup(model, params, chosen, 300, 0.01), crossed)
-            for name in ("euler", "rk4")]
+    jobs = [
+        tradeoff.Job(model, name, 0.01, 300, scene.setup(model, params, chosen, 300, 0.01), crossed)
+        for name in ("euler", "rk4")
+    ]
     for job, batched in zip(jobs, tradeoff.run_batched(jobs)):
-        single = simulate(model, integrator=job.integrator, dt=0.01, duration=3.0, qpos=job.setup.qpos,
-                          qvel=job.setup.qvel, control=job.setup.control, stop=crossed)
+        single = simulate(
+            model,
+            integrator=job.integrator,
+            dt=0.01,
+            duration=3.0,
+            qpos=job.setup.qpos,
+            qvel=job.setup.qvel,
+            control=job.setup.control,
+            stop=crossed,
+        )
         assert batched.stopped and single.stopped and batched.steps < 300
         np.testing.assert_array_equal(batched.qpos, single.qpos)
 

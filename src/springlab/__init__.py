@@ -1,10 +1,11 @@
 """springlab: MuJoCo scenes of the textbook vibration problems, checked against exact solutions.
 
-    >>> import springlab
-    >>> result = springlab.run("slider", "free", integrator="rk4", dt=1e-3, duration=5.0,
-    ...                        mass=2.0, stiffness=800.0, damping=4.0, x0=0.05)
-    >>> result.summary["passed"]
-    True
+>>> import springlab
+>>> result = springlab.run(
+...     "slider", "free", integrator="rk4", dt=1e-3, duration=5.0, mass=2.0, stiffness=800.0, damping=4.0, x0=0.05
+... )
+>>> result.summary["passed"]
+True
 """
 
 from . import analytic, errors

@@ -30,7 +30,6 @@ All time arguments are evaluated element-wise; the outputs have ``t``'s shape.
 from __future__ import annotations
 
 import math
-from typing import Optional, Tuple, Union
 
 import numpy as np
 
@@ -53,7 +52,7 @@ __all__ = [
     "piecewise_linear_velocity",
 ]
 
-ArrayLike = Union[float, np.ndarray, list, tuple]
+ArrayLike = float | np.ndarray | list | tuple
 
 #: |zeta - 1| at or below this is reported as critical damping by :func:`regime`.
 CRITICAL_TOLERANCE = 1e-12
@@ -66,6 +65,7 @@ RESONANCE_TOLERANCE = 1e-12
 # input validation
 # ---------------------------------------------------------------------------
 
+
 def _finite_scalar(name: str, value) -> float:
     try:
         out = float(value)
@@ -76,7 +76,7 @@ def _finite_scalar(name: str, value) -> float:
     return out
 
 
-def _check_oscillator(mass, stiffness, damping) -> Tuple[float, float, float]:
+def _check_oscillator(mass, stiffness, damping) -> tuple[float, float, float]:
     m = _finite_scalar("mass", mass)
     k = _finite_scalar("stiffness", stiffness)
     d = _finite_scalar("damping", damping)
@@ -108,6 +108,7 @@ def _any_time(t) -> np.ndarray:
 # ---------------------------------------------------------------------------
 # scalar oscillator: parameters
 # ---------------------------------------------------------------------------
+
 
 def natural_frequency(mass: float, stiffness: float) -> float:
     """Undamped natural angular frequency.
@@ -207,14 +208,14 @@ def _oscillator_constants(m: float, k: float, d: float):
     return sigma, wn2, b2, math.sqrt(abs(b2))
 
 
-def _overdamped_roots(sigma: float, wn2: float, gamma: float) -> Tuple[float, float]:
+def _overdamped_roots(sigma: float, wn2: float, gamma: float) -> tuple[float, float]:
     """(fast, slow) real roots; the slow one from the product of roots (no cancellation)."""
     fast = -(sigma + gamma)
     slow = -wn2 / (sigma + gamma) + 0.0  # + 0.0 turns -0.0 into 0.0 for k == 0
     return fast, slow
 
 
-def characteristic_roots(mass: float, stiffness: float, damping: float) -> Tuple[complex, complex]:
+def characteristic_roots(mass: float, stiffness: float, damping: float) -> tuple[complex, complex]:
     """Roots of the characteristic polynomial m s^2 + d s + k = 0.
 
     Overdamped roots use the cancellation-free pair q/m and k/q with
@@ -320,8 +321,9 @@ def _fundamental(t: np.ndarray, sigma: float, wn2: float, b2: float, gamma: floa
     return P, Q, dP, dQ, E, C, S, exp_branch
 
 
-def free_response(t: ArrayLike, mass: float, stiffness: float, damping: float,
-                  x0: float, v0: float) -> Tuple[np.ndarray, np.ndarray]:
+def free_response(
+    t: ArrayLike, mass: float, stiffness: float, damping: float, x0: float, v0: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Exact free vibration of m x'' + d x' + k x = 0, x(0) = x0, x'(0) = v0.
 
     Uses x = e^{-sigma t} [x0 (C + sigma S) + v0 S] with sigma = d / (2 m),
@@ -368,8 +370,9 @@ _STEP_SERIES_TERMS = 30
 
 
 @np.errstate(over="ignore")
-def _unit_step_displacement(t: np.ndarray, m: float, k: float, sigma: float, wn2: float,
-                            b2: float, gamma: float, fund) -> np.ndarray:
+def _unit_step_displacement(
+    t: np.ndarray, m: float, k: float, sigma: float, wn2: float, b2: float, gamma: float, fund
+) -> np.ndarray:
     """h(t): displacement for a unit force from rest, m h'' + d h' + k h = 1.
 
     The textbook (1 - e^{-sigma t}(cos + ...)) / k cancels catastrophically
@@ -441,8 +444,9 @@ def _unit_step_displacement(t: np.ndarray, m: float, k: float, sigma: float, wn2
     return h
 
 
-def step_response(t: ArrayLike, mass: float, stiffness: float, damping: float, force: float,
-                  x0: float = 0.0, v0: float = 0.0) -> Tuple[np.ndarray, np.ndarray]:
+def step_response(
+    t: ArrayLike, mass: float, stiffness: float, damping: float, force: float, x0: float = 0.0, v0: float = 0.0
+) -> tuple[np.ndarray, np.ndarray]:
     """Exact response to a constant force switched on at t = 0.
 
     Mathematically x = F/k + free response from (x0 - F/k, v0) for k > 0, and
@@ -491,8 +495,9 @@ def step_response(t: ArrayLike, mass: float, stiffness: float, damping: float, f
     return x.reshape(tt.shape), v.reshape(tt.shape)
 
 
-def steady_state_amplitude(mass: float, stiffness: float, damping: float,
-                           force_amplitude: float, force_frequency: float) -> Tuple[float, float]:
+def steady_state_amplitude(
+    mass: float, stiffness: float, damping: float, force_amplitude: float, force_frequency: float
+) -> tuple[float, float]:
     """Steady-state amplitude and phase lag under F(t) = F0 sin(2 pi f t).
 
     x_ss(t) = X sin(W t - phi) with W = 2 pi f,
@@ -558,9 +563,16 @@ def _duhamel_exp(t: np.ndarray, w: complex, r: complex) -> np.ndarray:
 _DUHAMEL_MAX_ZETA = 0.5
 
 
-def harmonic_response(t: ArrayLike, mass: float, stiffness: float, damping: float,
-                      force_amplitude: float, force_frequency: float,
-                      x0: float = 0.0, v0: float = 0.0) -> Tuple[np.ndarray, np.ndarray]:
+def harmonic_response(
+    t: ArrayLike,
+    mass: float,
+    stiffness: float,
+    damping: float,
+    force_amplitude: float,
+    force_frequency: float,
+    x0: float = 0.0,
+    v0: float = 0.0,
+) -> tuple[np.ndarray, np.ndarray]:
     """Exact response to F(t) = F0 sin(2 pi f t) switched on at t = 0.
 
     Full solution = steady-state particular solution + transient chosen to
@@ -647,16 +659,26 @@ _PADE = {
     3: (120.0, 60.0, 12.0, 1.0),
     5: (30240.0, 15120.0, 3360.0, 420.0, 30.0, 1.0),
     7: (17297280.0, 8648640.0, 1995840.0, 277200.0, 25200.0, 1512.0, 56.0, 1.0),
-    9: (17643225600.0, 8821612800.0, 2075673600.0, 302702400.0, 30270240.0,
-        2162160.0, 110880.0, 3960.0, 90.0, 1.0),
-    13: (64764752532480000.0, 32382376266240000.0, 7771770303897600.0,
-         1187353796428800.0, 129060195264000.0, 10559470521600.0,
-         670442572800.0, 33522128640.0, 1323241920.0, 40840800.0, 960960.0,
-         16380.0, 182.0, 1.0),
+    9: (17643225600.0, 8821612800.0, 2075673600.0, 302702400.0, 30270240.0, 2162160.0, 110880.0, 3960.0, 90.0, 1.0),
+    13: (
+        64764752532480000.0,
+        32382376266240000.0,
+        7771770303897600.0,
+        1187353796428800.0,
+        129060195264000.0,
+        10559470521600.0,
+        670442572800.0,
+        33522128640.0,
+        1323241920.0,
+        40840800.0,
+        960960.0,
+        16380.0,
+        182.0,
+        1.0,
+    ),
 }
 # Backward-error bounds theta_m for degree m (Al-Mohy & Higham 2009, Table 3.1).
-_THETA = {3: 1.495585217958292e-2, 5: 2.539398330063230e-1,
-          7: 9.504178996162932e-1, 9: 2.097847961257068e0, 13: 4.25}
+_THETA = {3: 1.495585217958292e-2, 5: 2.539398330063230e-1, 7: 9.504178996162932e-1, 9: 2.097847961257068e0, 13: 4.25}
 
 
 def _onenorm(a: np.ndarray) -> float:
@@ -679,7 +701,7 @@ def _ell(a: np.ndarray, m: int) -> int:
     if power_norm == 0.0 or a_norm == 0.0:
         return 0
     alpha = power_norm / (a_norm * c_recip)
-    value = math.ceil(math.log2(alpha / 2.0 ** -53) / (2 * m))
+    value = math.ceil(math.log2(alpha / 2.0**-53) / (2 * m))
     return max(value, 0)
 
 
@@ -687,10 +709,8 @@ def _pade_uv(m: int, a: np.ndarray, powers: dict, ident: np.ndarray):
     b = _PADE[m]
     if m == 13:
         a2, a4, a6 = powers[2], powers[4], powers[6]
-        u = a @ (a6 @ (b[13] * a6 + b[11] * a4 + b[9] * a2)
-                 + b[7] * a6 + b[5] * a4 + b[3] * a2 + b[1] * ident)
-        v = (a6 @ (b[12] * a6 + b[10] * a4 + b[8] * a2)
-             + b[6] * a6 + b[4] * a4 + b[2] * a2 + b[0] * ident)
+        u = a @ (a6 @ (b[13] * a6 + b[11] * a4 + b[9] * a2) + b[7] * a6 + b[5] * a4 + b[3] * a2 + b[1] * ident)
+        v = a6 @ (b[12] * a6 + b[10] * a4 + b[8] * a2) + b[6] * a6 + b[4] * a4 + b[2] * a2 + b[0] * ident
         return u, v
     u_sum = b[1] * ident
     v_sum = b[0] * ident
@@ -729,9 +749,9 @@ def _pade_scaled(arr: np.ndarray):
     d10 = _onenorm(a4 @ a6) ** 0.1
     eta5 = min(eta3, max(d8, d10))
     s = 0 if eta5 == 0.0 else max(math.ceil(math.log2(eta5 / _THETA[13])), 0)
-    s += _ell(arr * 2.0 ** -s, 13)
-    scaled = arr * 2.0 ** -s
-    powers = {2: a2 * 4.0 ** -s, 4: a4 * 16.0 ** -s, 6: a6 * 64.0 ** -s}
+    s += _ell(arr * 2.0**-s, 13)
+    scaled = arr * 2.0**-s
+    powers = {2: a2 * 4.0**-s, 4: a4 * 16.0**-s, 6: a6 * 64.0**-s}
     return (*_pade_uv(13, scaled, powers, ident), s)
 
 
@@ -801,7 +821,8 @@ def _expm_minus_identity(arr: np.ndarray) -> np.ndarray:
 # linear time-invariant systems
 # ---------------------------------------------------------------------------
 
-def _matrix(name: str, value, n: Optional[int] = None) -> np.ndarray:
+
+def _matrix(name: str, value, n: int | None = None) -> np.ndarray:
     arr = np.atleast_2d(np.asarray(value, dtype=float))
     if arr.ndim != 2 or arr.shape[0] != arr.shape[1]:
         raise ValueError(f"{name} must be a square matrix, got shape {arr.shape}")
@@ -966,9 +987,9 @@ class _Propagator:
         for b0 in range(0, n_out, block):
             cnt = min(block, n_out - b0)
             if contracting:
-                out[b0:b0 + cnt] = ms[:cnt] @ zb + gs[:cnt]
+                out[b0 : b0 + cnt] = ms[:cnt] @ zb + gs[:cnt]
             else:
-                out[b0:b0 + cnt] = zb + (ms[:cnt] @ zb + gs[:cnt])
+                out[b0 : b0 + cnt] = zb + (ms[:cnt] @ zb + gs[:cnt])
             zb = out[b0 + cnt - 1]
 
 
@@ -1081,7 +1102,7 @@ def lti_response(t, a, z0, b=None, u=None) -> np.ndarray:
             z = prop.step(z, float(times[j] - tau), u_seg)
             out[j] = z
             if j2 > j + 1:
-                out[j + 1:j2] = prop.run(z, float(times[j]), times[j + 1:j2], u_seg)
+                out[j + 1 : j2] = prop.run(z, float(times[j]), times[j + 1 : j2], u_seg)
             z = out[j2 - 1]
             tau = float(times[j2 - 1])
             j = j2
@@ -1092,8 +1113,9 @@ def lti_response(t, a, z0, b=None, u=None) -> np.ndarray:
     return out
 
 
-def linear_response(t, mass_matrix, damping_matrix, stiffness_matrix, q0, v0,
-                    force=None) -> Tuple[np.ndarray, np.ndarray]:
+def linear_response(
+    t, mass_matrix, damping_matrix, stiffness_matrix, q0, v0, force=None
+) -> tuple[np.ndarray, np.ndarray]:
     """Exact response of M q'' + C q' + K q = f(t) for an n-DOF linear system.
 
     Thin wrapper over :func:`lti_response` with A from :func:`state_matrix`
@@ -1136,6 +1158,7 @@ def linear_response(t, mass_matrix, damping_matrix, stiffness_matrix, q0, v0,
 # kinematics
 # ---------------------------------------------------------------------------
 
+
 def _coefficients(name: str, coefficients) -> np.ndarray:
     c = np.atleast_1d(np.asarray(coefficients, dtype=float))
     if c.ndim != 1 or c.size == 0:
@@ -1158,7 +1181,7 @@ def _polyval(t: np.ndarray, c: np.ndarray) -> np.ndarray:
     return acc
 
 
-def polynomial_motion(t: ArrayLike, coefficients) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+def polynomial_motion(t: ArrayLike, coefficients) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Position, velocity and acceleration of x(t) = sum_i c_i t^i.
 
     Args:
@@ -1178,8 +1201,9 @@ def polynomial_motion(t: ArrayLike, coefficients) -> Tuple[np.ndarray, np.ndarra
     return _polyval(tt, c), _polyval(tt, dc), _polyval(tt, ddc)
 
 
-def integrate_acceleration(t: ArrayLike, accel_coefficients, x0: float,
-                           v0: float) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+def integrate_acceleration(
+    t: ArrayLike, accel_coefficients, x0: float, v0: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Motion under a polynomial acceleration a(t) = sum_i a_i t^i.
 
     v(t) = v0 + sum a_i t^{i+1} / (i+1) and
@@ -1208,8 +1232,9 @@ def integrate_acceleration(t: ArrayLike, accel_coefficients, x0: float,
     return polynomial_motion(t, pos)
 
 
-def piecewise_linear_velocity(t: ArrayLike, knot_times, knot_velocities,
-                              x0: float = 0.0) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+def piecewise_linear_velocity(
+    t: ArrayLike, knot_times, knot_velocities, x0: float = 0.0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Exact motion for a piecewise-linear velocity record (tachograph).
 
     Args:

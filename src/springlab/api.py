@@ -1,9 +1,9 @@
 """springlab's Python API: run a scene's scenario, validate scenes.
 
-    >>> import springlab
-    >>> result = springlab.run("slider", "exercise")
-    >>> result.summary["quantities"]["regime"]
-    'overdamped'
+>>> import springlab
+>>> result = springlab.run("slider", "exercise")
+>>> result.summary["quantities"]["regime"]
+'overdamped'
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import numpy as np
 
 from . import compare, scenes
 from .errors import DivergedError
-from .scene import Scene, Scenario
+from .scene import Scenario, Scene
 from .simulate import Trajectory, check_timing, integrator_id, simulate
 
 #: a run whose error exceeds this many times its signal has blown up, flagged or not
@@ -117,16 +117,25 @@ def run(
     model = scene_obj.build(params, chosen)
     setup = scene_obj.setup(model, params, chosen, steps, dt)
     try:
-        trajectory = simulate(model, integrator=integrator, dt=dt, duration=duration, qpos=setup.qpos,
-                              qvel=setup.qvel, act=setup.act, control=setup.control,
-                              stop=scene_obj.stop_condition(model, params, chosen))
+        trajectory = simulate(
+            model,
+            integrator=integrator,
+            dt=dt,
+            duration=duration,
+            qpos=setup.qpos,
+            qvel=setup.qvel,
+            act=setup.act,
+            control=setup.control,
+            stop=scene_obj.stop_condition(model, params, chosen),
+        )
     except DivergedError as error:
         raise DivergedError(f"{error}{_stability_advice(scene_obj, model, params, chosen, integrator, dt)}") from None
     return evaluate(scene_obj, chosen, params, model, trajectory, tol)
 
 
-def evaluate(scene: Scene, scenario: Scenario, params, model, trajectory: Trajectory,
-             tol: float | None = None) -> Result:
+def evaluate(
+    scene: Scene, scenario: Scenario, params, model, trajectory: Trajectory, tol: float | None = None
+) -> Result:
     """Compare a finished run with its reference: errors, tolerance, checks, summary -> Result.
 
     Shared by `run` and the batched sweeps of springlab.tradeoff, so every path judges a run
@@ -139,8 +148,11 @@ def evaluate(scene: Scene, scenario: Scenario, params, model, trajectory: Trajec
     errors, tolerance, basis, passed = {}, None, "", None
     if reference is not None:
         simulated = {f"{j}_{k}": (pos if k == "pos" else vel)[j] for j in reference.pos for k in ("pos", "vel")}
-        exact = {f"{j}_{k}": (reference.pos if k == "pos" else reference.vel)[j]
-                 for j in reference.pos for k in ("pos", "vel")}
+        exact = {
+            f"{j}_{k}": (reference.pos if k == "pos" else reference.vel)[j]
+            for j in reference.pos
+            for k in ("pos", "vel")
+        }
         errors = compare.column_errors(simulated, exact)
         worst = max(e["max_rel"] for e in errors.values())
         if not math.isfinite(worst) or worst > BLOWUP_RATIO:

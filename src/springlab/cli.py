@@ -42,18 +42,27 @@ def _parse_sets(pairs: Sequence[str]) -> dict[str, str]:
 def _scene_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scene", help="scene name (see 'springlab list')")
     parser.add_argument("scenario", nargs="?", help="scenario name (default: the scene's first)")
-    parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
-                        help="override a parameter, SI units (repeatable)")
+    parser.add_argument(
+        "--set", action="append", default=[], metavar="NAME=VALUE", help="override a parameter, SI units (repeatable)"
+    )
 
 
 def _timing_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--integrator", choices=None, metavar="NAME",
-                        help=f"one of {', '.join(INTEGRATORS)} (default: the scene's validated one), or auto:"
-                             " the cheapest setting that meets --tol (see 'springlab tradeoff')")
+    parser.add_argument(
+        "--integrator",
+        choices=None,
+        metavar="NAME",
+        help=f"one of {', '.join(INTEGRATORS)} (default: the scene's validated one), or auto:"
+        " the cheapest setting that meets --tol (see 'springlab tradeoff')",
+    )
     parser.add_argument("--dt", type=float, metavar="SECONDS", help="timestep [s]")
     parser.add_argument("--duration", type=float, metavar="SECONDS", help="simulated time [s]")
-    parser.add_argument("--tol", type=float, metavar="TOL",
-                        help="relative tolerance to hold the run to (default: the integrator's predicted error)")
+    parser.add_argument(
+        "--tol",
+        type=float,
+        metavar="TOL",
+        help="relative tolerance to hold the run to (default: the integrator's predicted error)",
+    )
 
 
 def _print_json(value: Any) -> None:
@@ -66,16 +75,20 @@ def _print_json(value: Any) -> None:
 def cmd_list(args) -> int:
     catalogue = []
     for scene in scenes.SCENES.values():
-        catalogue.append({
-            "scene": scene.name,
-            "title": scene.title,
-            "joints": list(scene.joints),
-            "default_integrator": scene.integrator,
-            "default_dt": scene.dt,
-            "scenarios": {s.name: s.description for s in scene.scenarios.values()},
-            "parameters": {p.name: {"unit": p.unit, "description": p.description, "valid": p.valid_range()}
-                           for p in scene.parameters.values()},
-        })
+        catalogue.append(
+            {
+                "scene": scene.name,
+                "title": scene.title,
+                "joints": list(scene.joints),
+                "default_integrator": scene.integrator,
+                "default_dt": scene.dt,
+                "scenarios": {s.name: s.description for s in scene.scenarios.values()},
+                "parameters": {
+                    p.name: {"unit": p.unit, "description": p.description, "valid": p.valid_range()}
+                    for p in scene.parameters.values()
+                },
+            }
+        )
     if args.json:
         _print_json(catalogue)
         return EXIT_OK
@@ -93,8 +106,15 @@ def cmd_list(args) -> int:
 
 def _run_scenario(args) -> api.Result:
     """api.run from the scene, timing and --set arguments that run, render and plot share."""
-    return api.run(args.scene, args.scenario, integrator=args.integrator, dt=args.dt,
-                   duration=args.duration, tol=args.tol, **_parse_sets(args.set))
+    return api.run(
+        args.scene,
+        args.scenario,
+        integrator=args.integrator,
+        dt=args.dt,
+        duration=args.duration,
+        tol=args.tol,
+        **_parse_sets(args.set),
+    )
 
 
 def cmd_run(args) -> int:
@@ -112,8 +132,10 @@ def cmd_run(args) -> int:
 
 
 def _print_run(summary: dict, output: str | None) -> None:
-    print(f"{summary['scene']} / {summary['scenario']}: {summary['integrator']}, dt = {summary['dt']:g} s,"
-          f" {summary['steps']} steps in {summary['wall_time_s'] * 1e3:.1f} ms")
+    print(
+        f"{summary['scene']} / {summary['scenario']}: {summary['integrator']}, dt = {summary['dt']:g} s,"
+        f" {summary['steps']} steps in {summary['wall_time_s'] * 1e3:.1f} ms"
+    )
     for name, value in summary["quantities"].items():
         print(f"  {name:<26} {value:.10g}" if isinstance(value, float) else f"  {name:<26} {value}")
     for column, error in summary["errors"].items():
@@ -122,28 +144,37 @@ def _print_run(summary: dict, output: str | None) -> None:
         print(f"  check {_check_line(check)}")
     if summary["tolerance"] is not None or summary.get("checks"):
         verdict = "PASS" if summary["passed"] else "FAIL (outside tolerance)"
-        print(f"  tolerance {summary['tolerance']:.3e}: {verdict}" if summary["tolerance"] is not None
-              else f"  checks: {verdict}")
+        print(
+            f"  tolerance {summary['tolerance']:.3e}: {verdict}"
+            if summary["tolerance"] is not None
+            else f"  checks: {verdict}"
+        )
     if output:
         print(f"  wrote {pathlib.Path(output) / 'trajectory.csv'} and summary.json")
 
 
 def _check_line(check: dict) -> str:
     """'period_s  value 1.234  ref 1.234  error 1.0e-09 <= 1.0e-06 pass' for a Check dict."""
-    return (f"{check['name']:<30} value {check['value']:<14.10g} ref {check['reference']:<14.10g}"
-            f" error {check['error']:.2e} {'<=' if check['passed'] else '>'} {check['tolerance']:.2e}"
-            f"  {'pass' if check['passed'] else 'FAIL'}")
+    return (
+        f"{check['name']:<30} value {check['value']:<14.10g} ref {check['reference']:<14.10g}"
+        f" error {check['error']:.2e} {'<=' if check['passed'] else '>'} {check['tolerance']:.2e}"
+        f"  {'pass' if check['passed'] else 'FAIL'}"
+    )
 
 
 def _validation_table(rows: list[dict]) -> str:
     # columns as wide as their longest name, so long scenario names stay readable
     scene_width = max([12] + [len(r["scene"]) for r in rows]) + 1
     scenario_width = max([13] + [len(r["scenario"]) for r in rows]) + 1
-    lines = [f"{'scene':<{scene_width}}{'scenario':<{scenario_width}}{'integrator':<11}{'dt [s]':>9}"
-             f"{'max rel err':>13}{'tolerance':>11}  result"]
+    lines = [
+        f"{'scene':<{scene_width}}{'scenario':<{scenario_width}}{'integrator':<11}{'dt [s]':>9}"
+        f"{'max rel err':>13}{'tolerance':>11}  result"
+    ]
     for r in rows:
-        lines.append(f"{r['scene']:<{scene_width}}{r['scenario']:<{scenario_width}}{r['integrator']:<11}{r['dt']:>9.2g}"
-                     f"{r['max_rel_error']:>13.2e}{r['tolerance']:>11.2e}  {'pass' if r['passed'] else 'FAIL'}")
+        lines.append(
+            f"{r['scene']:<{scene_width}}{r['scenario']:<{scenario_width}}{r['integrator']:<11}{r['dt']:>9.2g}"
+            f"{r['max_rel_error']:>13.2e}{r['tolerance']:>11.2e}  {'pass' if r['passed'] else 'FAIL'}"
+        )
         lines.extend(f"    check {_check_line(c)}" for c in r.get("checks", []))
     return "\n".join(lines)
 
@@ -171,11 +202,14 @@ def cmd_render(args) -> int:
     render.check_video_arguments(args.output, args.fps, args.width, args.height)
     result = _run_scenario(args)
     outputs.prepare_directory(pathlib.Path(args.output).parent)
-    info = media.render_run(result, args.output, fps=args.fps, width=args.width, height=args.height,
-                            composite=args.composite)
-    print(f"wrote {info['path']}: {info['frames']} frames, {info['width']}x{info['height']} at {info['fps']:g} fps"
-          f" ({info['frames'] / info['fps']:.2f} s of simulation) in {info['seconds']:.1f} s"
-          f" ({info['frames'] / max(info['seconds'], 1e-9):.0f} frames/s)")
+    info = media.render_run(
+        result, args.output, fps=args.fps, width=args.width, height=args.height, composite=args.composite
+    )
+    print(
+        f"wrote {info['path']}: {info['frames']} frames, {info['width']}x{info['height']} at {info['fps']:g} fps"
+        f" ({info['frames'] / info['fps']:.2f} s of simulation) in {info['seconds']:.1f} s"
+        f" ({info['frames'] / max(info['seconds'], 1e-9):.0f} frames/s)"
+    )
     return _verdict(result.summary)
 
 
@@ -189,8 +223,15 @@ def cmd_plot(args) -> int:
         figure = plots.time_series(result) if args.kind == "time" else plots.phase_plane(result)
         verdict = _verdict(result.summary)
     else:
-        figure = plots.figure_for(args.kind, args.scene, args.scenario, integrator=args.integrator,
-                                  dt=args.dt, duration=args.duration, **_parse_sets(args.set))
+        figure = plots.figure_for(
+            args.kind,
+            args.scene,
+            args.scenario,
+            integrator=args.integrator,
+            dt=args.dt,
+            duration=args.duration,
+            **_parse_sets(args.set),
+        )
         verdict = EXIT_OK
     print(f"wrote {plots.save(figure, args.output)}")
     return verdict
@@ -199,15 +240,17 @@ def cmd_plot(args) -> int:
 def _verdict(summary: dict) -> int:
     """Exit code of a run whose outputs were written: 1 when outside its tolerance."""
     if summary["passed"] is False:
-        print(f"  note: {summary['scene']}/{summary['scenario']} is outside its tolerance"
-              f" (max error above {summary['tolerance']:.2e}); see 'springlab run'", file=sys.stderr)
+        print(
+            f"  note: {summary['scene']}/{summary['scenario']} is outside its tolerance"
+            f" (max error above {summary['tolerance']:.2e}); see 'springlab run'",
+            file=sys.stderr,
+        )
         return EXIT_FAILED
     return EXIT_OK
 
 
 def cmd_tradeoff(args) -> int:
-    result = tradeoff.tradeoff(args.scene, args.scenario, tol=args.tol, duration=args.duration,
-                               **_parse_sets(args.set))
+    result = tradeoff.tradeoff(args.scene, args.scenario, tol=args.tol, duration=args.duration, **_parse_sets(args.set))
     if args.output:
         tradeoff.write_tradeoff(result, args.output)
     if args.json:
@@ -219,15 +262,20 @@ def cmd_tradeoff(args) -> int:
 
 
 def _print_tradeoff(result, output: str | None) -> None:
-    print(f"{result.scene} / {result.scenario}: {len(result.runs)} runs over {result.duration:g} s"
-          f" in {result.sweep_wall_time_s:.1f} s")
-    print(f"  {'integrator':<13}{'dt [s]':>10}{'steps':>9}{'max rel err':>13}{'wall [ms]':>11}"
-          f"{'wall/sim s':>12}  pareto")
+    print(
+        f"{result.scene} / {result.scenario}: {len(result.runs)} runs over {result.duration:g} s"
+        f" in {result.sweep_wall_time_s:.1f} s"
+    )
+    print(
+        f"  {'integrator':<13}{'dt [s]':>10}{'steps':>9}{'max rel err':>13}{'wall [ms]':>11}{'wall/sim s':>12}  pareto"
+    )
     front = {id(r) for r in result.pareto}
     for r in result.runs:
         error = "diverged" if r.diverged else f"{r.max_rel_error:.3e}"
-        print(f"  {r.integrator:<13}{r.dt:>10.3g}{r.steps:>9}{error:>13}{r.wall_time_s * 1e3:>11.3f}"
-              f"{r.wall_time_s / result.duration * 1e3:>10.3f}ms  {'*' if id(r) in front else ''}")
+        print(
+            f"  {r.integrator:<13}{r.dt:>10.3g}{r.steps:>9}{error:>13}{r.wall_time_s * 1e3:>11.3f}"
+            f"{r.wall_time_s / result.duration * 1e3:>10.3f}ms  {'*' if id(r) in front else ''}"
+        )
     orders = ", ".join(f"{name} {p:.2f}" if p is not None else f"{name} -" for name, p in result.orders.items())
     print(f"  observed order: {orders}")
     pick = result.recommendation
@@ -235,8 +283,10 @@ def _print_tradeoff(result, output: str | None) -> None:
         if pick["integrator"] is None:
             print(f"  tol {pick['tol']:g}: no setting of the sweep meets it")
         else:
-            print(f"  tol {pick['tol']:g}: use {pick['integrator']} at dt = {pick['dt']:g} s (verified: error"
-                  f" {pick['max_rel_error']:.3e}, {pick['wall_time_s'] * 1e3:.3f} ms)")
+            print(
+                f"  tol {pick['tol']:g}: use {pick['integrator']} at dt = {pick['dt']:g} s (verified: error"
+                f" {pick['max_rel_error']:.3e}, {pick['wall_time_s'] * 1e3:.3f} ms)"
+            )
     print(f"  wall time: {tradeoff.WALL_TIME_BASIS}")
     if output:
         print(f"  wrote {pathlib.Path(output) / 'tradeoff.json'} and tradeoff.png")
@@ -257,25 +307,33 @@ def _print_stability(report: dict, output: str | None) -> None:
     print("stability boundary omega*dt (measured by a growth test vs theory)")
     print(f"  {'integrator':<13}{'zeta':>7}{'measured':>12}{'theory':>12}{'rel diff':>10}")
     for r in report["boundaries"]:
-        print(f"  {r['integrator']:<13}{r['zeta']:>7g}{r['measured_omega_dt']:>12.5g}{r['theory_omega_dt']:>12.5g}"
-              f"{r['relative_difference']:>10.1e}")
+        print(
+            f"  {r['integrator']:<13}{r['zeta']:>7g}{r['measured_omega_dt']:>12.5g}{r['theory_omega_dt']:>12.5g}"
+            f"{r['relative_difference']:>10.1e}"
+        )
     print(f"extremes (accurate: max rel error <= {report['accuracy_threshold']:g})")
-    print(f"  {'case':<15}{'integrator':<13}{'x limit':>8}{'omega*dt':>10}{'steps':>8}  {'outcome':<11}"
-          f"{'error':>9}  advice")
+    print(
+        f"  {'case':<15}{'integrator':<13}{'x limit':>8}{'omega*dt':>10}{'steps':>8}  {'outcome':<11}"
+        f"{'error':>9}  advice"
+    )
     for r in report["extremes"]:
         error = "-" if r["max_rel_error"] is None else f"{r['max_rel_error']:.1e}"
         if r["fraction"] is None:
             fraction = "advised"
         else:
             fraction = f"{r['fraction']:g}" + ("*" if r["limit_of"] != r["integrator"] else "")
-        print(f"  {r['case']:<15}{r['integrator']:<13}{fraction:>8}{r['omega_dt']:>10.4g}{r['steps']:>8}"
-              f"  {r['outcome']:<11}{error:>9}  {r['advice']}")
+        print(
+            f"  {r['case']:<15}{r['integrator']:<13}{fraction:>8}{r['omega_dt']:>10.4g}{r['steps']:>8}"
+            f"  {r['outcome']:<11}{error:>9}  {r['advice']}"
+        )
     print("  * discrete has no stability limit: fractions of the euler limit")
     print("undamped energy E/E0 vs the exact step-map formulas")
     for r in report["energy"]:
-        print(f"  {r['integrator']:<13} omega*dt {r['omega_dt']:g}, {r['steps']} steps: E/E0 in"
-              f" [{r['min_ratio']:.6g}, {r['max_ratio']:.6g}], final {r['final_ratio']:.6g};"
-              f" {r['formula']}: max deviation {r['max_relative_deviation']:.1e}")
+        print(
+            f"  {r['integrator']:<13} omega*dt {r['omega_dt']:g}, {r['steps']} steps: E/E0 in"
+            f" [{r['min_ratio']:.6g}, {r['max_ratio']:.6g}], final {r['final_ratio']:.6g};"
+            f" {r['formula']}: max deviation {r['max_relative_deviation']:.1e}"
+        )
     print(f"done in {report['wall_time_s']:.1f} s")
     if output:
         print(f"  wrote {pathlib.Path(output) / 'stability.json'}, stability.png and energy.png")
@@ -284,8 +342,9 @@ def _print_stability(report: dict, output: str | None) -> None:
 def cmd_design(args) -> int:
     from . import design  # here, not at the top: mujoco.batch is only needed by this command
 
-    study = design.run_study(args.scene, levels=args.levels, plane_levels=args.plane, nthread=args.threads,
-                             **_parse_sets(args.set))
+    study = design.run_study(
+        args.scene, levels=args.levels, plane_levels=args.plane, nthread=args.threads, **_parse_sets(args.set)
+    )
     if args.output:
         design.write(study, args.output)
     if args.json:
@@ -297,18 +356,24 @@ def cmd_design(args) -> int:
 
 def _print_design(design, study, output: str | None) -> None:
     s = design.summary(study)
-    print(f"{s['scene']} design study: {s['configurations']} configurations ({s['levels']} levels of "
-          f"{', '.join(design.PROPERTIES)}) in {s['wall_time_s']:.1f} s, {s['configurations_per_s']:.0f}/s"
-          f" on {s['nthread']} threads")
+    print(
+        f"{s['scene']} design study: {s['configurations']} configurations ({s['levels']} levels of "
+        f"{', '.join(design.PROPERTIES)}) in {s['wall_time_s']:.1f} s, {s['configurations_per_s']:.0f}/s"
+        f" on {s['nthread']} threads"
+    )
     print(f"  {'property':<16}{'default':>11}{'range':>22}{'elasticity':>12}{'local':>9}")
     for name in s["ranking"]:
         grid = s["properties"][name]["grid"]
         unit = design.PROPERTIES[name]
-        print(f"  {name:<16}{s['default']['properties'][name]:>11.4g}{f'{grid[0]:.3g}..{grid[-1]:.3g} {unit}':>22}"
-              f"{s['elasticities'][name]:>+12.3f}{s['local_elasticities'][name]:>+9.3f}")
+        print(
+            f"  {name:<16}{s['default']['properties'][name]:>11.4g}{f'{grid[0]:.3g}..{grid[-1]:.3g} {unit}':>22}"
+            f"{s['elasticities'][name]:>+12.3f}{s['local_elasticities'][name]:>+9.3f}"
+        )
     ratio = s["estimate_over_simulation"]
-    print(f"  log-log fit R^2 {s['regression_r2']:.3f}; analytic estimate / simulation: median"
-          f" {ratio['median']:.3f}, 5-95% {ratio['p05']:.3f}-{ratio['p95']:.3f}")
+    print(
+        f"  log-log fit R^2 {s['regression_r2']:.3f}; analytic estimate / simulation: median"
+        f" {ratio['median']:.3f}, 5-95% {ratio['p05']:.3f}-{ratio['p95']:.3f}"
+    )
     print(design.answer(study))
     if output:
         print(f"  wrote {pathlib.Path(output) / 'design.json'}, configurations.csv and design.png")
@@ -320,8 +385,10 @@ def cmd_demo(args) -> int:
     state = demo.run_demo(args.output)
     print(_validation_table(state.validation))
     failed = sum(not r["passed"] for r in state.validation)
-    print(f"{len(state.validation) - failed} passed, {failed} failed; wrote {len(state.artifacts)} files"
-          f" under {state.out}/ in {time.perf_counter() - start:.1f} s")
+    print(
+        f"{len(state.validation) - failed} passed, {failed} failed; wrote {len(state.artifacts)} files"
+        f" under {state.out}/ in {time.perf_counter() - start:.1f} s"
+    )
     return EXIT_FAILED if failed else EXIT_OK
 
 
@@ -350,58 +417,88 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("scenes", nargs="*", help="scene names (default: all)")
     p.add_argument("--integrator", metavar="NAME", help="override the scenes' integrator")
     p.add_argument("--dt", type=float, metavar="SECONDS", help="override the scenes' timestep [s]")
-    p.add_argument("--tol", type=float, metavar="TOL",
-                   help="relative tolerance to hold every run to (needed by --integrator auto)")
+    p.add_argument(
+        "--tol", type=float, metavar="TOL", help="relative tolerance to hold every run to (needed by --integrator auto)"
+    )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     COMMANDS["validate"] = cmd_validate
 
-    p = sub.add_parser("render", help="film a scenario off-screen: mp4 (H.264) or gif, optionally beside its phase plane")
+    p = sub.add_parser(
+        "render", help="film a scenario off-screen: mp4 (H.264) or gif, optionally beside its phase plane"
+    )
     _scene_arguments(p)
     _timing_arguments(p)
     p.add_argument("--output", required=True, metavar="FILE", help="FILE.mp4 (H.264, plays in browsers) or FILE.gif")
     p.add_argument("--fps", type=float, default=30, help="frames per second; video time = simulation time (default 30)")
     p.add_argument("--width", type=int, default=640, help="width of the 3D view [px] (default 640)")
     p.add_argument("--height", type=int, default=480, help="height of the 3D view [px] (default 480)")
-    p.add_argument("--composite", action="store_true",
-                   help="add the phase-plane trace drawn as time advances, a height x height panel on the right")
+    p.add_argument(
+        "--composite",
+        action="store_true",
+        help="add the phase-plane trace drawn as time advances, a height x height panel on the right",
+    )
     COMMANDS["render"] = cmd_render
 
     p = sub.add_parser("plot", help="plot a scenario: time series, phase plane, family, zeta family")
     _scene_arguments(p)
     _timing_arguments(p)
     p.add_argument("--output", required=True, metavar="FILE", help="FILE.png, FILE.svg or FILE.pdf")
-    p.add_argument("--kind", default="time", choices=("time", "phase", "family", "zeta"),
-                   help="time: x(t), v(t) with the exact solution and the error on a log axis (default); "
-                        "phase: phase plane with vector field, equilibria, separatrices; "
-                        "family: phase trajectories from several initial displacements; "
-                        "zeta: responses for damping ratios 0 to 2")
+    p.add_argument(
+        "--kind",
+        default="time",
+        choices=("time", "phase", "family", "zeta"),
+        help="time: x(t), v(t) with the exact solution and the error on a log axis (default); "
+        "phase: phase plane with vector field, equilibria, separatrices; "
+        "family: phase trajectories from several initial displacements; "
+        "zeta: responses for damping ratios 0 to 2",
+    )
     COMMANDS["plot"] = cmd_plot
 
     p = sub.add_parser("tradeoff", help="error vs cost of every integrator and timestep; cheapest setting for --tol")
     _scene_arguments(p)
-    p.add_argument("--tol", type=float, metavar="TOL", help="recommend the cheapest setting meeting this relative error")
+    p.add_argument(
+        "--tol", type=float, metavar="TOL", help="recommend the cheapest setting meeting this relative error"
+    )
     p.add_argument("--duration", type=float, metavar="SECONDS", help="simulated time [s] (default: the scenario's)")
     p.add_argument("--output", metavar="DIR", help="write DIR/tradeoff.json and DIR/tradeoff.png")
     p.add_argument("--json", action="store_true", help="print tradeoff.json")
     COMMANDS["tradeoff"] = cmd_tradeoff
 
     p = sub.add_parser("stability", help="stability boundaries vs theory, extremes table, undamped energy")
-    p.add_argument("--full", action="store_true",
-                   help="more damping ratios and extreme cases, advice verified by running it (slower)")
+    p.add_argument(
+        "--full",
+        action="store_true",
+        help="more damping ratios and extreme cases, advice verified by running it (slower)",
+    )
     p.add_argument("--output", metavar="DIR", help="write DIR/stability.json, stability.png and energy.png")
     p.add_argument("--json", action="store_true", help="print stability.json")
     COMMANDS["stability"] = cmd_stability
 
     p = sub.add_parser("design", help="design study: positioning time over a property sweep, ranked sensitivities")
     p.add_argument("scene", help="scene with a design study: printer_head")
-    p.add_argument("--levels", type=int, default=7, metavar="N",
-                   help="odd number of grid points per property, N^4 configurations (default 7: 2401)")
-    p.add_argument("--plane", type=int, default=31, metavar="N",
-                   help="odd grid points per axis of the plotted plane over the two most influential properties,"
-                        " N^2 more configurations (default 31: 961; 0: plot the grid's slice)")
+    p.add_argument(
+        "--levels",
+        type=int,
+        default=7,
+        metavar="N",
+        help="odd number of grid points per property, N^4 configurations (default 7: 2401)",
+    )
+    p.add_argument(
+        "--plane",
+        type=int,
+        default=31,
+        metavar="N",
+        help="odd grid points per axis of the plotted plane over the two most influential properties,"
+        " N^2 more configurations (default 31: 961; 0: plot the grid's slice)",
+    )
     p.add_argument("--threads", type=int, default=0, metavar="N", help="batch threads (default 0: one per CPU)")
-    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
-                   help="start the sweep from another parameter value, SI units (repeatable)")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="start the sweep from another parameter value, SI units (repeatable)",
+    )
     p.add_argument("--output", metavar="DIR", help="write DIR/design.json, DIR/configurations.csv, DIR/design.png")
     p.add_argument("--json", action="store_true", help="print design.json")
     COMMANDS["design"] = cmd_design

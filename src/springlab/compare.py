@@ -109,8 +109,7 @@ def predicted_error(reference: Reference, integrator: str, dt: float, time: np.n
                 propagated[i] = step @ propagated[i - 1]
             error[rows] += propagated
         carried = error[last].copy()
-    rho = max(max(float(np.max(np.abs(np.linalg.eigvals(a)))) for _, a in segments),
-              1.0 / max(float(time[-1]), 1e-300))
+    rho = max(max(float(np.max(np.abs(np.linalg.eigvals(a)))) for _, a in segments), 1.0 / max(float(time[-1]), 1e-300))
     out = {}
     for joint, (ip, iv) in reference.rows.items():
         scaled = np.hypot(error[:, ip], error[:, iv] / rho)

@@ -109,14 +109,31 @@ def tradeoff_step(state: DemoState) -> list[Artifact]:
     report = tradeoff.stability_report()
     tradeoff.write_stability(report, state.out / "stability")
     return [
-        Artifact("tradeoff/tradeoff.json", "data", "slider free: error, steps and wall time of every integrator"
-                 " x timestep; orders, Pareto front, cheapest setting for 1e-6", "slider", "free"),
-        Artifact("tradeoff/tradeoff.png", "plot", "slider free: error vs timestep and error vs cost (Pareto front)",
-                 "slider", "free"),
-        Artifact("stability/stability.json", "data", "measured stability boundaries vs theory, extremes table,"
-                 " undamped energy vs formulas"),
-        Artifact("stability/stability.png", "plot", "stability map: measured per-step amplification over"
-                 " (zeta, omega*dt), theory and measured boundaries"),
+        Artifact(
+            "tradeoff/tradeoff.json",
+            "data",
+            "slider free: error, steps and wall time of every integrator"
+            " x timestep; orders, Pareto front, cheapest setting for 1e-6",
+            "slider",
+            "free",
+        ),
+        Artifact(
+            "tradeoff/tradeoff.png",
+            "plot",
+            "slider free: error vs timestep and error vs cost (Pareto front)",
+            "slider",
+            "free",
+        ),
+        Artifact(
+            "stability/stability.json",
+            "data",
+            "measured stability boundaries vs theory, extremes table, undamped energy vs formulas",
+        ),
+        Artifact(
+            "stability/stability.png",
+            "plot",
+            "stability map: measured per-step amplification over (zeta, omega*dt), theory and measured boundaries",
+        ),
         Artifact("stability/energy.png", "plot", "undamped energy of each integrator vs its exact formula"),
     ]
 
@@ -132,12 +149,28 @@ def design_step(state: DemoState) -> list[Artifact]:
     design.write(study, state.out / "design")
     state.timings.append(("design sweep (batched MuJoCo)", study.wall_time_s))
     return [
-        Artifact("design/design.json", "data", "printer head: how fast can it be positioned, which properties"
-                 " matter (elasticities, analytic estimate vs simulation)", "printer_head", "move"),
-        Artifact("design/configurations.csv", "data", f"printer head: every one of the {study.size}"
-                 " configurations' move, settling and positioning time", "printer_head", "move"),
-        Artifact("design/design.png", "plot", "printer head: positioning time over the two most influential"
-                 " properties; analytic estimate vs simulation", "printer_head", "move"),
+        Artifact(
+            "design/design.json",
+            "data",
+            "printer head: how fast can it be positioned, which properties"
+            " matter (elasticities, analytic estimate vs simulation)",
+            "printer_head",
+            "move",
+        ),
+        Artifact(
+            "design/configurations.csv",
+            "data",
+            f"printer head: every one of the {study.size} configurations' move, settling and positioning time",
+            "printer_head",
+            "move",
+        ),
+        Artifact(
+            "design/design.png",
+            "plot",
+            "printer head: positioning time over the two most influential properties; analytic estimate vs simulation",
+            "printer_head",
+            "move",
+        ),
     ]
 
 

@@ -281,8 +281,9 @@ def config_parameters(base: Mapping[str, float], values: Mapping[str, np.ndarray
     params = dict(base)
     for name in ("belt_stiffness", "carriage_mass", "drive_force"):
         params[name] = float(values[name][i])
-    params["belt_damping"] = float(belt_damping({n: np.atleast_1d(values[n][i]) for n in PROPERTIES},
-                                                base["motor_mass"])[0])
+    params["belt_damping"] = float(
+        belt_damping({n: np.atleast_1d(values[n][i]) for n in PROPERTIES}, base["motor_mass"])[0]
+    )
     return params
 
 
@@ -300,8 +301,9 @@ def timesteps(values: Mapping[str, np.ndarray], base: Mapping[str, float], omega
     return half / np.ceil(half / largest)
 
 
-def move_profiles(base: Mapping[str, float], values: Mapping[str, np.ndarray],
-                  dt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def move_profiles(
+    base: Mapping[str, float], values: Mapping[str, np.ndarray], dt: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """(steps per half-move, force [N]) per configuration, as PrinterHead.move_profile."""
     half_steps = np.empty(len(dt), int)
     force = np.empty(len(dt))
@@ -436,8 +438,9 @@ def simulate_moves(
 # -- the analytic estimate ---------------------------------------------------------
 
 
-def estimates(base: Mapping[str, float], values: Mapping[str, np.ndarray],
-              dt: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def estimates(
+    base: Mapping[str, float], values: Mapping[str, np.ndarray], dt: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(estimate [s], worst-case estimate [s], natural frequency [Hz]) per configuration.
 
     estimate: realized move time + ln(A / band) / (zeta omega_n), A the exact
@@ -499,7 +502,8 @@ def run_study(
     if not (isinstance(omega_dt, (int, float)) and 0 < omega_dt <= 1.0):
         raise BadInputError(f"omega_dt must be a number in (0, 1] (RK4 resolution), got {omega_dt!r}")
     if not isinstance(plane_levels, (int, np.integer)) or not (
-            plane_levels == 0 or (plane_levels >= 3 and plane_levels % 2 == 1)):
+        plane_levels == 0 or (plane_levels >= 3 and plane_levels % 2 == 1)
+    ):
         raise BadInputError(f"plane levels must be 0 (no plane) or an odd integer >= 3, got {plane_levels!r}")
     base = base_parameters(overrides)
     grids = make_grids(base, levels)
@@ -507,19 +511,27 @@ def run_study(
     runs = simulate_moves(base, values, omega_dt=omega_dt, nthread=nthread)
     estimate, worst, frequency = estimates(base, values, runs["dt_s"])
     study = Study(
-        base=base, grids=grids, values=values,
-        move_time_s=runs["move_time_s"], settling_time_s=runs["settling_time_s"],
-        positioning_time_s=runs["positioning_time_s"], residual_amplitude_m=runs["residual_amplitude_m"],
-        estimate_s=estimate, worst_case_estimate_s=worst, natural_frequency_hz=frequency,
-        dt_s=runs["dt_s"], steps=runs["steps_total"], wall_time_s=runs["wall_time_s"], nthread=runs["nthread"],
+        base=base,
+        grids=grids,
+        values=values,
+        move_time_s=runs["move_time_s"],
+        settling_time_s=runs["settling_time_s"],
+        positioning_time_s=runs["positioning_time_s"],
+        residual_amplitude_m=runs["residual_amplitude_m"],
+        estimate_s=estimate,
+        worst_case_estimate_s=worst,
+        natural_frequency_hz=frequency,
+        dt_s=runs["dt_s"],
+        steps=runs["steps_total"],
+        wall_time_s=runs["wall_time_s"],
+        nthread=runs["nthread"],
     )
     if plane_levels:
         study.plane = dense_plane(study, plane_levels, omega_dt=omega_dt, nthread=nthread)
     return study
 
 
-def dense_plane(study: Study, levels: int = PLANE_LEVELS, *, omega_dt: float = OMEGA_DT,
-                nthread: int = 0) -> Plane:
+def dense_plane(study: Study, levels: int = PLANE_LEVELS, *, omega_dt: float = OMEGA_DT, nthread: int = 0) -> Plane:
     """Simulate the `levels` x `levels` plane of the study's two most influential properties.
 
     Each spans the study's range (default x SPANS^[-1, 1]); the other two stay at their defaults.
@@ -533,9 +545,16 @@ def dense_plane(study: Study, levels: int = PLANE_LEVELS, *, omega_dt: float = O
     values[first], values[second] = y.ravel(), x.ravel()
     runs = simulate_moves(study.base, values, omega_dt=omega_dt, nthread=nthread)
     estimate, _, _ = estimates(study.base, values, runs["dt_s"])
-    return Plane(x_name=second, y_name=first, x=axis[second], y=axis[first],
-                 positioning_time_s=runs["positioning_time_s"].reshape(y.shape),
-                 estimate_s=estimate.reshape(y.shape), steps=runs["steps_total"], wall_time_s=runs["wall_time_s"])
+    return Plane(
+        x_name=second,
+        y_name=first,
+        x=axis[second],
+        y=axis[first],
+        positioning_time_s=runs["positioning_time_s"].reshape(y.shape),
+        estimate_s=estimate.reshape(y.shape),
+        steps=runs["steps_total"],
+        wall_time_s=runs["wall_time_s"],
+    )
 
 
 def _regression(values: Mapping[str, np.ndarray], times: np.ndarray) -> tuple[dict[str, float], float]:
@@ -592,19 +611,24 @@ def summary(study: Study) -> dict[str, Any]:
             "p05": float(np.percentile(ratio, 5)),
             "p95": float(np.percentile(ratio, 95)),
         },
-        "worst_case_covers": float(np.mean(study.worst_case_estimate_s[finite] >= study.positioning_time_s[finite]
-                                           - study.dt_s[finite] * 2)),
+        "worst_case_covers": float(
+            np.mean(study.worst_case_estimate_s[finite] >= study.positioning_time_s[finite] - study.dt_s[finite] * 2)
+        ),
         "steps": study.steps,
         "wall_time_s": study.wall_time_s,
         "configurations_per_s": study.size / study.wall_time_s,
         "nthread": study.nthread,
-        "plane": None if study.plane is None else {
+        "plane": None
+        if study.plane is None
+        else {
             "x": study.plane.x_name,
             "y": study.plane.y_name,
             "levels": len(study.plane.x),
             "configurations": int(study.plane.positioning_time_s.size),
-            "positioning_time_s": {"min": float(np.min(study.plane.positioning_time_s)),
-                                   "max": float(np.max(study.plane.positioning_time_s))},
+            "positioning_time_s": {
+                "min": float(np.min(study.plane.positioning_time_s)),
+                "max": float(np.max(study.plane.positioning_time_s)),
+            },
             "steps": study.plane.steps,
             "wall_time_s": study.plane.wall_time_s,
         },
@@ -657,8 +681,7 @@ def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
         contours = left.contour(x, y, plane, levels=levels, colors="white", linewidths=0.8)
         left.clabel(contours, fmt="%.0f ms", fontsize=8)
         if estimate_plane is not None:
-            left.contour(x, y, estimate_plane, levels=levels, colors="white", linewidths=0.6,
-                         linestyles="dashed")
+            left.contour(x, y, estimate_plane, levels=levels, colors="white", linewidths=0.6, linestyles="dashed")
     default = default_properties(study.base)
     left.plot(default[second], default[first], "w*", markersize=14, markeredgecolor="k", label="default")
     if estimate_plane is not None:
@@ -673,9 +696,11 @@ def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
     left.set_ylabel(_LABELS[first])
     elasticity = study.elasticities()
     others = [p for p in axes_order if p not in (first, second)]
-    left.set_title(f"positioning time [ms], {study.base['move_distance'] * 1e3:.4g} mm to "
-                   f"+-{study.base['positioning_band'] * 1e6:.3g} um\n"
-                   + ", ".join(f"{p} = {default[p]:.3g}" for p in others), fontsize=10)
+    left.set_title(
+        f"positioning time [ms], {study.base['move_distance'] * 1e3:.4g} mm to "
+        f"+-{study.base['positioning_band'] * 1e6:.3g} um\n" + ", ".join(f"{p} = {default[p]:.3g}" for p in others),
+        fontsize=10,
+    )
     legend = left.legend(loc="upper right", fontsize=8, facecolor="0.3", labelcolor="white")
     legend.get_frame().set_alpha(0.6)
     bar = fig.colorbar(mesh, ax=left, label="positioning time [ms]")
@@ -685,8 +710,9 @@ def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
     finite = np.isfinite(study.positioning_time_s)
     sim, est = study.positioning_time_s[finite] * 1e3, study.estimate_s[finite] * 1e3
     right.loglog(sim, est, ".", markersize=3, alpha=0.5, label="analytic estimate")
-    right.loglog(sim, study.worst_case_estimate_s[finite] * 1e3, ".", markersize=2, alpha=0.3,
-                 label="worst-case estimate")
+    right.loglog(
+        sim, study.worst_case_estimate_s[finite] * 1e3, ".", markersize=2, alpha=0.3, label="worst-case estimate"
+    )
     span = [min(sim.min(), est.min()) * 0.9, max(sim.max(), est.max()) * 1.1]
     right.plot(span, span, "k-", linewidth=0.8, label="equal")
     right.set_xlabel("simulated positioning time [ms] (MuJoCo, batched)")
@@ -695,8 +721,11 @@ def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
         axis.set_major_locator(matplotlib.ticker.LogLocator(subs=(1.0, 2.0, 5.0)))
         axis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda value, _: f"{value:g}"))
         axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
-    right.set_title(f"{study.size} configurations; elasticities d ln T / d ln p:\n"
-                    + ", ".join(f"{p.split('_')[0]} {elasticity[p]:+.2f}" for p in study.ranking()), fontsize=10)
+    right.set_title(
+        f"{study.size} configurations; elasticities d ln T / d ln p:\n"
+        + ", ".join(f"{p.split('_')[0]} {elasticity[p]:+.2f}" for p in study.ranking()),
+        fontsize=10,
+    )
     right.legend(fontsize=8)
     path = pathlib.Path(path)
     with outputs.atomic_path(path) as temporary:
@@ -708,20 +737,25 @@ def write(study: Study, directory: str | pathlib.Path) -> list[pathlib.Path]:
     """Write design.json, configurations.csv and design.png (the plot) into `directory`."""
     folder = outputs.prepare_directory(directory)
     columns = {name: study.values[name] for name in PROPERTIES}
-    columns.update({
-        "natural_frequency_hz": study.natural_frequency_hz,
-        "dt_s": study.dt_s,
-        "move_time_s": study.move_time_s,
-        "settling_time_s": study.settling_time_s,
-        "positioning_time_s": study.positioning_time_s,
-        "residual_amplitude_m": study.residual_amplitude_m,
-        "estimate_s": study.estimate_s,
-        "worst_case_estimate_s": study.worst_case_estimate_s,
-    })
-    written = outputs.write_text_files(folder, {
-        "design.json": outputs.dumps(summary(study)) + "\n",
-        "configurations.csv": outputs.csv_text(columns),
-    })
+    columns.update(
+        {
+            "natural_frequency_hz": study.natural_frequency_hz,
+            "dt_s": study.dt_s,
+            "move_time_s": study.move_time_s,
+            "settling_time_s": study.settling_time_s,
+            "positioning_time_s": study.positioning_time_s,
+            "residual_amplitude_m": study.residual_amplitude_m,
+            "estimate_s": study.estimate_s,
+            "worst_case_estimate_s": study.worst_case_estimate_s,
+        }
+    )
+    written = outputs.write_text_files(
+        folder,
+        {
+            "design.json": outputs.dumps(summary(study)) + "\n",
+            "configurations.csv": outputs.csv_text(columns),
+        },
+    )
     written.append(plot(study, folder / "design.png"))
     return written
 
@@ -743,7 +777,5 @@ def answer(study: Study) -> str:
         f"{d['settling_time_s'] * 1e3:.1f} ms of settling (estimate {d['estimate_s'] * 1e3:.1f} ms total, "
         f"worst case {d['worst_case_estimate_s'] * 1e3:.1f} ms). Over the {s['configurations']} configurations "
         f"it ranges {s['positioning_time_s']['min'] * 1e3:.1f}-{s['positioning_time_s']['max'] * 1e3:.0f} ms. "
-        f"Which properties? By elasticity d ln T / d ln p: "
-        + ", ".join(f"{p} {e[p]:+.2f}" for p in ranking)
-        + "."
+        f"Which properties? By elasticity d ln T / d ln p: " + ", ".join(f"{p} {e[p]:+.2f}" for p in ranking) + "."
     )

@@ -34,8 +34,9 @@ STIFFNESS_RATIO = 1e12
 JOINT, TENDON = "exciter", "exciter_coupling"
 
 
-def add(spec: mujoco.MjSpec, joint: str, *, force_amplitude: float, force_frequency: float,
-        driven_stiffness: float) -> None:
+def add(
+    spec: mujoco.MjSpec, joint: str, *, force_amplitude: float, force_frequency: float, driven_stiffness: float
+) -> None:
     """Add the exciter driving `joint` with F0 sin(2 pi f t) [N].
 
     Args:
@@ -56,8 +57,12 @@ def add(spec: mujoco.MjSpec, joint: str, *, force_amplitude: float, force_freque
     body.mass = exciter_stiffness / omega**2
     body.inertia = [1.0, 1.0, 1.0]
     body.explicitinertial = True
-    body.add_joint(name=JOINT, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1, 0, 0],
-                   stiffness=[exciter_stiffness - COUPLING_STIFFNESS * coef**2, 0, 0])
+    body.add_joint(
+        name=JOINT,
+        type=mujoco.mjtJoint.mjJNT_SLIDE,
+        axis=[1, 0, 0],
+        stiffness=[exciter_stiffness - COUPLING_STIFFNESS * coef**2, 0, 0],
+    )
     tendon = spec.add_tendon(name=TENDON, stiffness=[COUPLING_STIFFNESS, 0, 0])
     tendon.wrap_joint(joint, 1.0)
     tendon.wrap_joint(JOINT, coef)

@@ -23,9 +23,17 @@ DEMO_VIDEO = dict(fps=30, width=480, height=360)
 DEMO_CLIP_SECONDS = 10.0
 
 
-def render_run(result: api.Result, output: str | os.PathLike, *, fps: float = 30, width: int = 640,
-               height: int = 480, duration: float | None = None, composite: bool = False,
-               progress: bool | None = None) -> dict[str, Any]:
+def render_run(
+    result: api.Result,
+    output: str | os.PathLike,
+    *,
+    fps: float = 30,
+    width: int = 640,
+    height: int = 480,
+    duration: float | None = None,
+    composite: bool = False,
+    progress: bool | None = None,
+) -> dict[str, Any]:
     """Render a run to `output` (.mp4 H.264 or .gif); see render.render_video for the result dict.
 
     Args:
@@ -50,10 +58,20 @@ def render_run(result: api.Result, output: str | os.PathLike, *, fps: float = 30
         duration = min(float(duration), end) if end > 0 else float(duration)
     panel = plots.PhasePanel(result, height) if composite else None
     try:
-        return render.render_video(result.model, result.time, result.trajectory.qpos, output, fps=fps,
-                                   width=width, height=height, camera=scene.camera, duration=duration,
-                                   label=f"{result.scene} / {result.scenario}", progress=progress,
-                                   panel=panel)
+        return render.render_video(
+            result.model,
+            result.time,
+            result.trajectory.qpos,
+            output,
+            fps=fps,
+            width=width,
+            height=height,
+            camera=scene.camera,
+            duration=duration,
+            label=f"{result.scene} / {result.scenario}",
+            progress=progress,
+            panel=panel,
+        )
     except RuntimeError as error:  # GL context or ffmpeg: not the user's input, still one clean line
         raise SpringlabError(f"cannot render {str(output)!r}: {error}") from None
 
@@ -65,15 +83,24 @@ def plot_files(result: api.Result, folder: pathlib.Path, out: pathlib.Path) -> l
     and the zeta family where the scene defines them (skipped otherwise).
     """
     written = []
-    figures = [("time_series.png", "time series with the exact solution and the error",
-                lambda: plots.time_series(result)),
-               ("phase_plane.png", "phase plane", lambda: plots.phase_plane(result))]
+    figures = [
+        ("time_series.png", "time series with the exact solution and the error", lambda: plots.time_series(result)),
+        ("phase_plane.png", "phase plane", lambda: plots.phase_plane(result)),
+    ]
     scene = scenes.get(result.scene)
     scenario = scene.scenario(result.scenario)
-    if len(result.pos) == 1 and scene.phase_field(result.model, result.parameters, scenario) is not None \
-            and scene.equilibria(result.model, result.parameters, scenario):
-        figures.append(("phase_family.png", "phase trajectories from several initial displacements",
-                        lambda: plots.family_of(result)))
+    if (
+        len(result.pos) == 1
+        and scene.phase_field(result.model, result.parameters, scenario) is not None
+        and scene.equilibria(result.model, result.parameters, scenario)
+    ):
+        figures.append(
+            (
+                "phase_family.png",
+                "phase trajectories from several initial displacements",
+                lambda: plots.family_of(result),
+            )
+        )
     for name, title, make in figures:
         try:
             figure = make()
@@ -101,9 +128,15 @@ def media_step(state) -> list:
         clip = min(DEMO_CLIP_SECONDS, float(result.time[-1]))
         info = render_run(result, video, duration=clip, composite=True, progress=False, **DEMO_VIDEO)
         shown = "" if clip >= float(result.time[-1]) else f", first {clip:g} s of {float(result.time[-1]):g} s"
-        written.append(Artifact(str(video.relative_to(state.out)), "video",
-                                f"3D scene beside its phase-plane trace, {info['fps']:g} fps{shown}",
-                                scene_name, scenario_name))
+        written.append(
+            Artifact(
+                str(video.relative_to(state.out)),
+                "video",
+                f"3D scene beside its phase-plane trace, {info['fps']:g} fps{shown}",
+                scene_name,
+                scenario_name,
+            )
+        )
         for path, _, title in plot_files(result, folder, state.out):
             written.append(Artifact(path, "plot", title, scene_name, scenario_name))
         state.timings.append((f"media {scene_name}/{scenario_name}", time.perf_counter() - start))
@@ -114,7 +147,13 @@ def media_step(state) -> list:
         except BadInputError:
             continue  # no damping parameter, no exact linear reference, or several modes
         plots.save(figure, target)
-        written.append(Artifact(str(target.relative_to(state.out)), "plot",
-                                "the damping ratio from 0 to 2 (the chapter's zeta slider)", scene.name,
-                                scene.default_scenario))
+        written.append(
+            Artifact(
+                str(target.relative_to(state.out)),
+                "plot",
+                "the damping ratio from 0 to 2 (the chapter's zeta slider)",
+                scene.name,
+                scene.default_scenario,
+            )
+        )
     return written

@@ -116,7 +116,10 @@ def write_text_files(directory: str | os.PathLike, files: Mapping[str, str]) -> 
 
 def write_run(directory: str | os.PathLike, result, every: int = 1) -> list[pathlib.Path]:
     """Write a Result's trajectory.csv and summary.json into `directory`."""
-    return write_text_files(directory, {
-        "trajectory.csv": csv_text(result.columns(), every),
-        "summary.json": dumps(result.summary) + "\n",
-    })
+    return write_text_files(
+        directory,
+        {
+            "trajectory.csv": csv_text(result.columns(), every),
+            "summary.json": dumps(result.summary) + "\n",
+        },
+    )

@@ -114,8 +114,10 @@ def check_output(path: str | os.PathLike) -> None:
     """Raise BadInputError unless `path` ends in a format `save` writes."""
     suffix = pathlib.Path(path).suffix.lower()
     if suffix not in FORMATS:
-        raise BadInputError(f"unsupported plot format {pathlib.Path(path).suffix or '(none)'!r} for "
-                            f"{str(path)!r}; use one of: {', '.join(FORMATS)}")
+        raise BadInputError(
+            f"unsupported plot format {pathlib.Path(path).suffix or '(none)'!r} for "
+            f"{str(path)!r}; use one of: {', '.join(FORMATS)}"
+        )
 
 
 # -- time series -------------------------------------------------------------------
@@ -151,13 +153,18 @@ def time_series(result: api.Result) -> Figure:
             ax_e = axes[2, column]
             if joint in result.ref_pos:
                 for name, sim, ref, color, unit in (
-                        ("position", result.pos[joint], result.ref_pos[joint], "C0", pos_unit),
-                        ("velocity", result.vel[joint], result.ref_vel[joint], "C1", vel_unit)):
-                    ax_e.plot(result.time, _positive(sim - ref), color=color, lw=1.0,
-                              label=f"|{name} error| [{unit}]")
+                    ("position", result.pos[joint], result.ref_pos[joint], "C0", pos_unit),
+                    ("velocity", result.vel[joint], result.ref_vel[joint], "C1", vel_unit),
+                ):
+                    ax_e.plot(result.time, _positive(sim - ref), color=color, lw=1.0, label=f"|{name} error| [{unit}]")
                     if tolerance is not None:
-                        ax_e.axhline(tolerance * float(np.max(np.abs(ref))), color=color, lw=0.9,
-                                     ls=":", label=f"{name} tolerance")
+                        ax_e.axhline(
+                            tolerance * float(np.max(np.abs(ref))),
+                            color=color,
+                            lw=0.9,
+                            ls=":",
+                            label=f"{name} tolerance",
+                        )
                 ax_e.set_yscale("log")
                 ax_e.set_ylabel("|MuJoCo - exact|")
                 ax_e.legend(loc="best", fontsize=7, ncols=2)
@@ -207,8 +214,11 @@ def _phase_extras(result: api.Result):
     field = scene.phase_field(result.model, result.parameters, scenario)
     if field is None:
         return None, [], []
-    return (field, scene.equilibria(result.model, result.parameters, scenario),
-            scene.separatrices(result.model, result.parameters, scenario))
+    return (
+        field,
+        scene.equilibria(result.model, result.parameters, scenario),
+        scene.separatrices(result.model, result.parameters, scenario),
+    )
 
 
 def _separatrix_window(curves, center_xs: Sequence[float]):
@@ -237,9 +247,21 @@ def draw_phase_background(ax, field, equilibria, separatrices, xlim, vlim, *, ar
             sx, sv = dx / (xlim[1] - xlim[0]), dv / (vlim[1] - vlim[0])
             norm = np.hypot(sx, sv)
             norm = np.where(norm > 0, norm, 1.0)
-        ax.quiver(gx, gv, sx / norm, sv / norm, color=FIELD_COLOR, angles="uv", pivot="mid",
-                  scale=arrows * 1.4, width=0.0035, headwidth=3.5, headlength=4, zorder=1,
-                  label="equations of motion")
+        ax.quiver(
+            gx,
+            gv,
+            sx / norm,
+            sv / norm,
+            color=FIELD_COLOR,
+            angles="uv",
+            pivot="mid",
+            scale=arrows * 1.4,
+            width=0.0035,
+            headwidth=3.5,
+            headlength=4,
+            zorder=1,
+            label="equations of motion",
+        )
     for i, (x, v) in enumerate(separatrices):
         ax.plot(x, v, zorder=2, label="separatrix" if i == 0 else None, **SEPARATRIX)
     stable = [e["x"] for e in equilibria if e.get("stable")]
@@ -247,8 +269,17 @@ def draw_phase_background(ax, field, equilibria, separatrices, xlim, vlim, *, ar
     if stable:
         ax.plot(stable, np.zeros(len(stable)), "o", color="k", ms=7, zorder=5, label="stable equilibrium")
     if unstable:
-        ax.plot(unstable, np.zeros(len(unstable)), "o", mfc="white", mec="k", mew=1.5, ms=7, zorder=5,
-                label="unstable equilibrium")
+        ax.plot(
+            unstable,
+            np.zeros(len(unstable)),
+            "o",
+            mfc="white",
+            mec="k",
+            mew=1.5,
+            ms=7,
+            zorder=5,
+            label="unstable equilibrium",
+        )
     ax.set_xlim(*xlim)
     ax.set_ylim(*vlim)
 
@@ -345,9 +376,17 @@ def _family_runs(result: api.Result, starts: Sequence[float]):
                 qpos[model.joint(joint).qposadr[0]] = start
                 qvel = np.array(qvel if qvel is not None else np.zeros(model.nv), float)
                 qvel[model.joint(joint).dofadr[0]] = 0.0
-            trajectory = simulate(model, integrator=integrator, dt=dt, duration=duration, qpos=qpos, qvel=qvel,
-                                  act=setup.act, control=setup.control,
-                                  stop=scene.stop_condition(model, params, scenario))
+            trajectory = simulate(
+                model,
+                integrator=integrator,
+                dt=dt,
+                duration=duration,
+                qpos=qpos,
+                qvel=qvel,
+                act=setup.act,
+                control=setup.control,
+                stop=scene.stop_condition(model, params, scenario),
+            )
         except DivergedError:
             runs.append((start, None, None, False))
             continue
@@ -356,8 +395,15 @@ def _family_runs(result: api.Result, starts: Sequence[float]):
     return runs
 
 
-def phase_family(scene: str, scenario: str | None = None, *, integrator: str | None = None,
-                 dt: float | None = None, duration: float | None = None, **parameters: Any) -> Figure:
+def phase_family(
+    scene: str,
+    scenario: str | None = None,
+    *,
+    integrator: str | None = None,
+    dt: float | None = None,
+    duration: float | None = None,
+    **parameters: Any,
+) -> Figure:
     """Phase trajectories of one scenario from several initial displacements (Fig. 5.11).
 
     The displacements are fractions of the scenario's own initial displacement
@@ -377,8 +423,10 @@ def family_of(result: api.Result) -> Figure:
     """`phase_family` of an existing run (its model, parameters, integrator and dt)."""
     field, equilibria, separatrices = _phase_extras(result)
     if field is None or not equilibria:
-        raise BadInputError(f"plot kind 'family' needs one joint, an autonomous phase field and an equilibrium; "
-                            f"{result.scene}/{result.scenario} has none (use --kind time or phase)")
+        raise BadInputError(
+            f"plot kind 'family' needs one joint, an autonomous phase field and an equilibrium; "
+            f"{result.scene}/{result.scenario} has none (use --kind time or phase)"
+        )
     joint = next(iter(result.pos))
     center, starts, straddles = _family_displacements(result, equilibria, separatrices)
     runs = _family_runs(result, starts)
@@ -419,14 +467,22 @@ def _damping_per_ratio(scene_name: str, scenario_name: str | None, parameters: d
     model = scene.build(params, scenario)
     modes = scene.modes(model, params, scenario)
     if len(modes) < 1 or modes[0][1] <= 0:
-        raise BadInputError(f"plot kind 'zeta' needs a single damped mode; {scene.name}/{scenario.name} has "
-                            f"{len(modes)} modes")
+        raise BadInputError(
+            f"plot kind 'zeta' needs a single damped mode; {scene.name}/{scenario.name} has {len(modes)} modes"
+        )
     return 1.0 / modes[0][1]
 
 
-def zeta_family(scene: str, scenario: str | None = None, *, zetas: Sequence[float] = ZETAS,
-                integrator: str | None = None, dt: float | None = None, duration: float | None = None,
-                **parameters: Any) -> Figure:
+def zeta_family(
+    scene: str,
+    scenario: str | None = None,
+    *,
+    zetas: Sequence[float] = ZETAS,
+    integrator: str | None = None,
+    dt: float | None = None,
+    duration: float | None = None,
+    **parameters: Any,
+) -> Figure:
     """The scenario at several damping ratios: x(t) and the phase plane, exact curves dashed.
 
     Damping d = zeta x (d per unit zeta), found from the scene's single mode
@@ -440,18 +496,23 @@ def zeta_family(scene: str, scenario: str | None = None, *, zetas: Sequence[floa
     scene_obj = scenes.get(scene)
     chosen = scene_obj.scenario(scenario)
     if "damping" not in scene_obj.parameters or not chosen.exact:
-        raise BadInputError(f"plot kind 'zeta' needs a 'damping' parameter and an exact reference; "
-                            f"{scene}/{chosen.name} has not (use --kind time or phase)")
+        raise BadInputError(
+            f"plot kind 'zeta' needs a 'damping' parameter and an exact reference; "
+            f"{scene}/{chosen.name} has not (use --kind time or phase)"
+        )
     if "damping" in parameters:
         raise BadInputError("plot kind 'zeta' sets the damping itself; drop --set damping=...")
     per_ratio = _damping_per_ratio(scene, chosen.name, parameters)
     runs = []
     for zeta in zetas:
-        run = api.run(scene, chosen.name, integrator=integrator, dt=dt, duration=duration,
-                      damping=zeta * per_ratio, **parameters)
+        run = api.run(
+            scene, chosen.name, integrator=integrator, dt=dt, duration=duration, damping=zeta * per_ratio, **parameters
+        )
         if len(run.pos) != 1 or not run.ref_pos:
-            raise BadInputError(f"plot kind 'zeta' needs one joint with an exact reference; "
-                                f"{scene}/{chosen.name} reports {', '.join(run.pos)}")
+            raise BadInputError(
+                f"plot kind 'zeta' needs one joint with an exact reference; "
+                f"{scene}/{chosen.name} reports {', '.join(run.pos)}"
+            )
         runs.append((zeta, run))
     joint = next(iter(runs[0][1].pos))
     pos_unit, vel_unit = _units(runs[0][1].model, joint)
@@ -473,13 +534,22 @@ def zeta_family(scene: str, scenario: str | None = None, *, zetas: Sequence[floa
     ax_p.set_ylabel(f"{joint} velocity [{vel_unit}]")
     ax_p.set_title("phase plane")
     ax_t.set_title("response")
-    figure.suptitle(f"{scene} / {chosen.name}: the damping ratio ζ from 0 to {max(zetas):g}"
-                    f" (d = {per_ratio:.4g} ζ N s/m)")
+    figure.suptitle(
+        f"{scene} / {chosen.name}: the damping ratio ζ from 0 to {max(zetas):g} (d = {per_ratio:.4g} ζ N s/m)"
+    )
     return figure
 
 
-def figure_for(kind: str, scene: str, scenario: str | None = None, *, integrator: str | None = None,
-               dt: float | None = None, duration: float | None = None, **parameters: Any) -> Figure:
+def figure_for(
+    kind: str,
+    scene: str,
+    scenario: str | None = None,
+    *,
+    integrator: str | None = None,
+    dt: float | None = None,
+    duration: float | None = None,
+    **parameters: Any,
+) -> Figure:
     """The figure of one plot kind (see KINDS) for a scene's scenario."""
     if kind not in KINDS:
         raise BadInputError(f"unknown plot kind {kind!r}; valid: {', '.join(KINDS)}")
@@ -512,8 +582,7 @@ class PhasePanel:
         reported joint, at most 3).
     """
 
-    def __init__(self, result: api.Result, height: int, width: int | None = None,
-                 joints: Sequence[str] | None = None):
+    def __init__(self, result: api.Result, height: int, width: int | None = None, joints: Sequence[str] | None = None):
         from PIL import Image, ImageDraw
 
         self.result = result
@@ -529,8 +598,15 @@ class PhasePanel:
             field, equilibria, separatrices, xlim, vlim = _phase_view(result, joint)
             draw_phase_background(ax, field, equilibria, separatrices, xlim, vlim, arrows=17)
             if joint in result.ref_pos:
-                ax.plot(result.ref_pos[joint], result.ref_vel[joint], color="0.45", lw=0.8,
-                        ls=(0, (3, 3)), zorder=2, label="exact")
+                ax.plot(
+                    result.ref_pos[joint],
+                    result.ref_vel[joint],
+                    color="0.45",
+                    lw=0.8,
+                    ls=(0, (3, 3)),
+                    zorder=2,
+                    label="exact",
+                )
             pos_unit, vel_unit = _units(result.model, joint)
             ax.set_xlabel(f"{joint} [{pos_unit}]", fontsize=8 * scale)
             ax.set_ylabel(f"velocity [{vel_unit}]", fontsize=8 * scale)
@@ -563,8 +639,9 @@ class PhasePanel:
         for index, joint in enumerate(self.joints):
             x, v = self.result.pos[joint], self.result.vel[joint]
             xt, vt = float(np.interp(t, time, x)), float(np.interp(t, time, v))
-            new = self._pixels(index, np.append(x[self._next_sample:end], xt),
-                               np.append(v[self._next_sample:end], vt))
+            new = self._pixels(
+                index, np.append(x[self._next_sample : end], xt), np.append(v[self._next_sample : end], vt)
+            )
             if self._last[index] is not None:
                 new = np.vstack([self._last[index], new])
             if len(new) > 1:

@@ -78,8 +78,7 @@ import numpy as np  # noqa: E402
 from . import outputs  # noqa: E402
 from .errors import BadInputError  # noqa: E402  (a ValueError; the CLI maps it to exit 2)
 
-__all__ = ["ensure_gl_backend", "frame_times", "sample_states", "render_video", "check_video_arguments",
-           "framed_model"]
+__all__ = ["ensure_gl_backend", "frame_times", "sample_states", "render_video", "check_video_arguments", "framed_model"]
 
 #: Output formats render_video can write, by file extension.
 SUPPORTED_EXTENSIONS = (".mp4", ".gif")
@@ -149,9 +148,7 @@ def sample_states(time: np.ndarray, qpos: np.ndarray, at: np.ndarray) -> np.ndar
     if q.ndim == 1:
         q = q[:, None]
     if q.ndim != 2 or q.shape[0] != t.size:
-        raise BadInputError(
-            f"qpos must have shape (len(time), nq) = ({t.size}, nq), got {np.shape(qpos)}"
-        )
+        raise BadInputError(f"qpos must have shape (len(time), nq) = ({t.size}, nq), got {np.shape(qpos)}")
     if a.ndim != 1:
         raise BadInputError(f"at must be a 1-D array of times, got shape {a.shape}")
     if not np.all(np.isfinite(t)):
@@ -195,15 +192,13 @@ def _check_size(name: str, value) -> int:
 
 
 def _camera_names(model: mujoco.MjModel) -> list[str]:
-    return [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_CAMERA, i) or f"#{i}"
-            for i in range(model.ncam)]
+    return [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_CAMERA, i) or f"#{i}" for i in range(model.ncam)]
 
 
 def _resolve_camera(model: mujoco.MjModel, camera) -> int:
     """Camera id; -1 is MuJoCo's default free camera."""
     names = _camera_names(model)
-    listing = (", ".join(repr(n) for n in names) if names
-               else "none (use camera=None or -1 for the default free camera)")
+    listing = ", ".join(repr(n) for n in names) if names else "none (use camera=None or -1 for the default free camera)"
     if camera is None:
         return 0 if model.ncam > 0 else -1
     if isinstance(camera, str):
@@ -214,8 +209,7 @@ def _resolve_camera(model: mujoco.MjModel, camera) -> int:
     if isinstance(camera, (int, np.integer)) and not isinstance(camera, bool):
         if not -1 <= int(camera) < model.ncam:
             raise BadInputError(
-                f"camera index {camera} out of range [-1, {model.ncam}); "
-                f"the model's cameras are: {listing}"
+                f"camera index {camera} out of range [-1, {model.ncam}); the model's cameras are: {listing}"
             )
         return int(camera)
     raise BadInputError(f"camera must be a name, an index or None, got {camera!r}")
@@ -257,7 +251,7 @@ def _normalize_quaternions(model: mujoco.MjModel, q: np.ndarray) -> None:
             adr += 3
         elif jtype != mujoco.mjtJoint.mjJNT_BALL:
             continue
-        quat = q[:, adr:adr + 4]
+        quat = q[:, adr : adr + 4]
         norm = np.linalg.norm(quat, axis=1, keepdims=True)
         np.divide(quat, norm, out=quat, where=norm > 0)
 
@@ -287,8 +281,7 @@ def _camera_points(model, data, cam_id, geoms) -> np.ndarray:
     return np.column_stack([rel[:, 0], rel[:, 1], -rel[:, 2]])
 
 
-def framed_model(model: mujoco.MjModel, states: np.ndarray, camera_id: int, width: int,
-                 height: int) -> mujoco.MjModel:
+def framed_model(model: mujoco.MjModel, states: np.ndarray, camera_id: int, width: int, height: int) -> mujoco.MjModel:
     """The model, or a copy whose fixed camera backs off so every moving part stays in view.
 
     A scene's MJCF camera frames its usual motion; a parameter choice can carry
@@ -304,8 +297,11 @@ def framed_model(model: mujoco.MjModel, states: np.ndarray, camera_id: int, widt
     Tracking cameras and the free camera are left alone. ``model`` is never
     modified.
     """
-    if camera_id < 0 or model.cam_bodyid[camera_id] != 0 or \
-            model.cam_mode[camera_id] != mujoco.mjtCamLight.mjCAMLIGHT_FIXED:
+    if (
+        camera_id < 0
+        or model.cam_bodyid[camera_id] != 0
+        or model.cam_mode[camera_id] != mujoco.mjtCamLight.mjCAMLIGHT_FIXED
+    ):
         return model
     moving = _moving_geoms(model)
     if moving.size == 0:
@@ -323,8 +319,11 @@ def framed_model(model: mujoco.MjModel, states: np.ndarray, camera_id: int, widt
 
     def inside(p):
         right, up, depth = p.T
-        return ((np.abs(right) <= _FRAME_MARGIN * tan_h * depth)
-                & (np.abs(up) <= _FRAME_MARGIN * tan_v * depth) & (depth > 0))
+        return (
+            (np.abs(right) <= _FRAME_MARGIN * tan_h * depth)
+            & (np.abs(up) <= _FRAME_MARGIN * tan_v * depth)
+            & (depth > 0)
+        )
 
     if np.all(inside(points)):
         return model
@@ -337,8 +336,17 @@ def framed_model(model: mujoco.MjModel, states: np.ndarray, camera_id: int, widt
     right, up, depth = points.T
     shift_r = 0.5 * (np.max(right) + np.min(right))
     shift_u = 0.5 * (np.max(up) + np.min(up))
-    back = max(0.0, float(np.max(np.maximum(np.abs(right - shift_r) / (_FRAME_MARGIN * tan_h),
-                                            np.abs(up - shift_u) / (_FRAME_MARGIN * tan_v)) - depth)))
+    back = max(
+        0.0,
+        float(
+            np.max(
+                np.maximum(
+                    np.abs(right - shift_r) / (_FRAME_MARGIN * tan_h), np.abs(up - shift_u) / (_FRAME_MARGIN * tan_v)
+                )
+                - depth
+            )
+        ),
+    )
     framed = copy.copy(model)
     axes = data.cam_xmat[camera_id].reshape(3, 3)
     framed.cam_pos[camera_id] = model.cam_pos[camera_id] + axes @ np.array([shift_r, shift_u, back])
@@ -369,9 +377,7 @@ def _gl_context_class():
         else:
             GLContext = getattr(mujoco, "GLContext", None)
     except Exception as err:  # ImportError, or PyOpenGL platform errors
-        raise RuntimeError(
-            f"cannot load the OpenGL backend MUJOCO_GL={backend!r}: {err}"
-        ) from err
+        raise RuntimeError(f"cannot load the OpenGL backend MUJOCO_GL={backend!r}: {err}") from err
     if GLContext is None:
         raise RuntimeError(f"no OpenGL context available for MUJOCO_GL={backend!r}")
     return GLContext
@@ -394,10 +400,16 @@ def drawn_springs(model: mujoco.MjModel) -> list[tuple[int, int, float, np.ndarr
         if not name.startswith(SPRING_PREFIX):
             continue
         start = model.text_adr[i]
-        text = bytes(model.text_data[start:start + model.text_size[i] - 1]).decode()  # drop the NUL
+        text = bytes(model.text_data[start : start + model.text_size[i] - 1]).decode()  # drop the NUL
         first, second, width, *rgba = text.split()
-        springs.append((model.site(first).id, model.site(second).id, float(width),
-                        np.array([float(c) for c in rgba], dtype=np.float32)))
+        springs.append(
+            (
+                model.site(first).id,
+                model.site(second).id,
+                float(width),
+                np.array([float(c) for c in rgba], dtype=np.float32),
+            )
+        )
     return springs
 
 
@@ -417,8 +429,7 @@ class _OffscreenScene:
         except Exception as err:
             self.close()
             raise RuntimeError(
-                f"could not create an off-screen OpenGL context "
-                f"(MUJOCO_GL={os.environ.get('MUJOCO_GL')!r}): {err}"
+                f"could not create an off-screen OpenGL context (MUJOCO_GL={os.environ.get('MUJOCO_GL')!r}): {err}"
             ) from err
 
         # The offscreen framebuffer size is read from the model when the
@@ -442,9 +453,13 @@ class _OffscreenScene:
 
         self.scene = mujoco.MjvScene(model, maxgeom=max(1000, 4 * model.ngeom + 500))
         flags = self.scene.flags
-        for flag in (mujoco.mjtRndFlag.mjRND_SHADOW, mujoco.mjtRndFlag.mjRND_REFLECTION,
-                     mujoco.mjtRndFlag.mjRND_SKYBOX, mujoco.mjtRndFlag.mjRND_HAZE,
-                     mujoco.mjtRndFlag.mjRND_FOG):
+        for flag in (
+            mujoco.mjtRndFlag.mjRND_SHADOW,
+            mujoco.mjtRndFlag.mjRND_REFLECTION,
+            mujoco.mjtRndFlag.mjRND_SKYBOX,
+            mujoco.mjtRndFlag.mjRND_HAZE,
+            mujoco.mjtRndFlag.mjRND_FOG,
+        ):
             flags[flag] = 0
         self.option = mujoco.MjvOption()
         self.option.flags[mujoco.mjtVisFlag.mjVIS_TENDON] = 1  # the spring
@@ -483,9 +498,14 @@ class _OffscreenScene:
         half = 2.0 * half_h * max(1.0, self.width / self.height)
         mat = np.column_stack([right, up, fwd]).ravel()
         geom = scn.geoms[scn.ngeom]
-        mujoco.mjv_initGeom(geom, mujoco.mjtGeom.mjGEOM_BOX,
-                            np.array([half, half, 1e-3 * dist]), pos + dist * fwd, mat,
-                            _BACKGROUND_RGBA.astype(np.float32))
+        mujoco.mjv_initGeom(
+            geom,
+            mujoco.mjtGeom.mjGEOM_BOX,
+            np.array([half, half, 1e-3 * dist]),
+            pos + dist * fwd,
+            mat,
+            _BACKGROUND_RGBA.astype(np.float32),
+        )
         geom.emission = 1.0  # rgba * emission = white, whatever the lights
         geom.specular = 0.0
         geom.shininess = 0.0
@@ -501,17 +521,16 @@ class _OffscreenScene:
             if scn.ngeom >= scn.maxgeom:
                 return
             geom = scn.geoms[scn.ngeom]
-            mujoco.mjv_initGeom(geom, mujoco.mjtGeom.mjGEOM_CAPSULE, np.zeros(3), np.zeros(3),
-                                np.eye(3).ravel(), rgba)
-            mujoco.mjv_connector(geom, mujoco.mjtGeom.mjGEOM_CAPSULE, width,
-                                 data.site_xpos[first], data.site_xpos[second])
+            mujoco.mjv_initGeom(geom, mujoco.mjtGeom.mjGEOM_CAPSULE, np.zeros(3), np.zeros(3), np.eye(3).ravel(), rgba)
+            mujoco.mjv_connector(
+                geom, mujoco.mjtGeom.mjGEOM_CAPSULE, width, data.site_xpos[first], data.site_xpos[second]
+            )
             geom.category = mujoco.mjtCatBit.mjCAT_DECOR
             scn.ngeom += 1
 
     def render(self, data: mujoco.MjData, out: np.ndarray) -> None:
         """Render ``data`` (kinematics already computed) into ``out`` (H x W x 3)."""
-        mujoco.mjv_updateScene(self.model, data, self.option, None, self.camera,
-                               mujoco.mjtCatBit.mjCAT_ALL, self.scene)
+        mujoco.mjv_updateScene(self.model, data, self.option, None, self.camera, mujoco.mjtCatBit.mjCAT_ALL, self.scene)
         self._add_springs(data)
         self._add_backdrop()
         mujoco.mjr_render(self._rect, self.scene, self._con)
@@ -556,8 +575,7 @@ class _TextOverlay:
         self.size = max(11, round(view_height / 22))
         path = _find_font()
         try:
-            self.font = (ImageFont.truetype(path, self.size) if path
-                         else ImageFont.load_default(size=self.size))
+            self.font = ImageFont.truetype(path, self.size) if path else ImageFont.load_default(size=self.size)
         except Exception:  # very old Pillow or unreadable font file
             self.font = ImageFont.load_default()
         self.pad = max(3, self.size // 3)
@@ -584,10 +602,10 @@ class _TextOverlay:
             draw.text((self.pad, self.pad + i * self.line_h), s, fill=255, font=self.font)
         alpha = np.asarray(mask, dtype=np.float32)[..., None] * (1.0 / 255.0)
         y, x = self.margin, self.margin
-        region = view[y:y + box_h, x:x + box_w].astype(np.float32)
+        region = view[y : y + box_h, x : x + box_w].astype(np.float32)
         region = region * (1.0 - _TEXT_BOX_ALPHA) + 255.0 * _TEXT_BOX_ALPHA
         region = region * (1.0 - alpha) + _TEXT_RGB * alpha
-        view[y:y + box_h, x:x + box_w] = np.clip(region + 0.5, 0, 255).astype(np.uint8)
+        view[y : y + box_h, x : x + box_w] = np.clip(region + 0.5, 0, 255).astype(np.uint8)
 
 
 # ---------------------------------------------------------------------- sinks
@@ -601,12 +619,16 @@ class _Mp4Sink:
 
         self._path = path
         self._gen = imageio_ffmpeg.write_frames(
-            path, (width, height), pix_fmt_in="rgb24", pix_fmt_out="yuv420p",
-            fps=Fraction(fps).limit_denominator(100000), codec="libx264", quality=None,
+            path,
+            (width, height),
+            pix_fmt_in="rgb24",
+            pix_fmt_out="yuv420p",
+            fps=Fraction(fps).limit_denominator(100000),
+            codec="libx264",
+            quality=None,
             macro_block_size=1,  # sizes are made even by the caller
             ffmpeg_log_level="error",
-            output_params=["-preset", X264_PRESET, "-crf", str(X264_CRF),
-                           "-movflags", "+faststart", "-f", "mp4"],
+            output_params=["-preset", X264_PRESET, "-crf", str(X264_CRF), "-movflags", "+faststart", "-f", "mp4"],
         )
         self._gen.send(None)  # starts ffmpeg
 
@@ -668,8 +690,7 @@ class _WriterThread:
         self._error: BaseException | None = None
         self._abort = threading.Event()
         self._done = False
-        self._thread = threading.Thread(target=self._run, name="springlab-video-writer",
-                                        daemon=True)
+        self._thread = threading.Thread(target=self._run, name="springlab-video-writer", daemon=True)
         self._thread.start()
 
     def _run(self) -> None:
@@ -784,17 +805,13 @@ def _as_panel_image(img, index: int, height: int, width: int | None) -> np.ndarr
     arr = np.asarray(img)
     if arr.ndim != 3 or arr.shape[2] not in (3, 4) or arr.dtype != np.uint8:
         raise BadInputError(
-            f"panel({index}, t) must return an HxWx3 (or HxWx4) uint8 image, "
-            f"got shape {arr.shape} dtype {arr.dtype}"
+            f"panel({index}, t) must return an HxWx3 (or HxWx4) uint8 image, got shape {arr.shape} dtype {arr.dtype}"
         )
     if arr.shape[0] != height:
-        raise BadInputError(
-            f"panel({index}, t) returned height {arr.shape[0]}, expected the video height {height}"
-        )
+        raise BadInputError(f"panel({index}, t) returned height {arr.shape[0]}, expected the video height {height}")
     if width is not None and arr.shape[1] != width:
         raise BadInputError(
-            f"panel({index}, t) returned width {arr.shape[1]}, "
-            f"but the first panel image had width {width}"
+            f"panel({index}, t) returned width {arr.shape[1]}, but the first panel image had width {width}"
         )
     return arr[:, :, :3]
 
@@ -890,8 +907,7 @@ def render_video(
         q_rec = q_rec[:, None]
     if q_rec.shape != (t_rec.size, model.nq):
         raise BadInputError(
-            f"qpos must have shape (len(time), model.nq) = ({t_rec.size}, {model.nq}), "
-            f"got {q_rec.shape}"
+            f"qpos must have shape (len(time), model.nq) = ({t_rec.size}, {model.nq}), got {q_rec.shape}"
         )
     if not np.all(np.isfinite(q_rec)):
         raise BadInputError("qpos contains NaN or infinite values")
@@ -909,9 +925,7 @@ def render_video(
     at = frame_times(duration, fps)
     n_frames = at.size
     if n_frames == 0:
-        raise BadInputError(
-            f"duration {duration} s at {fps} fps gives no frames (need duration >= {0.5 / fps:.3g} s)"
-        )
+        raise BadInputError(f"duration {duration} s at {fps} fps gives no frames (need duration >= {0.5 / fps:.3g} s)")
     states = sample_states(t_rec, q_rec, at)  # validates time ordering
     _normalize_quaternions(model, states)
     model = framed_model(model, states, cam_id, width, height)
@@ -960,7 +974,7 @@ def render_video(
             text.draw(view, t)
             if panel is not None:
                 img = first_panel if i == 0 else _as_panel_image(panel(i, t), i, height, panel_w)
-                frame[:height, width:width + panel_w] = img
+                frame[:height, width : width + panel_w] = img
             if video_w > width + panel_w:  # even-size padding: repeat the edge
                 frame[:height, -1] = frame[:height, -2]
             if video_h > height:

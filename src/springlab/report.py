@@ -125,25 +125,34 @@ def _validation_table(rows: list[dict]) -> str:
         number = notes.setdefault(basis, len(notes) + 1)
         return f"<a href='#basis-{number}'>[{number}]</a>"
 
-    out = ["<table><tr><th>scene</th><th>scenario</th><th>integrator</th><th>dt [s]</th><th>steps</th>"
-           "<th>max relative error</th><th>tolerance</th><th>result</th><th>basis</th></tr>"]
+    out = [
+        "<table><tr><th>scene</th><th>scenario</th><th>integrator</th><th>dt [s]</th><th>steps</th>"
+        "<th>max relative error</th><th>tolerance</th><th>result</th><th>basis</th></tr>"
+    ]
     for r in rows:
-        out.append(f"<tr><td>{_e(r['scene'])}</td><td><a href='#{_e(r['scene'])}-{_e(r['scenario'])}'>"
-                   f"{_e(r['scenario'])}</a></td><td>{_e(r['integrator'])}</td><td class='num'>{_number(r['dt'], 'g')}</td>"
-                   f"<td class='num'>{_e(r.get('steps', ''))}</td><td class='num'>{_number(r['max_rel_error'])}</td>"
-                   f"<td class='num'>{_number(r['tolerance'])}</td><td>{_verdict(r['passed'])}</td>"
-                   f"<td>{note(r.get('tolerance_basis', ''))}</td></tr>")
+        out.append(
+            f"<tr><td>{_e(r['scene'])}</td><td><a href='#{_e(r['scene'])}-{_e(r['scenario'])}'>"
+            f"{_e(r['scenario'])}</a></td><td>{_e(r['integrator'])}</td><td class='num'>{_number(r['dt'], 'g')}</td>"
+            f"<td class='num'>{_e(r.get('steps', ''))}</td><td class='num'>{_number(r['max_rel_error'])}</td>"
+            f"<td class='num'>{_number(r['tolerance'])}</td><td>{_verdict(r['passed'])}</td>"
+            f"<td>{note(r.get('tolerance_basis', ''))}</td></tr>"
+        )
         for c in r.get("checks", []):
-            out.append(f"<tr class='check'><td></td><td colspan='4'>check <code>{_e(c['name'])}</code>: "
-                       f"{_number(c['value'], '.10g')} against {_number(c['reference'], '.10g')}</td>"
-                       f"<td class='num'>{_number(c['error'])}</td><td class='num'>{_number(c['tolerance'])}</td>"
-                       f"<td>{_verdict(c['passed'])}</td><td>{note(c.get('basis', ''))}</td></tr>")
+            out.append(
+                f"<tr class='check'><td></td><td colspan='4'>check <code>{_e(c['name'])}</code>: "
+                f"{_number(c['value'], '.10g')} against {_number(c['reference'], '.10g')}</td>"
+                f"<td class='num'>{_number(c['error'])}</td><td class='num'>{_number(c['tolerance'])}</td>"
+                f"<td>{_verdict(c['passed'])}</td><td>{note(c.get('basis', ''))}</td></tr>"
+            )
     out.append("</table>")
     failed = sum(not r["passed"] for r in rows)
-    out.append(f"<p>{len(rows) - failed} passed, {failed} failed. Errors are max |MuJoCo - exact| / max |exact|"
-               f" over the run (for checks: relative error of the value, absolute where the reference is 0).</p>")
-    out.append("<ol class='muted'>" + "".join(f"<li id='basis-{n}'>{_e(basis)}</li>" for basis, n in notes.items())
-               + "</ol>")
+    out.append(
+        f"<p>{len(rows) - failed} passed, {failed} failed. Errors are max |MuJoCo - exact| / max |exact|"
+        f" over the run (for checks: relative error of the value, absolute where the reference is 0).</p>"
+    )
+    out.append(
+        "<ol class='muted'>" + "".join(f"<li id='basis-{n}'>{_e(basis)}</li>" for basis, n in notes.items()) + "</ol>"
+    )
     return "\n".join(out)
 
 
@@ -163,13 +172,17 @@ def _media(artifacts: Iterable, ids: _Ids) -> tuple[str, list]:
         if a.kind == "video" and _is_video(a.path):
             vid = ids.next()
             kind = "video/webm" if a.path.lower().endswith(".webm") else "video/mp4"
-            blocks.append(f"<figure><video id='{vid}' controls muted loop playsinline preload='metadata'>"
-                          f"<source src='{_href(a.path)}' type='{kind}'></video><figcaption>{_e(a.title)} "
-                          f"(<span id='{vid}-duration'>loading</span>) <a href='{_href(a.path)}'>"
-                          f"{_e(pathlib.PurePath(a.path).name)}</a></figcaption></figure>")
+            blocks.append(
+                f"<figure><video id='{vid}' controls muted loop playsinline preload='metadata'>"
+                f"<source src='{_href(a.path)}' type='{kind}'></video><figcaption>{_e(a.title)} "
+                f"(<span id='{vid}-duration'>loading</span>) <a href='{_href(a.path)}'>"
+                f"{_e(pathlib.PurePath(a.path).name)}</a></figcaption></figure>"
+            )
         elif _is_image(a.path) and a.kind in ("plot", "video"):
-            images.append(f"<figure><a href='{_href(a.path)}'><img class='plot' src='{_href(a.path)}' "
-                          f"alt='{_e(a.title)}' loading='lazy'></a><figcaption>{_e(a.title)}</figcaption></figure>")
+            images.append(
+                f"<figure><a href='{_href(a.path)}'><img class='plot' src='{_href(a.path)}' "
+                f"alt='{_e(a.title)}' loading='lazy'></a><figcaption>{_e(a.title)}</figcaption></figure>"
+            )
         else:
             rest.append(a)
     html_text = f"<div class='media'>{''.join(blocks)}</div>" if blocks else ""
@@ -181,8 +194,11 @@ def _media(artifacts: Iterable, ids: _Ids) -> tuple[str, list]:
 def _links(artifacts: list) -> str:
     if not artifacts:
         return ""
-    items = "".join(f"<li><a href='{_href(a.path)}'>{_e(pathlib.PurePath(a.path).name)}</a> "
-                    f"<span class='muted'>({_e(a.kind)})</span> {_e(a.title)}</li>" for a in artifacts)
+    items = "".join(
+        f"<li><a href='{_href(a.path)}'>{_e(pathlib.PurePath(a.path).name)}</a> "
+        f"<span class='muted'>({_e(a.kind)})</span> {_e(a.title)}</li>"
+        for a in artifacts
+    )
     return f"<ul>{items}</ul>"
 
 
@@ -190,9 +206,12 @@ def _quantities(summary: dict) -> str:
     quantities = summary.get("quantities") or {}
     if not quantities:
         return ""
-    rows = "".join(f"<tr><td><code>{_e(k)}</code></td><td class='num'>"
-                   f"{_number(v, '.8g') if isinstance(v, (int, float)) else _e(v)}</td></tr>"
-                   for k, v in quantities.items() if isinstance(v, (int, float, str, bool)))
+    rows = "".join(
+        f"<tr><td><code>{_e(k)}</code></td><td class='num'>"
+        f"{_number(v, '.8g') if isinstance(v, (int, float)) else _e(v)}</td></tr>"
+        for k, v in quantities.items()
+        if isinstance(v, (int, float, str, bool))
+    )
     return f"<details><summary>quantities</summary><table>{rows}</table></details>" if rows else ""
 
 
@@ -200,8 +219,7 @@ def build_html(state, *, wall_time_s: float | None = None) -> str:
     """The report page for a finished demo state (validation rows, results, artifacts)."""
     ids = _Ids()
     artifacts = list(state.artifacts)
-    scene_names = list(dict.fromkeys([a.scene for a in artifacts if a.scene]
-                                     + [scene for scene, _ in state.results]))
+    scene_names = list(dict.fromkeys([a.scene for a in artifacts if a.scene] + [scene for scene, _ in state.results]))
     body = []
     nav = " ".join(f"<a href='#{_e(name)}'>{_e(name)}</a>" for name in scene_names)
     if any(not a.scene for a in artifacts):
@@ -209,14 +227,17 @@ def build_html(state, *, wall_time_s: float | None = None) -> str:
     nav += " <a href='#all-files'>all files</a>"
     now = datetime.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z")
     timing = f"; demo wall time {wall_time_s:.1f} s" if wall_time_s is not None else ""
-    body.append(f"<h1>springlab demo report</h1><p class='muted'>generated {_e(now)}{_e(timing)};"
-                f" {len(artifacts)} files</p><nav>{nav}</nav>")
+    body.append(
+        f"<h1>springlab demo report</h1><p class='muted'>generated {_e(now)}{_e(timing)};"
+        f" {len(artifacts)} files</p><nav>{nav}</nav>"
+    )
     body.append("<pre id='load-errors' class='fail' hidden></pre>")
     body.append("<h2 id='validation'>Validation against the exact solutions</h2>")
     body.append(_validation_table(state.validation))
     if getattr(state, "timings", None):
-        rows = "".join(f"<tr><td>{_e(name)}</td><td class='num'>{seconds:.1f}</td></tr>"
-                       for name, seconds in state.timings)
+        rows = "".join(
+            f"<tr><td>{_e(name)}</td><td class='num'>{seconds:.1f}</td></tr>" for name, seconds in state.timings
+        )
         body.append(f"<details><summary>time per step [s]</summary><table>{rows}</table></details>")
 
     for name in scene_names:
@@ -224,8 +245,11 @@ def build_html(state, *, wall_time_s: float | None = None) -> str:
         title = scene.title if scene is not None else ""
         body.append(f"<h2 id='{_e(name)}'>{_e(name)}</h2><p>{_e(title)}</p>")
         own = [a for a in artifacts if a.scene == name]
-        scenario_names = list(dict.fromkeys([s for scene_name, s in state.results if scene_name == name]
-                                            + [a.scenario for a in own if a.scenario]))
+        scenario_names = list(
+            dict.fromkeys(
+                [s for scene_name, s in state.results if scene_name == name] + [a.scenario for a in own if a.scenario]
+            )
+        )
         for scenario_name in scenario_names:
             items = [a for a in own if a.scenario == scenario_name]
             description = ""
@@ -235,8 +259,10 @@ def build_html(state, *, wall_time_s: float | None = None) -> str:
             verdict = ""
             if result is not None and result.summary.get("passed") is not None:
                 verdict = " " + _verdict(result.summary["passed"])
-            body.append(f"<h3 id='{_e(name)}-{_e(scenario_name)}'>{_e(name)} / {_e(scenario_name)}{verdict}</h3>"
-                        f"<p class='muted'>{_e(description)}</p>")
+            body.append(
+                f"<h3 id='{_e(name)}-{_e(scenario_name)}'>{_e(name)} / {_e(scenario_name)}{verdict}</h3>"
+                f"<p class='muted'>{_e(description)}</p>"
+            )
             media, rest = _media(sorted(items, key=_kind_rank), ids)
             body.append(media)
             if result is not None:
@@ -252,17 +278,23 @@ def build_html(state, *, wall_time_s: float | None = None) -> str:
         media, rest = _media(sorted(shared, key=_kind_rank), ids)
         body.append(f"<h2 id='across-scenes'>Across scenes</h2>{media}{_links(rest)}")
 
-    body.append("<h2 id='all-files'>All files</h2><table><tr><th>kind</th><th>scene</th><th>scenario</th>"
-                "<th>what</th><th>file</th></tr>")
+    body.append(
+        "<h2 id='all-files'>All files</h2><table><tr><th>kind</th><th>scene</th><th>scenario</th>"
+        "<th>what</th><th>file</th></tr>"
+    )
     for a in sorted(artifacts, key=lambda a: (_kind_rank(a), a.scene, a.scenario, a.path)):
-        body.append(f"<tr><td>{_e(a.kind)}</td><td>{_e(a.scene)}</td><td>{_e(a.scenario)}</td><td>{_e(a.title)}</td>"
-                    f"<td><a href='{_href(a.path)}'>{_e(a.path)}</a></td></tr>")
+        body.append(
+            f"<tr><td>{_e(a.kind)}</td><td>{_e(a.scene)}</td><td>{_e(a.scenario)}</td><td>{_e(a.title)}</td>"
+            f"<td><a href='{_href(a.path)}'>{_e(a.path)}</a></td></tr>"
+        )
     body.append("</table>")
-    return ("<!doctype html>\n<html lang='en'><head><meta charset='utf-8'>"
-            "<meta name='viewport' content='width=device-width, initial-scale=1'>"
-            f"<title>springlab demo report</title><style>{_CSS}</style></head>\n<body>\n"
-            + "\n".join(part for part in body if part)
-            + f"\n<script>{_SCRIPT}</script>\n</body></html>\n")
+    return (
+        "<!doctype html>\n<html lang='en'><head><meta charset='utf-8'>"
+        "<meta name='viewport' content='width=device-width, initial-scale=1'>"
+        f"<title>springlab demo report</title><style>{_CSS}</style></head>\n<body>\n"
+        + "\n".join(part for part in body if part)
+        + f"\n<script>{_SCRIPT}</script>\n</body></html>\n"
+    )
 
 
 def _kind_rank(artifact) -> int:

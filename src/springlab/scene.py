@@ -67,19 +67,11 @@ class Parameter:
         try:
             number = float(value)
         except (TypeError, ValueError):
-            raise ParameterError(
-                f"{self.name} must be a number {self.valid_range()}, got {value!r}"
-            ) from None
-        low_ok = (
-            self.minimum is None
-            or number > self.minimum
-            or (self.minimum_inclusive and number == self.minimum)
-        )
+            raise ParameterError(f"{self.name} must be a number {self.valid_range()}, got {value!r}") from None
+        low_ok = self.minimum is None or number > self.minimum or (self.minimum_inclusive and number == self.minimum)
         high_ok = self.maximum is None or number <= self.maximum
         if not math.isfinite(number) or not low_ok or not high_ok:
-            raise ParameterError(
-                f"{self.name} must be a finite number {self.valid_range()}, got {value!r}"
-            )
+            raise ParameterError(f"{self.name} must be a finite number {self.valid_range()}, got {value!r}")
         return number
 
 
@@ -174,9 +166,15 @@ class Check:
 
     def as_dict(self) -> dict[str, Any]:
         """The summary.json form: name, value, reference, error, tolerance, basis, passed."""
-        return {"name": self.name, "value": float(self.value), "reference": float(self.reference),
-                "error": self.error, "tolerance": float(self.tolerance), "basis": self.basis,
-                "passed": self.passed}
+        return {
+            "name": self.name,
+            "value": float(self.value),
+            "reference": float(self.reference),
+            "error": self.error,
+            "tolerance": float(self.tolerance),
+            "basis": self.basis,
+            "passed": self.passed,
+        }
 
 
 @dataclasses.dataclass
@@ -232,7 +230,7 @@ class Scene:
         """Parameter defaults read back from the compiled MJCF (override)."""
         return {}
 
-    @functools.cache
+    @functools.cache  # noqa: B019 - scenes are module-level singletons, never freed
     def _mjcf_defaults(self) -> dict[str, float]:
         with quiet_mujoco():
             return self.model_defaults(self.model_spec().compile())
@@ -301,8 +299,13 @@ class Scene:
         return []
 
     def stability_limit(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, integrator: str,
-        omega: float, zeta: float,
+        self,
+        model: mujoco.MjModel,
+        params: dict[str, float],
+        scenario: Scenario,
+        integrator: str,
+        omega: float,
+        zeta: float,
     ) -> float:
         """Largest omega*dt [-] at which `integrator` is stable on the mode (omega [rad/s], zeta [-]).
 
@@ -322,7 +325,9 @@ class Scene:
         """Equilibria of the unforced motion: [{"x": position [m], "stable": bool}]."""
         return []
 
-    def separatrices(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[tuple[np.ndarray, np.ndarray]]:
+    def separatrices(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario
+    ) -> list[tuple[np.ndarray, np.ndarray]]:
         """Separatrix curves of the unforced phase plane: [(x [m], v [m/s]) arrays] (none by default)."""
         return []
 

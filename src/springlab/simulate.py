@@ -126,8 +126,7 @@ def check_timing(dt: float, duration: float) -> int:
         raise BadInputError(f"duration {duration} s is shorter than one step of dt = {dt} s")
     if steps > MAX_STEPS:
         raise BadInputError(
-            f"duration/dt = {steps} steps exceeds the limit of {MAX_STEPS}; use a larger dt"
-            " or a shorter duration"
+            f"duration/dt = {steps} steps exceeds the limit of {MAX_STEPS}; use a larger dt or a shorter duration"
         )
     return steps
 
@@ -207,8 +206,17 @@ def simulate(
     with quiet_mujoco() as messages:
         start = _time.perf_counter()
         # skip_checks: the shapes are right by construction, and the checks cost per call
-        _rollout.rollout([model], [data], state0[None], controls, control_spec=_CTRL, state=out,
-                         sensordata=sensors, nstep=steps, skip_checks=True)
+        _rollout.rollout(
+            [model],
+            [data],
+            state0[None],
+            controls,
+            control_spec=_CTRL,
+            state=out,
+            sensordata=sensors,
+            nstep=steps,
+            skip_checks=True,
+        )
         wall = _time.perf_counter() - start
     states = np.concatenate([state0[None], out[0]])
     trajectory = _split(model, states, integrator, dt, wall)
@@ -231,8 +239,14 @@ def cut_at_stop(trajectory: Trajectory, stop) -> tuple[Trajectory, bool]:
     if not hits.size:
         return trajectory, False
     keep = int(hits[0]) + 1
-    return dataclasses.replace(trajectory, time=trajectory.time[:keep], qpos=trajectory.qpos[:keep],
-                               qvel=trajectory.qvel[:keep], act=trajectory.act[:keep], stopped=True), True
+    return dataclasses.replace(
+        trajectory,
+        time=trajectory.time[:keep],
+        qpos=trajectory.qpos[:keep],
+        qvel=trajectory.qvel[:keep],
+        act=trajectory.act[:keep],
+        stopped=True,
+    ), True
 
 
 def _split(model, states, integrator, dt, wall) -> Trajectory:

@@ -65,15 +65,15 @@ from mujoco import rollout as _rollout
 
 from . import api, compare, outputs, scenes
 from .errors import BadInputError, DivergedError
-from .scene import Scene, Scenario, Setup
+from .scene import Scenario, Scene, Setup
 from .simulate import (
     BAD_WARNINGS,
     INTEGRATORS,
     ORDERS,
     Trajectory,
-    cut_at_stop,
     check_diverged,
     check_timing,
+    cut_at_stop,
     initial_state,
     integrator_id,
     quiet_mujoco,
@@ -173,8 +173,10 @@ def run_batched(jobs: Sequence[Job], *, nthread: int = 0) -> list[Trajectory | D
         integrator_id(job.integrator)
     base = jobs[0].model
     shared = all(job.model is base for job in jobs)
-    if not shared and any(job.model.nq != base.nq or job.model.nv != base.nv or job.model.na != base.na
-                          or job.model.nu != base.nu for job in jobs):
+    if not shared and any(
+        job.model.nq != base.nq or job.model.nv != base.nv or job.model.na != base.na or job.model.nu != base.nu
+        for job in jobs
+    ):
         raise BadInputError("batched jobs with different models need the same nq, nv, na and nu")
     with quiet_mujoco():
         batch = _mjbatch.Batch(base, nsim=len(jobs), nthread=nthread)
@@ -218,9 +220,15 @@ def run_batched(jobs: Sequence[Job], *, nthread: int = 0) -> list[Trajectory | D
     results: list[Trajectory | DivergedError] = []
     for i, job in enumerate(jobs):
         states = np.concatenate([starts[i][None], *records[i]])
-        trajectory = Trajectory(time=states[:, 0], qpos=states[:, 1 : 1 + nq], qvel=states[:, 1 + nq : 1 + nq + nv],
-                                act=states[:, 1 + nq + nv :], integrator=job.integrator, dt=job.dt,
-                                wall_time_s=math.nan)
+        trajectory = Trajectory(
+            time=states[:, 0],
+            qpos=states[:, 1 : 1 + nq],
+            qvel=states[:, 1 + nq : 1 + nq + nv],
+            act=states[:, 1 + nq + nv :],
+            integrator=job.integrator,
+            dt=job.dt,
+            wall_time_s=math.nan,
+        )
         fired = [name for name, w in zip(("BADQPOS", "BADQVEL", "BADQACC"), BAD_WARNINGS) if warnings[i, w, 1] > 0]
         if job.stop is not None:
             trajectory, stopped = cut_at_stop(trajectory, job.stop)
@@ -258,8 +266,17 @@ def time_run(job: Job, *, repeats: int = 3, max_steps: int = TIMING_STEPS) -> fl
     with quiet_mujoco():
         for _ in range(max(1, repeats)):
             start = _time.perf_counter()
-            _rollout.rollout([model], [data], state0[None], controls, control_spec=_CTRL, state=out,
-                             sensordata=sensors, nstep=timed, skip_checks=True)
+            _rollout.rollout(
+                [model],
+                [data],
+                state0[None],
+                controls,
+                control_spec=_CTRL,
+                state=out,
+                sensordata=sensors,
+                nstep=timed,
+                skip_checks=True,
+            )
             best = min(best, _time.perf_counter() - start)
     return best * job.steps / timed
 
@@ -291,8 +308,14 @@ class Run:
 
     def row(self) -> dict[str, Any]:
         """The JSON row: integrator, dt, max_rel_error, steps, wall_time_s, diverged."""
-        return {"integrator": self.integrator, "dt": self.dt, "max_rel_error": self.max_rel_error,
-                "steps": self.steps, "wall_time_s": self.wall_time_s, "diverged": self.diverged}
+        return {
+            "integrator": self.integrator,
+            "dt": self.dt,
+            "max_rel_error": self.max_rel_error,
+            "steps": self.steps,
+            "wall_time_s": self.wall_time_s,
+            "diverged": self.diverged,
+        }
 
 
 @dataclasses.dataclass
@@ -369,8 +392,14 @@ def round_down(value: float, digits: int = 2) -> float:
     return out if out <= value else float(f"{(mantissa - 1) * unit:.{digits - 1}e}")
 
 
-def timestep_grid(rate: float | None, duration: float, *, points: int = SWEEP_POINTS,
-                  top: float = SWEEP_TOP, decades: float = SWEEP_DECADES) -> list[float]:
+def timestep_grid(
+    rate: float | None,
+    duration: float,
+    *,
+    points: int = SWEEP_POINTS,
+    top: float = SWEEP_TOP,
+    decades: float = SWEEP_DECADES,
+) -> list[float]:
     """Log-spaced timesteps [s], largest first, rounded to 3 significant digits.
 
     From omega*dt = `top` down `decades` decades for the fastest rate omega [1/s]
@@ -381,8 +410,10 @@ def timestep_grid(rate: float | None, duration: float, *, points: int = SWEEP_PO
     high = min(high, duration / 4)
     low = max(high * 10.0**-decades, duration / MAX_SWEEP_STEPS)
     if low >= high:
-        raise BadInputError(f"duration {duration:g} s is too long to sweep {points} timesteps within"
-                            f" {MAX_SWEEP_STEPS} steps per run; use a shorter --duration")
+        raise BadInputError(
+            f"duration {duration:g} s is too long to sweep {points} timesteps within"
+            f" {MAX_SWEEP_STEPS} steps per run; use a shorter --duration"
+        )
     grid = [_round_sig(high * (low / high) ** (j / (points - 1))) for j in range(points)]
     return sorted(set(grid), reverse=True)
 
@@ -421,8 +452,10 @@ def sweep(
     model = scene_obj.build(params, chosen)
     if not sweepable(scene_obj, chosen, params, model):
         valid = [s.name for s in scene_obj.scenarios.values() if sweepable(scene_obj, s, None)]
-        raise BadInputError(f"scenario {chosen.name!r} of {scene_obj.name} has no exact reference trajectory to"
-                            f" measure errors against; valid: {', '.join(valid) or 'none in this scene'}")
+        raise BadInputError(
+            f"scenario {chosen.name!r} of {scene_obj.name} has no exact reference trajectory to"
+            f" measure errors against; valid: {', '.join(valid) or 'none in this scene'}"
+        )
     integrators = list(integrators)
     for name in integrators:
         integrator_id(name)
@@ -454,13 +487,22 @@ def sweep(
         runs.append(Run(job.integrator, job.dt, steps, error, wall, diverged=error is None, detail=detail))
     runs.sort(key=lambda r: (integrators.index(r.integrator), -r.dt))
     orders = {name: observed_order([r for r in runs if r.integrator == name]) for name in integrators}
-    return Tradeoff(scene=scene_obj.name, scenario=chosen.name, parameters=params, overrides=dict(parameters),
-                    duration=duration, runs=runs, orders=orders, pareto=pareto_front(runs),
-                    sweep_wall_time_s=_time.perf_counter() - started)
+    return Tradeoff(
+        scene=scene_obj.name,
+        scenario=chosen.name,
+        parameters=params,
+        overrides=dict(parameters),
+        duration=duration,
+        runs=runs,
+        orders=orders,
+        pareto=pareto_front(runs),
+        sweep_wall_time_s=_time.perf_counter() - started,
+    )
 
 
-def sweepable(scene: Scene, scenario: Scenario, params: dict[str, float] | None,
-              model: mujoco.MjModel | None = None) -> bool:
+def sweepable(
+    scene: Scene, scenario: Scenario, params: dict[str, float] | None, model: mujoco.MjModel | None = None
+) -> bool:
     """Whether the scenario has an exact reference trajectory to sweep errors against (scenarios
     validated by scalar checks alone, like the non-linear ones, have none)."""
     if not scenario.exact:
@@ -490,11 +532,21 @@ def _accepted_grid(dts: Sequence[float], setup: Callable[[float], Setup | None])
         decade = 10.0 ** math.floor(math.log10(dt))
         nice = [m * decade * f for m in (1, 1.25, 1.6, 2, 2.5, 3.2, 4, 5, 6.25, 8) for f in (0.1, 1, 10)]
         nice = sorted((c for c in nice if dt / 2 <= c <= dt * 2), key=lambda c: abs(math.log(c / dt)))
-        grid.extend(next(([_round_sig(c)] for c in nice if _round_sig(c) not in grid and _round_sig(c) not in dts
-                          and setup(_round_sig(c)) is not None), []))
+        grid.extend(
+            next(
+                (
+                    [_round_sig(c)]
+                    for c in nice
+                    if _round_sig(c) not in grid and _round_sig(c) not in dts and setup(_round_sig(c)) is not None
+                ),
+                [],
+            )
+        )
     if len(grid) < 3:
-        raise BadInputError(f"the scene accepts too few of the timesteps {', '.join(f'{d:g}' for d in dts)} s"
-                            " to sweep; pass dts the scene accepts")
+        raise BadInputError(
+            f"the scene accepts too few of the timesteps {', '.join(f'{d:g}' for d in dts)} s"
+            " to sweep; pass dts the scene accepts"
+        )
     return sorted(set(grid), reverse=True)
 
 
@@ -595,8 +647,15 @@ def recommend(result: Tradeoff, tol: float, *, timing_repeats: int = 3) -> dict[
     tol = compare.check_tolerance(tol)
     for _, name, dt, _refined in _candidates(result, tol):
         try:
-            run = api.run(result.scene, result.scenario, integrator=name, dt=dt, duration=result.duration,
-                          tol=tol, **result.overrides)
+            run = api.run(
+                result.scene,
+                result.scenario,
+                integrator=name,
+                dt=dt,
+                duration=result.duration,
+                tol=tol,
+                **result.overrides,
+            )
         except DivergedError:
             continue
         if not run.summary["passed"]:
@@ -606,13 +665,24 @@ def recommend(result: Tradeoff, tol: float, *, timing_repeats: int = 3) -> dict[
         steps = run.trajectory.steps
         job = Job(run.model, name, dt, steps, scene_obj.setup(run.model, run.parameters, chosen, steps, dt))
         error = max(e["max_rel"] for e in run.summary["errors"].values())
-        return {"tol": tol, "integrator": name, "dt": dt, "max_rel_error": error,
-                "wall_time_s": time_run(job, repeats=timing_repeats)}
+        return {
+            "tol": tol,
+            "integrator": name,
+            "dt": dt,
+            "max_rel_error": error,
+            "wall_time_s": time_run(job, repeats=timing_repeats),
+        }
     return {"tol": tol, "integrator": None, "dt": None, "max_rel_error": None, "wall_time_s": None}
 
 
-def tradeoff(scene: str | Scene, scenario: str | None = None, *, tol: float | None = None,
-             duration: float | None = None, **parameters: Any) -> Tradeoff:
+def tradeoff(
+    scene: str | Scene,
+    scenario: str | None = None,
+    *,
+    tol: float | None = None,
+    duration: float | None = None,
+    **parameters: Any,
+) -> Tradeoff:
     """`sweep` plus, with `tol` [-], the verified cheapest setting that meets it (`recommend`)."""
     if tol is not None:
         tol = compare.check_tolerance(tol)
@@ -624,8 +694,15 @@ def tradeoff(scene: str | Scene, scenario: str | None = None, *, tol: float | No
     return result
 
 
-def auto_setting(scene: str | Scene, scenario: str | None, *, tol: float | None, dt: float | None = None,
-                 duration: float | None = None, **parameters: Any) -> tuple[str, float]:
+def auto_setting(
+    scene: str | Scene,
+    scenario: str | None,
+    *,
+    tol: float | None,
+    dt: float | None = None,
+    duration: float | None = None,
+    **parameters: Any,
+) -> tuple[str, float]:
     """(integrator, dt [s]) for `integrator='auto'`: the verified cheapest setting meeting `tol`.
 
     Raises:
@@ -639,9 +716,13 @@ def auto_setting(scene: str | Scene, scenario: str | None, *, tol: float | None,
     pick = result.recommendation
     if pick["integrator"] is None:
         best = min((r for r in result.runs if not r.diverged), key=lambda r: r.max_rel_error, default=None)
-        reach = f"; the best reached is {best.max_rel_error:.2g} ({best.integrator}, dt = {best.dt:g} s)" if best else ""
-        raise BadInputError(f"no integrator and timestep of the sweep meets tol = {tol:g} on {result.scene}"
-                            f" {result.scenario}{reach}; valid: a tol it can reach")
+        reach = (
+            f"; the best reached is {best.max_rel_error:.2g} ({best.integrator}, dt = {best.dt:g} s)" if best else ""
+        )
+        raise BadInputError(
+            f"no integrator and timestep of the sweep meets tol = {tol:g} on {result.scene}"
+            f" {result.scenario}{reach}; valid: a tol it can reach"
+        )
     return pick["integrator"], pick["dt"]
 
 
@@ -729,8 +810,8 @@ def measure_boundaries(
             raise BadInputError(f"zeta must be a finite number >= 0, got {zeta!r}")
     tester = _GrowthTester(pairs, steps, nthread)
     n = len(pairs)
-    low = np.zeros(n)                # largest omega*dt seen stable
-    high = np.full(n, math.inf)      # smallest omega*dt seen growing
+    low = np.zeros(n)  # largest omega*dt seen stable
+    high = np.full(n, math.inf)  # smallest omega*dt seen growing
     probe = np.full(n, SEARCH_START)
     active = np.ones(n, bool)
     while active.any():
@@ -760,8 +841,16 @@ def measure_boundaries(
             difference = math.inf
         else:
             difference = abs(measured - theory) / theory
-        rows.append({"integrator": name, "zeta": zeta, "measured_omega_dt": measured, "theory_omega_dt": theory,
-                     "relative_difference": difference, "within_tolerance": difference <= BOUNDARY_TOLERANCE})
+        rows.append(
+            {
+                "integrator": name,
+                "zeta": zeta,
+                "measured_omega_dt": measured,
+                "theory_omega_dt": theory,
+                "relative_difference": difference,
+                "within_tolerance": difference <= BOUNDARY_TOLERANCE,
+            }
+        )
     return rows
 
 
@@ -786,8 +875,11 @@ def one_step_maps(integrator: str, zetas: np.ndarray, omega_dts: np.ndarray, *, 
     return after.transpose(0, 2, 1).reshape(*zz.shape, 2, 2)
 
 
-def amplification_map(integrators: Iterable[str] = tuple(INTEGRATORS), zetas: np.ndarray | None = None,
-                      omega_dts: np.ndarray | None = None) -> dict[str, Any]:
+def amplification_map(
+    integrators: Iterable[str] = tuple(INTEGRATORS),
+    zetas: np.ndarray | None = None,
+    omega_dts: np.ndarray | None = None,
+) -> dict[str, Any]:
     """Spectral radius [-] of MuJoCo's measured one-step map over a (zeta, omega*dt) grid, per integrator.
 
     > 1 means the response grows by that factor per step (unstable). Returns
@@ -866,32 +958,86 @@ class ExtremeCase:
 
 
 EXTREME_CASES = (
-    ExtremeCase("stiff", "k = 1e12 N/m, m = 1 kg, zeta = 0.05, x0 = 1e-5 m, 20 periods", 1.0, 1e12, 0.05,
-                x0=1e-5, duration_periods=20),
-    ExtremeCase("stiff-large-x0", "k = 1e12 N/m, m = 1 kg, zeta = 0.05, x0 = 0.1 m: |qacc| = 1e11 m/s^2",
-                1.0, 1e12, 0.05, x0=0.1, duration_periods=20),
-    ExtremeCase("light", "m = 1e-9 kg, k = 100 N/m, zeta = 0.05, x0 = 1e-4 m, 20 periods", 1e-9, 100.0, 0.05,
-                x0=1e-4, duration_periods=20),
-    ExtremeCase("undamped-long", "m = 1 kg, k = 100 N/m, zeta = 0, x0 = 0.1 m, 1e4 periods", 1.0, 100.0, 0.0,
-                duration_periods=1e4),
-    ExtremeCase("overdamped", "m = 1 kg, k = 100 N/m, zeta = 1e4, x0 = 0.1 m, 3 slow time constants", 1.0, 100.0,
-                1e4, slow_time_constants=3),
+    ExtremeCase(
+        "stiff",
+        "k = 1e12 N/m, m = 1 kg, zeta = 0.05, x0 = 1e-5 m, 20 periods",
+        1.0,
+        1e12,
+        0.05,
+        x0=1e-5,
+        duration_periods=20,
+    ),
+    ExtremeCase(
+        "stiff-large-x0",
+        "k = 1e12 N/m, m = 1 kg, zeta = 0.05, x0 = 0.1 m: |qacc| = 1e11 m/s^2",
+        1.0,
+        1e12,
+        0.05,
+        x0=0.1,
+        duration_periods=20,
+    ),
+    ExtremeCase(
+        "light",
+        "m = 1e-9 kg, k = 100 N/m, zeta = 0.05, x0 = 1e-4 m, 20 periods",
+        1e-9,
+        100.0,
+        0.05,
+        x0=1e-4,
+        duration_periods=20,
+    ),
+    ExtremeCase(
+        "undamped-long",
+        "m = 1 kg, k = 100 N/m, zeta = 0, x0 = 0.1 m, 1e4 periods",
+        1.0,
+        100.0,
+        0.0,
+        duration_periods=1e4,
+    ),
+    ExtremeCase(
+        "overdamped",
+        "m = 1 kg, k = 100 N/m, zeta = 1e4, x0 = 0.1 m, 3 slow time constants",
+        1.0,
+        100.0,
+        1e4,
+        slow_time_constants=3,
+    ),
 )
 FULL_EXTREME_CASES = EXTREME_CASES + (
-    ExtremeCase("stiff-1e6", "k = 1e6 N/m, m = 1 kg, zeta = 0.05, x0 = 1e-3 m, 20 periods", 1.0, 1e6, 0.05,
-                x0=1e-3, duration_periods=20),
-    ExtremeCase("light-1e-5", "m = 1e-5 kg, k = 100 N/m, zeta = 0.05, x0 = 0.01 m, 20 periods", 1e-5, 100.0, 0.05,
-                x0=0.01, duration_periods=20),
-    ExtremeCase("overdamped-100", "m = 1 kg, k = 100 N/m, zeta = 100, x0 = 0.1 m, 3 slow time constants", 1.0,
-                100.0, 100.0, slow_time_constants=3),
+    ExtremeCase(
+        "stiff-1e6",
+        "k = 1e6 N/m, m = 1 kg, zeta = 0.05, x0 = 1e-3 m, 20 periods",
+        1.0,
+        1e6,
+        0.05,
+        x0=1e-3,
+        duration_periods=20,
+    ),
+    ExtremeCase(
+        "light-1e-5",
+        "m = 1e-5 kg, k = 100 N/m, zeta = 0.05, x0 = 0.01 m, 20 periods",
+        1e-5,
+        100.0,
+        0.05,
+        x0=0.01,
+        duration_periods=20,
+    ),
+    ExtremeCase(
+        "overdamped-100",
+        "m = 1 kg, k = 100 N/m, zeta = 100, x0 = 0.1 m, 3 slow time constants",
+        1.0,
+        100.0,
+        100.0,
+        slow_time_constants=3,
+    ),
 )
 
 
 def _case_model(case: ExtremeCase) -> tuple[mujoco.MjModel, Scene, Scenario, dict[str, float]]:
     scene = scenes.get("slider")
     chosen = scene.scenario("free")
-    params = scene.resolve(chosen, {"mass": case.mass, "stiffness": case.stiffness, "damping": case.damping,
-                                    "x0": case.x0, "v0": 0.0})
+    params = scene.resolve(
+        chosen, {"mass": case.mass, "stiffness": case.stiffness, "damping": case.damping, "x0": case.x0, "v0": 0.0}
+    )
     return scene.build(params, chosen), scene, chosen, params
 
 
@@ -952,9 +1098,16 @@ def _advice(case: ExtremeCase, context, costs: dict[str, float]) -> dict[str, An
     beyond MuJoCo's value limit no dt helps, and the advice says so.
     """
     if case.peak_acceleration >= MUJOCO_MAXVAL or case.omega * abs(case.x0) >= MUJOCO_MAXVAL:
-        return {"integrator": None, "dt": None, "steps": None, "predicted_error": None,
-                "phrase": (f"no dt helps: MuJoCo resets any |qacc| > {MUJOCO_MAXVAL:.0e} m/s^2 (mjMAXVAL), and"
-                           f" omega^2 x0 = {case.peak_acceleration:.1e}; rescale units or amplitude")}
+        return {
+            "integrator": None,
+            "dt": None,
+            "steps": None,
+            "predicted_error": None,
+            "phrase": (
+                f"no dt helps: MuJoCo resets any |qacc| > {MUJOCO_MAXVAL:.0e} m/s^2 (mjMAXVAL), and"
+                f" omega^2 x0 = {case.peak_acceleration:.1e}; rescale units or amplitude"
+            ),
+        }
     best = None
     target = ACCURACY / 2
     for name in ADVICE_INTEGRATORS:
@@ -974,15 +1127,23 @@ def _advice(case: ExtremeCase, context, costs: dict[str, float]) -> dict[str, An
         steps = max(1, round(case.duration / dt))
         cost = steps * costs[name]
         if best is None or cost < best["cost_s"]:
-            best = {"integrator": name, "dt": dt, "steps": steps, "cost_s": cost,
-                    "predicted_error": predicted_error(case, name, dt, context)}
-    best["phrase"] = (f"use {best['integrator']} with dt <= {best['dt']:.2g} s ({best['steps']:.2g} steps,"
-                      f" predicted error {best['predicted_error']:.1g})")
+            best = {
+                "integrator": name,
+                "dt": dt,
+                "steps": steps,
+                "cost_s": cost,
+                "predicted_error": predicted_error(case, name, dt, context),
+            }
+    best["phrase"] = (
+        f"use {best['integrator']} with dt <= {best['dt']:.2g} s ({best['steps']:.2g} steps,"
+        f" predicted error {best['predicted_error']:.1g})"
+    )
     return best
 
 
-def extremes_table(cases: Sequence[ExtremeCase] = EXTREME_CASES, *, verify_steps: int = VERIFY_STEPS,
-                   nthread: int = 0) -> list[dict[str, Any]]:
+def extremes_table(
+    cases: Sequence[ExtremeCase] = EXTREME_CASES, *, verify_steps: int = VERIFY_STEPS, nthread: int = 0
+) -> list[dict[str, Any]]:
     """Run every case x integrator at LIMIT_FRACTIONS of its stability limit; classify each run.
 
     discrete has no limit: its rows use the euler limit's fractions, to show it
@@ -1031,8 +1192,9 @@ def extremes_table(cases: Sequence[ExtremeCase] = EXTREME_CASES, *, verify_steps
         model, scene, chosen, params = contexts[case.name]
         setup = scene.setup(model, params, chosen, pick["steps"], pick["dt"])
         jobs.append(Job(model, pick["integrator"], pick["dt"], pick["steps"], setup))
-        meta.append(("advised", case, pick["integrator"], None, _limit(pick["integrator"], case.zeta),
-                     pick["integrator"]))
+        meta.append(
+            ("advised", case, pick["integrator"], None, _limit(pick["integrator"], case.zeta), pick["integrator"])
+        )
     outcomes = run_batched(jobs, nthread=nthread)
     rows = []
     for job, outcome, (kind, case, name, fraction, limit, limit_name) in zip(jobs, outcomes, meta):
@@ -1042,23 +1204,25 @@ def extremes_table(cases: Sequence[ExtremeCase] = EXTREME_CASES, *, verify_steps
             phrase = f"the advice, run over the whole {case.duration:.3g} s"
         else:
             phrase = _advice_phrase(outcome_name, name, job.dt, limit, pick)
-        rows.append({
-            "kind": kind,
-            "case": case.name,
-            "description": case.description,
-            "integrator": name,
-            "fraction": fraction,
-            "limit_of": limit_name,
-            "omega_dt": job.dt * case.omega,
-            "limit_omega_dt": limit,
-            "dt": job.dt,
-            "duration": job.dt * job.steps,
-            "steps": job.steps,
-            "outcome": outcome_name,
-            "max_rel_error": error,
-            "detail": detail,
-            "advice": phrase,
-        })
+        rows.append(
+            {
+                "kind": kind,
+                "case": case.name,
+                "description": case.description,
+                "integrator": name,
+                "fraction": fraction,
+                "limit_of": limit_name,
+                "omega_dt": job.dt * case.omega,
+                "limit_omega_dt": limit,
+                "dt": job.dt,
+                "duration": job.dt * job.steps,
+                "steps": job.steps,
+                "outcome": outcome_name,
+                "max_rel_error": error,
+                "detail": detail,
+                "advice": phrase,
+            }
+        )
     return rows
 
 
@@ -1095,8 +1259,9 @@ ENERGY_OMEGA_DT = 0.2
 ENERGY_PERIODS = 200
 
 
-def energy_formula(integrator: str, omega_dt: float, steps: np.ndarray, x0: float = 1.0, v0: float = 0.0,
-                   omega: float = 1.0) -> dict[str, np.ndarray | float]:
+def energy_formula(
+    integrator: str, omega_dt: float, steps: np.ndarray, x0: float = 1.0, v0: float = 0.0, omega: float = 1.0
+) -> dict[str, np.ndarray | float]:
     """The exact energy of each integrator's undamped step map, E_n / E_0 [-].
 
     euler, implicit, implicitfast (symplectic Euler): I = v^2 + omega^2 x^2 -
@@ -1118,8 +1283,9 @@ def energy_formula(integrator: str, omega_dt: float, steps: np.ndarray, x0: floa
     raise BadInputError(f"unknown integrator {integrator!r}; valid: {', '.join(INTEGRATORS)}")
 
 
-def energy_histories(omega_dt: float = ENERGY_OMEGA_DT, periods: float = ENERGY_PERIODS, *,
-                     nthread: int = 0) -> dict[str, Any]:
+def energy_histories(
+    omega_dt: float = ENERGY_OMEGA_DT, periods: float = ENERGY_PERIODS, *, nthread: int = 0
+) -> dict[str, Any]:
     """Energy of every integrator on the undamped slider (scenario `undamped`) against its formula.
 
     The energy E = m v^2/2 + k x^2/2 [J] is computed from qpos and qvel
@@ -1149,21 +1315,33 @@ def energy_histories(omega_dt: float = ENERGY_OMEGA_DT, periods: float = ENERGY_
         energy = 0.5 * m * v**2 + 0.5 * k * x**2
         ratio[name] = energy / energy0
         formula = energy_formula(name, omega_dt, n, x0, v0, omega)
-        row = {"integrator": name, "omega_dt": omega_dt, "steps": steps, "final_ratio": float(ratio[name][-1]),
-               "min_ratio": float(ratio[name].min()), "max_ratio": float(ratio[name].max())}
+        row = {
+            "integrator": name,
+            "omega_dt": omega_dt,
+            "steps": steps,
+            "final_ratio": float(ratio[name][-1]),
+            "min_ratio": float(ratio[name].min()),
+            "max_ratio": float(ratio[name].max()),
+        }
         if "ratio" in formula:
-            row["formula"] = ("(1 - y^6/72 + y^8/576)^n" if name == "rk4" else "(1 + y^2)^-n")
+            row["formula"] = "(1 - y^6/72 + y^8/576)^n" if name == "rk4" else "(1 + y^2)^-n"
             row["formula_final_ratio"] = float(formula["ratio"][-1])
             row["max_relative_deviation"] = float(np.max(np.abs(ratio[name] / formula["ratio"] - 1)))
         else:
-            invariant = (v**2 + omega**2 * x**2 - dt * omega**2 * x * v) / (v0**2 + omega**2 * x0**2
-                                                                            - dt * omega**2 * x0 * v0)
+            invariant = (v**2 + omega**2 * x**2 - dt * omega**2 * x * v) / (
+                v0**2 + omega**2 * x0**2 - dt * omega**2 * x0 * v0
+            )
             row["formula"] = "E/E0 in [1/(1 + y/2), 1/(1 - y/2)] (invariant v^2 + w^2 x^2 - dt w^2 x v)"
             row["formula_low"], row["formula_high"] = float(formula["low"]), float(formula["high"])
             row["max_relative_deviation"] = float(np.max(np.abs(invariant - 1)))
         rows.append(row)
-    return {"omega_dt": omega_dt, "periods": periods, "time_periods": n * omega_dt / (2 * math.pi),
-            "ratio": ratio, "rows": rows}
+    return {
+        "omega_dt": omega_dt,
+        "periods": periods,
+        "time_periods": n * omega_dt / (2 * math.pi),
+        "ratio": ratio,
+        "rows": rows,
+    }
 
 
 def stability_report(*, full: bool = False, nthread: int = 0) -> dict[str, Any]:
@@ -1174,16 +1352,19 @@ def stability_report(*, full: bool = False, nthread: int = 0) -> dict[str, Any]:
     """
     started = _time.perf_counter()
     boundaries = measure_boundaries(zetas=FULL_STABILITY_ZETAS if full else STABILITY_ZETAS, nthread=nthread)
-    extremes = extremes_table(FULL_EXTREME_CASES if full else EXTREME_CASES,
-                              verify_steps=10**9 if full else VERIFY_STEPS, nthread=nthread)
+    extremes = extremes_table(
+        FULL_EXTREME_CASES if full else EXTREME_CASES, verify_steps=10**9 if full else VERIFY_STEPS, nthread=nthread
+    )
     energy = energy_histories(nthread=nthread)
     return {
         "boundaries": boundaries,
         "extremes": extremes,
         "energy": energy["rows"],
-        "growth_test": (f"response |(omega x, v)| over steps {GROWTH_STEPS // 2}..{GROWTH_STEPS} exceeds"
-                        f" {GROWTH_FACTOR:g}x its maximum over the first {GROWTH_STEPS // 2}, or MuJoCo flags"
-                        " a blow-up"),
+        "growth_test": (
+            f"response |(omega x, v)| over steps {GROWTH_STEPS // 2}..{GROWTH_STEPS} exceeds"
+            f" {GROWTH_FACTOR:g}x its maximum over the first {GROWTH_STEPS // 2}, or MuJoCo flags"
+            " a blow-up"
+        ),
         "accuracy_threshold": ACCURACY,
         "wall_time_s": _time.perf_counter() - started,
         "_energy_series": energy,
@@ -1197,8 +1378,13 @@ def report_json(report: dict[str, Any]) -> dict[str, Any]:
 
 # -- tradeoff_plots --------------------------------------------------------------
 
-_COLORS = {"euler": "#1f77b4", "implicit": "#17becf", "implicitfast": "#2ca02c", "rk4": "#d62728",
-           "discrete": "#9467bd"}
+_COLORS = {
+    "euler": "#1f77b4",
+    "implicit": "#17becf",
+    "implicitfast": "#2ca02c",
+    "rk4": "#d62728",
+    "discrete": "#9467bd",
+}
 _STYLES = {"euler": "-", "implicit": "--", "implicitfast": ":", "rk4": "-", "discrete": "-"}
 
 
@@ -1231,16 +1417,31 @@ def plot_tradeoff(result: Tradeoff, path: str | pathlib.Path) -> pathlib.Path:
         label = f"{name} (order {order:.2f})" if order is not None else name
         errors = [max(r.max_rel_error, floor) for r in runs]
         left.loglog([r.dt for r in runs], errors, _STYLES[name], marker="o", ms=3, color=_COLORS[name], label=label)
-        right.loglog([r.wall_time_s for r in runs], errors, _STYLES[name], marker="o", ms=3, color=_COLORS[name],
-                     label=name)
+        right.loglog(
+            [r.wall_time_s for r in runs], errors, _STYLES[name], marker="o", ms=3, color=_COLORS[name], label=name
+        )
     front = result.pareto
-    right.step([r.wall_time_s for r in front], [max(r.max_rel_error, floor) for r in front], where="post",
-               color="black", lw=1.2, alpha=0.7, label="Pareto front")
+    right.step(
+        [r.wall_time_s for r in front],
+        [max(r.max_rel_error, floor) for r in front],
+        where="post",
+        color="black",
+        lw=1.2,
+        alpha=0.7,
+        label="Pareto front",
+    )
     pick = result.recommendation
     if pick and pick.get("integrator"):
         right.axhline(pick["tol"], color="gray", lw=0.8, ls="--")
-        right.plot([pick["wall_time_s"]], [max(pick["max_rel_error"], floor)], "*", ms=14, color="gold",
-                   markeredgecolor="black", label=f"tol {pick['tol']:g}: {pick['integrator']}, dt = {pick['dt']:g} s")
+        right.plot(
+            [pick["wall_time_s"]],
+            [max(pick["max_rel_error"], floor)],
+            "*",
+            ms=14,
+            color="gold",
+            markeredgecolor="black",
+            label=f"tol {pick['tol']:g}: {pick['integrator']}, dt = {pick['dt']:g} s",
+        )
     left.set_xlabel("timestep dt [s]")
     left.set_ylabel("max relative error [-]")
     left.set_title("error vs timestep (slope = order)")
@@ -1256,8 +1457,9 @@ def plot_tradeoff(result: Tradeoff, path: str | pathlib.Path) -> pathlib.Path:
     return _save(fig, path)
 
 
-def plot_stability(report: dict[str, Any], path: str | pathlib.Path,
-                   amplification: dict[str, Any] | None = None) -> pathlib.Path:
+def plot_stability(
+    report: dict[str, Any], path: str | pathlib.Path, amplification: dict[str, Any] | None = None
+) -> pathlib.Path:
     """Per integrator: measured per-step amplification over (zeta, omega*dt), theory boundary, measured boundary."""
     from matplotlib.colors import TwoSlopeNorm
 
@@ -1271,16 +1473,24 @@ def plot_stability(report: dict[str, Any], path: str | pathlib.Path,
     image = None
     for axis, name in zip(axes, names):
         log_radius = np.log10(np.clip(amplification["radius"][name], 1e-300, None))
-        image = axis.pcolormesh(zetas, omega_dts, np.clip(log_radius, -3, 3).T, cmap="RdBu_r", norm=norm,
-                                shading="nearest")
+        image = axis.pcolormesh(
+            zetas, omega_dts, np.clip(log_radius, -3, 3).T, cmap="RdBu_r", norm=norm, shading="nearest"
+        )
         theory = [stability_limit(name, z) for z in theory_zetas]
         if all(math.isinf(t) for t in theory):
             axis.text(0.5, 0.5, "no limit: never unstable", transform=axis.transAxes, ha="center", fontsize=9)
         else:
             axis.plot(theory_zetas, theory, color="black", lw=1.2, label="theory")
         rows = [r for r in report["boundaries"] if r["integrator"] == name and math.isfinite(r["measured_omega_dt"])]
-        axis.plot([r["zeta"] for r in rows], [r["measured_omega_dt"] for r in rows], "o", mfc="none",
-                  color="gold", mew=1.5, label="measured (growth test)")
+        axis.plot(
+            [r["zeta"] for r in rows],
+            [r["measured_omega_dt"] for r in rows],
+            "o",
+            mfc="none",
+            color="gold",
+            mew=1.5,
+            label="measured (growth test)",
+        )
         axis.set_xscale("symlog", linthresh=0.01)
         axis.set_yscale("log")
         axis.set_ylim(omega_dts[0], omega_dts[-1])
@@ -1301,20 +1511,32 @@ def plot_energy(series: dict[str, Any], path: str | pathlib.Path) -> pathlib.Pat
     n = np.arange(len(t))
     first = t <= 3.0
     for name in EULER_FAMILY:
-        euler.plot(t[first], series["ratio"][name][first] - 1, _STYLES[name], color=_COLORS[name], lw=1.2,
-                   label=name)
+        euler.plot(t[first], series["ratio"][name][first] - 1, _STYLES[name], color=_COLORS[name], lw=1.2, label=name)
     euler.axhline(1 / (1 - y / 2) - 1, color="black", lw=0.8, ls="--", label="1/(1 - y/2) - 1 (sharp bound)")
     euler.axhline(1 / (1 + y / 2) - 1, color="black", lw=0.8, ls=":", label="1/(1 + y/2) - 1")
     euler.set_title("euler family: bounded oscillation (first 3 periods)")
     stride = max(1, len(t) // 4000)
     rk4.plot(t[::stride], series["ratio"]["rk4"][::stride] - 1, color=_COLORS["rk4"], lw=2.5, alpha=0.6, label="rk4")
-    rk4.plot(t, energy_formula("rk4", y, n)["ratio"] - 1, color="black", lw=0.8, ls="--",
-             label="(1 - y^6/72 + y^8/576)^n - 1")
+    rk4.plot(
+        t,
+        energy_formula("rk4", y, n)["ratio"] - 1,
+        color="black",
+        lw=0.8,
+        ls="--",
+        label="(1 - y^6/72 + y^8/576)^n - 1",
+    )
     rk4.set_title("rk4: slow decay")
-    discrete.semilogy(t[::stride], series["ratio"]["discrete"][::stride], color=_COLORS["discrete"], lw=2.5,
-                      alpha=0.6, label="discrete")
-    discrete.semilogy(t, energy_formula("discrete", y, n)["ratio"], color="black", lw=0.8, ls="--",
-                      label="(1 + y^2)^-n")
+    discrete.semilogy(
+        t[::stride],
+        series["ratio"]["discrete"][::stride],
+        color=_COLORS["discrete"],
+        lw=2.5,
+        alpha=0.6,
+        label="discrete",
+    )
+    discrete.semilogy(
+        t, energy_formula("discrete", y, n)["ratio"], color="black", lw=0.8, ls="--", label="(1 + y^2)^-n"
+    )
     discrete.set_title("discrete: decay by 1/(1 + y^2) per step")
     euler.set_ylabel("E/E0 - 1 [-]")
     rk4.set_ylabel("E/E0 - 1 [-]")

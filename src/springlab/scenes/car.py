@@ -130,11 +130,32 @@ def _pitch_heave_defaults(params: dict[str, float], explicit: set[str]) -> dict[
 RELEVANT = {
     "push_release": ("mass", "stiffness", "damping", "clearance", "push_mass"),
     "damped_release": ("mass", "stiffness", "damping", "damping_ratio", "clearance", "push_mass"),
-    "pitch_heave": ("mass", "pitch_inertia", "front_axle_distance", "rear_axle_distance", "front_stiffness",
-                    "rear_stiffness", "front_damping", "rear_damping", "damping_ratio", "clearance", "push_mass",
-                    "push_position"),
-    "road_bump": ("mass", "stiffness", "damping", "damping_ratio", "clearance", "unsprung_mass",
-                  "tire_stiffness", "bump_height", "bump_length", "speed"),
+    "pitch_heave": (
+        "mass",
+        "pitch_inertia",
+        "front_axle_distance",
+        "rear_axle_distance",
+        "front_stiffness",
+        "rear_stiffness",
+        "front_damping",
+        "rear_damping",
+        "damping_ratio",
+        "clearance",
+        "push_mass",
+        "push_position",
+    ),
+    "road_bump": (
+        "mass",
+        "stiffness",
+        "damping",
+        "damping_ratio",
+        "clearance",
+        "unsprung_mass",
+        "tire_stiffness",
+        "bump_height",
+        "bump_length",
+        "speed",
+    ),
 }
 
 
@@ -152,52 +173,117 @@ class Car(Scene):
     parameters = {
         p.name: p
         for p in (
-            Parameter("mass", "kg", "sprung mass: car + passengers, everything the springs carry (road_bump: "
-                      "mass/4 per corner)", minimum=0.0, minimum_inclusive=False),
+            Parameter(
+                "mass",
+                "kg",
+                "sprung mass: car + passengers, everything the springs carry (road_bump: mass/4 per corner)",
+                minimum=0.0,
+                minimum_inclusive=False,
+            ),
             Parameter("stiffness", "N/m", "the four springs together", minimum=0.0, minimum_inclusive=False),
             Parameter("damping", "N s/m", "the four dampers together", minimum=0.0),
-            Parameter("damping_ratio", "-", "damping as a fraction of critical, sets the dampers not given "
-                      "explicitly (Gillespie: 0.2-0.4 for passenger cars)", minimum=0.0, default=0.3),
-            Parameter("clearance", "m", "height of the car bottom above the ground at rest, passengers in",
-                      minimum=0.0, minimum_inclusive=False),
-            Parameter("push_mass", "kg", "mass of the passers-by pushing down with their weight", minimum=0.0,
-                      default=250.0),
-            Parameter("pitch_inertia", "kg m^2", "moment of inertia about the lateral axis through the centre "
-                      "of mass", minimum=0.0, minimum_inclusive=False),
-            Parameter("front_axle_distance", "m", "a: centre of mass to front axle", minimum=0.0,
-                      minimum_inclusive=False),
-            Parameter("rear_axle_distance", "m", "b: centre of mass to rear axle", minimum=0.0,
-                      minimum_inclusive=False),
-            Parameter("front_stiffness", "N/m", "front axle's two springs together (default: "
-                      f"{FRONT_STIFFNESS_SHARE:g} x stiffness)", minimum=0.0, minimum_inclusive=False),
-            Parameter("rear_stiffness", "N/m", "rear axle's two springs together", minimum=0.0,
-                      minimum_inclusive=False),
+            Parameter(
+                "damping_ratio",
+                "-",
+                "damping as a fraction of critical, sets the dampers not given "
+                "explicitly (Gillespie: 0.2-0.4 for passenger cars)",
+                minimum=0.0,
+                default=0.3,
+            ),
+            Parameter(
+                "clearance",
+                "m",
+                "height of the car bottom above the ground at rest, passengers in",
+                minimum=0.0,
+                minimum_inclusive=False,
+            ),
+            Parameter(
+                "push_mass", "kg", "mass of the passers-by pushing down with their weight", minimum=0.0, default=250.0
+            ),
+            Parameter(
+                "pitch_inertia",
+                "kg m^2",
+                "moment of inertia about the lateral axis through the centre of mass",
+                minimum=0.0,
+                minimum_inclusive=False,
+            ),
+            Parameter(
+                "front_axle_distance", "m", "a: centre of mass to front axle", minimum=0.0, minimum_inclusive=False
+            ),
+            Parameter(
+                "rear_axle_distance", "m", "b: centre of mass to rear axle", minimum=0.0, minimum_inclusive=False
+            ),
+            Parameter(
+                "front_stiffness",
+                "N/m",
+                f"front axle's two springs together (default: {FRONT_STIFFNESS_SHARE:g} x stiffness)",
+                minimum=0.0,
+                minimum_inclusive=False,
+            ),
+            Parameter(
+                "rear_stiffness", "N/m", "rear axle's two springs together", minimum=0.0, minimum_inclusive=False
+            ),
             Parameter("front_damping", "N s/m", "front axle's two dampers together", minimum=0.0),
             Parameter("rear_damping", "N s/m", "rear axle's two dampers together", minimum=0.0),
-            Parameter("push_position", "m", "where the passers-by push, ahead of the centre of mass "
-                      "(default: over the front axle)"),
-            Parameter("unsprung_mass", "kg", "one wheel with its share of brake, hub and axle", minimum=0.0,
-                      minimum_inclusive=False),
-            Parameter("tire_stiffness", "N/m", "vertical stiffness of one tire", minimum=0.0,
-                      minimum_inclusive=False),
-            Parameter("bump_height", "m", "height of the half-sine bump", minimum=0.0, minimum_inclusive=False,
-                      default=0.08),
-            Parameter("bump_length", "m", "length of the bump along the road", minimum=0.0,
-                      minimum_inclusive=False, default=4.0),
+            Parameter(
+                "push_position",
+                "m",
+                "where the passers-by push, ahead of the centre of mass (default: over the front axle)",
+            ),
+            Parameter(
+                "unsprung_mass",
+                "kg",
+                "one wheel with its share of brake, hub and axle",
+                minimum=0.0,
+                minimum_inclusive=False,
+            ),
+            Parameter("tire_stiffness", "N/m", "vertical stiffness of one tire", minimum=0.0, minimum_inclusive=False),
+            Parameter(
+                "bump_height", "m", "height of the half-sine bump", minimum=0.0, minimum_inclusive=False, default=0.08
+            ),
+            Parameter(
+                "bump_length",
+                "m",
+                "length of the bump along the road",
+                minimum=0.0,
+                minimum_inclusive=False,
+                default=4.0,
+            ),
             Parameter("speed", "m/s", "driving speed", minimum=0.0, minimum_inclusive=False, default=8.0),
         )
     }
     scenarios = {
         s.name: s
         for s in (
-            Scenario("push_release", "the textbook problem: pushed down by 250 kg of passers-by, released,"
-                     " no damping", 1.0, {"damping": 0.0}, dt=1e-3),
-            Scenario("damped_release", "the same release with dampers at damping_ratio (default 0.3)", 1.0,
-                     derive=_damping_from_ratio, dt=2e-3),
-            Scenario("pitch_heave", "2 DOF: front/rear axle springs and dampers, pushed down over the front"
-                     " axle and released", 2.0, derive=_pitch_heave_defaults, dt=2e-3),
-            Scenario("road_bump", "quarter car over a half-sine bump (0.08 m high, 4 m long) at 8 m/s", 3.0,
-                     {"stiffness": COMFORT_STIFFNESS}, derive=_damping_from_ratio, dt=1e-3),
+            Scenario(
+                "push_release",
+                "the textbook problem: pushed down by 250 kg of passers-by, released, no damping",
+                1.0,
+                {"damping": 0.0},
+                dt=1e-3,
+            ),
+            Scenario(
+                "damped_release",
+                "the same release with dampers at damping_ratio (default 0.3)",
+                1.0,
+                derive=_damping_from_ratio,
+                dt=2e-3,
+            ),
+            Scenario(
+                "pitch_heave",
+                "2 DOF: front/rear axle springs and dampers, pushed down over the front axle and released",
+                2.0,
+                derive=_pitch_heave_defaults,
+                dt=2e-3,
+            ),
+            Scenario(
+                "road_bump",
+                "quarter car over a half-sine bump (0.08 m high, 4 m long) at 8 m/s",
+                3.0,
+                {"stiffness": COMFORT_STIFFNESS},
+                derive=_damping_from_ratio,
+                dt=1e-3,
+            ),
         )
     }
 
@@ -218,7 +304,7 @@ class Car(Scene):
             "tire_stiffness": float(model.numeric("tire_stiffness").data[0]),
         }
 
-    @functools.cache
+    @functools.cache  # noqa: B019 - scenes are module-level singletons, never freed
     def gravity(self) -> float:
         """Gravitational acceleration g [m/s^2] of the MJCF (opt.gravity, read back)."""
         with quiet_mujoco():
@@ -231,7 +317,8 @@ class Car(Scene):
         for name in overrides:
             if name not in relevant:
                 raise ParameterError(
-                    f"{name} does not apply to car {scenario.name}; its parameters: {', '.join(relevant)}")
+                    f"{name} does not apply to car {scenario.name}; its parameters: {', '.join(relevant)}"
+                )
         return {name: values[name] for name in relevant}
 
     def check_consistency(self, params: dict[str, float], scenario: Scenario) -> None:
@@ -243,7 +330,8 @@ class Car(Scene):
         if sag >= clearance:
             raise ParameterError(
                 f"push_mass = {push:g} kg pushes the car bottom {sag:.4g} m down, through the ground"
-                f" (clearance {clearance:g} m); valid: push_mass < {k * clearance / g:.6g} kg")
+                f" (clearance {clearance:g} m); valid: push_mass < {k * clearance / g:.6g} kg"
+            )
         # highest point after release: x_s + sag (undamped), less the first overshoot's decay (damped)
         zeta = d / (2.0 * math.sqrt(k * m))
         overshoot = math.exp(-math.pi * zeta / math.sqrt(1.0 - zeta * zeta)) if zeta < 1.0 else 0.0
@@ -251,7 +339,8 @@ class Car(Scene):
             raise ParameterError(
                 f"push_mass = {push:g} kg makes the car rebound {sag * overshoot:.4g} m above its rest height,"
                 f" off its springs (they are compressed only {m * g / k:.4g} m by its weight);"
-                f" valid: push_mass <= {m / overshoot:.6g} kg")
+                f" valid: push_mass <= {m / overshoot:.6g} kg"
+            )
 
     # -- model ---------------------------------------------------------------
 
@@ -306,8 +395,9 @@ class Car(Scene):
         ):
             # length = heave + coef * pitch = clearance at rest; preload = the axle's static load
             rest = clearance + load / k
-            tendon = spec.add_tendon(name=f"{axle}_suspension", stiffness=[k, 0.0, 0.0], damping=[c, 0.0, 0.0],
-                                     springlength=[rest, rest])
+            tendon = spec.add_tendon(
+                name=f"{axle}_suspension", stiffness=[k, 0.0, 0.0], damping=[c, 0.0, 0.0], springlength=[rest, rest]
+            )
             tendon.wrap_joint("heave", 1.0)
             tendon.wrap_joint("pitch", coef)
 
@@ -328,8 +418,9 @@ class Car(Scene):
         wheels.mass = mu
         wheels.add_joint(name="wheel", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[0.0, 0.0, 1.0], ref=wheel_rest)
         rest = params["clearance"] - wheel_rest + ms * g / ks  # spring carries the sprung weight at rest
-        suspension = spec.add_tendon(name="suspension", stiffness=[ks, 0.0, 0.0], damping=[cs, 0.0, 0.0],
-                                     springlength=[rest, rest])
+        suspension = spec.add_tendon(
+            name="suspension", stiffness=[ks, 0.0, 0.0], damping=[cs, 0.0, 0.0], springlength=[rest, rest]
+        )
         suspension.wrap_joint("heave", 1.0)
         suspension.wrap_joint("wheel", -1.0)
         # the bump generator: road height under the tire = exciter coordinate (horizontal axis: no gravity)
@@ -339,17 +430,30 @@ class Car(Scene):
         exciter.mass = exciter_stiffness / omega**2
         exciter.inertia = [1.0, 1.0, 1.0]
         exciter.explicitinertial = True
-        exciter.add_joint(name="road", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1.0, 0.0, 0.0],
-                          stiffness=[exciter_stiffness, 0.0, 0.0])
+        exciter.add_joint(
+            name="road", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[1.0, 0.0, 0.0], stiffness=[exciter_stiffness, 0.0, 0.0]
+        )
         contact = spec.add_tendon(name="bump_contact")
         contact.wrap_joint("road", 1.0)
         contact.wrap_joint("wheel", -1.0)
         affine = mujoco.mjtGain.mjGAIN_AFFINE
         # force = (gain0 + gain1 * length) * ctrl: a tire spring of rest length `radius`, switched by ctrl
-        spec.add_actuator(name="tire_on_bump", trntype=mujoco.mjtTrn.mjTRN_TENDON, target="bump_contact",
-                          gaintype=affine, gainprm=[-kt * radius, -kt, 0.0] + [0.0] * 7, ctrllimited=0)
-        spec.add_actuator(name="tire_on_road", trntype=mujoco.mjtTrn.mjTRN_JOINT, target="wheel",
-                          gaintype=affine, gainprm=[kt * radius, -kt, 0.0] + [0.0] * 7, ctrllimited=0)
+        spec.add_actuator(
+            name="tire_on_bump",
+            trntype=mujoco.mjtTrn.mjTRN_TENDON,
+            target="bump_contact",
+            gaintype=affine,
+            gainprm=[-kt * radius, -kt, 0.0] + [0.0] * 7,
+            ctrllimited=0,
+        )
+        spec.add_actuator(
+            name="tire_on_road",
+            trntype=mujoco.mjtTrn.mjTRN_JOINT,
+            target="wheel",
+            gaintype=affine,
+            gainprm=[kt * radius, -kt, 0.0] + [0.0] * 7,
+            ctrllimited=0,
+        )
 
     def setup(self, model, params, scenario, steps, dt) -> Setup:
         qpos = model.qpos0.copy()  # the static equilibrium (clearance; wheel at its loaded height)
@@ -382,28 +486,37 @@ class Car(Scene):
             x, theta = reference.pos["heave"], reference.pos["pitch"]
             what = f"push_mass = {params['push_mass']:g} kg at push_position = {params['push_position']:g} m"
             stations = {"front axle": linear.a, "rear axle": -linear.b, "push position": params["push_position"]}
-            springs = {"front": _axle_force(linear, 0, x, theta, reference.vel),
-                       "rear": _axle_force(linear, 1, x, theta, reference.vel)}
+            springs = {
+                "front": _axle_force(linear, 0, x, theta, reference.vel),
+                "rear": _axle_force(linear, 1, x, theta, reference.vel),
+            }
             fix = "use a smaller push_mass"
         else:
             quarter = _QuarterCar(model, params)
             what = f"bump_height = {params['bump_height']:g} m at speed = {params['speed']:g} m/s"
             stations = {"body": None}
             x = reference.pos["heave"]
-            springs = {"suspension": quarter.suspension_force(x, reference.pos["wheel"], reference.vel["heave"],
-                                                             reference.vel["wheel"])}
+            springs = {
+                "suspension": quarter.suspension_force(
+                    x, reference.pos["wheel"], reference.vel["heave"], reference.vel["wheel"]
+                )
+            }
             fix = "use a lower bump or another speed"
         for where, station in stations.items():
             bottom = x if station is None else x - station * theta
             if bottom.min() < 0.0:
                 i = int(np.argmin(bottom))
-                raise ParameterError(f"{what} drives the car bottom ({where}) through the ground (height"
-                                     f" {bottom[i]:.4g} m at t = {time[i]:.4g} s); {fix}")
+                raise ParameterError(
+                    f"{what} drives the car bottom ({where}) through the ground (height"
+                    f" {bottom[i]:.4g} m at t = {time[i]:.4g} s); {fix}"
+                )
         for axle, force in springs.items():
             if force.min() < 0.0:
                 i = int(np.argmin(force))
-                raise ParameterError(f"{what} lifts the car off its {axle} springs (springs and dampers would"
-                                     f" have to pull {-force[i]:.4g} N at t = {time[i]:.4g} s); {fix}")
+                raise ParameterError(
+                    f"{what} lifts the car off its {axle} springs (springs and dampers would"
+                    f" have to pull {-force[i]:.4g} N at t = {time[i]:.4g} s); {fix}"
+                )
 
     # -- exact references -----------------------------------------------------
 
@@ -423,22 +536,29 @@ class Car(Scene):
         # z = (x, v, 1): the spring's preload and gravity as a constant generator state
         system = np.array([[0.0, 1.0, 0.0], [-k / m, -d / m, k * rest / m], [0.0, 0.0, 0.0]])
         states = np.column_stack([x + rest, v, np.ones_like(time)])
-        return Reference(pos={"heave": x + rest}, vel={"heave": v}, system=system, states=states,
-                         rows={"heave": (0, 1)})
+        return Reference(
+            pos={"heave": x + rest}, vel={"heave": v}, system=system, states=states, rows={"heave": (0, 1)}
+        )
 
     @staticmethod
     def _pitch_heave_reference(model, params, time) -> Reference:
         linear = _Linear2Dof(model)
         q0 = linear.equilibrium + np.linalg.solve(linear.stiffness, _push_force(model, params))
-        q, v = analytic.linear_response(time, linear.mass, linear.damping, linear.stiffness, q0, np.zeros(2),
-                                        force=linear.preload)
+        q, v = analytic.linear_response(
+            time, linear.mass, linear.damping, linear.stiffness, q0, np.zeros(2), force=linear.preload
+        )
         a = analytic.state_matrix(linear.mass, linear.damping, linear.stiffness)
         system = np.zeros((5, 5))
         system[:4, :4] = a
         system[2:4, 4] = np.linalg.solve(linear.mass, linear.preload)
         states = np.column_stack([q, v, np.ones_like(time)])
-        return Reference(pos={"heave": q[:, 0], "pitch": q[:, 1]}, vel={"heave": v[:, 0], "pitch": v[:, 1]},
-                         system=system, states=states, rows={"heave": (0, 2), "pitch": (1, 3)})
+        return Reference(
+            pos={"heave": q[:, 0], "pitch": q[:, 1]},
+            vel={"heave": v[:, 0], "pitch": v[:, 1]},
+            system=system,
+            states=states,
+            rows={"heave": (0, 2), "pitch": (1, 3)},
+        )
 
     @staticmethod
     def _road_bump_reference(model, params, time) -> Reference:
@@ -453,12 +573,22 @@ class Car(Scene):
         for joint, (ip, iv) in rows.items():
             input_error[f"{joint}_pos"] = float(np.max(np.abs(realized[:, ip] - true[:, ip])))
             input_error[f"{joint}_vel"] = float(np.max(np.abs(realized[:, iv] - true[:, iv])))
-        basis = (f"+ the exact effect of ending the bump on the step grid at {switch:.6g} s instead of"
-                 f" {quarter.bump_time:.6g} s" if switch != quarter.bump_time else "")
-        return Reference(pos={"heave": true[:, 0], "wheel": true[:, 1]},
-                         vel={"heave": true[:, 2], "wheel": true[:, 3]},
-                         system=quarter.on_bump, states=true, rows=rows,
-                         switches=[(switch, quarter.on_road)], input_error=input_error, tolerance_basis=basis)
+        basis = (
+            f"+ the exact effect of ending the bump on the step grid at {switch:.6g} s instead of"
+            f" {quarter.bump_time:.6g} s"
+            if switch != quarter.bump_time
+            else ""
+        )
+        return Reference(
+            pos={"heave": true[:, 0], "wheel": true[:, 1]},
+            vel={"heave": true[:, 2], "wheel": true[:, 3]},
+            system=quarter.on_bump,
+            states=true,
+            rows=rows,
+            switches=[(switch, quarter.on_road)],
+            input_error=input_error,
+            tolerance_basis=basis,
+        )
 
     # -- modes and phase plane -------------------------------------------------
 
@@ -564,11 +694,14 @@ class Car(Scene):
             out[f"omega_d_{i}_rad_s"] = omega * math.sqrt(max(1 - zeta * zeta, 0.0))
         exact = {"M": linear.mass, "C": linear.damping, "K": linear.stiffness}
         out["linearization_max_rel_diff"] = max(
-            float(np.max(np.abs(measured[n] - exact[n])) / np.max(np.abs(exact[n]))) for n in exact
-            if np.max(np.abs(exact[n])) > 0)
+            float(np.max(np.abs(measured[n] - exact[n])) / np.max(np.abs(exact[n])))
+            for n in exact
+            if np.max(np.abs(exact[n])) > 0
+        )
         heave, pitch = model.joint("heave"), model.joint("pitch")
-        out["max_heave_deviation_m"] = float(np.max(np.abs(trajectory.qpos[:, heave.qposadr[0]]
-                                                          - linear.equilibrium[0])))
+        out["max_heave_deviation_m"] = float(
+            np.max(np.abs(trajectory.qpos[:, heave.qposadr[0]] - linear.equilibrium[0]))
+        )
         out["max_pitch_rad"] = float(np.max(np.abs(trajectory.qpos[:, pitch.qposadr[0]])))
         return out
 
@@ -623,17 +756,28 @@ def _tendon(model: mujoco.MjModel, name: str) -> dict:
     """A fixed tendon read back: stiffness [N/m], damping [N s/m], rest length [m], joint -> coefficient."""
     i = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TENDON, name)
     start, count = model.tendon_adr[i], model.tendon_num[i]
-    coefficients = {mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, int(model.wrap_objid[w])):
-                    float(model.wrap_prm[w]) for w in range(start, start + count)}
-    return {"stiffness": float(model.tendon_stiffness[i]), "damping": float(model.tendon_damping[i]),
-            "rest": float(model.tendon_lengthspring[i, 0]), "coefficients": coefficients}
+    coefficients = {
+        mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, int(model.wrap_objid[w])): float(model.wrap_prm[w])
+        for w in range(start, start + count)
+    }
+    return {
+        "stiffness": float(model.tendon_stiffness[i]),
+        "damping": float(model.tendon_damping[i]),
+        "rest": float(model.tendon_lengthspring[i, 0]),
+        "coefficients": coefficients,
+    }
 
 
 def _one_dof(model: mujoco.MjModel) -> tuple[float, float, float, float, float]:
     """(m [kg], k [N/m], d [N s/m], springref [m], g [m/s^2]) of the 1-DOF car, read back."""
     heave = model.joint("heave")
-    return (float(model.body("car").mass[0]), float(heave.stiffness[0]), float(model.dof_damping[heave.dofadr[0]]),
-            float(model.qpos_spring[heave.qposadr[0]]), _gravity(model))
+    return (
+        float(model.body("car").mass[0]),
+        float(heave.stiffness[0]),
+        float(model.dof_damping[heave.dofadr[0]]),
+        float(model.qpos_spring[heave.qposadr[0]]),
+        _gravity(model),
+    )
 
 
 class _Linear2Dof:
@@ -706,7 +850,7 @@ class _QuarterCar:
         a[2, 6] = ks * self.rest / ms - g
         a[3, :4] = [ks / mu, -(ks + kt) / mu, cs / mu, -cs / mu]
         a[3, 6] = (kt * self.radius - ks * self.rest) / mu - g
-        a[5, 4] = -self.omega**2
+        a[5, 4] = -(self.omega**2)
         self.on_road = a
         self.on_bump = a.copy()
         self.on_bump[3, 4] = kt / mu  # the tire follows the bump

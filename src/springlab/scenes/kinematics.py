@@ -48,7 +48,6 @@ analytic.piecewise_linear_velocity (tachograph).
 
 from __future__ import annotations
 
-
 import mujoco
 import numpy as np
 
@@ -123,14 +122,31 @@ class Kinematics(Scene):
     scenarios = {
         s.name: s
         for s in (
-            Scenario("polynomial_position", "x(t) = 0.03 t^3 + 0.2 t^2 + 1.2 t + 3.0 m: find v(t) and a(t)", 10.0,
-                     {"x0": 3.0, "v0": 1.2, "a0": 0.4, "jerk": 0.18}),
-            Scenario("linear_acceleration", "a(t) = 1.2 t + 3.0 m/s^2, v(0) = 15 m/s, x(0) = 150 m: find v(t), x(t)",
-                     5.0, {"x0": 150.0, "v0": 15.0, "a0": 3.0, "jerk": 1.2}),
-            Scenario("constant_acceleration", "uniformly accelerated motion, eq. 5.5: a = 2 m/s^2 from 10 m/s",
-                     5.0, {"x0": 0.0, "v0": 10.0, "a0": 2.0, "jerk": 0.0}),
-            Scenario("tachograph", "a bus's 12 s v-t record: displacement = area under v(t), a = its slope",
-                     TACHOGRAPH_TIMES[-1], {"x0": 0.0}, derive=_reject_profile_parameters),
+            Scenario(
+                "polynomial_position",
+                "x(t) = 0.03 t^3 + 0.2 t^2 + 1.2 t + 3.0 m: find v(t) and a(t)",
+                10.0,
+                {"x0": 3.0, "v0": 1.2, "a0": 0.4, "jerk": 0.18},
+            ),
+            Scenario(
+                "linear_acceleration",
+                "a(t) = 1.2 t + 3.0 m/s^2, v(0) = 15 m/s, x(0) = 150 m: find v(t), x(t)",
+                5.0,
+                {"x0": 150.0, "v0": 15.0, "a0": 3.0, "jerk": 1.2},
+            ),
+            Scenario(
+                "constant_acceleration",
+                "uniformly accelerated motion, eq. 5.5: a = 2 m/s^2 from 10 m/s",
+                5.0,
+                {"x0": 0.0, "v0": 10.0, "a0": 2.0, "jerk": 0.0},
+            ),
+            Scenario(
+                "tachograph",
+                "a bus's 12 s v-t record: displacement = area under v(t), a = its slope",
+                TACHOGRAPH_TIMES[-1],
+                {"x0": 0.0},
+                derive=_reject_profile_parameters,
+            ),
         )
     }
 
@@ -163,18 +179,20 @@ class Kinematics(Scene):
         if scenario.name == "tachograph":
             self._check_knots_on_grid(dt)
             if steps * dt > TACHOGRAPH_TIMES[-1] * (1 + 1e-12):
-                raise BadInputError(f"the tachograph record covers {TACHOGRAPH_TIMES[-1]:g} s;"
-                                    f" duration must be <= {TACHOGRAPH_TIMES[-1]:g} s, got {steps * dt:g} s")
+                raise BadInputError(
+                    f"the tachograph record covers {TACHOGRAPH_TIMES[-1]:g} s;"
+                    f" duration must be <= {TACHOGRAPH_TIMES[-1]:g} s, got {steps * dt:g} s"
+                )
             # the motor carries m a on each step; a is read at the step's midpoint, which lies
             # strictly inside one segment because every knot is a step boundary
             midpoints = (np.arange(steps) + 0.5) * dt
             accel = self._tachograph_acceleration(midpoints)
             control = np.column_stack([np.zeros(steps), m * accel])
-            return Setup(qpos=qpos, qvel=np.array([TACHOGRAPH_VELOCITIES[0]]), act=np.array([0.0]),
-                         control=control)
+            return Setup(qpos=qpos, qvel=np.array([TACHOGRAPH_VELOCITIES[0]]), act=np.array([0.0]), control=control)
         a0, jerk = self.acceleration_coefficients(params)
-        return Setup(qpos=qpos, qvel=np.array([params["v0"]]), act=np.array([m * a0]),
-                     control=np.array([m * jerk, 0.0]))
+        return Setup(
+            qpos=qpos, qvel=np.array([params["v0"]]), act=np.array([m * a0]), control=np.array([m * jerk, 0.0])
+        )
 
     @staticmethod
     def _tachograph_acceleration(time: np.ndarray) -> np.ndarray:
@@ -202,8 +220,9 @@ class Kinematics(Scene):
         if scenario.name == "tachograph":
             # MuJoCo's accumulated time may overshoot the record's end by round-off
             inside = np.clip(time, TACHOGRAPH_TIMES[0], TACHOGRAPH_TIMES[-1])
-            x, v, a = analytic.piecewise_linear_velocity(inside, TACHOGRAPH_TIMES, TACHOGRAPH_VELOCITIES,
-                                                         x0=params["x0"])
+            x, v, a = analytic.piecewise_linear_velocity(
+                inside, TACHOGRAPH_TIMES, TACHOGRAPH_VELOCITIES, x0=params["x0"]
+            )
             # z = (x, v, F): the force is constant on every step
             system = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0 / m], [0.0, 0.0, 0.0]])
             states = np.column_stack([x, v, m * np.asarray(a, float) * np.ones_like(time)])
@@ -213,10 +232,16 @@ class Kinematics(Scene):
             # z = (x, v, F, dF/dt): a force ramp, generated exactly
             system = np.zeros((4, 4))
             system[0, 1], system[1, 2], system[2, 3] = 1.0, 1.0 / m, 1.0
-            states = np.column_stack([x, v, m * np.asarray(a, float) * np.ones_like(time),
-                                      np.full_like(time, m * jerk)])
-        return Reference(pos={"vehicle": np.asarray(x, float)}, vel={"vehicle": np.asarray(v, float)},
-                         system=system, states=states, rows={"vehicle": (0, 1)})
+            states = np.column_stack(
+                [x, v, m * np.asarray(a, float) * np.ones_like(time), np.full_like(time, m * jerk)]
+            )
+        return Reference(
+            pos={"vehicle": np.asarray(x, float)},
+            vel={"vehicle": np.asarray(v, float)},
+            system=system,
+            states=states,
+            rows={"vehicle": (0, 1)},
+        )
 
     # -- phase plane -------------------------------------------------------------
 
@@ -246,8 +271,9 @@ class Kinematics(Scene):
         position = [x0, v0, a0 / 2.0, jerk / 6.0]
         velocity = [v0, a0, jerk / 2.0]
         acceleration = [a0, jerk]
-        x_end, v_end, a_end = (float(np.polynomial.polynomial.polyval(t_end, c))
-                               for c in (position, velocity, acceleration))
+        x_end, v_end, a_end = (
+            float(np.polynomial.polynomial.polyval(t_end, c)) for c in (position, velocity, acceleration)
+        )
         return {
             "position_expression": polynomial_expression("x", position, "m"),
             "velocity_expression": polynomial_expression("v", velocity, "m/s"),
@@ -280,11 +306,12 @@ class Kinematics(Scene):
                 v_text = f"{lead}{abs(slope):g} {shifted}"
             pieces.append(f"{v_text} m/s for {start:g} <= t <= {times[i + 1]:g} s")
         x_end, v_end, a_end = analytic.piecewise_linear_velocity(
-            np.array([min(t_end, TACHOGRAPH_TIMES[-1])]), TACHOGRAPH_TIMES, TACHOGRAPH_VELOCITIES, x0=params["x0"])
+            np.array([min(t_end, TACHOGRAPH_TIMES[-1])]), TACHOGRAPH_TIMES, TACHOGRAPH_VELOCITIES, x0=params["x0"]
+        )
         return {
             "velocity_profile": "v(t) = " + "; ".join(pieces),
-            "acceleration_profile": "a(t) = " + "; ".join(
-                f"{s:g} m/s^2 for {times[i]:g} < t < {times[i + 1]:g} s" for i, s in enumerate(slopes)),
+            "acceleration_profile": "a(t) = "
+            + "; ".join(f"{s:g} m/s^2 for {times[i]:g} < t < {times[i + 1]:g} s" for i, s in enumerate(slopes)),
             "knot_times_s": times.tolist(),
             "knot_velocities_m_s": velocities.tolist(),
             "segment_accelerations_m_s2": slopes.tolist(),

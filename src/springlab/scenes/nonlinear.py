@@ -282,6 +282,7 @@ def oscillation_period(mass: float, k1: float, k3: float, x0: float, v0: float) 
     if a == b:
         return math.nan, 0.0
     if k3 == 0:
+
         def reduced(x):
             return np.full_like(x, 0.5 * k1)
     else:
@@ -358,8 +359,12 @@ def turning_times(time: np.ndarray, velocity: np.ndarray, acceleration: np.ndarr
     """Times [s] of the position maxima (v crossing zero downwards), to O(dt^4) by cubic Hermite
     interpolation of v with its derivative a [m/s^2]."""
     down = np.flatnonzero((velocity[:-1] > 0) & (velocity[1:] <= 0))
-    return np.array([_hermite_root(time[i], time[i + 1], velocity[i], velocity[i + 1],
-                                   acceleration[i], acceleration[i + 1]) for i in down])
+    return np.array(
+        [
+            _hermite_root(time[i], time[i + 1], velocity[i], velocity[i + 1], acceleration[i], acceleration[i + 1])
+            for i in down
+        ]
+    )
 
 
 def measured_period(time, position, velocity, acceleration) -> float:
@@ -377,8 +382,7 @@ def crossing_time(time, position, velocity, radius: float) -> float:
         return math.nan if not beyond.size else float(time[0])
     i = int(beyond[0]) - 1
     target = math.copysign(radius, position[i + 1])
-    return _hermite_root(time[i], time[i + 1], position[i], position[i + 1], velocity[i], velocity[i + 1],
-                         target)
+    return _hermite_root(time[i], time[i + 1], position[i], position[i + 1], velocity[i], velocity[i + 1], target)
 
 
 # -- the scene -------------------------------------------------------------------------------
@@ -406,8 +410,13 @@ class Nonlinear(Scene):
             Parameter("k3", "N/m^3", "cubic spring coefficient (< 0 softening, > 0 hardening)"),
             Parameter("damping", "N s/m", "damper coefficient d", minimum=0.0),
             Parameter("force_amplitude", "N", "amplitude of the applied force", default=0.0),
-            Parameter("force_frequency", "Hz", "frequency of the sinusoidal force (0: constant force)",
-                      minimum=0.0, default=5.0 / math.pi),
+            Parameter(
+                "force_frequency",
+                "Hz",
+                "frequency of the sinusoidal force (0: constant force)",
+                minimum=0.0,
+                default=5.0 / math.pi,
+            ),
             Parameter("x0", "m", "initial stretch of the spring", default=0.09),
             Parameter("v0", "m/s", "initial velocity", default=0.0),
         )
@@ -415,15 +424,37 @@ class Nonlinear(Scene):
     scenarios = {
         s.name: s
         for s in (
-            Scenario("softening", "softening spring released inside the separatrix: bounded, anharmonic", 5.0,
-                     {**_UNFORCED, "x0": 0.09, "v0": 0.0}),
-            Scenario("softening_escape", "softening spring launched above the saddle energy: escapes", 5.0,
-                     {**_UNFORCED, "x0": 0.0, "v0": 0.75}),
-            Scenario("double_well", "Duffing double well (k1 < 0 < k3): oscillation inside one well", 5.0,
-                     {**_UNFORCED, **_DOUBLE_WELL, "x0": 0.13, "v0": 0.0}),
-            Scenario("forced_duffing", "damped, sinusoidally forced double well: chaos, 1e-9 m grows to the wells",
-                     40.0, {**_DOUBLE_WELL, "damping": 2.5, "force_amplitude": 3.0,
-                            "force_frequency": 5.0 / math.pi, "x0": 0.1, "v0": 0.0}),
+            Scenario(
+                "softening",
+                "softening spring released inside the separatrix: bounded, anharmonic",
+                5.0,
+                {**_UNFORCED, "x0": 0.09, "v0": 0.0},
+            ),
+            Scenario(
+                "softening_escape",
+                "softening spring launched above the saddle energy: escapes",
+                5.0,
+                {**_UNFORCED, "x0": 0.0, "v0": 0.75},
+            ),
+            Scenario(
+                "double_well",
+                "Duffing double well (k1 < 0 < k3): oscillation inside one well",
+                5.0,
+                {**_UNFORCED, **_DOUBLE_WELL, "x0": 0.13, "v0": 0.0},
+            ),
+            Scenario(
+                "forced_duffing",
+                "damped, sinusoidally forced double well: chaos, 1e-9 m grows to the wells",
+                40.0,
+                {
+                    **_DOUBLE_WELL,
+                    "damping": 2.5,
+                    "force_amplitude": 3.0,
+                    "force_frequency": 5.0 / math.pi,
+                    "x0": 0.1,
+                    "v0": 0.0,
+                },
+            ),
         )
     }
 
@@ -458,10 +489,16 @@ class Nonlinear(Scene):
         omega = 2 * math.pi * params["force_frequency"]
         # everything the exciter drives, as a stiffness scale: the spring at the escape radius too
         reach = ESCAPE_FACTOR * max(abs(params["x0"]), self._length_scale(params))
-        driven = (abs(params["k1"]) + 3 * abs(params["k3"]) * reach**2 + params["mass"] * omega**2
-                  + params["damping"] * omega)
-        exciter.add(spec, "block", force_amplitude=params["force_amplitude"],
-                    force_frequency=params["force_frequency"], driven_stiffness=driven)
+        driven = (
+            abs(params["k1"]) + 3 * abs(params["k3"]) * reach**2 + params["mass"] * omega**2 + params["damping"] * omega
+        )
+        exciter.add(
+            spec,
+            "block",
+            force_amplitude=params["force_amplitude"],
+            force_frequency=params["force_frequency"],
+            driven_stiffness=driven,
+        )
 
     @staticmethod
     def _length_scale(params: dict[str, float]) -> float:
@@ -568,8 +605,12 @@ class Nonlinear(Scene):
             stiffness = float(curvature(x_e, k1, k3))
             eigenvalues = linear_eigenvalues(m, stiffness, d)
             kind = equilibrium_kind(eigenvalues)
-            entry = {"x": float(x_e), "stable": kind in ("center", "stable focus", "stable node"),
-                     "kind": kind, "eigenvalues_per_s": [[float(s.real), float(s.imag)] for s in eigenvalues]}
+            entry = {
+                "x": float(x_e),
+                "stable": kind in ("center", "stable focus", "stable node"),
+                "kind": kind,
+                "eigenvalues_per_s": [[float(s.real), float(s.imag)] for s in eigenvalues],
+            }
             if stiffness > 0:
                 entry["omega_rad_s"] = math.sqrt(stiffness / m)
             elif stiffness < 0:
@@ -656,19 +697,33 @@ class Nonlinear(Scene):
             largest = (abs(k1) * probe + abs(k3) * probe**3) / m
             relative = 10 * (10 / 3) * _EPS * largest / step / (abs(stiffness) / m) + 100 * _EPS
             name = f"omega_at_{_label(x_e)}_m_rad_s" if stiffness > 0 else f"saddle_rate_at_{_label(x_e)}_m_per_s"
-            checks.append(Check(
-                name=name, value=math.sqrt(abs(jacobian[1, 0])), reference=math.sqrt(abs(stiffness) / m),
-                # a square root halves a relative error
-                tolerance=SAFETY * 0.5 * relative,
-                basis="MuJoCo's qacc linearized by Richardson-combined centred differences (exact for a cubic"
-                      " force): 2 x its round-off, against sqrt(|k1 + 3 k3 x^2| / m)"))
+            checks.append(
+                Check(
+                    name=name,
+                    value=math.sqrt(abs(jacobian[1, 0])),
+                    reference=math.sqrt(abs(stiffness) / m),
+                    # a square root halves a relative error
+                    tolerance=SAFETY * 0.5 * relative,
+                    basis="MuJoCo's qacc linearized by Richardson-combined centred differences (exact for a cubic"
+                    " force): 2 x its round-off, against sqrt(|k1 + 3 k3 x^2| / m)",
+                )
+            )
         return checks
 
     # -- re-running for error estimates -------------------------------------------
 
-    def _rerun(self, params, scenario, integrator: str, dt: float, duration: float,
-               x0: float | None = None, v0: float | None = None, state: tuple | None = None,
-               model: mujoco.MjModel | None = None) -> Trajectory:
+    def _rerun(
+        self,
+        params,
+        scenario,
+        integrator: str,
+        dt: float,
+        duration: float,
+        x0: float | None = None,
+        v0: float | None = None,
+        state: tuple | None = None,
+        model: mujoco.MjModel | None = None,
+    ) -> Trajectory:
         """Another run of the same scene, optionally from another block state or from a full
         (qpos, qvel) state; on a fresh model unless one is given (simulate sets its timestep)."""
         model = self.build(params, scenario) if model is None else model
@@ -676,10 +731,17 @@ class Nonlinear(Scene):
             qpos, qvel = state
             setup = Setup(qpos=qpos, qvel=qvel, control=self._setup(model, params, 0.0, 0.0).control)
         else:
-            setup = self._setup(model, params, params["x0"] if x0 is None else x0,
-                                params["v0"] if v0 is None else v0)
-        return simulate(model, integrator=integrator, dt=dt, duration=duration, qpos=setup.qpos,
-                        qvel=setup.qvel, control=setup.control, stop=self.stop_condition(model, params, scenario))
+            setup = self._setup(model, params, params["x0"] if x0 is None else x0, params["v0"] if v0 is None else v0)
+        return simulate(
+            model,
+            integrator=integrator,
+            dt=dt,
+            duration=duration,
+            qpos=setup.qpos,
+            qvel=setup.qvel,
+            control=setup.control,
+            stop=self.stop_condition(model, params, scenario),
+        )
 
     def _block(self, model, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
         j = model.joint("block")
@@ -692,8 +754,7 @@ class Nonlinear(Scene):
         m, k1, k3, d = self.physical(model)
         x0, v0 = params["x0"], params["v0"]
         e0 = float(energy(x0, v0, m, k1, k3))
-        saddle_levels = [float(potential(x, k1, k3)) for x in equilibrium_positions(k1, k3)
-                         if curvature(x, k1, k3) < 0]
+        saddle_levels = [float(potential(x, k1, k3)) for x in equilibrium_positions(k1, k3) if curvature(x, k1, k3) < 0]
         a, b = turning_points(x0, v0, m, k1, k3)
         orbit = {"energy_J": e0, "turning_points_m": [a, b]}
         if saddle_levels:
@@ -749,7 +810,8 @@ class Nonlinear(Scene):
                 if unforced:
                     try:
                         out["escape_time_quadrature_s"] = transit_time(
-                            m, k1, k3, params["x0"], params["v0"], math.copysign(radius, x[-1]))[0]
+                            m, k1, k3, params["x0"], params["v0"], math.copysign(radius, x[-1])
+                        )[0]
                     except ValueError:
                         pass
         if self._forcing(params) == "harmonic" and d > 0:
@@ -770,8 +832,9 @@ class Nonlinear(Scene):
         m, k1, k3, d = self.physical(model)
         x, v = self._block(model, trajectory)
         duration = float(trajectory.time[-1])
-        twin = self._rerun(params, scenario, trajectory.integrator, trajectory.dt, duration,
-                           x0=params["x0"] + PERTURBATION)
+        twin = self._rerun(
+            params, scenario, trajectory.integrator, trajectory.dt, duration, x0=params["x0"] + PERTURBATION
+        )
         x2, v2 = self._block(model, twin)
         n = min(len(x), len(x2))
         well = self._well_size(params, model)
@@ -796,12 +859,20 @@ class Nonlinear(Scene):
         wrong = np.flatnonzero(estimate > ACCURACY_FRACTION * well)
         out["accurate_until_s"] = float(trajectory.time[wrong[0]]) if wrong.size else float(trajectory.time[n - 1])
         out["lyapunov_exponent_per_s"], out["lyapunov_standard_error_per_s"] = self.lyapunov_exponent(
-            params, scenario, trajectory.integrator, trajectory.dt)
+            params, scenario, trajectory.integrator, trajectory.dt
+        )
         return out
 
-    def lyapunov_exponent(self, params, scenario, integrator: str, dt: float,
-                          transient: float = LYAPUNOV_TRANSIENT, total: float = LYAPUNOV_TIME,
-                          interval: float = LYAPUNOV_INTERVAL) -> tuple[float, float]:
+    def lyapunov_exponent(
+        self,
+        params,
+        scenario,
+        integrator: str,
+        dt: float,
+        transient: float = LYAPUNOV_TRANSIENT,
+        total: float = LYAPUNOV_TIME,
+        interval: float = LYAPUNOV_INTERVAL,
+    ) -> tuple[float, float]:
         """Largest Lyapunov exponent [1/s] by Benettin's renormalization, and its standard error [1/s].
 
         A companion run PERTURBATION away (in the block's (x, v / omega) plane) is pulled back
@@ -832,7 +903,9 @@ class Nonlinear(Scene):
             twin[0][qpos_adr] += dx * PERTURBATION / distance
             twin[1][dof] += dv * PERTURBATION / distance
         rates = np.array(rates)
-        return float(np.mean(rates)), float(np.std(rates, ddof=1) / math.sqrt(len(rates))) if len(rates) > 1 else math.inf
+        return float(np.mean(rates)), float(np.std(rates, ddof=1) / math.sqrt(len(rates))) if len(
+            rates
+        ) > 1 else math.inf
 
     # -- validation ------------------------------------------------------------------
 
@@ -848,9 +921,16 @@ class Nonlinear(Scene):
         if unforced:
             e = energy(x, v, m, k1, k3)
             drift = float(np.max(np.abs(e - e[0])) / max(np.max(0.5 * m * v**2), 1e-300))
-            out.append(Check("energy_drift_relative", drift, 0.0, ENERGY_DRIFT_LIMIT,
-                             "springlab's promise for undamped runs at the default setting: |E - E0| <="
-                             " 1e-6 x the largest kinetic energy"))
+            out.append(
+                Check(
+                    "energy_drift_relative",
+                    drift,
+                    0.0,
+                    ENERGY_DRIFT_LIMIT,
+                    "springlab's promise for undamped runs at the default setting: |E - E0| <="
+                    " 1e-6 x the largest kinetic energy",
+                )
+            )
             orbit = self._orbit(model, params)
             duration = float(trajectory.time[-1])
             if orbit["motion"] == "bounded":
@@ -862,11 +942,16 @@ class Nonlinear(Scene):
                 reference = orbit["period_quadrature_s"]
                 if not math.isfinite(period):  # fewer than two maxima in the run: nothing to measure
                     return out
-                out.append(Check(
-                    "period_s", period, reference,
-                    (SAFETY * estimate + orbit["period_quadrature_error_s"]) / reference + floor,
-                    f"2 x the Richardson error estimate of the measured period (runs at dt and dt/2, order {order})"
-                    " + quadrature error + 100 eps per step, against the energy integral by quadrature"))
+                out.append(
+                    Check(
+                        "period_s",
+                        period,
+                        reference,
+                        (SAFETY * estimate + orbit["period_quadrature_error_s"]) / reference + floor,
+                        f"2 x the Richardson error estimate of the measured period (runs at dt and dt/2, order {order})"
+                        " + quadrature error + 100 eps per step, against the energy integral by quadrature",
+                    )
+                )
             if trajectory.stopped:
                 radius = self.escape_radius(model, params)
                 escape = crossing_time(trajectory.time, x, v, radius)
@@ -874,15 +959,21 @@ class Nonlinear(Scene):
                 xh, vh = self._block(model, half)
                 escape_half = crossing_time(half.time, xh, vh, radius)
                 try:
-                    reference, quad_error = transit_time(m, k1, k3, params["x0"], params["v0"],
-                                                         math.copysign(radius, x[-1]))
+                    reference, quad_error = transit_time(
+                        m, k1, k3, params["x0"], params["v0"], math.copysign(radius, x[-1])
+                    )
                 except ValueError:
                     reference, quad_error = math.nan, 0.0
-                out.append(Check(
-                    "escape_time_s", escape, reference,
-                    (SAFETY * richardson * abs(escape - escape_half) + quad_error) / reference + floor,
-                    f"2 x the Richardson error estimate of the measured escape time (dt and dt/2, order {order})"
-                    " + quadrature error + 100 eps per step, against int dx / v(x) by quadrature"))
+                out.append(
+                    Check(
+                        "escape_time_s",
+                        escape,
+                        reference,
+                        (SAFETY * richardson * abs(escape - escape_half) + quad_error) / reference + floor,
+                        f"2 x the Richardson error estimate of the measured escape time (dt and dt/2, order {order})"
+                        " + quadrature error + 100 eps per step, against int dx / v(x) by quadrature",
+                    )
+                )
         elif self._forcing(params) != "none":
             out.append(self._convergence_check(params, scenario, integrator, dt, float(trajectory.time[-1])))
         return out
@@ -898,9 +989,14 @@ class Nonlinear(Scene):
         fine = float(np.max(np.abs(positions[1][:n] - positions[2][:n])))
         observed = math.log2(coarse / fine) if fine > 0 and coarse > 0 else math.nan
         order = ORDERS[integrator]
-        return Check("observed_order", observed, float(order), CONVERGENCE_ORDER_TOLERANCE / order,
-                     f"no closed form: |x(dt) - x(dt/2)| / |x(dt/2) - x(dt/4)| over the first {window:g} s must"
-                     f" show the integrator's order {order} within +-{CONVERGENCE_ORDER_TOLERANCE:g}")
+        return Check(
+            "observed_order",
+            observed,
+            float(order),
+            CONVERGENCE_ORDER_TOLERANCE / order,
+            f"no closed form: |x(dt) - x(dt/2)| / |x(dt/2) - x(dt/4)| over the first {window:g} s must"
+            f" show the integrator's order {order} within +-{CONVERGENCE_ORDER_TOLERANCE:g}",
+        )
 
 
 SCENE = Nonlinear()

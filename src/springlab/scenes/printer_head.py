@@ -110,31 +110,47 @@ class PrinterHead(Scene):
     parameters = {
         p.name: p
         for p in (
-            Parameter("carriage_mass", "kg", "mass of the carriage with the print head", minimum=0.0,
-                      minimum_inclusive=False),
-            Parameter("motor_mass", "kg", "motor-side mass: rotor+pulley inertia J / r^2", minimum=0.0,
-                      minimum_inclusive=False),
-            Parameter("belt_stiffness", "N/m", "belt stiffness k between drive point and carriage",
-                      minimum=0.0, minimum_inclusive=False),
+            Parameter(
+                "carriage_mass", "kg", "mass of the carriage with the print head", minimum=0.0, minimum_inclusive=False
+            ),
+            Parameter(
+                "motor_mass",
+                "kg",
+                "motor-side mass: rotor+pulley inertia J / r^2",
+                minimum=0.0,
+                minimum_inclusive=False,
+            ),
+            Parameter(
+                "belt_stiffness",
+                "N/m",
+                "belt stiffness k between drive point and carriage",
+                minimum=0.0,
+                minimum_inclusive=False,
+            ),
             Parameter("belt_damping", "N s/m", "belt damping c", minimum=0.0),
-            Parameter("drive_force", "N", "the motor's force limit on the belt", minimum=0.0,
-                      minimum_inclusive=False),
-            Parameter("move_distance", "m", "point-to-point move distance D", minimum=0.0,
-                      minimum_inclusive=False),
-            Parameter("positioning_band", "m", "half-width of the band around the target", minimum=0.0,
-                      minimum_inclusive=False),
-            Parameter("deflection", "m", "belt stretch at t = 0 (centre of mass at rest at 0)",
-                      default=0.0),
+            Parameter("drive_force", "N", "the motor's force limit on the belt", minimum=0.0, minimum_inclusive=False),
+            Parameter("move_distance", "m", "point-to-point move distance D", minimum=0.0, minimum_inclusive=False),
+            Parameter(
+                "positioning_band",
+                "m",
+                "half-width of the band around the target",
+                minimum=0.0,
+                minimum_inclusive=False,
+            ),
+            Parameter("deflection", "m", "belt stretch at t = 0 (centre of mass at rest at 0)", default=0.0),
         )
     }
     scenarios = {
         s.name: s
         for s in (
-            Scenario("move", "bang-bang move of move_distance at the force limit, then residual vibration",
-                     0.3),
+            Scenario("move", "bang-bang move of move_distance at the force limit, then residual vibration", 0.3),
             Scenario("step_force", "constant drive_force from rest: rigid-body motion + one belt mode", 0.05),
-            Scenario("settle", "release at rest from the belt stretch of full-force acceleration", 0.2,
-                     derive=_quasi_static_deflection),
+            Scenario(
+                "settle",
+                "release at rest from the belt stretch of full-force acceleration",
+                0.2,
+                derive=_quasi_static_deflection,
+            ),
         )
     }
 
@@ -166,8 +182,12 @@ class PrinterHead(Scene):
     def physical(model: mujoco.MjModel) -> tuple[float, float, float, float]:
         """(carriage mass [kg], motor-side mass [kg], belt stiffness [N/m], belt damping [N s/m]) of `model`."""
         belt = model.tendon("belt").id  # (MjModel's tendon view names these _stiffness, _damping)
-        return (float(model.body("carriage").mass[0]), float(model.body("motor").mass[0]),
-                float(model.tendon_stiffness[belt]), float(model.tendon_damping[belt]))
+        return (
+            float(model.body("carriage").mass[0]),
+            float(model.body("motor").mass[0]),
+            float(model.tendon_stiffness[belt]),
+            float(model.tendon_damping[belt]),
+        )
 
     @staticmethod
     def matrices(model: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -217,7 +237,7 @@ class PrinterHead(Scene):
         first = np.round(breaks / dt).astype(int)
         control = np.zeros((steps, model.nu))
         for start, force in zip(first, forces):
-            control[min(start, steps):, 0] = force
+            control[min(start, steps) :, 0] = force
         return Setup(qpos=qpos, qvel=qvel, control=control)
 
     # -- exact solution ------------------------------------------------------
@@ -237,9 +257,13 @@ class PrinterHead(Scene):
         system[2:4, 4] = inverse @ np.array([0.0, 1.0])
         segment = np.clip(np.searchsorted(breaks, time, side="right") - 1, 0, len(forces) - 1)
         states = np.column_stack([q, v, forces[segment]])
-        return Reference(pos={"carriage": q[:, 0], "motor": q[:, 1]},
-                         vel={"carriage": v[:, 0], "motor": v[:, 1]},
-                         system=system, states=states, rows={"carriage": (0, 2), "motor": (1, 3)})
+        return Reference(
+            pos={"carriage": q[:, 0], "motor": q[:, 1]},
+            vel={"carriage": v[:, 0], "motor": v[:, 1]},
+            system=system,
+            states=states,
+            rows={"carriage": (0, 2), "motor": (1, 3)},
+        )
 
     # -- the belt mode -------------------------------------------------------
 

@@ -37,6 +37,7 @@ from .. import analytic, exciter
 from ..scene import Parameter, Reference, Scenario, Scene, Setup
 from ..simulate import Trajectory
 
+
 def _damping_for_ratio(zeta: float) -> callable:
     """Scenario preset: damping [N s/m] = 2 zeta sqrt(k m) from the other parameters."""
 
@@ -84,23 +85,67 @@ class Slider(Scene):
         s.name: s
         for s in (
             Scenario("free", "release from x0, v0 with the model's damping", 5.0, _FORCE_FREE, dt=5e-3),
-            Scenario("undamped", "free response without damping (eq. 5.9)", 5.0, _FORCE_FREE,
-                     derive=_damping_for_ratio(0.0), dt=2.5e-3),
-            Scenario("underdamped", "free response at damping ratio 0.1 (eq. 5.14)", 5.0, _FORCE_FREE,
-                     derive=_damping_for_ratio(0.1), dt=5e-3),
-            Scenario("critical", "free response at damping ratio exactly 1", 3.0, _FORCE_FREE,
-                     derive=_damping_for_ratio(1.0), dt=5e-3),
-            Scenario("overdamped", "free response at damping ratio 2 (eq. 5.15)", 5.0, _FORCE_FREE,
-                     derive=_damping_for_ratio(2.0), dt=2.5e-3),
-            Scenario("step", "constant force from rest at the relaxed length", 5.0,
-                     {"force_amplitude": 10.0, "x0": 0.0, "v0": 0.0}, dt=5e-3),
-            Scenario("harmonic", "sinusoidal force from rest, transient included", 10.0,
-                     {"force_amplitude": 1.0, "x0": 0.0, "v0": 0.0}, dt=2e-3),
-            Scenario("resonance", "undamped, forced at its natural frequency: t sin growth", 5.0,
-                     {"force_amplitude": 1.0, "x0": 0.0, "v0": 0.0}, derive=_resonant, dt=2.5e-3),
-            Scenario("exercise", "the chapter's 'Under or overdamped?' problem: d/m = 3, k/m = 2",
-                     6.0, {"mass": 1.0, "stiffness": 2.0, "damping": 3.0, "x0": 5.0, "v0": 0.0,
-                           "force_amplitude": 0.0}, dt=1e-2),
+            Scenario(
+                "undamped",
+                "free response without damping (eq. 5.9)",
+                5.0,
+                _FORCE_FREE,
+                derive=_damping_for_ratio(0.0),
+                dt=2.5e-3,
+            ),
+            Scenario(
+                "underdamped",
+                "free response at damping ratio 0.1 (eq. 5.14)",
+                5.0,
+                _FORCE_FREE,
+                derive=_damping_for_ratio(0.1),
+                dt=5e-3,
+            ),
+            Scenario(
+                "critical",
+                "free response at damping ratio exactly 1",
+                3.0,
+                _FORCE_FREE,
+                derive=_damping_for_ratio(1.0),
+                dt=5e-3,
+            ),
+            Scenario(
+                "overdamped",
+                "free response at damping ratio 2 (eq. 5.15)",
+                5.0,
+                _FORCE_FREE,
+                derive=_damping_for_ratio(2.0),
+                dt=2.5e-3,
+            ),
+            Scenario(
+                "step",
+                "constant force from rest at the relaxed length",
+                5.0,
+                {"force_amplitude": 10.0, "x0": 0.0, "v0": 0.0},
+                dt=5e-3,
+            ),
+            Scenario(
+                "harmonic",
+                "sinusoidal force from rest, transient included",
+                10.0,
+                {"force_amplitude": 1.0, "x0": 0.0, "v0": 0.0},
+                dt=2e-3,
+            ),
+            Scenario(
+                "resonance",
+                "undamped, forced at its natural frequency: t sin growth",
+                5.0,
+                {"force_amplitude": 1.0, "x0": 0.0, "v0": 0.0},
+                derive=_resonant,
+                dt=2.5e-3,
+            ),
+            Scenario(
+                "exercise",
+                "the chapter's 'Under or overdamped?' problem: d/m = 3, k/m = 2",
+                6.0,
+                {"mass": 1.0, "stiffness": 2.0, "damping": 3.0, "x0": 5.0, "v0": 0.0, "force_amplitude": 0.0},
+                dt=1e-2,
+            ),
         )
     }
 
@@ -134,9 +179,13 @@ class Slider(Scene):
     def _add_exciter(self, spec: mujoco.MjSpec, params: dict[str, float]) -> None:
         """The harmonic force generator (springlab.exciter)."""
         omega = 2 * math.pi * params["force_frequency"]
-        exciter.add(spec, "slider", force_amplitude=params["force_amplitude"],
-                    force_frequency=params["force_frequency"],
-                    driven_stiffness=params["stiffness"] + params["mass"] * omega**2 + params["damping"] * omega)
+        exciter.add(
+            spec,
+            "slider",
+            force_amplitude=params["force_amplitude"],
+            force_frequency=params["force_frequency"],
+            driven_stiffness=params["stiffness"] + params["mass"] * omega**2 + params["damping"] * omega,
+        )
 
     def setup(self, model, params, scenario, steps, dt) -> Setup:
         qpos = np.zeros(model.nq)
@@ -181,8 +230,7 @@ class Slider(Scene):
             x, v = analytic.free_response(time, m, k, d, x0, v0)
             system = np.array([[0.0, 1.0], [-k / m, -d / m]])
             states = np.column_stack([x, v])
-        return Reference(pos={"slider": x}, vel={"slider": v}, system=system, states=states,
-                         rows={"slider": (0, 1)})
+        return Reference(pos={"slider": x}, vel={"slider": v}, system=system, states=states, rows={"slider": (0, 1)})
 
     def modes(self, model, params, scenario) -> list[tuple[float, float]]:
         m, k, d = self.physical(model)
@@ -228,7 +276,8 @@ class Slider(Scene):
             out["static_deflection_m"] = params["force_amplitude"] / k
         if forcing == "harmonic":
             amplitude, phase = analytic.steady_state_amplitude(
-                m, k, d, params["force_amplitude"], params["force_frequency"])
+                m, k, d, params["force_amplitude"], params["force_frequency"]
+            )
             out["frequency_ratio"] = 2 * math.pi * params["force_frequency"] / math.sqrt(k / m) if k else math.inf
             out["steady_state_amplitude_m"] = amplitude
             out["phase_lag_rad"] = phase
