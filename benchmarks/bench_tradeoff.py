@@ -1,7 +1,7 @@
 """Speed of springlab's trade-off sweep, side by side in one run.
 
 1. The accuracy pass of the full slider `free` sweep (5 integrators x 13
-   timesteps, 65 runs, 0.5 M steps): springlab.tradeoff.run_batched (one
+   timesteps, 65 runs, 0.5 M steps): springlab.batch.run_batched (one
    mujoco.batch.Batch, all CPUs, and on one thread) against a plain loop of
    springlab.simulate.simulate calls; best of 3 each, and the ratios.
 2. The whole `springlab tradeoff slider free --tol 1e-6` (sweep, timing pass,
@@ -17,7 +17,7 @@ import time
 
 import numpy as np
 
-from springlab import scenes, tradeoff
+from springlab import batch, scenes, tradeoff
 from springlab.simulate import INTEGRATORS, simulate
 from timing import best_of
 
@@ -32,7 +32,7 @@ def sweep_jobs():
     for dt in dts:
         steps = round(chosen.duration / dt)
         setup = scene.setup(model, params, chosen, steps, dt)
-        jobs.extend(tradeoff.Job(model, name, dt, steps, setup) for name in INTEGRATORS)
+        jobs.extend(batch.Job(model, name, dt, steps, setup) for name in INTEGRATORS)
     return jobs
 
 
@@ -55,11 +55,11 @@ def batched_vs_loop() -> None:
         ]
 
     # same numbers first: the comparison is only fair if both compute the same thing
-    for a, b in zip(tradeoff.run_batched(jobs), loop()):
+    for a, b in zip(batch.run_batched(jobs), loop()):
         assert np.array_equal(a.qpos, b.qpos) and np.array_equal(a.qvel, b.qvel)
     loop_time = best_of(loop, repeat=3)
-    batch_all = best_of(lambda: tradeoff.run_batched(jobs, nthread=0), repeat=3)
-    batch_one = best_of(lambda: tradeoff.run_batched(jobs, nthread=1), repeat=3)
+    batch_all = best_of(lambda: batch.run_batched(jobs, nthread=0), repeat=3)
+    batch_one = best_of(lambda: batch.run_batched(jobs, nthread=1), repeat=3)
     print(f"1) accuracy pass of the slider/free sweep: {len(jobs)} runs, {steps:,} steps, {os.cpu_count()} CPUs")
     print(f"   plain loop of simulate()       {loop_time:8.3f} s  ({steps / loop_time:,.0f} steps/s)")
     print(f"   run_batched, one thread        {batch_one:8.3f} s  ratio loop/batched {loop_time / batch_one:5.2f}")

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from springlab import scenes, tradeoff
+from springlab import extremes, scenes, stability
 from springlab.cli import main
 from springlab.simulate import INTEGRATORS, simulate, stability_limit
 
@@ -28,7 +28,7 @@ EULER_FAMILY = ("euler", "implicit", "implicitfast")
 @pytest.fixture(scope="module")
 def report():
     """`springlab stability`'s default report, computed once."""
-    return tradeoff.stability_report()
+    return stability.stability_report()
 
 
 def _theory_map(integrator, zeta, y):
@@ -64,7 +64,7 @@ def _independent_limit(integrator, zeta):
 def test_mujoco_step_map_is_the_hand_derived_map(integrator):
     zetas = np.array([0.0, 0.1, 1.0, 10.0])
     ys = np.array([0.01, 0.5, 1.9, 7.0])
-    measured = tradeoff.one_step_maps(integrator, zetas, ys)
+    measured = stability.one_step_maps(integrator, zetas, ys)
     for i, zeta in enumerate(zetas):
         for j, y in enumerate(ys):
             np.testing.assert_allclose(measured[i, j], _theory_map(integrator, zeta, y), rtol=1e-12, atol=1e-14)
@@ -208,7 +208,7 @@ def test_every_row_is_classified_with_its_error_or_its_divergence_and_one_piece_
             assert r["max_rel_error"] is None and "diverged" in r["detail"]
         else:
             assert math.isfinite(r["max_rel_error"]) and r["detail"] == ""
-            assert (r["max_rel_error"] <= tradeoff.ACCURACY) == (r["outcome"] == "accurate")
+            assert (r["max_rel_error"] <= extremes.ACCURACY) == (r["outcome"] == "accurate")
         assert r["advice"] and "\n" not in r["advice"]
 
 
@@ -216,10 +216,10 @@ def test_the_advised_settings_are_accurate_when_run_over_the_whole_case(report):
     # cheap advice is run by default (the 1e4-period rk4 run of 1.1e6 steps only with --full)
     advised = {r["case"]: r for r in report["extremes"] if r["kind"] == "advised"}
     assert {"stiff", "light", "overdamped"} <= set(advised)
-    for case in tradeoff.EXTREME_CASES:
+    for case in extremes.EXTREME_CASES:
         if case.name in advised:
             row = advised[case.name]
-            assert row["outcome"] == "accurate" and row["max_rel_error"] <= tradeoff.ACCURACY
+            assert row["outcome"] == "accurate" and row["max_rel_error"] <= extremes.ACCURACY
             assert row["duration"] == pytest.approx(case.duration, rel=0.01)
 
 
@@ -283,7 +283,7 @@ def test_a_run_beyond_mujocos_value_limit_exits_3_for_every_integrator(capsys, i
 
 
 def test_stability_cli_prints_json_and_writes_the_charts(tmp_path, capsys, monkeypatch, report):
-    monkeypatch.setattr(tradeoff, "stability_report", lambda full=False: report)
+    monkeypatch.setattr(stability, "stability_report", lambda full=False: report)
     code = main(["stability", "--json", "--output", str(tmp_path / "s")])
     out, err = capsys.readouterr()
     assert code == 0, err

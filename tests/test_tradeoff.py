@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import springlab
-from springlab import scenes, tradeoff
+from springlab import batch, scenes, tradeoff
 from springlab.cli import main
 from springlab.errors import BadInputError, DivergedError
 from springlab.simulate import INTEGRATORS, simulate
@@ -36,8 +36,8 @@ def test_batched_runs_are_bit_identical_to_single_simulate_calls(scenario):
     jobs = []
     for name, dt in configs:
         steps = round(1.0 / dt)
-        jobs.append(tradeoff.Job(model, name, dt, steps, scene.setup(model, params, chosen, steps, dt)))
-    for job, batched in zip(jobs, tradeoff.run_batched(jobs)):
+        jobs.append(batch.Job(model, name, dt, steps, scene.setup(model, params, chosen, steps, dt)))
+    for job, batched in zip(jobs, batch.run_batched(jobs)):
         single = simulate(
             model,
             integrator=job.integrator,
@@ -58,8 +58,8 @@ def test_batched_runs_of_different_models_are_bit_identical_to_single_runs():
     for stiffness, name in ((100.0, "rk4"), (1e6, "euler"), (3.0, "discrete")):
         scene, chosen, params, model = _scene_model("free", stiffness=stiffness)
         models.append(model)
-        jobs.append(tradeoff.Job(model, name, 1e-4, 700, scene.setup(model, params, chosen, 700, 1e-4)))
-    for job, batched in zip(jobs, tradeoff.run_batched(jobs)):
+        jobs.append(batch.Job(model, name, 1e-4, 700, scene.setup(model, params, chosen, 700, 1e-4)))
+    for job, batched in zip(jobs, batch.run_batched(jobs)):
         single = simulate(
             job.model,
             integrator=job.integrator,
@@ -76,9 +76,9 @@ def test_batched_runs_of_different_models_are_bit_identical_to_single_runs():
 def test_a_batched_blow_up_is_reported_as_divergence_never_as_a_result():
     # euler at omega*dt = 3 > 2.1 blows up; MuJoCo would reset it silently
     scene, chosen, params, model = _scene_model("free")
-    stable = tradeoff.Job(model, "euler", 0.01, 2000, scene.setup(model, params, chosen, 2000, 0.01))
-    unstable = tradeoff.Job(model, "euler", 0.3, 2000, scene.setup(model, params, chosen, 2000, 0.3))
-    good, bad = tradeoff.run_batched([stable, unstable])
+    stable = batch.Job(model, "euler", 0.01, 2000, scene.setup(model, params, chosen, 2000, 0.01))
+    unstable = batch.Job(model, "euler", 0.3, 2000, scene.setup(model, params, chosen, 2000, 0.3))
+    good, bad = batch.run_batched([stable, unstable])
     assert not isinstance(good, DivergedError)
     assert isinstance(bad, DivergedError)
     assert "diverged" in str(bad) and "BADQ" in str(bad)
@@ -260,10 +260,10 @@ def test_a_stop_condition_ends_batched_runs_exactly_where_simulate_ends_them():
         return qpos[:, 0] <= 0.0
 
     jobs = [
-        tradeoff.Job(model, name, 0.01, 300, scene.setup(model, params, chosen, 300, 0.01), crossed)
+        batch.Job(model, name, 0.01, 300, scene.setup(model, params, chosen, 300, 0.01), crossed)
         for name in ("euler", "rk4")
     ]
-    for job, batched in zip(jobs, tradeoff.run_batched(jobs)):
+    for job, batched in zip(jobs, batch.run_batched(jobs)):
         single = simulate(
             model,
             integrator=job.integrator,

@@ -9,7 +9,8 @@ True
 """
 
 from . import analytic, errors
-from .api import Result, run, validate
+from .api import Result
+from .auto import run, validate
 from .errors import BadInputError, DivergedError, SpringlabError, UnknownNameError
 from .scenes import SCENES
 

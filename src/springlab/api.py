@@ -1,4 +1,7 @@
-"""springlab's Python API: run a scene's scenario, validate scenes.
+"""springlab's single-run API: run a scene's scenario at an explicit setting, validate scenes.
+
+`integrator='auto'` is a study built on top of this layer (springlab.auto,
+which is what springlab.run and springlab.validate are).
 
 >>> import springlab
 >>> result = springlab.run("slider", "exercise")
@@ -16,12 +19,17 @@ import mujoco
 import numpy as np
 
 from . import compare, scenes
-from .errors import DivergedError
+from .errors import BadInputError, DivergedError
 from .scene import Scenario, Scene
 from .simulate import Trajectory, check_timing, integrator_id, simulate
 
 #: a run whose error exceeds this many times its signal has blown up, flagged or not
 BLOWUP_RATIO = 1e3
+#: integrator 'auto' is a study above this layer
+_AUTO_ELSEWHERE = (
+    "integrator 'auto' needs a sweep of every integrator: call springlab.run / springlab.validate"
+    " (springlab.auto), or name one of euler, implicit, implicitfast, rk4, discrete"
+)
 
 
 @dataclasses.dataclass
@@ -86,8 +94,8 @@ def run(
       scene: scene name (see `springlab list`).
       scenario: scenario name (None: the scene's default).
       integrator: one of 'euler', 'implicit', 'implicitfast', 'rk4', 'discrete'
-        (None: the scene's validated default), or 'auto': the cheapest setting
-        that meets `tol`, measured by springlab.tradeoff (then dt must be None).
+        (None: the scene's validated default). 'auto' is springlab.run's
+        (springlab.auto.run), not this function's.
       dt: timestep [s] (None: the scene's validated default).
       duration: simulated time [s] (None: the scenario's).
       tol: relative accuracy [-] to hold the run to instead of the integrator's
@@ -103,9 +111,7 @@ def run(
       DivergedError: the simulation blew up (nothing is returned for it).
     """
     if integrator == "auto":
-        from . import tradeoff  # here, not at the top: tradeoff builds on this module
-
-        integrator, dt = tradeoff.auto_setting(scene, scenario, tol=tol, dt=dt, duration=duration, **parameters)
+        raise BadInputError(_AUTO_ELSEWHERE)
     scene_obj, chosen, params = prepare(scene, scenario, parameters)
     integrator = scene_obj.integrator if integrator is None else integrator
     integrator_id(integrator)
@@ -138,7 +144,7 @@ def evaluate(
 ) -> Result:
     """Compare a finished run with its reference: errors, tolerance, checks, summary -> Result.
 
-    Shared by `run` and the batched sweeps of springlab.tradeoff, so every path judges a run
+    Shared by `run` and the batched studies (springlab.tradeoff, springlab.extremes), so every path judges a run
     the same way. Raises DivergedError for a run whose error dwarfs its signal.
     """
     columns = scene.joint_columns(model, trajectory)
@@ -237,8 +243,8 @@ def validate(
 
     Args:
       scene_names: scenes to validate (None: all).
-      integrator, dt: override the scenes' default setting ('auto': per
-        scenario the cheapest setting that meets `tol`, see `run`).
+      integrator, dt: override the scenes' default setting ('auto' is
+        springlab.validate's, see springlab.auto.validate).
       tol: relative tolerance [-] to hold every run to (None: the predicted error).
 
     Returns:
@@ -247,24 +253,29 @@ def validate(
       Check dicts; a scenario without compared columns shows its tightest check
       in max_rel_error/tolerance).
     """
+    if integrator == "auto":
+        raise BadInputError(_AUTO_ELSEWHERE)
+    return [
+        validation_row(run(scene.name, scenario.name, integrator=integrator, dt=dt, tol=tol))
+        for scene, scenario in exact_scenarios(scene_names)
+    ]
+
+
+def exact_scenarios(scene_names: list[str] | None = None) -> list[tuple[Scene, Scenario]]:
+    """(scene, scenario) of every scenario with an exact solution, in catalogue order.
+
+    Args:
+      scene_names: scenes to list (None or empty: all).
+
+    Raises:
+      UnknownNameError: a scene name springlab does not have.
+    """
     names = list(scenes.SCENES) if not scene_names else scene_names
-    rows = []
+    pairs = []
     for name in names:
         scene = scenes.get(name)
-        for scenario in scene.scenarios.values():
-            if not scenario.exact:
-                continue
-            if integrator == "auto":
-                from . import tradeoff  # here, not at the top: tradeoff builds on this module
-
-                if not tradeoff.sweepable(scene, scenario, None):
-                    # validated by its scalar checks at its own setting: nothing to sweep errors against
-                    row = validation_row(run(name, scenario.name))
-                    row["note"] = "no reference trajectory for 'auto' to sweep: the scene's validated setting"
-                    rows.append(row)
-                    continue
-            rows.append(validation_row(run(name, scenario.name, integrator=integrator, dt=dt, tol=tol)))
-    return rows
+        pairs.extend((scene, scenario) for scenario in scene.scenarios.values() if scenario.exact)
+    return pairs
 
 
 def validation_row(result: Result) -> dict[str, Any]:

@@ -14,7 +14,7 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from . import api, demo, outputs, scenes, tradeoff
+from . import api, auto, charts, demo, outputs, scenes, stability, tradeoff
 from .errors import BadInputError, SpringlabError
 from .simulate import INTEGRATORS
 
@@ -106,7 +106,7 @@ def cmd_list(args) -> int:
 
 def _run_scenario(args) -> api.Result:
     """api.run from the scene, timing and --set arguments that run, render and plot share."""
-    return api.run(
+    return auto.run(
         args.scene,
         args.scenario,
         integrator=args.integrator,
@@ -180,7 +180,7 @@ def _validation_table(rows: list[dict]) -> str:
 
 
 def cmd_validate(args) -> int:
-    rows = api.validate(args.scenes, integrator=args.integrator, dt=args.dt, tol=args.tol)
+    rows = auto.validate(args.scenes, integrator=args.integrator, dt=args.dt, tol=args.tol)
     if args.json:
         _print_json(rows)
     else:
@@ -252,7 +252,7 @@ def _verdict(summary: dict) -> int:
 def cmd_tradeoff(args) -> int:
     result = tradeoff.tradeoff(args.scene, args.scenario, tol=args.tol, duration=args.duration, **_parse_sets(args.set))
     if args.output:
-        tradeoff.write_tradeoff(result, args.output)
+        charts.write_tradeoff(result, args.output)
     if args.json:
         _print_json(result.as_json())
     else:
@@ -293,11 +293,11 @@ def _print_tradeoff(result, output: str | None) -> None:
 
 
 def cmd_stability(args) -> int:
-    report = tradeoff.stability_report(full=args.full)
+    report = stability.stability_report(full=args.full)
     if args.output:
-        tradeoff.write_stability(report, args.output)
+        charts.write_stability(report, stability.amplification_map(), args.output)
     if args.json:
-        _print_json(tradeoff.report_json(report))
+        _print_json(stability.report_json(report))
     else:
         _print_stability(report, args.output)
     return EXIT_OK if all(r["within_tolerance"] for r in report["boundaries"]) else EXIT_FAILED

@@ -15,24 +15,7 @@ import time
 from collections.abc import Callable
 
 from . import api, outputs, scenes
-
-
-@dataclasses.dataclass
-class Artifact:
-    """A file the demo wrote, for the report.
-
-    Attributes:
-      path: the file, relative to the output folder.
-      kind: 'data', 'plot', 'video' or 'report'.
-      title: one line saying what it shows.
-      scene, scenario: what it belongs to ('' for cross-scene artifacts).
-    """
-
-    path: str
-    kind: str
-    title: str
-    scene: str = ""
-    scenario: str = ""
+from .outputs import Artifact
 
 
 @dataclasses.dataclass
@@ -102,12 +85,12 @@ def run_demo(out: str | pathlib.Path, log: Callable[[str], None] = print) -> Dem
 
 def tradeoff_step(state: DemoState) -> list[Artifact]:
     """The slider's speed-accuracy trade (with the setting for 1e-6) and the stability map, extremes, energy."""
-    from . import tradeoff  # here: tradeoff builds on api, which this module's users import first
+    from . import charts, stability, tradeoff  # here: mujoco.batch and matplotlib only when this step runs
 
     result = tradeoff.tradeoff("slider", "free", tol=1e-6)
-    tradeoff.write_tradeoff(result, state.out / "tradeoff")
-    report = tradeoff.stability_report()
-    tradeoff.write_stability(report, state.out / "stability")
+    charts.write_tradeoff(result, state.out / "tradeoff")
+    report = stability.stability_report()
+    charts.write_stability(report, stability.amplification_map(), state.out / "stability")
     return [
         Artifact(
             "tradeoff/tradeoff.json",

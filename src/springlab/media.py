@@ -16,6 +16,7 @@ from typing import Any
 
 from . import api, plots, render, scenes
 from .errors import BadInputError, SpringlabError
+from .outputs import Artifact
 
 #: the demo's video settings: small enough that every scenario fits in the demo's time budget
 DEMO_VIDEO = dict(fps=30, width=480, height=360)
@@ -111,15 +112,13 @@ def plot_files(result: api.Result, folder: pathlib.Path, out: pathlib.Path) -> l
     return written
 
 
-def media_step(state) -> list:
+def media_step(state) -> list[Artifact]:
     """Demo step: every scenario's composite video and plots, and each scene's zeta family.
 
     Videos are 480 x 360 (+ a 360 x 360 phase panel) at 30 fps and show at
     most the first DEMO_CLIP_SECONDS of a run, which keeps the demo within a
     few minutes on two cores.
     """
-    from .demo import Artifact
-
     written = []
     for (scene_name, scenario_name), result in state.results.items():
         folder = state.out / scene_name / scenario_name

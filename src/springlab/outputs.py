@@ -1,4 +1,4 @@
-"""Writing results: trajectory.csv and summary.json, atomically.
+"""Writing results: trajectory.csv and summary.json, atomically; the Artifact record of a written file.
 
 Every file is written to a temporary name in its target folder and renamed
 into place, so an interrupted or failed write never leaves a partial file.
@@ -7,6 +7,7 @@ into place, so an interrupted or failed write never leaves a partial file.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import io
 import json
 import math
@@ -19,6 +20,24 @@ from typing import Any
 import numpy as np
 
 from .errors import BadInputError
+
+
+@dataclasses.dataclass
+class Artifact:
+    """A file the demo wrote, for the report.
+
+    Attributes:
+      path: the file, relative to the output folder.
+      kind: 'data', 'plot', 'video' or 'report'.
+      title: one line saying what it shows.
+      scene, scenario: what it belongs to ('' for cross-scene artifacts).
+    """
+
+    path: str
+    kind: str
+    title: str
+    scene: str = ""
+    scenario: str = ""
 
 
 def prepare_directory(directory: str | os.PathLike) -> pathlib.Path:

@@ -1,0 +1,122 @@
+"""`integrator='auto'`: the cheapest setting that meets a tolerance, chosen by the sweep, then run.
+
+`run` and `validate` are `api.run` and `api.validate` plus `integrator='auto'`
+(springlab.run and springlab.validate are these): the single-run API knows
+only explicit settings, and the automatic one is a study (springlab.tradeoff:
+a sweep of every integrator and timestep, then the verified cheapest setting
+meeting `tol`) composed on top of it.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from . import api
+from .errors import BadInputError
+from .scene import Scene
+from .tradeoff import sweepable, tradeoff
+
+#: what validate notes on a scenario 'auto' cannot sweep
+NO_SWEEP_NOTE = "no reference trajectory for 'auto' to sweep: the scene's validated setting"
+
+
+def auto_setting(
+    scene: str | Scene,
+    scenario: str | None,
+    *,
+    tol: float | None,
+    dt: float | None = None,
+    duration: float | None = None,
+    **parameters: Any,
+) -> tuple[str, float]:
+    """(integrator, dt [s]) for `integrator='auto'`: the verified cheapest setting meeting `tol`.
+
+    Raises:
+      BadInputError: no tol, a dt given (auto chooses it), or no setting meets tol.
+    """
+    if tol is None:
+        raise BadInputError("integrator 'auto' needs tol, the relative error to meet (e.g. --tol 1e-6)")
+    if dt is not None:
+        raise BadInputError("integrator 'auto' chooses dt itself; drop dt (--dt) or name an integrator")
+    result = tradeoff(scene, scenario, tol=tol, duration=duration, **parameters)
+    pick = result.recommendation
+    if pick["integrator"] is None:
+        best = min((r for r in result.runs if not r.diverged), key=lambda r: r.max_rel_error, default=None)
+        reach = (
+            f"; the best reached is {best.max_rel_error:.2g} ({best.integrator}, dt = {best.dt:g} s)" if best else ""
+        )
+        raise BadInputError(
+            f"no integrator and timestep of the sweep meets tol = {tol:g} on {result.scene}"
+            f" {result.scenario}{reach}; valid: a tol it can reach"
+        )
+    return pick["integrator"], pick["dt"]
+
+
+def run(
+    scene: str,
+    scenario: str | None = None,
+    *,
+    integrator: str | None = None,
+    dt: float | None = None,
+    duration: float | None = None,
+    tol: float | None = None,
+    **parameters: Any,
+) -> api.Result:
+    """`api.run`, where `integrator='auto'` first picks the cheapest setting meeting `tol` (`auto_setting`).
+
+    Args:
+      scene: scene name (see `springlab list`).
+      scenario: scenario name (None: the scene's default).
+      integrator: one of 'euler', 'implicit', 'implicitfast', 'rk4', 'discrete'
+        (None: the scene's validated default), or 'auto': the cheapest setting
+        that meets `tol`, measured by springlab.tradeoff (then dt must be None).
+      dt: timestep [s] (None: the scene's validated default, or auto's).
+      duration: simulated time [s] (None: the scenario's).
+      tol: relative accuracy [-] to hold the run to instead of the integrator's
+        predicted error (see springlab.compare); needed by 'auto'.
+      **parameters: scene parameters in SI units, e.g. mass=2.0 [kg].
+
+    Returns:
+      The Result (see `api.run`).
+
+    Raises:
+      BadInputError: unknown names, non-physical values, bad dt/duration; for
+        'auto' no tol, a dt given, or no setting meeting tol.
+      DivergedError: the simulation blew up (nothing is returned for it).
+    """
+    if integrator == "auto":
+        integrator, dt = auto_setting(scene, scenario, tol=tol, dt=dt, duration=duration, **parameters)
+    return api.run(scene, scenario, integrator=integrator, dt=dt, duration=duration, tol=tol, **parameters)
+
+
+def validate(
+    scene_names: list[str] | None = None,
+    *,
+    integrator: str | None = None,
+    dt: float | None = None,
+    tol: float | None = None,
+) -> list[dict[str, Any]]:
+    """`api.validate`, where `integrator='auto'` picks per scenario the cheapest setting meeting `tol`.
+
+    Args:
+      scene_names: scenes to validate (None: all).
+      integrator: integrator name, None (the scenes' own) or 'auto'.
+      dt: timestep [s] (None: the scenes' own; must be None with 'auto').
+      tol: relative tolerance [-] to hold every run to (None: the predicted error).
+
+    Returns:
+      The rows of `api.validate`; a scenario validated by scalar checks alone
+      (nothing for 'auto' to sweep) runs at the scene's validated setting and
+      its row carries a "note" saying so.
+    """
+    if integrator != "auto":
+        return api.validate(scene_names, integrator=integrator, dt=dt, tol=tol)
+    rows = []
+    for scene, scenario in api.exact_scenarios(scene_names):
+        if not sweepable(scene, scenario, None):
+            row = api.validation_row(api.run(scene.name, scenario.name))
+            row["note"] = NO_SWEEP_NOTE
+            rows.append(row)
+            continue
+        rows.append(api.validation_row(run(scene.name, scenario.name, integrator="auto", dt=dt, tol=tol)))
+    return rows
