@@ -19,9 +19,18 @@ import mujoco
 import numpy as np
 
 from . import compare, scenes
-from .errors import BadInputError, DivergedError
+from .errors import BadInputError, DivergedError, ParameterError
 from .scene import Scenario, Scene
-from .simulate import Trajectory, check_timing, integrator_id, simulate
+from .simulate import (
+    INTEGRATORS,
+    MAX_STEPS,
+    MAX_VALUE,
+    Trajectory,
+    beyond_mujoco_limits,
+    check_timing,
+    integrator_id,
+    simulate,
+)
 
 #: a run whose error exceeds this many times its signal has blown up, flagged or not
 BLOWUP_RATIO = 1e3
@@ -135,7 +144,9 @@ def run(
             stop=scene_obj.stop_condition(model, params, chosen),
         )
     except DivergedError as error:
-        raise DivergedError(f"{error}{_stability_advice(scene_obj, model, params, chosen, integrator, dt)}") from None
+        beyond = beyond_mujoco_limits(model, setup.qpos, setup.qvel, setup.act, setup.control)
+        advice = _stability_advice(scene_obj, model, params, chosen, integrator, dt, duration, beyond)
+        raise DivergedError(f"{error}{advice}") from None
     return evaluate(scene_obj, chosen, params, model, trajectory, tol)
 
 
@@ -152,6 +163,14 @@ def evaluate(
     vel = {j: c[1] for j, c in columns.items()}
     reference = scene.reference(model, params, scenario, trajectory.time) if scenario.exact else None
     errors, tolerance, basis, passed = {}, None, "", None
+    if reference is not None and not all(
+        np.isfinite(v).all() for v in (*reference.pos.values(), *reference.vel.values())
+    ):
+        # e.g. damping = 1e300: the run may be fine, the closed form overflows; not a divergence
+        raise ParameterError(
+            f"the exact solution of {scene.name} {scenario.name} is not finite in double precision at these"
+            f" parameter values ({', '.join(f'{k}={v:g}' for k, v in params.items())}); choose less extreme ones"
+        )
     if reference is not None:
         simulated = {f"{j}_{k}": (pos if k == "pos" else vel)[j] for j in reference.pos for k in ("pos", "vel")}
         exact = {
@@ -162,9 +181,12 @@ def evaluate(
         errors = compare.column_errors(simulated, exact)
         worst = max(e["max_rel"] for e in errors.values())
         if not math.isfinite(worst) or worst > BLOWUP_RATIO:
+            advice = _stability_advice(
+                scene, model, params, scenario, trajectory.integrator, trajectory.dt, trajectory.time[-1]
+            )
             raise DivergedError(
                 f"simulation diverged: error {worst:.3g} times the signal ({trajectory.integrator},"
-                f" dt = {trajectory.dt:g} s){_stability_advice(scene, model, params, scenario, trajectory.integrator, trajectory.dt)}"
+                f" dt = {trajectory.dt:g} s){advice}"
             )
         if tol is not None:
             per_column = {column: tol for column in errors}
@@ -212,10 +234,31 @@ def evaluate(
     )
 
 
-def _stability_advice(scene: Scene, model, params, scenario, integrator: str, dt: float) -> str:
-    """': omega*dt = ... exceeds the <integrator> stability limit ...; use ...' or ''."""
+def _stability_advice(
+    scene: Scene,
+    model,
+    params,
+    scenario,
+    integrator: str,
+    dt: float,
+    duration: float,
+    beyond: str | None = None,
+) -> str:
+    """Why a run diverged and what would help, as ': ...' (or '' when the scene has no modes).
+
+    Never contradicts itself: a state past MuJoCo's own cap (`beyond`, see
+    simulate.beyond_mujoco_limits) is not a timestep problem; a mode within its
+    stability limit gets no "use a smaller dt"; a dt too small to reach in
+    MAX_STEPS steps is not advised, the integrators stable at this dt are.
+    """
+    if beyond is not None:
+        return (
+            f": {beyond} is beyond MuJoCo's limit of {MAX_VALUE:g} on every position, velocity and acceleration"
+            " (mjMAXVAL, SI units), so no timestep or integrator can run it; choose values that keep them below it"
+        )
     worst = None
-    for omega, zeta in scene.modes(model, params, scenario):
+    modes = scene.modes(model, params, scenario)
+    for omega, zeta in modes:
         limit = scene.stability_limit(model, params, scenario, integrator, omega, zeta)
         ratio = omega * dt / limit
         if worst is None or ratio > worst[0]:
@@ -223,13 +266,24 @@ def _stability_advice(scene: Scene, model, params, scenario, integrator: str, dt
     if worst is None:
         return ""
     ratio, omega, zeta, limit = worst
-    if not math.isfinite(limit):
-        return f": omega*dt = {omega * dt:.4g} (zeta = {zeta:.3g})"
-    verdict = "exceeds" if ratio > 1 else "is within"
-    return (
-        f": omega*dt = {omega * dt:.4g} {verdict} the {integrator} stability limit {limit:.4g}"
-        f" (omega = {omega:.4g} rad/s, zeta = {zeta:.3g}); use dt < {limit / omega:.3g} s or integrator 'discrete'"
-    )
+    mode = f"(omega = {omega:.4g} rad/s, zeta = {zeta:.3g})"
+    if ratio <= 1:
+        return (
+            f": omega*dt = {omega * dt:.4g} is within the {integrator} stability limit {limit:.4g} {mode}, so a"
+            f" smaller timestep is not the cure; look for values that reach MuJoCo's limit of {MAX_VALUE:g}"
+            " (mjMAXVAL) on a position, velocity or acceleration during the run"
+        )
+    stable = [
+        name
+        for name in INTEGRATORS
+        if all(w * dt < scene.stability_limit(model, params, scenario, name, w, z) for w, z in modes)
+    ]
+    others = f"an integrator stable at this dt ({', '.join(stable)})" if stable else "integrator 'discrete'"
+    smaller = limit / omega
+    exceeds = f": omega*dt = {omega * dt:.4g} exceeds the {integrator} stability limit {limit:.4g} {mode}"
+    if duration / smaller > MAX_STEPS:
+        return f"{exceeds}; the dt it needs (< {smaller:.3g} s) would take more than {MAX_STEPS} steps, so use {others}"
+    return f"{exceeds}; use dt < {smaller:.3g} s or {others}"
 
 
 def validate(

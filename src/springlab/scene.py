@@ -29,6 +29,12 @@ from . import model_files
 from .errors import ParameterError, UnknownNameError
 from .simulate import Trajectory, quiet_mujoco, stability_limit
 
+#: smallest body mass [kg] and principal inertia [kg m^2] MuJoCo compiles: its mjMINVAL
+#: (1e-15); a moving body below it fails `MjSpec.compile` ("must be larger than mjMINVAL")
+MIN_MASS = float(mujoco.mjMINVAL)
+#: why a mass-like parameter stops at MIN_MASS, for its error message
+MIN_MASS_REASON = "MuJoCo cannot compile a body whose mass or principal inertia is below its mjMINVAL = 1e-15"
+
 
 @dataclasses.dataclass(frozen=True)
 class Parameter:
@@ -42,6 +48,7 @@ class Parameter:
       minimum_inclusive: whether `minimum` itself is valid.
       maximum: highest valid value (None: unbounded).
       default: default value, or None when it is read back from the model.
+      reason: why the range is what it is (added to the error message), e.g. MIN_MASS_REASON.
     """
 
     name: str
@@ -51,6 +58,7 @@ class Parameter:
     minimum_inclusive: bool = True
     maximum: float | None = None
     default: float | None = None
+    reason: str = ""
 
     def valid_range(self) -> str:
         """Human-readable valid range, e.g. '> 0 kg'."""
@@ -71,7 +79,8 @@ class Parameter:
         low_ok = self.minimum is None or number > self.minimum or (self.minimum_inclusive and number == self.minimum)
         high_ok = self.maximum is None or number <= self.maximum
         if not math.isfinite(number) or not low_ok or not high_ok:
-            raise ParameterError(f"{self.name} must be a finite number {self.valid_range()}, got {value!r}")
+            why = f" ({self.reason})" if self.reason else ""
+            raise ParameterError(f"{self.name} must be a finite number {self.valid_range()}{why}, got {value!r}")
         return number
 
 
@@ -270,7 +279,14 @@ class Scene:
         spec = self.model_spec()
         self.edit(spec, params, scenario)
         with quiet_mujoco():
-            return spec.compile()
+            try:
+                return spec.compile()
+            except ValueError as error:
+                # a backstop: each parameter's range should catch this first (tests/test_cli_inputs.py)
+                reason = str(error).splitlines()[0].removeprefix("Error: ")
+                raise ParameterError(
+                    f"MuJoCo cannot compile {self.name} {scenario.name} with these parameters: {reason}"
+                ) from None
 
     def setup(
         self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, steps: int, dt: float

@@ -80,7 +80,7 @@ import numpy as np
 
 from .. import analytic
 from ..errors import ParameterError
-from ..scene import Parameter, Reference, Scenario, Scene, Setup
+from ..scene import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene, Setup
 from ..simulate import Trajectory, quiet_mujoco
 
 #: pitch_heave: share of the springs' stiffness at the front axle [-]. Below the
@@ -177,8 +177,8 @@ class Car(Scene):
                 "mass",
                 "kg",
                 "sprung mass: car + passengers, everything the springs carry (road_bump: mass/4 per corner)",
-                minimum=0.0,
-                minimum_inclusive=False,
+                minimum=MIN_MASS,
+                reason=MIN_MASS_REASON,
             ),
             Parameter("stiffness", "N/m", "the four springs together", minimum=0.0, minimum_inclusive=False),
             Parameter("damping", "N s/m", "the four dampers together", minimum=0.0),
@@ -204,8 +204,8 @@ class Car(Scene):
                 "pitch_inertia",
                 "kg m^2",
                 "moment of inertia about the lateral axis through the centre of mass",
-                minimum=0.0,
-                minimum_inclusive=False,
+                minimum=MIN_MASS,
+                reason=MIN_MASS_REASON,
             ),
             Parameter(
                 "front_axle_distance", "m", "a: centre of mass to front axle", minimum=0.0, minimum_inclusive=False
@@ -234,8 +234,8 @@ class Car(Scene):
                 "unsprung_mass",
                 "kg",
                 "one wheel with its share of brake, hub and axle",
-                minimum=0.0,
-                minimum_inclusive=False,
+                minimum=MIN_MASS,
+                reason=MIN_MASS_REASON,
             ),
             Parameter("tire_stiffness", "N/m", "vertical stiffness of one tire", minimum=0.0, minimum_inclusive=False),
             Parameter(
@@ -322,6 +322,7 @@ class Car(Scene):
         return {name: values[name] for name in relevant}
 
     def check_consistency(self, params: dict[str, float], scenario: Scenario) -> None:
+        self._check_body_masses(params, scenario)
         if scenario.name not in _ONE_DOF:
             return  # 2-DOF checks need the exact motion: see setup()
         g = self.gravity()
@@ -341,6 +342,28 @@ class Car(Scene):
                 f" off its springs (they are compressed only {m * g / k:.4g} m by its weight);"
                 f" valid: push_mass <= {m / overshoot:.6g} kg"
             )
+
+    def _check_body_masses(self, params: dict[str, float], scenario: Scenario) -> None:
+        """Every moving body's mass and principal inertias at or above MuJoCo's MIN_MASS (else it cannot compile)."""
+        if scenario.name == "road_bump" and params["mass"] / 4.0 < MIN_MASS:
+            raise ParameterError(
+                f"mass must be a finite number >= {4 * MIN_MASS:g} kg for road_bump (a quarter of it per corner;"
+                f" {MIN_MASS_REASON}), got {params['mass']!r}"
+            )
+        if scenario.name == "pitch_heave":
+            # roll and yaw inertias scale with pitch_inertia (_edit_pitch_heave): the smallest must reach MIN_MASS
+            inertia = self._mjcf_inertia()
+            lowest = MIN_MASS * inertia[1] / min(inertia)
+            if params["pitch_inertia"] < lowest:
+                raise ParameterError(
+                    f"pitch_inertia must be a finite number >= {lowest:.4g} kg m^2 (roll and yaw inertias scale"
+                    f" with it; {MIN_MASS_REASON}), got {params['pitch_inertia']!r}"
+                )
+
+    @functools.cache  # noqa: B019 - scenes are module-level singletons, never freed
+    def _mjcf_inertia(self) -> tuple[float, float, float]:
+        """The car body's principal inertias in the MJCF [kg m^2]: roll, pitch, yaw."""
+        return tuple(float(i) for i in self.model_spec().body("car").inertia)
 
     # -- model ---------------------------------------------------------------
 
@@ -376,8 +399,11 @@ class Car(Scene):
         m, a, b = params["mass"], params["front_axle_distance"], params["rear_axle_distance"]
         heave.stiffness = [0.0, 0.0, 0.0]  # the springs are the axle tendons now
         heave.damping = [0.0, 0.0, 0.0]
-        inertia = list(car.inertia)
-        car.inertia = [inertia[0], params["pitch_inertia"], inertia[2]]
+        # only the pitch axis turns: roll and yaw inertias follow it in the MJCF's proportion, so
+        # MuJoCo's triangle inequality (A + B >= C) holds for any pitch_inertia (identical at the default)
+        roll, pitch, yaw = (float(i) for i in car.inertia)
+        scale = params["pitch_inertia"] / pitch
+        car.inertia = [roll * scale, params["pitch_inertia"], yaw * scale]
         com = list(car.ipos)
         car.add_joint(name="pitch", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0.0, 1.0, 0.0], pos=com)
         # the picture follows the parameters: axle sites, hubs and wheels at a and b

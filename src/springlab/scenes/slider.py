@@ -34,7 +34,7 @@ import mujoco
 import numpy as np
 
 from .. import analytic, exciter
-from ..scene import Parameter, Reference, Scenario, Scene, Setup
+from ..scene import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene, Setup
 from ..simulate import Trajectory
 
 
@@ -72,7 +72,7 @@ class Slider(Scene):
     parameters = {
         p.name: p
         for p in (
-            Parameter("mass", "kg", "mass of the block", minimum=0.0, minimum_inclusive=False),
+            Parameter("mass", "kg", "mass of the block", minimum=MIN_MASS, reason=MIN_MASS_REASON),
             Parameter("stiffness", "N/m", "spring stiffness k", minimum=0.0),
             Parameter("damping", "N s/m", "damper coefficient d", minimum=0.0),
             Parameter("x0", "m", "initial stretch of the spring", default=0.1),
