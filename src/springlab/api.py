@@ -303,9 +303,10 @@ def validate(
 
     Returns:
       One row per scenario: scene, scenario, integrator, dt, steps, max_rel_error,
-      tolerance, tolerance_basis, passed, wall_time_s, and checks (the scenario's
-      Check dicts; a scenario without compared columns shows its tightest check
-      in max_rel_error/tolerance).
+      measure, tolerance, tolerance_basis, passed, wall_time_s, and checks (the
+      scenario's Check dicts; a scenario without compared columns shows its
+      tightest check in max_rel_error/tolerance, and `measure` says which:
+      'trajectory max_rel', or '<check name> rel' / '<check name> abs').
     """
     if integrator == "auto":
         raise BadInputError(_AUTO_ELSEWHERE)
@@ -338,11 +339,13 @@ def validation_row(result: Result) -> dict[str, Any]:
     checks = s.get("checks", [])
     if s["errors"]:
         worst, tolerance, basis = max(e["max_rel"] for e in s["errors"].values()), s["tolerance"], s["tolerance_basis"]
+        measure = "trajectory max_rel"
     else:
         # no compared columns: the row shows the check closest to (or furthest past) its tolerance
         tightest = max(checks, key=lambda c: c["error"] / c["tolerance"] if c["tolerance"] > 0 else math.inf)
         worst, tolerance = tightest["error"], tightest["tolerance"]
         basis = f"{tightest['name']}: {tightest['basis']}"
+        measure = f"{tightest['name']} {'rel' if tightest['reference'] != 0 else 'abs'}"
     return {
         "scene": s["scene"],
         "scenario": s["scenario"],
@@ -350,6 +353,7 @@ def validation_row(result: Result) -> dict[str, Any]:
         "dt": s["dt"],
         "steps": s["steps"],
         "max_rel_error": worst,
+        "measure": measure,
         "tolerance": tolerance,
         "tolerance_basis": basis,
         "passed": s["passed"],

@@ -163,17 +163,21 @@ def _check_line(check: dict) -> str:
 
 
 def _validation_table(rows: list[dict]) -> str:
+    """The validate/demo table: one column says what each row's error measures (trajectory or a check)."""
     # columns as wide as their longest name, so long scenario names stay readable
     scene_width = max([12] + [len(r["scene"]) for r in rows]) + 1
     scenario_width = max([13] + [len(r["scenario"]) for r in rows]) + 1
+    measures = [r.get("measure", "trajectory max_rel") for r in rows]
+    measure_width = max([len("error of")] + [len(m) for m in measures]) + 2
     lines = [
         f"{'scene':<{scene_width}}{'scenario':<{scenario_width}}{'integrator':<11}{'dt [s]':>9}"
-        f"{'max rel err':>13}{'tolerance':>11}  result"
+        f"  {'error of':<{measure_width}}{'error':>9}{'tolerance':>11}  result"
     ]
-    for r in rows:
+    for r, measure in zip(rows, measures):
         lines.append(
             f"{r['scene']:<{scene_width}}{r['scenario']:<{scenario_width}}{r['integrator']:<11}{r['dt']:>9.2g}"
-            f"{r['max_rel_error']:>13.2e}{r['tolerance']:>11.2e}  {'pass' if r['passed'] else 'FAIL'}"
+            f"  {measure:<{measure_width}}{r['max_rel_error']:>9.2e}{r['tolerance']:>11.2e}"
+            f"  {'pass' if r['passed'] else 'FAIL'}"
         )
         lines.extend(f"    check {_check_line(c)}" for c in r.get("checks", []))
     return "\n".join(lines)

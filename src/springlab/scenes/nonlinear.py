@@ -843,6 +843,7 @@ class Nonlinear(Scene):
         distance = np.hypot(x2[:n] - x[:n], (v2[:n] - v[:n]) / omega)
         out = {"perturbation_m": PERTURBATION, "well_size_m": well}
         apart = np.flatnonzero(separation >= well)
+        out["separated"] = bool(apart.size)  # else separation_time_s and ftle_per_s are inf (null in JSON)
         if apart.size:
             i = int(apart[0])
             t_sep = float(trajectory.time[i])
@@ -850,6 +851,7 @@ class Nonlinear(Scene):
             out["ftle_per_s"] = float(math.log(distance[i] / PERTURBATION) / t_sep)
         else:
             out["separation_time_s"] = math.inf
+            out["ftle_per_s"] = math.inf
         # how long this trajectory itself is right: Richardson estimate from a run at dt/2
         order = ORDERS[trajectory.integrator]
         half = self._rerun(params, scenario, trajectory.integrator, trajectory.dt / 2, duration)

@@ -279,6 +279,8 @@ class Slider(Scene):
                 m, k, d, params["force_amplitude"], params["force_frequency"]
             )
             out["frequency_ratio"] = 2 * math.pi * params["force_frequency"] / math.sqrt(k / m) if k else math.inf
+            # undamped at resonance the response grows without bound: no steady state (inf, null in JSON)
+            out["steady_state_exists"] = bool(math.isfinite(amplitude))
             out["steady_state_amplitude_m"] = amplitude
             out["phase_lag_rad"] = phase
         x = trajectory.qpos[:, model.joint("slider").qposadr[0]]
