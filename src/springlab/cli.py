@@ -1,24 +1,30 @@
-"""The `springlab` command line: argparse only, every command calls the library.
+"""Watch textbook vibration problems run in MuJoCo, each checked against its exact solution.
 
+The `springlab` command line (argparse; every command calls the library).
 Exit codes: 0 ok; 1 a validation fell outside its tolerance; 2 bad input;
-3 the simulation diverged (nothing written). Errors are one line on stderr.
+3 the simulation diverged (nothing written); 130 interrupted (Ctrl-C, SIGINT);
+143 terminated (SIGTERM). Errors are one line on stderr.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import pathlib
+import signal
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
-from . import api, auto, charts, demo, outputs, scenes, stability, tradeoff
+from . import __version__, api, auto, charts, demo, outputs, scenes, stability, tradeoff
 from .errors import BadInputError, SpringlabError
 from .simulate import INTEGRATORS
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_DIVERGED = 0, 1, 2, 3
+#: 128 + the signal number, as shells report a process a signal ended
+EXIT_INTERRUPTED, EXIT_TERMINATED = 128 + signal.SIGINT, 128 + signal.SIGTERM
 
 
 class _Parser(argparse.ArgumentParser):
@@ -26,6 +32,18 @@ class _Parser(argparse.ArgumentParser):
 
     def error(self, message: str) -> None:  # noqa: D401 - argparse hook
         raise BadInputError(f"{message} (see '{self.prog} --help')")
+
+    def parse_known_args(self, args=None, namespace=None):  # noqa: D401 - argparse hook
+        # a command's own parser takes options and positionals in any order
+        # (`run slider --set x0=0.05 harmonic`); argparse's intermixed parsing calls
+        # back into this method, hence the guard
+        if self._subparsers is not None or getattr(self, "_intermixing", False):
+            return super().parse_known_args(args, namespace)
+        self._intermixing = True
+        try:
+            return self.parse_known_intermixed_args(args, namespace)
+        finally:
+            self._intermixing = False
 
 
 def _parse_sets(pairs: Sequence[str]) -> dict[str, str]:
@@ -83,6 +101,11 @@ def cmd_list(args) -> int:
                 "default_integrator": scene.integrator,
                 "default_dt": scene.dt,
                 "scenarios": {s.name: s.description for s in scene.scenarios.values()},
+                # the setting `run` and `validate` use for each scenario (a scenario may validate its own dt)
+                "scenario_settings": {
+                    s.name: {"integrator": scene.integrator, "dt": s.dt or scene.dt, "duration": s.duration}
+                    for s in scene.scenarios.values()
+                },
                 "parameters": {
                     p.name: {"unit": p.unit, "description": p.description, "valid": p.valid_range()}
                     for p in scene.parameters.values()
@@ -94,10 +117,13 @@ def cmd_list(args) -> int:
         return EXIT_OK
     for entry in catalogue:
         print(f"{entry['scene']}: {entry['title']}")
-        print(f"  default setting: {entry['default_integrator']}, dt = {entry['default_dt']:g} s")
-        print("  scenarios:")
+        print(
+            f"  default setting: {entry['default_integrator']}, dt = {entry['default_dt']:g} s unless a scenario says"
+        )
+        print("  scenarios (validated dt):")
         for name, text in entry["scenarios"].items():
-            print(f"    {name:<14} {text}")
+            dt = entry["scenario_settings"][name]["dt"]
+            print(f"    {name:<22} {f'{dt * 1e3:g} ms':>8}  {text}")
         print("  parameters:")
         for name, p in entry["parameters"].items():
             print(f"    {name:<16} [{p['unit']}] {p['description']} ({p['valid']})")
@@ -254,6 +280,8 @@ def _verdict(summary: dict) -> int:
 
 
 def cmd_tradeoff(args) -> int:
+    if args.output:
+        outputs.check_directory(args.output)  # before seconds of sweeping, not after
     result = tradeoff.tradeoff(args.scene, args.scenario, tol=args.tol, duration=args.duration, **_parse_sets(args.set))
     if args.output:
         charts.write_tradeoff(result, args.output)
@@ -297,6 +325,8 @@ def _print_tradeoff(result, output: str | None) -> None:
 
 
 def cmd_stability(args) -> int:
+    if args.output:
+        outputs.check_directory(args.output)
     report = stability.stability_report(full=args.full)
     if args.output:
         charts.write_stability(report, stability.amplification_map(), args.output)
@@ -346,6 +376,8 @@ def _print_stability(report: dict, output: str | None) -> None:
 def cmd_design(args) -> int:
     from . import design  # here, not at the top: mujoco.batch is only needed by this command
 
+    if args.output:
+        outputs.check_directory(args.output)
     study = design.run_study(
         args.scene, levels=args.levels, plane_levels=args.plane, nthread=args.threads, **_parse_sets(args.set)
     )
@@ -386,7 +418,13 @@ def _print_design(design, study, output: str | None) -> None:
 def cmd_demo(args) -> int:
     """The main job: validate every scene and write everything under the output folder."""
     start = time.perf_counter()
-    state = demo.run_demo(args.output)
+    try:
+        state = demo.run_demo(args.output)
+    except (KeyboardInterrupt, Terminated) as stop:
+        marker = pathlib.Path(args.output) / demo.INCOMPLETE_MARKER
+        if marker.exists():
+            stop.note = f"; {args.output}/ is incomplete (see {marker})"  # type: ignore[attr-defined]
+        raise
     print(_validation_table(state.validation))
     failed = sum(not r["passed"] for r in state.validation)
     print(
@@ -402,7 +440,13 @@ COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {}
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="springlab", description=__doc__.splitlines()[0])
+    parser = _Parser(
+        prog="springlab",
+        description=__doc__.splitlines()[0],
+        epilog="Start with 'springlab list' and 'springlab run slider'. Exit codes: 0 ok, 1 outside tolerance,"
+        " 2 bad input, 3 diverged, 130 interrupted, 143 terminated.",
+    )
+    parser.add_argument("--version", action="version", version=f"springlab {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser, metavar="COMMAND")
 
     p = sub.add_parser("list", help="scenes, scenarios and parameters")
@@ -513,17 +557,45 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(BaseException):
+    """SIGTERM arrived (a timeout, a batch scheduler): unwinds like Ctrl-C, so partial files are removed."""
+
+
+def _raise_terminated(signum, frame) -> None:
+    raise Terminated
+
+
+@contextlib.contextmanager
+def _sigterm_unwinds() -> Iterator[None]:
+    """Turn SIGTERM into the Terminated exception for the duration (main thread only; restored after)."""
+    try:
+        previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    except ValueError:  # not the main thread: leave signals alone
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the `springlab` console script; returns the exit code."""
     try:
-        args = build_parser().parse_args(argv)
-        return COMMANDS[args.command](args)
+        with _sigterm_unwinds():
+            args = build_parser().parse_args(argv)
+            return COMMANDS[args.command](args)
+    except SystemExit as done:  # --help, --version
+        return done.code if isinstance(done.code, int) else EXIT_OK
     except SpringlabError as error:
         print(f"springlab: error: {error}", file=sys.stderr)
         return error.exit_code
-    except KeyboardInterrupt:
-        print("springlab: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as stop:
+        print(f"springlab: interrupted{getattr(stop, 'note', '')}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except Terminated as stop:
+        print(f"springlab: terminated{getattr(stop, 'note', '')}", file=sys.stderr)
+        return EXIT_TERMINATED
     except BrokenPipeError:
         # the reader went away (`springlab list | head`): stop quietly, as Unix tools do;
         # point stdout at devnull so the interpreter's final flush cannot raise again

@@ -70,7 +70,8 @@ import numpy as np
 from mujoco import batch as mjbatch
 
 from . import outputs, scenes
-from .errors import BadInputError, DivergedError, UnknownNameError
+from .errors import BadInputError, DivergedError, ParameterError, UnknownNameError
+from .scene import Parameter
 from .scenes.printer_head import (
     PrinterHead,
     after_force_bound,
@@ -226,11 +227,30 @@ class Study:
 def base_parameters(overrides: Mapping[str, Any] | None = None) -> dict[str, float]:
     """The printer_head `move` parameters the sweep starts from (MJCF defaults < overrides).
 
+    The design table's property `damping_ratio` [-] is accepted too: it sets the
+    belt damping c = 2 zeta sqrt(k m_c m_m / (m_c + m_m)) of the other values.
+
     Raises:
-      UnknownNameError, ParameterError: as for `springlab run`.
+      UnknownNameError, ParameterError: as for `springlab run`, and for
+        damping_ratio given together with belt_damping.
     """
     scene = scenes.get("printer_head")
-    return scene.resolve(scene.scenario("move"), dict(overrides or {}))
+    overrides = dict(overrides or {})
+    for name in overrides:
+        if name != "damping_ratio" and name not in scene.parameters:
+            raise UnknownNameError(
+                "parameter of the printer_head design study", name, [*scene.parameters, "damping_ratio"]
+            )
+    ratio = overrides.pop("damping_ratio", None)
+    if ratio is None:
+        return scene.resolve(scene.scenario("move"), overrides)
+    if "belt_damping" in overrides:
+        raise ParameterError("give damping_ratio or belt_damping, not both (damping_ratio sets the belt damping)")
+    ratio = Parameter("damping_ratio", "-", "belt damping ratio", minimum=0.0).check(ratio)
+    base = scene.resolve(scene.scenario("move"), overrides)
+    reduced = base["carriage_mass"] * base["motor_mass"] / (base["carriage_mass"] + base["motor_mass"])
+    overrides["belt_damping"] = 2.0 * ratio * math.sqrt(base["belt_stiffness"] * reduced)
+    return scene.resolve(scene.scenario("move"), overrides)
 
 
 def default_properties(base: Mapping[str, float]) -> dict[str, float]:

@@ -52,6 +52,35 @@ def prepare_directory(directory: str | os.PathLike) -> pathlib.Path:
     return path
 
 
+def check_directory(directory: str | os.PathLike) -> pathlib.Path:
+    """Raise BadInputError unless a file can be written in `directory`; leave nothing behind.
+
+    For commands that compute for seconds before they write: a bad --output
+    fails at once. It tries for real (creates the missing folders and a probe
+    file, then removes them), so permissions, read-only mounts and /proc answer
+    as they will when the results are written.
+    """
+    path = pathlib.Path(directory)
+    if path.exists() and not path.is_dir():
+        raise BadInputError(f"output directory {str(path)!r} exists and is not a directory")
+    missing = []
+    for folder in [path, *path.parents]:
+        if folder.exists():
+            break
+        missing.append(folder)
+    try:
+        for folder in reversed(missing):
+            folder.mkdir()
+        os.unlink(temporary_beside(path / "probe"))
+    except OSError as error:
+        raise BadInputError(f"cannot write into output directory {str(path)!r}: {error.strerror or error}") from None
+    finally:
+        for folder in missing:
+            with contextlib.suppress(OSError):
+                folder.rmdir()
+    return path
+
+
 def temporary_beside(target: pathlib.Path) -> pathlib.Path:
     """Create a hidden, unique, empty file next to `target` and return its path.
 
