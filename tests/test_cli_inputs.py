@@ -136,3 +136,13 @@ def test_an_exact_solution_that_overflows_is_bad_input_not_a_divergence():
         warnings.simplefilter("error")
         with pytest.raises(ParameterError, match="not finite in double precision"):
             springlab.run("slider", "free", damping=1e300, integrator="implicit")
+
+
+def test_a_divergence_within_the_stability_limit_never_advises_a_smaller_dt():
+    # a 1e15 N harmonic force starts at sin(0) = 0, then drives the acceleration past 1e10 within steps;
+    # omega*dt = 0.025 is far inside rk4's 2.83: shrinking dt cannot help, and the advice must not say it does
+    with pytest.raises(DivergedError) as caught:
+        springlab.run("slider", "harmonic", force_amplitude=1e15)
+    message = str(caught.value)
+    assert "is within the rk4 stability limit" in message and "not the timestep instability" in message
+    assert "use dt" not in message

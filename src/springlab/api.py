@@ -268,10 +268,15 @@ def _stability_advice(
     ratio, omega, zeta, limit = worst
     mode = f"(omega = {omega:.4g} rad/s, zeta = {zeta:.3g})"
     if ratio <= 1:
+        within = (
+            f"is within the {integrator} stability limit {limit:.4g}"
+            if math.isfinite(limit)
+            else f"meets no stability limit ({integrator} has none on this mode)"
+        )
         return (
-            f": omega*dt = {omega * dt:.4g} is within the {integrator} stability limit {limit:.4g} {mode}, so a"
-            f" smaller timestep is not the cure; look for values that reach MuJoCo's limit of {MAX_VALUE:g}"
-            " (mjMAXVAL) on a position, velocity or acceleration during the run"
+            f": omega*dt = {omega * dt:.4g} {within} {mode}, so this is not the timestep instability; look for"
+            f" values that reach MuJoCo's limit of {MAX_VALUE:g} (mjMAXVAL) on a position, velocity or"
+            " acceleration during the run"
         )
     stable = [
         name
