@@ -150,7 +150,7 @@ def evaluate(
     columns = scene.joint_columns(model, trajectory)
     pos = {j: c[0] for j, c in columns.items()}
     vel = {j: c[1] for j, c in columns.items()}
-    reference = scene.reference(model, params, scenario, trajectory.time) if scenario.exact else None
+    reference = scene.reference(model, params, scenario, trajectory.time, dt=trajectory.dt) if scenario.exact else None
     errors, tolerance, basis, passed = {}, None, "", None
     if reference is not None:
         simulated = {f"{j}_{k}": (pos if k == "pos" else vel)[j] for j in reference.pos for k in ("pos", "vel")}

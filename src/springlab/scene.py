@@ -279,9 +279,14 @@ class Scene:
         return Setup()
 
     def reference(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, time: np.ndarray
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, time: np.ndarray, *, dt: float
     ) -> Reference | None:
-        """Exact solution at `time` [s], or None where none exists (override)."""
+        """Exact solution at `time` [s] of a run with timestep `dt` [s], or None where none exists (override).
+
+        `dt` is explicit, never read back from `model.opt.timestep`: an input switched on the
+        step grid (a bang-bang move, the end of a road bump) is placed on the run's own grid,
+        and one model may serve runs at many timesteps (a sweep).
+        """
         return None
 
     def quantities(

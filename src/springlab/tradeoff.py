@@ -145,7 +145,7 @@ def fastest_rate(scene: Scene, model: mujoco.MjModel, params: dict[str, float], 
     if rates:
         return max(rates)
     if scenario.exact:
-        reference = scene.reference(model, params, scenario, np.array([0.0]))
+        reference = scene.reference(model, params, scenario, np.array([0.0]), dt=scenario.dt or scene.dt)
         if reference is not None and reference.system is not None:
             radius = float(np.max(np.abs(np.linalg.eigvals(reference.system))))
             return radius if radius > 0 else None
@@ -282,7 +282,7 @@ def sweepable(
     if params is None:
         params = scene.resolve(scenario, {})
     model = scene.build(params, scenario) if model is None else model
-    return scene.reference(model, params, scenario, np.zeros(1)) is not None
+    return scene.reference(model, params, scenario, np.zeros(1), dt=scenario.dt or scene.dt) is not None
 
 
 def _setup_or_none(scene: Scene, model, params, scenario, dt: float, duration: float) -> Setup | None:
