@@ -151,7 +151,7 @@ def evaluate(
     pos = {j: c[0] for j, c in columns.items()}
     vel = {j: c[1] for j, c in columns.items()}
     reference = scene.reference(model, params, scenario, trajectory.time, dt=trajectory.dt) if scenario.exact else None
-    errors, tolerance, basis, passed = {}, None, "", None
+    errors, tolerance, basis, passed, validity = {}, None, "", None, None
     if reference is not None:
         simulated = {f"{j}_{k}": (pos if k == "pos" else vel)[j] for j in reference.pos for k in ("pos", "vel")}
         exact = {
@@ -167,20 +167,36 @@ def evaluate(
                 f" dt = {trajectory.dt:g} s){_stability_advice(scene, model, params, scenario, trajectory.integrator, trajectory.dt)}"
             )
         if tol is not None:
+            # measured against the exact reference: true at any dt, no estimate involved
             per_column = {column: tol for column in errors}
             basis = "requested tolerance"
         elif reference.system is not None:
-            per_column = compare.tolerances(reference, trajectory.integrator, trajectory.dt, trajectory.time)
+            predicted = compare.tolerances(reference, trajectory.integrator, trajectory.dt, trajectory.time)
+            per_column = {c: min(v, compare.CERTIFIED_CAP) for c, v in predicted.items()}
             basis = compare.TOLERANCE_BASIS + (f"; {reference.tolerance_basis}" if reference.tolerance_basis else "")
+            if any(v > compare.CERTIFIED_CAP for v in predicted.values()):
+                basis += f"; capped at {compare.CERTIFIED_CAP:g}, the most a PASS certifies without --tol"
+            span = float(trajectory.time[-1] - trajectory.time[0])
+            validity = compare.estimate_range(
+                compare.system_rates(reference), trajectory.integrator, trajectory.dt, max(span, trajectory.dt)
+            )
         else:
-            per_column = {column: reference.tolerance for column in errors}
+            per_column = {column: min(reference.tolerance, compare.CERTIFIED_CAP) for column in errors}
             basis = reference.tolerance_basis
         tolerance = max(per_column.values())
         passed = all(errors[c]["max_rel"] <= per_column[c] for c in errors)
+        if validity is not None and not validity.inside:
+            passed = False  # the tolerance is no tolerance here: nothing is certified
     checks = [c.as_dict() for c in scene.checks(model, params, scenario, trajectory)] if scenario.exact else []
     if checks:
         # a scenario without compared columns is held to its checks alone
         passed = all(c["passed"] for c in checks) and passed is not False
+    if passed is None:
+        verdict = None
+    elif validity is not None and not validity.inside:
+        verdict = compare.NOT_VALIDATED
+    else:
+        verdict = compare.PASS if passed else compare.FAIL
     summary = {
         "scene": scene.name,
         "scenario": scenario.name,
@@ -195,6 +211,16 @@ def evaluate(
         "tolerance": tolerance,
         "tolerance_basis": basis,
         "passed": passed,
+        "verdict": verdict,
+        "estimate_range": None
+        if validity is None
+        else {
+            "inside": validity.inside,
+            # null, never a string: inf factor = a diverging tail, no largest dt = every dt is inside
+            "dropped_terms_factor": validity.factor if math.isfinite(validity.factor) else None,
+            "largest_dt_inside_s": validity.largest_dt if math.isfinite(validity.largest_dt) else None,
+            "reason": validity.reason(),
+        },
         "checks": checks,
     }
     return Result(
@@ -289,7 +315,7 @@ def validation_row(result: Result) -> dict[str, Any]:
         tightest = max(checks, key=lambda c: c["error"] / c["tolerance"] if c["tolerance"] > 0 else math.inf)
         worst, tolerance = tightest["error"], tightest["tolerance"]
         basis = f"{tightest['name']}: {tightest['basis']}"
-    return {
+    row = {
         "scene": s["scene"],
         "scenario": s["scenario"],
         "integrator": s["integrator"],
@@ -299,6 +325,11 @@ def validation_row(result: Result) -> dict[str, Any]:
         "tolerance": tolerance,
         "tolerance_basis": basis,
         "passed": s["passed"],
+        "verdict": s.get("verdict"),
         "wall_time_s": s["wall_time_s"],
         "checks": checks,
     }
+    validity = s.get("estimate_range")
+    if validity is not None and not validity["inside"]:
+        row["note"] = f"{s['verdict']}: {validity['reason']}"
+    return row
