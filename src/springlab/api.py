@@ -217,7 +217,7 @@ def evaluate(
         else {
             "inside": validity.inside,
             # null, never a string: inf factor = a diverging tail, no largest dt = every dt is inside
-            "dropped_terms_factor": validity.factor if math.isfinite(validity.factor) else None,
+            "error_bound_factor": validity.factor if math.isfinite(validity.factor) else None,
             "largest_dt_inside_s": validity.largest_dt if math.isfinite(validity.largest_dt) else None,
             "reason": validity.reason(),
         },

@@ -59,6 +59,12 @@ def plot_tradeoff(result: Tradeoff, path: str | pathlib.Path) -> pathlib.Path:
         right.loglog(
             [r.wall_time_s for r in runs], errors, _STYLES[name], marker="o", ms=3, color=_COLORS[name], label=name
         )
+        # runs outside the range of their error estimate: `springlab run` calls them not validated
+        outside = [(r, e) for r, e in zip(runs, errors) if not r.validated]
+        for axis, x in ((left, [r.dt for r, _ in outside]), (right, [r.wall_time_s for r, _ in outside])):
+            axis.plot(x, [e for _, e in outside], "x", ms=8, mew=1.5, color=_COLORS[name])
+    if any(not r.diverged and not r.validated for r in result.runs):
+        left.plot([], [], "x", ms=8, mew=1.5, color="gray", label="not validated (outside the estimate's range)")
     front = result.pareto
     right.step(
         [r.wall_time_s for r in front],
@@ -90,7 +96,9 @@ def plot_tradeoff(result: Tradeoff, path: str | pathlib.Path) -> pathlib.Path:
     for axis in (left, right):
         axis.grid(True, which="both", alpha=0.3)
         axis.legend(fontsize=8)
+    unvalidated = sum(not r.diverged and not r.validated for r in result.runs)
     note = f"; {diverged} diverged runs not shown" if diverged else ""
+    note += f"; x: {unvalidated} not validated" if unvalidated else ""
     fig.suptitle(f"{result.scene} / {result.scenario}: {len(result.runs)} runs over {result.duration:g} s{note}")
     fig.tight_layout()
     return _save(fig, path)

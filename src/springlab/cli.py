@@ -274,20 +274,28 @@ def cmd_tradeoff(args) -> int:
     return EXIT_FAILED if pick is not None and pick["integrator"] is None else EXIT_OK
 
 
+def _run_verdict(run) -> str:
+    """A sweep row's verdict in a word or two: pass, FAIL, not validated, or blank when diverged."""
+    if run.verdict is None:
+        return ""
+    return {compare.PASS: "pass", compare.FAIL: "FAIL"}.get(run.verdict, "not validated")
+
+
 def _print_tradeoff(result, output: str | None) -> None:
     print(
         f"{result.scene} / {result.scenario}: {len(result.runs)} runs over {result.duration:g} s"
         f" in {result.sweep_wall_time_s:.1f} s"
     )
     print(
-        f"  {'integrator':<13}{'dt [s]':>10}{'steps':>9}{'max rel err':>13}{'wall [ms]':>11}{'wall/sim s':>12}  pareto"
+        f"  {'integrator':<13}{'dt [s]':>10}{'steps':>9}{'max rel err':>13}{'wall [ms]':>11}{'wall/sim s':>12}"
+        "  pareto  verdict"
     )
     front = {id(r) for r in result.pareto}
     for r in result.runs:
         error = "diverged" if r.diverged else f"{r.max_rel_error:.3e}"
         print(
             f"  {r.integrator:<13}{r.dt:>10.3g}{r.steps:>9}{error:>13}{r.wall_time_s * 1e3:>11.3f}"
-            f"{r.wall_time_s / result.duration * 1e3:>10.3f}ms  {'*' if id(r) in front else ''}"
+            f"{r.wall_time_s / result.duration * 1e3:>10.3f}ms  {'*' if id(r) in front else ' ':<6}  {_run_verdict(r)}"
         )
     orders = ", ".join(f"{name} {p:.2f}" if p is not None else f"{name} -" for name, p in result.orders.items())
     print(f"  observed order: {orders}")
