@@ -104,7 +104,9 @@ def run(
 
     Returns:
       The Result; `result.summary["passed"]` says whether every compared column
-      is within its tolerance.
+      is within its tolerance and, without `tol`, the run is inside the range of
+      its error estimate; `result.summary["verdict"]` says which ('PASS', 'FAIL',
+      or springlab.compare.NOT_VALIDATED, with `estimate_range["reason"]`).
 
     Raises:
       BadInputError: unknown names, non-physical values, bad dt/duration.
@@ -275,7 +277,8 @@ def validate(
 
     Returns:
       One row per scenario: scene, scenario, integrator, dt, steps, max_rel_error,
-      tolerance, tolerance_basis, passed, wall_time_s, and checks (the scenario's
+      tolerance, tolerance_basis, passed, verdict, wall_time_s, note (only for a run
+      that is not validated: why, and the largest dt inside), and checks (the scenario's
       Check dicts; a scenario without compared columns shows its tightest check
       in max_rel_error/tolerance).
     """

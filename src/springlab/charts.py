@@ -8,11 +8,12 @@ from __future__ import annotations
 
 import math
 import pathlib
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
-from . import outputs
+from . import compare, outputs
 from .simulate import stability_limit
 from .stability import EULER_FAMILY, energy_formula, report_json
 from .tradeoff import Tradeoff
@@ -104,6 +105,25 @@ def plot_tradeoff(result: Tradeoff, path: str | pathlib.Path) -> pathlib.Path:
     return _save(fig, path)
 
 
+#: run length [natural periods] of the estimate-range line drawn on the stability map
+RANGE_PERIODS = 10
+_RANGE = f"validated below ({RANGE_PERIODS} periods)"
+
+
+def estimate_range_line(integrator: str, zetas: Sequence[float]) -> list[float]:
+    """Largest omega*dt [-] inside the range of the error estimate for a run of RANGE_PERIODS periods, per zeta.
+
+    On the unit oscillator (omega = 1 rad/s): its roots -zeta +- sqrt(zeta^2 - 1) are the modes
+    `compare.estimate_range` judges; above the line `springlab run` says "not validated".
+    """
+    out = []
+    for zeta in zetas:
+        root = np.sqrt(complex(zeta * zeta - 1.0))
+        rates = [-zeta + root, -zeta - root]
+        out.append(compare.estimate_range(rates, integrator, 0.1, RANGE_PERIODS * 2 * math.pi).largest_dt)
+    return out
+
+
 def plot_stability(report: dict[str, Any], amplification: dict[str, Any], path: str | pathlib.Path) -> pathlib.Path:
     """Per integrator: measured per-step amplification over (zeta, omega*dt), theory boundary, measured boundary.
 
@@ -131,6 +151,9 @@ def plot_stability(report: dict[str, Any], amplification: dict[str, Any], path: 
             axis.text(0.5, 0.5, "no limit: never unstable", transform=axis.transAxes, ha="center", fontsize=9)
         else:
             axis.plot(theory_zetas, theory, color="black", lw=1.2, label="theory")
+        # below this line a run of RANGE_PERIODS periods is inside the range of its error estimate (springlab.compare)
+        range_zetas = theory_zetas[::5]
+        axis.plot(range_zetas, estimate_range_line(name, range_zetas), color="black", lw=1.0, ls="--", label=_RANGE)
         rows = [r for r in report["boundaries"] if r["integrator"] == name and math.isfinite(r["measured_omega_dt"])]
         axis.plot(
             [r["zeta"] for r in rows],
