@@ -20,7 +20,7 @@ import numpy as np
 
 from . import compare, scenes
 from .errors import BadInputError, DivergedError
-from .scene import Scenario, Scene
+from .scene import Check, Scenario, Scene
 from .simulate import Trajectory, check_timing, integrator_id, simulate
 
 #: a run whose error exceeds this many times its signal has blown up, flagged or not
@@ -189,7 +189,10 @@ def evaluate(
         passed = all(errors[c]["max_rel"] <= per_column[c] for c in errors)
         if validity is not None and not validity.inside:
             passed = False  # the tolerance is no tolerance here: nothing is certified
-    checks = [c.as_dict() for c in scene.checks(model, params, scenario, trajectory)] if scenario.exact else []
+    checks = [
+        _capped(check, tol).as_dict()
+        for check in (scene.checks(model, params, scenario, trajectory) if scenario.exact else [])
+    ]
     if checks:
         # a scenario without compared columns is held to its checks alone
         passed = all(c["passed"] for c in checks) and passed is not False
@@ -238,6 +241,15 @@ def evaluate(
         model=model,
         trajectory=trajectory,
     )
+
+
+def _capped(check: Check, tol: float | None) -> Check:
+    """A check whose relative error a PASS certifies, with its tolerance capped at compare.CERTIFIED_CAP
+    unless the caller asked for a tolerance (the same cap as the compared columns)."""
+    if tol is not None or not check.certifies_error or check.reference == 0 or check.tolerance <= compare.CERTIFIED_CAP:
+        return check
+    basis = f"{check.basis}; capped at {compare.CERTIFIED_CAP:g}, the most a PASS certifies without --tol"
+    return dataclasses.replace(check, tolerance=compare.CERTIFIED_CAP, basis=basis)
 
 
 def _stability_advice(scene: Scene, model, params, scenario, integrator: str, dt: float) -> str:

@@ -145,6 +145,10 @@ class Check:
       tolerance: bound on `error` [-]: relative, or absolute in the name's unit
         when the reference is 0.
       basis: why the tolerance is what it is (one line).
+      certifies_error: whether `error` is an error of a physical result, which a PASS
+        without a requested tolerance certifies only up to springlab.compare.CERTIFIED_CAP
+        (False for a diagnostic, e.g. an observed order of convergence against the
+        integrator's).
     """
 
     name: str
@@ -152,6 +156,7 @@ class Check:
     reference: float
     tolerance: float
     basis: str
+    certifies_error: bool = True
 
     @property
     def error(self) -> float:
