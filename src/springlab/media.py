@@ -14,7 +14,7 @@ import pathlib
 import time
 from typing import Any
 
-from . import api, plots, render, scenes
+from . import api, plots, progress, render, scenes
 from .errors import BadInputError, SpringlabError
 from .outputs import Artifact
 
@@ -120,6 +120,7 @@ def media_step(state) -> list[Artifact]:
     few minutes on two cores.
     """
     written = []
+    films = progress.bar(len(state.results), description="demo: filming", unit="video")  # on a terminal only
     for (scene_name, scenario_name), result in state.results.items():
         folder = state.out / scene_name / scenario_name
         start = time.perf_counter()
@@ -139,6 +140,8 @@ def media_step(state) -> list[Artifact]:
         for path, _, title in plot_files(result, folder, state.out):
             written.append(Artifact(path, "plot", title, scene_name, scenario_name))
         state.timings.append((f"media {scene_name}/{scenario_name}", time.perf_counter() - start))
+        films.update(1)
+    films.close()
     for scene in scenes.SCENES.values():
         target = state.out / scene.name / "zeta_family.png"
         try:

@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import math
 import os
-import sys
 import time as _time
 from collections.abc import Callable
 from pathlib import Path
@@ -41,6 +40,7 @@ import numpy as np
 
 from . import outputs
 from .errors import BadInputError  # a ValueError; the CLI maps it to exit 2
+from .progress import bar as progress_bar
 from .render_drawings import SPRING_PREFIX, drawn_springs
 from .render_framing import framed_model
 from .render_gl import OffscreenScene, ensure_gl_backend
@@ -227,50 +227,6 @@ def _normalize_quaternions(model: mujoco.MjModel, q: np.ndarray) -> None:
         np.divide(quat, norm, out=quat, where=norm > 0)
 
 
-# ------------------------------------------------------------------- progress
-
-
-class _Progress:
-    def __init__(self, total: int, enabled: bool, stream=None):
-        self.total = total
-        self.enabled = enabled and total > 0
-        self.stream = stream if stream is not None else sys.stderr
-        self.start = _time.perf_counter()
-        self._last = 0.0
-
-    def update(self, done: int) -> None:
-        if not self.enabled:
-            return
-        now = _time.perf_counter()
-        if done < self.total and now - self._last < 0.1:
-            return
-        self._last = now
-        frac = done / self.total
-        bar = "#" * int(30 * frac)
-        rate = done / max(now - self.start, 1e-9)
-        self.stream.write(f"\rrendering [{bar:<30}] {done}/{self.total} frames {rate:5.1f} fps")
-        if done >= self.total:
-            self.stream.write("\n")
-            self._last = 0.0  # finished: nothing left to terminate
-        self.stream.flush()
-
-    def interrupted(self) -> None:
-        """End a partly drawn bar with a newline so error messages start clean."""
-        if self.enabled and self._last:
-            try:
-                self.stream.write("\n")
-                self.stream.flush()
-            except Exception:  # noqa: BLE001
-                pass
-
-
-def _stderr_is_terminal() -> bool:
-    try:
-        return bool(sys.stderr is not None and sys.stderr.isatty())
-    except (AttributeError, ValueError):
-        return False
-
-
 # ----------------------------------------------------------------- main entry
 
 
@@ -338,7 +294,8 @@ def render_video(
     label:
         Optional text drawn above the simulation time on every frame.
     progress:
-        Show a progress bar on stderr; ``None`` = only when stderr is a terminal.
+        Show a progress bar (frames, rate, ETA) on stderr; ``None`` = only when
+        stderr is a terminal (:mod:`springlab.progress`).
     panel:
         Optional ``panel(frame_index, t) -> HxWx3 uint8`` image (RGBA accepted,
         alpha dropped) drawn to the right of the 3D view, e.g. a phase-plane
@@ -402,8 +359,6 @@ def render_video(
     states = sample_states(t_rec, q_rec, at)  # validates time ordering
     _normalize_quaternions(model, states)
     model = framed_model(model, states, cam_id, width, height)
-    if progress is None:
-        progress = _stderr_is_terminal()
 
     try:
         out_path.parent.mkdir(parents=True, exist_ok=True)
@@ -413,7 +368,7 @@ def render_video(
 
     scene = None
     writer = None
-    bar = _Progress(n_frames, bool(progress))
+    bar = progress_bar(n_frames, description="rendering", unit="frame", enabled=progress)
     try:
         scene = OffscreenScene(model, width, height, cam_id)
         data = mujoco.MjData(model)
@@ -453,7 +408,7 @@ def render_video(
             if video_h > height:
                 frame[-1] = frame[-2]
             writer.put(frame)
-            bar.update(i + 1)
+            bar.update(1)
 
         writer.finish()
         writer = None
@@ -461,13 +416,13 @@ def render_video(
     except BaseException:
         if writer is not None:
             writer.abort()
-        bar.interrupted()
         try:
             os.remove(tmp_name)
         except FileNotFoundError:
             pass
         raise
     finally:
+        bar.close()  # ends the bar's line, so a following message starts clean
         if scene is not None:
             scene.close()
 
