@@ -29,6 +29,7 @@ Design notes
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import time as _time
@@ -38,11 +39,11 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from . import outputs
+from . import outputs, render_scale
 from .errors import BadInputError  # a ValueError; the CLI maps it to exit 2
 from .progress import bar as progress_bar
-from .render_drawings import SPRING_PREFIX, drawn_springs
-from .render_framing import framed_model
+from .render_drawings import SPRING_PREFIX, Drawings, RoadBump, covering_guides, drawn_springs
+from .render_framing import frame_camera, framed_model
 from .render_gl import OffscreenScene, ensure_gl_backend
 from .render_sink import X264_CRF, X264_PRESET, GifSink, Mp4Sink, WriterThread
 from .render_text import TextOverlay
@@ -56,6 +57,7 @@ __all__ = [
     "framed_model",
     "drawn_springs",
     "SPRING_PREFIX",
+    "RoadBump",
     "X264_PRESET",
     "X264_CRF",
 ]
@@ -259,6 +261,9 @@ def render_video(
     label: str = "",
     progress: bool | None = None,
     panel: Callable[[int, float], np.ndarray] | None = None,
+    slow_motion: float = 1.0,
+    exaggerate: float | None = 1.0,
+    road_bump: RoadBump | None = None,
 ) -> dict:
     """Render a recorded trajectory to a video file.
 
@@ -302,11 +307,24 @@ def render_video(
         plot; ``H`` must equal ``height`` and ``W`` must stay constant. It is
         called once per frame, in order, on the calling thread. The video is
         then ``(width + W) x height``.
+    slow_motion:
+        Factor S >= 1 [-]: frame k shows simulation time k / (fps S), so the
+        video lasts S x ``duration``; "1/S speed" is written on every frame.
+    exaggerate:
+        Factor E >= 1 [-]: every coordinate is drawn at its mean over the frames
+        plus E times its deviation from it (:func:`render_scale.exaggerated`);
+        "motion ×E" is written on every frame. Drawing only: the trajectory
+        passed in is not changed. ``None``: :func:`render_scale.default_exaggeration`
+        of the filmed motion.
+    road_bump:
+        Optional :class:`render_drawings.RoadBump`: the road profile drawn under
+        a quarter car (its height follows the exaggeration).
 
     Returns
     -------
     ``{"frames": n, "fps": fps, "width": W, "height": H, "seconds": wall time,
-    "path": str}`` with the encoded video size ``W x H``.
+    "path": str, "slow_motion": S, "exaggeration": E}`` with the encoded video
+    size ``W x H``.
 
     Raises
     ------
@@ -352,13 +370,26 @@ def render_video(
             f"duration must be > 0 s, got {duration!r}"
             + (" (time[-1]; pass duration= or a longer recording)" if duration == t_rec[-1] else "")
         )
-    at = frame_times(duration, fps)
+    slow_motion = render_scale.check_factor("slow_motion", slow_motion)
+    if exaggerate is not None:
+        exaggerate = render_scale.check_factor("exaggerate", exaggerate)
+    at = frame_times(duration * slow_motion, fps) / slow_motion  # simulation time of each frame [s]
     n_frames = at.size
     if n_frames == 0:
-        raise BadInputError(f"duration {duration} s at {fps} fps gives no frames (need duration >= {0.5 / fps:.3g} s)")
+        raise BadInputError(
+            f"duration {duration} s at {fps} fps gives no frames (need duration >= {0.5 / (fps * slow_motion):.3g} s)"
+        )
     states = sample_states(t_rec, q_rec, at)  # validates time ordering
     _normalize_quaternions(model, states)
-    model = framed_model(model, states, cam_id, width, height)
+    if exaggerate is None:
+        exaggerate = render_scale.default_exaggeration(model, states)
+    states = render_scale.exaggerated(model, states, exaggerate)
+    model = covering_guides(model, states)
+    if road_bump is not None and exaggerate != 1.0:
+        road_bump = dataclasses.replace(road_bump, exaggeration=exaggerate)
+    drawings = Drawings(model, states, road_bump, height)
+    model, camera_path = frame_camera(model, states, cam_id, width, height, anchors=drawings.anchors())
+    drawings.rail_marks = camera_path is not None  # a following camera needs marks to show the travel
 
     try:
         out_path.parent.mkdir(parents=True, exist_ok=True)
@@ -370,9 +401,15 @@ def render_video(
     writer = None
     bar = progress_bar(n_frames, description="rendering", unit="frame", enabled=progress)
     try:
-        scene = OffscreenScene(model, width, height, cam_id)
+        scene = OffscreenScene(model, width, height, cam_id, drawings=drawings)
         data = mujoco.MjData(model)
-        text = TextOverlay(label, height, float(at[-1]))
+        text = TextOverlay(
+            label,
+            height,
+            float(at[-1]),
+            notes=render_scale.labels(slow_motion, exaggerate),
+            time_step=1.0 / (fps * slow_motion),
+        )
 
         first_panel = None
         panel_w = 0
@@ -394,6 +431,8 @@ def render_video(
             t = float(at[i])
             data.qpos[:] = states[i]
             data.time = t
+            if camera_path is not None:  # a camera that follows a long travel
+                model.cam_pos[cam_id] = camera_path[i]
             mujoco.mj_fwdPosition(model, data)
 
             frame = np.empty((video_h, video_w, 3), dtype=np.uint8)
@@ -433,4 +472,6 @@ def render_video(
         "height": int(video_h),
         "seconds": _time.perf_counter() - wall_start,
         "path": str(out_path),
+        "slow_motion": slow_motion,
+        "exaggeration": exaggerate,
     }

@@ -23,8 +23,6 @@ import os
 import mujoco
 import numpy as np
 
-from . import render_drawings
-
 __all__ = ["ensure_gl_backend", "OffscreenScene"]
 
 _BACKGROUND_RGBA = np.array([1.0, 1.0, 1.0, 1.0])  # backdrop colour (white)
@@ -69,7 +67,7 @@ def _gl_context_class():
 class OffscreenScene:
     """One GL context + MjrContext + MjvScene, reused for every frame."""
 
-    def __init__(self, model: mujoco.MjModel, width: int, height: int, camera_id: int):
+    def __init__(self, model: mujoco.MjModel, width: int, height: int, camera_id: int, drawings=None):
         self.model = model
         self.width = width
         self.height = height
@@ -126,7 +124,7 @@ class OffscreenScene:
             self.camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
             self.camera.fixedcamid = camera_id
 
-        self._springs = render_drawings.drawn_springs(model)
+        self._drawings = drawings  # render_drawings.Drawings or None: springs, dampers, belt, road
         self._rect = mujoco.MjrRect(0, 0, width, height)
         self._pixels = np.empty((height, width, 3), dtype=np.uint8)
         self._eye = np.eye(3)
@@ -171,7 +169,8 @@ class OffscreenScene:
     def render(self, data: mujoco.MjData, out: np.ndarray) -> None:
         """Render ``data`` (kinematics already computed) into ``out`` (H x W x 3)."""
         mujoco.mjv_updateScene(self.model, data, self.option, None, self.camera, mujoco.mjtCatBit.mjCAT_ALL, self.scene)
-        render_drawings.add_springs(self.scene, self._springs, data)
+        if self._drawings is not None:
+            self._drawings.add(self.scene, data)
         self._add_backdrop()
         mujoco.mjr_render(self._rect, self.scene, self._con)
         mujoco.mjr_readPixels(self._pixels, None, self._rect, self._con)

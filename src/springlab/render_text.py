@@ -37,7 +37,13 @@ def _find_font() -> str | None:
 class TextOverlay:
     """Dark text on a translucent white box at the top-left of the 3D view."""
 
-    def __init__(self, label: str, view_height: int, max_time: float):
+    def __init__(self, label: str, view_height: int, max_time: float, notes: list[str] = (), time_step: float = 0.01):
+        """``label`` on the first line, then ``notes`` (e.g. "motion ×30"), then the time.
+
+        ``max_time`` [s] fixes the width of the time field; ``time_step`` [s]
+        (the simulated time between frames) sets its decimals, so a slowed
+        video's clock visibly advances every frame.
+        """
         from PIL import ImageFont
 
         self.size = max(11, round(view_height / 22))
@@ -50,15 +56,17 @@ class TextOverlay:
         self.margin = max(2, self.size // 3)
         self.line_h = int(round(self.size * 1.25))
         self.label = " ".join(str(label).split())  # one line, no control chars
-        self._digits = len(f"{max(max_time, 0.0):.2f}")
+        self.notes = [" ".join(str(n).split()) for n in notes]
+        self._decimals = max(2, min(6, math.ceil(-math.log10(max(time_step, 1e-6)) - 1e-9)))
+        self._digits = len(f"{max(max_time, 0.0):.{self._decimals}f}")
 
     def time_text(self, t: float) -> str:
-        return f"t = {t:{self._digits}.2f} s"
+        return f"t = {t:{self._digits}.{self._decimals}f} s"
 
     def draw(self, view: np.ndarray, t: float) -> None:
         from PIL import Image, ImageDraw
 
-        lines = [s for s in (self.label, self.time_text(t)) if s]
+        lines = [s for s in (self.label, *self.notes, self.time_text(t)) if s]
         widths = [int(math.ceil(self.font.getlength(s))) for s in lines]
         box_w = min(view.shape[1] - self.margin, max(widths) + 2 * self.pad)
         box_h = min(view.shape[0] - self.margin, len(lines) * self.line_h + 2 * self.pad)
