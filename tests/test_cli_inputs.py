@@ -146,3 +146,27 @@ def test_a_divergence_within_the_stability_limit_never_advises_a_smaller_dt():
     message = str(caught.value)
     assert "is within the rk4 stability limit" in message and "not the timestep instability" in message
     assert "use dt" not in message
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ("run", "printer_head", "--set", "belt_damping=1e300"),
+        ("run", "car", "pitch_heave", "--set", "front_damping=1e300"),
+        ("run", "slider", "--set", "mass=1e300"),
+        ("run", "car", "road_bump", "--set", "speed=1e300"),
+        ("run", "slider", "harmonic", "--set", "force_frequency=1e300"),
+        ("run", "car", "road_bump", "--set", "bump_length=1e-300"),
+        ("run", "kinematics", "--set", "jerk=1e300"),
+        ("run", "nonlinear", "--set", "x0=1e300"),
+    ],
+)
+def test_values_at_the_edge_of_double_precision_get_one_line_and_no_warning(argv, capsys):
+    # each value is inside its stated range; their products leave double precision or MuJoCo's caps
+    from springlab.cli import main
+
+    code = main(list(argv))
+    err = capsys.readouterr().err
+    assert code in (2, 3), err
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err and "Warning" not in err
+    assert "double precision" in err or "mjMAXVAL" in err

@@ -11,15 +11,17 @@ which is what springlab.run and springlab.validate are).
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
+from collections.abc import Iterator
 from typing import Any
 
 import mujoco
 import numpy as np
 
 from . import compare, scenes
-from .errors import BadInputError, DivergedError, ParameterError
+from .errors import BadInputError, DivergedError, ParameterError, SpringlabError
 from .scene import Check, Scenario, Scene
 from .simulate import (
     INTEGRATORS,
@@ -131,25 +133,48 @@ def run(
     steps = check_timing(dt, duration)
     if tol is not None:
         tol = compare.check_tolerance(tol)
-    model = scene_obj.build(params, chosen)
-    setup = scene_obj.setup(model, params, chosen, steps, dt)
+    with _within_double_precision(scene_obj, chosen, params):
+        model = scene_obj.build(params, chosen)
+        setup = scene_obj.setup(model, params, chosen, steps, dt)
+        try:
+            trajectory = simulate(
+                model,
+                integrator=integrator,
+                dt=dt,
+                duration=duration,
+                qpos=setup.qpos,
+                qvel=setup.qvel,
+                act=setup.act,
+                control=setup.control,
+                stop=scene_obj.stop_condition(model, params, chosen),
+            )
+        except DivergedError as error:
+            beyond = beyond_mujoco_limits(model, setup.qpos, setup.qvel, setup.act, setup.control)
+            advice = _stability_advice(scene_obj, model, params, chosen, integrator, dt, duration, beyond)
+            raise DivergedError(f"{error}{advice}") from None
+        return evaluate(scene_obj, chosen, params, model, trajectory, tol)
+
+
+@contextlib.contextmanager
+def _within_double_precision(scene: Scene, scenario: Scenario, params: dict[str, float]) -> Iterator[None]:
+    """Turn arithmetic that breaks down at extreme parameter values into one ParameterError.
+
+    Each value is checked against its range, but products of valid values can still
+    leave double precision (force_frequency = 1e300: omega^2 overflows; mass = 1e300:
+    rates underflow to 0). Such a run has no meaningful answer: exit 2, one line,
+    naming the most extreme value, instead of a traceback.
+    """
     try:
-        trajectory = simulate(
-            model,
-            integrator=integrator,
-            dt=dt,
-            duration=duration,
-            qpos=setup.qpos,
-            qvel=setup.qvel,
-            act=setup.act,
-            control=setup.control,
-            stop=scene_obj.stop_condition(model, params, chosen),
-        )
-    except DivergedError as error:
-        beyond = beyond_mujoco_limits(model, setup.qpos, setup.qvel, setup.act, setup.control)
-        advice = _stability_advice(scene_obj, model, params, chosen, integrator, dt, duration, beyond)
-        raise DivergedError(f"{error}{advice}") from None
-    return evaluate(scene_obj, chosen, params, model, trajectory, tol)
+        yield
+    except SpringlabError:
+        raise
+    except (ArithmeticError, np.linalg.LinAlgError, ValueError) as error:
+        name, value = max(params.items(), key=lambda item: abs(math.log10(abs(item[1]))) if item[1] else 0.0)
+        raise ParameterError(
+            f"{scene.name} {scenario.name} cannot be computed in double precision at these values (the most"
+            f" extreme: {name} = {value:g}): {type(error).__name__}: {str(error).splitlines()[0] if str(error) else ''}"
+            "; choose less extreme ones"
+        ) from None
 
 
 def evaluate(
@@ -284,7 +309,7 @@ def _stability_advice(
     duration: float,
     beyond: str | None = None,
 ) -> str:
-    """Why a run diverged and what would help, as ': ...' (or '' when the scene has no modes).
+    """Why a run diverged and what would help, as ': ...'.
 
     Never contradicts itself: a state past MuJoCo's own cap (`beyond`, see
     simulate.beyond_mujoco_limits) is not a timestep problem; a mode within its
@@ -304,7 +329,11 @@ def _stability_advice(
         if worst is None or ratio > worst[0]:
             worst = (ratio, omega, zeta, limit)
     if worst is None:
-        return ""
+        # no oscillating mode (a driven free mass): no timestep limit applies, only MuJoCo's cap
+        return (
+            f": {scene.name} has no mode whose stability limits dt, so a position, velocity or acceleration"
+            f" passed MuJoCo's limit of {MAX_VALUE:g} (mjMAXVAL); choose values that keep them below it"
+        )
     ratio, omega, zeta, limit = worst
     mode = f"(omega = {omega:.4g} rad/s, zeta = {zeta:.3g})"
     if ratio <= 1:

@@ -15,6 +15,7 @@ import pathlib
 import signal
 import sys
 import time
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
@@ -627,7 +628,10 @@ def _sigterm_unwinds() -> Iterator[None]:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the `springlab` console script; returns the exit code."""
     try:
-        with _sigterm_unwinds():
+        # the terminal gets springlab's one-line answers, never warning text (numpy's overflow
+        # warnings at extreme values, library deprecations); the API leaves warnings alone
+        with _sigterm_unwinds(), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
             args = build_parser().parse_args(argv)
             return COMMANDS[args.command](args)
     except SystemExit as done:  # --help, --version
