@@ -41,8 +41,8 @@ import math
 from typing import Any
 
 import numpy as np
+import scipy.linalg
 
-from . import analytic
 from .errors import BadInputError
 from .scene import Reference
 from .simulate import ORDERS
@@ -102,7 +102,7 @@ def predicted_error(reference: Reference, integrator: str, dt: float, time: np.n
         elapsed = time[rows] - start
         error[rows] = scale * elapsed[:, None] * (z[rows] @ np.linalg.matrix_power(a, order + 1).T)
         if carried.any():
-            step = analytic.expm(a * dt)
+            step = scipy.linalg.expm(a * dt)
             propagated = np.empty((last + 1 - first, z.shape[1]))
             propagated[0] = carried
             for i in range(1, len(propagated)):
