@@ -306,6 +306,7 @@ def forced():
     return springlab.run("nonlinear", "forced_duffing")
 
 
+@pytest.mark.slow
 def test_forced_duffing_agrees_with_an_independent_solver_until_its_accuracy_horizon(forced):
     p = forced.parameters
     omega = 2 * math.pi * p["force_frequency"]
@@ -329,6 +330,7 @@ def test_forced_duffing_agrees_with_an_independent_solver_until_its_accuracy_hor
     assert np.max(difference[t <= horizon]) < 1e-3
 
 
+@pytest.mark.slow
 def test_twin_runs_separate_like_the_variational_equation(forced):
     # d(dx)'' = -(k1 + 3 k3 x^2) dx / m - d dx' / m along the trajectory, integrated by scipy
     p = forced.parameters
@@ -357,6 +359,7 @@ def test_twin_runs_separate_like_the_variational_equation(forced):
         assert separation == pytest.approx(1e-9 * sol.sol(when)[2], rel=1e-3)
 
 
+@pytest.mark.slow
 def test_forced_duffing_is_chaotic(forced):
     q = forced.summary["quantities"]
     assert q["perturbation_m"] == 1e-9 and q["well_size_m"] == pytest.approx(0.1)

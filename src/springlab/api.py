@@ -173,6 +173,7 @@ def evaluate(
             per_column = compare.tolerances(reference, trajectory.integrator, trajectory.dt, trajectory.time)
             basis = compare.TOLERANCE_BASIS + (f"; {reference.tolerance_basis}" if reference.tolerance_basis else "")
         else:
+            assert reference.tolerance is not None, "a reference without `system` states its tolerance"
             per_column = {column: reference.tolerance for column in errors}
             basis = reference.tolerance_basis
         tolerance = max(per_column.values())
@@ -271,7 +272,7 @@ def exact_scenarios(scene_names: list[str] | None = None) -> list[tuple[Scene, S
       UnknownNameError: a scene name springlab does not have.
     """
     names = list(scenes.SCENES) if not scene_names else scene_names
-    pairs = []
+    pairs: list[tuple[Scene, Scenario]] = []
     for name in names:
         scene = scenes.get(name)
         pairs.extend((scene, scenario) for scenario in scene.scenarios.values() if scenario.exact)

@@ -40,11 +40,10 @@ def auto_setting(
         raise BadInputError("integrator 'auto' chooses dt itself; drop dt (--dt) or name an integrator")
     result = tradeoff(scene, scenario, tol=tol, duration=duration, **parameters)
     pick = result.recommendation
+    assert pick is not None, "a sweep with tol always answers, if only with integrator None"
     if pick["integrator"] is None:
-        best = min((r for r in result.runs if not r.diverged), key=lambda r: r.max_rel_error, default=None)
-        reach = (
-            f"; the best reached is {best.max_rel_error:.2g} ({best.integrator}, dt = {best.dt:g} s)" if best else ""
-        )
+        best = min((r for r in result.runs if not r.diverged), key=lambda r: r.error, default=None)
+        reach = f"; the best reached is {best.error:.2g} ({best.integrator}, dt = {best.dt:g} s)" if best else ""
         raise BadInputError(
             f"no integrator and timestep of the sweep meets tol = {tol:g} on {result.scene}"
             f" {result.scenario}{reach}; valid: a tol it can reach"

@@ -71,6 +71,12 @@ class Job:
     stop: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None
 
 
+def _present(controls: np.ndarray | None) -> np.ndarray:
+    """The control series of a job on a model with actuators (which always has one)."""
+    assert controls is not None, "a model with actuators runs with a control series"
+    return controls
+
+
 def _controls(job: Job) -> np.ndarray | None:
     """(steps, nu) controls of a job, or None for a model without actuators."""
     nu = job.model.nu
@@ -141,10 +147,10 @@ def run_batched(jobs: Sequence[Job], *, nthread: int = 0) -> list[Trajectory | D
             count = int(end - done)
             control = None
             if base.nu:
-                control = np.stack([controls[i][done:end] for i in ids])
+                control = np.stack([_present(controls[i])[done:end] for i in ids])
             out = batch.rollout(count, control=control, record=[RECORD_SPEC], ids=ids)[RECORD_SPEC]
-            for row, i in enumerate(ids):
-                records[i].append(out[row])
+            for row, job_index in enumerate(ids):
+                records[job_index].append(out[row])
             done = int(end)
         warnings = np.array(batch.warning)
     results: list[Trajectory | DivergedError] = []
@@ -188,7 +194,7 @@ def time_run(job: Job, *, repeats: int = 3, max_steps: int = TIMING_STEPS) -> fl
     state0 = initial_state(model, job.setup.qpos, job.setup.qvel, job.setup.act)
     controls = None
     if model.nu:
-        controls = np.ascontiguousarray(_controls(job)[:timed])[None]
+        controls = np.ascontiguousarray(_present(_controls(job))[:timed])[None]
     data = mujoco.MjData(model)
     out = np.empty((1, timed, state0.size))
     sensors = np.empty((1, timed, model.nsensordata))

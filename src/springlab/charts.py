@@ -54,7 +54,7 @@ def plot_tradeoff(result: Tradeoff, path: str | pathlib.Path) -> pathlib.Path:
             continue
         order = result.orders.get(name)
         label = f"{name} (order {order:.2f})" if order is not None else name
-        errors = [max(r.max_rel_error, floor) for r in runs]
+        errors = [max(r.error, floor) for r in runs]
         left.loglog([r.dt for r in runs], errors, _STYLES[name], marker="o", ms=3, color=_COLORS[name], label=label)
         right.loglog(
             [r.wall_time_s for r in runs], errors, _STYLES[name], marker="o", ms=3, color=_COLORS[name], label=name
@@ -62,7 +62,7 @@ def plot_tradeoff(result: Tradeoff, path: str | pathlib.Path) -> pathlib.Path:
     front = result.pareto
     right.step(
         [r.wall_time_s for r in front],
-        [max(r.max_rel_error, floor) for r in front],
+        [max(r.error, floor) for r in front],
         where="post",
         color="black",
         lw=1.2,

@@ -87,6 +87,7 @@ def predicted_error(reference: Reference, integrator: str, dt: float, time: np.n
       time: (n,) times of the states [s], uniformly dt apart.
     """
     z = reference.states
+    assert z is not None, "tolerances() needs a linear reference (states and system)"
     order = ORDERS[integrator]
     scale = ERROR_CONSTANTS[integrator] * dt**order
     segments = [(float(time[0]), np.asarray(reference.system, float))]
@@ -122,7 +123,7 @@ def tolerances(reference: Reference, integrator: str, dt: float, time: np.ndarra
     """Relative tolerance per compared column (see module docstring)."""
     floor = ROUNDOFF_PER_STEP * (len(time) - 1)
     predicted = predicted_error(reference, integrator, dt, time)
-    out = {}
+    out: dict[str, float] = {}
     for joint in reference.rows:
         for kind, series in (("pos", reference.pos[joint]), ("vel", reference.vel[joint])):
             column = f"{joint}_{kind}"

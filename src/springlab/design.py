@@ -205,7 +205,7 @@ class Study:
         centre = self.levels // 2
         out = {}
         for axis, name in enumerate(self.grids):
-            index = [centre] * len(shape)
+            index: list[int | slice] = [centre] * len(shape)
             index[axis] = centre + 1
             upper = grid_times[tuple(index)]
             index[axis] = centre - 1
@@ -339,7 +339,8 @@ def simulate_moves(
     Raises:
       DivergedError: a simulation blew up (MuJoCo's warning counters rose).
     """
-    scene: PrinterHead = scenes.get("printer_head")
+    scene = scenes.get("printer_head")
+    assert isinstance(scene, PrinterHead)
     scenario = scene.scenario("move")
     params = dict(base)
     model = scene.build(params, scenario)
@@ -664,7 +665,7 @@ def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
         first, second = study.plane.y_name, study.plane.x_name
     else:
         shape = (study.levels,) * len(axes_order)
-        index = [centre] * len(shape)
+        index: list[int | slice] = [centre] * len(shape)
         index[axes_order.index(first)] = slice(None)
         index[axes_order.index(second)] = slice(None)
         plane = study.positioning_time_s.reshape(shape)[tuple(index)] * 1e3  # ms

@@ -28,7 +28,7 @@ def render_run(
     result: api.Result,
     output: str | os.PathLike,
     *,
-    fps: float = 30,
+    fps: int = 30,
     width: int = 640,
     height: int = 480,
     duration: float | None = None,

@@ -78,6 +78,13 @@ class Run:
     diverged: bool = False
     detail: str = ""
 
+    @property
+    def error(self) -> float:
+        """max_rel_error of a run that did not diverge [-] (filter out diverged runs first)."""
+        if self.max_rel_error is None:
+            raise ValueError(f"{self.integrator} at dt = {self.dt:g} s diverged: it has no error")
+        return self.max_rel_error
+
     def row(self) -> dict[str, Any]:
         """The JSON row: integrator, dt, max_rel_error, steps, wall_time_s, diverged."""
         return {
@@ -237,7 +244,7 @@ def sweep(
         dts = timestep_grid(fastest_rate(scene_obj, model, params, chosen), duration)
         dts = _accepted_grid(dts, lambda dt: _setup_or_none(scene_obj, model, params, chosen, dt, duration))
     stop = scene_obj.stop_condition(model, params, chosen)
-    jobs = []
+    jobs: list[Job] = []
     for dt in dts:
         steps = check_timing(dt, duration)
         setup = scene_obj.setup(model, params, chosen, steps, dt)
@@ -349,7 +356,7 @@ def observed_order(runs: Iterable[Run]) -> float | None:
     points = sorted(asymptotic_runs(runs), key=lambda r: r.dt)[:FIT_POINTS]
     if len({r.dt for r in points}) < 3:
         return None
-    log_dt, log_error = np.log([r.dt for r in points]), np.log([r.max_rel_error for r in points])
+    log_dt, log_error = np.log([r.dt for r in points]), np.log([r.error for r in points])
     slope, intercept = np.polyfit(log_dt, log_error, 1)
     if np.max(np.abs(log_error - (slope * log_dt + intercept))) > math.log(FIT_MAX_SCATTER):
         return None
@@ -358,12 +365,12 @@ def observed_order(runs: Iterable[Run]) -> float | None:
 
 def pareto_front(runs: Iterable[Run]) -> list[Run]:
     """Runs that no other run beats in both error and wall time, cheapest first (diverged runs excluded)."""
-    candidates = sorted((r for r in runs if not r.diverged), key=lambda r: (r.wall_time_s, r.max_rel_error))
+    candidates = sorted((r for r in runs if not r.diverged), key=lambda r: (r.wall_time_s, r.error))
     front, best = [], math.inf
     for r in candidates:
-        if r.max_rel_error < best:
+        if r.error < best:
             front.append(r)
-            best = r.max_rel_error
+            best = r.error
     return front
 
 
@@ -383,7 +390,7 @@ def _candidates(result: Tradeoff, tol: float) -> list[tuple[float, str, float, b
     out = []
     for name in dict.fromkeys(r.integrator for r in result.runs):
         runs = sorted((r for r in result.runs if r.integrator == name), key=lambda r: r.dt)
-        passing = [r for r in runs if not r.diverged and r.max_rel_error <= tol]
+        passing = [r for r in runs if not r.diverged and r.error <= tol]
         if not passing:
             continue
         grid = min(passing, key=lambda r: (r.steps, -r.dt))
@@ -391,8 +398,8 @@ def _candidates(result: Tradeoff, tol: float) -> list[tuple[float, str, float, b
         larger = [r for r in runs if r.dt > grid.dt]
         order = result.orders.get(name)
         order = order if order is not None and abs(order - ORDERS[name]) <= 0.5 else ORDERS[name]
-        if grid.max_rel_error > 0:
-            predicted = grid.dt * (REFINE_SAFETY * tol / grid.max_rel_error) ** (1.0 / order)
+        if grid.error > 0:
+            predicted = grid.dt * (REFINE_SAFETY * tol / grid.error) ** (1.0 / order)
         else:
             predicted = grid.dt
         ceiling = larger[0].dt if larger else 2 * grid.dt
