@@ -114,15 +114,22 @@ def _any_time(t) -> np.ndarray:
 def natural_frequency(mass: float, stiffness: float) -> float:
     """Undamped natural angular frequency.
 
-    Args:
-        mass: Mass m [kg], > 0.
-        stiffness: Spring constant k [N/m], >= 0.
+    Parameters
+    ----------
+    mass
+        Mass m [kg], > 0.
+    stiffness
+        Spring constant k [N/m], >= 0.
 
-    Returns:
+    Returns
+    -------
+    float
         omega_n = sqrt(k / m) [rad/s].
 
-    Raises:
-        ValueError: For non-finite input, m <= 0 or k < 0.
+    Raises
+    ------
+    ValueError
+        For non-finite input, m <= 0 or k < 0.
     """
     m, k, _ = _check_oscillator(mass, stiffness, 0.0)
     return math.sqrt(k / m)
@@ -131,17 +138,25 @@ def natural_frequency(mass: float, stiffness: float) -> float:
 def damping_ratio(mass: float, stiffness: float, damping: float) -> float:
     """Dimensionless damping ratio.
 
-    Args:
-        mass: Mass m [kg], > 0.
-        stiffness: Spring constant k [N/m], >= 0.
-        damping: Viscous damping coefficient d [N s/m], >= 0.
+    Parameters
+    ----------
+    mass
+        Mass m [kg], > 0.
+    stiffness
+        Spring constant k [N/m], >= 0.
+    damping
+        Viscous damping coefficient d [N s/m], >= 0.
 
-    Returns:
+    Returns
+    -------
+    float
         zeta = d / (2 sqrt(k m)) [-]; ``math.inf`` for k = 0 with d > 0 and
         0.0 for d = 0.
 
-    Raises:
-        ValueError: For non-physical or non-finite input.
+    Raises
+    ------
+    ValueError
+        For non-physical or non-finite input.
     """
     m, k, d = _check_oscillator(mass, stiffness, damping)
     if d == 0.0:
@@ -157,16 +172,24 @@ def damping_ratio(mass: float, stiffness: float, damping: float) -> float:
 def damped_frequency(mass: float, stiffness: float, damping: float) -> float:
     """Damped natural angular frequency.
 
-    Args:
-        mass: Mass m [kg], > 0.
-        stiffness: Spring constant k [N/m], >= 0.
-        damping: Viscous damping coefficient d [N s/m], >= 0.
+    Parameters
+    ----------
+    mass
+        Mass m [kg], > 0.
+    stiffness
+        Spring constant k [N/m], >= 0.
+    damping
+        Viscous damping coefficient d [N s/m], >= 0.
 
-    Returns:
+    Returns
+    -------
+    float
         omega_d = omega_n sqrt(1 - zeta^2) [rad/s] for zeta < 1, else 0.0.
 
-    Raises:
-        ValueError: For non-physical or non-finite input.
+    Raises
+    ------
+    ValueError
+        For non-physical or non-finite input.
     """
     m, k, d = _check_oscillator(mass, stiffness, damping)
     # Same beta as the time responses: sqrt((wn - sigma)(wn + sigma)), which
@@ -178,18 +201,26 @@ def damped_frequency(mass: float, stiffness: float, damping: float) -> float:
 def regime(mass: float, stiffness: float, damping: float) -> str:
     """Classify the free motion.
 
-    Args:
-        mass: Mass m [kg], > 0.
-        stiffness: Spring constant k [N/m], >= 0.
-        damping: Viscous damping coefficient d [N s/m], >= 0.
+    Parameters
+    ----------
+    mass
+        Mass m [kg], > 0.
+    stiffness
+        Spring constant k [N/m], >= 0.
+    damping
+        Viscous damping coefficient d [N s/m], >= 0.
 
-    Returns:
+    Returns
+    -------
+    str
         ``'undamped'`` iff d == 0; otherwise ``'critical'`` when
         |zeta - 1| <= 1e-12, ``'underdamped'`` for smaller zeta and
         ``'overdamped'`` for larger zeta (including k == 0 with d > 0).
 
-    Raises:
-        ValueError: For non-physical or non-finite input.
+    Raises
+    ------
+    ValueError
+        For non-physical or non-finite input.
     """
     zeta = damping_ratio(mass, stiffness, damping)
     if damping == 0.0:
@@ -224,19 +255,27 @@ def characteristic_roots(mass: float, stiffness: float, damping: float) -> tuple
     cannot overflow), so the slow root is accurate to a few ulps even for
     m = 1, k = 1, d = 1e9 (slow root ~ -1e-9).
 
-    Args:
-        mass: Mass m [kg], > 0.
-        stiffness: Spring constant k [N/m], >= 0.
-        damping: Viscous damping coefficient d [N s/m], >= 0.
+    Parameters
+    ----------
+    mass
+        Mass m [kg], > 0.
+    stiffness
+        Spring constant k [N/m], >= 0.
+    damping
+        Viscous damping coefficient d [N s/m], >= 0.
 
-    Returns:
+    Returns
+    -------
+    tuple[complex, complex]
         ``(s1, s2)`` [rad/s] as complex numbers.  Underdamped / undamped:
         ``(-sigma + i omega_d, -sigma - i omega_d)``.  Critical (beta^2 == 0
         exactly): both ``-sigma``.  Overdamped: ``(fast, slow)``, i.e. the more
         negative root first; for k == 0 the slow root is exactly 0.
 
-    Raises:
-        ValueError: For non-physical or non-finite input.
+    Raises
+    ------
+    ValueError
+        For non-physical or non-finite input.
     """
     m, k, d = _check_oscillator(mass, stiffness, damping)
     sigma, wn2, b2, beta = _oscillator_constants(m, k, d)
@@ -337,19 +376,30 @@ def free_response(
     x ~ x0 e^{-k t / d} of a heavily damped spring is exact.  Covers k = 0
     (free mass, with or without damping).
 
-    Args:
-        t: Time(s) since release [s], finite and >= 0; scalar or array.
-        mass: Mass m [kg], > 0.
-        stiffness: Spring constant k [N/m], >= 0.
-        damping: Viscous damping coefficient d [N s/m], >= 0.
-        x0: Initial displacement [m].
-        v0: Initial velocity [m/s].
+    Parameters
+    ----------
+    t
+        Time(s) since release [s], finite and >= 0; scalar or array.
+    mass
+        Mass m [kg], > 0.
+    stiffness
+        Spring constant k [N/m], >= 0.
+    damping
+        Viscous damping coefficient d [N s/m], >= 0.
+    x0
+        Initial displacement [m].
+    v0
+        Initial velocity [m/s].
 
-    Returns:
+    Returns
+    -------
+    tuple[ndarray, ndarray]
         (x, v): displacement [m] and velocity [m/s], arrays of t's shape.
 
-    Raises:
-        ValueError: For non-physical or non-finite input or negative t.
+    Raises
+    ------
+    ValueError
+        For non-physical or non-finite input or negative t.
     """
     m, k, d = _check_oscillator(mass, stiffness, damping)
     x0 = _finite_scalar("x0", x0)
@@ -457,20 +507,32 @@ def step_response(
     rest, is computed without the F/k - F/k cancellation (see
     ``_unit_step_displacement``), so tiny k and k == 0 are exact too.
 
-    Args:
-        t: Time(s) since the force was applied [s], finite and >= 0.
-        mass: Mass m [kg], > 0.
-        stiffness: Spring constant k [N/m], >= 0.
-        damping: Viscous damping coefficient d [N s/m], >= 0.
-        force: Constant applied force F [N].
-        x0: Initial displacement [m].
-        v0: Initial velocity [m/s].
+    Parameters
+    ----------
+    t
+        Time(s) since the force was applied [s], finite and >= 0.
+    mass
+        Mass m [kg], > 0.
+    stiffness
+        Spring constant k [N/m], >= 0.
+    damping
+        Viscous damping coefficient d [N s/m], >= 0.
+    force
+        Constant applied force F [N].
+    x0
+        Initial displacement [m].
+    v0
+        Initial velocity [m/s].
 
-    Returns:
+    Returns
+    -------
+    tuple[ndarray, ndarray]
         (x, v): displacement [m] and velocity [m/s], arrays of t's shape.
 
-    Raises:
-        ValueError: For non-physical or non-finite input or negative t.
+    Raises
+    ------
+    ValueError
+        For non-physical or non-finite input or negative t.
     """
     m, k, d = _check_oscillator(mass, stiffness, damping)
     force = _finite_scalar("force", force)
@@ -504,21 +566,31 @@ def steady_state_amplitude(
     x_ss(t) = X sin(W t - phi) with W = 2 pi f,
     X = F0 / sqrt((k - m W^2)^2 + (d W)^2), phi = atan2(d W, k - m W^2).
 
-    Args:
-        mass: Mass m [kg], > 0.
-        stiffness: Spring constant k [N/m], >= 0.
-        damping: Viscous damping coefficient d [N s/m], >= 0.
-        force_amplitude: F0 [N] (the amplitude carries its sign).
-        force_frequency: f [Hz], >= 0.
+    Parameters
+    ----------
+    mass
+        Mass m [kg], > 0.
+    stiffness
+        Spring constant k [N/m], >= 0.
+    damping
+        Viscous damping coefficient d [N s/m], >= 0.
+    force_amplitude
+        F0 [N] (the amplitude carries its sign).
+    force_frequency
+        f [Hz], >= 0.
 
-    Returns:
+    Returns
+    -------
+    tuple[float, float]
         (amplitude [m], phase lag [rad] in [0, pi]).  At undamped resonance
         (d == 0 and |k - m W^2| <= 1e-12 max(k, m W^2)) the amplitude is
         +-inf (0.0 if F0 == 0) and the phase pi/2.  A static force on a free
         mass (k == 0, f == 0) also gives an infinite amplitude.
 
-    Raises:
-        ValueError: For non-physical or non-finite input.
+    Raises
+    ------
+    ValueError
+        For non-physical or non-finite input.
     """
     m, k, d = _check_oscillator(mass, stiffness, damping)
     f0 = _finite_scalar("force_amplitude", force_amplitude)
@@ -592,24 +664,37 @@ def harmonic_response(
     through resonance.  For zeta > 0.5, overdamped and k == 0 the direct
     particular + transient form is used.
 
-    Args:
-        t: Time(s) since the force was applied [s], finite and >= 0.
-        mass: Mass m [kg], > 0.
-        stiffness: Spring constant k [N/m], >= 0.
-        damping: Viscous damping coefficient d [N s/m], >= 0.
-        force_amplitude: F0 [N].
-        force_frequency: f [Hz], >= 0 (f == 0 means zero force).
-        x0: Initial displacement [m].
-        v0: Initial velocity [m/s].
+    Parameters
+    ----------
+    t
+        Time(s) since the force was applied [s], finite and >= 0.
+    mass
+        Mass m [kg], > 0.
+    stiffness
+        Spring constant k [N/m], >= 0.
+    damping
+        Viscous damping coefficient d [N s/m], >= 0.
+    force_amplitude
+        F0 [N].
+    force_frequency
+        f [Hz], >= 0 (f == 0 means zero force).
+    x0
+        Initial displacement [m].
+    v0
+        Initial velocity [m/s].
 
-    Returns:
+    Returns
+    -------
+    tuple[ndarray, ndarray]
         (x, v): displacement [m] and velocity [m/s], arrays of t's shape.
         Accuracy is a few ulps relative to the response amplitude (points
         where x itself nearly vanishes, e.g. x ~ t^3 just after switch-on
         from rest, carry that absolute error).
 
-    Raises:
-        ValueError: For non-physical or non-finite input or negative t.
+    Raises
+    ------
+    ValueError
+        For non-physical or non-finite input or negative t.
     """
     m, k, d = _check_oscillator(mass, stiffness, damping)
     f0 = _finite_scalar("force_amplitude", force_amplitude)
@@ -666,18 +751,25 @@ def _coefficients(name: str, coefficients) -> np.ndarray:
     return c
 
 
-def polynomial_motion(t: ArrayLike, coefficients) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def polynomial_motion(t: ArrayLike, coefficients: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Position, velocity and acceleration of x(t) = sum_i c_i t^i.
 
-    Args:
-        t: Time(s) [s], finite; scalar or array.
-        coefficients: c_0 [m], c_1 [m/s], c_2 [m/s^2], ... (increasing power).
+    Parameters
+    ----------
+    t
+        Time(s) [s], finite; scalar or array.
+    coefficients
+        c_0 [m], c_1 [m/s], c_2 [m/s^2], ... (increasing power).
 
-    Returns:
+    Returns
+    -------
+    tuple[ndarray, ndarray, ndarray]
         (x [m], v [m/s], a [m/s^2]) by exact differentiation, arrays of t's shape.
 
-    Raises:
-        ValueError: For empty or non-finite coefficients or non-finite t.
+    Raises
+    ------
+    ValueError
+        For empty or non-finite coefficients or non-finite t.
     """
     tt = _any_time(t)
     c = _coefficients("coefficients", coefficients)
@@ -687,7 +779,7 @@ def polynomial_motion(t: ArrayLike, coefficients) -> tuple[np.ndarray, np.ndarra
 
 
 def integrate_acceleration(
-    t: ArrayLike, accel_coefficients, x0: float, v0: float
+    t: ArrayLike, accel_coefficients: ArrayLike, x0: float, v0: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Motion under a polynomial acceleration a(t) = sum_i a_i t^i.
 
@@ -697,17 +789,26 @@ def integrate_acceleration(
     a = 1.2 t + 3.0, v(0) = 15, x(0) = 150 gives v = 15 + 3 t + 0.6 t^2 and
     x = 150 + 15 t + 1.5 t^2 + 0.2 t^3.
 
-    Args:
-        t: Time(s) [s], finite; scalar or array.
-        accel_coefficients: a_0 [m/s^2], a_1 [m/s^3], ... (increasing power).
-        x0: Position at t = 0 [m].
-        v0: Velocity at t = 0 [m/s].
+    Parameters
+    ----------
+    t
+        Time(s) [s], finite; scalar or array.
+    accel_coefficients
+        a_0 [m/s^2], a_1 [m/s^3], ... (increasing power).
+    x0
+        Position at t = 0 [m].
+    v0
+        Velocity at t = 0 [m/s].
 
-    Returns:
+    Returns
+    -------
+    tuple[ndarray, ndarray, ndarray]
         (x [m], v [m/s], a [m/s^2]), arrays of t's shape.
 
-    Raises:
-        ValueError: For empty or non-finite input.
+    Raises
+    ------
+    ValueError
+        For empty or non-finite input.
     """
     acc = _coefficients("accel_coefficients", accel_coefficients)
     x0 = _finite_scalar("x0", x0)
@@ -718,23 +819,32 @@ def integrate_acceleration(
 
 
 def piecewise_linear_velocity(
-    t: ArrayLike, knot_times, knot_velocities, x0: float = 0.0
+    t: ArrayLike, knot_times: ArrayLike, knot_velocities: ArrayLike, x0: float = 0.0
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Exact motion for a piecewise-linear velocity record (tachograph).
 
-    Args:
-        t: Time(s) [s] within [knot_times[0], knot_times[-1]].
-        knot_times: Strictly increasing knot times (>= 2) [s].
-        knot_velocities: Velocities at the knots [m/s].
-        x0: Position at knot_times[0] [m].
+    Parameters
+    ----------
+    t
+        Time(s) [s] within [knot_times[0], knot_times[-1]].
+    knot_times
+        Strictly increasing knot times (>= 2) [s].
+    knot_velocities
+        Velocities at the knots [m/s].
+    x0
+        Position at knot_times[0] [m].
 
-    Returns:
+    Returns
+    -------
+    tuple[ndarray, ndarray, ndarray]
         (x [m], v [m/s], a [m/s^2]): position is x0 plus the exact area under
         v; acceleration is the segment slope, taken from the segment to the
         right at an interior knot (and from the last segment at the final knot).
 
-    Raises:
-        ValueError: For bad knots, non-finite input or t outside the knot range.
+    Raises
+    ------
+    ValueError
+        For bad knots, non-finite input or t outside the knot range.
     """
     tk = np.asarray(knot_times, dtype=float)
     vk = np.asarray(knot_velocities, dtype=float)

@@ -52,15 +52,22 @@ TIMING_STEPS = 4000
 class Job:
     """One simulation of a batch.
 
-    Attributes:
-      model: the compiled model; jobs sharing one model object run on it with
+    Attributes
+    ----------
+    model
+        the compiled model; jobs sharing one model object run on it with
         per-simulation timestep and integrator (Batch.expand), jobs with
         different models each run on a copy of theirs (Batch.set_models).
-      integrator: one of INTEGRATORS.
-      dt: timestep [s].
-      steps: number of steps.
-      setup: initial state and controls (control: (nu,) or (steps, nu), held over each step).
-      stop: the scene's stop condition (Scene.stop_condition), applied as `simulate` applies it.
+    integrator
+        one of INTEGRATORS.
+    dt
+        timestep [s].
+    steps
+        number of steps.
+    setup
+        initial state and controls (control: (nu,) or (steps, nu), held over each step).
+    stop
+        the scene's stop condition (Scene.stop_condition), applied as `simulate` applies it.
     """
 
     model: mujoco.MjModel
@@ -93,15 +100,20 @@ def run_batched(jobs: Sequence[Job], *, nthread: int = 0) -> list[Trajectory | D
     unfinished simulations together, segment by segment, so no simulation
     takes a step it does not need.
 
-    Args:
-      jobs: the simulations.
-      nthread: threads of the batch (0: one per CPU).
+    Parameters
+    ----------
+    jobs
+        the simulations.
+    nthread
+        threads of the batch (0: one per CPU).
 
-    Returns:
-      Per job its Trajectory (t = 0 included; wall_time_s is nan: batched runs
-      share threads, see `time_run` for a per-run cost), or the DivergedError
-      describing how it blew up (MuJoCo's BADQPOS/BADQVEL/BADQACC warnings, a
-      silent reset, non-finite values).
+    Returns
+    -------
+    list[Trajectory | DivergedError]
+        Per job its Trajectory (t = 0 included; wall_time_s is nan: batched runs
+        share threads, see `time_run` for a per-run cost), or the DivergedError
+        describing how it blew up (MuJoCo's BADQPOS/BADQVEL/BADQACC warnings, a
+        silent reset, non-finite values).
     """
     if not jobs:
         return []

@@ -99,10 +99,14 @@ def plot_tradeoff(result: Tradeoff, path: str | pathlib.Path) -> pathlib.Path:
 def plot_stability(report: dict[str, Any], amplification: dict[str, Any], path: str | pathlib.Path) -> pathlib.Path:
     """Per integrator: measured per-step amplification over (zeta, omega*dt), theory boundary, measured boundary.
 
-    Args:
-      report: `stability.stability_report` (its measured boundaries are drawn).
-      amplification: `stability.amplification_map` (the colour map).
-      path: the PNG to write.
+    Parameters
+    ----------
+    report
+        `stability.stability_report` (its measured boundaries are drawn).
+    amplification
+        `stability.amplification_map` (the colour map).
+    path
+        the PNG to write.
     """
     from matplotlib.colors import TwoSlopeNorm
 
@@ -204,10 +208,14 @@ def write_stability(
 ) -> list[pathlib.Path]:
     """Write DIR/stability.json, DIR/stability.png (map) and DIR/energy.png.
 
-    Args:
-      report: `stability.stability_report`.
-      amplification: `stability.amplification_map`, drawn in stability.png.
-      directory: the output folder.
+    Parameters
+    ----------
+    report
+        `stability.stability_report`.
+    amplification
+        `stability.amplification_map`, drawn in stability.png.
+    directory
+        the output folder.
     """
     written = outputs.write_text_files(directory, {"stability.json": outputs.dumps(report_json(report)) + "\n"})
     written.append(plot_stability(report, amplification, pathlib.Path(directory) / "stability.png"))

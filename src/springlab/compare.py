@@ -65,8 +65,10 @@ def check_tolerance(tol: Any) -> float:
 def column_errors(simulated: dict[str, np.ndarray], reference: dict[str, np.ndarray]) -> dict[str, dict]:
     """Per column: max_abs = max |sim - ref| and max_rel = max_abs / max |ref|.
 
-    Args:
-      simulated, reference: column name -> series (same length).
+    Parameters
+    ----------
+    simulated, reference
+        column name -> series (same length).
     """
     errors = {}
     for name, ref in reference.items():
@@ -79,12 +81,17 @@ def column_errors(simulated: dict[str, np.ndarray], reference: dict[str, np.ndar
 def predicted_error(reference: Reference, integrator: str, dt: float, time: np.ndarray) -> dict[str, float]:
     """Leading-order max absolute error per column [m or m/s] (see module docstring).
 
-    Args:
-      reference: exact solution with its `system` matrix A, `states` z(t) and
+    Parameters
+    ----------
+    reference
+        exact solution with its `system` matrix A, `states` z(t) and
         optional `switches` (A changes on step boundaries).
-      integrator: integrator name.
-      dt: timestep [s].
-      time: (n,) times of the states [s], uniformly dt apart.
+    integrator
+        integrator name.
+    dt
+        timestep [s].
+    time
+        (n,) times of the states [s], uniformly dt apart.
     """
     z = reference.states
     assert z is not None, "tolerances() needs a linear reference (states and system)"

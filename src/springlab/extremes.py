@@ -183,7 +183,12 @@ def _sample_steps(steps: int, count: int = 2000) -> np.ndarray:
     return np.unique(picks.astype(np.int64))
 
 
-def predicted_error(case: ExtremeCase, integrator: str, dt: float, context) -> float:
+def predicted_error(
+    case: ExtremeCase,
+    integrator: str,
+    dt: float,
+    context: tuple[mujoco.MjModel, Scene, Scenario, dict[str, float]],
+) -> float:
     """Max relative error [-] of a run of `case`, from MuJoCo's measured one-step map.
 
     The slider is linear, so a run is z_n = M^n z_0 exactly, with M measured
@@ -215,6 +220,7 @@ def predicted_error(case: ExtremeCase, integrator: str, dt: float, context) -> f
     if not np.isfinite(states).all():
         return math.inf
     reference = scene.reference(model, params, chosen, n * dt)
+    assert reference is not None, "the slider's free scenario has an exact reference"
     errors = []
     for k, series in ((0, reference.pos["slider"]), (1, reference.vel["slider"])):
         peak = float(np.max(np.abs(series)))
@@ -286,13 +292,15 @@ def extremes_table(
     Each case also gets a row for its advised setting (`_advice`), run in full
     over the case's duration when it takes at most `verify_steps` steps.
 
-    Returns:
-      One row per run: kind ('limit' or 'advised'), case, description,
-      integrator, fraction (of limit_of's stability limit; None for advised
-      rows), limit_of, omega_dt, limit_omega_dt, dt, duration, steps, outcome
-      ('accurate' | 'inaccurate' | 'diverged'), max_rel_error (None if
-      diverged), detail (how it diverged), advice (one phrase: which
-      integrator and dt to use instead).
+    Returns
+    -------
+    list[dict[str, Any]]
+        One row per run: kind ('limit' or 'advised'), case, description,
+        integrator, fraction (of limit_of's stability limit; None for advised
+        rows), limit_of, omega_dt, limit_omega_dt, dt, duration, steps, outcome
+        ('accurate' | 'inaccurate' | 'diverged'), max_rel_error (None if
+        diverged), detail (how it diverged), advice (one phrase: which
+        integrator and dt to use instead).
     """
     jobs: list[Job] = []
     meta: list[tuple[str, ExtremeCase, str, float | None, float, str]] = []

@@ -20,6 +20,7 @@ import math
 
 import numpy as np
 import scipy.linalg
+from numpy.typing import ArrayLike
 
 __all__ = ["state_matrix", "lti_response", "linear_response", "expm_minus_identity"]
 
@@ -82,21 +83,29 @@ def _matrix(name: str, value, n: int | None = None) -> np.ndarray:
     return arr
 
 
-def state_matrix(mass_matrix, damping_matrix, stiffness_matrix) -> np.ndarray:
+def state_matrix(mass_matrix: ArrayLike, damping_matrix: ArrayLike, stiffness_matrix: ArrayLike) -> np.ndarray:
     """First-order state matrix of M q'' + C q' + K q = f.
 
-    Args:
-        mass_matrix: M (n, n) [kg], symmetric positive definite.
-        damping_matrix: C (n, n) [N s/m].
-        stiffness_matrix: K (n, n) [N/m] (may be singular, e.g. rigid-body modes).
+    Parameters
+    ----------
+    mass_matrix
+        M (n, n) [kg], symmetric positive definite.
+    damping_matrix
+        C (n, n) [N s/m].
+    stiffness_matrix
+        K (n, n) [N/m] (may be singular, e.g. rigid-body modes).
 
-    Returns:
+    Returns
+    -------
+    ndarray
         A = [[0, I], [-M^-1 K, -M^-1 C]] (2n, 2n) for the state z = (q, q')
         (upper-right block dimensionless, lower blocks [1/s^2] and [1/s]).
 
-    Raises:
-        ValueError: For non-finite or mis-shaped matrices or an M that is not
-            symmetric positive definite.
+    Raises
+    ------
+    ValueError
+        For non-finite or mis-shaped matrices or an M that is not
+        symmetric positive definite.
     """
     mm = _matrix("mass_matrix", mass_matrix)
     n = mm.shape[0]
@@ -293,7 +302,13 @@ def _parse_input(b, u, n: int):
     return bmat, bp, vals
 
 
-def lti_response(t, a, z0, b=None, u=None) -> np.ndarray:
+def lti_response(
+    t: ArrayLike,
+    a: ArrayLike,
+    z0: ArrayLike,
+    b: ArrayLike | None = None,
+    u: ArrayLike | tuple[ArrayLike, ArrayLike] | None = None,
+) -> np.ndarray:
     """Exact solution of z' = A z + B u(t) with piecewise-constant input.
 
     Over each interval of constant input the exact map is read off
@@ -307,22 +322,32 @@ def lti_response(t, a, z0, b=None, u=None) -> np.ndarray:
     with an exact short Taylor step.  Irregular grids take one exponential
     per distinct step size (slow if every step differs).
 
-    Args:
-        t: Output times [s], 1-D, non-decreasing, t[0] >= 0 (need not be uniform).
-        a: State matrix A (N, N) [1/s].
-        z0: State at t = 0, shape (N,).
-        b: Input matrix B (N, p); required iff u is given.
-        u: None (no input), a constant input (p,) applied for t >= 0, or a
-            tuple ``(breakpoints, values)``: sorted switch times (K,) [s] with
-            breakpoints[0] == 0, and values (K, p), value i acting on
-            [breakpoints[i], breakpoints[i+1]).
+    Parameters
+    ----------
+    t
+        Output times [s], 1-D, non-decreasing, t[0] >= 0 (need not be uniform).
+    a
+        State matrix A (N, N) [1/s].
+    z0
+        State at t = 0, shape (N,).
+    b
+        Input matrix B (N, p); required iff u is given.
+    u
+        None (no input), a constant input (p,) applied for t >= 0, or a
+        tuple ``(breakpoints, values)``: sorted switch times (K,) [s] with
+        breakpoints[0] == 0, and values (K, p), value i acting on
+        [breakpoints[i], breakpoints[i+1]).
 
-    Returns:
+    Returns
+    -------
+    ndarray
         z: states at the output times, shape (len(t), N).
 
-    Raises:
-        ValueError: For mis-shaped or non-finite input, unsorted times or
-            breakpoints, or a first breakpoint other than 0.
+    Raises
+    ------
+    ValueError
+        For mis-shaped or non-finite input, unsorted times or
+        breakpoints, or a first breakpoint other than 0.
     """
     times = _output_times(t)
     amat = _matrix("a", a)
@@ -363,30 +388,48 @@ def lti_response(t, a, z0, b=None, u=None) -> np.ndarray:
 
 
 def linear_response(
-    t, mass_matrix, damping_matrix, stiffness_matrix, q0, v0, force=None
+    t: ArrayLike,
+    mass_matrix: ArrayLike,
+    damping_matrix: ArrayLike,
+    stiffness_matrix: ArrayLike,
+    q0: ArrayLike,
+    v0: ArrayLike,
+    force: ArrayLike | tuple[ArrayLike, ArrayLike] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Exact response of M q'' + C q' + K q = f(t) for an n-DOF linear system.
 
     Thin wrapper over :func:`lti_response` with A from :func:`state_matrix`
     and B = [[0], [M^-1]], so singular K (free rigid-body modes) is exact.
 
-    Args:
-        t: Output times [s], 1-D, non-decreasing, t[0] >= 0.
-        mass_matrix: M (n, n) [kg], symmetric positive definite.
-        damping_matrix: C (n, n) [N s/m].
-        stiffness_matrix: K (n, n) [N/m].
-        q0: Initial displacements (n,) [m] at t = 0.
-        v0: Initial velocities (n,) [m/s] at t = 0.
-        force: None (free vibration), a constant force vector (n,) [N] for
-            t >= 0 (pass an array or list), or ``(breakpoints, values)`` with
-            breakpoints (K,) [s] starting at 0 and values (K, n) [N], value i
-            acting on [breakpoints[i], breakpoints[i+1]).
+    Parameters
+    ----------
+    t
+        Output times [s], 1-D, non-decreasing, t[0] >= 0.
+    mass_matrix
+        M (n, n) [kg], symmetric positive definite.
+    damping_matrix
+        C (n, n) [N s/m].
+    stiffness_matrix
+        K (n, n) [N/m].
+    q0
+        Initial displacements (n,) [m] at t = 0.
+    v0
+        Initial velocities (n,) [m/s] at t = 0.
+    force
+        None (free vibration), a constant force vector (n,) [N] for
+        t >= 0 (pass an array or list), or ``(breakpoints, values)`` with
+        breakpoints (K,) [s] starting at 0 and values (K, n) [N], value i
+        acting on [breakpoints[i], breakpoints[i+1]).
 
-    Returns:
+    Returns
+    -------
+    tuple[ndarray, ndarray]
         (q, v): displacements [m] and velocities [m/s], each (len(t), n).
 
-    Raises:
-        ValueError: For non-physical, mis-shaped or non-finite input.
+    Raises
+    ------
+    ValueError
+        For non-physical, mis-shaped or non-finite input.
     """
     amat = state_matrix(mass_matrix, damping_matrix, stiffness_matrix)
     n = amat.shape[0] // 2

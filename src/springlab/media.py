@@ -37,20 +37,31 @@ def render_run(
 ) -> dict[str, Any]:
     """Render a run to `output` (.mp4 H.264 or .gif); see render.render_video for the result dict.
 
-    Args:
-      result: the run (api.run).
-      output: video file; written completely or not at all.
-      fps: frames per second of the video (video time = simulation time).
-      width, height: size of the 3D view [px].
-      duration: seconds of simulation to show (default: the whole run).
-      composite: put the phase-plane trace (a height x height panel, one
+    Parameters
+    ----------
+    result
+        the run (api.run).
+    output
+        video file; written completely or not at all.
+    fps
+        frames per second of the video (video time = simulation time).
+    width, height
+        size of the 3D view [px].
+    duration
+        seconds of simulation to show (default: the whole run).
+    composite
+        put the phase-plane trace (a height x height panel, one
         phase plane per reported joint, up to 3, stacked) to the right of the
         3D view; the video is then (width + height) x height.
-      progress: progress bar on stderr (None: when stderr is a terminal).
+    progress
+        progress bar on stderr (None: when stderr is a terminal).
 
-    Raises:
-      BadInputError: bad size, fps, extension or unwritable output.
-      SpringlabError: no off-screen OpenGL context or the encoder failed.
+    Raises
+    ------
+    BadInputError
+        bad size, fps, extension or unwritable output.
+    SpringlabError
+        no off-screen OpenGL context or the encoder failed.
     """
     render.check_video_arguments(output, fps, width, height)
     scene = scenes.get(result.scene)

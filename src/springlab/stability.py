@@ -114,10 +114,12 @@ def measure_boundaries(
     between the last stable and the first growing omega*dt down to a ratio of
     1 + SEARCH_PRECISION. All pairs advance together in one batch.
 
-    Returns:
-      Rows {"integrator", "zeta", "measured_omega_dt", "theory_omega_dt",
-      "relative_difference", "within_tolerance"}; measured is inf when nothing
-      grew up to SEARCH_STOP.
+    Returns
+    -------
+    list[dict[str, Any]]
+        Rows {"integrator", "zeta", "measured_omega_dt", "theory_omega_dt",
+        "relative_difference", "within_tolerance"}; measured is inf when nothing
+        grew up to SEARCH_STOP.
     """
     pairs = [(name, float(z)) for name in integrators for z in zetas]
     for name, zeta in pairs:

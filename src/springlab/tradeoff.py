@@ -60,14 +60,22 @@ WALL_TIME_BASIS = (
 class Run:
     """One (integrator, dt) of a sweep.
 
-    Attributes:
-      integrator: integrator name.
-      dt: timestep [s].
-      steps: steps taken.
-      max_rel_error: max over the compared columns of max |sim - ref| / max |ref| [-]; None if diverged.
-      wall_time_s: wall time of the run alone [s] (see module docstring).
-      diverged: the run blew up (detected, never reported as a result).
-      detail: how it diverged, for people.
+    Attributes
+    ----------
+    integrator
+        integrator name.
+    dt
+        timestep [s].
+    steps
+        steps taken.
+    max_rel_error
+        max over the compared columns of max |sim - ref| / max |ref| [-]; None if diverged.
+    wall_time_s
+        wall time of the run alone [s] (see module docstring).
+    diverged
+        the run blew up (detected, never reported as a result).
+    detail
+        how it diverged, for people.
     """
 
     integrator: str
@@ -101,16 +109,26 @@ class Run:
 class Tradeoff:
     """A speed-accuracy sweep of one scenario.
 
-    Attributes:
-      scene, scenario: names.
-      parameters: the parameter values used (SI).
-      overrides: the parameters the caller set (re-applied when verifying a recommendation).
-      duration: simulated time of every run [s].
-      runs: every (integrator, dt), grouped by integrator, dt descending.
-      orders: integrator -> observed order of accuracy (None: too few asymptotic points).
-      pareto: the runs no other run beats in both error and wall time, cheapest first.
-      recommendation: for a tolerance, the verified cheapest setting (see `recommend`).
-      sweep_wall_time_s: wall time of the whole sweep, timing pass included [s].
+    Attributes
+    ----------
+    scene, scenario
+        names.
+    parameters
+        the parameter values used (SI).
+    overrides
+        the parameters the caller set (re-applied when verifying a recommendation).
+    duration
+        simulated time of every run [s].
+    runs
+        every (integrator, dt), grouped by integrator, dt descending.
+    orders
+        integrator -> observed order of accuracy (None: too few asymptotic points).
+    pareto
+        the runs no other run beats in both error and wall time, cheapest first.
+    recommendation
+        for a tolerance, the verified cheapest setting (see `recommend`).
+    sweep_wall_time_s
+        wall time of the whole sweep, timing pass included [s].
     """
 
     scene: str
@@ -210,21 +228,34 @@ def sweep(
 ) -> Tradeoff:
     """Run every integrator at every timestep on one scenario, batched, and measure the trade.
 
-    Args:
-      scene: scene name or object.
-      scenario: scenario name (None: the scene's default); it needs an exact reference.
-      integrators: integrator names (default: all five).
-      dts: timesteps [s] (default: `timestep_grid` from the scenario's fastest rate).
-      duration: simulated time [s] (None: the scenario's).
-      timing_repeats: timed repetitions per configuration (best is kept).
-      nthread: threads of the batch (0: one per CPU).
-      **parameters: scene parameters in SI units.
+    Parameters
+    ----------
+    scene
+        scene name or object.
+    scenario
+        scenario name (None: the scene's default); it needs an exact reference.
+    integrators
+        integrator names (default: all five).
+    dts
+        timesteps [s] (default: `timestep_grid` from the scenario's fastest rate).
+    duration
+        simulated time [s] (None: the scenario's).
+    timing_repeats
+        timed repetitions per configuration (best is kept).
+    nthread
+        threads of the batch (0: one per CPU).
+    **parameters
+        scene parameters in SI units.
 
-    Returns:
-      The Tradeoff (runs, orders, Pareto front; no recommendation).
+    Returns
+    -------
+    Tradeoff
+        The Tradeoff (runs, orders, Pareto front; no recommendation).
 
-    Raises:
-      BadInputError: unknown names, non-physical values, a scenario without exact reference.
+    Raises
+    ------
+    BadInputError
+        unknown names, non-physical values, a scenario without exact reference.
     """
     started = _time.perf_counter()
     scene_obj, chosen, params = api.prepare(scene, scenario, parameters)
@@ -417,14 +448,19 @@ def recommend(result: Tradeoff, tol: float, *, timing_repeats: int = 3) -> dict[
     the first one whose verification run meets tol wins, and its error and
     wall time (measured as the sweep's) are reported.
 
-    Args:
-      result: a sweep of the scenario.
-      tol: relative tolerance [-] on every compared column.
+    Parameters
+    ----------
+    result
+        a sweep of the scenario.
+    tol
+        relative tolerance [-] on every compared column.
 
-    Returns:
-      {"tol", "integrator", "dt", "max_rel_error", "wall_time_s"}; integrator,
-      dt, max_rel_error and wall_time_s are None when no setting of the sweep
-      meets tol.
+    Returns
+    -------
+    dict[str, Any]
+        {"tol", "integrator", "dt", "max_rel_error", "wall_time_s"}; integrator,
+        dt, max_rel_error and wall_time_s are None when no setting of the sweep
+        meets tol.
     """
     tol = compare.check_tolerance(tol)
     for _, name, dt, _refined in _candidates(result, tol):
