@@ -212,15 +212,26 @@ def cmd_render(args) -> int:
     from . import media, render  # GL and matplotlib only for the commands that draw
 
     render.check_video_arguments(args.output, args.fps, args.width, args.height)
+    for name, value in (("--slow-motion", args.slow_motion), ("--exaggerate", args.exaggerate)):
+        if value is not None:
+            render.render_scale.check_factor(name, value)
     result = _run_scenario(args)
     outputs.prepare_directory(pathlib.Path(args.output).parent)
     info = media.render_run(
-        result, args.output, fps=args.fps, width=args.width, height=args.height, composite=args.composite
+        result,
+        args.output,
+        fps=args.fps,
+        width=args.width,
+        height=args.height,
+        composite=args.composite,
+        slow_motion=args.slow_motion,
+        exaggerate=args.exaggerate,
     )
+    scaled = "".join(f", {note}" for note in render.render_scale.labels(info["slow_motion"], info["exaggeration"]))
     print(
         f"wrote {info['path']}: {info['frames']} frames, {info['width']}x{info['height']} at {info['fps']:g} fps"
-        f" ({info['frames'] / info['fps']:.2f} s of simulation) in {info['seconds']:.1f} s"
-        f" ({info['frames'] / max(info['seconds'], 1e-9):.0f} frames/s)"
+        f" ({info['frames'] / info['fps'] / info['slow_motion']:.3g} s of simulation{scaled})"
+        f" in {info['seconds']:.1f} s ({info['frames'] / max(info['seconds'], 1e-9):.0f} frames/s)"
     )
     return _verdict(result.summary)
 
@@ -457,6 +468,20 @@ def build_parser() -> argparse.ArgumentParser:
         "--composite",
         action="store_true",
         help="add the phase-plane trace drawn as time advances, a height x height panel on the right",
+    )
+    p.add_argument(
+        "--slow-motion",
+        type=float,
+        metavar="FACTOR",
+        help="play FACTOR times slower (drawing only; default: short runs slowed to >= 90 frames and 6 frames"
+        " per period of their fastest mode, e.g. the printer move at 1/50 speed; written on every frame)",
+    )
+    p.add_argument(
+        "--exaggerate",
+        type=float,
+        metavar="FACTOR",
+        help="draw displacements FACTOR times larger around their mean (drawing only; default: motions below"
+        " 1%% of the body's size magnified to about 3%%, e.g. the car x30; written on every frame)",
     )
     COMMANDS["render"] = cmd_render
 
