@@ -34,8 +34,11 @@ Scenarios (the chapter asks for none by number; these show what it describes):
   3 N sin(10 t) (Holmes' chaotic Duffing oscillator x'' + 0.25 x' - x + x^3 =
   0.3 sin t in units of 0.1 m and 0.1 s). Two runs whose initial positions
   differ by 1e-9 m separate to the size of the wells (0.1 m); the scenario
-  reports the separation time, the finite-time Lyapunov exponent over it and
-  the long-time largest Lyapunov exponent (renormalized pair of runs).
+  reports the separation time and the finite-time Lyapunov exponent over it,
+  both from a pair converged for that question (dt halved until two successive
+  separation times agree within SEPARATION_RTOL: the default run's own
+  trajectory leaves the exact one before the twins separate), and an estimate
+  of the long-time largest Lyapunov exponent (renormalized pair of runs).
 
 How the force keeps the integrator's order: as in slider.py, a sinusoidal
 force comes from an MJCF-native generator, a very heavy exciter body on its
@@ -78,7 +81,7 @@ import math
 import mujoco
 import numpy as np
 
-from .. import exciter
+from .. import events, exciter
 from ..errors import ParameterError
 from ..scene import Check, Parameter, Scenario, Scene, Setup
 from ..simulate import ORDERS, Trajectory, simulate
@@ -89,6 +92,9 @@ ESCAPE_FACTOR = 3.0
 ENERGY_DRIFT_LIMIT = 1e-6
 #: initial offset of the second forced run [m]
 PERTURBATION = 1e-9
+#: forced runs: the separation time is refined (dt halved, at most this many times) until two successive
+#: values agree within this relative difference [-]: the headline's three digits
+SEPARATION_RTOL, SEPARATION_MAX_HALVINGS = 1e-3, 3
 #: forced runs: self-convergence is measured over the first this many seconds [s]
 CONVERGENCE_WINDOW = 5.0
 #: Lyapunov exponent by renormalization: transient skipped [s], averaging time [s], renormalization interval [s]
@@ -340,31 +346,10 @@ def _label(x: float) -> str:
     return "0" if x == 0 else f"{x:+.4g}"
 
 
-def _hermite_root(t0, t1, y0, y1, dy0, dy1, target=0.0) -> float:
-    """Time in [t0, t1] [s] where the cubic Hermite interpolant of y (slopes dy) equals target."""
-    h = t1 - t0
-    p0, p1, m0, m1 = y0 - target, y1 - target, dy0 * h, dy1 * h
-    # cubic in s: (2s^3 - 3s^2 + 1) p0 + (s^3 - 2s^2 + s) m0 + (-2s^3 + 3s^2) p1 + (s^3 - s^2) m1
-    coefficients = [2 * p0 + m0 - 2 * p1 + m1, -3 * p0 - 2 * m0 + 3 * p1 - m1, m0, p0]
-    roots = np.roots(coefficients) if any(coefficients[:3]) else np.array([])
-    real = [r.real for r in roots if abs(r.imag) < 1e-9 and -1e-9 <= r.real <= 1 + 1e-9]
-    if not real:  # fall back to the linear interpolant
-        s = p0 / (p0 - p1) if p0 != p1 else 0.0
-    else:
-        s = min(real, key=lambda r: abs(r - p0 / (p0 - p1)) if p0 != p1 else r)
-    return t0 + s * h
-
-
 def turning_times(time: np.ndarray, velocity: np.ndarray, acceleration: np.ndarray) -> np.ndarray:
     """Times [s] of the position maxima (v crossing zero downwards), to O(dt^4) by cubic Hermite
-    interpolation of v with its derivative a [m/s^2]."""
-    down = np.flatnonzero((velocity[:-1] > 0) & (velocity[1:] <= 0))
-    return np.array(
-        [
-            _hermite_root(time[i], time[i + 1], velocity[i], velocity[i + 1], acceleration[i], acceleration[i + 1])
-            for i in down
-        ]
-    )
+    interpolation of v with its derivative a [m/s^2] (springlab.events)."""
+    return events.down_crossings(time, velocity, acceleration)
 
 
 def measured_period(time, position, velocity, acceleration) -> float:
@@ -377,12 +362,7 @@ def measured_period(time, position, velocity, acceleration) -> float:
 
 def crossing_time(time, position, velocity, radius: float) -> float:
     """First time [s] |x| reaches `radius` [m], to O(dt^4) by cubic Hermite interpolation (nan: never)."""
-    beyond = np.flatnonzero(np.abs(position) >= radius)
-    if not beyond.size or beyond[0] == 0:
-        return math.nan if not beyond.size else float(time[0])
-    i = int(beyond[0]) - 1
-    target = math.copysign(radius, position[i + 1])
-    return _hermite_root(time[i], time[i + 1], position[i], position[i + 1], velocity[i], velocity[i + 1], target)
+    return events.first_crossing(time, position, velocity, radius)
 
 
 # -- the scene -------------------------------------------------------------------------------
@@ -674,7 +654,7 @@ class Nonlinear(Scene):
         integrator = model.opt.integrator
         model.opt.integrator = mujoco.mjtIntegrator.mjINT_RK4
         try:
-            da_dx = (4 * centred(step / 2) - centred(step)) / 3
+            da_dx = events.richardson_extrapolate(centred(step), centred(step / 2), 2)
             velocity_step = 1.0  # [m/s]; the damping force is linear in v
             da_dv = (acceleration(x_e, velocity_step) - acceleration(x_e, -velocity_step)) / (2 * velocity_step)
         finally:
@@ -827,39 +807,72 @@ class Nonlinear(Scene):
         m, k1, k3, d = self.physical(model)
         return self._length_scale({"k1": k1, "k3": k3}) or max(abs(params["x0"]), 1e-3)
 
-    def _chaos(self, model, params, scenario, trajectory: Trajectory) -> dict:
-        """Sensitivity to initial conditions: a second run from x0 + PERTURBATION."""
-        m, k1, k3, d = self.physical(model)
-        x, v = self._block(model, trajectory)
-        duration = float(trajectory.time[-1])
-        twin = self._rerun(
-            params, scenario, trajectory.integrator, trajectory.dt, duration, x0=params["x0"] + PERTURBATION
-        )
+    def _separation(self, model, params, lead: Trajectory, twin: Trajectory) -> tuple[float, float]:
+        """(time [s] the pair's positions first lie the well size apart, finite-time Lyapunov exponent [1/s]).
+
+        The crossing of |x_twin - x| = well is located by cubic Hermite interpolation of the gap with its
+        rate (springlab.events, O(dt^4)). The exponent is the gap's mean growth rate up to then,
+        ln(well / PERTURBATION) / t. (inf, nan): never that far apart.
+        """
+        x, v = self._block(model, lead)
         x2, v2 = self._block(model, twin)
         n = min(len(x), len(x2))
         well = self._well_size(params, model)
-        omega = math.sqrt(abs(float(curvature(well, k1, k3))) / m) or 1.0
-        separation = np.abs(x2[:n] - x[:n])
-        distance = np.hypot(x2[:n] - x[:n], (v2[:n] - v[:n]) / omega)
-        out = {"perturbation_m": PERTURBATION, "well_size_m": well}
-        apart = np.flatnonzero(separation >= well)
-        if apart.size:
-            i = int(apart[0])
-            t_sep = float(trajectory.time[i])
-            out["separation_time_s"] = t_sep
-            out["ftle_per_s"] = float(math.log(distance[i] / PERTURBATION) / t_sep)
-        else:
-            out["separation_time_s"] = math.inf
-        # how long this trajectory itself is right: Richardson estimate from a run at dt/2
-        order = ORDERS[trajectory.integrator]
-        half = self._rerun(params, scenario, trajectory.integrator, trajectory.dt / 2, duration)
-        xh = self._block(model, half)[0][::2]
+        t_sep = events.first_crossing(lead.time[:n], x2[:n] - x[:n], v2[:n] - v[:n], well)
+        if not math.isfinite(t_sep):
+            return math.inf, math.nan
+        return float(t_sep), math.log(well / PERTURBATION) / float(t_sep)
+
+    def _chaos(self, model, params, scenario, trajectory: Trajectory) -> dict:
+        """Sensitivity to initial conditions: a second run from x0 + PERTURBATION, refined until the
+        separation time converges (a claim about the physics needs a run converged for it)."""
+        x = self._block(model, trajectory)[0]
+        integrator, duration = trajectory.integrator, float(trajectory.time[-1])
+        well = self._well_size(params, model)
+        out: dict = {"perturbation_m": PERTURBATION, "well_size_m": well}
+        # level k: the pair at dt / 2^k; level 0 is this run and its twin
+        leads = [trajectory]
+        twin = self._rerun(params, scenario, integrator, trajectory.dt, duration, x0=params["x0"] + PERTURBATION)
+        found = [self._separation(model, params, trajectory, twin)]
+        converged = False
+        for k in range(1, SEPARATION_MAX_HALVINGS + 1):
+            dt_k = trajectory.dt / 2**k
+            # the finer pair need not run far past the coarser one's separation
+            previous = found[-1][0]
+            span = duration if not math.isfinite(previous) else min(duration, 2.0 * previous)
+            lead = self._rerun(params, scenario, integrator, dt_k, span)
+            twin = self._rerun(params, scenario, integrator, dt_k, span, x0=params["x0"] + PERTURBATION)
+            leads.append(lead)
+            found.append(self._separation(model, params, lead, twin))
+            (coarse, _), (fine, _) = found[-2], found[-1]
+            if (not math.isfinite(coarse) and not math.isfinite(fine)) or (
+                math.isfinite(coarse) and abs(fine - coarse) <= SEPARATION_RTOL * fine
+            ):
+                converged = True
+                break
+        t_sep, ftle = found[-1]
+        out["separation_time_s"] = t_sep
+        if math.isfinite(t_sep):
+            out["ftle_per_s"] = ftle
+        out["separation_time_converged"] = converged
+        out["separation_time_dt_s"] = trajectory.dt / 2 ** (len(found) - 1)
+        out["separation_time_refinement_s"] = [float(t) for t, _ in found]
+        out["separation_time_at_run_dt_s"] = float(found[0][0])
+        # how long this trajectory itself is right: Richardson estimate from the run at dt/2
+        order = ORDERS[integrator]
+        xh = self._block(model, leads[1])[0][::2]
         n = min(len(x), len(xh))
         estimate = 2**order / (2**order - 1) * np.abs(x[:n] - xh[:n])
         wrong = np.flatnonzero(estimate > ACCURACY_FRACTION * well)
         out["accurate_until_s"] = float(trajectory.time[wrong[0]]) if wrong.size else float(trajectory.time[n - 1])
         out["lyapunov_exponent_per_s"], out["lyapunov_standard_error_per_s"] = self.lyapunov_exponent(
-            params, scenario, trajectory.integrator, trajectory.dt
+            params, scenario, integrator, trajectory.dt
+        )
+        out["lyapunov_exponent_basis"] = (
+            f"estimate: mean log growth of a pair renormalized every {LYAPUNOV_INTERVAL:g} s over"
+            f" {LYAPUNOV_TIME:g} s after {LYAPUNOV_TRANSIENT:g} s, at the run's setting; +- is the standard"
+            " error of that finite average (statistical, not a bound), and the average is not converged"
+            " in its length"
         )
         return out
 
@@ -914,7 +927,6 @@ class Nonlinear(Scene):
         out = self._linearization_checks(model, params)
         integrator, dt = trajectory.integrator, trajectory.dt
         order = ORDERS[integrator]
-        richardson = 2**order / (2**order - 1)
         floor = ROUNDOFF_PER_STEP * trajectory.steps
         unforced = d == 0 and self._forcing(params) == "none"
         x, v = self._block(model, trajectory)
@@ -938,7 +950,7 @@ class Nonlinear(Scene):
                 half = self._rerun(params, scenario, integrator, dt / 2, duration)
                 xh, vh = self._block(model, half)
                 period_half = measured_period(half.time, xh, vh, self._acceleration(model, xh, vh))
-                estimate = richardson * abs(period - period_half)
+                estimate = events.richardson_error(period, period_half, order)
                 reference = orbit["period_quadrature_s"]
                 if not math.isfinite(period):  # fewer than two maxima in the run: nothing to measure
                     return out
@@ -969,7 +981,7 @@ class Nonlinear(Scene):
                         "escape_time_s",
                         escape,
                         reference,
-                        (SAFETY * richardson * abs(escape - escape_half) + quad_error) / reference + floor,
+                        (SAFETY * events.richardson_error(escape, escape_half, order) + quad_error) / reference + floor,
                         f"2 x the Richardson error estimate of the measured escape time (dt and dt/2, order {order})"
                         " + quadrature error + 100 eps per step, against int dx / v(x) by quadrature",
                     )
