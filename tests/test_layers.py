@@ -26,6 +26,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
         "linear",
         "polynomials",
         "compare",
+        "events",
         "scene",
         "scenes",
     ),

@@ -128,6 +128,8 @@ def cmd_run(args) -> int:
         _print_json(summary)
     else:
         _print_run(summary, args.output)
+    for limit in summary.get("model_limits", []):
+        print(f"springlab: {summary['scene']} {summary['scenario']} is not validated: {limit}", file=sys.stderr)
     return EXIT_FAILED if summary["passed"] is False else EXIT_OK
 
 
@@ -144,6 +146,8 @@ def _print_run(summary: dict, output: str | None) -> None:
         print(f"  check {_check_line(check)}")
     if summary["tolerance"] is not None or summary.get("checks"):
         verdict = "PASS" if summary["passed"] else "FAIL (outside tolerance)"
+        if summary.get("model_limits"):
+            verdict = "NOT VALIDATED (outside the scene's model, see below)"
         print(
             f"  tolerance {summary['tolerance']:.3e}: {verdict}"
             if summary["tolerance"] is not None
@@ -238,7 +242,11 @@ def cmd_plot(args) -> int:
 
 
 def _verdict(summary: dict) -> int:
-    """Exit code of a run whose outputs were written: 1 when outside its tolerance."""
+    """Exit code of a run whose outputs were written: 1 when outside its tolerance or its model's range."""
+    for limit in summary.get("model_limits", []):
+        print(f"springlab: {summary['scene']} {summary['scenario']} is not validated: {limit}", file=sys.stderr)
+    if summary.get("model_limits"):
+        return EXIT_FAILED
     if summary["passed"] is False:
         print(
             f"  note: {summary['scene']}/{summary['scenario']} is outside its tolerance"

@@ -9,9 +9,9 @@ crossings measured through it keep up with RK4 (the same rule as
 `scipy.integrate.solve_ivp`'s dense output and event location).
 
 Every function takes the samples y [unit] and their time derivatives dy
-[unit/s]. Where an input switches on a step boundary the derivative jumps:
-`dy_left` gives the left-hand derivative at each sample (default: dy), used as
-the end slope of the interval that ends there.
+[unit/s] of one smooth stretch of a run. Where an input switches on a step
+boundary the derivatives jump: measure each side separately (the switch
+sample with its left-hand derivatives on the first, right-hand on the second).
 
 Richardson: a quantity Q(h) measured at step h with an integrator of order p
 has error ~ C h^p, so Q(h) - Q(h/2) ~ C h^p (1 - 2^-p) and the error of Q(h)
@@ -51,39 +51,34 @@ def hermite_root(t0: float, t1: float, y0, y1, dy0, dy1, target: float = 0.0) ->
     return t0 + s * h
 
 
-def down_crossings(time: np.ndarray, y: np.ndarray, dy: np.ndarray, dy_left: np.ndarray | None = None) -> np.ndarray:
+def down_crossings(time: np.ndarray, y: np.ndarray, dy: np.ndarray) -> np.ndarray:
     """Times [s] where y crosses zero downwards (y > 0 then y <= 0), to O(dt^4) by cubic Hermite interpolation.
 
     With y a velocity and dy its acceleration these are the times of the position maxima.
     """
-    dy_left = dy if dy_left is None else dy_left
     down = np.flatnonzero((y[:-1] > 0) & (y[1:] <= 0))
-    return np.array([hermite_root(time[i], time[i + 1], y[i], y[i + 1], dy[i], dy_left[i + 1]) for i in down])
+    return np.array([hermite_root(time[i], time[i + 1], y[i], y[i + 1], dy[i], dy[i + 1]) for i in down])
 
 
-def first_crossing(
-    time: np.ndarray, y: np.ndarray, dy: np.ndarray, level: float, dy_left: np.ndarray | None = None
-) -> float:
+def first_crossing(time: np.ndarray, y: np.ndarray, dy: np.ndarray, level: float) -> float:
     """First time [s] |y| reaches `level` (> 0), to O(dt^4) by cubic Hermite interpolation (nan: never)."""
-    dy_left = dy if dy_left is None else dy_left
     beyond = np.flatnonzero(np.abs(y) >= level)
     if not beyond.size or beyond[0] == 0:
         return math.nan if not beyond.size else float(time[0])
     i = int(beyond[0]) - 1
     target = math.copysign(level, y[i + 1])
-    return hermite_root(time[i], time[i + 1], y[i], y[i + 1], dy[i], dy_left[i + 1], target)
+    return hermite_root(time[i], time[i + 1], y[i], y[i + 1], dy[i], dy[i + 1], target)
 
 
-def first_below(time: np.ndarray, y: np.ndarray, dy: np.ndarray, level: float = 0.0, dy_left=None) -> float:
+def first_below(time: np.ndarray, y: np.ndarray, dy: np.ndarray, level: float = 0.0) -> float:
     """First time [s] y drops below `level`, to O(dt^4) by cubic Hermite interpolation (nan: never)."""
-    dy_left = dy if dy_left is None else dy_left
     below = np.flatnonzero(y < level)
     if not below.size:
         return math.nan
     if below[0] == 0:
         return float(time[0])
     i = int(below[0]) - 1
-    return hermite_root(time[i], time[i + 1], y[i], y[i + 1], dy[i], dy_left[i + 1], level)
+    return hermite_root(time[i], time[i + 1], y[i], y[i + 1], dy[i], dy[i + 1], level)
 
 
 def extrema(
@@ -91,8 +86,6 @@ def extrema(
     y: np.ndarray,
     dy: np.ndarray,
     ddy: np.ndarray | None = None,
-    dy_left: np.ndarray | None = None,
-    ddy_left: np.ndarray | None = None,
 ) -> np.ndarray:
     """Interior extrema (t [s], value) of y, from the sign changes of dy, as rows of an (k, 2) array.
 
@@ -101,17 +94,15 @@ def extrema(
     The value is the cubic Hermite interpolant of (y, dy) there: O(dt^4). A series starting at
     rest (dy[0] == 0) counts its first sample as an extremum.
     """
-    dy_left = dy if dy_left is None else dy_left
     out = [(float(time[0]), float(y[0]))] if dy[0] == 0.0 else []
-    crossings = np.flatnonzero(np.sign(dy[:-1]) * np.sign(dy_left[1:]) < 0)
+    crossings = np.flatnonzero(np.sign(dy[:-1]) * np.sign(dy[1:]) < 0)
     for i in crossings:
         t0, t1 = time[i], time[i + 1]
-        v0, v1 = dy[i], dy_left[i + 1]
+        v0, v1 = dy[i], dy[i + 1]
         if ddy is None:
             t = t0 + (t1 - t0) * v0 / (v0 - v1)
         else:
-            ddy_end = ddy if ddy_left is None else ddy_left
-            t = hermite_root(t0, t1, v0, v1, ddy[i], ddy_end[i + 1])
+            t = hermite_root(t0, t1, v0, v1, ddy[i], ddy[i + 1])
         out.append((float(t), hermite_value(t0, t1, y[i], y[i + 1], v0, v1, t)))
     return np.array(out).reshape(-1, 2)
 
@@ -121,11 +112,9 @@ def peak_magnitude(
     y: np.ndarray,
     dy: np.ndarray,
     ddy: np.ndarray | None = None,
-    dy_left: np.ndarray | None = None,
-    ddy_left: np.ndarray | None = None,
 ) -> float:
     """max |y| over the run: the samples (ends, kinks at switches) and the interpolated interior extrema."""
-    found = extrema(time, y, dy, ddy, dy_left, ddy_left)
+    found = extrema(time, y, dy, ddy)
     interior = float(np.max(np.abs(found[:, 1]))) if len(found) else 0.0
     return max(float(np.max(np.abs(y))), interior)
 

@@ -341,6 +341,21 @@ class Scene:
         """Scalar claims `validate` holds an exact scenario to, beyond its compared columns (override)."""
         return []
 
+    def model_limits(
+        self,
+        model: mujoco.MjModel,
+        params: dict[str, float],
+        scenario: Scenario,
+        trajectory: Trajectory,
+    ) -> list[str]:
+        """Where this run leaves the range the scene's equations describe, one line each (override).
+
+        E.g. a linear tire that would have to pull on the road: the simulation may still match its
+        exact reference, but neither describes the physical system any more. Any line makes the run
+        not validated (`passed` False, exit 1) and is reported in summary.json's `model_limits`.
+        """
+        return []
+
     def stop_condition(
         self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario
     ) -> Callable[[np.ndarray, np.ndarray], np.ndarray] | None:

@@ -36,6 +36,10 @@ add them by MjSpec edits of that one model:
   `tire_stiffness` (no tire damping). The wheel reaches a half-sine bump
   r(t) = bump_height sin(pi speed t / bump_length) at t = 0 and leaves it at
   t_e = bump_length / speed; the car was at rest in static equilibrium before.
+  The tire is linear both ways, so a run in which the tire force would turn
+  negative (the wheel lifts off the road) is outside the model: its
+  `model_limits` say when, and the run is not validated (exit 1). Peaks and
+  the lift-off time are interpolated between the samples (springlab.events).
 
 How the bump input stays exact (MJCF-native, no Python force, rollout-ready):
 the road height under the tire is the coordinate of an internal *exciter*: a
@@ -78,7 +82,7 @@ import math
 import mujoco
 import numpy as np
 
-from .. import analytic
+from .. import analytic, events
 from ..errors import ParameterError
 from ..scene import Parameter, Reference, Scenario, Scene, Setup
 from ..simulate import Trajectory, quiet_mujoco
@@ -657,7 +661,7 @@ class Car(Scene):
                 out["omega_d_rad_s"] = omega_d
                 out["damped_period_s"] = 2 * math.pi / omega_d
                 out["logarithmic_decrement"] = 2 * math.pi * zeta / math.sqrt(1 - zeta * zeta)
-                peaks = _peaks(trajectory.time, x - rest, v, trajectory.dt)
+                peaks = events.extrema(trajectory.time, x - rest, v)
                 # well above the integration error; successive same-sign extrema are one damped period apart
                 peaks = peaks[np.abs(peaks[:, 1]) > 1e-3 * np.max(np.abs(peaks[:, 1]), initial=0.0)]
                 if len(peaks) >= 3:
@@ -689,8 +693,11 @@ class Car(Scene):
         for i, (omega, _) in enumerate(analytic_modes, start=1):
             out[f"omega_{i}_analytic_rad_s"] = omega
         damped = _damped_modes(analytic.state_matrix(measured["M"], measured["C"], measured["K"]))
+        # frequency_i_hz above is undamped (K phi = omega^2 M phi); the damping ratio belongs to the damped
+        # eigenvalue lambda, whose own natural frequency |lambda| differs once C is not proportional to K
         for i, (omega, zeta) in enumerate(damped, start=1):
             out[f"mode_{i}_damping_ratio"] = zeta
+            out[f"mode_{i}_natural_frequency_hz"] = omega / (2 * math.pi)
             out[f"omega_d_{i}_rad_s"] = omega * math.sqrt(max(1 - zeta * zeta, 0.0))
         exact = {"M": linear.mass, "C": linear.damping, "K": linear.stiffness}
         out["linearization_max_rel_diff"] = max(
@@ -708,18 +715,9 @@ class Car(Scene):
     @staticmethod
     def _road_bump_quantities(model, params, trajectory) -> dict:
         quarter = _QuarterCar(model, params)
-        heave, wheel, road = (model.joint(n) for n in ("heave", "wheel", "road"))
-        xs = trajectory.qpos[:, heave.qposadr[0]]
-        xw = trajectory.qpos[:, wheel.qposadr[0]]
-        vs = trajectory.qvel[:, heave.dofadr[0]]
-        vw = trajectory.qvel[:, wheel.dofadr[0]]
-        switch = quarter.switch_step(trajectory.dt)
-        on_bump = np.arange(len(trajectory.time)) < switch
-        road_height = np.where(on_bump, trajectory.qpos[:, road.qposadr[0]], 0.0)  # the realized input
-        suspension = quarter.suspension_force(xs, xw, vs, vw)
-        tire = quarter.tire_force(xw, road_height)
-        static_tire = (quarter.ms + quarter.mu) * quarter.g
+        peaks = quarter.measured(model, trajectory)
         body_modes = _damped_modes(quarter.on_road[:4, :4])
+        static_tire = quarter.static_tire_force()
         out: dict = {
             "sprung_mass_kg": quarter.ms,
             "body_frequency_hz": body_modes[0][0] / (2 * math.pi),
@@ -727,18 +725,32 @@ class Car(Scene):
             "wheel_hop_frequency_hz": body_modes[1][0] / (2 * math.pi),
             "wheel_hop_damping_ratio": body_modes[1][1],
             "bump_duration_s": quarter.bump_time,
-            "peak_body_acceleration_m_s2": float(np.max(np.abs(suspension / quarter.ms - quarter.g))),
-            "peak_suspension_travel_m": float(np.max(np.abs((xs - xw) - (xs[0] - xw[0])))),
-            "peak_tire_deflection_m": float(np.max(np.abs(tire - static_tire))) / quarter.kt,
-            "min_body_height_m": float(np.min(xs)),
+            "peak_body_acceleration_m_s2": peaks["body_acceleration"],
+            "peak_suspension_travel_m": peaks["suspension_travel"],
+            "peak_tire_deflection_m": peaks["tire_deflection"],
+            "min_body_height_m": peaks["min_body_height"],
             "static_tire_force_n": static_tire,
-            "min_tire_force_n": float(np.min(tire)),
-            "tire_leaves_road": bool(np.min(tire) < 0.0),
+            "min_tire_force_n": peaks["min_tire_force"],
+            "tire_leaves_road": bool(peaks["min_tire_force"] < 0.0),
         }
         if out["tire_leaves_road"]:
-            # a real tire cannot pull: after this instant the linear model's answers are an upper estimate
-            out["tire_lift_off_time_s"] = float(trajectory.time[int(np.argmax(tire < 0.0))])
+            # a real tire cannot pull: from this instant on the linear model no longer describes the car
+            out["tire_lift_off_time_s"] = peaks["lift_off_time"]
         return out
+
+    def model_limits(self, model, params, scenario, trajectory) -> list[str]:
+        if scenario.name != "road_bump":
+            return []
+        quarter = _QuarterCar(model, params)
+        peaks = quarter.measured(model, trajectory)
+        if peaks["min_tire_force"] >= 0.0:
+            return []
+        return [
+            f"the tire leaves the road at t = {peaks['lift_off_time']:.6g} s (bump_height = {params['bump_height']:g} m"
+            f" at speed = {params['speed']:g} m/s): the linear tire would have to pull"
+            f" {-peaks['min_tire_force']:.4g} N on the road, which a real tire cannot, so the answers after that"
+            " instant are not the car's; use a lower bump or another speed"
+        ]
 
 
 SCENE = Car()
@@ -873,6 +885,71 @@ class _QuarterCar:
         """Compressive tire force [N] (negative: the tire would have to pull on the road)."""
         return self.kt * (self.radius + road_height - xw)
 
+    def static_tire_force(self) -> float:
+        """Tire force [N] at rest: the weight of the sprung and unsprung masses."""
+        return (self.ms + self.mu) * self.g
+
+    def states(self, model: mujoco.MjModel, trajectory: Trajectory) -> np.ndarray:
+        """(n, 7) state z of a run, read from its joints (the exciter's coordinate is e)."""
+        heave, wheel, road = (model.joint(n) for n in ("heave", "wheel", "road"))
+        q, v = trajectory.qpos, trajectory.qvel
+        return np.column_stack(
+            [
+                q[:, heave.qposadr[0]],
+                q[:, wheel.qposadr[0]],
+                v[:, heave.dofadr[0]],
+                v[:, wheel.dofadr[0]],
+                q[:, road.qposadr[0]],
+                v[:, road.dofadr[0]],
+                np.ones(len(trajectory.time)),
+            ]
+        )
+
+    def measured(self, model: mujoco.MjModel, trajectory: Trajectory) -> dict[str, float]:
+        """Peaks, minima and the lift-off time of a run, between its samples to the run's order.
+
+        On each input segment (on the bump up to the switch step, on the flat road from it) the
+        state obeys z' = A z exactly, so any output y = c z has y' = c A z and y'' = c A^2 z: cubic
+        Hermite interpolation of (y, y') (extrema located on (y', y'')) is O(dt^4), as RK4
+        (springlab.events). Reading them at the samples would be O(dt^2) in a peak and O(dt) in a time.
+
+        Returns: body_acceleration [m/s^2] (largest |x_s''|), suspension_travel [m] (largest change of
+        x_s - x_w), tire_deflection [m] (largest change from the static deflection), min_body_height [m],
+        min_tire_force [N] and lift_off_time [s] (first time the tire force is negative, nan: never).
+        """
+        z = self.states(model, trajectory)
+        time = trajectory.time
+        switch = min(self.switch_step(trajectory.dt), len(time) - 1)
+        unit = np.eye(7)
+        static_travel = z[0, 0] - z[0, 1]
+        peaks = {"body_acceleration": 0.0, "suspension_travel": 0.0, "tire_deflection": 0.0}
+        lows = {"min_body_height": math.inf, "min_tire_force": math.inf}
+        lift_off = math.nan
+        # segment samples: the switch sample belongs to both (its left and right limits)
+        segments = [(self.on_bump, slice(0, switch + 1)), (self.on_road, slice(switch, len(time)))]
+        for a, part in segments:
+            t, zs = time[part], z[part]
+            if len(t) < 2:
+                continue
+            on_bump = a is self.on_bump
+            road = unit[4] if on_bump else np.zeros(7)
+            tire = self.kt * (self.radius * unit[6] + road - unit[1])
+            outputs = {
+                "body_acceleration": a[2],
+                "suspension_travel": unit[0] - unit[1] - static_travel * unit[6],
+                "tire_deflection": tire / self.kt - self.static_tire_force() / self.kt * unit[6],
+            }
+            for name, c in outputs.items():
+                y, dy, ddy = zs @ c, zs @ (c @ a), zs @ (c @ a @ a)
+                peaks[name] = max(peaks[name], events.peak_magnitude(t, y, dy, ddy))
+            for name, c in (("min_body_height", unit[0]), ("min_tire_force", tire)):
+                y, dy, ddy = zs @ c, zs @ (c @ a), zs @ (c @ a @ a)
+                found = events.extrema(t, y, dy, ddy)
+                lows[name] = min(lows[name], float(np.min(y)), *(found[:, 1] if len(found) else []))
+                if name == "min_tire_force" and math.isnan(lift_off):
+                    lift_off = events.first_below(t, y, dy, 0.0)
+        return {**peaks, **lows, "lift_off_time": lift_off}
+
 
 def _piecewise_lti(time: np.ndarray, z0: np.ndarray, segments: list[tuple[float, np.ndarray]]) -> np.ndarray:
     """Exact z(t) of z' = A_j z on [s_j, s_j+1) (segments [(s_j, A_j)], s_0 = 0), at `time` [s].
@@ -916,24 +993,6 @@ def _damped_modes(a: np.ndarray) -> list[tuple[float, float]]:
         elif lam.imag == 0 and lam.real != 0:
             out.append((abs(lam), 1.0))
     return sorted(out)
-
-
-def _peaks(time, offset, velocity, dt) -> np.ndarray:
-    """Extrema (t [s], value [m]) of `offset`, from the sign changes of `velocity`.
-
-    The time is the velocity's zero by linear interpolation, the value a cubic
-    Hermite interpolant of (offset, velocity) there: O(dt^4), so the measured
-    logarithmic decrement is not limited by the sampling.
-    """
-    out = [(time[0], offset[0])] if velocity[0] == 0.0 else []  # released from rest: an extremum
-    crossings = np.flatnonzero(np.sign(velocity[:-1]) * np.sign(velocity[1:]) < 0)
-    for i in crossings:
-        v0, v1 = velocity[i], velocity[i + 1]
-        s = v0 / (v0 - v1)  # fraction of the step
-        x0, x1 = offset[i], offset[i + 1]
-        h00, h10, h01, h11 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s, -2 * s**3 + 3 * s**2, s**3 - s**2
-        out.append((time[i] + s * dt, h00 * x0 + h10 * dt * v0 + h01 * x1 + h11 * dt * v1))
-    return np.array(out).reshape(-1, 2)
 
 
 def linearize(model: mujoco.MjModel, qpos: np.ndarray) -> dict[str, np.ndarray]:

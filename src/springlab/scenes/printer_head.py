@@ -53,7 +53,10 @@ Jacobian, s = ln(lambda) / dt); `move_time_s`, `residual_amplitude_m` (largest
 carriage deviation from the target after the move), `settling_time_s` (time
 after the move ends, or after release, from which the carriage stays inside
 +-positioning_band for good), `positioning_time_s` = move + settling, and the
-analytic estimates. "For good" is certified, not assumed: after the force is
+analytic estimates: `settling_time_estimate_s` = ln(A / band) / (zeta omega_n),
+A the envelope of the exact residual vibration after the move, and
+`positioning_time_estimate_s` = `move_time_s` (the move this run makes, on the
+step grid: known exactly) + that settling estimate. "For good" is certified, not assumed: after the force is
 off the belt's energy E = mu s'^2/2 + k s^2/2 cannot grow, so the carriage
 stays within |X - target| + (m_m / M) sqrt(2 E / k) of the target for ever;
 a run that ends before that bound is inside the band reports
