@@ -88,6 +88,9 @@ class Scenario:
         for presets that depend on other parameters (e.g. damping from a ratio).
       exact: whether an exact reference exists (validated by `validate`).
       dt: the scenario's validated timestep [s] (None: the scene's `dt`).
+      variant: for a scene whose scenarios differ in their model (e.g. the car: 1 DOF,
+        pitch/heave, quarter car), the object that carries what differs; the scene's
+        hooks delegate to it instead of dispatching on scenario names (None: unused).
     """
 
     name: str
@@ -97,6 +100,7 @@ class Scenario:
     derive: Callable[[dict[str, float], set[str]], dict[str, float]] | None = None
     exact: bool = True
     dt: float | None = None
+    variant: Any = None
 
 
 @dataclasses.dataclass
