@@ -28,6 +28,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
         "compare",
         "events",
         "scene",
+        "checks",
         "scenes",
     ),
     "one run": ("api",),
