@@ -104,13 +104,16 @@ from ._nonlinear_orbits import (
     crossings_through,
     curvature,
     energy,
+    equilibria,
     equilibrium_kind,
     equilibrium_positions,
     gap_below,
     level_crossings,
     linear_eigenvalues,
+    orbit,
     oscillation_period,
     potential,
+    separatrices,
     spring_force,
     tanh_sinh,
     transit_time,
@@ -392,58 +395,14 @@ class Nonlinear(Scene):
         return field
 
     def equilibria(self, model, params, scenario) -> list[dict]:
-        """Every equilibrium with its linearization: x [m], stable, kind, eigenvalues_per_s
-        ([real, imaginary] pairs [1/s] of the roots of m s^2 + d s + V''(x) = 0), and omega_rad_s = sqrt(V''/m) (small-oscillation frequency
-        without damping, where V'' > 0) or saddle_rate_per_s = sqrt(-V''/m) (where V'' < 0: the
-        undamped growth rate, and the slope dv/dx of the separatrices through the saddle)."""
+        """Every equilibrium with its linearization (springlab.scenes._nonlinear_orbits.equilibria)."""
         m, k1, k3, d = self.physical(model)
-        out = []
-        for x_e in equilibrium_positions(k1, k3):
-            stiffness = float(curvature(x_e, k1, k3))
-            eigenvalues = linear_eigenvalues(m, stiffness, d)
-            kind = equilibrium_kind(eigenvalues)
-            entry = {
-                "x": float(x_e),
-                "stable": kind in ("center", "stable focus", "stable node"),
-                "kind": kind,
-                "eigenvalues_per_s": [[float(s.real), float(s.imag)] for s in eigenvalues],
-            }
-            if stiffness > 0:
-                entry["omega_rad_s"] = math.sqrt(stiffness / m)
-            elif stiffness < 0:
-                entry["saddle_rate_per_s"] = math.sqrt(-stiffness / m)
-            out.append(entry)
-        return out
+        return equilibria(m, k1, k3, d)
 
     def separatrices(self, model, params, scenario, points: int = 401) -> list[tuple[np.ndarray, np.ndarray]]:
-        """The energy level of every saddle, E = V(x_saddle), as (x [m], v [m/s]) curves: upper
-        (v >= 0) and lower branches of each interval where the level lies above V, out to twice
-        the farthest equilibrium or level crossing (the branches that leave a softening spring's
-        saddles are cut there)."""
+        """The saddles' energy levels as (x [m], v [m/s]) curves (springlab.scenes._nonlinear_orbits.separatrices)."""
         m, k1, k3, d = self.physical(model)
-        saddles = [x for x in equilibrium_positions(k1, k3) if curvature(x, k1, k3) < 0]
-        curves = []
-        done: list[float] = []
-        for saddle in saddles:
-            level = float(potential(saddle, k1, k3))
-            if any(abs(level - other) <= 1e-12 * max(abs(level), 1e-300) for other in done):
-                continue  # symmetric saddles share one level set
-            done.append(level)
-            crossings = crossings_through(saddle, k1, k3)
-            extent = 2.0 * max(np.max(np.abs(crossings)), np.max(np.abs(equilibrium_positions(k1, k3))))
-            edges = np.unique(np.concatenate([[-extent, extent], crossings]))
-            for low, high in zip(edges[:-1], edges[1:]):
-                if gap_below(saddle, 0.5 * (low + high), k1, k3) <= 0:
-                    continue
-                # cosine spacing: dense where the branch meets the axis
-                x = low + (high - low) * 0.5 * (1 - np.cos(np.linspace(0, math.pi, points)))
-                x[0], x[-1] = low, high
-                v = np.sqrt(np.maximum(2.0 * gap_below(saddle, x, k1, k3) / m, 0.0))
-                curves.append((x, v))
-                curves.append((x.copy(), -v))
-        return curves
-
-    # -- linearization through MuJoCo ---------------------------------------------
+        return separatrices(m, k1, k3, points)
 
     # -- linearization through MuJoCo ---------------------------------------------
 
@@ -518,27 +477,9 @@ class Nonlinear(Scene):
     # -- results -------------------------------------------------------------
 
     def _orbit(self, model, params) -> dict:
-        """What the unforced, undamped motion through (x0, v0) is: energies, turning points, period."""
+        """The unforced, undamped motion through (x0, v0) (springlab.scenes._nonlinear_orbits.orbit)."""
         m, k1, k3, d = self.physical(model)
-        x0, v0 = params["x0"], params["v0"]
-        e0 = float(energy(x0, v0, m, k1, k3))
-        saddle_levels = [float(potential(x, k1, k3)) for x in equilibrium_positions(k1, k3) if curvature(x, k1, k3) < 0]
-        a, b = turning_points(x0, v0, m, k1, k3)
-        orbit = {"energy_J": e0, "turning_points_m": [a, b]}
-        if saddle_levels:
-            orbit["separatrix_energy_J"] = min(saddle_levels, key=lambda s: abs(s - e0))
-            wells = [float(potential(x, k1, k3)) for x in equilibrium_positions(k1, k3) if curvature(x, k1, k3) > 0]
-            if wells:
-                # how much energy a block resting in a well needs to get over the lowest saddle
-                orbit["barrier_height_J"] = min(saddle_levels) - min(wells)
-        if math.isfinite(a) and math.isfinite(b) and a != b:
-            orbit["motion"] = "bounded"
-            orbit["period_quadrature_s"], orbit["period_quadrature_error_s"] = oscillation_period(m, k1, k3, x0, v0)
-        elif a == b:
-            orbit["motion"] = "equilibrium"
-        else:
-            orbit["motion"] = "unbounded"
-        return orbit
+        return orbit(m, k1, k3, params["x0"], params["v0"])
 
     def quantities(self, model, params, scenario, trajectory: Trajectory) -> dict:
         m, k1, k3, d = self.physical(model)
