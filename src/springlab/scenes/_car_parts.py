@@ -35,8 +35,8 @@ class Variant:
         """Initial state and controls (qpos0 and rest: the static equilibrium)."""
         raise NotImplementedError
 
-    def reference(self, model: mujoco.MjModel, params: dict[str, float], time: np.ndarray) -> Reference:
-        """The exact solution at `time` [s]."""
+    def reference(self, model: mujoco.MjModel, params: dict[str, float], time: np.ndarray, dt: float) -> Reference:
+        """The exact solution at `time` [s] of a run with timestep `dt` [s] (Scene.reference)."""
         raise NotImplementedError
 
     def modes(self, model: mujoco.MjModel, params: dict[str, float]) -> list[tuple[float, float]]:

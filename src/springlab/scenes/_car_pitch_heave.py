@@ -173,12 +173,12 @@ class PitchHeave(Variant):
         linear = Linear2Dof(model)
         q0 = linear.equilibrium + np.linalg.solve(linear.stiffness, push_force(model, params))
         qpos[model.joint("heave").qposadr[0]], qpos[model.joint("pitch").qposadr[0]] = q0
-        self._check_motion(model, params, np.arange(steps + 1) * dt)
+        self._check_motion(model, params, np.arange(steps + 1) * dt, dt)
         return Setup(qpos=qpos, qvel=np.zeros(model.nv))
 
-    def _check_motion(self, model, params, time: np.ndarray) -> None:
+    def _check_motion(self, model, params, time: np.ndarray, dt: float) -> None:
         """ParameterError if the exact motion puts the bottom below ground or makes an axle's springs pull."""
-        reference = self.reference(model, params, time)
+        reference = self.reference(model, params, time, dt)
         linear = Linear2Dof(model)
         x, theta = reference.pos["heave"], reference.pos["pitch"]
         stations = {"front axle": linear.a, "rear axle": -linear.b, "push position": params["push_position"]}
@@ -193,7 +193,7 @@ class PitchHeave(Variant):
             },
         )
 
-    def reference(self, model, params, time) -> Reference:
+    def reference(self, model, params, time, dt) -> Reference:
         linear = Linear2Dof(model)
         q0 = linear.equilibrium + np.linalg.solve(linear.stiffness, push_force(model, params))
         q, v = analytic.linear_response(

@@ -80,7 +80,7 @@ class Release(Variant):
         qpos[model.joint("heave").qposadr[0]] = springref - (m + params["push_mass"]) * g / k  # pushed down
         return Setup(qpos=qpos, qvel=np.zeros(model.nv))
 
-    def reference(self, model, params, time) -> Reference:
+    def reference(self, model, params, time, dt) -> Reference:
         m, k, d, springref, g = one_dof(model)
         rest = springref - m * g / k
         x0 = springref - (m + params["push_mass"]) * g / k

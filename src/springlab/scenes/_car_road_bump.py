@@ -235,13 +235,13 @@ class RoadBump(Variant):
         control = np.zeros((steps, 2))
         control[:switch_step, 0] = 1.0  # tire on the bump exciter
         control[switch_step:, 1] = 1.0  # tire on the flat road
-        self._check_motion(model, params, np.arange(steps + 1) * dt)
+        self._check_motion(model, params, np.arange(steps + 1) * dt, dt)
         # qpos0: the static equilibrium (clearance; wheel at its loaded height)
         return Setup(qpos=model.qpos0.copy(), qvel=qvel, control=control)
 
-    def _check_motion(self, model, params, time: np.ndarray) -> None:
+    def _check_motion(self, model, params, time: np.ndarray, dt: float) -> None:
         """ParameterError if the exact motion puts the bottom below ground or makes the suspension pull."""
-        reference = self.reference(model, params, time)
+        reference = self.reference(model, params, time, dt)
         quarter = QuarterCar(model, params)
         x = reference.pos["heave"]
         refuse_motion(
@@ -256,9 +256,8 @@ class RoadBump(Variant):
             },
         )
 
-    def reference(self, model, params, time) -> Reference:
+    def reference(self, model, params, time, dt) -> Reference:
         quarter = QuarterCar(model, params)
-        dt = float(time[1] - time[0]) if len(time) > 1 else 1.0
         z0 = quarter.initial_state()
         true = piecewise_lti(time, z0, [(0.0, quarter.on_bump), (quarter.bump_time, quarter.on_road)])
         switch = quarter.switch_step(dt) * dt

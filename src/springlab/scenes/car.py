@@ -290,8 +290,8 @@ class Car(Scene):
 
     # -- exact references, modes, results (the scenario's variant) -------------
 
-    def reference(self, model, params, scenario, time) -> Reference:
-        return scenario.variant.reference(model, params, time)
+    def reference(self, model, params, scenario, time, *, dt) -> Reference:
+        return scenario.variant.reference(model, params, time, dt)
 
     def modes(self, model, params, scenario) -> list[tuple[float, float]]:
         return scenario.variant.modes(model, params)
