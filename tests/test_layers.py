@@ -24,6 +24,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
         "simulate",
         "analytic",
         "linear",
+        "linearize",
         "polynomials",
         "compare",
         "scene",
