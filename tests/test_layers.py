@@ -45,7 +45,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
         "sweep",
         "executor",
     ),
-    "outputs": ("charts", "plots", "render", "report", "media"),
+    "outputs": ("charts", "charts_audit", "plots", "render", "report", "media"),
     "front": ("cli", "demo", "__main__", "__init__"),
 }
 PREFIXES = {"scenes.": "physics", "render_": "outputs"}

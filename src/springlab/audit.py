@@ -104,6 +104,60 @@ class Audit:
         """The model's own setting is stable and meets tol (exit 0 of the CLI; otherwise 1)."""
         return bool(self.own["stable"]) and self.own["error"] is not None and self.own["error"] <= self.tol
 
+    def verdict(self) -> list[str]:
+        """A few lines for the terminal: modes, the own setting's margin and error, the recommendation."""
+        lines = []
+        fastest = self.linear.fastest
+        unstable = sum(m.physically_unstable for m in self.linear.modes)
+        motion = "linear" if self.is_linear else "nonlinear"
+        head = f"{self.model}: {len(self.linear.modes)} modes"
+        if fastest is not None:
+            zeta = "" if fastest.damping_ratio is None else f", zeta {fastest.damping_ratio:.3g}"
+            head += f", fastest {fastest.frequency_hz:.4g} Hz ({fastest.kind}{zeta})"
+        if unstable:
+            head += f"; {unstable} physically unstable (the model's own dynamics, not the integrator)"
+        lines.append(f"{head}; {motion} along the motion")
+        own, limit = self.own, self.limits[self.own["integrator"]]
+        if limit.measured_s is None:
+            stable = "has no stability limit up to the duration"
+        elif own["stable"]:
+            stable = f"is stable with margin {limit.measured_s / own['dt']:.3g}x (limit {limit.measured_s:.3g} s)"
+        else:
+            stable = f"is UNSTABLE: its limit is {limit.measured_s:.3g} s"
+        error = "not compared" if own["error"] is None else f"{own['error']:.2g}"
+        meets = "" if own["error"] is None else (" (meets tol)" if own["error"] <= self.tol else " (misses tol)")
+        lines.append(
+            f"your setting, {own['integrator']} at {own['dt'] * 1e3:.3g} ms, {stable};"
+            f" its error over {self.duration:g} s is {error}{meets}"
+        )
+        pick = self.recommendation
+        if pick["integrator"] is None:
+            lines.append(f"no swept setting meets tol {self.tol:g} (verified runs); try --dt lower or a longer grid")
+        else:
+            own_cost = next(
+                (
+                    r.wall_time_s
+                    for r in self.runs
+                    if r.integrator == own["integrator"] and math.isclose(r.dt, own["dt"])
+                ),
+                None,
+            )
+            ratio = f" at {pick['wall_time_s'] / own_cost:.2g}x the cost of yours" if own_cost else ""
+            lines.append(
+                f"cheapest meeting tol {self.tol:g}: {pick['integrator']} at {pick['dt'] * 1e3:.3g} ms, error"
+                f" {pick['error']:.2g}{ratio} (verified by a run)"
+            )
+        if self.constraints:
+            names = ", ".join(f"{c['element']} ({c['timeconst_s']:g} s)" for c in self.constraints[:3])
+            more = f" and {len(self.constraints) - 3} more" if len(self.constraints) > 3 else ""
+            lines.append(f"solref time constants shorter than 2 dt (MuJoCo stiffens nothing, it clamps): {names}{more}")
+        if not self.reference["converged"]:
+            lines.append(
+                f"note: the RK4 reference did not converge to 1% of tol (estimate {self.reference['error_estimate']:.2g});"
+                " errors below that are not resolved"
+            )
+        return lines
+
     def as_json(self) -> dict[str, Any]:
         """audit.json (DESIGN.md's contract, plus orders, pareto, reference, constraints and timings)."""
         fastest = self.linear.fastest
@@ -287,8 +341,7 @@ def audit(
     if dts is None:
         finite = [lim.measured_s for lim in limits.values() if lim.measured_s is not None]
         ceiling = min(GRID_TOP_OVER_LIMIT * max(finite), duration / 10) if finite else duration / 10
-        multiple = max(1, math.floor(ceiling / own_dt))
-        top = own_dt * multiple if own_dt <= ceiling else ceiling
+        top = _grid_top(duration, ceiling, own_dt)
         dts = default_grid(top)
         if own_dt <= top and not any(abs(d - own_dt) <= 1e-12 * own_dt for d in dts):
             dts = sorted({*dts, own_dt}, reverse=True)
@@ -358,6 +411,19 @@ def audit(
             "total_s": stamps["end"] - stamps["start"],
         },
     )
+
+
+def _grid_top(duration: float, ceiling: float, own_dt: float) -> float:
+    """The default grid's largest timestep [s]: duration / J for the fewest intervals J that keep it at most
+    `ceiling` [s], with J dividing duration / own_dt when that is an integer (so the model's own timestep
+    divides it and is compared at the same checkpoints)."""
+    fewest = max(1, math.ceil(duration / ceiling * (1 - 1e-12)))
+    own_steps = duration / own_dt
+    if abs(own_steps - round(own_steps)) <= 1e-9 * own_steps and own_dt <= ceiling:
+        steps = round(own_steps)
+        divisors = [j for j in range(fewest, steps + 1) if steps % j == 0]
+        return duration / divisors[0]
+    return duration / fewest
 
 
 def _as_runs(runs: list[SweepRun]) -> list[Run]:
