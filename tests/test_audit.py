@@ -17,9 +17,8 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from springlab import audit as audit_module
 from springlab import stability, tradeoff
-from springlab.audit import audit
+from springlab.audit import INTEGRATORS, audit
 from springlab.errors import BadInputError, UnknownNameError
 from springlab.simulate import stability_limit
 from test_linearize import chain_frequencies, chain_xml, pendulum_xml
@@ -122,7 +121,7 @@ def test_a_sphere_bouncing_on_a_soft_contact_audits_and_its_recommendation_meets
 
 def _final_state(model, integrator, dt, result):
     work = model.__copy__()
-    work.opt.integrator = audit_module.INTEGRATORS[integrator]
+    work.opt.integrator = INTEGRATORS[integrator]
     work.opt.timestep = dt
     data = mujoco.MjData(work)
     data.qpos[:] = result.start.qpos

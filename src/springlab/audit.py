@@ -315,7 +315,7 @@ def audit(
       keyframe: operating point, keyframe name or index (default: the first keyframe, else qpos0 at rest).
       tol: tolerance on the error of the module docstring [-].
       integrators: names to sweep (default all five), a list or "a,b".
-      dt: timesteps [s] to sweep (see `parse_dts`; default: a 12-point grid over 3 decades below 1.2x
+      dt: timesteps [s] to sweep (see `parse_dts`; default: a 12-point grid over 2.5 decades below 1.2x
         the largest measured stability limit, whose top is a multiple of the model's own timestep).
       duration: simulated time of every run [s] (default 1 s; a scene: its scenario's).
       perturb: size of the initial perturbation of the operating point [m or rad].
@@ -364,7 +364,7 @@ def audit(
     if is_linear:
         reference = linear_reference(model, linear, start, spacing, count)
     else:
-        reference = converged_reference(model, point, start, spacing, count, finest, tol, nthread=nthread)
+        reference = converged_reference(model, point, start, spacing, count, finest, tol, coarse=probe, nthread=nthread)
     stamps["reference"] = _time.perf_counter()
 
     runs = []
@@ -462,13 +462,16 @@ def _own_setting(model, point, start, outcomes, name, dt, shares, limits, spacin
 
 def _recommend(model, point, start, runs, limits, tol, duration, spacing, reference) -> dict[str, Any]:
     """The cheapest swept setting meeting tol within RECOMMEND_LIMIT_FRACTION of its stability limit,
-    verified by a run of its own (springlab.simulate, not the batch)."""
+    verified by a run of its own (springlab.simulate, not the batch). Meeting tol means error + the
+    reference's own error estimate <= tol, so a reference that did not fully converge cannot pass a
+    setting that misses tol."""
+    budget = tol - reference.error_estimate
     candidates = sorted(
         (
             r
             for r in runs
             if r.error is not None
-            and r.error <= tol
+            and r.error <= budget
             and (
                 limits[r.integrator].measured_s is None
                 or r.dt <= RECOMMEND_LIMIT_FRACTION * limits[r.integrator].measured_s
@@ -491,7 +494,7 @@ def _recommend(model, point, start, runs, limits, tol, duration, spacing, refere
         except DivergedError:
             continue
         error = error_of(model, point, trajectory, spacing, reference)
-        if error is not None and error <= tol:
+        if error is not None and error <= budget:
             return {
                 "integrator": run.integrator,
                 "dt": run.dt,

@@ -43,6 +43,8 @@ SCAN_STOP = 1e4
 SCAN_STOP_S = 10.0
 #: bisection down to this ratio between stable and unstable timesteps
 LIMIT_PRECISION = 1e-4
+#: a predicted limit p is first bracketed by [p / GUESS_BRACKET, p * GUESS_BRACKET]
+GUESS_BRACKET = 1.01
 #: confirmation runs at these fractions of the measured limit
 CONFIRM_BELOW, CONFIRM_ABOVE = 0.98, 1.02
 #: a confirmation run "grows" when its deviation from the unperturbed run grows GROWTH_SEEN x beyond the
@@ -101,9 +103,11 @@ def _rk4_limit(eigenvalue: complex) -> float:
         return abs(1 + z + z**2 / 2 + z**3 / 6 + z**4 / 24) > 1 + 1e-13
 
     grid = np.linspace(1e-3, 3.0, 3000)
-    first = next((y for y in grid if grows(y)), None)
-    if first is None:
+    z = grid * unit
+    growing = np.flatnonzero(np.abs(1 + z + z**2 / 2 + z**3 / 6 + z**4 / 24) > 1 + 1e-13)
+    if not growing.size:
         return math.inf
+    first = float(grid[growing[0]])
     low, high = first - (grid[1] - grid[0]), first
     for _ in range(60):
         mid = 0.5 * (low + high)
@@ -136,9 +140,9 @@ class _MapProbe:
     """
 
     def __init__(self, model: mujoco.MjModel, linear: Linearization, integrator: str):
-        self.model, self.linear, self.integrator = model, linear, integrator
+        self.model, self.linear, self.integrator = copy.copy(model), linear, integrator
         self.sigma = linear.max_growth_rate
-        self.data = mujoco.MjData(model)
+        self.data = mujoco.MjData(self.model)
         self.basis = None
         if linear.physically_unstable:
             values, vectors = np.linalg.eig(linear.A)
@@ -146,7 +150,7 @@ class _MapProbe:
             self.basis = np.linalg.pinv(vectors)
 
     def map(self, dt: float) -> np.ndarray:
-        return one_step_map(self.model, self.integrator, dt, self.linear.point, data=self.data)
+        return one_step_map(self.model, self.integrator, dt, self.linear.point, data=self.data, copy_model=False)
 
     def excess(self, dt: float, phi: np.ndarray | None = None) -> tuple[float, np.ndarray | None, float]:
         """(max |mu| / exact growth of its mode [-], that mu's eigenvector, that |mu| [-]); the first > 1 +
@@ -180,21 +184,31 @@ def measured_limit(
     """The smallest dt [s] at which `integrator`'s measured one-step map grows (module docstring), or None.
 
     scale_s: the model's fastest time scale 1/|lambda|_max [s] (or its own timestep without a mode);
-    stop_s: the largest dt worth scanning [s] (a run's duration); guess_s: a predicted limit [s] to start
-    the scan near (it only saves map evaluations: the scan still starts below it and doubles).
+    stop_s: the largest dt worth scanning [s] (a run's duration); guess_s: a predicted limit [s], tried
+    first as a bracket [guess / GUESS_BRACKET, guess * GUESS_BRACKET] (it only saves map evaluations: a
+    wrong guess falls back to the doubling scan from its stable side).
     """
     probe = _MapProbe(model, linear, integrator)
-    first = SCAN_START * scale_s if guess_s is None else min(guess_s / 4, SCAN_STOP * scale_s)
-    low, dt = 0.0, first
     stop = min(SCAN_STOP * scale_s, stop_s)
-    dt = min(dt, stop)
-    while not probe.unstable(dt):
-        if dt >= stop:
-            return None
-        low, dt = dt, min(2 * dt, stop)
-    high = dt
+    low, high = 0.0, None
+    if guess_s is not None and GUESS_BRACKET * guess_s < stop:
+        # a good prediction brackets the limit in two maps; a wrong one only costs those two
+        below, above = guess_s / GUESS_BRACKET, min(guess_s * GUESS_BRACKET, stop)
+        if probe.unstable(below):
+            high = below
+        elif probe.unstable(above):
+            low, high = below, above
+        else:
+            low = above
+    if high is None:
+        dt = min(2 * low if low else SCAN_START * scale_s, stop)
+        while not probe.unstable(dt):
+            if dt >= stop:
+                return None
+            low, dt = dt, min(2 * dt, stop)
+        high = dt
     if low == 0.0:  # unstable at the first probe: go down
-        floor = 1e-6 * first
+        floor = 1e-6 * high
         while high > floor and probe.unstable(high / 2):
             high /= 2
         low = high / 2

@@ -37,7 +37,7 @@ from .simulate import MAX_STEPS, Trajectory, quiet_mujoco
 #: default grid: this many timesteps ...
 GRID_POINTS = 12
 #: ... over this many decades below the largest
-GRID_DECADES = 3.0
+GRID_DECADES = 2.5
 #: at least this many checkpoints over the duration
 MIN_CHECKPOINTS = 10
 #: the reference's own estimated error must be at most this fraction of tol
@@ -206,15 +206,19 @@ def converged_reference(
     finest_dt: float,
     tol: float,
     *,
+    coarse: Trajectory | None = None,
     nthread: int = 0,
 ) -> _Reference:
     """RK4 refined by halving from below `finest_dt` [s] until its Richardson error estimate is at most
     REFERENCE_FRACTION x tol (module docstring), or REFERENCE_MAX_STEPS; the finest level is returned with
-    its estimate (which says whether it converged)."""
+    its estimate (which says whether it converged). `coarse`: an RK4 run at twice the first level's dt
+    (the sweep's finest), used as the coarsest level instead of running it again."""
     duration = spacing * (count - 1)
     dt = spacing / (2 * _stride(finest_dt, spacing))
     levels: list[tuple[np.ndarray, np.ndarray]] = []
-    estimate, diffs = math.inf, []
+    estimate, diffs, finest_level = math.inf, [], None
+    if coarse is not None and isinstance(coarse, Trajectory) and math.isclose(coarse.dt, 2 * dt):
+        levels.append(_at_checkpoints(coarse, spacing, count))  # the sweep's own finest RK4 run
     while True:
         dts = [dt] if levels else [2 * dt, dt]
         steps = [round(duration / d) for d in dts]
@@ -224,6 +228,7 @@ def converged_reference(
         if any(isinstance(o, DivergedError) for o in outcomes):
             break
         levels.extend(_at_checkpoints(o, spacing, count) for o in outcomes)
+        finest_level = dt
         if len(levels) >= 2:
             coarse, fine = levels[-2], levels[-1]
             diffs.append(checkpoint_error(model, point, *coarse, _Reference(*fine, "", 0.0, None)))
@@ -231,13 +236,18 @@ def converged_reference(
             if len(diffs) >= 2 and diffs[-1] > 0 and diffs[-2] > 0:
                 order = min(max(math.log2(diffs[-2] / diffs[-1]), 1.0), 4.0)
             estimate = diffs[-1] / (2**order - 1)
-            if estimate <= REFERENCE_FRACTION * tol and len(diffs) >= 2:
+            target = REFERENCE_FRACTION * tol
+            if estimate <= target and len(diffs) >= 2:
+                break
+            # at the observed order, reaching the target takes (estimate / target)^(1/p) times the steps:
+            # past the cap, more levels only cost time (contacts keep RK4 far from its order)
+            if len(diffs) >= 2 and max(steps) * (estimate / target) ** (1 / order) > REFERENCE_MAX_STEPS:
                 break
         dt /= 2
     if not levels:
         raise BadInputError("the RK4 reference diverged or needs too many steps; use a shorter --duration")
     qpos, qvel = levels[-1]
-    return _Reference(qpos, qvel, "RK4, converged (Richardson)", estimate, dt if estimate < math.inf else None)
+    return _Reference(qpos, qvel, "RK4, converged (Richardson)", estimate, finest_level)
 
 
 def sweep_runs(

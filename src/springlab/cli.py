@@ -14,7 +14,9 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from . import api, audit, auto, charts, charts_audit, demo, outputs, scenes, stability, tradeoff
+from . import api, auto, charts, charts_audit, demo, outputs, scenes, stability, tradeoff
+from .audit import DEFAULT_PERTURB, DEFAULT_TOL
+from .audit import audit as run_audit
 from .errors import BadInputError, SpringlabError
 from .simulate import INTEGRATORS
 
@@ -293,7 +295,7 @@ def _print_tradeoff(result, output: str | None) -> None:
 
 
 def cmd_audit(args) -> int:
-    result = audit.audit(
+    result = run_audit(
         args.model,
         keyframe=args.keyframe,
         tol=args.tol,
@@ -499,14 +501,14 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("audit", help="any MJCF: modes, stability limits, error vs cost, the cheapest setting for --tol")
     p.add_argument("model", help="path to an MJCF (or URDF) file, or a scene name")
     p.add_argument("--keyframe", metavar="NAME|INDEX", help="operating point (default: first keyframe, else qpos0)")
-    p.add_argument("--tol", type=float, default=audit.DEFAULT_TOL, metavar="TOL", help="error tolerance (default 1e-3)")
+    p.add_argument("--tol", type=float, default=DEFAULT_TOL, metavar="TOL", help="error tolerance (default 1e-3)")
     p.add_argument("--integrators", metavar="A,B", help=f"integrators to sweep (default: {','.join(INTEGRATORS)})")
     p.add_argument("--dt", metavar="LIST|RANGE", help="timesteps 'a,b,c' or 'LOW:HIGH:N' [s] (default: automatic)")
     p.add_argument("--duration", type=float, metavar="SECONDS", help="simulated time [s] (default 1; a scene's own)")
     p.add_argument(
         "--perturb",
         type=float,
-        default=audit.DEFAULT_PERTURB,
+        default=DEFAULT_PERTURB,
         metavar="SIZE",
         help="initial perturbation of the operating point [m or rad] (default 1e-3)",
     )

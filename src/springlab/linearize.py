@@ -378,6 +378,7 @@ def one_step_map(
     *,
     step: float = FD_STEP,
     data: mujoco.MjData | None = None,
+    copy_model: bool = True,
 ) -> np.ndarray:
     """MuJoCo's one-step map Phi = d x_{n+1} / d x_n of `integrator` at timestep `dt` [s], (n, n).
 
@@ -385,7 +386,9 @@ def one_step_map(
     exactly, so |eigenvalues| > 1 of Phi are growth per step [-]. Centred differences with step
     `step`: `mjd_transitionFD` for euler, implicit, implicitfast and discrete; `mj_step` differenced
     in the tangent space (`mj_integratePos` / `mj_differentiatePos`) for rk4. `model` is not
-    modified (a copy takes the integrator and timestep); `data` is optional scratch for that copy.
+    modified (a copy takes the integrator and timestep; copy_model=False sets them on `model` itself,
+    for loops that own a scratch copy: copying a large model costs more than its map); `data` is
+    optional scratch.
 
     Raises:
       UnknownNameError: unknown integrator. BadInputError: dt not a finite number > 0.
@@ -394,7 +397,7 @@ def one_step_map(
     if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
         raise BadInputError(f"dt must be a finite number > 0 s, got {dt!r}")
     point = _point_or_default(model, point)
-    work = copy.copy(model)
+    work = copy.copy(model) if copy_model else model
     work.opt.integrator = kind
     work.opt.timestep = dt
     data = mujoco.MjData(work) if data is None else data
