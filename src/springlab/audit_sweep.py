@@ -47,7 +47,7 @@ REFERENCE_MAX_STEPS = 50_000
 #: states along the motion where the linearization is re-taken to test linearity
 LINEARITY_PROBES = 4
 #: steps of the timing run behind each integrator's cost per step
-TIMING_STEPS = 2000
+TIMING_STEPS = 1000
 
 
 @dataclasses.dataclass
