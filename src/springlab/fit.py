@@ -239,8 +239,8 @@ class _Problem:
         mujoco.mj_getState(model, data, state, _FULL)
         control = np.zeros((self.steps + 1, model.nu))
         if setup.control is not None and model.nu:
-            control[:] = np.broadcast_to(np.asarray(setup.control, float)[: self.steps + 1][-1], control.shape)
-            rows = np.atleast_2d(setup.control)
+            rows = np.atleast_2d(np.asarray(setup.control, float))
+            control[:] = rows[-1]  # a constant control, or the last row held (sysid drops the final row)
             control[: min(len(rows), self.steps + 1)] = rows[: self.steps + 1]
         return state, control
 
@@ -366,6 +366,7 @@ def _solve(problem: _Problem, record) -> dict[str, Any]:
         "wall_time_s": wall,
         "sysid_params": optimum,
         "residual_fn": residual_fn,
+        "scale": scale,
     }
 
 
@@ -458,14 +459,27 @@ def fit(
             raise BadInputError(f"unknown scenario {scenario!r} of {scene}; a fit takes one of: {valid}")
         raise BadInputError(f"{scene} {scenario} cannot be fitted from a record; a fit takes one of: {valid}")
     chosen = scene_obj.scenario(scenario)
-    nuisance = {k: float(v) for k, v in parameters.items() if k in ("x0", "v0", "offset", "delay")}
-    for name, value in nuisance.items():
-        if not math.isfinite(value):
-            raise ParameterError(f"{name} must be a finite number, got {value!r}")
+    nuisance = {}
+    for name, value in parameters.items():
+        if name in ("x0", "v0", "offset", "delay") and name not in scene_obj.parameters:
+            try:
+                nuisance[name] = float(value)
+            except (TypeError, ValueError):
+                nuisance[name] = math.nan
+            if not math.isfinite(nuisance[name]):
+                raise ParameterError(f"{name} must be a finite number, got {value!r}")
     scene_values = {k: v for k, v in parameters.items() if k not in nuisance}
     base = scene_obj.resolve(chosen, scene_values)
+    # a fitted delay models the held part before a release itself: keep it in the record
+    wants_delay = any("delay" in str(item) for item in (free or ()))
     record = fit_data.load(
-        data, (how.joint,), mapping=fit_data.parse_map(map), scale=scale, start=start, signals=how.signals
+        data,
+        (how.joint,),
+        mapping=fit_data.parse_map(map),
+        scale=scale,
+        start=start,
+        detect_release=not wants_delay,
+        signals=how.signals,
     )
     free = _free_names(how, free, degree, record)
     forced = scenario == "step" and base.get("force_amplitude", 0.0) != 0.0
@@ -476,10 +490,14 @@ def fit(
             f"{record.time.size} samples cannot fit {len(free)} parameters; a fit needs at least {len(free) + 2}"
         )
     modal = bool(set(free) & set(MODAL)) or scene == "kinematics"
-    fixed = dict(nuisance)
-    if scene != "kinematics" and "x0" not in free and "x0" not in fixed and "x0" not in base:
-        fixed["x0"] = float(record.values[0])
-    start_values = how.start(record, base, fixed, free, force)
+    fixed = dict(nuisance) | {k: base[k] for k in ("x0", "v0") if k in parameters and k in base}
+    if scene != "kinematics":
+        # an initial state neither fitted nor given: the first sample, at rest
+        if "x0" not in free and "x0" not in fixed:
+            fixed["x0"] = float(record.values[0]) if record.signal == "pos" else how.equilibrium(base)
+        if "v0" not in free and "v0" not in fixed:
+            fixed["v0"] = 0.0
+    start_values = _start(how, record, base, fixed, free, force)
     problem = _Problem(how, chosen, base, record, free, start_values, modal, force)
     solved = _solve(problem, record)
     # the grid was set for the start; if the estimate is faster, refine it once
@@ -489,6 +507,21 @@ def fit(
         problem.set_grid(estimate)
         solved = _solve(problem, record)
     return _finish(problem, solved, run_scene)
+
+
+def _start(how: SceneFit, record, base, fixed, free, force) -> dict[str, float]:
+    """Start values; with a free delay, from the part after the detected release, shifted to it."""
+    if "delay" not in free:
+        return how.start(record, base, fixed, free, force)
+    release = fit_data.find_release(record.time, record.values)
+    delay = 0.0 if release is None else release - record.origin
+    after = record.time >= record.origin + delay
+    shifted = dataclasses.replace(
+        record, time=record.time[after], values=record.values[after], origin=record.origin + delay
+    )
+    values = how.start(shifted, base, fixed, free, force)
+    values["delay"] = delay
+    return values
 
 
 def _free_names(how: SceneFit, free, degree, record) -> list[str]:
@@ -525,9 +558,12 @@ def _finish(problem: _Problem, solved: dict[str, Any], run_scene: bool) -> FitRe
     how, record, free = problem.how, problem.record, problem.free
     x, jacobian = solved["x"], solved["jacobian"]
     _identifiability(problem, jacobian)
-    covariance, half = sysid.calculate_intervals(solved["residuals"], jacobian)
-    covariance = np.asarray(covariance, float)
-    half = np.asarray(half, float)
+    # in parameters scaled to O(1): sysid's zero-eigenvalue threshold is relative, and k ~ 1e6 N/m beside
+    # an offset ~ 1e-3 m would otherwise look singular
+    scale = np.array(solved["scale"])
+    covariance, half = sysid.calculate_intervals(solved["residuals"], jacobian * scale)
+    covariance = np.asarray(covariance, float) * np.outer(scale, scale)
+    half = np.asarray(half, float) * scale
     n, p = record.time.size, len(free)
     dof = n - p
     residual = np.concatenate(solved["residuals"]) * problem.scale
@@ -548,7 +584,8 @@ def _finish(problem: _Problem, solved: dict[str, Any], run_scene: bool) -> FitRe
     derived = fit_results.delta_intervals(
         lambda v: fit_results.derived_quantities(how, problem, problem.values(v)), x, covariance, quantile
     )
-    derived = {k: v for k, v in derived.items() if k not in free}
+    same = {"omega_n_rad_s": "omega_n", "damping_ratio": "zeta"}
+    derived = {k: v for k, v in derived.items() if k not in free and same.get(k) not in free}
     params = how.scene_params(values, problem.base, problem.modal)
     curves = _curves(problem, x, covariance, quantile) if how.scene == "kinematics" else {}
     cross = fit_results.cross_check(problem, x, half, fitted)
@@ -631,3 +668,14 @@ def _scene_run(problem: _Problem, values: dict[str, float], params: dict[str, fl
     except SpringlabError as error:
         return None, f"the identified scene could not be run: {error}"
     return run, note
+
+
+def write(result: FitResult, directory: str | os.PathLike) -> list:
+    """Write fit.json and the identified scene's trajectory.csv / summary.json into `directory` (all or none)."""
+    from . import outputs
+
+    files = {"fit.json": outputs.dumps(result.as_dict()) + "\n"}
+    if result.run is not None:
+        files["trajectory.csv"] = outputs.csv_text(result.run.columns())
+        files["summary.json"] = outputs.dumps(result.run.summary) + "\n"
+    return outputs.write_text_files(directory, files)

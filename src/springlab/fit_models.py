@@ -108,8 +108,9 @@ class SceneFit:
             raise BadInputError(
                 f"{', '.join(physical)} cannot all be fitted: {why}; fix one with --set (e.g. --set {self.mass}=...)"
             )
-        if len(physical) == 2 and not forced:
-            (fixed_name,) = set(self.physical()) - set(physical)
+        rest = set(self.physical()) - set(physical)
+        if len(physical) == 2 and not forced and rest:
+            (fixed_name,) = rest
             if params[fixed_name] == 0:
                 raise BadInputError(
                     f"{' and '.join(physical)} cannot be told apart with {fixed_name} = 0: a free decay fixes only"

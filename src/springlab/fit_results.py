@@ -180,14 +180,14 @@ def verdict(result) -> str:
     else:
         parts = []
         for name, symbol in (("omega_n_rad_s", "ω_n"), ("damping_ratio", "ζ")):
-            q = der[name]
+            q = der.get(name) or est[{"omega_n_rad_s": "omega_n", "damping_ratio": "zeta"}[name]]
             parts.append(f"{symbol} = {plus_minus(q['value'], q['ci95'][1] - q['value'], q['unit'])}")
         for name in result.free:
             if name in ("omega_n", "zeta", "x0", "v0", "offset", "delay"):
                 continue
             q = est[name]
             parts.append(f"{name} = {plus_minus(q['value'], q['ci95'][1] - q['value'], q['unit'])}")
-        zeta = der["damping_ratio"]["value"]
+        zeta = (der.get("damping_ratio") or est["zeta"])["value"]
         m, k, d = 1.0, 1.0, 2 * zeta
         text = ", ".join(parts) + f": {analytic.regime(m, k, d) if zeta > 0 else 'undamped'}"
     status = "" if result.converged else f"; NOT CONVERGED ({result.optimizer['status']})"
