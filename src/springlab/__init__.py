@@ -12,6 +12,7 @@ from . import analytic, errors
 from .api import Result
 from .auto import run, validate
 from .errors import BadInputError, DivergedError, SpringlabError, UnknownNameError
+from .fit import fit
 from .scenes import SCENES
 
 __all__ = [
@@ -19,6 +20,7 @@ __all__ = [
     "errors",
     "run",
     "validate",
+    "fit",
     "Result",
     "SCENES",
     "SpringlabError",

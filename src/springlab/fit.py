@@ -161,7 +161,7 @@ class _Problem:
         self.scale = float(np.std(record.values)) or 1.0
         self.rollouts = 0
         self.rollout_time = 0.0
-        self.threads = max(1, min(4, os.cpu_count() or 1))
+        self.threads = max(1, min(2, os.cpu_count() or 1))
         self.set_grid(start)
 
     # -- grid ------------------------------------------------------------------
