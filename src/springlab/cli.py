@@ -380,9 +380,12 @@ def _print_design(design, study, output: str | None) -> None:
 
 
 def cmd_fit(args) -> int:
-    from . import fit, fit_chart  # here, not at the top: mujoco.sysid and scipy load only for fits
+    # here, not at the top: mujoco.sysid and scipy load only for fits; `from .fit import`, because
+    # springlab.fit (the attribute) is the function once springlab/__init__ has run
+    from .fit import fit, write
+    from .fit_chart import plot_fit
 
-    result = fit.fit(
+    result = fit(
         args.scene,
         args.data,
         args.scenario,
@@ -394,8 +397,8 @@ def cmd_fit(args) -> int:
         **_parse_sets(args.set),
     )
     if args.output:
-        fit.write(result, args.output)
-        fit_chart.plot_fit(result, pathlib.Path(args.output) / "fit.png")
+        write(result, args.output)
+        plot_fit(result, pathlib.Path(args.output) / "fit.png")
     if args.json:
         _print_json(result.as_dict())
     else:
