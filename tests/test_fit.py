@@ -109,6 +109,18 @@ def test_slider_overdamped_decay(tmp_path):
     assert "overdamped" in result.verdict
 
 
+def test_slider_mass_stiffness_and_damping_from_a_known_step_force(tmp_path):
+    # a known force makes the static deflection F/k visible: all three are identifiable (no free offset)
+    m, k, d, force = 1.0, 100.0, 2.0, 10.0
+    omega, zeta = math.sqrt(k / m), d / (2 * math.sqrt(k * m))
+    t = np.arange(0, 3, 2e-3)
+    x, _, _ = free_decay(t, omega, zeta, -force / k, 0.0)  # about the new equilibrium F/k, from rest at 0
+    data = write(tmp_path / "d.csv", {"time": t, "slider_pos": x + force / k})
+    result = fit("slider", data, "step", free=["mass,stiffness,damping,x0,v0"], force_amplitude=force, run_scene=False)
+    for name, truth in (("mass", m), ("stiffness", k), ("damping", d)):
+        assert rel(result.estimates[name]["value"], truth) < EXACT
+
+
 def test_car_stiffness_and_damping_from_a_recorded_heave(tmp_path):
     car = scenes.get("car")
     p = car.resolve(car.scenario("damped_release"), {})

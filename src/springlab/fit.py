@@ -646,7 +646,9 @@ def _finish(problem: _Problem, solved: dict[str, Any], run_scene: bool) -> FitRe
     )
     result.verdict = fit_results.verdict(result)
     if run_scene:
-        result.run, result.run_note = _scene_run(problem, values, params)
+        v0 = estimates.get("v0")
+        moving = v0 is not None and not v0["ci95"][0] <= 0.0 <= v0["ci95"][1]  # v0 = 0 is not plausible
+        result.run, result.run_note = _scene_run(problem, values, params, moving)
     return result
 
 
@@ -668,7 +670,7 @@ def _curves(problem: _Problem, x, covariance, quantile) -> dict[str, Any]:
     return out
 
 
-def _scene_run(problem: _Problem, values: dict[str, float], params: dict[str, float]):
+def _scene_run(problem: _Problem, values: dict[str, float], params: dict[str, float], moving: bool):
     """The identified scene's own run over the record's span, or (None, why not)."""
     how, scene = problem.how, problem.scene
     chosen = problem.scenario
@@ -678,12 +680,12 @@ def _scene_run(problem: _Problem, values: dict[str, float], params: dict[str, fl
         g = scene.gravity()
         overrides["push_mass"] = (params["clearance"] - values["x0"]) * params["stiffness"] / g
         overrides.pop("damping_ratio", None)
-        if abs(values["v0"]) > 0:
+        if moving:
             note = f"the car scene starts at rest; the fitted v0 = {values['v0']:.3g} m/s is not in its run"
     elif how.scene == "printer_head":
         total = params["carriage_mass"] + params["motor_mass"]
         overrides["deflection"] = -values["x0"] * total / params["motor_mass"]
-        if abs(values["v0"]) > 0:
+        if moving:
             note = f"the printer_head scene starts at rest; the fitted v0 = {values['v0']:.3g} m/s is not in its run"
     try:
         run = api.run(how.scene, chosen.name, duration=float(problem.t[-1]), **overrides)
