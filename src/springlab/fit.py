@@ -163,6 +163,7 @@ class _Problem:
         self.t = record.model_time
         self.scale = float(np.std(record.values)) or 1.0
         self.rollouts = 0
+        self._spec = None
         self.rollout_time = 0.0
         self.set_grid(start)
         # a thread pool costs ~5 ms per rollout call: worth it only for long batches
@@ -220,7 +221,9 @@ class _Problem:
 
     def spec(self, scene_params: dict[str, float]) -> mujoco.MjSpec:
         """The scene's MjSpec with its edits for these parameters and the signal's sensor."""
-        spec = self.scene.model_spec()
+        if self._spec is None:
+            self._spec = self.scene.model_spec()
+        spec = self._spec.copy()  # parse the MJCF once per fit, not once per candidate
         self.scene.edit(spec, scene_params, self.scenario)
         spec.add_sensor(
             name="fit_signal",
