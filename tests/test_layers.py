@@ -18,6 +18,7 @@ PACKAGE = pathlib.Path(__file__).resolve().parents[1] / "src" / "springlab"
 LAYERS: dict[str, tuple[str, ...]] = {
     "physics": (
         "errors",
+        "progress",
         "model_files",
         "outputs",
         "exciter",
