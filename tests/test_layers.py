@@ -41,6 +41,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
         "audit",
         "fit",
         "fit_data",
+        "fit_engine",
         "fit_models",
         "fit_results",
         "sweep",
