@@ -12,8 +12,21 @@ import re
 
 PACKAGE = pathlib.Path(__file__).resolve().parents[1] / "src" / "springlab"
 
-#: modules other branches are rewriting (issue 11); each leaves this list when it lands in the house style
-PENDING = ("render.py", "plots.py", "cli.py", "scenes/")
+#: modules other branches are writing or rewriting (issue 11), by file-name prefix; each leaves this list
+#: when it lands in the house style
+PENDING = (
+    "render",
+    "plots.py",
+    "cli.py",
+    "scenes/",
+    "audit",
+    "fit",
+    "charts_audit.py",
+    "checks.py",
+    "events.py",
+    "linearize.py",
+    "progress.py",
+)
 #: public functions whose argument is the demo's state or a Result from a layer above (typing them needs a
 #: Protocol in the lower layer); named here so the list can only shrink
 UNTYPED = {"media.py:media_step", "report.py:build_html", "report.py:write_report", "outputs.py:write_run"}

@@ -14,7 +14,9 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from . import api, auto, charts, demo, outputs, scenes, stability, tradeoff
+from . import api, auto, charts, charts_audit, compare, demo, outputs, scenes, stability, tradeoff
+from .audit import DEFAULT_PERTURB, DEFAULT_TOL
+from .audit import audit as run_audit
 from .errors import BadInputError, SpringlabError
 from .simulate import INTEGRATORS
 
@@ -128,6 +130,8 @@ def cmd_run(args) -> int:
         _print_json(summary)
     else:
         _print_run(summary, args.output)
+    for limit in summary.get("model_limits", []):
+        print(f"springlab: {summary['scene']} {summary['scenario']} is not validated: {limit}", file=sys.stderr)
     return EXIT_FAILED if summary["passed"] is False else EXIT_OK
 
 
@@ -143,12 +147,15 @@ def _print_run(summary: dict, output: str | None) -> None:
     for check in summary.get("checks", []):
         print(f"  check {_check_line(check)}")
     if summary["tolerance"] is not None or summary.get("checks"):
-        verdict = "PASS" if summary["passed"] else "FAIL (outside tolerance)"
+        verdict = summary["verdict"] if summary["verdict"] != "FAIL" else "FAIL (outside tolerance)"
         print(
             f"  tolerance {summary['tolerance']:.3e}: {verdict}"
             if summary["tolerance"] is not None
             else f"  checks: {verdict}"
         )
+        validity = summary.get("estimate_range")
+        if validity is not None and not validity["inside"]:
+            print(f"  basis: {validity['reason']}")
     if output:
         print(f"  wrote {pathlib.Path(output) / 'trajectory.csv'} and summary.json")
 
@@ -173,10 +180,17 @@ def _validation_table(rows: list[dict]) -> str:
     for r in rows:
         lines.append(
             f"{r['scene']:<{scene_width}}{r['scenario']:<{scenario_width}}{r['integrator']:<11}{r['dt']:>9.2g}"
-            f"{r['max_rel_error']:>13.2e}{r['tolerance']:>11.2e}  {'pass' if r['passed'] else 'FAIL'}"
+            f"{r['max_rel_error']:>13.2e}{r['tolerance']:>11.2e}  {_row_result(r)}"
         )
         lines.extend(f"    check {_check_line(c)}" for c in r.get("checks", []))
     return "\n".join(lines)
+
+
+def _row_result(row: dict) -> str:
+    """'pass', 'FAIL' or 'not validated' (outside the range of the error estimate) for a validate row."""
+    if row["passed"]:
+        return "pass"
+    return "not validated" if row.get("verdict") == compare.NOT_VALIDATED else "FAIL"
 
 
 def cmd_validate(args) -> int:
@@ -191,7 +205,9 @@ def cmd_validate(args) -> int:
             if r.get("note"):
                 print(f"{r['scene']} {r['scenario']}: {r['note']}")
         failed = sum(not r["passed"] for r in rows)
-        print(f"{len(rows) - failed} passed, {failed} failed")
+        unvalidated = sum(r.get("verdict") == compare.NOT_VALIDATED for r in rows)
+        outside = f" ({unvalidated} not validated: outside the range of the error estimate)" if unvalidated else ""
+        print(f"{len(rows) - failed} passed, {failed} failed{outside}")
     return EXIT_FAILED if any(not r["passed"] for r in rows) else EXIT_OK
 
 
@@ -200,15 +216,26 @@ def cmd_render(args) -> int:
     from . import media, render  # GL and matplotlib only for the commands that draw
 
     render.check_video_arguments(args.output, args.fps, args.width, args.height)
+    for name, value in (("--slow-motion", args.slow_motion), ("--exaggerate", args.exaggerate)):
+        if value is not None:
+            render.render_scale.check_factor(name, value)
     result = _run_scenario(args)
     outputs.prepare_directory(pathlib.Path(args.output).parent)
     info = media.render_run(
-        result, args.output, fps=args.fps, width=args.width, height=args.height, composite=args.composite
+        result,
+        args.output,
+        fps=args.fps,
+        width=args.width,
+        height=args.height,
+        composite=args.composite,
+        slow_motion=args.slow_motion,
+        exaggerate=args.exaggerate,
     )
+    scaled = "".join(f", {note}" for note in render.render_scale.labels(info["slow_motion"], info["exaggeration"]))
     print(
         f"wrote {info['path']}: {info['frames']} frames, {info['width']}x{info['height']} at {info['fps']:g} fps"
-        f" ({info['frames'] / info['fps']:.2f} s of simulation) in {info['seconds']:.1f} s"
-        f" ({info['frames'] / max(info['seconds'], 1e-9):.0f} frames/s)"
+        f" ({info['frames'] / info['fps'] / info['slow_motion']:.3g} s of simulation{scaled})"
+        f" in {info['seconds']:.1f} s ({info['frames'] / max(info['seconds'], 1e-9):.0f} frames/s)"
     )
     return _verdict(result.summary)
 
@@ -238,13 +265,18 @@ def cmd_plot(args) -> int:
 
 
 def _verdict(summary: dict) -> int:
-    """Exit code of a run whose outputs were written: 1 when outside its tolerance."""
+    """Exit code of a run whose outputs were written: 1 when outside its tolerance or its model's range."""
+    for limit in summary.get("model_limits", []):
+        print(f"springlab: {summary['scene']} {summary['scenario']} is not validated: {limit}", file=sys.stderr)
+    if summary.get("model_limits"):
+        return EXIT_FAILED
     if summary["passed"] is False:
-        print(
-            f"  note: {summary['scene']}/{summary['scenario']} is outside its tolerance"
-            f" (max error above {summary['tolerance']:.2e}); see 'springlab run'",
-            file=sys.stderr,
+        why = (
+            f"not validated ({summary['estimate_range']['reason']})"
+            if summary.get("verdict") == compare.NOT_VALIDATED
+            else f"outside its tolerance (max error above {summary['tolerance']:.2e})"
         )
+        print(f"  note: {summary['scene']}/{summary['scenario']} is {why}; see 'springlab run'", file=sys.stderr)
         return EXIT_FAILED
     return EXIT_OK
 
@@ -261,20 +293,28 @@ def cmd_tradeoff(args) -> int:
     return EXIT_FAILED if pick is not None and pick["integrator"] is None else EXIT_OK
 
 
+def _run_verdict(run) -> str:
+    """A sweep row's verdict in a word or two: pass, FAIL, not validated, or blank when diverged."""
+    if run.verdict is None:
+        return ""
+    return {compare.PASS: "pass", compare.FAIL: "FAIL"}.get(run.verdict, "not validated")
+
+
 def _print_tradeoff(result, output: str | None) -> None:
     print(
         f"{result.scene} / {result.scenario}: {len(result.runs)} runs over {result.duration:g} s"
         f" in {result.sweep_wall_time_s:.1f} s"
     )
     print(
-        f"  {'integrator':<13}{'dt [s]':>10}{'steps':>9}{'max rel err':>13}{'wall [ms]':>11}{'wall/sim s':>12}  pareto"
+        f"  {'integrator':<13}{'dt [s]':>10}{'steps':>9}{'max rel err':>13}{'wall [ms]':>11}{'wall/sim s':>12}"
+        "  pareto  verdict"
     )
     front = {id(r) for r in result.pareto}
     for r in result.runs:
         error = "diverged" if r.diverged else f"{r.max_rel_error:.3e}"
         print(
             f"  {r.integrator:<13}{r.dt:>10.3g}{r.steps:>9}{error:>13}{r.wall_time_s * 1e3:>11.3f}"
-            f"{r.wall_time_s / result.duration * 1e3:>10.3f}ms  {'*' if id(r) in front else ''}"
+            f"{r.wall_time_s / result.duration * 1e3:>10.3f}ms  {'*' if id(r) in front else ' ':<6}  {_run_verdict(r)}"
         )
     orders = ", ".join(f"{name} {p:.2f}" if p is not None else f"{name} -" for name, p in result.orders.items())
     print(f"  observed order: {orders}")
@@ -290,6 +330,28 @@ def _print_tradeoff(result, output: str | None) -> None:
     print(f"  wall time: {tradeoff.WALL_TIME_BASIS}")
     if output:
         print(f"  wrote {pathlib.Path(output) / 'tradeoff.json'} and tradeoff.png")
+
+
+def cmd_audit(args) -> int:
+    result = run_audit(
+        args.model,
+        keyframe=args.keyframe,
+        tol=args.tol,
+        integrators=args.integrators,
+        dt=args.dt,
+        duration=args.duration,
+        perturb=args.perturb,
+    )
+    if args.output:
+        charts_audit.write_audit(result, args.output)
+    if args.json:
+        _print_json(result.as_json())
+    else:
+        for line in result.verdict():
+            print(line)
+        if args.output:
+            print(f"wrote {pathlib.Path(args.output) / 'audit.json'} and audit.png")
+    return EXIT_OK if result.own_ok else EXIT_FAILED
 
 
 def cmd_stability(args) -> int:
@@ -379,6 +441,63 @@ def _print_design(design, study, output: str | None) -> None:
         print(f"  wrote {pathlib.Path(output) / 'design.json'}, configurations.csv and design.png")
 
 
+def cmd_fit(args) -> int:
+    # here, not at the top: mujoco.sysid and scipy load only for fits; `from .fit import`, because
+    # springlab.fit (the attribute) is the function once springlab/__init__ has run
+    from .fit import fit, write
+    from .fit_chart import plot_fit
+
+    result = fit(
+        args.scene,
+        args.data,
+        args.scenario,
+        map=args.map,
+        free=args.free or None,
+        scale=args.scale,
+        start=args.start,
+        degree=args.degree,
+        **_parse_sets(args.set),
+    )
+    if args.output:
+        write(result, args.output)
+        plot_fit(result, pathlib.Path(args.output) / "fit.png")
+    if args.json:
+        _print_json(result.as_dict())
+    else:
+        _print_fit(result, args.output)
+    return EXIT_OK if result.converged else EXIT_FAILED
+
+
+def _print_fit(result, output: str | None) -> None:
+    record = result.record
+    print(
+        f"{result.scene} / {result.scenario} from {record.column} ({record.time.size} samples,"
+        f" {record.time[0]:g} to {record.time[-1]:g} s): fitted {', '.join(result.free)}"
+    )
+    for note in record.notes:
+        print(f"  data: {note}")
+    for name, q in {**result.estimates, **result.derived}.items():
+        low, high = q["ci95"]
+        unit = "" if q["unit"] == "-" else q["unit"]
+        print(f"  {name:<26} {q['value']:<16.10g} 95% [{low:.8g}, {high:.8g}] {unit}")
+    check = result.cross_check
+    print(
+        f"  closed-form cross-check: max relative difference {check['max_relative_difference']:.1e}"
+        f" ({'agrees' if check['agrees'] else 'DISAGREES'})"
+    )
+    o = result.optimizer
+    print(
+        f"  optimizer: {o['status']} after {o['iterations']} iterations, {o['rollouts']} rollouts"
+        f" of {o['steps']} steps ({o['time_per_rollout_s'] * 1e3:.1f} ms each), {o['wall_time_s']:.2f} s"
+    )
+    if result.run_note:
+        print(f"  note: {result.run_note}")
+    print(result.verdict)
+    if output:
+        wrote = "fit.json, fit.png" + (", trajectory.csv and summary.json" if result.run is not None else "")
+        print(f"  wrote {wrote} under {output}")
+
+
 def cmd_demo(args) -> int:
     """The main job: validate every scene and write everything under the output folder."""
     start = time.perf_counter()
@@ -437,6 +556,20 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="add the phase-plane trace drawn as time advances, a height x height panel on the right",
     )
+    p.add_argument(
+        "--slow-motion",
+        type=float,
+        metavar="FACTOR",
+        help="play FACTOR times slower (drawing only; default: short runs slowed to >= 90 frames and 6 frames"
+        " per period of their fastest mode, e.g. the printer move at 1/50 speed; written on every frame)",
+    )
+    p.add_argument(
+        "--exaggerate",
+        type=float,
+        metavar="FACTOR",
+        help="draw displacements FACTOR times larger around their mean (drawing only; default: motions below"
+        " 1%% of the body's size magnified to about 3%%, e.g. the car x30; written on every frame)",
+    )
     COMMANDS["render"] = cmd_render
 
     p = sub.add_parser("plot", help="plot a scenario: time series, phase plane, family, zeta family")
@@ -474,6 +607,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print stability.json")
     COMMANDS["stability"] = cmd_stability
 
+    p = sub.add_parser("audit", help="any MJCF: modes, stability limits, error vs cost, the cheapest setting for --tol")
+    p.add_argument("model", help="path to an MJCF (or URDF) file, or a scene name")
+    p.add_argument("--keyframe", metavar="NAME|INDEX", help="operating point (default: first keyframe, else qpos0)")
+    p.add_argument("--tol", type=float, default=DEFAULT_TOL, metavar="TOL", help="error tolerance (default 1e-3)")
+    p.add_argument("--integrators", metavar="A,B", help=f"integrators to sweep (default: {','.join(INTEGRATORS)})")
+    p.add_argument("--dt", metavar="LIST|RANGE", help="timesteps 'a,b,c' or 'LOW:HIGH:N' [s] (default: automatic)")
+    p.add_argument("--duration", type=float, metavar="SECONDS", help="simulated time [s] (default 1; a scene's own)")
+    p.add_argument(
+        "--perturb",
+        type=float,
+        default=DEFAULT_PERTURB,
+        metavar="SIZE",
+        help="initial perturbation of the operating point [m or rad] (default 1e-3)",
+    )
+    p.add_argument("--output", metavar="DIR", help="write DIR/audit.json and DIR/audit.png")
+    p.add_argument("--json", action="store_true", help="print audit.json")
+    COMMANDS["audit"] = cmd_audit
+
     p = sub.add_parser("design", help="design study: positioning time over a property sweep, ranked sensitivities")
     p.add_argument("scene", help="scene with a design study: printer_head")
     p.add_argument(
@@ -502,6 +653,26 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--output", metavar="DIR", help="write DIR/design.json, DIR/configurations.csv, DIR/design.png")
     p.add_argument("--json", action="store_true", help="print design.json")
     COMMANDS["design"] = cmd_design
+
+    p = sub.add_parser("fit", help="identify a scene's parameters from a recorded signal (CSV)")
+    p.add_argument("scene", help="slider, car, printer_head or kinematics")
+    p.add_argument("data", metavar="DATA.csv", help="header row; time [s] and <joint>_pos, _vel or _acc")
+    p.add_argument("--scenario", metavar="S", help="the scenario the record shows (default: the scene's fit default)")
+    p.add_argument(
+        "--map", action="append", default=[], metavar="COLUMN=NAME", help="rename a file column (t=time, x=slider_pos)"
+    )
+    p.add_argument(
+        "--free", action="append", default=[], metavar="NAME[,NAME...]", help="names to fit (default: the scene's)"
+    )
+    p.add_argument(
+        "--set", action="append", default=[], metavar="NAME=VALUE", help="fix a parameter, SI units (repeatable)"
+    )
+    p.add_argument("--start", type=float, metavar="S", help="release time [s]: drop the record before it")
+    p.add_argument("--scale", type=float, default=1.0, metavar="FACTOR", help="SI units per file unit (mm: 0.001)")
+    p.add_argument("--degree", type=int, metavar="N", help="kinematics: degree 0-3 of the polynomial")
+    p.add_argument("--output", metavar="DIR", help="write fit.json, fit.png, trajectory.csv and summary.json")
+    p.add_argument("--json", action="store_true", help="print fit.json")
+    COMMANDS["fit"] = cmd_fit
 
     p = sub.add_parser("demo", help="the main job: validate everything, write out/")
     p.add_argument("--output", default="out", metavar="DIR", help="output folder (default: out)")

@@ -219,7 +219,7 @@ def predicted_error(
         states = ((vectors[None, :, :] * (powers * coefficients[None, :])[:, None, :]).sum(-1)).real
     if not np.isfinite(states).all():
         return math.inf
-    reference = scene.reference(model, params, chosen, n * dt)
+    reference = scene.reference(model, params, chosen, n * dt, dt=dt)
     assert reference is not None, "the slider's free scenario has an exact reference"
     errors = []
     for k, series in ((0, reference.pos["slider"]), (1, reference.vel["slider"])):
