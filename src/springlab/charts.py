@@ -110,7 +110,7 @@ RANGE_PERIODS = 10
 _RANGE = f"validated below ({RANGE_PERIODS} periods)"
 
 
-def estimate_range_line(integrator: str, zetas: Sequence[float]) -> list[float]:
+def estimate_range_line(integrator: str, zetas: Sequence[float] | np.ndarray) -> list[float]:
     """Largest omega*dt [-] inside the range of the error estimate for a run of RANGE_PERIODS periods, per zeta.
 
     On the unit oscillator (omega = 1 rad/s): its roots -zeta +- sqrt(zeta^2 - 1) are the modes

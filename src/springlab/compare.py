@@ -283,7 +283,7 @@ def mode_factor(rate: complex, integrator: str, dt: float, duration: float) -> f
 def system_rates(reference: Reference) -> list[complex]:
     """Eigenvalues lambda [1/s] of every system matrix of the reference (segments included), 0 dropped."""
     systems = [reference.system] + [a for _, a in reference.switches]
-    rates = []
+    rates: list[complex] = []
     for a in systems:
         values = np.linalg.eigvals(np.asarray(a, float))
         scale = max(float(np.max(np.abs(values))), 1e-300)
