@@ -85,3 +85,15 @@ def test_public_functions_have_type_hints():
             if bare:
                 missing.append(f"{name}:{node.lineno} {node.name}: {', '.join(bare)}")
     assert not missing, "public functions without type hints:\n" + "\n".join(missing)
+
+
+def test_contributing_lists_the_layers_of_test_layers():
+    from test_layers import LAYERS
+
+    text = (PACKAGE.parents[1] / "CONTRIBUTING.md").read_text()
+    table = {}
+    for line in text.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 3 and cells[0] in LAYERS:
+            table[cells[0]] = tuple(re.findall(r"`([\w.]+)`", cells[1]))
+    assert table == LAYERS
