@@ -130,6 +130,8 @@ def cmd_run(args) -> int:
         _print_json(summary)
     else:
         _print_run(summary, args.output)
+    for limit in summary.get("model_limits", []):
+        print(f"springlab: {summary['scene']} {summary['scenario']} is not validated: {limit}", file=sys.stderr)
     return EXIT_FAILED if summary["passed"] is False else EXIT_OK
 
 
@@ -263,7 +265,11 @@ def cmd_plot(args) -> int:
 
 
 def _verdict(summary: dict) -> int:
-    """Exit code of a run whose outputs were written: 1 when outside its tolerance."""
+    """Exit code of a run whose outputs were written: 1 when outside its tolerance or its model's range."""
+    for limit in summary.get("model_limits", []):
+        print(f"springlab: {summary['scene']} {summary['scenario']} is not validated: {limit}", file=sys.stderr)
+    if summary.get("model_limits"):
+        return EXIT_FAILED
     if summary["passed"] is False:
         why = (
             f"not validated ({summary['estimate_range']['reason']})"
@@ -435,6 +441,63 @@ def _print_design(design, study, output: str | None) -> None:
         print(f"  wrote {pathlib.Path(output) / 'design.json'}, configurations.csv and design.png")
 
 
+def cmd_fit(args) -> int:
+    # here, not at the top: mujoco.sysid and scipy load only for fits; `from .fit import`, because
+    # springlab.fit (the attribute) is the function once springlab/__init__ has run
+    from .fit import fit, write
+    from .fit_chart import plot_fit
+
+    result = fit(
+        args.scene,
+        args.data,
+        args.scenario,
+        map=args.map,
+        free=args.free or None,
+        scale=args.scale,
+        start=args.start,
+        degree=args.degree,
+        **_parse_sets(args.set),
+    )
+    if args.output:
+        write(result, args.output)
+        plot_fit(result, pathlib.Path(args.output) / "fit.png")
+    if args.json:
+        _print_json(result.as_dict())
+    else:
+        _print_fit(result, args.output)
+    return EXIT_OK if result.converged else EXIT_FAILED
+
+
+def _print_fit(result, output: str | None) -> None:
+    record = result.record
+    print(
+        f"{result.scene} / {result.scenario} from {record.column} ({record.time.size} samples,"
+        f" {record.time[0]:g} to {record.time[-1]:g} s): fitted {', '.join(result.free)}"
+    )
+    for note in record.notes:
+        print(f"  data: {note}")
+    for name, q in {**result.estimates, **result.derived}.items():
+        low, high = q["ci95"]
+        unit = "" if q["unit"] == "-" else q["unit"]
+        print(f"  {name:<26} {q['value']:<16.10g} 95% [{low:.8g}, {high:.8g}] {unit}")
+    check = result.cross_check
+    print(
+        f"  closed-form cross-check: max relative difference {check['max_relative_difference']:.1e}"
+        f" ({'agrees' if check['agrees'] else 'DISAGREES'})"
+    )
+    o = result.optimizer
+    print(
+        f"  optimizer: {o['status']} after {o['iterations']} iterations, {o['rollouts']} rollouts"
+        f" of {o['steps']} steps ({o['time_per_rollout_s'] * 1e3:.1f} ms each), {o['wall_time_s']:.2f} s"
+    )
+    if result.run_note:
+        print(f"  note: {result.run_note}")
+    print(result.verdict)
+    if output:
+        wrote = "fit.json, fit.png" + (", trajectory.csv and summary.json" if result.run is not None else "")
+        print(f"  wrote {wrote} under {output}")
+
+
 def cmd_demo(args) -> int:
     """The main job: validate every scene and write everything under the output folder."""
     start = time.perf_counter()
@@ -590,6 +653,26 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--output", metavar="DIR", help="write DIR/design.json, DIR/configurations.csv, DIR/design.png")
     p.add_argument("--json", action="store_true", help="print design.json")
     COMMANDS["design"] = cmd_design
+
+    p = sub.add_parser("fit", help="identify a scene's parameters from a recorded signal (CSV)")
+    p.add_argument("scene", help="slider, car, printer_head or kinematics")
+    p.add_argument("data", metavar="DATA.csv", help="header row; time [s] and <joint>_pos, _vel or _acc")
+    p.add_argument("--scenario", metavar="S", help="the scenario the record shows (default: the scene's fit default)")
+    p.add_argument(
+        "--map", action="append", default=[], metavar="COLUMN=NAME", help="rename a file column (t=time, x=slider_pos)"
+    )
+    p.add_argument(
+        "--free", action="append", default=[], metavar="NAME[,NAME...]", help="names to fit (default: the scene's)"
+    )
+    p.add_argument(
+        "--set", action="append", default=[], metavar="NAME=VALUE", help="fix a parameter, SI units (repeatable)"
+    )
+    p.add_argument("--start", type=float, metavar="S", help="release time [s]: drop the record before it")
+    p.add_argument("--scale", type=float, default=1.0, metavar="FACTOR", help="SI units per file unit (mm: 0.001)")
+    p.add_argument("--degree", type=int, metavar="N", help="kinematics: degree 0-3 of the polynomial")
+    p.add_argument("--output", metavar="DIR", help="write fit.json, fit.png, trajectory.csv and summary.json")
+    p.add_argument("--json", action="store_true", help="print fit.json")
+    COMMANDS["fit"] = cmd_fit
 
     p = sub.add_parser("demo", help="the main job: validate everything, write out/")
     p.add_argument("--output", default="out", metavar="DIR", help="output folder (default: out)")
