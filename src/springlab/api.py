@@ -34,6 +34,8 @@ from .simulate import (
     simulate,
 )
 
+#: the verdict of a run that left its scene's equations (Scene.model_limits), whatever its errors
+OUTSIDE_MODEL = "not validated: outside the scene's model"
 #: a run whose error exceeds this many times its signal has blown up, flagged or not
 BLOWUP_RATIO = 1e3
 #: integrator 'auto' is a study above this layer
@@ -47,15 +49,24 @@ _AUTO_ELSEWHERE = (
 class Result:
     """One run of a scenario: the trajectory, its reference, errors and summary.
 
-    Attributes:
-      scene, scenario: the names run.
-      parameters: parameter name -> value used (SI).
-      time: (n,) [s], one row per physics step, t = 0 included.
-      pos, vel: joint -> simulated position [m] / velocity [m/s] series.
-      ref_pos, ref_vel: joint -> exact series (empty where no reference exists).
-      summary: the summary.json dict (see README).
-      model: the compiled MjModel that ran.
-      trajectory: the raw Trajectory.
+    Attributes
+    ----------
+    scene, scenario
+        the names run.
+    parameters
+        parameter name -> value used (SI).
+    time
+        (n,) [s], one row per physics step, t = 0 included.
+    pos, vel
+        joint -> simulated position [m] / velocity [m/s] series.
+    ref_pos, ref_vel
+        joint -> exact series (empty where no reference exists).
+    summary
+        the summary.json dict (see README).
+    model
+        the compiled MjModel that ran.
+    trajectory
+        the raw Trajectory.
     """
 
     scene: str
@@ -82,7 +93,9 @@ class Result:
         return out
 
 
-def prepare(scene: str | Scene, scenario: str | None, parameters: dict[str, Any]):
+def prepare(
+    scene: str | Scene, scenario: str | None, parameters: dict[str, Any]
+) -> tuple[Scene, Scenario, dict[str, float]]:
     """Resolve names and parameters; return (Scene, Scenario, params)."""
     scene = scenes.get(scene) if isinstance(scene, str) else scene
     chosen = scene.scenario(scenario)
@@ -101,27 +114,40 @@ def run(
 ) -> Result:
     """Simulate a scenario headless in MuJoCo and compare it with its exact solution.
 
-    Args:
-      scene: scene name (see `springlab list`).
-      scenario: scenario name (None: the scene's default).
-      integrator: one of 'euler', 'implicit', 'implicitfast', 'rk4', 'discrete'
+    Parameters
+    ----------
+    scene
+        scene name (see `springlab list`).
+    scenario
+        scenario name (None: the scene's default).
+    integrator
+        one of 'euler', 'implicit', 'implicitfast', 'rk4', 'discrete'
         (None: the scene's validated default). 'auto' is springlab.run's
         (springlab.auto.run), not this function's.
-      dt: timestep [s] (None: the scene's validated default).
-      duration: simulated time [s] (None: the scenario's).
-      tol: relative accuracy [-] to hold the run to instead of the integrator's
+    dt
+        timestep [s] (None: the scene's validated default).
+    duration
+        simulated time [s] (None: the scenario's).
+    tol
+        relative accuracy [-] to hold the run to instead of the integrator's
         predicted error (see springlab.compare).
-      **parameters: scene parameters in SI units, e.g. mass=2.0 [kg].
+    **parameters
+        scene parameters in SI units, e.g. mass=2.0 [kg].
 
-    Returns:
-      The Result; `result.summary["passed"]` says whether every compared column
-      is within its tolerance and, without `tol`, the run is inside the range of
-      its error estimate; `result.summary["verdict"]` says which ('PASS', 'FAIL',
-      or springlab.compare.NOT_VALIDATED, with `estimate_range["reason"]`).
+    Returns
+    -------
+    Result
+        The Result; `result.summary["passed"]` says whether every compared column
+        is within its tolerance and, without `tol`, the run is inside the range of
+        its error estimate; `result.summary["verdict"]` says which ('PASS', 'FAIL',
+        or springlab.compare.NOT_VALIDATED, with `estimate_range["reason"]`).
 
-    Raises:
-      BadInputError: unknown names, non-physical values, bad dt/duration.
-      DivergedError: the simulation blew up (nothing is returned for it).
+    Raises
+    ------
+    BadInputError
+        unknown names, non-physical values, bad dt/duration.
+    DivergedError
+        the simulation blew up (nothing is returned for it).
     """
     if integrator == "auto":
         raise BadInputError(_AUTO_ELSEWHERE)
@@ -178,7 +204,12 @@ def _within_double_precision(scene: Scene, scenario: Scenario, params: dict[str,
 
 
 def evaluate(
-    scene: Scene, scenario: Scenario, params, model, trajectory: Trajectory, tol: float | None = None
+    scene: Scene,
+    scenario: Scenario,
+    params: dict[str, float],
+    model: mujoco.MjModel,
+    trajectory: Trajectory,
+    tol: float | None = None,
 ) -> Result:
     """Compare a finished run with its reference: errors, tolerance, checks, summary -> Result.
 
@@ -230,6 +261,7 @@ def evaluate(
                 compare.system_rates(reference), trajectory.integrator, trajectory.dt, max(span, trajectory.dt)
             )
         else:
+            assert reference.tolerance is not None, "a reference without `system` states its tolerance"
             per_column = {column: min(reference.tolerance, compare.CERTIFIED_CAP) for column in errors}
             basis = reference.tolerance_basis
         tolerance = max(per_column.values())
@@ -243,7 +275,12 @@ def evaluate(
     if checks:
         # a scenario without compared columns is held to its checks alone
         passed = all(c["passed"] for c in checks) and passed is not False
-    if passed is None:
+    limits = scene.model_limits(model, params, scenario, trajectory)
+    if limits:
+        passed = False  # matching the reference proves nothing once the equations no longer hold
+    if limits:
+        verdict = OUTSIDE_MODEL
+    elif passed is None:
         verdict = None
     elif validity is not None and not validity.inside:
         verdict = compare.NOT_VALIDATED
@@ -274,6 +311,7 @@ def evaluate(
             "reason": validity.reason(),
         },
         "checks": checks,
+        "model_limits": limits,
     }
     return Result(
         scene=scene.name,
@@ -369,19 +407,25 @@ def validate(
 ) -> list[dict[str, Any]]:
     """Run every scenario that has an exact reference at the scene's validated setting.
 
-    Args:
-      scene_names: scenes to validate (None: all).
-      integrator, dt: override the scenes' default setting ('auto' is
+    Parameters
+    ----------
+    scene_names
+        scenes to validate (None: all).
+    integrator, dt
+        override the scenes' default setting ('auto' is
         springlab.validate's, see springlab.auto.validate).
-      tol: relative tolerance [-] to hold every run to (None: the predicted error).
+    tol
+        relative tolerance [-] to hold every run to (None: the predicted error).
 
-    Returns:
-      One row per scenario: scene, scenario, integrator, dt, steps, max_rel_error,
-      measure, tolerance, tolerance_basis, passed, verdict, wall_time_s, note (only
-      for a run that is not validated: why, and the largest dt inside), and checks
-      (the scenario's Check dicts; a scenario without compared columns shows its
-      tightest check in max_rel_error/tolerance, and `measure` says which:
-      'trajectory max_rel', or '<check name> rel' / '<check name> abs').
+    Returns
+    -------
+    list[dict[str, Any]]
+        One row per scenario: scene, scenario, integrator, dt, steps, max_rel_error,
+        measure, tolerance, tolerance_basis, passed, verdict, wall_time_s, note (only
+        for a run that is not validated: why, and the largest dt inside), and checks
+        (the scenario's Check dicts; a scenario without compared columns shows its
+        tightest check in max_rel_error/tolerance, and `measure` says which:
+        'trajectory max_rel', or '<check name> rel' / '<check name> abs').
     """
     if integrator == "auto":
         raise BadInputError(_AUTO_ELSEWHERE)
@@ -394,14 +438,18 @@ def validate(
 def exact_scenarios(scene_names: list[str] | None = None) -> list[tuple[Scene, Scenario]]:
     """(scene, scenario) of every scenario with an exact solution, in catalogue order.
 
-    Args:
-      scene_names: scenes to list (None or empty: all).
+    Parameters
+    ----------
+    scene_names
+        scenes to list (None or empty: all).
 
-    Raises:
-      UnknownNameError: a scene name springlab does not have.
+    Raises
+    ------
+    UnknownNameError
+        a scene name springlab does not have.
     """
     names = list(scenes.SCENES) if not scene_names else scene_names
-    pairs = []
+    pairs: list[tuple[Scene, Scenario]] = []
     for name in names:
         scene = scenes.get(name)
         pairs.extend((scene, scenario) for scenario in scene.scenarios.values() if scenario.exact)
@@ -437,6 +485,8 @@ def validation_row(result: Result) -> dict[str, Any]:
         "checks": checks,
     }
     validity = s.get("estimate_range")
-    if validity is not None and not validity["inside"]:
+    if s.get("model_limits"):
+        row["note"] = f"{s['verdict']}: " + "; ".join(s["model_limits"])
+    elif validity is not None and not validity["inside"]:
         row["note"] = f"{s['verdict']}: {validity['reason']}"
     return row
