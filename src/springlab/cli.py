@@ -14,7 +14,7 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from . import api, auto, charts, demo, outputs, scenes, stability, tradeoff
+from . import api, auto, charts, compare, demo, outputs, scenes, stability, tradeoff
 from .errors import BadInputError, SpringlabError
 from .simulate import INTEGRATORS
 
@@ -143,12 +143,15 @@ def _print_run(summary: dict, output: str | None) -> None:
     for check in summary.get("checks", []):
         print(f"  check {_check_line(check)}")
     if summary["tolerance"] is not None or summary.get("checks"):
-        verdict = "PASS" if summary["passed"] else "FAIL (outside tolerance)"
+        verdict = summary["verdict"] if summary["verdict"] != "FAIL" else "FAIL (outside tolerance)"
         print(
             f"  tolerance {summary['tolerance']:.3e}: {verdict}"
             if summary["tolerance"] is not None
             else f"  checks: {verdict}"
         )
+        validity = summary.get("estimate_range")
+        if validity is not None and not validity["inside"]:
+            print(f"  basis: {validity['reason']}")
     if output:
         print(f"  wrote {pathlib.Path(output) / 'trajectory.csv'} and summary.json")
 
@@ -173,10 +176,17 @@ def _validation_table(rows: list[dict]) -> str:
     for r in rows:
         lines.append(
             f"{r['scene']:<{scene_width}}{r['scenario']:<{scenario_width}}{r['integrator']:<11}{r['dt']:>9.2g}"
-            f"{r['max_rel_error']:>13.2e}{r['tolerance']:>11.2e}  {'pass' if r['passed'] else 'FAIL'}"
+            f"{r['max_rel_error']:>13.2e}{r['tolerance']:>11.2e}  {_row_result(r)}"
         )
         lines.extend(f"    check {_check_line(c)}" for c in r.get("checks", []))
     return "\n".join(lines)
+
+
+def _row_result(row: dict) -> str:
+    """'pass', 'FAIL' or 'not validated' (outside the range of the error estimate) for a validate row."""
+    if row["passed"]:
+        return "pass"
+    return "not validated" if row.get("verdict") == compare.NOT_VALIDATED else "FAIL"
 
 
 def cmd_validate(args) -> int:
@@ -191,7 +201,9 @@ def cmd_validate(args) -> int:
             if r.get("note"):
                 print(f"{r['scene']} {r['scenario']}: {r['note']}")
         failed = sum(not r["passed"] for r in rows)
-        print(f"{len(rows) - failed} passed, {failed} failed")
+        unvalidated = sum(r.get("verdict") == compare.NOT_VALIDATED for r in rows)
+        outside = f" ({unvalidated} not validated: outside the range of the error estimate)" if unvalidated else ""
+        print(f"{len(rows) - failed} passed, {failed} failed{outside}")
     return EXIT_FAILED if any(not r["passed"] for r in rows) else EXIT_OK
 
 
@@ -251,11 +263,12 @@ def cmd_plot(args) -> int:
 def _verdict(summary: dict) -> int:
     """Exit code of a run whose outputs were written: 1 when outside its tolerance."""
     if summary["passed"] is False:
-        print(
-            f"  note: {summary['scene']}/{summary['scenario']} is outside its tolerance"
-            f" (max error above {summary['tolerance']:.2e}); see 'springlab run'",
-            file=sys.stderr,
+        why = (
+            f"not validated ({summary['estimate_range']['reason']})"
+            if summary.get("verdict") == compare.NOT_VALIDATED
+            else f"outside its tolerance (max error above {summary['tolerance']:.2e})"
         )
+        print(f"  note: {summary['scene']}/{summary['scenario']} is {why}; see 'springlab run'", file=sys.stderr)
         return EXIT_FAILED
     return EXIT_OK
 
@@ -272,20 +285,28 @@ def cmd_tradeoff(args) -> int:
     return EXIT_FAILED if pick is not None and pick["integrator"] is None else EXIT_OK
 
 
+def _run_verdict(run) -> str:
+    """A sweep row's verdict in a word or two: pass, FAIL, not validated, or blank when diverged."""
+    if run.verdict is None:
+        return ""
+    return {compare.PASS: "pass", compare.FAIL: "FAIL"}.get(run.verdict, "not validated")
+
+
 def _print_tradeoff(result, output: str | None) -> None:
     print(
         f"{result.scene} / {result.scenario}: {len(result.runs)} runs over {result.duration:g} s"
         f" in {result.sweep_wall_time_s:.1f} s"
     )
     print(
-        f"  {'integrator':<13}{'dt [s]':>10}{'steps':>9}{'max rel err':>13}{'wall [ms]':>11}{'wall/sim s':>12}  pareto"
+        f"  {'integrator':<13}{'dt [s]':>10}{'steps':>9}{'max rel err':>13}{'wall [ms]':>11}{'wall/sim s':>12}"
+        "  pareto  verdict"
     )
     front = {id(r) for r in result.pareto}
     for r in result.runs:
         error = "diverged" if r.diverged else f"{r.max_rel_error:.3e}"
         print(
             f"  {r.integrator:<13}{r.dt:>10.3g}{r.steps:>9}{error:>13}{r.wall_time_s * 1e3:>11.3f}"
-            f"{r.wall_time_s / result.duration * 1e3:>10.3f}ms  {'*' if id(r) in front else ''}"
+            f"{r.wall_time_s / result.duration * 1e3:>10.3f}ms  {'*' if id(r) in front else ' ':<6}  {_run_verdict(r)}"
         )
     orders = ", ".join(f"{name} {p:.2f}" if p is not None else f"{name} -" for name, p in result.orders.items())
     print(f"  observed order: {orders}")

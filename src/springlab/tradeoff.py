@@ -68,6 +68,8 @@ class Run:
       wall_time_s: wall time of the run alone [s] (see module docstring).
       diverged: the run blew up (detected, never reported as a result).
       detail: how it diverged, for people.
+      verdict: what `springlab run` says of the same setting: 'PASS', 'FAIL' or 'not validated:
+        outside the range of the error estimate' (springlab.compare); None if diverged.
     """
 
     integrator: str
@@ -77,9 +79,15 @@ class Run:
     wall_time_s: float
     diverged: bool = False
     detail: str = ""
+    verdict: str | None = None
+
+    @property
+    def validated(self) -> bool:
+        """Whether the run is inside the range of its error estimate (its verdict means something)."""
+        return self.verdict in (compare.PASS, compare.FAIL)
 
     def row(self) -> dict[str, Any]:
-        """The JSON row: integrator, dt, max_rel_error, steps, wall_time_s, diverged."""
+        """The JSON row: integrator, dt, max_rel_error, steps, wall_time_s, diverged, verdict."""
         return {
             "integrator": self.integrator,
             "dt": self.dt,
@@ -87,6 +95,7 @@ class Run:
             "steps": self.steps,
             "wall_time_s": self.wall_time_s,
             "diverged": self.diverged,
+            "verdict": self.verdict,
         }
 
 
@@ -145,7 +154,7 @@ def fastest_rate(scene: Scene, model: mujoco.MjModel, params: dict[str, float], 
     if rates:
         return max(rates)
     if scenario.exact:
-        reference = scene.reference(model, params, scenario, np.array([0.0]))
+        reference = scene.reference(model, params, scenario, np.array([0.0]), dt=scenario.dt or scene.dt)
         if reference is not None and reference.system is not None:
             radius = float(np.max(np.abs(np.linalg.eigvals(reference.system))))
             return radius if radius > 0 else None
@@ -245,18 +254,22 @@ def sweep(
     outcomes = run_batched(jobs, nthread=nthread)
     runs = []
     for job, outcome in zip(jobs, outcomes):
-        error, detail, steps = None, "", job.steps
+        error, detail, steps, verdict = None, "", job.steps, None
         if isinstance(outcome, DivergedError):
             detail = str(outcome)
         else:
             steps = outcome.steps  # a stop condition may end a run early, as in `springlab run`
             try:
+                # judged exactly as `springlab run` judges it: the reference is built for this run's own dt
                 result = api.evaluate(scene_obj, chosen, params, model, outcome)
                 error = max(e["max_rel"] for e in result.summary["errors"].values())
+                verdict = result.summary["verdict"]
             except DivergedError as blown:
                 detail = str(blown)
         wall = time_run(job, repeats=timing_repeats)
-        runs.append(Run(job.integrator, job.dt, steps, error, wall, diverged=error is None, detail=detail))
+        runs.append(
+            Run(job.integrator, job.dt, steps, error, wall, diverged=error is None, detail=detail, verdict=verdict)
+        )
     runs.sort(key=lambda r: (integrators.index(r.integrator), -r.dt))
     orders = {name: observed_order([r for r in runs if r.integrator == name]) for name in integrators}
     return Tradeoff(
@@ -282,7 +295,7 @@ def sweepable(
     if params is None:
         params = scene.resolve(scenario, {})
     model = scene.build(params, scenario) if model is None else model
-    return scene.reference(model, params, scenario, np.zeros(1)) is not None
+    return scene.reference(model, params, scenario, np.zeros(1), dt=scenario.dt or scene.dt) is not None
 
 
 def _setup_or_none(scene: Scene, model, params, scenario, dt: float, duration: float) -> Setup | None:
