@@ -369,6 +369,51 @@ def test_forced_duffing_is_chaotic(forced):
     assert observed["reference"] == 4 and abs(observed["value"] - 4) < 0.5
 
 
+def test_forced_duffing_separation_time_is_the_converged_one_of_the_exact_system(forced):
+    # the exact pair by scipy: x and the gap g = x_twin - x as states of their own (g starts at 1e-9 m, so
+    # its absolute tolerance sits 15 orders below it), stopped where |g| first reaches the 0.1 m wells
+    p = forced.parameters
+    m, k1, k3, d = p["mass"], p["k1"], p["k3"], p["damping"]
+    amplitude, omega = p["force_amplitude"], 2 * math.pi * p["force_frequency"]
+
+    def pair(t, s):
+        x, v, g, gv = s
+        x2 = x + g
+        force = amplitude * math.sin(omega * t)
+        return [
+            v,
+            (-k1 * x - k3 * x**3 - d * v + force) / m,
+            gv,
+            (-k1 * g - k3 * g * (x2 * x2 + x2 * x + x * x) - d * gv) / m,
+        ]
+
+    def apart(t, s):
+        return abs(s[2]) - 0.1
+
+    apart.terminal = True
+    sol = solve_ivp(
+        pair,
+        (0, 40.0),
+        [p["x0"], p["v0"], 1e-9, 0.0],
+        method="DOP853",
+        rtol=1e-12,
+        atol=[1e-15, 1e-14, 1e-24, 1e-23],
+        events=apart,
+    )
+    exact = sol.t_events[0][0]  # 20.5934 s
+    q = forced.summary["quantities"]
+    assert q["separation_time_converged"] is True
+    # converged: the last two refinements agree within SEPARATION_RTOL, and so does the exact system
+    last, before = q["separation_time_refinement_s"][-1], q["separation_time_refinement_s"][-2]
+    assert abs(last - before) <= nonlinear.SEPARATION_RTOL * last
+    assert q["separation_time_s"] == pytest.approx(exact, rel=nonlinear.SEPARATION_RTOL)
+    assert q["ftle_per_s"] == pytest.approx(math.log(0.1 / 1e-9) / exact, rel=nonlinear.SEPARATION_RTOL)
+    # the default 1 ms run alone is not converged for this question (its trajectory leaves the exact one first)
+    assert abs(q["separation_time_at_run_dt_s"] - exact) > 10 * nonlinear.SEPARATION_RTOL * exact
+    assert q["accurate_until_s"] < exact
+    assert q["lyapunov_exponent_basis"].startswith("estimate")
+
+
 def test_lyapunov_estimator_recovers_the_exact_exponent_of_a_damped_linear_oscillator():
     # linear, damped, forced: every perturbation decays like exp(-d t / 2m), so the exponent is -d / 2m
     scenario = SCENE.scenario("forced_duffing")

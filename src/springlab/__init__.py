@@ -10,6 +10,7 @@ True
 
 from . import analytic, errors
 from .api import Result
+from .audit import Audit, audit
 from .auto import run, validate
 from .errors import BadInputError, DivergedError, SpringlabError, UnknownNameError
 from .scenes import SCENES
@@ -19,6 +20,8 @@ __all__ = [
     "errors",
     "run",
     "validate",
+    "audit",
+    "Audit",
     "Result",
     "SCENES",
     "SpringlabError",

@@ -23,6 +23,8 @@ from .errors import BadInputError, DivergedError
 from .scene import Check, Scenario, Scene
 from .simulate import Trajectory, check_timing, integrator_id, simulate
 
+#: the verdict of a run that left its scene's equations (Scene.model_limits), whatever its errors
+OUTSIDE_MODEL = "not validated: outside the scene's model"
 #: a run whose error exceeds this many times its signal has blown up, flagged or not
 BLOWUP_RATIO = 1e3
 #: integrator 'auto' is a study above this layer
@@ -196,7 +198,12 @@ def evaluate(
     if checks:
         # a scenario without compared columns is held to its checks alone
         passed = all(c["passed"] for c in checks) and passed is not False
-    if passed is None:
+    limits = scene.model_limits(model, params, scenario, trajectory)
+    if limits:
+        passed = False  # matching the reference proves nothing once the equations no longer hold
+    if limits:
+        verdict = OUTSIDE_MODEL
+    elif passed is None:
         verdict = None
     elif validity is not None and not validity.inside:
         verdict = compare.NOT_VALIDATED
@@ -227,6 +234,7 @@ def evaluate(
             "reason": validity.reason(),
         },
         "checks": checks,
+        "model_limits": limits,
     }
     return Result(
         scene=scene.name,
@@ -345,6 +353,8 @@ def validation_row(result: Result) -> dict[str, Any]:
         "checks": checks,
     }
     validity = s.get("estimate_range")
-    if validity is not None and not validity["inside"]:
+    if s.get("model_limits"):
+        row["note"] = f"{s['verdict']}: " + "; ".join(s["model_limits"])
+    elif validity is not None and not validity["inside"]:
         row["note"] = f"{s['verdict']}: {validity['reason']}"
     return row

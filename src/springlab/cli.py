@@ -14,7 +14,9 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from . import api, auto, charts, compare, demo, outputs, scenes, stability, tradeoff
+from . import api, auto, charts, charts_audit, compare, demo, outputs, scenes, stability, tradeoff
+from .audit import DEFAULT_PERTURB, DEFAULT_TOL
+from .audit import audit as run_audit
 from .errors import BadInputError, SpringlabError
 from .simulate import INTEGRATORS
 
@@ -128,6 +130,8 @@ def cmd_run(args) -> int:
         _print_json(summary)
     else:
         _print_run(summary, args.output)
+    for limit in summary.get("model_limits", []):
+        print(f"springlab: {summary['scene']} {summary['scenario']} is not validated: {limit}", file=sys.stderr)
     return EXIT_FAILED if summary["passed"] is False else EXIT_OK
 
 
@@ -261,7 +265,11 @@ def cmd_plot(args) -> int:
 
 
 def _verdict(summary: dict) -> int:
-    """Exit code of a run whose outputs were written: 1 when outside its tolerance."""
+    """Exit code of a run whose outputs were written: 1 when outside its tolerance or its model's range."""
+    for limit in summary.get("model_limits", []):
+        print(f"springlab: {summary['scene']} {summary['scenario']} is not validated: {limit}", file=sys.stderr)
+    if summary.get("model_limits"):
+        return EXIT_FAILED
     if summary["passed"] is False:
         why = (
             f"not validated ({summary['estimate_range']['reason']})"
@@ -322,6 +330,28 @@ def _print_tradeoff(result, output: str | None) -> None:
     print(f"  wall time: {tradeoff.WALL_TIME_BASIS}")
     if output:
         print(f"  wrote {pathlib.Path(output) / 'tradeoff.json'} and tradeoff.png")
+
+
+def cmd_audit(args) -> int:
+    result = run_audit(
+        args.model,
+        keyframe=args.keyframe,
+        tol=args.tol,
+        integrators=args.integrators,
+        dt=args.dt,
+        duration=args.duration,
+        perturb=args.perturb,
+    )
+    if args.output:
+        charts_audit.write_audit(result, args.output)
+    if args.json:
+        _print_json(result.as_json())
+    else:
+        for line in result.verdict():
+            print(line)
+        if args.output:
+            print(f"wrote {pathlib.Path(args.output) / 'audit.json'} and audit.png")
+    return EXIT_OK if result.own_ok else EXIT_FAILED
 
 
 def cmd_stability(args) -> int:
@@ -519,6 +549,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--output", metavar="DIR", help="write DIR/stability.json, stability.png and energy.png")
     p.add_argument("--json", action="store_true", help="print stability.json")
     COMMANDS["stability"] = cmd_stability
+
+    p = sub.add_parser("audit", help="any MJCF: modes, stability limits, error vs cost, the cheapest setting for --tol")
+    p.add_argument("model", help="path to an MJCF (or URDF) file, or a scene name")
+    p.add_argument("--keyframe", metavar="NAME|INDEX", help="operating point (default: first keyframe, else qpos0)")
+    p.add_argument("--tol", type=float, default=DEFAULT_TOL, metavar="TOL", help="error tolerance (default 1e-3)")
+    p.add_argument("--integrators", metavar="A,B", help=f"integrators to sweep (default: {','.join(INTEGRATORS)})")
+    p.add_argument("--dt", metavar="LIST|RANGE", help="timesteps 'a,b,c' or 'LOW:HIGH:N' [s] (default: automatic)")
+    p.add_argument("--duration", type=float, metavar="SECONDS", help="simulated time [s] (default 1; a scene's own)")
+    p.add_argument(
+        "--perturb",
+        type=float,
+        default=DEFAULT_PERTURB,
+        metavar="SIZE",
+        help="initial perturbation of the operating point [m or rad] (default 1e-3)",
+    )
+    p.add_argument("--output", metavar="DIR", help="write DIR/audit.json and DIR/audit.png")
+    p.add_argument("--json", action="store_true", help="print audit.json")
+    COMMANDS["audit"] = cmd_audit
 
     p = sub.add_parser("design", help="design study: positioning time over a property sweep, ranked sensitivities")
     p.add_argument("scene", help="scene with a design study: printer_head")

@@ -74,9 +74,14 @@ from .errors import BadInputError, DivergedError, UnknownNameError
 from .scenes.printer_head import (
     PrinterHead,
     after_force_bound,
+    belt_damping_for,
+    belt_damping_ratio,
+    belt_omega,
     minimum_move_time,
     move_residual_stretch,
+    residual_envelope,
     settling_estimate,
+    worst_case_envelope,
 )
 from .simulate import quiet_mujoco
 
@@ -236,11 +241,10 @@ def base_parameters(overrides: Mapping[str, Any] | None = None) -> dict[str, flo
 def default_properties(base: Mapping[str, float]) -> dict[str, float]:
     """The swept properties' values at `base`: damping ratio from the belt damping."""
     m_c, m_m = base["carriage_mass"], base["motor_mass"]
-    reduced = m_c * m_m / (m_c + m_m)
     return {
         "belt_stiffness": base["belt_stiffness"],
         "carriage_mass": m_c,
-        "damping_ratio": base["belt_damping"] / (2.0 * math.sqrt(base["belt_stiffness"] * reduced)),
+        "damping_ratio": belt_damping_ratio(base["belt_damping"], base["belt_stiffness"], m_c, m_m),
         "drive_force": base["drive_force"],
     }
 
@@ -272,8 +276,7 @@ def configurations(grids: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
 def belt_damping(values: Mapping[str, np.ndarray], motor_mass: float) -> np.ndarray:
     """Belt damping c = 2 zeta sqrt(k mu) [N s/m] of each configuration."""
     m_c = np.asarray(values["carriage_mass"], float)
-    reduced = m_c * motor_mass / (m_c + motor_mass)
-    return 2.0 * np.asarray(values["damping_ratio"]) * np.sqrt(np.asarray(values["belt_stiffness"]) * reduced)
+    return belt_damping_for(np.asarray(values["damping_ratio"]), np.asarray(values["belt_stiffness"]), m_c, motor_mass)
 
 
 def config_parameters(base: Mapping[str, float], values: Mapping[str, np.ndarray], i: int) -> dict[str, float]:
@@ -295,8 +298,7 @@ def timesteps(values: Mapping[str, np.ndarray], base: Mapping[str, float], omega
     m_c = np.asarray(values["carriage_mass"], float)
     motor_mass = base["motor_mass"]
     total = m_c + motor_mass
-    reduced = m_c * motor_mass / total
-    largest = omega_dt / np.sqrt(np.asarray(values["belt_stiffness"]) / reduced)
+    largest = omega_dt / belt_omega(np.asarray(values["belt_stiffness"]), m_c, motor_mass)
     half = np.sqrt(base["move_distance"] * total / np.asarray(values["drive_force"], float))
     return half / np.ceil(half / largest)
 
@@ -454,16 +456,14 @@ def estimates(
         params = config_parameters(base, values, i)
         m_c, k, force = params["carriage_mass"], params["belt_stiffness"], params["drive_force"]
         total = m_c + m_m
-        reduced = m_c * m_m / total
-        omega = math.sqrt(k / reduced)
+        omega = float(belt_omega(k, m_c, m_m))
         zeta = float(values["damping_ratio"][i])
         frequency[i] = omega / (2 * math.pi)
         half_steps, _ = PrinterHead.move_profile(params, float(dt[i]))
         stretch, rate = move_residual_stretch(params, float(dt[i]))
-        omega_d = omega * math.sqrt(1 - zeta * zeta)
-        envelope = (m_m / total) * math.hypot(stretch, (rate + zeta * omega * stretch) / omega_d)
+        envelope = residual_envelope(stretch, rate, m_c, m_m, omega, zeta)
         estimate[i] = 2 * half_steps * dt[i] + settling_estimate(envelope, band, zeta, omega)
-        worst_envelope = 4 * force * m_c * m_m / (total**2 * k)
+        worst_envelope = worst_case_envelope(force, m_c, m_m, k)
         worst[i] = minimum_move_time(distance, total, force) + settling_estimate(worst_envelope, band, zeta, omega)
     return estimate, worst, frequency
 

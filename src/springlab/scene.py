@@ -88,6 +88,9 @@ class Scenario:
         for presets that depend on other parameters (e.g. damping from a ratio).
       exact: whether an exact reference exists (validated by `validate`).
       dt: the scenario's validated timestep [s] (None: the scene's `dt`).
+      variant: for a scene whose scenarios differ in their model (e.g. the car: 1 DOF,
+        pitch/heave, quarter car), the object that carries what differs; the scene's
+        hooks delegate to it instead of dispatching on scenario names (None: unused).
     """
 
     name: str
@@ -97,6 +100,7 @@ class Scenario:
     derive: Callable[[dict[str, float], set[str]], dict[str, float]] | None = None
     exact: bool = True
     dt: float | None = None
+    variant: Any = None
 
 
 @dataclasses.dataclass
@@ -198,7 +202,45 @@ class Setup:
 
 
 class Scene:
-    """Base class of the scenes; subclasses fill in the class attributes and hooks."""
+    """Base class of the scenes: one MJCF file under models/ and one module of the same name.
+
+    Like scipy's `OdeSolver`, a new scene is a subclass that provides the following.
+
+    1. Class attributes: `name` (also the MJCF stem: models/<name>.xml), `title` (the one-line
+       question), `joints` (the reported joints, trajectory.csv's columns), `parameters`
+       (name -> `Parameter`, SI with units and valid ranges), `scenarios` (name -> `Scenario`,
+       each with its duration, presets and validated `dt`; a scene whose scenarios differ in their
+       model gives each its `variant` instead of dispatching on names), `default_scenario`, and
+       the validated default setting `integrator` and `dt` [s]; optionally `camera`.
+    2. `model_defaults(model)`: the parameters whose defaults live in the MJCF, read back from the
+       compiled model (the physics values have one home, the MJCF).
+    3. `edit(spec, params, scenario)`: MjSpec edits that apply the parameters, so the physics
+       stays in MJCF (no Python forces; time-varying inputs as MJCF-native generators or
+       piecewise-constant controls switched on step boundaries, see springlab.exciter).
+    4. `setup(model, params, scenario, steps, dt)`: the initial state and open-loop controls
+       (`Setup`); raise ParameterError for a motion the scene's equations cannot describe
+       when that is known before the run.
+    5. `physical(model)`: the physical constants the scene's equations use, read back from the
+       compiled model (SI; the order is the scene's, documented in its override).
+    6. `modes(model, params, scenario)`: [(natural frequency [rad/s], damping ratio [-])] of every
+       mode the integrator must resolve (forcing generators included), for stability advice.
+    7. `reference(model, params, scenario, time)`: the exact solution at `time` [s] where one
+       exists (`Reference`; for a linear scene with its state matrix, so the tolerance is
+       derived), else None and `checks(...)`: scalar claims against independent references
+       (`Check`; builders in springlab.checks).
+    8. `quantities(model, params, scenario, trajectory)`: the scenario's named results, SI,
+       names ending in their unit; peaks and event times interpolated between the samples to
+       the run's order (springlab.events).
+    9. Optionally: `check_consistency` (non-physical parameter combinations), `model_limits`
+       (where a finished run leaves the scene's equations), `stop_condition` (an event that
+       ends a run early as a result), `stability_limit` (damping MuJoCo treats differently from
+       joint damping), `phase_field`/`equilibria`/`separatrices` (one-joint phase planes),
+       `joint_columns` (joints that only some scenarios have).
+
+    The module exposes the instance as `SCENE`; springlab.scenes discovers it. Tests check each
+    claim against a reference built in the test (closed form, expm, scipy's DOP853 at tight
+    rtol), never against the scene's own reference.
+    """
 
     #: scene name, also the MJCF file stem under models/.
     name: str = ""
@@ -317,6 +359,14 @@ class Scene:
         """Named results of the scenario, SI, names ending in their unit (override)."""
         return {}
 
+    def physical(self, model: mujoco.MjModel) -> tuple[float, ...]:
+        """The physical constants the scene's equations use, read back from the compiled model (SI).
+
+        The order is the scene's (e.g. the slider's (mass [kg], stiffness [N/m], damping [N s/m]));
+        none by default.
+        """
+        return ()
+
     def modes(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[tuple[float, float]]:
         """[(natural frequency [rad/s], damping ratio [-])] of the run, for stability advice."""
         return []
@@ -362,6 +412,21 @@ class Scene:
         trajectory: Trajectory,
     ) -> list[Check]:
         """Scalar claims `validate` holds an exact scenario to, beyond its compared columns (override)."""
+        return []
+
+    def model_limits(
+        self,
+        model: mujoco.MjModel,
+        params: dict[str, float],
+        scenario: Scenario,
+        trajectory: Trajectory,
+    ) -> list[str]:
+        """Where this run leaves the range the scene's equations describe, one line each (override).
+
+        E.g. a linear tire that would have to pull on the road: the simulation may still match its
+        exact reference, but neither describes the physical system any more. Any line makes the run
+        not validated (`passed` False, exit 1) and is reported in summary.json's `model_limits`.
+        """
         return []
 
     def stop_condition(
