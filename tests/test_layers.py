@@ -45,10 +45,14 @@ LAYERS: dict[str, tuple[str, ...]] = {
         "audit_limits",
         "audit_sweep",
         "fit",
+        "fit_data",
+        "fit_engine",
+        "fit_models",
+        "fit_results",
         "sweep",
         "executor",
     ),
-    "outputs": ("charts", "charts_audit", "plots", "render", "report", "media"),
+    "outputs": ("charts", "charts_audit", "fit_chart", "plots", "render", "report", "media"),
     "front": ("cli", "demo", "__main__", "__init__"),
 }
 PREFIXES = {"scenes.": "physics", "render_": "outputs"}

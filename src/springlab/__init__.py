@@ -13,6 +13,7 @@ from .api import Result
 from .audit import Audit, audit
 from .auto import run, validate
 from .errors import BadInputError, DivergedError, SpringlabError, UnknownNameError
+from .fit import fit
 from .scenes import SCENES
 
 __all__ = [
@@ -22,6 +23,7 @@ __all__ = [
     "validate",
     "audit",
     "Audit",
+    "fit",
     "Result",
     "SCENES",
     "SpringlabError",

@@ -30,16 +30,18 @@ import numpy as np
 from . import api, compare, scenes
 from .audit_limits import Limit, constraint_flags, stability_limits
 from .audit_sweep import (
+    MAX_SAMPLES,
     REFERENCE_FRACTION,
+    ExactReference,
     SweepRun,
     checkpoint_spacing,
     converged_reference,
     cost_per_step,
     default_grid,
-    error_of,
-    linear_reference,
     linearity_change,
     linearity_tolerance,
+    reference_step,
+    run_error,
     sweep_runs,
 )
 from .errors import BadInputError, DivergedError
@@ -134,14 +136,7 @@ class Audit:
         if pick["integrator"] is None:
             lines.append(f"no swept setting meets tol {self.tol:g} (verified runs); try --dt lower or a longer grid")
         else:
-            own_cost = next(
-                (
-                    r.wall_time_s
-                    for r in self.runs
-                    if r.integrator == own["integrator"] and math.isclose(r.dt, own["dt"])
-                ),
-                None,
-            )
+            own_cost = own.get("wall_time_s")
             ratio = f" at {pick['wall_time_s'] / own_cost:.2g}x the cost of yours" if own_cost else ""
             lines.append(
                 f"cheapest meeting tol {self.tol:g}: {pick['integrator']} at {pick['dt'] * 1e3:.3g} ms, error"
@@ -315,7 +310,7 @@ def audit(
       keyframe: operating point, keyframe name or index (default: the first keyframe, else qpos0 at rest).
       tol: tolerance on the error of the module docstring [-].
       integrators: names to sweep (default all five), a list or "a,b".
-      dt: timesteps [s] to sweep (see `parse_dts`; default: a 12-point grid over 2.5 decades below 1.2x
+      dt: timesteps [s] to sweep (see `parse_dts`; default: a 12-point grid over 3 decades below 1.2x
         the largest measured stability limit, whose top is a multiple of the model's own timestep).
       duration: simulated time of every run [s] (default 1 s; a scene: its scenario's).
       perturb: size of the initial perturbation of the operating point [m or rad].
@@ -343,48 +338,43 @@ def audit(
         ceiling = min(GRID_TOP_OVER_LIMIT * max(finite), duration / 10) if finite else duration / 10
         top = _grid_top(duration, ceiling, own_dt)
         dts = default_grid(top)
-        if own_dt <= top and not any(abs(d - own_dt) <= 1e-12 * own_dt for d in dts):
-            dts = sorted({*dts, own_dt}, reverse=True)
     spacing = checkpoint_spacing(dts, duration)
-    count = int(math.floor(duration / spacing * (1 + 1e-12))) + 1
-    check_duration = spacing * (count - 1)
+    run_duration = spacing * math.floor(duration / spacing * (1 + 1e-12))  # every run ends on a common time
     start = _start(model, point, perturb, source)
-    own_shares = abs(own_dt * round(spacing / own_dt) - spacing) <= 1e-9 * spacing
-    extra = [(own_name, own_dt)] if own_shares else []
     finest = min(dts)
-    probe_name = "rk4"
-    extra.append((probe_name, finest))
-    outcomes = sweep_runs(model, start, names, dts, check_duration, extra=extra, nthread=nthread)
+    extra = [(own_name, own_dt), ("rk4", finest)]  # the own setting; the linearity probe and coarsest reference
+    outcomes = sweep_runs(model, start, names, dts, run_duration, extra=extra, nthread=nthread)
     stamps["sweep"] = _time.perf_counter()
 
-    probe = outcomes[(probe_name, finest)]
+    probe = outcomes[("rk4", finest)]
     change = math.inf if isinstance(probe, DivergedError) else linearity_change(model, linear, probe)
-    threshold = linearity_tolerance(linear, tol, check_duration)
+    threshold = linearity_tolerance(linear, tol, run_duration)
     is_linear = change <= threshold
     if is_linear:
-        reference = linear_reference(model, linear, start, spacing, count)
+        reference = ExactReference(model, linear, start)
     else:
-        reference = converged_reference(model, point, start, spacing, count, finest, tol, coarse=probe, nthread=nthread)
+        step = reference_step(dts, spacing)
+        reference = converged_reference(model, point, start, step, run_duration, tol, coarse=probe, nthread=nthread)
     stamps["reference"] = _time.perf_counter()
 
     runs = []
     middle = sorted(dts)[len(dts) // 2]
-    costs = {name: cost_per_step(model, start, name, middle) for name in names}
+    costs = {name: cost_per_step(model, start, name, middle) for name in dict.fromkeys([*names, own_name])}
     for name in names:
-        for step in dts:
-            outcome = outcomes[(name, step)]
-            error = error_of(model, point, outcome, spacing, reference)
-            steps = round(check_duration / step)
-            runs.append(SweepRun(name, step, steps, error, costs[name] * steps, error is None))
+        for dt_run in dts:
+            error = run_error(model, point, outcomes[(name, dt_run)], reference)
+            steps = round(run_duration / dt_run)
+            runs.append(SweepRun(name, dt_run, steps, error, costs[name] * steps, error is None))
     orders = {name: _order([r for r in runs if r.integrator == name], reference.error_estimate) for name in names}
-    own = _own_setting(model, point, start, outcomes, own_name, own_dt, own_shares, limits, spacing, reference)
-    recommendation = _recommend(model, point, start, runs, limits, tol, check_duration, spacing, reference)
+    own = _own_setting(model, point, outcomes[(own_name, own_dt)], own_name, own_dt, limits, reference)
+    own["wall_time_s"] = costs[own_name] * round(run_duration / own_dt)
+    recommendation = _recommend(model, point, start, runs, limits, tol, run_duration, reference)
     stamps["end"] = _time.perf_counter()
     return Audit(
         model=source.label,
         linear=linear,
         start=start,
-        duration=check_duration,
+        duration=run_duration,
         tol=tol,
         perturb=perturb,
         limits=limits,
@@ -397,8 +387,8 @@ def audit(
             "error_estimate": reference.error_estimate,
             "dt": reference.dt,
             "converged": reference.error_estimate <= REFERENCE_FRACTION * tol,
-            "checkpoints": count,
-            "checkpoint_spacing_s": spacing,
+            "compared_at": f"every step of each run (every k-th for at most {MAX_SAMPLES})",
+            "common_time_spacing_s": spacing,
         },
         runs=runs,
         orders=orders,
@@ -431,9 +421,20 @@ def _as_runs(runs: list[SweepRun]) -> list[Run]:
 
 
 def _order(runs: list[SweepRun], reference_error: float) -> float | None:
-    """springlab.tradeoff's observed order over the runs whose error stands 10x clear of the reference's."""
-    clear = [r for r in _as_runs(runs) if r.max_rel_error is None or r.max_rel_error > 10 * reference_error]
-    return observed_order(clear)
+    """springlab.tradeoff's observed order over the runs clear of the error floor.
+
+    The floor: the reference's own error estimate, or where the errors stop falling at the fine end (from
+    the finest run, coarser runs whose error is not at least sqrt(dt ratio) above the next finer one's: a
+    first-order method rises by the full ratio). Runs within 10x the floor are left out: there the
+    reference or round-off, not the integrator, sets the error.
+    """
+    finest_first = sorted((r for r in runs if r.error is not None and r.error > 0), key=lambda r: r.dt)
+    floor = reference_error
+    for finer, coarser in zip(finest_first, finest_first[1:]):
+        if coarser.error > finer.error * math.sqrt(coarser.dt / finer.dt):
+            break
+        floor = max(floor, finer.error, coarser.error)
+    return observed_order([r for r in _as_runs(runs) if r.max_rel_error is None or r.max_rel_error > 10 * floor])
 
 
 def _pareto(runs: list[SweepRun]) -> list[SweepRun]:
@@ -447,20 +448,18 @@ def _stable_at(limits: dict[str, Limit], name: str, dt: float) -> bool:
     return limit is None or dt < limit
 
 
-def _own_setting(model, point, start, outcomes, name, dt, shares, limits, spacing, reference) -> dict[str, Any]:
-    error = error_of(model, point, outcomes[(name, dt)], spacing, reference) if shares else None
-    diverged = shares and isinstance(outcomes[(name, dt)], DivergedError)
+def _own_setting(model, point, outcome, name, dt, limits, reference) -> dict[str, Any]:
+    error = run_error(model, point, outcome, reference)
     return {
         "integrator": name,
         "dt": dt,
-        "stable": _stable_at(limits, name, dt) and not diverged,
+        "stable": _stable_at(limits, name, dt) and not isinstance(outcome, DivergedError),
         "error": error,
         "margin": limits[name].margin(dt),
-        "compared": shares,
     }
 
 
-def _recommend(model, point, start, runs, limits, tol, duration, spacing, reference) -> dict[str, Any]:
+def _recommend(model, point, start, runs, limits, tol, duration, reference) -> dict[str, Any]:
     """The cheapest swept setting meeting tol within RECOMMEND_LIMIT_FRACTION of its stability limit,
     verified by a run of its own (springlab.simulate, not the batch). Meeting tol means error + the
     reference's own error estimate <= tol, so a reference that did not fully converge cannot pass a
@@ -493,7 +492,7 @@ def _recommend(model, point, start, runs, limits, tol, duration, spacing, refere
             )
         except DivergedError:
             continue
-        error = error_of(model, point, trajectory, spacing, reference)
+        error = run_error(model, point, trajectory, reference)
         if error is not None and error <= budget:
             return {
                 "integrator": run.integrator,

@@ -1,8 +1,7 @@
 """Accuracy vs cost of any model: every integrator over a timestep grid against a reference, batched.
 
-The runs start from the perturbed operating point and hold the operating point's controls. They are
-compared at checkpoints, the multiples of a spacing every timestep divides (default grid: the
-largest timestep divided by integers m, so the checkpoints are the largest timestep's steps), by
+The runs start from the perturbed operating point and hold the operating point's controls. Each run
+is compared with the reference at its own steps (at most MAX_SAMPLES of them, evenly strided) by
 
   error = max( max_t |q_sim - q_ref|_inf / max_t |q_ref - q_op|_inf,  max_t |v_sim - v_ref|_inf / max_t |v_ref|_inf )
 
@@ -11,10 +10,12 @@ model the max relative error over the position and velocity columns that `spring
 
 The reference: when the model is linear along the motion (its linearization, re-taken at
 LINEARITY_PROBES states of the motion, differs from the one at the operating point by less than
-`linearity_tolerance`), the exact solution of the (affine) linearization, expm; otherwise RK4 at
-ever finer timesteps c/M, c/2M, ... until the Richardson estimate of its error, diff / (2^p - 1)
-with p the order observed over the last three levels (clamped to [1, 4]: contact-rich models lose
-RK4's order), is at most REFERENCE_FRACTION x tol.
+`linearity_tolerance`), the exact solution of the (affine) linearization, expm, at any time;
+otherwise RK4 at h, h/2, ... until the Richardson estimate of its error, diff / (2^p - 1) with p the
+order observed over the last three levels (clamped to [1, 4]: contact-rich models lose RK4's
+order), is at most REFERENCE_FRACTION x tol. h = spacing / (2 lcm(m_i)) for the grid's timesteps
+spacing / m_i, so every step of every grid run is a reference step: the default grid takes its m_i
+from SMOOTH (2^a and 3 x 2^a), whose lcm stays at twice the largest.
 """
 
 from __future__ import annotations
@@ -37,9 +38,13 @@ from .simulate import MAX_STEPS, Trajectory, quiet_mujoco
 #: default grid: this many timesteps ...
 GRID_POINTS = 12
 #: ... over this many decades below the largest
-GRID_DECADES = 2.5
-#: at least this many checkpoints over the duration
+GRID_DECADES = 3.0
+#: the divisors m of the default grid's timesteps top / m: their lcm is at most 2x the largest
+SMOOTH = sorted({2**a * b for a in range(16) for b in (1, 3)})
+#: the duration holds at least this many of the largest timestep
 MIN_CHECKPOINTS = 10
+#: each run is compared at most at this many of its steps
+MAX_SAMPLES = 2000
 #: the reference's own estimated error must be at most this fraction of tol
 REFERENCE_FRACTION = 0.01
 #: most steps of one reference run
@@ -67,7 +72,7 @@ class SweepRun:
 
 
 def checkpoint_spacing(dts: list[float], duration: float) -> float:
-    """The smallest common multiple [s] of the timesteps (as decimals), which the checkpoints are multiples of.
+    """The smallest common multiple [s] of the timesteps (as decimals): every run has a step there.
 
     Raises:
       BadInputError: fewer than MIN_CHECKPOINTS such multiples fit in the duration.
@@ -84,23 +89,25 @@ def checkpoint_spacing(dts: list[float], duration: float) -> float:
     return spacing
 
 
+def reference_step(dts: list[float], spacing: float) -> float:
+    """h = spacing / (2 lcm(spacing / dt_i)) [s]: every step of every run at dts is a multiple of h."""
+    return spacing / (2 * math.lcm(*(max(1, round(spacing / dt)) for dt in dts)))
+
+
 def default_grid(top: float, points: int = GRID_POINTS, decades: float = GRID_DECADES) -> list[float]:
-    """top / m [s] for `points` distinct integers m from 1 to about 10^decades, largest dt first."""
-    ms = []
-    for value in np.geomspace(1.0, 10.0**decades, points):
-        ms.append(max(round(value), ms[-1] + 1 if ms else 1))
-    return [top / m for m in ms]
+    """top / m [s] for `points` distinct m of SMOOTH nearest (in log) to a geometric sequence from 1 to
+    10^decades, largest dt first."""
+    chosen: list[int] = []
+    for target in np.geomspace(1.0, 10.0**decades, points):
+        free = [m for m in SMOOTH if m not in chosen and (not chosen or m > chosen[-1])]
+        chosen.append(min(free, key=lambda m: abs(math.log(m / target))))
+    return [top / m for m in chosen]
 
 
-def _stride(dt: float, spacing: float) -> int:
-    return max(1, round(spacing / dt))
-
-
-class _Reference:
-    """States at the checkpoints k * spacing, k = 0..K: qpos (K+1, nq), qvel (K+1, nv)."""
-
-    def __init__(self, qpos: np.ndarray, qvel: np.ndarray, kind: str, error_estimate: float, dt: float | None):
-        self.qpos, self.qvel, self.kind, self.error_estimate, self.dt = qpos, qvel, kind, error_estimate, dt
+def sample_rows(steps: int) -> np.ndarray:
+    """The step indices a run of `steps` steps is compared at: all, or every k-th for at most MAX_SAMPLES."""
+    stride = max(1, math.ceil(steps / MAX_SAMPLES))
+    return np.arange(0, steps + 1, stride)
 
 
 def _tangent_distance(model: mujoco.MjModel, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -115,62 +122,103 @@ def _tangent_distance(model: mujoco.MjModel, a: np.ndarray, b: np.ndarray) -> np
     return out
 
 
-def checkpoint_error(model: mujoco.MjModel, point: OperatingPoint, qpos, qvel, reference: _Reference) -> float:
-    """The module docstring's error [-] of states at the checkpoints against the reference's."""
-    count = min(len(qpos), len(reference.qpos))
-    ref_q, ref_v = reference.qpos[:count], reference.qvel[:count]
-    scale_q = float(np.max(_tangent_distance(model, ref_q, np.broadcast_to(point.qpos, ref_q.shape))))
-    scale_v = float(np.max(np.abs(ref_v), initial=0.0))
-    err_q = float(np.max(_tangent_distance(model, qpos[:count], ref_q)))
-    err_v = float(np.max(np.abs(qvel[:count] - ref_v), initial=0.0))
-    if not (math.isfinite(err_q) and math.isfinite(err_v)):
-        return math.inf
-    return max(err_q / scale_q if scale_q > 0 else err_q, err_v / scale_v if scale_v > 0 else err_v)
+class Reference:
+    """The reference motion: `states(dt, rows)` gives (qpos, qvel, kept) at times rows * dt [s].
+
+    Attributes:
+      kind: what it is, for people.
+      error_estimate: its own estimated error [-] (0 for the exact solution).
+      dt: its timestep [s] (None for the exact solution).
+    """
+
+    kind = ""
+    error_estimate = 0.0
+    dt: float | None = None
+
+    def states(self, dt: float, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        raise NotImplementedError
 
 
-def _at_checkpoints(trajectory: Trajectory, spacing: float, count: int) -> tuple[np.ndarray, np.ndarray]:
-    stride = _stride(trajectory.dt, spacing)
-    rows = np.arange(count) * stride
-    rows = rows[rows < len(trajectory.time)]
-    return trajectory.qpos[rows], trajectory.qvel[rows]
+class TrajectoryReference(Reference):
+    """A recorded run: states at its own steps; times between them are not kept."""
+
+    def __init__(self, trajectory: Trajectory, kind: str = "", error_estimate: float = 0.0):
+        self.trajectory, self.kind, self.error_estimate, self.dt = trajectory, kind, error_estimate, trajectory.dt
+
+    def states(self, dt, rows):
+        index = rows * (dt / self.dt)
+        nearest = np.round(index).astype(np.int64)
+        kept = (np.abs(index - nearest) <= 1e-6 * np.maximum(1.0, index)) & (nearest < len(self.trajectory.time))
+        picked = nearest[kept]
+        return self.trajectory.qpos[picked], self.trajectory.qvel[picked], kept
 
 
-def linear_reference(
-    model: mujoco.MjModel, linear: Linearization, start: Setup, spacing: float, count: int
-) -> _Reference:
-    """The exact solution of the affine linearization dx/dt = f0 + A (x - x_op) at the checkpoints.
+class ExactReference(Reference):
+    """The exact solution of the affine linearization dx/dt = f0 + A (x - x_op), at any time.
 
     f0 = (qvel, qacc, act_dot) at the operating point (zero at an equilibrium); x in the tangent space.
     """
-    point = linear.point
-    nv, n = model.nv, linear.A.shape[0]
-    work = copy.copy(model)
-    work.opt.integrator = int(mujoco.mjtIntegrator.mjINT_EULER)  # the continuous forward pass
-    data = mujoco.MjData(work)
-    with quiet_mujoco():
-        point.load(work, data)
-        mujoco.mj_forward(work, data)
-    drift = np.concatenate([data.qvel, data.qacc, data.act_dot])
-    x0 = np.zeros(n)
-    mujoco.mj_differentiatePos(work, x0[:nv], 1.0, point.qpos, start.qpos)
-    x0[nv : 2 * nv] = start.qvel - point.qvel
-    x0[2 * nv :] = (start.act if start.act is not None else point.act) - point.act
-    augmented = np.zeros((n + 1, n + 1))
-    augmented[:n, :n] = linear.A
-    augmented[:n, n] = drift
-    from scipy.linalg import expm  # scipy is a dependency; imported here to keep import time low
 
-    step = expm(augmented * spacing)
-    z = np.concatenate([x0, [1.0]])
-    states = np.empty((count, n))
-    for k in range(count):
-        states[k] = z[:n]
-        z = step @ z
-    qpos = np.empty((count, model.nq))
-    for k in range(count):
-        qpos[k] = point.qpos
-        mujoco.mj_integratePos(work, qpos[k], states[k, :nv], 1.0)
-    return _Reference(qpos, point.qvel + states[:, nv : 2 * nv], "exact solution of the linearization", 0.0, None)
+    kind = "exact solution of the linearization"
+
+    def __init__(self, model: mujoco.MjModel, linear: Linearization, start: Setup):
+        point = linear.point
+        self.nv, n = model.nv, linear.A.shape[0]
+        self.work = copy.copy(model)
+        self.work.opt.integrator = int(mujoco.mjtIntegrator.mjINT_EULER)  # the continuous forward pass
+        data = mujoco.MjData(self.work)
+        with quiet_mujoco():
+            point.load(self.work, data)
+            mujoco.mj_forward(self.work, data)
+        drift = np.concatenate([data.qvel, data.qacc, data.act_dot])
+        x0 = np.zeros(n)
+        mujoco.mj_differentiatePos(self.work, x0[: self.nv], 1.0, point.qpos, start.qpos)
+        x0[self.nv : 2 * self.nv] = start.qvel - point.qvel
+        x0[2 * self.nv :] = (start.act if start.act is not None else point.act) - point.act
+        self.augmented = np.zeros((n + 1, n + 1))
+        self.augmented[:n, :n] = linear.A
+        self.augmented[:n, n] = drift
+        self.z0 = np.concatenate([x0, [1.0]])
+        self.point = point
+
+    def states(self, dt, rows):
+        from scipy.linalg import expm  # scipy is a dependency; imported here to keep import time low
+
+        stride = int(rows[1] - rows[0]) if len(rows) > 1 else 1  # sample_rows: evenly strided from 0
+        step = expm(self.augmented * dt * stride)
+        z = self.z0.copy()
+        tangent = np.empty((len(rows), len(z) - 1))
+        for k in range(len(rows)):
+            tangent[k] = z[:-1]
+            z = step @ z
+        nv = self.nv
+        if self.work.nq == nv:
+            qpos = self.point.qpos + tangent[:, :nv]
+        else:
+            qpos = np.empty((len(rows), self.work.nq))
+            for k in range(len(rows)):
+                qpos[k] = self.point.qpos
+                mujoco.mj_integratePos(self.work, qpos[k], tangent[k, :nv], 1.0)
+        return qpos, self.point.qvel + tangent[:, nv : 2 * nv], np.ones(len(rows), bool)
+
+
+def run_error(model: mujoco.MjModel, point: OperatingPoint, outcome, reference: Reference) -> float | None:
+    """A run's error [-] (module docstring) at its sampled steps, None if it diverged."""
+    if isinstance(outcome, DivergedError):
+        return None
+    rows = sample_rows(len(outcome.time) - 1)
+    ref_q, ref_v, kept = reference.states(outcome.dt, rows)
+    rows = rows[kept]
+    if len(rows) < 2:
+        return None
+    qpos, qvel = outcome.qpos[rows], outcome.qvel[rows]
+    scale_q = float(np.max(_tangent_distance(model, ref_q, np.broadcast_to(point.qpos, ref_q.shape))))
+    scale_v = float(np.max(np.abs(ref_v), initial=0.0))
+    err_q = float(np.max(_tangent_distance(model, qpos, ref_q)))
+    err_v = float(np.max(np.abs(qvel - ref_v), initial=0.0))
+    if not (math.isfinite(err_q) and math.isfinite(err_v)):
+        return math.inf
+    return max(err_q / scale_q if scale_q > 0 else err_q, err_v / scale_v if scale_v > 0 else err_v)
 
 
 def linearity_change(model: mujoco.MjModel, linear: Linearization, trajectory: Trajectory) -> float:
@@ -201,24 +249,24 @@ def converged_reference(
     model: mujoco.MjModel,
     point: OperatingPoint,
     start: Setup,
-    spacing: float,
-    count: int,
-    finest_dt: float,
+    step: float,
+    duration: float,
     tol: float,
     *,
     coarse: Trajectory | None = None,
     nthread: int = 0,
-) -> _Reference:
-    """RK4 refined by halving from below `finest_dt` [s] until its Richardson error estimate is at most
-    REFERENCE_FRACTION x tol (module docstring), or REFERENCE_MAX_STEPS; the finest level is returned with
-    its estimate (which says whether it converged). `coarse`: an RK4 run at twice the first level's dt
-    (the sweep's finest), used as the coarsest level instead of running it again."""
-    duration = spacing * (count - 1)
-    dt = spacing / (2 * _stride(finest_dt, spacing))
-    levels: list[tuple[np.ndarray, np.ndarray]] = []
-    estimate, diffs, finest_level = math.inf, [], None
-    if coarse is not None and isinstance(coarse, Trajectory) and math.isclose(coarse.dt, 2 * dt):
-        levels.append(_at_checkpoints(coarse, spacing, count))  # the sweep's own finest RK4 run
+) -> Reference:
+    """RK4 at `step`, step/2, ... [s] until its Richardson error estimate is at most REFERENCE_FRACTION x tol
+    (module docstring), REFERENCE_MAX_STEPS, or the observed order cannot get there within that cap; the
+    finest level is returned with its estimate (which says whether it converged). `coarse`: an RK4 run
+    at 2 x step (the sweep's finest), used as the coarsest level instead of running it again."""
+    levels: list[Trajectory] = []
+    while 2 * round(duration / step) > REFERENCE_MAX_STEPS and 2 * step * MIN_CHECKPOINTS <= duration:
+        step *= 2  # too fine for the cap: the finest runs are then compared where their steps meet its steps
+    if isinstance(coarse, Trajectory) and math.isclose(coarse.dt, 2 * step):
+        levels.append(coarse)
+    dt, estimate, diffs = step, math.inf, []
+    target = REFERENCE_FRACTION * tol
     while True:
         dts = [dt] if levels else [2 * dt, dt]
         steps = [round(duration / d) for d in dts]
@@ -227,16 +275,14 @@ def converged_reference(
         outcomes = run_batched([Job(model, "rk4", d, s, start) for d, s in zip(dts, steps)], nthread=nthread)
         if any(isinstance(o, DivergedError) for o in outcomes):
             break
-        levels.extend(_at_checkpoints(o, spacing, count) for o in outcomes)
-        finest_level = dt
+        levels.extend(outcomes)
         if len(levels) >= 2:
-            coarse, fine = levels[-2], levels[-1]
-            diffs.append(checkpoint_error(model, point, *coarse, _Reference(*fine, "", 0.0, None)))
+            diff = run_error(model, point, levels[-2], TrajectoryReference(levels[-1]))
+            diffs.append(math.inf if diff is None else diff)
             order = 4.0
             if len(diffs) >= 2 and diffs[-1] > 0 and diffs[-2] > 0:
                 order = min(max(math.log2(diffs[-2] / diffs[-1]), 1.0), 4.0)
             estimate = diffs[-1] / (2**order - 1)
-            target = REFERENCE_FRACTION * tol
             if estimate <= target and len(diffs) >= 2:
                 break
             # at the observed order, reaching the target takes (estimate / target)^(1/p) times the steps:
@@ -244,10 +290,12 @@ def converged_reference(
             if len(diffs) >= 2 and max(steps) * (estimate / target) ** (1 / order) > REFERENCE_MAX_STEPS:
                 break
         dt /= 2
-    if not levels:
-        raise BadInputError("the RK4 reference diverged or needs too many steps; use a shorter --duration")
-    qpos, qvel = levels[-1]
-    return _Reference(qpos, qvel, "RK4, converged (Richardson)", estimate, finest_level)
+    if len(levels) < 2:
+        raise BadInputError(
+            "the RK4 reference diverged or needs more than"
+            f" {REFERENCE_MAX_STEPS} steps; use a shorter --duration or timesteps that divide the largest one"
+        )
+    return TrajectoryReference(levels[-1], "RK4, converged (Richardson)", estimate)
 
 
 def sweep_runs(
@@ -277,10 +325,3 @@ def cost_per_step(model: mujoco.MjModel, start: Setup, integrator: str, dt: floa
     step does not depend on dt; one long timing per integrator is steadier on a loaded machine than many
     short ones)."""
     return time_run(Job(copy.copy(model), integrator, dt, TIMING_STEPS, start), repeats=3) / TIMING_STEPS
-
-
-def error_of(model, point, outcome, spacing: float, reference: _Reference) -> float | None:
-    """A run's checkpoint error [-], None if it diverged."""
-    if isinstance(outcome, DivergedError):
-        return None
-    return checkpoint_error(model, point, *_at_checkpoints(outcome, spacing, len(reference.qpos)), reference)

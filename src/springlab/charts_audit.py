@@ -11,7 +11,6 @@ audit.png has three panels:
 
 from __future__ import annotations
 
-import math
 import pathlib
 
 from . import outputs
@@ -92,13 +91,11 @@ def _cost_panel(result: Audit, ax) -> None:
     if front:
         ax.loglog([r.wall_time_s for r in front], [max(r.error, floor) for r in front], "k-", lw=2, alpha=0.4)
     ax.axhline(result.tol, color="k", ls=":", lw=1, label=f"tol {result.tol:g}")
-    own = next(
-        (r for r in result.runs if r.integrator == result.own["integrator"] and math.isclose(r.dt, result.own["dt"])),
-        None,
-    )
-    if own is not None and own.error is not None:
-        ax.scatter(own.wall_time_s, max(own.error, floor), marker="*", s=200, color="gold", edgecolors="k", zorder=5)
-        ax.annotate(" own setting", (own.wall_time_s, max(own.error, floor)), fontsize=8)
+    own = result.own
+    if own["error"] is not None:
+        where = (own["wall_time_s"], max(own["error"], floor))
+        ax.scatter(*where, marker="*", s=200, color="gold", edgecolors="k", zorder=5)
+        ax.annotate(" own setting", where, fontsize=8)
     pick = result.recommendation
     if pick["integrator"] is not None:
         ax.scatter(pick["wall_time_s"], max(pick["error"], floor), s=200, facecolors="none", edgecolors="k", zorder=5)

@@ -131,7 +131,7 @@ def _validation_table(rows: list[dict]) -> str:
 
     out = [
         "<table><tr><th>scene</th><th>scenario</th><th>integrator</th><th>dt [s]</th><th>steps</th>"
-        "<th>max relative error</th><th>tolerance</th><th>result</th><th>basis</th></tr>"
+        "<th>error of</th><th>error</th><th>tolerance</th><th>result</th><th>basis</th></tr>"
     ]
     for r in rows:
         checks = {c["name"] for c in r.get("checks", [])}
@@ -142,13 +142,14 @@ def _validation_table(rows: list[dict]) -> str:
         out.append(
             f"<tr><td>{_e(r['scene'])}</td><td><a href='#{_e(r['scene'])}-{_e(r['scenario'])}'>"
             f"{_e(r['scenario'])}</a></td><td>{_e(r['integrator'])}</td><td class='num'>{_number(r['dt'], 'g')}</td>"
-            f"<td class='num'>{_e(r.get('steps', ''))}</td><td class='num'>{_number(r['max_rel_error'])}</td>"
+            f"<td class='num'>{_e(r.get('steps', ''))}</td><td>{_e(r.get('measure', 'trajectory max_rel'))}</td>"
+            f"<td class='num'>{_number(r['max_rel_error'])}</td>"
             f"<td class='num'>{_number(r['tolerance'])}</td><td>{_verdict(r['passed'], r.get('verdict'))}</td>"
             f"<td>{note(basis)}</td></tr>"
         )
         for c in r.get("checks", []):
             out.append(
-                f"<tr class='check'><td></td><td colspan='4'>check <code>{_e(c['name'])}</code>: "
+                f"<tr class='check'><td></td><td colspan='5'>check <code>{_e(c['name'])}</code>: "
                 f"{_number(c['value'], '.10g')} against {_number(c['reference'], '.10g')}</td>"
                 f"<td class='num'>{_number(c['error'])}</td><td class='num'>{_number(c['tolerance'])}</td>"
                 f"<td>{_verdict(c['passed'])}</td><td>{note(c.get('basis', ''))}</td></tr>"

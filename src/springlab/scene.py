@@ -29,19 +29,35 @@ from . import model_files
 from .errors import ParameterError, UnknownNameError
 from .simulate import Trajectory, quiet_mujoco, stability_limit
 
+#: smallest body mass [kg] and principal inertia [kg m^2] MuJoCo compiles: its mjMINVAL
+#: (1e-15); a moving body below it fails `MjSpec.compile` ("must be larger than mjMINVAL")
+MIN_MASS = float(mujoco.mjMINVAL)
+#: why a mass-like parameter stops at MIN_MASS, for its error message
+MIN_MASS_REASON = "MuJoCo cannot compile a body whose mass or principal inertia is below its mjMINVAL = 1e-15"
+
 
 @dataclasses.dataclass(frozen=True)
 class Parameter:
     """A scene parameter in SI units.
 
-    Attributes:
-      name: as used by `--set NAME=VALUE` and keyword arguments.
-      unit: SI unit, e.g. 'kg', 'N/m', 'N s/m', 'm', 'm/s', 'Hz', '-' for none.
-      description: one line.
-      minimum: lowest valid value (None: unbounded).
-      minimum_inclusive: whether `minimum` itself is valid.
-      maximum: highest valid value (None: unbounded).
-      default: default value, or None when it is read back from the model.
+    Attributes
+    ----------
+    name
+        as used by `--set NAME=VALUE` and keyword arguments.
+    unit
+        SI unit, e.g. 'kg', 'N/m', 'N s/m', 'm', 'm/s', 'Hz', '-' for none.
+    description
+        one line.
+    minimum
+        lowest valid value (None: unbounded).
+    minimum_inclusive
+        whether `minimum` itself is valid.
+    maximum
+        highest valid value (None: unbounded).
+    default
+        default value, or None when it is read back from the model.
+    reason
+        why the range is what it is (added to the error message), e.g. MIN_MASS_REASON.
     """
 
     name: str
@@ -51,6 +67,7 @@ class Parameter:
     minimum_inclusive: bool = True
     maximum: float | None = None
     default: float | None = None
+    reason: str = ""
 
     def valid_range(self) -> str:
         """Human-readable valid range, e.g. '> 0 kg'."""
@@ -71,7 +88,8 @@ class Parameter:
         low_ok = self.minimum is None or number > self.minimum or (self.minimum_inclusive and number == self.minimum)
         high_ok = self.maximum is None or number <= self.maximum
         if not math.isfinite(number) or not low_ok or not high_ok:
-            raise ParameterError(f"{self.name} must be a finite number {self.valid_range()}, got {value!r}")
+            why = f" ({self.reason})" if self.reason else ""
+            raise ParameterError(f"{self.name} must be a finite number {self.valid_range()}{why}, got {value!r}")
         return number
 
 
@@ -79,16 +97,25 @@ class Parameter:
 class Scenario:
     """A named question a scene answers.
 
-    Attributes:
-      name: scenario name.
-      description: one line.
-      duration: default simulated time [s].
-      presets: parameter values this scenario sets (user overrides win).
-      derive: optional function(params, explicitly_set_names) -> extra values,
+    Attributes
+    ----------
+    name
+        scenario name.
+    description
+        one line.
+    duration
+        default simulated time [s].
+    presets
+        parameter values this scenario sets (user overrides win).
+    derive
+        optional function(params, explicitly_set_names) -> extra values,
         for presets that depend on other parameters (e.g. damping from a ratio).
-      exact: whether an exact reference exists (validated by `validate`).
-      dt: the scenario's validated timestep [s] (None: the scene's `dt`).
-      variant: for a scene whose scenarios differ in their model (e.g. the car: 1 DOF,
+    exact
+        whether an exact reference exists (validated by `validate`).
+    dt
+        the scenario's validated timestep [s] (None: the scene's `dt`).
+    variant
+        for a scene whose scenarios differ in their model (e.g. the car: 1 DOF,
         pitch/heave, quarter car), the object that carries what differs; the scene's
         hooks delegate to it instead of dispatching on scenario names (None: unused).
     """
@@ -107,19 +134,27 @@ class Scenario:
 class Reference:
     """The exact solution of a scenario at the trajectory's times.
 
-    Attributes:
-      pos, vel: joint name -> exact position [m or rad] and velocity [m/s or rad/s].
-      system: for linear scenes, the matrix A [1/s] of the autonomous system
+    Attributes
+    ----------
+    pos, vel
+        joint name -> exact position [m or rad] and velocity [m/s or rad/s].
+    system
+        for linear scenes, the matrix A [1/s] of the autonomous system
         z' = A z that generated the reference (forcing included as generator
         states); None otherwise. Used to derive the error bound.
-      states: (n, dim) exact z(t), or None.
-      rows: joint name -> (row of its position, row of its velocity) in z.
-      tolerance: for scenes without `system`, the relative tolerance [-] every
+    states
+        (n, dim) exact z(t), or None.
+    rows
+        joint name -> (row of its position, row of its velocity) in z.
+    tolerance
+        for scenes without `system`, the relative tolerance [-] every
         compared column is held to, and `tolerance_basis` says why.
-      switches: for a linear scene whose input is switched on a step boundary:
+    switches
+        for a linear scene whose input is switched on a step boundary:
         [(time [s], A after it)], in time order; `system` holds before the first.
         The states z(t) stay continuous across a switch.
-      input_error: column -> exact max absolute difference [m or m/s] between the
+    input_error
+        column -> exact max absolute difference [m or m/s] between the
         responses to the input the model realizes and the true input, added to
         that column's tolerance (`tolerance_basis` says where it comes from).
     """
@@ -142,14 +177,21 @@ class Check:
     For scenes without an exact trajectory (non-linear ones), `validate` holds a
     scenario to its checks instead of (or besides) the compared columns.
 
-    Attributes:
-      name: what is checked, ending in its unit like a quantity, e.g. 'period_s'.
-      value: measured from the simulation (in the name's unit).
-      reference: the independent expectation (closed form, quadrature, ...).
-      tolerance: bound on `error` [-]: relative, or absolute in the name's unit
+    Attributes
+    ----------
+    name
+        what is checked, ending in its unit like a quantity, e.g. 'period_s'.
+    value
+        measured from the simulation (in the name's unit).
+    reference
+        the independent expectation (closed form, quadrature, ...).
+    tolerance
+        bound on `error` [-]: relative, or absolute in the name's unit
         when the reference is 0.
-      basis: why the tolerance is what it is (one line).
-      certifies_error: whether `error` is an error of a physical result, which a PASS
+    basis
+        why the tolerance is what it is (one line).
+    certifies_error
+        whether `error` is an error of a physical result, which a PASS
         without a requested tolerance certifies only up to springlab.compare.CERTIFIED_CAP
         (False for a diagnostic, e.g. an observed order of convergence against the
         integrator's).
@@ -190,9 +232,12 @@ class Check:
 class Setup:
     """Initial state and inputs of one run.
 
-    Attributes:
-      qpos, qvel, act: initial state (None: the model's rest state).
-      control: (nu,) or (steps, nu) open-loop controls, held over each step.
+    Attributes
+    ----------
+    qpos, qvel, act
+        initial state (None: the model's rest state).
+    control
+        (nu,) or (steps, nu) open-loop controls, held over each step.
     """
 
     qpos: np.ndarray | None = None
@@ -298,9 +343,12 @@ class Scene:
     def resolve(self, scenario: Scenario, overrides: Mapping[str, Any]) -> dict[str, float]:
         """Final parameter values: MJCF defaults < scenario presets < overrides.
 
-        Raises:
-          UnknownNameError: an override names no parameter of this scene.
-          ParameterError: a value is not a finite number in its valid range.
+        Raises
+        ------
+        UnknownNameError
+            an override names no parameter of this scene.
+        ParameterError
+            a value is not a finite number in its valid range.
         """
         for name in overrides:
             if name not in self.parameters:
@@ -330,7 +378,14 @@ class Scene:
         spec = self.model_spec()
         self.edit(spec, params, scenario)
         with quiet_mujoco():
-            return spec.compile()
+            try:
+                return spec.compile()
+            except ValueError as error:
+                # a backstop: each parameter's range should catch this first (tests/test_cli_inputs.py)
+                reason = str(error).splitlines()[0].removeprefix("Error: ")
+                raise ParameterError(
+                    f"MuJoCo cannot compile {self.name} {scenario.name} with these parameters: {reason}"
+                ) from None
 
     def setup(
         self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, steps: int, dt: float

@@ -88,7 +88,7 @@ import numpy as np
 from .. import events, exciter
 from ..checks import energy_drift_check, joint_jacobian, linearization_check, observed_order_check, richardson_check
 from ..errors import ParameterError
-from ..scene import Check, Parameter, Scenario, Scene, Setup
+from ..scene import MIN_MASS, MIN_MASS_REASON, Check, Parameter, Scenario, Scene, Setup
 from ..simulate import ORDERS, Trajectory, simulate
 from . import _nonlinear_chaos
 from ._nonlinear_chaos import (
@@ -225,7 +225,7 @@ class Nonlinear(Scene):
     parameters = {
         p.name: p
         for p in (
-            Parameter("mass", "kg", "mass of the block", minimum=0.0, minimum_inclusive=False),
+            Parameter("mass", "kg", "mass of the block", minimum=MIN_MASS, reason=MIN_MASS_REASON),
             Parameter("k1", "N/m", "linear spring coefficient (spring force k1 x + k3 x^3)"),
             Parameter("k3", "N/m^3", "cubic spring coefficient (< 0 softening, > 0 hardening)"),
             Parameter("damping", "N s/m", "damper coefficient d", minimum=0.0),

@@ -85,7 +85,7 @@ import mujoco
 import numpy as np
 
 from .. import analytic
-from ..scene import Parameter, Reference, Scenario, Scene, Setup
+from ..scene import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene, Setup
 from ..simulate import Trajectory, integrator_id, quiet_mujoco
 from ..simulate import stability_limit as joint_damping_stability_limit
 
@@ -129,14 +129,18 @@ class PrinterHead(Scene):
         p.name: p
         for p in (
             Parameter(
-                "carriage_mass", "kg", "mass of the carriage with the print head", minimum=0.0, minimum_inclusive=False
+                "carriage_mass",
+                "kg",
+                "mass of the carriage with the print head",
+                minimum=MIN_MASS,
+                reason=MIN_MASS_REASON,
             ),
             Parameter(
                 "motor_mass",
                 "kg",
                 "motor-side mass: rotor+pulley inertia J / r^2",
-                minimum=0.0,
-                minimum_inclusive=False,
+                minimum=MIN_MASS,
+                reason=MIN_MASS_REASON,
             ),
             Parameter(
                 "belt_stiffness",
