@@ -31,8 +31,21 @@ LAYERS: dict[str, tuple[str, ...]] = {
         "scenes",
     ),
     "one run": ("api",),
-    "studies": ("batch", "tradeoff", "stability", "extremes", "auto", "design", "audit", "fit", "sweep", "executor"),
-    "outputs": ("charts", "plots", "render", "report", "media"),
+    "studies": (
+        "batch",
+        "tradeoff",
+        "stability",
+        "extremes",
+        "auto",
+        "design",
+        "audit",
+        "fit",
+        "sweep",
+        "sweeps",
+        "executor",
+        "sobol",
+    ),
+    "outputs": ("charts", "plots", "render", "report", "media", "sweep_plot"),
     "front": ("cli", "demo", "__main__", "__init__"),
 }
 PREFIXES = {"scenes.": "physics", "render_": "outputs"}

@@ -13,12 +13,14 @@ from .api import Result
 from .auto import run, validate
 from .errors import BadInputError, DivergedError, SpringlabError, UnknownNameError
 from .scenes import SCENES
+from .sweeps import sweep
 
 __all__ = [
     "analytic",
     "errors",
     "run",
     "validate",
+    "sweep",
     "Result",
     "SCENES",
     "SpringlabError",

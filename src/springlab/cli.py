@@ -14,8 +14,11 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
+import numpy as np
+
 from . import api, auto, charts, demo, outputs, scenes, stability, tradeoff
 from .errors import BadInputError, SpringlabError
+from .executor import CONNECT_TIMEOUT_S, Executor
 from .simulate import INTEGRATORS
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_DIVERGED = 0, 1, 2, 3
@@ -67,6 +70,24 @@ def _timing_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _print_json(value: Any) -> None:
     print(outputs.dumps(value))
+
+
+def _executor_arguments(parser: argparse.ArgumentParser) -> None:
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument(
+        "--workers", type=int, metavar="N", help="run the chunks on a local dask cluster of N worker processes"
+    )
+    where.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="run the chunks on a running dask scheduler, e.g. tcp://10.0.0.5:8786"
+        f" (unreachable for {CONNECT_TIMEOUT_S:g} s: exit 2)",
+    )
+
+
+def _executor(args) -> Executor:
+    """Where a study's chunks run: locally (default), --workers N or --scheduler ADDRESS."""
+    return Executor(workers=args.workers, scheduler=args.scheduler, progress=False if args.json else None)
 
 
 # -- commands -----------------------------------------------------------------
@@ -379,6 +400,47 @@ def _print_design(design, study, output: str | None) -> None:
         print(f"  wrote {pathlib.Path(output) / 'design.json'}, configurations.csv and design.png")
 
 
+def cmd_sweep(args) -> int:
+    from . import sweep_plot, sweeps
+
+    with _executor(args) as executor:
+        result = sweeps.sweep(
+            args.scene,
+            args.scenario,
+            vary=args.vary,
+            samples=args.samples,
+            seed=args.seed,
+            integrator=args.integrator,
+            dt=args.dt,
+            duration=args.duration,
+            executor=executor,
+            **_parse_sets(args.set),
+        )
+    if args.output:
+        sweep_plot.write(result, args.output, args.quantity)
+    if args.json:
+        _print_json(result.summary())
+        return EXIT_OK
+    s = result.summary()
+    print(
+        f"{s['scene']} / {s['scenario']}: {s['configurations']} configurations ({s['integrator']}, dt = {s['dt']:g} s,"
+        f" {s['duration']:g} s each) in {s['wall_time_s']:.2f} s on {s['executor']}"
+        f" ({s['configurations_per_s']:.0f}/s, {s['chunks']} chunks)"
+    )
+    print(f"  passed {s['passed']}, failed {s['failed']}, diverged {s['diverged']}, invalid {s['invalid']}")
+    quantity = args.quantity or (sweep_plot.default_quantity(result) if s["diverged"] < s["configurations"] else None)
+    if quantity:
+        values = result.column(quantity)
+        finite = values[np.isfinite(values)]
+        if finite.size:
+            best = int(np.nanargmin(np.where(np.isfinite(values), values, np.nan)))
+            where = ", ".join(f"{n} = {result.values[n][best]:.4g}" for n in result.values)
+            print(f"  {quantity}: min {finite.min():.4g} (at {where}), max {finite.max():.4g}")
+    if args.output:
+        print(f"  wrote {pathlib.Path(args.output) / 'sweep.csv'} and sweep.png")
+    return EXIT_OK
+
+
 def cmd_demo(args) -> int:
     """The main job: validate every scene and write everything under the output folder."""
     start = time.perf_counter()
@@ -502,6 +564,29 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--output", metavar="DIR", help="write DIR/design.json, DIR/configurations.csv, DIR/design.png")
     p.add_argument("--json", action="store_true", help="print design.json")
     COMMANDS["design"] = cmd_design
+
+    p = sub.add_parser("sweep", help="run a scenario over a grid (or random samples) of parameters, batched")
+    _scene_arguments(p)
+    p.add_argument(
+        "--vary",
+        action="append",
+        default=[],
+        required=True,
+        metavar="NAME=LOW:HIGH:N[:log]",
+        help="vary a parameter over N values from LOW to HIGH, SI units (repeatable; :log for log spacing)",
+    )
+    p.add_argument("--samples", type=int, metavar="N", help="N random points in the box instead of the full grid")
+    p.add_argument("--seed", type=int, default=0, help="seed of the random points (default 0)")
+    p.add_argument("--integrator", metavar="NAME", help=f"one of {', '.join(INTEGRATORS)} (default: the scene's)")
+    p.add_argument("--dt", type=float, metavar="SECONDS", help="timestep [s] (default: the scene's validated one)")
+    p.add_argument("--duration", type=float, metavar="SECONDS", help="simulated time [s] (default: the scenario's)")
+    p.add_argument(
+        "--quantity", metavar="NAME", help="what sweep.png shows (default: the scenario's headline quantity)"
+    )
+    _executor_arguments(p)
+    p.add_argument("--output", metavar="DIR", help="write DIR/sweep.csv and DIR/sweep.png")
+    p.add_argument("--json", action="store_true", help="print the sweep (setting, counts, every row) as JSON")
+    COMMANDS["sweep"] = cmd_sweep
 
     p = sub.add_parser("demo", help="the main job: validate everything, write out/")
     p.add_argument("--output", default="out", metavar="DIR", help="output folder (default: out)")
