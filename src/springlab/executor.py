@@ -106,6 +106,7 @@ class Executor:
       timeout: seconds [s] to wait for the scheduler (and for LocalCluster workers) to answer.
       progress: None: a progress bar on a terminal only; False: never (--json, tests).
       on_result: optional callback(chunk index) after each chunk's result arrives (tests use it).
+      nthread: batch threads of a local run (0: one per CPU); dask tasks always get 1.
 
     Use as a context manager (or call `close`) so a LocalCluster started here is shut down;
     one Executor can run several maps (a study and its plane) on the same cluster.
@@ -119,6 +120,7 @@ class Executor:
         timeout: float = CONNECT_TIMEOUT_S,
         progress: bool | None = None,
         on_result: Callable[[int], None] | None = None,
+        nthread: int = 0,
     ):
         if workers is not None and scheduler is not None:
             raise BadInputError("give --workers N (a local cluster) or --scheduler ADDRESS (a running one), not both")
@@ -127,7 +129,9 @@ class Executor:
         if not (isinstance(timeout, (int, float)) and timeout > 0):
             raise BadInputError(f"timeout must be a number > 0 s, got {timeout!r}")
         self.workers, self.scheduler, self.timeout = workers, scheduler, float(timeout)
-        self.progress, self.on_result = progress, on_result
+        if isinstance(nthread, bool) or not isinstance(nthread, int) or nthread < 0:
+            raise BadInputError(f"threads must be an integer >= 0 (0: one per CPU), got {nthread!r}")
+        self.progress, self.on_result, self.nthread = progress, on_result, nthread
         self._cluster = None
         self._client = None
 
@@ -203,6 +207,8 @@ class Executor:
     ) -> list[Any]:
         """[function(payload, nthread=...) for payload in payloads], in order.
 
+        Locally `nthread` is the executor's (0: every CPU); on dask it is 1 (one task per worker thread).
+
         Args:
           function: a module-level (importable) function of plain data; it runs its chunk as one
             batched MuJoCo call on `nthread` threads (0: every CPU) and returns plain data.
@@ -219,7 +225,7 @@ class Executor:
         with progress.bar(sum(sizes), description=description, unit=unit, enabled=self.progress) as bar:
             if not self.distributed:
                 for index, payload in enumerate(payloads):
-                    results[index] = function(payload, nthread=0)
+                    results[index] = function(payload, nthread=self.nthread)
                     bar.update(sizes[index])
                     if self.on_result is not None:
                         self.on_result(index)
