@@ -85,9 +85,11 @@ def _executor_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def _executor(args) -> Executor:
-    """Where a study's chunks run: locally (default), --workers N or --scheduler ADDRESS."""
-    return Executor(workers=args.workers, scheduler=args.scheduler, progress=False if args.json else None)
+def _executor(args, nthread: int = 0) -> Executor:
+    """Where a study's chunks run: locally (default, on `nthread` threads), --workers N or --scheduler ADDRESS."""
+    return Executor(
+        workers=args.workers, scheduler=args.scheduler, progress=False if args.json else None, nthread=nthread
+    )
 
 
 # -- commands -----------------------------------------------------------------
@@ -363,16 +365,55 @@ def _print_stability(report: dict, output: str | None) -> None:
 def cmd_design(args) -> int:
     from . import design  # here, not at the top: mujoco.batch is only needed by this command
 
-    study = design.run_study(
-        args.scene, levels=args.levels, plane_levels=args.plane, nthread=args.threads, **_parse_sets(args.set)
-    )
+    overrides = _parse_sets(args.set)
+    if args.sobol is not None:
+        from . import sobol
+
+        sobol.check_base_samples(args.sobol)  # bad input before minutes of simulation
+    with _executor(args, nthread=args.threads) as executor:
+        study = design.run_study(
+            args.scene,
+            levels=args.levels,
+            plane_levels=args.plane,
+            executor=executor,
+            omega_dt=design.OMEGA_DT,
+            **overrides,
+        )
+        indices = None
+        if args.sobol is not None:
+            indices = sobol.printer_head(args.sobol, seed=args.seed, executor=executor, **overrides)
+    extra = {} if indices is None else {"sobol": indices.summary()}
     if args.output:
-        design.write(study, args.output)
+        design.write(study, args.output, extra)
+        if indices is not None:
+            charts.plot_sobol(indices, pathlib.Path(args.output) / "sobol.png")
     if args.json:
-        _print_json(design.summary(study))
+        _print_json({**design.summary(study), **extra})
     else:
         _print_design(design, study, args.output)
+        if indices is not None:
+            _print_sobol(sobol, indices, args.output)
     return EXIT_OK
+
+
+def _print_sobol(sobol, indices, output: str | None) -> None:
+    s = indices.summary()
+    print(
+        f"Sobol indices of positioning time: {s['runs']} runs in {s['wall_time_s']:.1f} s on {s['executor']}"
+        f" ({s['runs_per_s']:.0f}/s), {s['unsettled']} unsettled"
+    )
+    print(f"  {'property':<16}{'range':>24}{'S1':>14}{'ST':>14}{'ST-S1':>8}{'elasticity':>12}")
+    for name in s["ranking"]:
+        low, high = s["parameters"][name]["range"]
+        unit = sobol.PARAMETERS[name]
+        print(
+            f"  {name:<16}{f'{low:.3g}..{high:.3g} {unit}':>24}{s['S1'][name]:>8.3f}+-{s['S1_conf'][name]:<4.2f}"
+            f"{s['ST'][name]:>8.3f}+-{s['ST_conf'][name]:<4.2f}{s['interactions'][name]:>8.3f}"
+            f"{s['elasticities'][name]:>+12.3f}"
+        )
+    print(sobol.answer(indices))
+    if output:
+        print(f"  wrote {pathlib.Path(output) / 'sobol.png'} and the sobol entry of design.json")
 
 
 def _print_design(design, study, output: str | None) -> None:
@@ -561,7 +602,20 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="NAME=VALUE",
         help="start the sweep from another parameter value, SI units (repeatable)",
     )
-    p.add_argument("--output", metavar="DIR", help="write DIR/design.json, DIR/configurations.csv, DIR/design.png")
+    p.add_argument(
+        "--sobol",
+        type=int,
+        nargs="?",
+        const=16384,
+        metavar="N",
+        help="also Sobol indices of carriage mass, belt stiffness, damping ratio, force and move length:"
+        " N x 7 runs, N a power of 2 (bare --sobol: 16384, 114,688 runs)",
+    )
+    p.add_argument("--seed", type=int, default=0, help="seed of the Sobol sequence and bootstrap (default 0)")
+    _executor_arguments(p)
+    p.add_argument(
+        "--output", metavar="DIR", help="write DIR/design.json, configurations.csv, design.png (and sobol.png)"
+    )
     p.add_argument("--json", action="store_true", help="print design.json")
     COMMANDS["design"] = cmd_design
 

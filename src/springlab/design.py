@@ -804,8 +804,9 @@ def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
     return path
 
 
-def write(study: Study, directory: str | pathlib.Path) -> list[pathlib.Path]:
-    """Write design.json, configurations.csv and design.png (the plot) into `directory`."""
+def write(study: Study, directory: str | pathlib.Path, extra: Mapping[str, Any] | None = None) -> list[pathlib.Path]:
+    """Write design.json (the summary, plus `extra` entries such as `sobol`), configurations.csv and
+    design.png (the plot) into `directory`."""
     folder = outputs.prepare_directory(directory)
     columns = {name: study.values[name] for name in PROPERTIES}
     columns.update(
@@ -823,7 +824,7 @@ def write(study: Study, directory: str | pathlib.Path) -> list[pathlib.Path]:
     written = outputs.write_text_files(
         folder,
         {
-            "design.json": outputs.dumps(summary(study)) + "\n",
+            "design.json": outputs.dumps({**summary(study), **(extra or {})}) + "\n",
             "configurations.csv": outputs.csv_text(columns),
         },
     )
