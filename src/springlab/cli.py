@@ -273,7 +273,10 @@ def _verdict(summary: dict) -> int:
 
 
 def cmd_tradeoff(args) -> int:
-    result = tradeoff.tradeoff(args.scene, args.scenario, tol=args.tol, duration=args.duration, **_parse_sets(args.set))
+    with _executor(args) as executor:
+        result = tradeoff.tradeoff(
+            args.scene, args.scenario, tol=args.tol, duration=args.duration, executor=executor, **_parse_sets(args.set)
+        )
     if args.output:
         charts.write_tradeoff(result, args.output)
     if args.json:
@@ -316,9 +319,11 @@ def _print_tradeoff(result, output: str | None) -> None:
 
 
 def cmd_stability(args) -> int:
-    report = stability.stability_report(full=args.full)
+    with _executor(args) as executor:
+        report = stability.stability_report(full=args.full, executor=executor)
+        amplification = stability.amplification_map(executor=executor) if args.output else None
     if args.output:
-        charts.write_stability(report, stability.amplification_map(), args.output)
+        charts.write_stability(report, amplification, args.output)
     if args.json:
         _print_json(stability.report_json(report))
     else:
@@ -563,6 +568,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--tol", type=float, metavar="TOL", help="recommend the cheapest setting meeting this relative error"
     )
     p.add_argument("--duration", type=float, metavar="SECONDS", help="simulated time [s] (default: the scenario's)")
+    _executor_arguments(p)
     p.add_argument("--output", metavar="DIR", help="write DIR/tradeoff.json and DIR/tradeoff.png")
     p.add_argument("--json", action="store_true", help="print tradeoff.json")
     COMMANDS["tradeoff"] = cmd_tradeoff
@@ -573,6 +579,7 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="more damping ratios and extreme cases, advice verified by running it (slower)",
     )
+    _executor_arguments(p)
     p.add_argument("--output", metavar="DIR", help="write DIR/stability.json, stability.png and energy.png")
     p.add_argument("--json", action="store_true", help="print stability.json")
     COMMANDS["stability"] = cmd_stability
