@@ -172,7 +172,7 @@ class Executor:
                 n_workers=self.workers,
                 threads_per_worker=1,
                 processes=True,
-                dashboard_address=None,
+                dashboard_address=":0",  # any free port: a second cluster must not warn that 8787 is taken
                 silence_logs=logging.CRITICAL,
                 # the workers import springlab from wherever this process does
                 env={"PYTHONPATH": _pythonpath_for_workers()},
