@@ -264,6 +264,11 @@ def _pythonpath_for_workers() -> str:
     return os.pathsep.join(p for p in (here, os.environ.get("PYTHONPATH", "")) if p)
 
 
+def ping(payload: Any, nthread: int = 0) -> Any:
+    """A chunk that does nothing (returns its payload): measures the executor's per-task overhead."""
+    return payload
+
+
 def chunked(count: int, size: int) -> list[range]:
     """Index ranges [0, size), [size, 2 size), ... covering `count` items; the study's chunks.
 
