@@ -60,9 +60,9 @@ def test_input_error_is_zero_on_the_grid_and_exactly_the_realized_difference_off
     scenario = scene.scenario("road_bump")
     params = scene.resolve(scenario, {})
     model = scene.build(params, scenario)
-    on_grid = scene.reference(model, params, scenario, np.arange(2001) * 5e-4)
+    on_grid = scene.reference(model, params, scenario, np.arange(2001) * 5e-4, dt=5e-4)
     assert all(value == 0.0 for value in on_grid.input_error.values())
     assert on_grid.tolerance_basis == ""
-    off_grid = scene.reference(model, params, scenario, np.arange(1429) * 7e-4)
+    off_grid = scene.reference(model, params, scenario, np.arange(1429) * 7e-4, dt=7e-4)
     assert off_grid.input_error["wheel_vel"] > 0.0
     assert off_grid.switches[0][0] == pytest.approx(714 * 7e-4)

@@ -169,3 +169,17 @@ def test_tradeoff_stability_and_design_charts_leave_the_callers_backend_alone(tm
     )
     subprocess.run([sys.executable, "-c", code], check=True, timeout=300)
     assert (tmp_path / "t.png").stat().st_size > 0 and (tmp_path / "d.png").stat().st_size > 0
+
+
+def test_plotting_leaves_the_callers_rcparams_alone_and_still_uses_its_own_style(tmp_path):
+    code = (
+        "import matplotlib\n"
+        "before = dict(matplotlib.rcParams)\n"
+        "import springlab.plots as p, springlab.api as a\n"
+        "figure = p.time_series(a.run('slider', 'free', duration=0.2))\n"
+        f"p.save(figure, {str(tmp_path / 't.png')!r})\n"
+        "changed = [k for k, v in matplotlib.rcParams.items() if before[k] != v]\n"
+        "assert not changed, changed\n"
+        "assert figure.axes[0].xaxis.label.get_fontsize() == p.STYLE['font.size']\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=120)

@@ -200,6 +200,8 @@ def test_render_command_writes_a_composite_video(tmp_path, capsys):
             "--height",
             "120",
             "--composite",
+            "--slow-motion",
+            "1",
             "--output",
             str(output),
         ]
@@ -234,9 +236,12 @@ def test_render_command_exits_3_on_divergence_and_writes_nothing(tmp_path, capsy
 
 
 def test_render_run_clips_to_the_requested_seconds(undamped, tmp_path):
-    info = media.render_run(undamped, tmp_path / "v.mp4", fps=10, width=64, height=48, duration=1.0)
+    info = media.render_run(undamped, tmp_path / "v.mp4", fps=10, width=64, height=48, duration=1.0, slow_motion=1)
     assert info["frames"] == 10
     assert math.isclose(info["frames"] / info["fps"], 1.0)
+    # slowed down, the same second of simulation fills S times the frames
+    info = media.render_run(undamped, tmp_path / "v.mp4", fps=10, width=64, height=48, duration=1.0, slow_motion=4)
+    assert info["frames"] == 40 and info["slow_motion"] == 4
 
 
 def test_declared_springs_are_drawn_between_their_sites():

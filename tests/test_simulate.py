@@ -28,6 +28,7 @@ def test_rollout_path_is_bit_identical_to_a_plain_mj_step_loop(integrator, scena
     trajectory = simulate(
         model, integrator=integrator, dt=1e-3, duration=0.5, qpos=setup.qpos, qvel=setup.qvel, control=setup.control
     )
+    model.opt.integrator, model.opt.timestep = INTEGRATORS[integrator], 1e-3  # the plain loop's own setting
     data = mujoco.MjData(model)
     data.qpos[:], data.qvel[:], data.ctrl[:] = setup.qpos, setup.qvel, setup.control
     qpos = [data.qpos.copy()]
@@ -36,6 +37,18 @@ def test_rollout_path_is_bit_identical_to_a_plain_mj_step_loop(integrator, scena
         qpos.append(data.qpos.copy())
     np.testing.assert_array_equal(trajectory.qpos, np.array(qpos))
     assert trajectory.time[0] == 0.0 and trajectory.time[-1] == pytest.approx(0.5)
+
+
+@pytest.mark.parametrize("integrator", list(INTEGRATORS))
+def test_simulate_never_modifies_its_callers_model(integrator):
+    # as mujoco.rollout: one model may serve many runs (a sweep), so no run may leak its setting into it
+    scene, chosen, params, model = _slider_model("free")
+    before = (int(model.opt.integrator), float(model.opt.timestep), model.body_mass.copy(), model.qpos0.copy())
+    simulate(model, integrator=integrator, dt=7e-4, duration=0.07)
+    after = (int(model.opt.integrator), float(model.opt.timestep), model.body_mass.copy(), model.qpos0.copy())
+    assert before[:2] == after[:2]
+    np.testing.assert_array_equal(before[2], after[2])
+    np.testing.assert_array_equal(before[3], after[3])
 
 
 def test_runs_are_deterministic():

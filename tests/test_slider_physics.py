@@ -24,9 +24,17 @@ def test_default_setting_reaches_1e6_relative_accuracy(scenario):
 @pytest.mark.parametrize("scenario", ["undamped", "underdamped", "critical", "overdamped", "step", "harmonic"])
 def test_every_integrator_stays_within_its_order_based_tolerance(integrator, scenario):
     result = springlab.run("slider", scenario, integrator=integrator, dt=1e-3, duration=2.0)
-    for column, error in result.summary["errors"].items():
-        assert error["max_rel"] <= result.summary["tolerance"], column
-    assert result.summary["passed"] is True
+    summary = result.summary
+    assert summary["estimate_range"]["inside"] is True  # omega dt = 0.01: the prediction holds
+    scene = springlab.scenes.get("slider")
+    chosen = scene.scenario(scenario)
+    reference = scene.reference(result.model, result.parameters, chosen, result.time, dt=1e-3)
+    predicted = springlab.compare.tolerances(reference, integrator, 1e-3, result.time)
+    for column, error in summary["errors"].items():
+        assert error["max_rel"] <= predicted[column], column
+    # a PASS certifies at most 1e-2 (discrete's dissipation costs it more over 2 s)
+    worst = max(e["max_rel"] for e in summary["errors"].values())
+    assert summary["passed"] is (worst <= springlab.compare.CERTIFIED_CAP)
 
 
 def test_rk4_tolerance_is_a_tight_prediction_not_a_blanket():

@@ -282,7 +282,7 @@ def test_a_scenario_without_an_exact_trajectory_cannot_be_swept():
     from springlab.scenes.slider import Slider
 
     class ChecksOnly(Slider):  # validated by scalar checks alone, like the non-linear scenes
-        def reference(self, model, params, scenario, time):
+        def reference(self, model, params, scenario, time, *, dt):
             return None
 
     with pytest.raises(BadInputError, match="no exact reference trajectory.*valid: none in this scene"):

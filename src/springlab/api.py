@@ -20,7 +20,7 @@ import numpy as np
 
 from . import compare, scenes
 from .errors import BadInputError, DivergedError
-from .scene import Scenario, Scene
+from .scene import Check, Scenario, Scene
 from .simulate import Trajectory, check_timing, integrator_id, simulate
 
 #: a run whose error exceeds this many times its signal has blown up, flagged or not
@@ -104,7 +104,9 @@ def run(
 
     Returns:
       The Result; `result.summary["passed"]` says whether every compared column
-      is within its tolerance.
+      is within its tolerance and, without `tol`, the run is inside the range of
+      its error estimate; `result.summary["verdict"]` says which ('PASS', 'FAIL',
+      or springlab.compare.NOT_VALIDATED, with `estimate_range["reason"]`).
 
     Raises:
       BadInputError: unknown names, non-physical values, bad dt/duration.
@@ -150,8 +152,8 @@ def evaluate(
     columns = scene.joint_columns(model, trajectory)
     pos = {j: c[0] for j, c in columns.items()}
     vel = {j: c[1] for j, c in columns.items()}
-    reference = scene.reference(model, params, scenario, trajectory.time) if scenario.exact else None
-    errors, tolerance, basis, passed = {}, None, "", None
+    reference = scene.reference(model, params, scenario, trajectory.time, dt=trajectory.dt) if scenario.exact else None
+    errors, tolerance, basis, passed, validity = {}, None, "", None, None
     if reference is not None:
         simulated = {f"{j}_{k}": (pos if k == "pos" else vel)[j] for j in reference.pos for k in ("pos", "vel")}
         exact = {
@@ -167,20 +169,39 @@ def evaluate(
                 f" dt = {trajectory.dt:g} s){_stability_advice(scene, model, params, scenario, trajectory.integrator, trajectory.dt)}"
             )
         if tol is not None:
+            # measured against the exact reference: true at any dt, no estimate involved
             per_column = {column: tol for column in errors}
             basis = "requested tolerance"
         elif reference.system is not None:
-            per_column = compare.tolerances(reference, trajectory.integrator, trajectory.dt, trajectory.time)
+            predicted = compare.tolerances(reference, trajectory.integrator, trajectory.dt, trajectory.time)
+            per_column = {c: min(v, compare.CERTIFIED_CAP) for c, v in predicted.items()}
             basis = compare.TOLERANCE_BASIS + (f"; {reference.tolerance_basis}" if reference.tolerance_basis else "")
+            if any(v > compare.CERTIFIED_CAP for v in predicted.values()):
+                basis += f"; capped at {compare.CERTIFIED_CAP:g}, the most a PASS certifies without --tol"
+            span = float(trajectory.time[-1] - trajectory.time[0])
+            validity = compare.estimate_range(
+                compare.system_rates(reference), trajectory.integrator, trajectory.dt, max(span, trajectory.dt)
+            )
         else:
-            per_column = {column: reference.tolerance for column in errors}
+            per_column = {column: min(reference.tolerance, compare.CERTIFIED_CAP) for column in errors}
             basis = reference.tolerance_basis
         tolerance = max(per_column.values())
         passed = all(errors[c]["max_rel"] <= per_column[c] for c in errors)
-    checks = [c.as_dict() for c in scene.checks(model, params, scenario, trajectory)] if scenario.exact else []
+        if validity is not None and not validity.inside:
+            passed = False  # the tolerance is no tolerance here: nothing is certified
+    checks = [
+        _capped(check, tol).as_dict()
+        for check in (scene.checks(model, params, scenario, trajectory) if scenario.exact else [])
+    ]
     if checks:
         # a scenario without compared columns is held to its checks alone
         passed = all(c["passed"] for c in checks) and passed is not False
+    if passed is None:
+        verdict = None
+    elif validity is not None and not validity.inside:
+        verdict = compare.NOT_VALIDATED
+    else:
+        verdict = compare.PASS if passed else compare.FAIL
     summary = {
         "scene": scene.name,
         "scenario": scenario.name,
@@ -195,6 +216,16 @@ def evaluate(
         "tolerance": tolerance,
         "tolerance_basis": basis,
         "passed": passed,
+        "verdict": verdict,
+        "estimate_range": None
+        if validity is None
+        else {
+            "inside": validity.inside,
+            # null, never a string: inf factor = a diverging tail, no largest dt = every dt is inside
+            "error_bound_factor": validity.factor if math.isfinite(validity.factor) else None,
+            "largest_dt_inside_s": validity.largest_dt if math.isfinite(validity.largest_dt) else None,
+            "reason": validity.reason(),
+        },
         "checks": checks,
     }
     return Result(
@@ -210,6 +241,15 @@ def evaluate(
         model=model,
         trajectory=trajectory,
     )
+
+
+def _capped(check: Check, tol: float | None) -> Check:
+    """A check whose relative error a PASS certifies, with its tolerance capped at compare.CERTIFIED_CAP
+    unless the caller asked for a tolerance (the same cap as the compared columns)."""
+    if tol is not None or not check.certifies_error or check.reference == 0 or check.tolerance <= compare.CERTIFIED_CAP:
+        return check
+    basis = f"{check.basis}; capped at {compare.CERTIFIED_CAP:g}, the most a PASS certifies without --tol"
+    return dataclasses.replace(check, tolerance=compare.CERTIFIED_CAP, basis=basis)
 
 
 def _stability_advice(scene: Scene, model, params, scenario, integrator: str, dt: float) -> str:
@@ -249,7 +289,8 @@ def validate(
 
     Returns:
       One row per scenario: scene, scenario, integrator, dt, steps, max_rel_error,
-      tolerance, tolerance_basis, passed, wall_time_s, and checks (the scenario's
+      tolerance, tolerance_basis, passed, verdict, wall_time_s, note (only for a run
+      that is not validated: why, and the largest dt inside), and checks (the scenario's
       Check dicts; a scenario without compared columns shows its tightest check
       in max_rel_error/tolerance).
     """
@@ -289,7 +330,7 @@ def validation_row(result: Result) -> dict[str, Any]:
         tightest = max(checks, key=lambda c: c["error"] / c["tolerance"] if c["tolerance"] > 0 else math.inf)
         worst, tolerance = tightest["error"], tightest["tolerance"]
         basis = f"{tightest['name']}: {tightest['basis']}"
-    return {
+    row = {
         "scene": s["scene"],
         "scenario": s["scenario"],
         "integrator": s["integrator"],
@@ -299,6 +340,11 @@ def validation_row(result: Result) -> dict[str, Any]:
         "tolerance": tolerance,
         "tolerance_basis": basis,
         "passed": s["passed"],
+        "verdict": s.get("verdict"),
         "wall_time_s": s["wall_time_s"],
         "checks": checks,
     }
+    validity = s.get("estimate_range")
+    if validity is not None and not validity["inside"]:
+        row["note"] = f"{s['verdict']}: {validity['reason']}"
+    return row

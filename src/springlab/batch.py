@@ -15,7 +15,6 @@ state. Divide by the duration for the wall time per simulated second.
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 import math
 import time as _time
@@ -33,6 +32,7 @@ from .simulate import (
     INTEGRATORS,
     Trajectory,
     check_diverged,
+    configured,
     cut_at_stop,
     initial_state,
     integrator_id,
@@ -114,12 +114,7 @@ def run_batched(jobs: Sequence[Job], *, nthread: int = 0) -> list[Trajectory | D
             batch.expand("opt.timestep")[:] = [job.dt for job in jobs]
             batch.expand("opt.integrator")[:] = [INTEGRATORS[job.integrator] for job in jobs]
         else:
-            models = []
-            for job in jobs:
-                model = copy.copy(job.model)
-                model.opt.timestep = job.dt
-                model.opt.integrator = INTEGRATORS[job.integrator]
-                models.append(model)
+            models = [configured(job.model, job.integrator, job.dt) for job in jobs]
             batch.set_models(models)
         nq, nv, na = base.nq, base.nv, base.na
         starts = []
@@ -181,9 +176,7 @@ def time_run(job: Job, *, repeats: int = 3, max_steps: int = TIMING_STEPS) -> fl
     `max_steps` steps and scaled by steps (MuJoCo's cost per step does not
     depend on dt or on the state).
     """
-    model = job.model
-    model.opt.integrator = INTEGRATORS[job.integrator]
-    model.opt.timestep = job.dt
+    model = configured(job.model, job.integrator, job.dt)  # the job's model is left as it was
     timed = max(1, min(job.steps, max_steps))
     state0 = initial_state(model, job.setup.qpos, job.setup.qvel, job.setup.act)
     controls = None

@@ -8,11 +8,12 @@ from __future__ import annotations
 
 import math
 import pathlib
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
-from . import outputs
+from . import compare, outputs
 from .simulate import stability_limit
 from .stability import EULER_FAMILY, energy_formula, report_json
 from .tradeoff import Tradeoff
@@ -59,6 +60,12 @@ def plot_tradeoff(result: Tradeoff, path: str | pathlib.Path) -> pathlib.Path:
         right.loglog(
             [r.wall_time_s for r in runs], errors, _STYLES[name], marker="o", ms=3, color=_COLORS[name], label=name
         )
+        # runs outside the range of their error estimate: `springlab run` calls them not validated
+        outside = [(r, e) for r, e in zip(runs, errors) if not r.validated]
+        for axis, x in ((left, [r.dt for r, _ in outside]), (right, [r.wall_time_s for r, _ in outside])):
+            axis.plot(x, [e for _, e in outside], "x", ms=8, mew=1.5, color=_COLORS[name])
+    if any(not r.diverged and not r.validated for r in result.runs):
+        left.plot([], [], "x", ms=8, mew=1.5, color="gray", label="not validated (outside the estimate's range)")
     front = result.pareto
     right.step(
         [r.wall_time_s for r in front],
@@ -90,10 +97,31 @@ def plot_tradeoff(result: Tradeoff, path: str | pathlib.Path) -> pathlib.Path:
     for axis in (left, right):
         axis.grid(True, which="both", alpha=0.3)
         axis.legend(fontsize=8)
+    unvalidated = sum(not r.diverged and not r.validated for r in result.runs)
     note = f"; {diverged} diverged runs not shown" if diverged else ""
+    note += f"; x: {unvalidated} not validated" if unvalidated else ""
     fig.suptitle(f"{result.scene} / {result.scenario}: {len(result.runs)} runs over {result.duration:g} s{note}")
     fig.tight_layout()
     return _save(fig, path)
+
+
+#: run length [natural periods] of the estimate-range line drawn on the stability map
+RANGE_PERIODS = 10
+_RANGE = f"validated below ({RANGE_PERIODS} periods)"
+
+
+def estimate_range_line(integrator: str, zetas: Sequence[float]) -> list[float]:
+    """Largest omega*dt [-] inside the range of the error estimate for a run of RANGE_PERIODS periods, per zeta.
+
+    On the unit oscillator (omega = 1 rad/s): its roots -zeta +- sqrt(zeta^2 - 1) are the modes
+    `compare.estimate_range` judges; above the line `springlab run` says "not validated".
+    """
+    out = []
+    for zeta in zetas:
+        root = np.sqrt(complex(zeta * zeta - 1.0))
+        rates = [-zeta + root, -zeta - root]
+        out.append(compare.estimate_range(rates, integrator, 0.1, RANGE_PERIODS * 2 * math.pi).largest_dt)
+    return out
 
 
 def plot_stability(report: dict[str, Any], amplification: dict[str, Any], path: str | pathlib.Path) -> pathlib.Path:
@@ -123,6 +151,9 @@ def plot_stability(report: dict[str, Any], amplification: dict[str, Any], path: 
             axis.text(0.5, 0.5, "no limit: never unstable", transform=axis.transAxes, ha="center", fontsize=9)
         else:
             axis.plot(theory_zetas, theory, color="black", lw=1.2, label="theory")
+        # below this line a run of RANGE_PERIODS periods is inside the range of its error estimate (springlab.compare)
+        range_zetas = theory_zetas[::5]
+        axis.plot(range_zetas, estimate_range_line(name, range_zetas), color="black", lw=1.0, ls="--", label=_RANGE)
         rows = [r for r in report["boundaries"] if r["integrator"] == name and math.isfinite(r["measured_omega_dt"])]
         axis.plot(
             [r["zeta"] for r in rows],

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from . import api, auto, charts, demo, outputs, scenes, stability, tradeoff
+from . import api, auto, charts, compare, demo, outputs, scenes, stability, tradeoff
 from .errors import BadInputError, SpringlabError
 from .executor import CONNECT_TIMEOUT_S, Executor
 from .simulate import INTEGRATORS
@@ -166,12 +166,15 @@ def _print_run(summary: dict, output: str | None) -> None:
     for check in summary.get("checks", []):
         print(f"  check {_check_line(check)}")
     if summary["tolerance"] is not None or summary.get("checks"):
-        verdict = "PASS" if summary["passed"] else "FAIL (outside tolerance)"
+        verdict = summary["verdict"] if summary["verdict"] != "FAIL" else "FAIL (outside tolerance)"
         print(
             f"  tolerance {summary['tolerance']:.3e}: {verdict}"
             if summary["tolerance"] is not None
             else f"  checks: {verdict}"
         )
+        validity = summary.get("estimate_range")
+        if validity is not None and not validity["inside"]:
+            print(f"  basis: {validity['reason']}")
     if output:
         print(f"  wrote {pathlib.Path(output) / 'trajectory.csv'} and summary.json")
 
@@ -196,10 +199,17 @@ def _validation_table(rows: list[dict]) -> str:
     for r in rows:
         lines.append(
             f"{r['scene']:<{scene_width}}{r['scenario']:<{scenario_width}}{r['integrator']:<11}{r['dt']:>9.2g}"
-            f"{r['max_rel_error']:>13.2e}{r['tolerance']:>11.2e}  {'pass' if r['passed'] else 'FAIL'}"
+            f"{r['max_rel_error']:>13.2e}{r['tolerance']:>11.2e}  {_row_result(r)}"
         )
         lines.extend(f"    check {_check_line(c)}" for c in r.get("checks", []))
     return "\n".join(lines)
+
+
+def _row_result(row: dict) -> str:
+    """'pass', 'FAIL' or 'not validated' (outside the range of the error estimate) for a validate row."""
+    if row["passed"]:
+        return "pass"
+    return "not validated" if row.get("verdict") == compare.NOT_VALIDATED else "FAIL"
 
 
 def cmd_validate(args) -> int:
@@ -214,7 +224,9 @@ def cmd_validate(args) -> int:
             if r.get("note"):
                 print(f"{r['scene']} {r['scenario']}: {r['note']}")
         failed = sum(not r["passed"] for r in rows)
-        print(f"{len(rows) - failed} passed, {failed} failed")
+        unvalidated = sum(r.get("verdict") == compare.NOT_VALIDATED for r in rows)
+        outside = f" ({unvalidated} not validated: outside the range of the error estimate)" if unvalidated else ""
+        print(f"{len(rows) - failed} passed, {failed} failed{outside}")
     return EXIT_FAILED if any(not r["passed"] for r in rows) else EXIT_OK
 
 
@@ -223,15 +235,26 @@ def cmd_render(args) -> int:
     from . import media, render  # GL and matplotlib only for the commands that draw
 
     render.check_video_arguments(args.output, args.fps, args.width, args.height)
+    for name, value in (("--slow-motion", args.slow_motion), ("--exaggerate", args.exaggerate)):
+        if value is not None:
+            render.render_scale.check_factor(name, value)
     result = _run_scenario(args)
     outputs.prepare_directory(pathlib.Path(args.output).parent)
     info = media.render_run(
-        result, args.output, fps=args.fps, width=args.width, height=args.height, composite=args.composite
+        result,
+        args.output,
+        fps=args.fps,
+        width=args.width,
+        height=args.height,
+        composite=args.composite,
+        slow_motion=args.slow_motion,
+        exaggerate=args.exaggerate,
     )
+    scaled = "".join(f", {note}" for note in render.render_scale.labels(info["slow_motion"], info["exaggeration"]))
     print(
         f"wrote {info['path']}: {info['frames']} frames, {info['width']}x{info['height']} at {info['fps']:g} fps"
-        f" ({info['frames'] / info['fps']:.2f} s of simulation) in {info['seconds']:.1f} s"
-        f" ({info['frames'] / max(info['seconds'], 1e-9):.0f} frames/s)"
+        f" ({info['frames'] / info['fps'] / info['slow_motion']:.3g} s of simulation{scaled})"
+        f" in {info['seconds']:.1f} s ({info['frames'] / max(info['seconds'], 1e-9):.0f} frames/s)"
     )
     return _verdict(result.summary)
 
@@ -263,11 +286,12 @@ def cmd_plot(args) -> int:
 def _verdict(summary: dict) -> int:
     """Exit code of a run whose outputs were written: 1 when outside its tolerance."""
     if summary["passed"] is False:
-        print(
-            f"  note: {summary['scene']}/{summary['scenario']} is outside its tolerance"
-            f" (max error above {summary['tolerance']:.2e}); see 'springlab run'",
-            file=sys.stderr,
+        why = (
+            f"not validated ({summary['estimate_range']['reason']})"
+            if summary.get("verdict") == compare.NOT_VALIDATED
+            else f"outside its tolerance (max error above {summary['tolerance']:.2e})"
         )
+        print(f"  note: {summary['scene']}/{summary['scenario']} is {why}; see 'springlab run'", file=sys.stderr)
         return EXIT_FAILED
     return EXIT_OK
 
@@ -287,20 +311,28 @@ def cmd_tradeoff(args) -> int:
     return EXIT_FAILED if pick is not None and pick["integrator"] is None else EXIT_OK
 
 
+def _run_verdict(run) -> str:
+    """A sweep row's verdict in a word or two: pass, FAIL, not validated, or blank when diverged."""
+    if run.verdict is None:
+        return ""
+    return {compare.PASS: "pass", compare.FAIL: "FAIL"}.get(run.verdict, "not validated")
+
+
 def _print_tradeoff(result, output: str | None) -> None:
     print(
         f"{result.scene} / {result.scenario}: {len(result.runs)} runs over {result.duration:g} s"
         f" in {result.sweep_wall_time_s:.1f} s"
     )
     print(
-        f"  {'integrator':<13}{'dt [s]':>10}{'steps':>9}{'max rel err':>13}{'wall [ms]':>11}{'wall/sim s':>12}  pareto"
+        f"  {'integrator':<13}{'dt [s]':>10}{'steps':>9}{'max rel err':>13}{'wall [ms]':>11}{'wall/sim s':>12}"
+        "  pareto  verdict"
     )
     front = {id(r) for r in result.pareto}
     for r in result.runs:
         error = "diverged" if r.diverged else f"{r.max_rel_error:.3e}"
         print(
             f"  {r.integrator:<13}{r.dt:>10.3g}{r.steps:>9}{error:>13}{r.wall_time_s * 1e3:>11.3f}"
-            f"{r.wall_time_s / result.duration * 1e3:>10.3f}ms  {'*' if id(r) in front else ''}"
+            f"{r.wall_time_s / result.duration * 1e3:>10.3f}ms  {'*' if id(r) in front else ' ':<6}  {_run_verdict(r)}"
         )
     orders = ", ".join(f"{name} {p:.2f}" if p is not None else f"{name} -" for name, p in result.orders.items())
     print(f"  observed order: {orders}")
@@ -544,6 +576,20 @@ def build_parser() -> argparse.ArgumentParser:
         "--composite",
         action="store_true",
         help="add the phase-plane trace drawn as time advances, a height x height panel on the right",
+    )
+    p.add_argument(
+        "--slow-motion",
+        type=float,
+        metavar="FACTOR",
+        help="play FACTOR times slower (drawing only; default: short runs slowed to >= 90 frames and 6 frames"
+        " per period of their fastest mode, e.g. the printer move at 1/50 speed; written on every frame)",
+    )
+    p.add_argument(
+        "--exaggerate",
+        type=float,
+        metavar="FACTOR",
+        help="draw displacements FACTOR times larger around their mean (drawing only; default: motions below"
+        " 1%% of the body's size magnified to about 3%%, e.g. the car x30; written on every frame)",
     )
     COMMANDS["render"] = cmd_render
 

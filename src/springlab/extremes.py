@@ -213,7 +213,7 @@ def predicted_error(case: ExtremeCase, integrator: str, dt: float, context) -> f
         states = ((vectors[None, :, :] * (powers * coefficients[None, :])[:, None, :]).sum(-1)).real
     if not np.isfinite(states).all():
         return math.inf
-    reference = scene.reference(model, params, chosen, n * dt)
+    reference = scene.reference(model, params, chosen, n * dt, dt=dt)
     errors = []
     for k, series in ((0, reference.pos["slider"]), (1, reference.vel["slider"])):
         peak = float(np.max(np.abs(series)))

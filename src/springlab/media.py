@@ -9,19 +9,20 @@ hooks (camera, phase_field, equilibria, separatrices) and the Result.
 
 from __future__ import annotations
 
+import math
 import os
 import pathlib
 import time
 from typing import Any
 
-from . import api, plots, render, scenes
+from . import api, plots, progress, render, render_scale, scenes
 from .errors import BadInputError, SpringlabError
 from .outputs import Artifact
 
 #: the demo's video settings: small enough that every scenario fits in the demo's time budget
 DEMO_VIDEO = dict(fps=30, width=480, height=360)
-#: longest stretch of a scenario the demo films [s] (the time overlay shows where it is)
-DEMO_CLIP_SECONDS = 10.0
+#: longest video the demo films of a scenario [s of video] (the time overlay shows where it is)
+DEMO_CLIP_SECONDS = 15.0
 
 
 def render_run(
@@ -34,6 +35,8 @@ def render_run(
     duration: float | None = None,
     composite: bool = False,
     progress: bool | None = None,
+    slow_motion: float | None = None,
+    exaggerate: float | None = None,
 ) -> dict[str, Any]:
     """Render a run to `output` (.mp4 H.264 or .gif); see render.render_video for the result dict.
 
@@ -47,6 +50,12 @@ def render_run(
         phase plane per reported joint, up to 3, stacked) to the right of the
         3D view; the video is then (width + height) x height.
       progress: progress bar on stderr (None: when stderr is a terminal).
+      slow_motion: factor >= 1 [-] the video is slowed by (drawing only); None:
+        render_scale.default_slow_motion of the shown duration and the scene's
+        vibration modes (short runs slowed until they fill 90 frames and their
+        fastest mode gets 6 frames per period; the printer move: 1/50 speed).
+      exaggerate: factor >= 1 [-] displacements are drawn magnified by; None:
+        render_scale.default_exaggeration of the motion (the car: x30).
 
     Raises:
       BadInputError: bad size, fps, extension or unwritable output.
@@ -57,7 +66,16 @@ def render_run(
     end = float(result.time[-1])
     if duration is not None:
         duration = min(float(duration), end) if end > 0 else float(duration)
+    if slow_motion is None:
+        slow_motion = default_slow_motion(result, duration if duration is not None else end, fps)
     panel = plots.PhasePanel(result, height) if composite else None
+    road_bump = None
+    if {"bump_height", "bump_length", "speed"} <= set(result.parameters) and "road" in _joint_names(result.model):
+        # the quarter car: the road it drives over is drawn, the exciter that realizes it is not
+        p = result.parameters
+        road_bump = render.RoadBump(
+            p["bump_height"], p["bump_length"], p["speed"], "wheel_front_right", "wheel_rear_right"
+        )
     try:
         return render.render_video(
             result.model,
@@ -72,9 +90,26 @@ def render_run(
             label=f"{result.scene} / {result.scenario}",
             progress=progress,
             panel=panel,
+            slow_motion=slow_motion,
+            exaggerate=exaggerate,
+            road_bump=road_bump,
         )
     except RuntimeError as error:  # GL context or ffmpeg: not the user's input, still one clean line
         raise SpringlabError(f"cannot render {str(output)!r}: {error}") from None
+
+
+def _joint_names(model) -> set[str]:
+    return {model.joint(j).name for j in range(model.njnt)}
+
+
+def default_slow_motion(result: api.Result, duration: float, fps: float) -> float:
+    """render_scale.default_slow_motion for `duration` [s] of a run, from its scene's vibration modes [Hz]."""
+    scene = scenes.get(result.scene)
+    try:
+        modes = scene.modes(result.model, result.parameters, scene.scenario(result.scenario))
+    except (BadInputError, NotImplementedError):
+        modes = []
+    return render_scale.default_slow_motion(duration, fps, [omega / (2 * math.pi) for omega, _ in modes])
 
 
 def plot_files(result: api.Result, folder: pathlib.Path, out: pathlib.Path) -> list[tuple[str, str, str]]:
@@ -120,13 +155,16 @@ def media_step(state) -> list[Artifact]:
     few minutes on two cores.
     """
     written = []
+    films = progress.bar(len(state.results), description="demo: filming", unit="video")  # on a terminal only
     for (scene_name, scenario_name), result in state.results.items():
         folder = state.out / scene_name / scenario_name
         start = time.perf_counter()
         video = folder / "video.mp4"
-        clip = min(DEMO_CLIP_SECONDS, float(result.time[-1]))
-        info = render_run(result, video, duration=clip, composite=True, progress=False, **DEMO_VIDEO)
+        slow = default_slow_motion(result, float(result.time[-1]), DEMO_VIDEO["fps"])
+        clip = min(DEMO_CLIP_SECONDS / slow, float(result.time[-1]))
+        info = render_run(result, video, duration=clip, composite=True, progress=False, slow_motion=slow, **DEMO_VIDEO)
         shown = "" if clip >= float(result.time[-1]) else f", first {clip:g} s of {float(result.time[-1]):g} s"
+        shown += "".join(", " + note for note in render_scale.labels(info["slow_motion"], info["exaggeration"]))
         written.append(
             Artifact(
                 str(video.relative_to(state.out)),
@@ -139,6 +177,8 @@ def media_step(state) -> list[Artifact]:
         for path, _, title in plot_files(result, folder, state.out):
             written.append(Artifact(path, "plot", title, scene_name, scenario_name))
         state.timings.append((f"media {scene_name}/{scenario_name}", time.perf_counter() - start))
+        films.update(1)
+    films.close()
     for scene in scenes.SCENES.values():
         target = state.out / scene.name / "zeta_family.png"
         try:

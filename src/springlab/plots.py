@@ -26,6 +26,7 @@ and [rad/s].
 
 from __future__ import annotations
 
+import functools
 import os
 import pathlib
 from collections.abc import Sequence
@@ -56,7 +57,20 @@ EXACT = dict(color="k", lw=1.0, ls=(0, (4, 3)))
 FIELD_COLOR = "0.72"
 SEPARATRIX = dict(color="C3", lw=1.1, ls=(0, (6, 3)))
 
-matplotlib.rcParams.update({"font.size": 9, "axes.titlesize": 10, "savefig.dpi": 120})
+#: matplotlib settings of springlab's figures, applied with rc_context around each figure and save,
+#: so the caller's (global) rcParams are never changed
+STYLE = {"font.size": 9, "axes.titlesize": 10, "savefig.dpi": 120}
+
+
+def _styled(function):
+    """Run `function` inside matplotlib.rc_context(STYLE): text sizes are read when artists are made."""
+
+    @functools.wraps(function)
+    def wrapper(*args, **kwargs):
+        with matplotlib.rc_context(STYLE):
+            return function(*args, **kwargs)
+
+    return wrapper
 
 
 # -- helpers ---------------------------------------------------------------------
@@ -96,6 +110,7 @@ def _new_figure(width: float, height: float) -> Figure:
     return figure
 
 
+@_styled
 def save(figure: Figure, output: str | os.PathLike) -> pathlib.Path:
     """Write `figure` to `output` (.png, .svg or .pdf), atomically: a complete file or none.
 
@@ -123,6 +138,7 @@ def check_output(path: str | os.PathLike) -> None:
 # -- time series -------------------------------------------------------------------
 
 
+@_styled
 def time_series(result: api.Result) -> Figure:
     """Position, velocity and (where an exact solution exists) the error on a log axis, per joint.
 
@@ -301,6 +317,7 @@ def _phase_view(result: api.Result, joint: str):
     return field, equilibria, separatrices, xlim, vlim
 
 
+@_styled
 def phase_plane(result: api.Result) -> Figure:
     """The phase plane (position, velocity) of every reported joint (see the module docstring)."""
     joints = list(result.pos)
@@ -419,6 +436,7 @@ def phase_family(
     return family_of(api.run(scene, scenario, integrator=integrator, dt=dt, duration=duration, **parameters))
 
 
+@_styled
 def family_of(result: api.Result) -> Figure:
     """`phase_family` of an existing run (its model, parameters, integrator and dt)."""
     field, equilibria, separatrices = _phase_extras(result)
@@ -473,6 +491,7 @@ def _damping_per_ratio(scene_name: str, scenario_name: str | None, parameters: d
     return 1.0 / modes[0][1]
 
 
+@_styled
 def zeta_family(
     scene: str,
     scenario: str | None = None,
@@ -582,6 +601,7 @@ class PhasePanel:
         reported joint, at most 3).
     """
 
+    @_styled
     def __init__(self, result: api.Result, height: int, width: int | None = None, joints: Sequence[str] | None = None):
         from PIL import Image, ImageDraw
 

@@ -156,6 +156,10 @@ class Check:
       tolerance: bound on `error` [-]: relative, or absolute in the name's unit
         when the reference is 0.
       basis: why the tolerance is what it is (one line).
+      certifies_error: whether `error` is an error of a physical result, which a PASS
+        without a requested tolerance certifies only up to springlab.compare.CERTIFIED_CAP
+        (False for a diagnostic, e.g. an observed order of convergence against the
+        integrator's).
     """
 
     name: str
@@ -163,6 +167,7 @@ class Check:
     reference: float
     tolerance: float
     basis: str
+    certifies_error: bool = True
 
     @property
     def error(self) -> float:
@@ -289,9 +294,14 @@ class Scene:
         return Setup()
 
     def reference(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, time: np.ndarray
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, time: np.ndarray, *, dt: float
     ) -> Reference | None:
-        """Exact solution at `time` [s], or None where none exists (override)."""
+        """Exact solution at `time` [s] of a run with timestep `dt` [s], or None where none exists (override).
+
+        `dt` is explicit, never read back from `model.opt.timestep`: an input switched on the
+        step grid (a bang-bang move, the end of a road bump) is placed on the run's own grid,
+        and one model may serve runs at many timesteps (a sweep).
+        """
         return None
 
     def quantities(

@@ -14,6 +14,7 @@ returning such a run.
 from __future__ import annotations
 
 import contextlib
+import copy
 import dataclasses
 import math
 import threading
@@ -131,6 +132,18 @@ def check_timing(dt: float, duration: float) -> int:
     return steps
 
 
+def configured(model: mujoco.MjModel, integrator: str, dt: float) -> mujoco.MjModel:
+    """A copy of `model` set to `integrator` and timestep `dt` [s]; `model` itself is left as it was.
+
+    A caller's model may serve many runs (a sweep, a reference built from it): writing the
+    timestep into it would leak one run's setting into the next.
+    """
+    work = copy.copy(model)
+    work.opt.integrator = integrator_id(integrator)
+    work.opt.timestep = dt
+    return work
+
+
 def initial_state(
     model: mujoco.MjModel,
     qpos: np.ndarray | None = None,
@@ -173,7 +186,8 @@ def simulate(
     """Run `model` headless and record every step.
 
     Args:
-      model: compiled model; its opt.integrator and opt.timestep are set here.
+      model: compiled model; never modified (the run steps a copy with `integrator` and
+        `dt` set, as mujoco.rollout never modifies its inputs).
       integrator: one of INTEGRATORS.
       dt: timestep [s].
       duration: simulated time [s]; steps = round(duration / dt).
@@ -193,8 +207,7 @@ def simulate(
       DivergedError: MuJoCo flagged or silently reset the run, or it went non-finite.
     """
     steps = check_timing(dt, duration)
-    model.opt.integrator = integrator_id(integrator)
-    model.opt.timestep = dt
+    model = configured(model, integrator, dt)
     data = mujoco.MjData(model) if data is None else data
     state0 = initial_state(model, qpos, qvel, act, data)
     controls = None

@@ -71,6 +71,8 @@ class Run:
       wall_time_s: wall time of the run alone [s] (see module docstring).
       diverged: the run blew up (detected, never reported as a result).
       detail: how it diverged, for people.
+      verdict: what `springlab run` says of the same setting: 'PASS', 'FAIL' or 'not validated:
+        outside the range of the error estimate' (springlab.compare); None if diverged.
     """
 
     integrator: str
@@ -80,9 +82,15 @@ class Run:
     wall_time_s: float
     diverged: bool = False
     detail: str = ""
+    verdict: str | None = None
+
+    @property
+    def validated(self) -> bool:
+        """Whether the run is inside the range of its error estimate (its verdict means something)."""
+        return self.verdict in (compare.PASS, compare.FAIL)
 
     def row(self) -> dict[str, Any]:
-        """The JSON row: integrator, dt, max_rel_error, steps, wall_time_s, diverged."""
+        """The JSON row: integrator, dt, max_rel_error, steps, wall_time_s, diverged, verdict."""
         return {
             "integrator": self.integrator,
             "dt": self.dt,
@@ -90,6 +98,7 @@ class Run:
             "steps": self.steps,
             "wall_time_s": self.wall_time_s,
             "diverged": self.diverged,
+            "verdict": self.verdict,
         }
 
 
@@ -148,7 +157,7 @@ def fastest_rate(scene: Scene, model: mujoco.MjModel, params: dict[str, float], 
     if rates:
         return max(rates)
     if scenario.exact:
-        reference = scene.reference(model, params, scenario, np.array([0.0]))
+        reference = scene.reference(model, params, scenario, np.array([0.0]), dt=scenario.dt or scene.dt)
         if reference is not None and reference.system is not None:
             radius = float(np.max(np.abs(np.linalg.eigvals(reference.system))))
             return radius if radius > 0 else None
@@ -260,11 +269,11 @@ def sweep(
     outcomes = [o for part in runner.map(grid_chunk, payloads, description="tradeoff") for o in part]
     stop = scene_obj.stop_condition(model, params, chosen)
     runs = []
-    for (name, dt), (error, detail, steps) in zip(pairs, outcomes):
+    for (name, dt), (error, detail, steps, verdict) in zip(pairs, outcomes):
         full = check_timing(dt, duration)
         job = Job(model, name, dt, full, scene_obj.setup(model, params, chosen, full, dt), stop)
         wall = time_run(job, repeats=timing_repeats)
-        runs.append(Run(name, dt, steps, error, wall, diverged=error is None, detail=detail))
+        runs.append(Run(name, dt, steps, error, wall, diverged=error is None, detail=detail, verdict=verdict))
     runs.sort(key=lambda r: (integrators.index(r.integrator), -r.dt))
     orders = {name: observed_order([r for r in runs if r.integrator == name]) for name in integrators}
     return Tradeoff(
@@ -280,9 +289,9 @@ def sweep(
     )
 
 
-def grid_chunk(payload: dict[str, Any], nthread: int = 0) -> list[tuple[float | None, str, int]]:
+def grid_chunk(payload: dict[str, Any], nthread: int = 0) -> list[tuple[float | None, str, int, Any]]:
     """One chunk of the grid as one batched call: per (integrator, dt) of payload["pairs"],
-    (max relative error [-] or None if it diverged, why it diverged, steps taken).
+    (max relative error [-] or None if it diverged, why it diverged, steps taken, the run's verdict).
 
     A module-level function of plain data for dask workers: the model is rebuilt here from the
     scene's MJCF and payload["parameters"], exactly as the caller built it.
@@ -298,15 +307,17 @@ def grid_chunk(payload: dict[str, Any], nthread: int = 0) -> list[tuple[float | 
     out = []
     for job, outcome in zip(jobs, run_batched(jobs, nthread=nthread)):
         if isinstance(outcome, DivergedError):
-            out.append((None, str(outcome), job.steps))
+            out.append((None, str(outcome), job.steps, None))
             continue
         try:
+            # judged exactly as `springlab run` judges it: the reference is built for this run's own dt
             result = api.evaluate(scene_obj, chosen, params, model, outcome)
         except DivergedError as blown:
-            out.append((None, str(blown), outcome.steps))
+            out.append((None, str(blown), outcome.steps, None))
             continue
         # a stop condition may end a run early, as in `springlab run`
-        out.append((max(e["max_rel"] for e in result.summary["errors"].values()), "", outcome.steps))
+        error = max(e["max_rel"] for e in result.summary["errors"].values())
+        out.append((error, "", outcome.steps, result.summary["verdict"]))
     return out
 
 
@@ -320,7 +331,7 @@ def sweepable(
     if params is None:
         params = scene.resolve(scenario, {})
     model = scene.build(params, scenario) if model is None else model
-    return scene.reference(model, params, scenario, np.zeros(1)) is not None
+    return scene.reference(model, params, scenario, np.zeros(1), dt=scenario.dt or scene.dt) is not None
 
 
 def _setup_or_none(scene: Scene, model, params, scenario, dt: float, duration: float) -> Setup | None:

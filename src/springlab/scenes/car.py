@@ -475,12 +475,12 @@ class Car(Scene):
             control[:switch_step, 0] = 1.0  # tire on the bump exciter
             control[switch_step:, 1] = 1.0  # tire on the flat road
         if scenario.name in ("pitch_heave", "road_bump"):
-            self._check_motion(model, params, scenario, np.arange(steps + 1) * dt)
+            self._check_motion(model, params, scenario, np.arange(steps + 1) * dt, dt)
         return Setup(qpos=qpos, qvel=qvel, control=control)
 
-    def _check_motion(self, model, params, scenario, time: np.ndarray) -> None:
+    def _check_motion(self, model, params, scenario, time: np.ndarray, dt: float) -> None:
         """ParameterError if the exact motion lifts the car off its springs or puts its bottom below ground."""
-        reference = self.reference(model, params, scenario, time)
+        reference = self.reference(model, params, scenario, time, dt=dt)
         if scenario.name == "pitch_heave":
             linear = _Linear2Dof(model)
             x, theta = reference.pos["heave"], reference.pos["pitch"]
@@ -520,12 +520,12 @@ class Car(Scene):
 
     # -- exact references -----------------------------------------------------
 
-    def reference(self, model, params, scenario, time) -> Reference:
+    def reference(self, model, params, scenario, time, *, dt) -> Reference:
         if scenario.name in _ONE_DOF:
             return self._one_dof_reference(model, params, time)
         if scenario.name == "pitch_heave":
             return self._pitch_heave_reference(model, params, time)
-        return self._road_bump_reference(model, params, time)
+        return self._road_bump_reference(model, params, time, dt)
 
     @staticmethod
     def _one_dof_reference(model, params, time) -> Reference:
@@ -561,9 +561,8 @@ class Car(Scene):
         )
 
     @staticmethod
-    def _road_bump_reference(model, params, time) -> Reference:
+    def _road_bump_reference(model, params, time, dt: float) -> Reference:
         quarter = _QuarterCar(model, params)
-        dt = float(time[1] - time[0]) if len(time) > 1 else 1.0
         z0 = quarter.initial_state()
         true = _piecewise_lti(time, z0, [(0.0, quarter.on_bump), (quarter.bump_time, quarter.on_road)])
         switch = quarter.switch_step(dt) * dt

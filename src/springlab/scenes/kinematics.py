@@ -215,7 +215,7 @@ class Kinematics(Scene):
 
     # -- exact reference -------------------------------------------------------
 
-    def reference(self, model, params, scenario, time) -> Reference:
+    def reference(self, model, params, scenario, time, *, dt) -> Reference:
         m = self.mass(model)
         if scenario.name == "tachograph":
             # MuJoCo's accumulated time may overshoot the record's end by round-off

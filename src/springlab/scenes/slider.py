@@ -212,7 +212,7 @@ class Slider(Scene):
         stiffness = float(joint.stiffness[0]) + exciter.coupling_stiffness(model)
         return float(model.body("block").mass[0]), stiffness, float(model.dof_damping[dof])
 
-    def reference(self, model, params, scenario, time) -> Reference:
+    def reference(self, model, params, scenario, time, *, dt) -> Reference:
         m, k, d = self.physical(model)
         x0, v0, f0 = params["x0"], params["v0"], params["force_amplitude"]
         forcing = self._forcing(params, scenario)

@@ -1,0 +1,84 @@
+"""On-frame text: the simulation time and a label, antialiased, in a box at the top left.
+
+Drawn with Pillow (TrueType DejaVu Sans from matplotlib, found without
+importing it; Unicode-capable, e.g. Greek letters) in dark text on a
+translucent white box, so it reads over any part of the scene.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["TextOverlay"]
+
+_TEXT_RGB = np.array([20.0, 20.0, 28.0])  # near-black text
+_TEXT_BOX_ALPHA = 0.78  # translucent white box behind the text
+
+
+def _find_font() -> str | None:
+    """Path of matplotlib's DejaVu Sans, found without importing matplotlib."""
+    try:
+        spec = importlib.util.find_spec("matplotlib")
+    except (ImportError, ValueError):
+        return None
+    if spec is None or not spec.submodule_search_locations:
+        return None
+    for root in spec.submodule_search_locations:
+        path = Path(root, "mpl-data", "fonts", "ttf", "DejaVuSans.ttf")
+        if path.is_file():
+            return str(path)
+    return None
+
+
+class TextOverlay:
+    """Dark text on a translucent white box at the top-left of the 3D view."""
+
+    def __init__(self, label: str, view_height: int, max_time: float, notes: list[str] = (), time_step: float = 0.01):
+        """``label`` on the first line, then ``notes`` (e.g. "motion ×30"), then the time.
+
+        ``max_time`` [s] fixes the width of the time field; ``time_step`` [s]
+        (the simulated time between frames) sets its decimals, so a slowed
+        video's clock visibly advances every frame.
+        """
+        from PIL import ImageFont
+
+        self.size = max(11, round(view_height / 22))
+        path = _find_font()
+        try:
+            self.font = ImageFont.truetype(path, self.size) if path else ImageFont.load_default(size=self.size)
+        except Exception:  # very old Pillow or unreadable font file
+            self.font = ImageFont.load_default()
+        self.pad = max(3, self.size // 3)
+        self.margin = max(2, self.size // 3)
+        self.line_h = int(round(self.size * 1.25))
+        self.label = " ".join(str(label).split())  # one line, no control chars
+        self.notes = [" ".join(str(n).split()) for n in notes]
+        self._decimals = max(2, min(6, math.ceil(-math.log10(max(time_step, 1e-6)) - 1e-9)))
+        self._digits = len(f"{max(max_time, 0.0):.{self._decimals}f}")
+
+    def time_text(self, t: float) -> str:
+        return f"t = {t:{self._digits}.{self._decimals}f} s"
+
+    def draw(self, view: np.ndarray, t: float) -> None:
+        from PIL import Image, ImageDraw
+
+        lines = [s for s in (self.label, *self.notes, self.time_text(t)) if s]
+        widths = [int(math.ceil(self.font.getlength(s))) for s in lines]
+        box_w = min(view.shape[1] - self.margin, max(widths) + 2 * self.pad)
+        box_h = min(view.shape[0] - self.margin, len(lines) * self.line_h + 2 * self.pad)
+        if box_w <= 0 or box_h <= 0:
+            return
+        mask = Image.new("L", (box_w, box_h), 0)
+        draw = ImageDraw.Draw(mask)
+        for i, s in enumerate(lines):
+            draw.text((self.pad, self.pad + i * self.line_h), s, fill=255, font=self.font)
+        alpha = np.asarray(mask, dtype=np.float32)[..., None] * (1.0 / 255.0)
+        y, x = self.margin, self.margin
+        region = view[y : y + box_h, x : x + box_w].astype(np.float32)
+        region = region * (1.0 - _TEXT_BOX_ALPHA) + 255.0 * _TEXT_BOX_ALPHA
+        region = region * (1.0 - alpha) + _TEXT_RGB * alpha
+        view[y : y + box_h, x : x + box_w] = np.clip(region + 0.5, 0, 255).astype(np.uint8)

@@ -1,0 +1,199 @@
+"""A PASS means something: the error estimate is used only inside its range, and a PASS certifies at most 1e-2.
+
+The range rule (springlab.compare.estimate_range) is checked against the exact
+error of the integrators' known one-step maps on the scalar test equation; the
+verdicts of real runs are checked against their exact references across every
+integrator and timestep up to the stability limit.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+import springlab
+from springlab import api, compare, tradeoff
+from springlab.errors import BadInputError, DivergedError
+from springlab.simulate import INTEGRATORS
+
+#: the one-step maps R(z) of the scalar test equation y' = lambda y, z = h lambda, in closed form
+AMPLIFICATIONS = {
+    "rk4": lambda z: 1 + z + z**2 / 2 + z**3 / 6 + z**4 / 24,
+    "euler": lambda z: 1 + z,  # explicit Euler: the model of the first-order integrators' local error
+}
+
+
+def _leading_and_exact(rate: complex, integrator: str, dt: float, duration: float) -> tuple[float, float]:
+    """max over the run of the leading-order estimate n C |z|^(p+1) |e^(lambda t)| and of |R(z)^n - e^(z n)|."""
+    order = 4 if integrator == "rk4" else 1
+    n = np.arange(round(duration / dt) + 1)
+    z = dt * rate
+    exact_flow = np.exp(z * n)
+    leading = n * compare.ERROR_CONSTANTS[integrator] * abs(z) ** (order + 1) * np.abs(exact_flow)
+    exact_error = np.abs(AMPLIFICATIONS[integrator](z) ** n - exact_flow)
+    # the round-off of n floating-point powers, allowed as springlab allows it (100 eps per step)
+    roundoff = compare.ROUNDOFF_PER_STEP * n * np.abs(exact_flow)
+    return float((leading + roundoff).max()), float(exact_error.max())
+
+
+@pytest.mark.parametrize("integrator", list(AMPLIFICATIONS))
+def test_inside_the_range_the_exact_error_of_every_mode_is_within_the_safety_factor_of_the_estimate(integrator):
+    inside = 0
+    for angle in np.linspace(math.pi / 2, math.pi, 7):  # undamped ... purely decaying modes
+        rate = 10.0 * complex(math.cos(angle), math.sin(angle))
+        for duration in (1.0, 20.0):
+            for dt in np.geomspace(1e-4, 0.2, 25):
+                verdict = compare.estimate_range([rate, rate.conjugate()], integrator, dt, duration)
+                if not verdict.inside:
+                    continue
+                inside += 1
+                leading, exact = _leading_and_exact(rate, integrator, dt, duration)
+                assert exact <= compare.SAFETY * leading, (angle, duration, dt)
+    assert inside >= 100  # the rule is not vacuous
+
+
+@pytest.mark.parametrize("integrator", list(AMPLIFICATIONS))
+def test_the_largest_dt_inside_is_the_boundary_of_the_range(integrator):
+    for rate in (10j, -3 + 10j, -40.0):
+        verdict = compare.estimate_range([rate], integrator, 0.3, 5.0)
+        assert not verdict.inside
+        edge = verdict.largest_dt
+        assert compare.estimate_range([rate], integrator, edge, 5.0).inside
+        # two significant digits, rounded down: the next 2-digit value up is outside or within rounding of it
+        assert not compare.estimate_range([rate], integrator, edge * 1.1, 5.0).inside
+
+
+def test_a_system_without_nonzero_modes_is_inside_at_every_dt():
+    verdict = compare.estimate_range([], "euler", 1.0, 10.0)
+    assert verdict.inside and math.isinf(verdict.largest_dt)
+
+
+# -- runs: the four cases of issue 10, and the cap -----------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ("run", "slider", "undamped", "--integrator", "euler", "--dt", "0.05", "--duration", "20"),
+        ("validate", "slider", "--dt", "0.05", "--integrator", "euler"),
+        ("run", "slider", "--dt", "0.5", "--integrator", "discrete"),
+        ("validate", "printer_head", "--integrator", "euler"),
+    ],
+)
+def test_runs_far_outside_the_estimates_range_are_not_validated_and_exit_1(argv, capsys):
+    from springlab.cli import main
+
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    assert code == 1, err
+    assert "not validated" in out
+    assert "is inside" in out  # the basis line names a dt that would be
+    assert ": PASS" not in out and not any(line.endswith(" pass") for line in out.splitlines())
+
+
+def test_a_not_validated_run_says_why_and_which_dt_is_inside_and_that_dt_is():
+    result = springlab.run("slider", "undamped", integrator="euler", dt=0.05, duration=20.0)
+    summary = result.summary
+    assert summary["passed"] is False
+    assert summary["verdict"] == compare.NOT_VALIDATED
+    assert summary["estimate_range"]["inside"] is False
+    largest = summary["estimate_range"]["largest_dt_inside_s"]
+    assert f"dt <= {largest:.2g} s is inside" in summary["estimate_range"]["reason"]
+    inside = springlab.run("slider", "undamped", integrator="euler", dt=largest, duration=20.0)
+    assert inside.summary["estimate_range"]["inside"] is True
+
+
+def test_a_requested_tolerance_is_a_measurement_and_holds_at_any_dt():
+    # with --tol the run is held to the exact reference directly: no estimate, no range
+    loose = springlab.run("slider", "undamped", integrator="euler", dt=0.05, duration=20.0, tol=2.0)
+    assert loose.summary["passed"] is True and loose.summary["estimate_range"] is None
+    tight = springlab.run("slider", "undamped", integrator="euler", dt=0.05, duration=20.0, tol=1.0)
+    assert tight.summary["passed"] is False and tight.summary["verdict"] == compare.FAIL
+
+
+def _exact_scenarios():
+    return [(scene, scenario) for scene, scenario in api.exact_scenarios() if tradeoff.sweepable(scene, scenario, None)]
+
+
+def _stability_dt(scene, scenario, integrator: str) -> float | None:
+    """The largest stable dt [s] of the scenario's modes (the scene's own limit; euler's for discrete)."""
+    params = scene.resolve(scenario, {})
+    model = scene.build(params, scenario)
+    limited = "euler" if integrator == "discrete" else integrator
+    limits = [
+        scene.stability_limit(model, params, scenario, limited, omega, zeta) / omega
+        for omega, zeta in scene.modes(model, params, scenario)
+    ]
+    finite = [limit for limit in limits if math.isfinite(limit)]
+    return min(finite) if finite else None
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("integrator", list(INTEGRATORS))
+def test_a_pass_never_certifies_more_than_the_cap_up_to_the_stability_limit(integrator):
+    """Every scene with an exact reference, dt from its validated one up to the stability limit."""
+    passes = not_validated = 0
+    for scene, scenario in _exact_scenarios():
+        validated_dt = scenario.dt or scene.dt
+        # up to 0.95 x the stability limit (euler's for discrete, which has none), 4 log-spaced points
+        stable = _stability_dt(scene, scenario, integrator)
+        top = 0.95 * stable if stable else 20 * validated_dt
+        for dt in np.geomspace(validated_dt, max(top, validated_dt), 4):
+            dt = float(f"{dt:.2g}")
+            try:
+                result = springlab.run(scene.name, scenario.name, integrator=integrator, dt=dt)
+            except (DivergedError, BadInputError):
+                continue  # a blow-up is never a result; a dt the scene rejects is bad input
+            summary = result.summary
+            worst = max(e["max_rel"] for e in summary["errors"].values())
+            if summary["passed"]:
+                passes += 1
+                assert worst <= compare.CERTIFIED_CAP, (scene.name, scenario.name, dt, worst)
+                assert worst <= summary["tolerance"]
+                assert summary["verdict"] == compare.PASS
+            elif summary["verdict"] == compare.NOT_VALIDATED:
+                not_validated += 1
+    assert passes >= 5 and not_validated >= 5
+
+
+# -- the sweep judges every run as `run` does ---------------------------------------------------
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("scene", "scenario", "dts", "integrators"),
+    [
+        ("slider", "harmonic", (0.05, 0.02, 0.01, 0.005, 0.002), tuple(INTEGRATORS)),
+        ("car", "road_bump", (2e-3, 1.3e-3, 1e-3, 7e-4, 5e-4), tuple(INTEGRATORS)),
+        ("printer_head", "move", (2e-4, 1e-4, 5e-5, 3.5e-5, 2e-5), tuple(INTEGRATORS)),
+        # issue 10's case: rk4 at dt = 5e-5 right after rk4 at 1e-4 on the shared model
+        ("printer_head", "move", (1e-4, 5e-5), ("rk4",)),
+        ("kinematics", "tachograph", (0.05, 0.025, 0.01, 0.005), tuple(INTEGRATORS)),
+    ],
+)
+def test_every_sweep_row_is_what_springlab_run_reports_at_the_same_setting(scene, scenario, dts, integrators):
+    # all runs of a sweep share one model; each reference must still be built for its own dt
+    # (issue 10: printer_head rk4 at dt = 5e-5 read 1.32e-2 in the sweep and 2.9e-7 from run)
+    sweep = tradeoff.sweep(scene, scenario, integrators=integrators, dts=dts, timing_repeats=1, nthread=1)
+    assert len(sweep.runs) == len(integrators) * len(dts)
+    for row in sweep.runs:
+        try:
+            single = springlab.run(scene, scenario, integrator=row.integrator, dt=row.dt, duration=sweep.duration)
+        except DivergedError:
+            assert row.diverged, (row.integrator, row.dt)
+            continue
+        errors = single.summary["errors"]
+        assert row.max_rel_error == max(e["max_rel"] for e in errors.values()), (row.integrator, row.dt)
+        assert row.verdict == single.summary["verdict"], (row.integrator, row.dt)
+
+
+def test_a_check_of_a_physical_result_is_capped_like_the_compared_columns():
+    # rk4 at dt = 0.05 s: the period from Richardson-extrapolated runs is 1.4 % off the energy integral
+    result = springlab.run("nonlinear", "softening", integrator="rk4", dt=0.05)
+    period = next(c for c in result.summary["checks"] if c["name"] == "period_s")
+    assert period["error"] > compare.CERTIFIED_CAP
+    assert period["tolerance"] == compare.CERTIFIED_CAP and period["passed"] is False
+    assert result.summary["passed"] is False
+    for check in result.summary["checks"]:
+        if check["passed"] and check["reference"] != 0:
+            assert check["error"] <= compare.CERTIFIED_CAP
