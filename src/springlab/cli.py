@@ -458,7 +458,7 @@ def _print_design(design, study, output: str | None) -> None:
     print(
         f"{s['scene']} design study: {s['configurations']} configurations ({s['levels']} levels of "
         f"{', '.join(design.PROPERTIES)}) in {s['wall_time_s']:.1f} s, {s['configurations_per_s']:.0f}/s"
-        f" on {s['nthread']} threads"
+        + (f" on {s['nthread']} threads" if s["executor"] == "local" else f" on {s['executor']}")
     )
     print(f"  {'property':<16}{'default':>11}{'range':>22}{'elasticity':>12}{'local':>9}")
     for name in s["ranking"]:

@@ -37,7 +37,6 @@ import logging
 import os
 import pathlib
 import socket
-import time as _time
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 from urllib.parse import urlsplit
@@ -283,10 +282,3 @@ def chunked(count: int, size: int) -> list[range]:
 def resolve(executor: Executor | None) -> Executor:
     """`executor`, or a local one."""
     return Executor(progress=False) if executor is None else executor
-
-
-def timed_map(executor: Executor, function, payloads, **kwargs) -> tuple[list[Any], float]:
-    """(`executor.map(...)`, wall time [s])."""
-    start = _time.perf_counter()
-    out = executor.map(function, payloads, **kwargs)
-    return out, _time.perf_counter() - start
