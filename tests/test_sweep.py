@@ -38,13 +38,21 @@ def test_random_samples_stay_in_the_box_and_repeat_with_the_seed():
     assert first["damping"].min() >= 1.0 and first["damping"].max() <= 3.0
 
 
-def test_every_row_equals_a_single_run_at_its_parameters():
-    # batched runs are bit-identical to simulate (mujoco.batch); evaluation is shared with springlab.run
-    result = springlab.sweep("slider", "free", vary={"damping": (0.5, 40.0, 3, "log"), "stiffness": (200.0, 800.0, 2)})
-    assert result.size == 6
+@pytest.mark.parametrize(
+    "scene, scenario, vary",
+    [
+        ("slider", "free", {"damping": (0.5, 40.0, 3, "log"), "stiffness": (200.0, 800.0, 2)}),
+        ("slider", "step", {"force_amplitude": (0.5, 2.0, 2)}),  # an actuator: per-step controls
+        ("car", "road_bump", {"speed": (3.0, 9.0, 2)}),
+    ],
+)
+def test_every_row_equals_a_single_run_at_its_parameters(scene, scenario, vary):
+    # a chunk is one threaded rollout, the function springlab.run steps with; evaluation is shared
+    result = springlab.sweep(scene, scenario, vary=vary)
+    assert result.size == math.prod(spec[2] for spec in vary.values())
     for i, row in enumerate(result.rows):
         values = {name: float(result.values[name][i]) for name in result.values}
-        single = springlab.run("slider", "free", **values).summary
+        single = springlab.run(scene, scenario, **values).summary
         assert row["quantities"] == {k: v for k, v in single["quantities"].items() if not isinstance(v, list)}
         assert row["errors"] == {c: e["max_rel"] for c, e in single["errors"].items()}
         assert row["passed"] == single["passed"] and not row["diverged"]

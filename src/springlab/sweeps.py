@@ -8,8 +8,8 @@ whether it passed. A configuration that blows up is a row marked `diverged`,
 not a failed sweep.
 
 How it runs: the configurations are cut into chunks of `CHUNK_CONFIGURATIONS`;
-each chunk is one `mujoco.batch.Batch` call (`batch.run_batched`,
-bit-identical per run to `springlab run`) on the executor (springlab.executor:
+each chunk is one threaded `mujoco.rollout` call (`batch.run_rollout`,
+bit-identical per run to `springlab run`, which steps with the same function) on the executor (springlab.executor:
 locally, or on dask workers that rebuild each model from the scene's MJCF and
 the row's parameters). Rows come back in configuration order, so the sweep is
 the same bit for bit wherever it ran.
@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from . import api, scenes
-from .batch import Job, run_batched
+from .batch import Job, run_rollout
 from .errors import BadInputError, DivergedError, UnknownNameError
 from .executor import Executor, chunked, resolve
 from .simulate import check_timing, integrator_id
@@ -256,7 +256,7 @@ def run_chunk(payload: Mapping[str, Any], nthread: int = 0) -> list[dict[str, An
             continue
         prepared.append((row, params, model))
         jobs.append(Job(model, integrator, dt, steps, setup, scene.stop_condition(model, params, chosen)))
-    for (row, params, model), outcome in zip(prepared, run_batched(jobs, nthread=nthread)):
+    for (row, params, model), outcome in zip(prepared, run_rollout(jobs, nthread=nthread)):
         try:
             if isinstance(outcome, DivergedError):
                 raise outcome
