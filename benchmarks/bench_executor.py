@@ -28,7 +28,7 @@ import numpy as np
 from mujoco import rollout
 
 from springlab import analytic, api, design, model_files, scenes, sobol, sweeps
-from springlab.batch import Job, run_batched
+from springlab.batch import Job, run_rollout
 from springlab.executor import Executor, chunked, ping
 from springlab.scene import parsed_spec
 from springlab.simulate import initial_state, simulate
@@ -91,7 +91,7 @@ def slider_sweep() -> None:
 
     def springlab_batched():
         for piece in chunked(n, sweeps.CHUNK_CONFIGURATIONS):
-            run_batched(jobs[piece.start : piece.stop])
+            run_rollout(jobs[piece.start : piece.stop])
 
     nthread = os.cpu_count() or 1
     for m in models:
@@ -129,11 +129,13 @@ def _solve_ivp_loop(params, dt, steps, target) -> tuple[float, float]:
             (x0, v0),
             method="DOP853",
             t_eval=t,
-            rtol=tol / 10,
-            atol=tol * abs(x0) / 10,
+            rtol=tol / 1000,  # DOP853 is 8th order: a tight tolerance costs few more steps
+            atol=tol * abs(x0) / 1000,
         )
-        exact, _ = analytic.free_response(t, m, k, d, x0, v0)
-        worst = max(worst, float(np.max(np.abs(solution.y[0] - exact)) / np.max(np.abs(exact)) / tol))
+        x, v = analytic.free_response(t, m, k, d, x0, v0)
+        # judged as springlab judges a run: max |error| / max |exact| of position and velocity
+        for simulated, exact in ((solution.y[0], x), (solution.y[1], v)):
+            worst = max(worst, float(np.max(np.abs(simulated - exact)) / np.max(np.abs(exact)) / tol))
     return time.perf_counter() - start, worst
 
 
@@ -163,7 +165,12 @@ def run_overhead() -> None:
 
 
 if __name__ == "__main__":  # LocalCluster workers are spawned processes: they re-import this file
-    measured = design_throughput()
-    sobol_projection(measured)
-    slider_sweep()
-    run_overhead()
+    import sys
+
+    parts = set(sys.argv[1:]) or {"design", "sweep", "run"}  # e.g. `bench_executor.py sweep run`
+    if "design" in parts:
+        sobol_projection(design_throughput())
+    if "sweep" in parts:
+        slider_sweep()
+    if "run" in parts:
+        run_overhead()
