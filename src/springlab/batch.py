@@ -177,7 +177,9 @@ def _same_structure(models: Sequence[mujoco.MjModel]) -> bool:
     return all(all(getattr(m, f) == getattr(first, f) for f in fields) for m in models)
 
 
-def run_rollout(jobs: Sequence[Job], *, nthread: int = 0) -> list[Trajectory | DivergedError]:
+def run_rollout(
+    jobs: Sequence[Job], *, nthread: int = 0, private_models: bool = False
+) -> list[Trajectory | DivergedError]:
     """Run jobs of equal length as one threaded `mujoco.rollout` call, one model per job.
 
     The path `simulate` takes for one run, taken for many at once: bit-identical to
@@ -188,11 +190,19 @@ def run_rollout(jobs: Sequence[Job], *, nthread: int = 0) -> list[Trajectory | D
     Args:
       jobs: the simulations (each model is copied and set to its job's integrator and dt).
       nthread: threads (0: one per CPU).
+      private_models: every job has its own model, which nobody else reads: set its integrator
+        and dt in place instead of copying it (a sweep's chunk builds its models for itself).
     """
     if not jobs:
         return []
     steps = {job.steps for job in jobs}
-    models = [configured(job.model, job.integrator, job.dt) for job in jobs]
+    if private_models and len({id(job.model) for job in jobs}) == len(jobs):
+        models = [job.model for job in jobs]
+        for job in jobs:
+            job.model.opt.integrator = INTEGRATORS[job.integrator]
+            job.model.opt.timestep = job.dt
+    else:
+        models = [configured(job.model, job.integrator, job.dt) for job in jobs]
     if len(steps) != 1 or not _same_structure(models):
         return run_batched(jobs, nthread=nthread)
     count = steps.pop()

@@ -256,7 +256,7 @@ def run_chunk(payload: Mapping[str, Any], nthread: int = 0) -> list[dict[str, An
             continue
         prepared.append((row, params, model))
         jobs.append(Job(model, integrator, dt, steps, setup, scene.stop_condition(model, params, chosen)))
-    for (row, params, model), outcome in zip(prepared, run_rollout(jobs, nthread=nthread)):
+    for (row, params, model), outcome in zip(prepared, run_rollout(jobs, nthread=nthread, private_models=True)):
         try:
             if isinstance(outcome, DivergedError):
                 raise outcome
