@@ -16,12 +16,13 @@ print(
 )
 print(
     f"a second run from x(0) + {q['perturbation_m']:g} m is {q['well_size_m']:g} m (the well distance) away"
-    f" after {q['separation_time_s']:.4g} s"
+    f" after {q['separation_time_s']:.4g} s (converged: pairs at dt down to {q['separation_time_dt_s']:g} s give"
+    f" {', '.join(f'{t:.5g}' for t in q['separation_time_refinement_s'])} s)"
 )
 print(
     f"finite-time Lyapunov exponent over that time: {q['ftle_per_s']:.3g} 1/s;"
-    f" long-time largest Lyapunov exponent: {q['lyapunov_exponent_per_s']:.3g}"
-    f" +- {q['lyapunov_standard_error_per_s']:.2g} 1/s"
+    f" long-time largest Lyapunov exponent (an estimate over 100 s): {q['lyapunov_exponent_per_s']:.3g}"
+    f" +- {q['lyapunov_standard_error_per_s']:.2g} 1/s (standard error)"
 )
 print(
     f"the trajectory itself stays within 1 % of the well distance of the exact one until"

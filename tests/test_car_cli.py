@@ -78,3 +78,15 @@ def test_the_textbook_script_prints_the_three_answers(tmp_path):
     assert "= 2.4525 mm" in out and "97.5475 mm above the ground" in out
     assert "x_s = 100.0000 mm, A = -2.4525 mm" in out and "omega = sqrt(k/m) = 31.6228 rad/s" in out
     assert "an ellipse centred at (x_s, 0)" in out and "omega |A| = 0.07755 m/s" in out
+
+
+def test_a_tire_that_leaves_the_road_is_written_but_not_validated(tmp_path, capsys):
+    # the linear tire would pull on the road after 0.0273 s: the outputs are a result, exit 1 says not to trust it
+    argv = ["run", "car", "road_bump", "--set", "bump_height=0.03", "--set", "bump_length=0.3", "--set", "speed=10"]
+    code, out, err = _run(capsys, *argv, "--output", str(tmp_path))
+    assert code == 1
+    assert "not validated: outside the scene's model" in out and "PASS" not in out
+    (line,) = err.strip().splitlines()
+    assert line.startswith("springlab: car road_bump is not validated: the tire leaves the road at t = 0.0273274 s")
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["passed"] is False and summary["quantities"]["tire_leaves_road"] is True

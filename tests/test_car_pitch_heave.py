@@ -72,6 +72,12 @@ def test_modal_damping_ratios_agree_with_the_damped_eigenvalues(result):
     for i, root in enumerate(roots, start=1):
         assert q[f"mode_{i}_damping_ratio"] == pytest.approx(-root.real / abs(root), rel=1e-8)
         assert q[f"omega_d_{i}_rad_s"] == pytest.approx(root.imag, rel=1e-8)
+        # the damping ratio's own natural frequency |lambda| (python-control's damp: 4.678 / 5.939 Hz),
+        # not the undamped frequency_i_hz (4.6746 / 5.9429 Hz) beside it
+        assert q[f"mode_{i}_natural_frequency_hz"] == pytest.approx(abs(root) / (2 * math.pi), rel=1e-8)
+    assert q["mode_1_natural_frequency_hz"] == pytest.approx(4.678, abs=5e-4)
+    assert q["mode_2_natural_frequency_hz"] == pytest.approx(5.939, abs=5e-4)
+    assert abs(q["mode_1_natural_frequency_hz"] - q["frequency_1_hz"]) > 1e-3
 
 
 def test_transition_fd_of_a_fine_euler_step_converges_to_the_same_eigenvalues(result):

@@ -214,6 +214,30 @@ def test_bang_bang_move_takes_the_minimum_time_2_sqrt_dm_over_f():
     assert q["positioning_time_s"] == pytest.approx(q["move_time_s"] + q["settling_time_s"])
 
 
+def test_positioning_time_estimate_is_the_runs_move_time_plus_the_estimated_settling():
+    # definition (docs/scenes/printer_head.md): the move this run makes is known exactly, so only the
+    # settling is estimated: realized move time 2 n dt + ln(A / band) / (zeta omega_n), A the envelope of
+    # the exact residual vibration after the move (not the minimum move time 2 sqrt(D M / F))
+    result = springlab.run("printer_head", "move")
+    p, dt = result.parameters, result.summary["dt"]
+    q = result.summary["quantities"]
+    starts, _ = _segments(p, "move", dt)
+    move_time = starts[2]
+    q_exact, v_exact = _exact(p, "move", dt, np.array([move_time]))
+    q_end, v_end = q_exact[0], v_exact[0]
+    omega, zeta = _belt_mode(p)
+    omega_d = omega * math.sqrt(1 - zeta**2)
+    stretch, rate = q_end[1] - q_end[0], v_end[1] - v_end[0]
+    total = p["carriage_mass"] + p["motor_mass"]
+    envelope = p["motor_mass"] / total * math.hypot(stretch, (rate + zeta * omega * stretch) / omega_d)
+    settling = math.log(envelope / p["positioning_band"]) / (zeta * omega)
+    # expm of the 5x5 system: relative error ~ eps x its condition (exp of omega t ~ 1e3 rad), far below 1e-9
+    assert q["move_time_s"] == pytest.approx(move_time, rel=1e-12)
+    assert q["positioning_time_estimate_s"] == pytest.approx(move_time + settling, rel=1e-9)
+    minimum = 2 * math.sqrt(p["move_distance"] * total / p["drive_force"])
+    assert abs(q["positioning_time_estimate_s"] - (minimum + settling)) > 0.5 * (move_time - minimum)
+
+
 @pytest.mark.parametrize(
     "argv, needle",
     [

@@ -82,7 +82,7 @@ def test_a_diverged_configuration_is_a_marked_row_and_run_refuses_it():
         ("mass=1:2:x", "NAME=LOW:HIGH:N"),
         ("mass=-1:2:3:log", "log range needs LOW > 0"),
         ("weight=1:2:3", "unknown parameter of slider 'weight'"),
-        ("mass=0:1:3", "mass must be a finite number > 0"),
+        ("mass=0:1:3", "configuration 0 (mass=0): mass must be a finite number"),
     ],
 )
 def test_bad_ranges_are_one_line_errors_and_write_nothing(tmp_path, capsys, vary, message):

@@ -10,8 +10,10 @@ True
 
 from . import analytic, errors
 from .api import Result
+from .audit import Audit, audit
 from .auto import run, validate
 from .errors import BadInputError, DivergedError, SpringlabError, UnknownNameError
+from .fit import fit
 from .scenes import SCENES
 from .sweeps import sweep
 
@@ -21,6 +23,9 @@ __all__ = [
     "run",
     "validate",
     "sweep",
+    "audit",
+    "Audit",
+    "fit",
     "Result",
     "SCENES",
     "SpringlabError",

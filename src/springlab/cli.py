@@ -1,27 +1,36 @@
-"""The `springlab` command line: argparse only, every command calls the library.
+"""Watch textbook vibration problems run in MuJoCo, each checked against its exact solution.
 
+The `springlab` command line (argparse; every command calls the library).
 Exit codes: 0 ok; 1 a validation fell outside its tolerance; 2 bad input;
-3 the simulation diverged (nothing written). Errors are one line on stderr.
+3 the simulation diverged (nothing written); 130 interrupted (Ctrl-C, SIGINT);
+143 terminated (SIGTERM). Errors are one line on stderr.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import pathlib
+import signal
 import sys
 import time
-from collections.abc import Callable, Sequence
+import warnings
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 import numpy as np
 
-from . import api, auto, charts, compare, demo, outputs, scenes, stability, tradeoff
+from . import __version__, api, auto, charts, charts_audit, compare, demo, outputs, scenes, stability, tradeoff
+from .audit import DEFAULT_PERTURB, DEFAULT_TOL
+from .audit import audit as run_audit
 from .errors import BadInputError, SpringlabError
 from .executor import CONNECT_TIMEOUT_S, Executor
 from .simulate import INTEGRATORS
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_DIVERGED = 0, 1, 2, 3
+#: 128 + the signal number, as shells report a process a signal ended
+EXIT_INTERRUPTED, EXIT_TERMINATED = 128 + signal.SIGINT, 128 + signal.SIGTERM
 
 
 class _Parser(argparse.ArgumentParser):
@@ -29,6 +38,18 @@ class _Parser(argparse.ArgumentParser):
 
     def error(self, message: str) -> None:  # noqa: D401 - argparse hook
         raise BadInputError(f"{message} (see '{self.prog} --help')")
+
+    def parse_known_args(self, args=None, namespace=None):  # noqa: D401 - argparse hook
+        # a command's own parser takes options and positionals in any order
+        # (`run slider --set x0=0.05 harmonic`); argparse's intermixed parsing calls
+        # back into this method, hence the guard
+        if self._subparsers is not None or getattr(self, "_intermixing", False):
+            return super().parse_known_args(args, namespace)
+        self._intermixing = True
+        try:
+            return self.parse_known_intermixed_args(args, namespace)
+        finally:
+            self._intermixing = False
 
 
 def _parse_sets(pairs: Sequence[str]) -> dict[str, str]:
@@ -106,6 +127,11 @@ def cmd_list(args) -> int:
                 "default_integrator": scene.integrator,
                 "default_dt": scene.dt,
                 "scenarios": {s.name: s.description for s in scene.scenarios.values()},
+                # the setting `run` and `validate` use for each scenario (a scenario may validate its own dt)
+                "scenario_settings": {
+                    s.name: {"integrator": scene.integrator, "dt": s.dt or scene.dt, "duration": s.duration}
+                    for s in scene.scenarios.values()
+                },
                 "parameters": {
                     p.name: {"unit": p.unit, "description": p.description, "valid": p.valid_range()}
                     for p in scene.parameters.values()
@@ -117,10 +143,13 @@ def cmd_list(args) -> int:
         return EXIT_OK
     for entry in catalogue:
         print(f"{entry['scene']}: {entry['title']}")
-        print(f"  default setting: {entry['default_integrator']}, dt = {entry['default_dt']:g} s")
-        print("  scenarios:")
+        print(
+            f"  default setting: {entry['default_integrator']}, dt = {entry['default_dt']:g} s unless a scenario says"
+        )
+        print("  scenarios (validated dt):")
         for name, text in entry["scenarios"].items():
-            print(f"    {name:<14} {text}")
+            dt = entry["scenario_settings"][name]["dt"]
+            print(f"    {name:<22} {f'{dt * 1e3:g} ms':>8}  {text}")
         print("  parameters:")
         for name, p in entry["parameters"].items():
             print(f"    {name:<16} [{p['unit']}] {p['description']} ({p['valid']})")
@@ -151,6 +180,8 @@ def cmd_run(args) -> int:
         _print_json(summary)
     else:
         _print_run(summary, args.output)
+    for limit in summary.get("model_limits", []):
+        print(f"springlab: {summary['scene']} {summary['scenario']} is not validated: {limit}", file=sys.stderr)
     return EXIT_FAILED if summary["passed"] is False else EXIT_OK
 
 
@@ -189,17 +220,20 @@ def _check_line(check: dict) -> str:
 
 
 def _validation_table(rows: list[dict]) -> str:
+    """The validate/demo table: one column says what each row's error measures (trajectory or a check)."""
     # columns as wide as their longest name, so long scenario names stay readable
     scene_width = max([12] + [len(r["scene"]) for r in rows]) + 1
     scenario_width = max([13] + [len(r["scenario"]) for r in rows]) + 1
+    measures = [r.get("measure", "trajectory max_rel") for r in rows]
+    measure_width = max([len("error of")] + [len(m) for m in measures]) + 2
     lines = [
         f"{'scene':<{scene_width}}{'scenario':<{scenario_width}}{'integrator':<11}{'dt [s]':>9}"
-        f"{'max rel err':>13}{'tolerance':>11}  result"
+        f"  {'error of':<{measure_width}}{'error':>9}{'tolerance':>11}  result"
     ]
-    for r in rows:
+    for r, measure in zip(rows, measures):
         lines.append(
             f"{r['scene']:<{scene_width}}{r['scenario']:<{scenario_width}}{r['integrator']:<11}{r['dt']:>9.2g}"
-            f"{r['max_rel_error']:>13.2e}{r['tolerance']:>11.2e}  {_row_result(r)}"
+            f"  {measure:<{measure_width}}{r['max_rel_error']:>9.2e}{r['tolerance']:>11.2e}  {_row_result(r)}"
         )
         lines.extend(f"    check {_check_line(c)}" for c in r.get("checks", []))
     return "\n".join(lines)
@@ -284,7 +318,11 @@ def cmd_plot(args) -> int:
 
 
 def _verdict(summary: dict) -> int:
-    """Exit code of a run whose outputs were written: 1 when outside its tolerance."""
+    """Exit code of a run whose outputs were written: 1 when outside its tolerance or its model's range."""
+    for limit in summary.get("model_limits", []):
+        print(f"springlab: {summary['scene']} {summary['scenario']} is not validated: {limit}", file=sys.stderr)
+    if summary.get("model_limits"):
+        return EXIT_FAILED
     if summary["passed"] is False:
         why = (
             f"not validated ({summary['estimate_range']['reason']})"
@@ -297,6 +335,8 @@ def _verdict(summary: dict) -> int:
 
 
 def cmd_tradeoff(args) -> int:
+    if args.output:
+        outputs.check_directory(args.output)  # before seconds of computing, not after
     with _executor(args) as executor:
         result = tradeoff.tradeoff(
             args.scene, args.scenario, tol=args.tol, duration=args.duration, executor=executor, **_parse_sets(args.set)
@@ -350,7 +390,31 @@ def _print_tradeoff(result, output: str | None) -> None:
         print(f"  wrote {pathlib.Path(output) / 'tradeoff.json'} and tradeoff.png")
 
 
+def cmd_audit(args) -> int:
+    result = run_audit(
+        args.model,
+        keyframe=args.keyframe,
+        tol=args.tol,
+        integrators=args.integrators,
+        dt=args.dt,
+        duration=args.duration,
+        perturb=args.perturb,
+    )
+    if args.output:
+        charts_audit.write_audit(result, args.output)
+    if args.json:
+        _print_json(result.as_json())
+    else:
+        for line in result.verdict():
+            print(line)
+        if args.output:
+            print(f"wrote {pathlib.Path(args.output) / 'audit.json'} and audit.png")
+    return EXIT_OK if result.own_ok else EXIT_FAILED
+
+
 def cmd_stability(args) -> int:
+    if args.output:
+        outputs.check_directory(args.output)  # before seconds of computing, not after
     with _executor(args) as executor:
         report = stability.stability_report(full=args.full, executor=executor)
         amplification = stability.amplification_map(executor=executor) if args.output else None
@@ -402,6 +466,8 @@ def _print_stability(report: dict, output: str | None) -> None:
 def cmd_design(args) -> int:
     from . import design  # here, not at the top: mujoco.batch is only needed by this command
 
+    if args.output:
+        outputs.check_directory(args.output)  # before seconds of computing, not after
     overrides = _parse_sets(args.set)
     if args.sobol is not None:
         from . import sobol
@@ -519,10 +585,73 @@ def cmd_sweep(args) -> int:
     return EXIT_OK
 
 
+def cmd_fit(args) -> int:
+    # here, not at the top: mujoco.sysid and scipy load only for fits; `from .fit import`, because
+    # springlab.fit (the attribute) is the function once springlab/__init__ has run
+    from .fit import fit, write
+    from .fit_chart import plot_fit
+
+    result = fit(
+        args.scene,
+        args.data,
+        args.scenario,
+        map=args.map,
+        free=args.free or None,
+        scale=args.scale,
+        start=args.start,
+        degree=args.degree,
+        **_parse_sets(args.set),
+    )
+    if args.output:
+        write(result, args.output)
+        plot_fit(result, pathlib.Path(args.output) / "fit.png")
+    if args.json:
+        _print_json(result.as_dict())
+    else:
+        _print_fit(result, args.output)
+    return EXIT_OK if result.converged else EXIT_FAILED
+
+
+def _print_fit(result, output: str | None) -> None:
+    record = result.record
+    print(
+        f"{result.scene} / {result.scenario} from {record.column} ({record.time.size} samples,"
+        f" {record.time[0]:g} to {record.time[-1]:g} s): fitted {', '.join(result.free)}"
+    )
+    for note in record.notes:
+        print(f"  data: {note}")
+    for name, q in {**result.estimates, **result.derived}.items():
+        low, high = q["ci95"]
+        unit = "" if q["unit"] == "-" else q["unit"]
+        print(f"  {name:<26} {q['value']:<16.10g} 95% [{low:.8g}, {high:.8g}] {unit}")
+    check = result.cross_check
+    print(
+        f"  closed-form cross-check: max relative difference {check['max_relative_difference']:.1e}"
+        f" ({'agrees' if check['agrees'] else 'DISAGREES'})"
+    )
+    o = result.optimizer
+    print(
+        f"  optimizer: {o['status']} after {o['iterations']} iterations, {o['rollouts']} rollouts"
+        f" of {o['steps']} steps ({o['time_per_rollout_s'] * 1e3:.1f} ms each), {o['wall_time_s']:.2f} s"
+    )
+    if result.run_note:
+        print(f"  note: {result.run_note}")
+    print(result.verdict)
+    if output:
+        wrote = "fit.json, fit.png" + (", trajectory.csv and summary.json" if result.run is not None else "")
+        print(f"  wrote {wrote} under {output}")
+
+
 def cmd_demo(args) -> int:
     """The main job: validate every scene and write everything under the output folder."""
     start = time.perf_counter()
-    state = demo.run_demo(args.output)
+    try:
+        state = demo.run_demo(args.output)
+    except (KeyboardInterrupt, Terminated) as stop:
+        marker = pathlib.Path(args.output) / demo.INCOMPLETE_MARKER
+        if marker.exists():
+            stop.note = f"; {args.output}/ is incomplete (see {marker})"  # type: ignore[attr-defined]
+        raise
     print(_validation_table(state.validation))
     failed = sum(not r["passed"] for r in state.validation)
     print(
@@ -538,7 +667,13 @@ COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {}
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="springlab", description=__doc__.splitlines()[0])
+    parser = _Parser(
+        prog="springlab",
+        description=__doc__.splitlines()[0],
+        epilog="Start with 'springlab list' and 'springlab run slider'. Exit codes: 0 ok, 1 outside tolerance,"
+        " 2 bad input, 3 diverged, 130 interrupted, 143 terminated.",
+    )
+    parser.add_argument("--version", action="version", version=f"springlab {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser, metavar="COMMAND")
 
     p = sub.add_parser("list", help="scenes, scenarios and parameters")
@@ -630,6 +765,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print stability.json")
     COMMANDS["stability"] = cmd_stability
 
+    p = sub.add_parser("audit", help="any MJCF: modes, stability limits, error vs cost, the cheapest setting for --tol")
+    p.add_argument("model", help="path to an MJCF (or URDF) file, or a scene name")
+    p.add_argument("--keyframe", metavar="NAME|INDEX", help="operating point (default: first keyframe, else qpos0)")
+    p.add_argument("--tol", type=float, default=DEFAULT_TOL, metavar="TOL", help="error tolerance (default 1e-3)")
+    p.add_argument("--integrators", metavar="A,B", help=f"integrators to sweep (default: {','.join(INTEGRATORS)})")
+    p.add_argument("--dt", metavar="LIST|RANGE", help="timesteps 'a,b,c' or 'LOW:HIGH:N' [s] (default: automatic)")
+    p.add_argument("--duration", type=float, metavar="SECONDS", help="simulated time [s] (default 1; a scene's own)")
+    p.add_argument(
+        "--perturb",
+        type=float,
+        default=DEFAULT_PERTURB,
+        metavar="SIZE",
+        help="initial perturbation of the operating point [m or rad] (default 1e-3)",
+    )
+    p.add_argument("--output", metavar="DIR", help="write DIR/audit.json and DIR/audit.png")
+    p.add_argument("--json", action="store_true", help="print audit.json")
+    COMMANDS["audit"] = cmd_audit
+
     p = sub.add_parser("design", help="design study: positioning time over a property sweep, ranked sensitivities")
     p.add_argument("scene", help="scene with a design study: printer_head")
     p.add_argument(
@@ -695,23 +848,74 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print the sweep (setting, counts, every row) as JSON")
     COMMANDS["sweep"] = cmd_sweep
 
+    p = sub.add_parser("fit", help="identify a scene's parameters from a recorded signal (CSV)")
+    p.add_argument("scene", help="slider, car, printer_head or kinematics")
+    p.add_argument("data", metavar="DATA.csv", help="header row; time [s] and <joint>_pos, _vel or _acc")
+    p.add_argument("--scenario", metavar="S", help="the scenario the record shows (default: the scene's fit default)")
+    p.add_argument(
+        "--map", action="append", default=[], metavar="COLUMN=NAME", help="rename a file column (t=time, x=slider_pos)"
+    )
+    p.add_argument(
+        "--free", action="append", default=[], metavar="NAME[,NAME...]", help="names to fit (default: the scene's)"
+    )
+    p.add_argument(
+        "--set", action="append", default=[], metavar="NAME=VALUE", help="fix a parameter, SI units (repeatable)"
+    )
+    p.add_argument("--start", type=float, metavar="S", help="release time [s]: drop the record before it")
+    p.add_argument("--scale", type=float, default=1.0, metavar="FACTOR", help="SI units per file unit (mm: 0.001)")
+    p.add_argument("--degree", type=int, metavar="N", help="kinematics: degree 0-3 of the polynomial")
+    p.add_argument("--output", metavar="DIR", help="write fit.json, fit.png, trajectory.csv and summary.json")
+    p.add_argument("--json", action="store_true", help="print fit.json")
+    COMMANDS["fit"] = cmd_fit
+
     p = sub.add_parser("demo", help="the main job: validate everything, write out/")
     p.add_argument("--output", default="out", metavar="DIR", help="output folder (default: out)")
     COMMANDS["demo"] = cmd_demo
     return parser
 
 
+class Terminated(BaseException):
+    """SIGTERM arrived (a timeout, a batch scheduler): unwinds like Ctrl-C, so partial files are removed."""
+
+
+def _raise_terminated(signum, frame) -> None:
+    raise Terminated
+
+
+@contextlib.contextmanager
+def _sigterm_unwinds() -> Iterator[None]:
+    """Turn SIGTERM into the Terminated exception for the duration (main thread only; restored after)."""
+    try:
+        previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    except ValueError:  # not the main thread: leave signals alone
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the `springlab` console script; returns the exit code."""
     try:
-        args = build_parser().parse_args(argv)
-        return COMMANDS[args.command](args)
+        # the terminal gets springlab's one-line answers, never warning text (numpy's overflow
+        # warnings at extreme values, library deprecations); the API leaves warnings alone
+        with _sigterm_unwinds(), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            args = build_parser().parse_args(argv)
+            return COMMANDS[args.command](args)
+    except SystemExit as done:  # --help, --version
+        return done.code if isinstance(done.code, int) else EXIT_OK
     except SpringlabError as error:
         print(f"springlab: error: {error}", file=sys.stderr)
         return error.exit_code
-    except KeyboardInterrupt:
-        print("springlab: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as stop:
+        print(f"springlab: interrupted{getattr(stop, 'note', '')}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except Terminated as stop:
+        print(f"springlab: terminated{getattr(stop, 'note', '')}", file=sys.stderr)
+        return EXIT_TERMINATED
     except BrokenPipeError:
         # the reader went away (`springlab list | head`): stop quietly, as Unix tools do;
         # point stdout at devnull so the interpreter's final flush cannot raise again

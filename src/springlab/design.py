@@ -70,14 +70,20 @@ import numpy as np
 from mujoco import batch as mjbatch
 
 from . import outputs, scenes
-from .errors import BadInputError, DivergedError, UnknownNameError
+from .errors import BadInputError, DivergedError, ParameterError, UnknownNameError
 from .executor import Executor, chunked
+from .scene import Parameter
 from .scenes.printer_head import (
     PrinterHead,
     after_force_bound,
+    belt_damping_for,
+    belt_damping_ratio,
+    belt_omega,
     minimum_move_time,
     move_residual_stretch,
+    residual_envelope,
     settling_estimate,
+    worst_case_envelope,
 )
 from .simulate import quiet_mujoco
 
@@ -123,12 +129,18 @@ _PER_CONFIGURATION = ("move_time_s", "settling_time_s", "positioning_time_s", "r
 class Plane:
     """Positioning time on a dense grid of the two most influential properties, the others at default.
 
-    Attributes:
-      x_name, y_name: the properties along x and y (y the most influential).
-      x, y: their grid values, (nx,) and (ny,).
-      positioning_time_s, estimate_s: (ny, nx) simulated and estimated positioning time [s].
-      steps: physics steps taken.
-      wall_time_s: wall time of the batched simulation [s].
+    Attributes
+    ----------
+    x_name, y_name
+        the properties along x and y (y the most influential).
+    x, y
+        their grid values, (nx,) and (ny,).
+    positioning_time_s, estimate_s
+        (ny, nx) simulated and estimated positioning time [s].
+    steps
+        physics steps taken.
+    wall_time_s
+        wall time of the batched simulation [s].
     """
 
     x_name: str
@@ -145,23 +157,40 @@ class Plane:
 class Study:
     """A finished design sweep; arrays are per configuration, (n,).
 
-    Attributes:
-      base: the scene parameters the sweep starts from (SI).
-      grids: property -> its grid levels (the default in the middle).
-      values: property -> per-configuration value.
-      move_time_s: realized bang-bang move time [s].
-      settling_time_s: time after the move until the carriage stays in the band [s] (inf: never).
-      positioning_time_s: move + settling [s].
-      residual_amplitude_m: largest carriage deviation from the target after the move [m].
-      estimate_s: analytic estimate of positioning time [s] (module docstring).
-      worst_case_estimate_s: the phase-independent upper estimate [s].
-      natural_frequency_hz: belt mode [Hz].
-      dt_s: timestep of each simulation [s].
-      steps: physics steps taken in total.
-      wall_time_s: wall time of the batched simulation [s].
-      nthread: threads each batch ran on.
-      executor: where the chunks ran ('local', '2 local dask workers', ...).
-      plane: the dense plane over the two most influential properties (None: not run).
+    Attributes
+    ----------
+    base
+        the scene parameters the sweep starts from (SI).
+    grids
+        property -> its grid levels (the default in the middle).
+    values
+        property -> per-configuration value.
+    move_time_s
+        realized bang-bang move time [s].
+    settling_time_s
+        time after the move until the carriage stays in the band [s] (inf: never).
+    positioning_time_s
+        move + settling [s].
+    residual_amplitude_m
+        largest carriage deviation from the target after the move [m].
+    estimate_s
+        analytic estimate of positioning time [s] (module docstring).
+    worst_case_estimate_s
+        the phase-independent upper estimate [s].
+    natural_frequency_hz
+        belt mode [Hz].
+    dt_s
+        timestep of each simulation [s].
+    steps
+        physics steps taken in total.
+    wall_time_s
+        wall time of the batched simulation [s].
+    nthread
+        threads each batch ran on.
+    executor
+        where the chunks ran ('local', '2 local dask workers', ...).
+    plane
+        the dense plane over the two most influential properties (None: not run).
     """
 
     base: dict[str, float]
@@ -212,7 +241,7 @@ class Study:
         centre = self.levels // 2
         out = {}
         for axis, name in enumerate(self.grids):
-            index = [centre] * len(shape)
+            index: list[int | slice] = [centre] * len(shape)
             index[axis] = centre + 1
             upper = grid_times[tuple(index)]
             index[axis] = centre - 1
@@ -233,21 +262,40 @@ class Study:
 def base_parameters(overrides: Mapping[str, Any] | None = None) -> dict[str, float]:
     """The printer_head `move` parameters the sweep starts from (MJCF defaults < overrides).
 
-    Raises:
-      UnknownNameError, ParameterError: as for `springlab run`.
+    The design table's property `damping_ratio` [-] is accepted too: it sets the
+    belt damping c = 2 zeta sqrt(k m_c m_m / (m_c + m_m)) of the other values.
+
+    Raises
+    ------
+    UnknownNameError, ParameterError
+        as for `springlab run`, and for damping_ratio given together with belt_damping.
     """
     scene = scenes.get("printer_head")
-    return scene.resolve(scene.scenario("move"), dict(overrides or {}))
+    overrides = dict(overrides or {})
+    for name in overrides:
+        if name != "damping_ratio" and name not in scene.parameters:
+            raise UnknownNameError(
+                "parameter of the printer_head design study", name, [*scene.parameters, "damping_ratio"]
+            )
+    ratio = overrides.pop("damping_ratio", None)
+    if ratio is None:
+        return scene.resolve(scene.scenario("move"), overrides)
+    if "belt_damping" in overrides:
+        raise ParameterError("give damping_ratio or belt_damping, not both (damping_ratio sets the belt damping)")
+    ratio = Parameter("damping_ratio", "-", "belt damping ratio", minimum=0.0).check(ratio)
+    base = scene.resolve(scene.scenario("move"), overrides)
+    reduced = base["carriage_mass"] * base["motor_mass"] / (base["carriage_mass"] + base["motor_mass"])
+    overrides["belt_damping"] = 2.0 * ratio * math.sqrt(base["belt_stiffness"] * reduced)
+    return scene.resolve(scene.scenario("move"), overrides)
 
 
 def default_properties(base: Mapping[str, float]) -> dict[str, float]:
     """The swept properties' values at `base`: damping ratio from the belt damping."""
     m_c, m_m = base["carriage_mass"], base["motor_mass"]
-    reduced = m_c * m_m / (m_c + m_m)
     return {
         "belt_stiffness": base["belt_stiffness"],
         "carriage_mass": m_c,
-        "damping_ratio": base["belt_damping"] / (2.0 * math.sqrt(base["belt_stiffness"] * reduced)),
+        "damping_ratio": belt_damping_ratio(base["belt_damping"], base["belt_stiffness"], m_c, m_m),
         "drive_force": base["drive_force"],
     }
 
@@ -255,8 +303,10 @@ def default_properties(base: Mapping[str, float]) -> dict[str, float]:
 def make_grids(base: Mapping[str, float], levels: int = DEFAULT_LEVELS) -> dict[str, np.ndarray]:
     """Property -> `levels` values, default x span^u for u evenly in [-1, 1].
 
-    Raises:
-      BadInputError: `levels` is not an odd integer >= 3 (the default must be a grid point).
+    Raises
+    ------
+    BadInputError
+        `levels` is not an odd integer >= 3 (the default must be a grid point).
     """
     if not isinstance(levels, (int, np.integer)) or levels < 3 or levels % 2 == 0:
         raise BadInputError(f"levels must be an odd integer >= 3 (the default is the middle one), got {levels!r}")
@@ -279,8 +329,7 @@ def configurations(grids: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
 def belt_damping(values: Mapping[str, np.ndarray], motor_mass: float) -> np.ndarray:
     """Belt damping c = 2 zeta sqrt(k mu) [N s/m] of each configuration."""
     m_c = np.asarray(values["carriage_mass"], float)
-    reduced = m_c * motor_mass / (m_c + motor_mass)
-    return 2.0 * np.asarray(values["damping_ratio"]) * np.sqrt(np.asarray(values["belt_stiffness"]) * reduced)
+    return belt_damping_for(np.asarray(values["damping_ratio"]), np.asarray(values["belt_stiffness"]), m_c, motor_mass)
 
 
 def config_parameters(base: Mapping[str, float], values: Mapping[str, np.ndarray], i: int) -> dict[str, float]:
@@ -303,8 +352,7 @@ def timesteps(values: Mapping[str, np.ndarray], base: Mapping[str, float], omega
     m_c = np.asarray(values["carriage_mass"], float)
     motor_mass = base["motor_mass"]
     total = m_c + motor_mass
-    reduced = m_c * motor_mass / total
-    largest = omega_dt / np.sqrt(np.asarray(values["belt_stiffness"]) / reduced)
+    largest = omega_dt / belt_omega(np.asarray(values["belt_stiffness"]), m_c, motor_mass)
     half = np.sqrt(move_distances(base, values) * total / np.asarray(values["drive_force"], float))
     return half / np.ceil(half / largest)
 
@@ -337,23 +385,35 @@ def simulate_moves(
 ) -> dict[str, Any]:
     """Run the `move` scenario for every configuration in one mujoco.batch.Batch.
 
-    Args:
-      base: scene parameters (move_distance [m], positioning_band [m], motor_mass [kg], ...).
-      values: property -> (n,) values (PROPERTIES).
-      omega_dt: omega_n dt [-] of every simulation (RK4).
-      nthread: batch threads (0: one per CPU).
-      chunk: steps per rollout call.
-      max_duration: simulated time [s] after which an unsettled configuration is given up.
+    Parameters
+    ----------
+    base
+        scene parameters (move_distance [m], positioning_band [m], motor_mass [kg], ...).
+    values
+        property -> (n,) values (PROPERTIES).
+    omega_dt
+        omega_n dt [-] of every simulation (RK4).
+    nthread
+        batch threads (0: one per CPU).
+    chunk
+        steps per rollout call.
+    max_duration
+        simulated time [s] after which an unsettled configuration is given up.
 
-    Returns:
-      dict of (n,) arrays: move_time_s, settling_time_s, positioning_time_s,
-      residual_amplitude_m, dt_s, steps (per configuration); and steps_total,
-      wall_time_s, nthread.
+    Returns
+    -------
+    dict[str, Any]
+        dict of (n,) arrays: move_time_s, settling_time_s, positioning_time_s,
+        residual_amplitude_m, dt_s, steps (per configuration); and steps_total,
+        wall_time_s, nthread.
 
-    Raises:
-      DivergedError: a simulation blew up (MuJoCo's warning counters rose).
+    Raises
+    ------
+    DivergedError
+        a simulation blew up (MuJoCo's warning counters rose).
     """
-    scene: PrinterHead = scenes.get("printer_head")
+    scene = scenes.get("printer_head")
+    assert isinstance(scene, PrinterHead)
     scenario = scene.scenario("move")
     params = dict(base)
     model = scene.build(params, scenario)
@@ -510,16 +570,14 @@ def estimates(
         params = config_parameters(base, values, i)
         m_c, k, force = params["carriage_mass"], params["belt_stiffness"], params["drive_force"]
         total = m_c + m_m
-        reduced = m_c * m_m / total
-        omega = math.sqrt(k / reduced)
+        omega = float(belt_omega(k, m_c, m_m))
         zeta = float(values["damping_ratio"][i])
         frequency[i] = omega / (2 * math.pi)
         half_steps, _ = PrinterHead.move_profile(params, float(dt[i]))
         stretch, rate = move_residual_stretch(params, float(dt[i]))
-        omega_d = omega * math.sqrt(1 - zeta * zeta)
-        envelope = (m_m / total) * math.hypot(stretch, (rate + zeta * omega * stretch) / omega_d)
+        envelope = residual_envelope(stretch, rate, m_c, m_m, omega, zeta)
         estimate[i] = 2 * half_steps * dt[i] + settling_estimate(envelope, band, zeta, omega)
-        worst_envelope = 4 * force * m_c * m_m / (total**2 * k)
+        worst_envelope = worst_case_envelope(force, m_c, m_m, k)
         worst[i] = minimum_move_time(params["move_distance"], total, force) + settling_estimate(
             worst_envelope, band, zeta, omega
         )
@@ -541,19 +599,30 @@ def run_study(
 ) -> Study:
     """Sweep the four properties, simulate every configuration, and estimate each analytically.
 
-    Args:
-      scene: the scene to study (only 'printer_head' has a design study).
-      levels: odd number of grid points per property (levels^4 configurations).
-      plane_levels: odd number of grid points per axis of the dense plane over the two most
+    Parameters
+    ----------
+    scene
+        the scene to study (only 'printer_head' has a design study).
+    levels
+        odd number of grid points per property (levels^4 configurations).
+    plane_levels
+        odd number of grid points per axis of the dense plane over the two most
         influential properties (plane_levels^2 more configurations), 0 for none.
-      nthread: batch threads (0: one per CPU).
-      omega_dt: omega_n dt [-] of every simulation.
-      executor: where the chunks run (None: locally on `nthread` threads); the numbers are the same.
-      **overrides: printer_head parameters to start from (SI), e.g. move_distance=0.2 [m].
+    nthread
+        batch threads (0: one per CPU).
+    omega_dt
+        omega_n dt [-] of every simulation.
+    executor
+        where the chunks run (None: locally on `nthread` threads); the numbers are the same.
+    **overrides
+        printer_head parameters to start from (SI), e.g. move_distance=0.2 [m].
 
-    Raises:
-      UnknownNameError: an unknown scene or parameter.
-      BadInputError: bad levels, threads or parameter values.
+    Raises
+    ------
+    UnknownNameError
+        an unknown scene or parameter.
+    BadInputError
+        bad levels, threads or parameter values.
     """
     if scene not in STUDIES:
         raise UnknownNameError("design study", str(scene), STUDIES)
@@ -735,7 +804,7 @@ def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
         first, second = study.plane.y_name, study.plane.x_name
     else:
         shape = (study.levels,) * len(axes_order)
-        index = [centre] * len(shape)
+        index: list[int | slice] = [centre] * len(shape)
         index[axes_order.index(first)] = slice(None)
         index[axes_order.index(second)] = slice(None)
         plane = study.positioning_time_s.reshape(shape)[tuple(index)] * 1e3  # ms

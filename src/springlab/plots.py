@@ -189,7 +189,7 @@ def time_series(result: api.Result) -> Figure:
         axes[-1, column].set_xlabel("time [s]")
     verdict = ""
     if result.summary.get("passed") is not None:
-        verdict = ", PASS" if result.summary["passed"] else ", FAIL"
+        verdict = f", {result.summary.get('verdict') or ('PASS' if result.summary['passed'] else 'FAIL')}"
     figure.suptitle(f"{_title(result)}: {result.summary['integrator']}, dt = {result.summary['dt']:g} s{verdict}")
     return figure
 
@@ -481,6 +481,14 @@ def family_of(result: api.Result) -> Figure:
 
 def _damping_per_ratio(scene_name: str, scenario_name: str | None, parameters: dict[str, Any]) -> float:
     """Damping [N s/m] per unit damping ratio of the scene's single mode (zeta is linear in d)."""
+    # the number of modes first: a two-mode scenario (car pitch_heave) may not even take 'damping'
+    scene, scenario, params = api.prepare(scene_name, scenario_name, parameters)
+    count = len(scene.modes(scene.build(params, scenario), params, scenario))
+    if count != 1:
+        raise BadInputError(
+            f"plot kind 'zeta' needs a one-mode scene; {scene.name}/{scenario.name} has {count} modes"
+            " (use --kind time or phase)"
+        )
     scene, scenario, params = api.prepare(scene_name, scenario_name, {**parameters, "damping": 1.0})
     model = scene.build(params, scenario)
     modes = scene.modes(model, params, scenario)

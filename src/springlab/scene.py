@@ -29,6 +29,12 @@ from . import model_files
 from .errors import ParameterError, UnknownNameError
 from .simulate import Trajectory, quiet_mujoco, stability_limit
 
+#: smallest body mass [kg] and principal inertia [kg m^2] MuJoCo compiles: its mjMINVAL
+#: (1e-15); a moving body below it fails `MjSpec.compile` ("must be larger than mjMINVAL")
+MIN_MASS = float(mujoco.mjMINVAL)
+#: why a mass-like parameter stops at MIN_MASS, for its error message
+MIN_MASS_REASON = "MuJoCo cannot compile a body whose mass or principal inertia is below its mjMINVAL = 1e-15"
+
 
 @functools.lru_cache(maxsize=64)
 def parsed_spec(path: str) -> mujoco.MjSpec:
@@ -45,14 +51,24 @@ def parsed_spec(path: str) -> mujoco.MjSpec:
 class Parameter:
     """A scene parameter in SI units.
 
-    Attributes:
-      name: as used by `--set NAME=VALUE` and keyword arguments.
-      unit: SI unit, e.g. 'kg', 'N/m', 'N s/m', 'm', 'm/s', 'Hz', '-' for none.
-      description: one line.
-      minimum: lowest valid value (None: unbounded).
-      minimum_inclusive: whether `minimum` itself is valid.
-      maximum: highest valid value (None: unbounded).
-      default: default value, or None when it is read back from the model.
+    Attributes
+    ----------
+    name
+        as used by `--set NAME=VALUE` and keyword arguments.
+    unit
+        SI unit, e.g. 'kg', 'N/m', 'N s/m', 'm', 'm/s', 'Hz', '-' for none.
+    description
+        one line.
+    minimum
+        lowest valid value (None: unbounded).
+    minimum_inclusive
+        whether `minimum` itself is valid.
+    maximum
+        highest valid value (None: unbounded).
+    default
+        default value, or None when it is read back from the model.
+    reason
+        why the range is what it is (added to the error message), e.g. MIN_MASS_REASON.
     """
 
     name: str
@@ -62,6 +78,7 @@ class Parameter:
     minimum_inclusive: bool = True
     maximum: float | None = None
     default: float | None = None
+    reason: str = ""
 
     def valid_range(self) -> str:
         """Human-readable valid range, e.g. '> 0 kg'."""
@@ -82,7 +99,8 @@ class Parameter:
         low_ok = self.minimum is None or number > self.minimum or (self.minimum_inclusive and number == self.minimum)
         high_ok = self.maximum is None or number <= self.maximum
         if not math.isfinite(number) or not low_ok or not high_ok:
-            raise ParameterError(f"{self.name} must be a finite number {self.valid_range()}, got {value!r}")
+            why = f" ({self.reason})" if self.reason else ""
+            raise ParameterError(f"{self.name} must be a finite number {self.valid_range()}{why}, got {value!r}")
         return number
 
 
@@ -90,15 +108,27 @@ class Parameter:
 class Scenario:
     """A named question a scene answers.
 
-    Attributes:
-      name: scenario name.
-      description: one line.
-      duration: default simulated time [s].
-      presets: parameter values this scenario sets (user overrides win).
-      derive: optional function(params, explicitly_set_names) -> extra values,
+    Attributes
+    ----------
+    name
+        scenario name.
+    description
+        one line.
+    duration
+        default simulated time [s].
+    presets
+        parameter values this scenario sets (user overrides win).
+    derive
+        optional function(params, explicitly_set_names) -> extra values,
         for presets that depend on other parameters (e.g. damping from a ratio).
-      exact: whether an exact reference exists (validated by `validate`).
-      dt: the scenario's validated timestep [s] (None: the scene's `dt`).
+    exact
+        whether an exact reference exists (validated by `validate`).
+    dt
+        the scenario's validated timestep [s] (None: the scene's `dt`).
+    variant
+        for a scene whose scenarios differ in their model (e.g. the car: 1 DOF,
+        pitch/heave, quarter car), the object that carries what differs; the scene's
+        hooks delegate to it instead of dispatching on scenario names (None: unused).
     """
 
     name: str
@@ -108,25 +138,34 @@ class Scenario:
     derive: Callable[[dict[str, float], set[str]], dict[str, float]] | None = None
     exact: bool = True
     dt: float | None = None
+    variant: Any = None
 
 
 @dataclasses.dataclass
 class Reference:
     """The exact solution of a scenario at the trajectory's times.
 
-    Attributes:
-      pos, vel: joint name -> exact position [m or rad] and velocity [m/s or rad/s].
-      system: for linear scenes, the matrix A [1/s] of the autonomous system
+    Attributes
+    ----------
+    pos, vel
+        joint name -> exact position [m or rad] and velocity [m/s or rad/s].
+    system
+        for linear scenes, the matrix A [1/s] of the autonomous system
         z' = A z that generated the reference (forcing included as generator
         states); None otherwise. Used to derive the error bound.
-      states: (n, dim) exact z(t), or None.
-      rows: joint name -> (row of its position, row of its velocity) in z.
-      tolerance: for scenes without `system`, the relative tolerance [-] every
+    states
+        (n, dim) exact z(t), or None.
+    rows
+        joint name -> (row of its position, row of its velocity) in z.
+    tolerance
+        for scenes without `system`, the relative tolerance [-] every
         compared column is held to, and `tolerance_basis` says why.
-      switches: for a linear scene whose input is switched on a step boundary:
+    switches
+        for a linear scene whose input is switched on a step boundary:
         [(time [s], A after it)], in time order; `system` holds before the first.
         The states z(t) stay continuous across a switch.
-      input_error: column -> exact max absolute difference [m or m/s] between the
+    input_error
+        column -> exact max absolute difference [m or m/s] between the
         responses to the input the model realizes and the true input, added to
         that column's tolerance (`tolerance_basis` says where it comes from).
     """
@@ -149,14 +188,21 @@ class Check:
     For scenes without an exact trajectory (non-linear ones), `validate` holds a
     scenario to its checks instead of (or besides) the compared columns.
 
-    Attributes:
-      name: what is checked, ending in its unit like a quantity, e.g. 'period_s'.
-      value: measured from the simulation (in the name's unit).
-      reference: the independent expectation (closed form, quadrature, ...).
-      tolerance: bound on `error` [-]: relative, or absolute in the name's unit
+    Attributes
+    ----------
+    name
+        what is checked, ending in its unit like a quantity, e.g. 'period_s'.
+    value
+        measured from the simulation (in the name's unit).
+    reference
+        the independent expectation (closed form, quadrature, ...).
+    tolerance
+        bound on `error` [-]: relative, or absolute in the name's unit
         when the reference is 0.
-      basis: why the tolerance is what it is (one line).
-      certifies_error: whether `error` is an error of a physical result, which a PASS
+    basis
+        why the tolerance is what it is (one line).
+    certifies_error
+        whether `error` is an error of a physical result, which a PASS
         without a requested tolerance certifies only up to springlab.compare.CERTIFIED_CAP
         (False for a diagnostic, e.g. an observed order of convergence against the
         integrator's).
@@ -197,9 +243,12 @@ class Check:
 class Setup:
     """Initial state and inputs of one run.
 
-    Attributes:
-      qpos, qvel, act: initial state (None: the model's rest state).
-      control: (nu,) or (steps, nu) open-loop controls, held over each step.
+    Attributes
+    ----------
+    qpos, qvel, act
+        initial state (None: the model's rest state).
+    control
+        (nu,) or (steps, nu) open-loop controls, held over each step.
     """
 
     qpos: np.ndarray | None = None
@@ -209,7 +258,45 @@ class Setup:
 
 
 class Scene:
-    """Base class of the scenes; subclasses fill in the class attributes and hooks."""
+    """Base class of the scenes: one MJCF file under models/ and one module of the same name.
+
+    Like scipy's `OdeSolver`, a new scene is a subclass that provides the following.
+
+    1. Class attributes: `name` (also the MJCF stem: models/<name>.xml), `title` (the one-line
+       question), `joints` (the reported joints, trajectory.csv's columns), `parameters`
+       (name -> `Parameter`, SI with units and valid ranges), `scenarios` (name -> `Scenario`,
+       each with its duration, presets and validated `dt`; a scene whose scenarios differ in their
+       model gives each its `variant` instead of dispatching on names), `default_scenario`, and
+       the validated default setting `integrator` and `dt` [s]; optionally `camera`.
+    2. `model_defaults(model)`: the parameters whose defaults live in the MJCF, read back from the
+       compiled model (the physics values have one home, the MJCF).
+    3. `edit(spec, params, scenario)`: MjSpec edits that apply the parameters, so the physics
+       stays in MJCF (no Python forces; time-varying inputs as MJCF-native generators or
+       piecewise-constant controls switched on step boundaries, see springlab.exciter).
+    4. `setup(model, params, scenario, steps, dt)`: the initial state and open-loop controls
+       (`Setup`); raise ParameterError for a motion the scene's equations cannot describe
+       when that is known before the run.
+    5. `physical(model)`: the physical constants the scene's equations use, read back from the
+       compiled model (SI; the order is the scene's, documented in its override).
+    6. `modes(model, params, scenario)`: [(natural frequency [rad/s], damping ratio [-])] of every
+       mode the integrator must resolve (forcing generators included), for stability advice.
+    7. `reference(model, params, scenario, time)`: the exact solution at `time` [s] where one
+       exists (`Reference`; for a linear scene with its state matrix, so the tolerance is
+       derived), else None and `checks(...)`: scalar claims against independent references
+       (`Check`; builders in springlab.checks).
+    8. `quantities(model, params, scenario, trajectory)`: the scenario's named results, SI,
+       names ending in their unit; peaks and event times interpolated between the samples to
+       the run's order (springlab.events).
+    9. Optionally: `check_consistency` (non-physical parameter combinations), `model_limits`
+       (where a finished run leaves the scene's equations), `stop_condition` (an event that
+       ends a run early as a result), `stability_limit` (damping MuJoCo treats differently from
+       joint damping), `phase_field`/`equilibria`/`separatrices` (one-joint phase planes),
+       `joint_columns` (joints that only some scenarios have).
+
+    The module exposes the instance as `SCENE`; springlab.scenes discovers it. Tests check each
+    claim against a reference built in the test (closed form, expm, scipy's DOP853 at tight
+    rtol), never against the scene's own reference.
+    """
 
     #: scene name, also the MJCF file stem under models/.
     name: str = ""
@@ -253,9 +340,12 @@ class Scene:
     def resolve(self, scenario: Scenario, overrides: Mapping[str, Any]) -> dict[str, float]:
         """Final parameter values: MJCF defaults < scenario presets < overrides.
 
-        Raises:
-          UnknownNameError: an override names no parameter of this scene.
-          ParameterError: a value is not a finite number in its valid range.
+        Raises
+        ------
+        UnknownNameError
+            an override names no parameter of this scene.
+        ParameterError
+            a value is not a finite number in its valid range.
         """
         for name in overrides:
             if name not in self.parameters:
@@ -285,7 +375,14 @@ class Scene:
         spec = self.model_spec()
         self.edit(spec, params, scenario)
         with quiet_mujoco():
-            return spec.compile()
+            try:
+                return spec.compile()
+            except ValueError as error:
+                # a backstop: each parameter's range should catch this first (tests/test_cli_inputs.py)
+                reason = str(error).splitlines()[0].removeprefix("Error: ")
+                raise ParameterError(
+                    f"MuJoCo cannot compile {self.name} {scenario.name} with these parameters: {reason}"
+                ) from None
 
     def setup(
         self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, steps: int, dt: float
@@ -313,6 +410,14 @@ class Scene:
     ) -> dict[str, Any]:
         """Named results of the scenario, SI, names ending in their unit (override)."""
         return {}
+
+    def physical(self, model: mujoco.MjModel) -> tuple[float, ...]:
+        """The physical constants the scene's equations use, read back from the compiled model (SI).
+
+        The order is the scene's (e.g. the slider's (mass [kg], stiffness [N/m], damping [N s/m]));
+        none by default.
+        """
+        return ()
 
     def modes(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[tuple[float, float]]:
         """[(natural frequency [rad/s], damping ratio [-])] of the run, for stability advice."""
@@ -359,6 +464,21 @@ class Scene:
         trajectory: Trajectory,
     ) -> list[Check]:
         """Scalar claims `validate` holds an exact scenario to, beyond its compared columns (override)."""
+        return []
+
+    def model_limits(
+        self,
+        model: mujoco.MjModel,
+        params: dict[str, float],
+        scenario: Scenario,
+        trajectory: Trajectory,
+    ) -> list[str]:
+        """Where this run leaves the range the scene's equations describe, one line each (override).
+
+        E.g. a linear tire that would have to pull on the road: the simulation may still match its
+        exact reference, but neither describes the physical system any more. Any line makes the run
+        not validated (`passed` False, exit 1) and is reported in summary.json's `model_limits`.
+        """
         return []
 
     def stop_condition(

@@ -53,7 +53,7 @@ import numpy as np
 
 from .. import analytic
 from ..errors import BadInputError, ParameterError
-from ..scene import Parameter, Reference, Scenario, Scene, Setup
+from ..scene import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene, Setup
 from ..simulate import Trajectory
 
 #: the tachograph record: knot times [s] and the velocities there [m/s]; v(t) is linear between them
@@ -112,7 +112,7 @@ class Kinematics(Scene):
     parameters = {
         p.name: p
         for p in (
-            Parameter("mass", "kg", "mass of the vehicle", minimum=0.0, minimum_inclusive=False),
+            Parameter("mass", "kg", "mass of the vehicle", minimum=MIN_MASS, reason=MIN_MASS_REASON),
             Parameter("x0", "m", "initial position x(0)", default=0.0),
             Parameter("v0", "m/s", "initial velocity v(0)", default=0.0),
             Parameter("a0", "m/s^2", "initial acceleration a(0)", default=0.0),

@@ -53,7 +53,10 @@ Jacobian, s = ln(lambda) / dt); `move_time_s`, `residual_amplitude_m` (largest
 carriage deviation from the target after the move), `settling_time_s` (time
 after the move ends, or after release, from which the carriage stays inside
 +-positioning_band for good), `positioning_time_s` = move + settling, and the
-analytic estimates. "For good" is certified, not assumed: after the force is
+analytic estimates: `settling_time_estimate_s` = ln(A / band) / (zeta omega_n),
+A the envelope of the exact residual vibration after the move, and
+`positioning_time_estimate_s` = `move_time_s` (the move this run makes, on the
+step grid: known exactly) + that settling estimate. "For good" is certified, not assumed: after the force is
 off the belt's energy E = mu s'^2/2 + k s^2/2 cannot grow, so the carriage
 stays within |X - target| + (m_m / M) sqrt(2 E / k) of the target for ever;
 a run that ends before that bound is inside the band reports
@@ -82,7 +85,7 @@ import mujoco
 import numpy as np
 
 from .. import analytic
-from ..scene import Parameter, Reference, Scenario, Scene, Setup
+from ..scene import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene, Setup
 from ..simulate import Trajectory, integrator_id, quiet_mujoco
 from ..simulate import stability_limit as joint_damping_stability_limit
 
@@ -111,14 +114,18 @@ class PrinterHead(Scene):
         p.name: p
         for p in (
             Parameter(
-                "carriage_mass", "kg", "mass of the carriage with the print head", minimum=0.0, minimum_inclusive=False
+                "carriage_mass",
+                "kg",
+                "mass of the carriage with the print head",
+                minimum=MIN_MASS,
+                reason=MIN_MASS_REASON,
             ),
             Parameter(
                 "motor_mass",
                 "kg",
                 "motor-side mass: rotor+pulley inertia J / r^2",
-                minimum=0.0,
-                minimum_inclusive=False,
+                minimum=MIN_MASS,
+                reason=MIN_MASS_REASON,
             ),
             Parameter(
                 "belt_stiffness",
@@ -359,12 +366,11 @@ class PrinterHead(Scene):
             out["positioning_time_s"] = out["move_time_s"] + out["settling_time_s"]
         # the analytic estimate: envelope of the residual vibration down to the band
         if zeta < 1.0 and k > 0:
-            omega_d = omega_n * math.sqrt(1 - zeta * zeta)
             s0 = q_m[start] - q_c[start]
             s0_rate = v_m[start] - v_c[start]
             if scenario.name == "move":
                 s0, s0_rate = move_residual_stretch(params, dt)
-            envelope = (m_m / total) * math.hypot(s0, (s0_rate + zeta * omega_n * s0) / omega_d)
+            envelope = residual_envelope(s0, s0_rate, m_c, m_m, omega_n, zeta)
             out["residual_envelope_m"] = envelope
             out["settling_time_estimate_s"] = settling_estimate(envelope, band, zeta, omega_n)
             if scenario.name == "move":
@@ -373,6 +379,49 @@ class PrinterHead(Scene):
 
 
 # -- helpers shared with the design study ------------------------------------------
+
+
+def reduced_mass(carriage_mass, motor_mass):
+    """Reduced mass mu = m_c m_m / (m_c + m_m) [kg] of the belt mode (floats or arrays)."""
+    return carriage_mass * motor_mass / (carriage_mass + motor_mass)
+
+
+def belt_damping_for(damping_ratio, stiffness, carriage_mass, motor_mass):
+    """Belt damping c = 2 zeta sqrt(k mu) [N s/m] giving the belt mode `damping_ratio` [-] (floats or arrays)."""
+    return 2.0 * damping_ratio * np.sqrt(stiffness * reduced_mass(carriage_mass, motor_mass))
+
+
+def belt_damping_ratio(damping: float, stiffness: float, carriage_mass: float, motor_mass: float) -> float:
+    """The belt mode's damping ratio zeta = c / (2 sqrt(k mu)) [-] of belt damping c [N s/m]."""
+    return damping / (2.0 * math.sqrt(stiffness * reduced_mass(carriage_mass, motor_mass)))
+
+
+def belt_omega(stiffness, carriage_mass, motor_mass):
+    """The belt mode's undamped natural frequency omega_n = sqrt(k / mu) [rad/s] (floats or arrays)."""
+    return np.sqrt(stiffness / reduced_mass(carriage_mass, motor_mass))
+
+
+def residual_envelope(
+    stretch: float, stretch_rate: float, carriage_mass: float, motor_mass: float, omega_n: float, zeta: float
+) -> float:
+    """Envelope A [m] of the carriage's residual vibration A e^(-zeta omega_n t) once the force is off.
+
+    The carriage moves (m_m / M) times the belt stretch s; a damped free vibration from (s, s') has
+    amplitude hypot(s, (s' + zeta omega_n s) / omega_d), omega_d = omega_n sqrt(1 - zeta^2).
+    """
+    omega_d = omega_n * math.sqrt(1 - zeta * zeta)
+    share = motor_mass / (carriage_mass + motor_mass)
+    return share * math.hypot(stretch, (stretch_rate + zeta * omega_n * stretch) / omega_d)
+
+
+def worst_case_envelope(force: float, carriage_mass: float, motor_mass: float, stiffness: float) -> float:
+    """Largest residual envelope [m] any bang-bang move at `force` [N] can leave: 4 F m_c m_m / (M^2 k).
+
+    The residual stretch of an undamped belt is 4 sin^2(omega_n T / 4) <= 4 times the static
+    stretch F m_c / (M k), and the carriage moves m_m / M of it.
+    """
+    total = carriage_mass + motor_mass
+    return 4 * force * carriage_mass * motor_mass / (total**2 * stiffness)
 
 
 def minimum_move_time(distance: float, mass: float, force: float) -> float:

@@ -34,7 +34,7 @@ import mujoco
 import numpy as np
 
 from .. import analytic, exciter
-from ..scene import Parameter, Reference, Scenario, Scene, Setup
+from ..scene import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene, Setup
 from ..simulate import Trajectory
 
 
@@ -72,7 +72,7 @@ class Slider(Scene):
     parameters = {
         p.name: p
         for p in (
-            Parameter("mass", "kg", "mass of the block", minimum=0.0, minimum_inclusive=False),
+            Parameter("mass", "kg", "mass of the block", minimum=MIN_MASS, reason=MIN_MASS_REASON),
             Parameter("stiffness", "N/m", "spring stiffness k", minimum=0.0),
             Parameter("damping", "N s/m", "damper coefficient d", minimum=0.0),
             Parameter("x0", "m", "initial stretch of the spring", default=0.1),
@@ -279,6 +279,8 @@ class Slider(Scene):
                 m, k, d, params["force_amplitude"], params["force_frequency"]
             )
             out["frequency_ratio"] = 2 * math.pi * params["force_frequency"] / math.sqrt(k / m) if k else math.inf
+            # undamped at resonance the response grows without bound: no steady state (inf, null in JSON)
+            out["steady_state_exists"] = bool(math.isfinite(amplitude))
             out["steady_state_amplitude_m"] = amplitude
             out["phase_lag_rad"] = phase
         x = trajectory.qpos[:, model.joint("slider").qposadr[0]]
