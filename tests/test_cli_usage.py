@@ -7,8 +7,11 @@ import pathlib
 import pytest
 
 import springlab
-from springlab import demo, design, scenes
+from springlab import demo, design, model_files, scenes
 from springlab.cli import build_parser, main
+
+#: a recorded signal shipped with the docs, for fit's argument parsing
+EXAMPLE_CSV = pathlib.Path(__file__).parent.parent / "docs" / "examples" / "decay_mm.csv"
 
 
 def _run(capsys, *argv):
@@ -46,6 +49,9 @@ def test_an_extra_positional_is_still_refused_in_one_line(capsys):
         (["tradeoff", "slider"], "springlab.tradeoff", "tradeoff"),
         (["stability"], "springlab.stability", "stability_report"),
         (["design", "printer_head"], "springlab.design", "run_study"),
+        (["sweep", "slider", "--vary", "mass=1:2:3"], "springlab.sweeps", "sweep"),
+        (["audit", str(model_files.path("slider"))], "springlab.cli", "run_audit"),
+        (["fit", "slider", str(EXAMPLE_CSV)], "springlab.fit", "fit"),
     ],
 )
 def test_an_unwritable_output_fails_before_any_computing(tmp_path, capsys, monkeypatch, command, module, function):

@@ -391,6 +391,8 @@ def _print_tradeoff(result, output: str | None) -> None:
 
 
 def cmd_audit(args) -> int:
+    if args.output:
+        outputs.check_directory(args.output)  # before seconds of computing, not after
     result = run_audit(
         args.model,
         keyframe=args.keyframe,
@@ -547,6 +549,8 @@ def _print_design(design, study, output: str | None) -> None:
 def cmd_sweep(args) -> int:
     from . import sweep_plot, sweeps
 
+    if args.output:
+        outputs.check_directory(args.output)  # before seconds of computing, not after
     with _executor(args) as executor:
         result = sweeps.sweep(
             args.scene,
@@ -591,6 +595,8 @@ def cmd_fit(args) -> int:
     from .fit import fit, write
     from .fit_chart import plot_fit
 
+    if args.output:
+        outputs.check_directory(args.output)  # before seconds of computing, not after
     result = fit(
         args.scene,
         args.data,
