@@ -19,10 +19,13 @@ import warnings
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
+import numpy as np
+
 from . import __version__, api, auto, charts, charts_audit, compare, demo, outputs, scenes, stability, tradeoff
 from .audit import DEFAULT_PERTURB, DEFAULT_TOL
 from .audit import audit as run_audit
 from .errors import BadInputError, SpringlabError
+from .executor import CONNECT_TIMEOUT_S, Executor
 from .simulate import INTEGRATORS
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_DIVERGED = 0, 1, 2, 3
@@ -88,6 +91,26 @@ def _timing_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _print_json(value: Any) -> None:
     print(outputs.dumps(value))
+
+
+def _executor_arguments(parser: argparse.ArgumentParser) -> None:
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument(
+        "--workers", type=int, metavar="N", help="run the chunks on a local dask cluster of N worker processes"
+    )
+    where.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="run the chunks on a running dask scheduler, e.g. tcp://10.0.0.5:8786"
+        f" (unreachable for {CONNECT_TIMEOUT_S:g} s: exit 2)",
+    )
+
+
+def _executor(args, nthread: int = 0) -> Executor:
+    """Where a study's chunks run: locally (default, on `nthread` threads), --workers N or --scheduler ADDRESS."""
+    return Executor(
+        workers=args.workers, scheduler=args.scheduler, progress=False if args.json else None, nthread=nthread
+    )
 
 
 # -- commands -----------------------------------------------------------------
@@ -313,8 +336,11 @@ def _verdict(summary: dict) -> int:
 
 def cmd_tradeoff(args) -> int:
     if args.output:
-        outputs.check_directory(args.output)  # before seconds of sweeping, not after
-    result = tradeoff.tradeoff(args.scene, args.scenario, tol=args.tol, duration=args.duration, **_parse_sets(args.set))
+        outputs.check_directory(args.output)  # before seconds of computing, not after
+    with _executor(args) as executor:
+        result = tradeoff.tradeoff(
+            args.scene, args.scenario, tol=args.tol, duration=args.duration, executor=executor, **_parse_sets(args.set)
+        )
     if args.output:
         charts.write_tradeoff(result, args.output)
     if args.json:
@@ -388,10 +414,12 @@ def cmd_audit(args) -> int:
 
 def cmd_stability(args) -> int:
     if args.output:
-        outputs.check_directory(args.output)
-    report = stability.stability_report(full=args.full)
+        outputs.check_directory(args.output)  # before seconds of computing, not after
+    with _executor(args) as executor:
+        report = stability.stability_report(full=args.full, executor=executor)
+        amplification = stability.amplification_map(executor=executor) if args.output else None
     if args.output:
-        charts.write_stability(report, stability.amplification_map(), args.output)
+        charts.write_stability(report, amplification, args.output)
     if args.json:
         _print_json(stability.report_json(report))
     else:
@@ -439,17 +467,56 @@ def cmd_design(args) -> int:
     from . import design  # here, not at the top: mujoco.batch is only needed by this command
 
     if args.output:
-        outputs.check_directory(args.output)
-    study = design.run_study(
-        args.scene, levels=args.levels, plane_levels=args.plane, nthread=args.threads, **_parse_sets(args.set)
-    )
+        outputs.check_directory(args.output)  # before seconds of computing, not after
+    overrides = _parse_sets(args.set)
+    if args.sobol is not None:
+        from . import sobol
+
+        sobol.check_base_samples(args.sobol)  # bad input before minutes of simulation
+    with _executor(args, nthread=args.threads) as executor:
+        study = design.run_study(
+            args.scene,
+            levels=args.levels,
+            plane_levels=args.plane,
+            executor=executor,
+            omega_dt=design.OMEGA_DT,
+            **overrides,
+        )
+        indices = None
+        if args.sobol is not None:
+            indices = sobol.printer_head(args.sobol, seed=args.seed, executor=executor, **overrides)
+    extra = {} if indices is None else {"sobol": indices.summary()}
     if args.output:
-        design.write(study, args.output)
+        design.write(study, args.output, extra)
+        if indices is not None:
+            charts.plot_sobol(indices, pathlib.Path(args.output) / "sobol.png")
     if args.json:
-        _print_json(design.summary(study))
+        _print_json({**design.summary(study), **extra})
     else:
         _print_design(design, study, args.output)
+        if indices is not None:
+            _print_sobol(sobol, indices, args.output)
     return EXIT_OK
+
+
+def _print_sobol(sobol, indices, output: str | None) -> None:
+    s = indices.summary()
+    print(
+        f"Sobol indices of positioning time: {s['runs']} runs in {s['wall_time_s']:.1f} s on {s['executor']}"
+        f" ({s['runs_per_s']:.0f}/s), {s['unsettled']} unsettled"
+    )
+    print(f"  {'property':<16}{'range':>24}{'S1':>14}{'ST':>14}{'ST-S1':>8}{'elasticity':>12}")
+    for name in s["ranking"]:
+        low, high = s["parameters"][name]["range"]
+        unit = sobol.PARAMETERS[name]
+        print(
+            f"  {name:<16}{f'{low:.3g}..{high:.3g} {unit}':>24}{s['S1'][name]:>8.3f}+-{s['S1_conf'][name]:<4.2f}"
+            f"{s['ST'][name]:>8.3f}+-{s['ST_conf'][name]:<4.2f}{s['interactions'][name]:>8.3f}"
+            f"{s['elasticities'][name]:>+12.3f}"
+        )
+    print(sobol.answer(indices))
+    if output:
+        print(f"  wrote {pathlib.Path(output) / 'sobol.png'} and the sobol entry of design.json")
 
 
 def _print_design(design, study, output: str | None) -> None:
@@ -457,7 +524,7 @@ def _print_design(design, study, output: str | None) -> None:
     print(
         f"{s['scene']} design study: {s['configurations']} configurations ({s['levels']} levels of "
         f"{', '.join(design.PROPERTIES)}) in {s['wall_time_s']:.1f} s, {s['configurations_per_s']:.0f}/s"
-        f" on {s['nthread']} threads"
+        + (f" on {s['nthread']} threads" if s["executor"] == "local" else f" on {s['executor']}")
     )
     print(f"  {'property':<16}{'default':>11}{'range':>22}{'elasticity':>12}{'local':>9}")
     for name in s["ranking"]:
@@ -475,6 +542,47 @@ def _print_design(design, study, output: str | None) -> None:
     print(design.answer(study))
     if output:
         print(f"  wrote {pathlib.Path(output) / 'design.json'}, configurations.csv and design.png")
+
+
+def cmd_sweep(args) -> int:
+    from . import sweep_plot, sweeps
+
+    with _executor(args) as executor:
+        result = sweeps.sweep(
+            args.scene,
+            args.scenario,
+            vary=args.vary,
+            samples=args.samples,
+            seed=args.seed,
+            integrator=args.integrator,
+            dt=args.dt,
+            duration=args.duration,
+            executor=executor,
+            **_parse_sets(args.set),
+        )
+    if args.output:
+        sweep_plot.write(result, args.output, args.quantity)
+    if args.json:
+        _print_json(result.summary())
+        return EXIT_OK
+    s = result.summary()
+    print(
+        f"{s['scene']} / {s['scenario']}: {s['configurations']} configurations ({s['integrator']}, dt = {s['dt']:g} s,"
+        f" {s['duration']:g} s each) in {s['wall_time_s']:.2f} s on {s['executor']}"
+        f" ({s['configurations_per_s']:.0f}/s, {s['chunks']} chunks)"
+    )
+    print(f"  passed {s['passed']}, failed {s['failed']}, diverged {s['diverged']}, invalid {s['invalid']}")
+    quantity = args.quantity or (sweep_plot.default_quantity(result) if s["diverged"] < s["configurations"] else None)
+    if quantity:
+        values = result.column(quantity)
+        finite = values[np.isfinite(values)]
+        if finite.size:
+            best = int(np.nanargmin(np.where(np.isfinite(values), values, np.nan)))
+            where = ", ".join(f"{n} = {result.values[n][best]:.4g}" for n in result.values)
+            print(f"  {quantity}: min {finite.min():.4g} (at {where}), max {finite.max():.4g}")
+    if args.output:
+        print(f"  wrote {pathlib.Path(args.output) / 'sweep.csv'} and sweep.png")
+    return EXIT_OK
 
 
 def cmd_fit(args) -> int:
@@ -641,6 +749,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--tol", type=float, metavar="TOL", help="recommend the cheapest setting meeting this relative error"
     )
     p.add_argument("--duration", type=float, metavar="SECONDS", help="simulated time [s] (default: the scenario's)")
+    _executor_arguments(p)
     p.add_argument("--output", metavar="DIR", help="write DIR/tradeoff.json and DIR/tradeoff.png")
     p.add_argument("--json", action="store_true", help="print tradeoff.json")
     COMMANDS["tradeoff"] = cmd_tradeoff
@@ -651,6 +760,7 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="more damping ratios and extreme cases, advice verified by running it (slower)",
     )
+    _executor_arguments(p)
     p.add_argument("--output", metavar="DIR", help="write DIR/stability.json, stability.png and energy.png")
     p.add_argument("--json", action="store_true", help="print stability.json")
     COMMANDS["stability"] = cmd_stability
@@ -698,9 +808,45 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="NAME=VALUE",
         help="start the sweep from another parameter value, SI units (repeatable)",
     )
-    p.add_argument("--output", metavar="DIR", help="write DIR/design.json, DIR/configurations.csv, DIR/design.png")
+    p.add_argument(
+        "--sobol",
+        type=int,
+        nargs="?",
+        const=16384,
+        metavar="N",
+        help="also Sobol indices of carriage mass, belt stiffness, damping ratio, force and move length:"
+        " N x 7 runs, N a power of 2 (bare --sobol: 16384, 114,688 runs)",
+    )
+    p.add_argument("--seed", type=int, default=0, help="seed of the Sobol sequence and bootstrap (default 0)")
+    _executor_arguments(p)
+    p.add_argument(
+        "--output", metavar="DIR", help="write DIR/design.json, configurations.csv, design.png (and sobol.png)"
+    )
     p.add_argument("--json", action="store_true", help="print design.json")
     COMMANDS["design"] = cmd_design
+
+    p = sub.add_parser("sweep", help="run a scenario over a grid (or random samples) of parameters, batched")
+    _scene_arguments(p)
+    p.add_argument(
+        "--vary",
+        action="append",
+        default=[],
+        required=True,
+        metavar="NAME=LOW:HIGH:N[:log]",
+        help="vary a parameter over N values from LOW to HIGH, SI units (repeatable; :log for log spacing)",
+    )
+    p.add_argument("--samples", type=int, metavar="N", help="N random points in the box instead of the full grid")
+    p.add_argument("--seed", type=int, default=0, help="seed of the random points (default 0)")
+    p.add_argument("--integrator", metavar="NAME", help=f"one of {', '.join(INTEGRATORS)} (default: the scene's)")
+    p.add_argument("--dt", type=float, metavar="SECONDS", help="timestep [s] (default: the scene's validated one)")
+    p.add_argument("--duration", type=float, metavar="SECONDS", help="simulated time [s] (default: the scenario's)")
+    p.add_argument(
+        "--quantity", metavar="NAME", help="what sweep.png shows (default: the scenario's headline quantity)"
+    )
+    _executor_arguments(p)
+    p.add_argument("--output", metavar="DIR", help="write DIR/sweep.csv and DIR/sweep.png")
+    p.add_argument("--json", action="store_true", help="print the sweep (setting, counts, every row) as JSON")
+    COMMANDS["sweep"] = cmd_sweep
 
     p = sub.add_parser("fit", help="identify a scene's parameters from a recorded signal (CSV)")
     p.add_argument("scene", help="slider, car, printer_head or kinematics")
