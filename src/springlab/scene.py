@@ -312,6 +312,19 @@ class Scene:
     dt: float = 1e-3
     #: named camera for rendering.
     camera: str | None = None
+    #: scenario -> (the textbook question it answers, the answer as one sentence): the answer is a
+    #: str.format template over the run's quantities and parameters, e.g. "... {period_s:.3g} s ..."
+    questions: dict[str, tuple[str, str]] = {}
+
+    def question_and_answer(self, scenario: str, quantities: dict, parameters: dict) -> tuple[str, str] | None:
+        """(question, answer sentence) of a scenario's run, or None where the scene states none."""
+        if scenario not in self.questions:
+            return None
+        question, template = self.questions[scenario]
+        try:
+            return question, template.format_map({**parameters, **quantities})
+        except (KeyError, ValueError, TypeError, IndexError):  # a quantity the run did not produce
+            return question, ""
 
     # -- names ---------------------------------------------------------------
 

@@ -107,6 +107,25 @@ class Car(Scene):
     integrator = "rk4"
     dt = 1e-3
     default_scenario = "push_release"
+    #: the textbook question each scenario answers, and its answer as a sentence (Scene.questions)
+    questions = {
+        "push_release": (
+            "Passers-by push the car down with 250 kg and let go: how does it move?",
+            "It bobs ±{static_sag_m:.3g} m about its rest height at {omega_rad_s:.4g} rad/s (period {period_s:.3g} s), undamped.",
+        ),
+        "damped_release": (
+            "The same release with shock absorbers at ζ = 0.3?",
+            "The bobbing dies out with logarithmic decrement {logarithmic_decrement:.3g} (time constant {decay_time_constant_s:.3g} s); the car rises at most to {max_height_m:.4g} m.",
+        ),
+        "pitch_heave": (
+            "With front and rear springs, how does the car pitch and heave after a push over the front axle?",
+            "Two modes at {frequency_1_hz:.3g} Hz and {frequency_2_hz:.3g} Hz, each a rotation about its own node ({mode_1_node_m:.3g} m and {mode_2_node_m:.3g} m from the centre of mass).",
+        ),
+        "road_bump": (
+            "A quarter car drives over an 8 cm half-sine bump at 8 m/s: what do the passengers feel?",
+            "A peak body acceleration of {peak_body_acceleration_m_s2:.3g} m/s² and {peak_suspension_travel_m:.3g} m of suspension travel; the tire keeps at least {min_tire_force_n:.4g} N on the road.",
+        ),
+    }
     parameters = {
         p.name: p
         for p in (

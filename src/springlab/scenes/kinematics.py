@@ -109,6 +109,25 @@ class Kinematics(Scene):
     integrator = "rk4"
     dt = 1e-2
     default_scenario = "polynomial_position"
+    #: the textbook question each scenario answers, and its answer as a sentence (Scene.questions)
+    questions = {
+        "polynomial_position": (
+            "Given x(t) = 0.03 t³ + 0.2 t² + 1.2 t + 3 m, find v(t) and a(t).",
+            "{velocity_expression} and {acceleration_expression}; at t = {end_time_s:.3g} s, v = {v_end_m_s:.4g} m/s.",
+        ),
+        "linear_acceleration": (
+            "Given a(t) = 1.2 t + 3 m/s², v(0) = 15 m/s, x(0) = 150 m, find v(t) and x(t).",
+            "{velocity_expression} and {position_expression}: x = {x_end_m:.5g} m at t = {end_time_s:.3g} s.",
+        ),
+        "constant_acceleration": (
+            "Uniform acceleration (eq. 5.5): a = 2 m/s² from 10 m/s; where is the car after 5 s?",
+            "{position_expression}: {x_end_m:.4g} m, at {v_end_m_s:.4g} m/s.",
+        ),
+        "tachograph": (
+            "A bus's tachograph records v(t) over 12 s: how far did it go, and what were its accelerations?",
+            "The area under v(t) is {displacement_m:.4g} m; the slopes are {segment_accelerations_m_s2} m/s².",
+        ),
+    }
     parameters = {
         p.name: p
         for p in (

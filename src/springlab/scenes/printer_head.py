@@ -110,6 +110,21 @@ class PrinterHead(Scene):
     integrator = "rk4"
     dt = 1e-4
     default_scenario = "move"
+    #: the textbook question each scenario answers, and its answer as a sentence (Scene.questions)
+    questions = {
+        "move": (
+            "How fast can the print head be positioned one inch away, to ±10 µm?",
+            "The minimum-time move takes {move_time_s:.3g} s; the {natural_frequency_hz:.4g} Hz belt ringing then settles in {settling_time_s:.3g} s: positioned in {positioning_time_s:.4g} s.",
+        ),
+        "step_force": (
+            "What does a constant motor force do to the carriage and the belt?",
+            "The carriage accelerates at {rigid_acceleration_m_s2:.4g} m/s² while the belt stretches to {max_belt_stretch_m:.3g} m, twice its static {static_belt_stretch_m:.3g} m, ringing at {natural_frequency_hz:.4g} Hz.",
+        ),
+        "settle": (
+            "Released from the belt stretch of full acceleration, how long does the carriage take to settle?",
+            "It rings at {natural_frequency_hz:.4g} Hz with ζ = {damping_ratio:.3g} and stays within the band after {settling_time_s:.3g} s.",
+        ),
+    }
     parameters = {
         p.name: p
         for p in (
