@@ -10,8 +10,10 @@ True
 
 from . import analytic, errors
 from .api import Result
+from .audit import Audit, audit
 from .auto import run, validate
 from .errors import BadInputError, DivergedError, SpringlabError, UnknownNameError
+from .fit import fit
 from .scenes import SCENES
 
 __all__ = [
@@ -19,6 +21,9 @@ __all__ = [
     "errors",
     "run",
     "validate",
+    "audit",
+    "Audit",
+    "fit",
     "Result",
     "SCENES",
     "SpringlabError",

@@ -14,7 +14,9 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from . import api, auto, charts, compare, demo, outputs, scenes, stability, tradeoff
+from . import api, auto, charts, charts_audit, compare, demo, outputs, scenes, stability, tradeoff
+from .audit import DEFAULT_PERTURB, DEFAULT_TOL
+from .audit import audit as run_audit
 from .errors import BadInputError, SpringlabError
 from .simulate import INTEGRATORS
 
@@ -330,6 +332,28 @@ def _print_tradeoff(result, output: str | None) -> None:
         print(f"  wrote {pathlib.Path(output) / 'tradeoff.json'} and tradeoff.png")
 
 
+def cmd_audit(args) -> int:
+    result = run_audit(
+        args.model,
+        keyframe=args.keyframe,
+        tol=args.tol,
+        integrators=args.integrators,
+        dt=args.dt,
+        duration=args.duration,
+        perturb=args.perturb,
+    )
+    if args.output:
+        charts_audit.write_audit(result, args.output)
+    if args.json:
+        _print_json(result.as_json())
+    else:
+        for line in result.verdict():
+            print(line)
+        if args.output:
+            print(f"wrote {pathlib.Path(args.output) / 'audit.json'} and audit.png")
+    return EXIT_OK if result.own_ok else EXIT_FAILED
+
+
 def cmd_stability(args) -> int:
     report = stability.stability_report(full=args.full)
     if args.output:
@@ -415,6 +439,63 @@ def _print_design(design, study, output: str | None) -> None:
     print(design.answer(study))
     if output:
         print(f"  wrote {pathlib.Path(output) / 'design.json'}, configurations.csv and design.png")
+
+
+def cmd_fit(args) -> int:
+    # here, not at the top: mujoco.sysid and scipy load only for fits; `from .fit import`, because
+    # springlab.fit (the attribute) is the function once springlab/__init__ has run
+    from .fit import fit, write
+    from .fit_chart import plot_fit
+
+    result = fit(
+        args.scene,
+        args.data,
+        args.scenario,
+        map=args.map,
+        free=args.free or None,
+        scale=args.scale,
+        start=args.start,
+        degree=args.degree,
+        **_parse_sets(args.set),
+    )
+    if args.output:
+        write(result, args.output)
+        plot_fit(result, pathlib.Path(args.output) / "fit.png")
+    if args.json:
+        _print_json(result.as_dict())
+    else:
+        _print_fit(result, args.output)
+    return EXIT_OK if result.converged else EXIT_FAILED
+
+
+def _print_fit(result, output: str | None) -> None:
+    record = result.record
+    print(
+        f"{result.scene} / {result.scenario} from {record.column} ({record.time.size} samples,"
+        f" {record.time[0]:g} to {record.time[-1]:g} s): fitted {', '.join(result.free)}"
+    )
+    for note in record.notes:
+        print(f"  data: {note}")
+    for name, q in {**result.estimates, **result.derived}.items():
+        low, high = q["ci95"]
+        unit = "" if q["unit"] == "-" else q["unit"]
+        print(f"  {name:<26} {q['value']:<16.10g} 95% [{low:.8g}, {high:.8g}] {unit}")
+    check = result.cross_check
+    print(
+        f"  closed-form cross-check: max relative difference {check['max_relative_difference']:.1e}"
+        f" ({'agrees' if check['agrees'] else 'DISAGREES'})"
+    )
+    o = result.optimizer
+    print(
+        f"  optimizer: {o['status']} after {o['iterations']} iterations, {o['rollouts']} rollouts"
+        f" of {o['steps']} steps ({o['time_per_rollout_s'] * 1e3:.1f} ms each), {o['wall_time_s']:.2f} s"
+    )
+    if result.run_note:
+        print(f"  note: {result.run_note}")
+    print(result.verdict)
+    if output:
+        wrote = "fit.json, fit.png" + (", trajectory.csv and summary.json" if result.run is not None else "")
+        print(f"  wrote {wrote} under {output}")
 
 
 def cmd_demo(args) -> int:
@@ -526,6 +607,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print stability.json")
     COMMANDS["stability"] = cmd_stability
 
+    p = sub.add_parser("audit", help="any MJCF: modes, stability limits, error vs cost, the cheapest setting for --tol")
+    p.add_argument("model", help="path to an MJCF (or URDF) file, or a scene name")
+    p.add_argument("--keyframe", metavar="NAME|INDEX", help="operating point (default: first keyframe, else qpos0)")
+    p.add_argument("--tol", type=float, default=DEFAULT_TOL, metavar="TOL", help="error tolerance (default 1e-3)")
+    p.add_argument("--integrators", metavar="A,B", help=f"integrators to sweep (default: {','.join(INTEGRATORS)})")
+    p.add_argument("--dt", metavar="LIST|RANGE", help="timesteps 'a,b,c' or 'LOW:HIGH:N' [s] (default: automatic)")
+    p.add_argument("--duration", type=float, metavar="SECONDS", help="simulated time [s] (default 1; a scene's own)")
+    p.add_argument(
+        "--perturb",
+        type=float,
+        default=DEFAULT_PERTURB,
+        metavar="SIZE",
+        help="initial perturbation of the operating point [m or rad] (default 1e-3)",
+    )
+    p.add_argument("--output", metavar="DIR", help="write DIR/audit.json and DIR/audit.png")
+    p.add_argument("--json", action="store_true", help="print audit.json")
+    COMMANDS["audit"] = cmd_audit
+
     p = sub.add_parser("design", help="design study: positioning time over a property sweep, ranked sensitivities")
     p.add_argument("scene", help="scene with a design study: printer_head")
     p.add_argument(
@@ -554,6 +653,26 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--output", metavar="DIR", help="write DIR/design.json, DIR/configurations.csv, DIR/design.png")
     p.add_argument("--json", action="store_true", help="print design.json")
     COMMANDS["design"] = cmd_design
+
+    p = sub.add_parser("fit", help="identify a scene's parameters from a recorded signal (CSV)")
+    p.add_argument("scene", help="slider, car, printer_head or kinematics")
+    p.add_argument("data", metavar="DATA.csv", help="header row; time [s] and <joint>_pos, _vel or _acc")
+    p.add_argument("--scenario", metavar="S", help="the scenario the record shows (default: the scene's fit default)")
+    p.add_argument(
+        "--map", action="append", default=[], metavar="COLUMN=NAME", help="rename a file column (t=time, x=slider_pos)"
+    )
+    p.add_argument(
+        "--free", action="append", default=[], metavar="NAME[,NAME...]", help="names to fit (default: the scene's)"
+    )
+    p.add_argument(
+        "--set", action="append", default=[], metavar="NAME=VALUE", help="fix a parameter, SI units (repeatable)"
+    )
+    p.add_argument("--start", type=float, metavar="S", help="release time [s]: drop the record before it")
+    p.add_argument("--scale", type=float, default=1.0, metavar="FACTOR", help="SI units per file unit (mm: 0.001)")
+    p.add_argument("--degree", type=int, metavar="N", help="kinematics: degree 0-3 of the polynomial")
+    p.add_argument("--output", metavar="DIR", help="write fit.json, fit.png, trajectory.csv and summary.json")
+    p.add_argument("--json", action="store_true", help="print fit.json")
+    COMMANDS["fit"] = cmd_fit
 
     p = sub.add_parser("demo", help="the main job: validate everything, write out/")
     p.add_argument("--output", default="out", metavar="DIR", help="output folder (default: out)")

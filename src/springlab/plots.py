@@ -189,7 +189,7 @@ def time_series(result: api.Result) -> Figure:
         axes[-1, column].set_xlabel("time [s]")
     verdict = ""
     if result.summary.get("passed") is not None:
-        verdict = ", PASS" if result.summary["passed"] else ", FAIL"
+        verdict = f", {result.summary.get('verdict') or ('PASS' if result.summary['passed'] else 'FAIL')}"
     figure.suptitle(f"{_title(result)}: {result.summary['integrator']}, dt = {result.summary['dt']:g} s{verdict}")
     return figure
 

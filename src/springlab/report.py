@@ -28,7 +28,7 @@ import pathlib
 from collections.abc import Iterable
 from typing import Any
 
-from . import outputs, scenes
+from . import compare, outputs, scenes
 
 IMAGE_SUFFIXES = (".png", ".svg", ".jpg", ".jpeg", ".gif", ".webp")
 VIDEO_SUFFIXES = (".mp4", ".webm")
@@ -96,9 +96,11 @@ def _number(value: Any, spec: str = ".2e") -> str:
     return _e(value)
 
 
-def _verdict(passed: Any) -> str:
+def _verdict(passed: Any, verdict: str | None = None) -> str:
     if passed is None:
         return '<span class="muted">n/a</span>'
+    if not passed and verdict == compare.NOT_VALIDATED:
+        return '<span class="fail">not validated</span>'
     return '<span class="pass">pass</span>' if passed else '<span class="fail">FAIL</span>'
 
 
@@ -134,8 +136,8 @@ def _validation_table(rows: list[dict]) -> str:
             f"<tr><td>{_e(r['scene'])}</td><td><a href='#{_e(r['scene'])}-{_e(r['scenario'])}'>"
             f"{_e(r['scenario'])}</a></td><td>{_e(r['integrator'])}</td><td class='num'>{_number(r['dt'], 'g')}</td>"
             f"<td class='num'>{_e(r.get('steps', ''))}</td><td class='num'>{_number(r['max_rel_error'])}</td>"
-            f"<td class='num'>{_number(r['tolerance'])}</td><td>{_verdict(r['passed'])}</td>"
-            f"<td>{note(r.get('tolerance_basis', ''))}</td></tr>"
+            f"<td class='num'>{_number(r['tolerance'])}</td><td>{_verdict(r['passed'], r.get('verdict'))}</td>"
+            f"<td>{note(r.get('note') or r.get('tolerance_basis', ''))}</td></tr>"
         )
         for c in r.get("checks", []):
             out.append(
@@ -258,7 +260,7 @@ def build_html(state, *, wall_time_s: float | None = None) -> str:
             result = state.results.get((name, scenario_name))
             verdict = ""
             if result is not None and result.summary.get("passed") is not None:
-                verdict = " " + _verdict(result.summary["passed"])
+                verdict = " " + _verdict(result.summary["passed"], result.summary.get("verdict"))
             body.append(
                 f"<h3 id='{_e(name)}-{_e(scenario_name)}'>{_e(name)} / {_e(scenario_name)}{verdict}</h3>"
                 f"<p class='muted'>{_e(description)}</p>"

@@ -1,0 +1,339 @@
+"""Stability limits of any model, per integrator: predicted from its modes, measured on its one-step map,
+confirmed on the nonlinear model; and the constraint settings a timestep breaks.
+
+Numerical instability, as measured here: at timestep dt the one-step map Phi(dt) (springlab.linearize)
+amplifies some mode more than the exact flow does, spectral radius
+rho(Phi) > (1 + MAP_MARGIN) max(1, exp(sigma dt)), with sigma the largest growth rate of the
+continuous linearization (0 unless the model is physically unstable: an upright pole *should* fall,
+and that is no integrator's fault). MAP_MARGIN covers the finite differences: a Jordan block's
+double eigenvalue 1 (a free body, an unsprung direction) moves by sqrt(error) ~ 1e-5.
+
+The measured limit is the smallest such dt: a doubling scan from SCAN_START / |lambda|_max, then a
+geometric bisection to a ratio of 1 + LIMIT_PRECISION. The closed-form prediction from the modes:
+euler / implicit / implicitfast treat joint damping implicitly and springs explicitly, stable while
+omega dt < 2 zeta + 2 sqrt(zeta^2 + 1) per oscillatory mode (`simulate.stability_limit`; tendon
+damping, treated explicitly or only on the diagonal, is not in that formula); rk4 is R(dt A) on a
+linear model, R(z) = 1 + z + z^2/2 + z^3/6 + z^4/24, so its limit is the first dt at which
+|R(dt lambda)| > 1 for a stable lambda (2.83/omega undamped); discrete has none.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import math
+from collections.abc import Iterable
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from .batch import Job, run_batched
+from .errors import DivergedError
+from .linearize import Linearization, OperatingPoint, one_step_map
+from .scene import Setup
+from .simulate import stability_limit
+
+#: growth of the one-step map beyond the exact flow's that counts as numerical instability [-]
+MAP_MARGIN = 1e-4
+#: the scan starts at SCAN_START / |lambda|_max and doubles ...
+SCAN_START = 0.01
+#: ... up to SCAN_STOP / |lambda|_max (or SCAN_STOP_S without a mode) [s]
+SCAN_STOP = 1e4
+SCAN_STOP_S = 10.0
+#: bisection down to this ratio between stable and unstable timesteps
+LIMIT_PRECISION = 1e-4
+#: a predicted limit p is first bracketed by [p / GUESS_BRACKET, p * GUESS_BRACKET]
+GUESS_BRACKET = 1.01
+#: confirmation runs at these fractions of the measured limit
+CONFIRM_BELOW, CONFIRM_ABOVE = 0.98, 1.02
+#: a confirmation run "grows" when its deviation from the unperturbed run grows GROWTH_SEEN x beyond the
+#: exact flow's growth, and stays bounded when it does not; the run is long enough for the map to
+#: predict GROWTH_TARGET x, within [CONFIRM_MIN_STEPS, CONFIRM_MAX_STEPS] steps
+GROWTH_SEEN = 100.0
+GROWTH_TARGET = 1e6
+CONFIRM_MIN_STEPS, CONFIRM_MAX_STEPS = 200, 20_000
+#: the confirmation perturbation, along the map's most unstable eigenvector [tangent-space units]
+CONFIRM_SIZE = 1e-6
+
+
+@dataclasses.dataclass
+class Limit:
+    """One integrator's stability limit.
+
+    Attributes:
+      integrator: name.
+      predicted_s: closed-form limit from the modes [s] (None: no closed form, or no limit).
+      measured_s: from the measured one-step map [s] (None: stable over the whole scan).
+      confirmed: runs of the nonlinear model at CONFIRM_BELOW x stay bounded and at CONFIRM_ABOVE x
+        grow (None: nothing to confirm).
+      growth_per_step_above: rho(Phi) / max(1, exp(sigma dt)) just above the limit [-].
+      detail: how the confirmation came out, for people.
+    """
+
+    integrator: str
+    predicted_s: float | None
+    measured_s: float | None
+    confirmed: bool | None = None
+    growth_per_step_above: float | None = None
+    detail: str = ""
+
+    def margin(self, dt: float) -> float | None:
+        """measured limit / dt [-] (None: no limit)."""
+        return None if self.measured_s is None else self.measured_s / dt
+
+    def as_json(self, own_dt: float) -> dict[str, Any]:
+        """{"limit_dt_predicted_s", "limit_dt_measured_s", "confirmed", "margin", "detail"}."""
+        return {
+            "limit_dt_predicted_s": self.predicted_s,
+            "limit_dt_measured_s": self.measured_s,
+            "confirmed": self.confirmed,
+            "margin": self.margin(own_dt),
+            "detail": self.detail,
+        }
+
+
+def _rk4_limit(eigenvalue: complex) -> float:
+    """Largest h |lambda| [-] with |R(h lambda)| <= 1 for a stable eigenvalue (2.828 on the imaginary axis)."""
+    unit = eigenvalue / abs(eigenvalue)
+    unit = complex(min(unit.real, 0.0), unit.imag)  # a stable mode's round-off growth is no growth
+
+    def grows(y: float) -> bool:
+        z = y * unit
+        return abs(1 + z + z**2 / 2 + z**3 / 6 + z**4 / 24) > 1 + 1e-13
+
+    grid = np.linspace(1e-3, 3.0, 3000)
+    z = grid * unit
+    growing = np.flatnonzero(np.abs(1 + z + z**2 / 2 + z**3 / 6 + z**4 / 24) > 1 + 1e-13)
+    if not growing.size:
+        return math.inf
+    first = float(grid[growing[0]])
+    low, high = first - (grid[1] - grid[0]), first
+    for _ in range(60):
+        mid = 0.5 * (low + high)
+        low, high = (low, mid) if grows(mid) else (mid, high)
+    return low
+
+
+def predicted_limit(linear: Linearization, integrator: str) -> float | None:
+    """The closed-form stability limit [s] of `integrator` from the stable modes (module docstring), or None."""
+    stable = [m for m in linear.modes if m.kind != "rigid" and not m.physically_unstable]
+    if integrator == "discrete":
+        return None
+    if integrator == "rk4":
+        limits = [_rk4_limit(m.eigenvalue) / m.rate_rad_s for m in stable]
+    else:
+        limits = [
+            stability_limit(integrator, m.damping_ratio) / m.rate_rad_s for m in stable if m.kind == "oscillatory"
+        ]
+    finite = [limit for limit in limits if math.isfinite(limit)]
+    return min(finite) if finite else None
+
+
+class _MapProbe:
+    """rho(Phi(dt)) relative to the exact flow's growth, per dt [s], for one integrator.
+
+    For a physically stable model the exact flow grows nowhere, so the excess is rho(Phi) itself.
+    With a physically unstable mode each eigenvalue mu of Phi is compared with exp(lambda dt) of the
+    continuous mode its eigenvector lies along (largest coefficient in A's eigenvector basis), so an
+    upright pole's fall does not hide a fast mode's numerical growth.
+    """
+
+    def __init__(self, model: mujoco.MjModel, linear: Linearization, integrator: str):
+        self.model, self.linear, self.integrator = copy.copy(model), linear, integrator
+        self.sigma = linear.max_growth_rate
+        self.data = mujoco.MjData(self.model)
+        self.basis = None
+        if linear.physically_unstable:
+            values, vectors = np.linalg.eig(linear.A)
+            self.rates = np.maximum(values.real, 0.0)
+            self.basis = np.linalg.pinv(vectors)
+
+    def map(self, dt: float) -> np.ndarray:
+        return one_step_map(self.model, self.integrator, dt, self.linear.point, data=self.data, copy_model=False)
+
+    def excess(self, dt: float, phi: np.ndarray | None = None) -> tuple[float, np.ndarray | None, float]:
+        """(max |mu| / exact growth of its mode [-], that mu's eigenvector, that |mu| [-]); the first > 1 +
+        MAP_MARGIN is numerical growth."""
+        phi = self.map(dt) if phi is None else phi
+        if not np.isfinite(phi).all():
+            return math.inf, None, math.inf
+        if not phi.size:
+            return 0.0, None, 0.0
+        values, vectors = np.linalg.eig(phi)
+        if self.basis is None:
+            ratios = np.abs(values)
+        else:
+            modes = np.argmax(np.abs(self.basis @ vectors), axis=0)
+            ratios = np.abs(values) * np.exp(-self.rates[modes] * dt)  # no overflow for fast physical growth
+        worst = int(np.argmax(ratios))
+        return float(ratios[worst]), vectors[:, worst], float(np.abs(values[worst]))
+
+    def unstable(self, dt: float) -> bool:
+        return self.excess(dt)[0] > 1 + MAP_MARGIN
+
+
+def measured_limit(
+    model: mujoco.MjModel,
+    linear: Linearization,
+    integrator: str,
+    scale_s: float,
+    stop_s: float,
+    guess_s: float | None = None,
+) -> float | None:
+    """The smallest dt [s] at which `integrator`'s measured one-step map grows (module docstring), or None.
+
+    scale_s: the model's fastest time scale 1/|lambda|_max [s] (or its own timestep without a mode);
+    stop_s: the largest dt worth scanning [s] (a run's duration); guess_s: a predicted limit [s], tried
+    first as a bracket [guess / GUESS_BRACKET, guess * GUESS_BRACKET] (it only saves map evaluations: a
+    wrong guess falls back to the doubling scan from its stable side).
+    """
+    probe = _MapProbe(model, linear, integrator)
+    stop = min(SCAN_STOP * scale_s, stop_s)
+    low, high = 0.0, None
+    if guess_s is not None and GUESS_BRACKET * guess_s < stop:
+        # a good prediction brackets the limit in two maps; a wrong one only costs those two
+        below, above = guess_s / GUESS_BRACKET, min(guess_s * GUESS_BRACKET, stop)
+        if probe.unstable(below):
+            high = below
+        elif probe.unstable(above):
+            low, high = below, above
+        else:
+            low = above
+    if high is None:
+        dt = min(2 * low if low else SCAN_START * scale_s, stop)
+        while not probe.unstable(dt):
+            if dt >= stop:
+                return None
+            low, dt = dt, min(2 * dt, stop)
+        high = dt
+    if low == 0.0:  # unstable at the first probe: go down
+        floor = 1e-6 * high
+        while high > floor and probe.unstable(high / 2):
+            high /= 2
+        low = high / 2
+    while high / low > 1 + LIMIT_PRECISION:
+        mid = math.sqrt(low * high)
+        low, high = (low, mid) if probe.unstable(mid) else (mid, high)
+    return math.sqrt(low * high)
+
+
+def _deviation(model: mujoco.MjModel, run_a, run_b) -> float:
+    """||x_a - x_b||_inf at the end of two runs, in the tangent space."""
+    dq = np.zeros(model.nv)
+    mujoco.mj_differentiatePos(model, dq, 1.0, run_b.qpos[-1], run_a.qpos[-1])
+    return float(max(np.max(np.abs(dq), initial=0.0), np.max(np.abs(run_a.qvel[-1] - run_b.qvel[-1]), initial=0.0)))
+
+
+def confirm(model: mujoco.MjModel, linear: Linearization, limits: Iterable[Limit], *, nthread: int = 0) -> None:
+    """Run the nonlinear model just below and just above each measured limit and set `confirmed`.
+
+    Per limit four runs, batched: the operating point as it is and perturbed by CONFIRM_SIZE along the
+    most unstable eigenvector of Phi(CONFIRM_ABOVE x limit), at CONFIRM_BELOW and CONFIRM_ABOVE x the
+    limit. Confirmed: above, the deviation grows beyond GROWTH_SEEN x the exact flow's growth (or the
+    run blows up); below, it does not.
+    """
+    point = linear.point
+    jobs, plan = [], []
+    data = mujoco.MjData(model)
+    for limit in limits:
+        if limit.measured_s is None:
+            limit.detail = "no limit found: nothing to confirm"
+            continue
+        probe = _MapProbe(model, linear, limit.integrator)
+        above = CONFIRM_ABOVE * limit.measured_s
+        growth, vector, size = probe.excess(above)
+        limit.growth_per_step_above = growth
+        physical = math.exp(min(probe.sigma * above, 700.0))
+        if vector is None or CONFIRM_MAX_STEPS * math.log(max(size / physical, 1e-300)) < math.log(GROWTH_SEEN):
+            # the model's own growth per step outruns the numerical one: a run cannot tell them apart
+            limit.detail = (
+                f"not confirmable by a run: the physically unstable mode grows {physical:.3g}x per step,"
+                f" the numerical one {size:.3g}x"
+            )
+            continue
+        steps = math.ceil(math.log(GROWTH_TARGET) / math.log(size / physical)) if size > physical else CONFIRM_MAX_STEPS
+        steps = int(min(max(steps, CONFIRM_MIN_STEPS), CONFIRM_MAX_STEPS))
+        direction = np.real(vector)
+        if not np.any(direction):
+            direction = np.imag(vector)
+        direction = CONFIRM_SIZE * direction / np.max(np.abs(direction))
+        start = _perturbed(model, point, direction, data)
+        base = Setup(point.qpos, point.qvel, point.act, point.ctrl)
+        for fraction in (CONFIRM_BELOW, CONFIRM_ABOVE):
+            dt = fraction * limit.measured_s
+            for setup in (base, start):
+                jobs.append(Job(model, limit.integrator, dt, steps, setup))
+            plan.append((limit, fraction, steps, dt))
+    outcomes = run_batched(jobs, nthread=nthread)
+    verdicts: dict[int, dict[float, bool]] = {}
+    for index, (limit, fraction, steps, dt) in enumerate(plan):
+        plain, pushed = outcomes[2 * index], outcomes[2 * index + 1]
+        if isinstance(plain, DivergedError) or isinstance(pushed, DivergedError):
+            grew = True
+        else:
+            allowed = math.exp(linear.max_growth_rate * dt * steps)
+            grew = _deviation(model, pushed, plain) > GROWTH_SEEN * allowed * CONFIRM_SIZE
+        verdicts.setdefault(id(limit), {})[fraction] = grew
+        if fraction == CONFIRM_ABOVE:
+            below = verdicts[id(limit)][CONFIRM_BELOW]
+            limit.confirmed = (not below) and grew
+            limit.detail = (
+                f"{steps} steps at {CONFIRM_BELOW:g}x: {'grew' if below else 'bounded'};"
+                f" at {CONFIRM_ABOVE:g}x: {'grew' if grew else 'bounded'}"
+            )
+
+
+def _perturbed(model: mujoco.MjModel, point: OperatingPoint, direction: np.ndarray, data: mujoco.MjData) -> Setup:
+    """The operating point moved by `direction` = (dq, dv, dact) in the tangent space."""
+    nv = model.nv
+    qpos = point.qpos.copy()
+    mujoco.mj_integratePos(model, qpos, direction[:nv], 1.0)
+    return Setup(qpos, point.qvel + direction[nv : 2 * nv], point.act + direction[2 * nv :], point.ctrl)
+
+
+def stability_limits(
+    model: mujoco.MjModel, linear: Linearization, integrators: Iterable[str], stop_s: float, *, nthread: int = 0
+) -> dict[str, Limit]:
+    """Predicted, measured (scanned up to `stop_s` [s]) and confirmed limits per integrator name."""
+    fastest = linear.fastest
+    scale = 1.0 / fastest.rate_rad_s if fastest is not None else model.opt.timestep
+    out = {}
+    for name in integrators:
+        predicted = predicted_limit(linear, name)
+        out[name] = Limit(name, predicted, measured_limit(model, linear, name, scale, stop_s, predicted))
+    confirm(model, linear, out.values(), nthread=nthread)
+    return out
+
+
+def constraint_flags(model: mujoco.MjModel, dt: float) -> list[dict[str, Any]]:
+    """Constraint settings whose solref time constant is shorter than 2 dt [s] (MuJoCo then stiffens nothing:
+    with refsafe on it clamps the time constant to 2 dt, so the constraint is softer than written; off, the
+    integrator can go unstable). One row per element: {"element", "timeconst_s", "dt_limit_s"} (dt_limit_s
+    = timeconst / 2, the largest timestep that keeps it as written)."""
+    rows = []
+
+    def check(kind: str, count: int, solref: np.ndarray, name_of) -> None:
+        for i in range(count):
+            timeconst = float(solref[i][0])
+            if timeconst > 0 and timeconst < 2 * dt:
+                rows.append(
+                    {"element": f"{kind} {name_of(i)!r}", "timeconst_s": timeconst, "dt_limit_s": timeconst / 2}
+                )
+
+    def name(obj):
+        return lambda i: obj(i).name or str(i)
+
+    check("geom", model.ngeom, model.geom_solref, name(model.geom))
+    check("joint limit", model.njnt, model.jnt_solref, name(model.joint))
+    check("equality", model.neq, model.eq_solref, name(model.eq))
+    check("tendon limit", model.ntendon, model.tendon_solref_lim, name(model.tendon))
+    check("contact pair", model.npair, model.pair_solref, name(model.pair))
+    if model.opt.enableflags & int(mujoco.mjtEnableBit.mjENBL_OVERRIDE):
+        check("option o_solref", 1, model.opt.o_solref[None], lambda i: "override")
+    return rows
+
+
+def copy_for(model: mujoco.MjModel) -> mujoco.MjModel:
+    """A copy of `model` the audit may set integrators and timesteps on."""
+    return copy.copy(model)

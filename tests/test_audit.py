@@ -1,0 +1,166 @@
+"""`springlab.audit` on models with known answers: a chain of masses and springs (closed-form
+eigenfrequencies, so closed-form stability limits), a pendulum (linear only near its bottom), a sphere
+on a soft contact, and the shipped slider, whose limits and orders `springlab stability` and
+`springlab tradeoff` already measure.
+
+Tolerances: the measured limit is bisected to a ratio of 1 + 1e-4 (audit_limits.LIMIT_PRECISION) on a
+map good to ~1e-10, so 1e-3 relative to the closed form is wide; the contract asks agreement with
+stability/tradeoff within 0.5 % (limits) and 0.1 (orders).
+"""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+import pytest
+from scipy.linalg import expm
+
+from springlab import stability, tradeoff
+from springlab.audit import INTEGRATORS, audit
+from springlab.errors import BadInputError, UnknownNameError
+from springlab.simulate import stability_limit
+from test_linearize import chain_frequencies, chain_xml, pendulum_xml
+
+LIMIT_RELATIVE = 1e-3
+
+
+@pytest.fixture(scope="module")
+def chain_audit():
+    return audit(mujoco.MjModel.from_xml_string(chain_xml(4, 100.0, 1.0, 0.0)), tol=1e-3)
+
+
+def test_chain_limits_are_two_and_2_83_over_the_highest_frequency(chain_audit):
+    omega_max = chain_frequencies(4, 100.0, 1.0).max()
+    limits = chain_audit.limits
+    for name in ("euler", "implicit", "implicitfast"):
+        assert limits[name].measured_s * omega_max == pytest.approx(2.0, rel=LIMIT_RELATIVE)
+        assert limits[name].predicted_s * omega_max == pytest.approx(2.0, rel=LIMIT_RELATIVE)
+    assert limits["rk4"].measured_s * omega_max == pytest.approx(2 * math.sqrt(2), rel=LIMIT_RELATIVE)
+    assert limits["discrete"].measured_s is None  # implicit in springs: no limit
+    assert all(limits[name].confirmed for name in ("euler", "implicit", "implicitfast", "rk4"))
+
+
+def test_chain_is_linear_and_its_recommendation_meets_tol_against_the_exact_solution(chain_audit):
+    result = chain_audit
+    assert result.is_linear
+    assert result.orders["rk4"] == pytest.approx(4.0, abs=0.1)
+    assert result.orders["euler"] == pytest.approx(1.0, abs=0.1)
+    pick = result.recommendation
+    assert pick["verified"] and pick["error"] <= result.tol
+    # independent reference: the closed-form chain (M from the relative coordinates, K = k I), expm
+    n, k, m = 4, 100.0, 1.0
+    i = np.arange(n)
+    mass = m * (n - np.maximum.outer(i, i))
+    system = np.block([[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(mass, k * np.eye(n)), np.zeros((n, n))]])
+    model = mujoco.MjModel.from_xml_string(chain_xml(n, k, m, 0.0))
+    model.opt.integrator = mujoco.mjtIntegrator.__members__[
+        {"euler": "mjINT_EULER", "implicit": "mjINT_IMPLICIT", "implicitfast": "mjINT_IMPLICITFAST"}.get(
+            pick["integrator"], f"mjINT_{pick['integrator'].upper()}"
+        )
+    ]
+    model.opt.timestep = pick["dt"]
+    data = mujoco.MjData(model)
+    data.qpos[:] = result.start.qpos
+    x0 = np.concatenate([result.start.qpos, result.start.qvel])
+    steps = round(result.duration / pick["dt"])
+    sim, ref = [x0], [x0]
+    for s in range(1, steps + 1):
+        mujoco.mj_step(model, data)
+        sim.append(np.concatenate([data.qpos, data.qvel]))
+        ref.append(expm(system * s * pick["dt"]) @ x0)
+    sim, ref = np.array(sim), np.array(ref)
+    error = max(
+        np.max(np.abs(sim[:, :n] - ref[:, :n])) / np.max(np.abs(ref[:, :n])),
+        np.max(np.abs(sim[:, n:] - ref[:, n:])) / np.max(np.abs(ref[:, n:])),
+    )
+    assert error <= result.tol
+
+
+def test_pendulum_is_linear_for_a_small_swing_and_nonlinear_for_a_large_one():
+    model = mujoco.MjModel.from_xml_string(pendulum_xml())
+    small = audit(model, keyframe="bottom", perturb=1e-4, integrators="rk4,euler", duration=1.0)
+    large = audit(model, keyframe="bottom", perturb=1.0, integrators="rk4,euler", duration=1.0)
+    assert small.is_linear and not large.is_linear
+    assert large.reference["converged"]
+
+
+def test_an_upright_pendulum_is_reported_physically_unstable_not_numerically():
+    model = mujoco.MjModel.from_xml_string(pendulum_xml())
+    result = audit(model, keyframe="top", perturb=1e-3, integrators="rk4", duration=1.0)
+    modes = result.as_json()["modes"]
+    assert any(m["physically_unstable"] for m in modes)
+    rate = math.sqrt(9.81 / 0.5)
+    # RK4 is R(dt A) on the linearization: its limit is set by the decaying root -rate (2.785/rate)
+    assert result.limits["rk4"].measured_s * rate == pytest.approx(2.7853, rel=LIMIT_RELATIVE)
+    assert result.own["stable"]
+
+
+@pytest.mark.slow
+def test_a_sphere_bouncing_on_a_soft_contact_audits_and_its_recommendation_meets_tol():
+    xml = (
+        '<mujoco><option gravity="0 0 -9.81"/><worldbody><geom type="plane" size="1 1 0.1"/>'
+        '<body pos="0 0 0.2"><joint type="slide" axis="0 0 1"/><geom type="sphere" size="0.1" mass="1"/>'
+        "</body></worldbody></mujoco>"
+    )
+    model = mujoco.MjModel.from_xml_string(xml)
+    tol = 1e-2
+    result = audit(model, tol=tol, duration=0.5, integrators="euler,rk4,implicitfast")
+    assert not result.is_linear  # free fall, then contact
+    pick = result.recommendation
+    assert pick["verified"]
+    # independent reference: RK4 at 1e-5 s, itself converged (its difference to 2e-5 s is tol/100 or less)
+    reference = _final_state(model, "rk4", 1e-5, result)
+    coarser = _final_state(model, "rk4", 2e-5, result)
+    chosen = _final_state(model, pick["integrator"], pick["dt"], result)
+    motion = abs(reference[0] - result.start.qpos[0])
+    assert abs(coarser[0] - reference[0]) <= tol / 100 * motion
+    assert abs(chosen[0] - reference[0]) <= tol * motion
+
+
+def _final_state(model, integrator, dt, result):
+    work = model.__copy__()
+    work.opt.integrator = INTEGRATORS[integrator]
+    work.opt.timestep = dt
+    data = mujoco.MjData(work)
+    data.qpos[:] = result.start.qpos
+    for _ in range(round(result.duration / dt)):
+        mujoco.mj_step(work, data)
+    return np.concatenate([data.qpos, data.qvel])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scene", ["slider", "car"])
+def test_a_shipped_scene_audit_agrees_with_stability_and_tradeoff(scene):
+    # the contract: limits within 0.5 %, orders within 0.1 wherever both measure one (the audit's grid
+    # stops at 1e-3 of its largest dt, so discrete on the car stays above the fit's 0.1 error cap)
+    result = audit(scene, tol=1e-3)
+    (mode,) = result.linear.modes
+    omega, zeta = mode.frequency_hz * 2 * math.pi, mode.damping_ratio
+    boundaries = stability.measure_boundaries(("euler", "implicitfast", "rk4"), (abs(zeta),))
+    for row in boundaries:
+        assert result.limits[row["integrator"]].measured_s * omega == pytest.approx(row["measured_omega_dt"], rel=5e-3)
+        assert row["theory_omega_dt"] == pytest.approx(stability_limit(row["integrator"], abs(zeta)))
+    sweep = tradeoff.sweep(scene, result.model.split("'")[3])
+    compared = [name for name, order in sweep.orders.items() if order is not None and result.orders[name] is not None]
+    assert {"euler", "rk4"} <= set(compared)
+    for name in compared:
+        assert result.orders[name] == pytest.approx(sweep.orders[name], abs=0.1), name
+
+
+def test_bad_input_is_one_error_before_any_work(tmp_path):
+    with pytest.raises(BadInputError, match="no such model file or scene 'nowhere.xml'"):
+        audit("nowhere.xml")
+    broken = tmp_path / "broken.xml"
+    broken.write_text("<mujoco><worldbody><body><joint type='hinge'/></body></worldbody>")
+    with pytest.raises(BadInputError, match="cannot load"):
+        audit(str(broken))
+    with pytest.raises(UnknownNameError, match="unknown integrator 'rk5'"):
+        audit("slider", integrators="rk4,rk5")
+    with pytest.raises(BadInputError, match="tol must be"):
+        audit("slider", tol=-1)
+    with pytest.raises(BadInputError, match="--dt must be"):
+        audit("slider", dt="1:2")
+    with pytest.raises(BadInputError, match="unknown keyframe"):
+        audit("slider", keyframe="nope")

@@ -1,0 +1,65 @@
+"""`springlab audit` on the command line: outputs, exit codes, one-line errors and nothing partial on bad input."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from springlab.cli import main
+from test_linearize import chain_xml, pendulum_xml
+
+
+def test_audit_writes_json_and_png_and_says_the_verdict(tmp_path, capsys):
+    model = tmp_path / "chain.xml"
+    model.write_text(chain_xml(2, 100.0, 1.0, 0.2).replace('gravity="0 0 0"', 'gravity="0 0 0" integrator="RK4"'))
+    out = tmp_path / "out"
+    code = main(["audit", str(model), "--output", str(out), "--integrators", "euler,rk4"])
+    lines = capsys.readouterr().out.splitlines()
+    assert code == 0  # rk4 at MuJoCo's default 2 ms: stable, error ~1e-8 (omega dt = 0.03, 4th order)
+    data = json.loads((out / "audit.json").read_text())
+    for key in ("model", "operating_point", "linear", "modes", "stability", "own_setting", "sweep", "recommendation"):
+        assert key in data
+    assert set(data["stability"]["rk4"]) >= {"limit_dt_predicted_s", "limit_dt_measured_s", "confirmed", "margin"}
+    assert data["recommendation"]["verified"] is True
+    assert (out / "audit.png").stat().st_size > 0
+    assert any(line.startswith("your setting, rk4 at 2 ms, is stable with margin") for line in lines)
+    assert sorted(p.name for p in out.iterdir()) == ["audit.json", "audit.png"]
+
+
+def test_a_setting_that_misses_tol_is_a_finding_exit_1_with_outputs(tmp_path, capsys):
+    model = tmp_path / "chain.xml"
+    model.write_text(chain_xml(2, 100.0, 1.0, 0.2))
+    out = tmp_path / "out"
+    # euler at 2 ms is first order: its error over 1 s is ~1e-2, far above 1e-9
+    assert main(["audit", str(model), "--tol", "1e-9", "--integrators", "euler", "--output", str(out)]) == 1
+    assert (out / "audit.json").exists() and (out / "audit.png").exists()
+    assert "misses tol" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["missing.xml"], "no such model file or scene 'missing.xml'"),
+        (["BROKEN"], "cannot load"),
+        (["PENDULUM", "--keyframe", "side"], "unknown keyframe 'side'"),
+        (["PENDULUM", "--integrators", "rk5"], "unknown integrator 'rk5'"),
+        (["PENDULUM", "--tol", "0"], "tol must be"),
+        (["PENDULUM", "--dt", "fast"], "--dt must be"),
+        (["PENDULUM", "--duration", "-1"], "duration must be"),
+        (["PENDULUM", "--perturb", "nan"], "perturb must be"),
+    ],
+)
+def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys, args, message):
+    broken = tmp_path / "broken.xml"
+    broken.write_text("<mujoco><worldbody><body><joint type='hinge'/></body></worldbody>")
+    pendulum = tmp_path / "pendulum.xml"
+    pendulum.write_text(pendulum_xml())
+    paths = {"BROKEN": str(broken), "PENDULUM": str(pendulum)}
+    out = tmp_path / "out"
+    code = main(["audit", *[paths.get(a, a) for a in args], "--output", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert not out.exists() or not any(out.iterdir())
+    assert not (tmp_path / "MUJOCO_LOG.TXT").exists()

@@ -1,0 +1,87 @@
+"""`springlab audit` on models nobody here wrote: the MJCF files shipped in dm_control's suite.
+
+Each audits without error, and its recommended setting meets the tolerance against an independent
+reference computed here: MuJoCo's RK4 at a timestep far below the audit's, run with mujoco.rollout
+(not springlab's runner), itself checked converged (its distance to the run at twice its timestep is
+at most a twentieth of tol), and the error measured here at the audit's checkpoints with
+mj_differentiatePos. Durations: the humanoid and the cheetah first touch the floor at 0.22 s and
+0.13 s; the cheetah's run includes its landing, the humanoid's stops before (a falling humanoid's
+contacts are chaotic: no RK4 reference converges in reasonable time, which `springlab audit` reports).
+"""
+
+from __future__ import annotations
+
+import pathlib
+
+import dm_control  # a test-only dependency (the `test` extra)
+import mujoco
+import numpy as np
+import pytest
+from mujoco import rollout
+
+from springlab.audit import audit
+from springlab.simulate import INTEGRATORS
+
+SUITE = pathlib.Path(dm_control.__file__).parent / "suite"
+_FULL = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
+
+CASES = {
+    # model: (duration [s], tol [-])
+    "pendulum": (1.0, 1e-3),
+    "cartpole": (1.0, 1e-3),
+    "acrobot": (1.0, 1e-3),
+    "cheetah": (0.3, 2e-2),
+    "humanoid": (0.2, 1e-2),
+}
+
+
+def _checkpoint_states(model, integrator, dt, duration, spacing, count, start):
+    """qpos, qvel at t = k * spacing (k < count) of a run from `start`, by mujoco.rollout."""
+    work = model.__copy__()
+    work.opt.integrator = INTEGRATORS[integrator]
+    work.opt.timestep = dt
+    data = mujoco.MjData(work)
+    data.qpos[:], data.qvel[:] = start.qpos, start.qvel
+    if start.act is not None:
+        data.act[:] = start.act
+    state0 = np.empty(mujoco.mj_stateSize(work, _FULL))
+    mujoco.mj_getState(work, data, state0, _FULL)
+    steps = round(duration / dt)
+    control = np.tile(start.control, (1, steps, 1)) if work.nu else None
+    states, _ = rollout.rollout(work, data, state0[None], control, nstep=steps)
+    states = np.concatenate([state0[None], states[0]])
+    rows = np.arange(count) * round(spacing / dt)
+    return states[rows, 1 : 1 + work.nq], states[rows, 1 + work.nq : 1 + work.nq + work.nv]
+
+
+def _error(model, qpos, qvel, ref_qpos, ref_qvel, origin):
+    """max(|dq|_inf / max |q_ref - origin|_inf, |dv|_inf / max |v_ref|_inf) over the checkpoints."""
+    dq = np.zeros(model.nv)
+
+    def distance(a, b):
+        mujoco.mj_differentiatePos(model, dq, 1.0, b, a)
+        return np.max(np.abs(dq))
+
+    err_q = max(distance(a, b) for a, b in zip(qpos, ref_qpos))
+    scale_q = max(distance(b, origin) for b in ref_qpos)
+    err_v = np.max(np.abs(qvel - ref_qvel))
+    return max(err_q / scale_q, err_v / np.max(np.abs(ref_qvel)))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(CASES))
+def test_dm_control_model_audits_and_its_recommendation_meets_tol(name):
+    duration, tol = CASES[name]
+    path = SUITE / f"{name}.xml"
+    result = audit(str(path), tol=tol, duration=duration)
+    pick = result.recommendation
+    assert pick["verified"], result.verdict()
+    model = mujoco.MjModel.from_xml_path(str(path))
+    spacing, count = result.reference["checkpoint_spacing_s"], result.reference["checkpoints"]
+    fine = spacing / round(spacing / 2.5e-5)  # RK4 at ~25 us, a multiple of the checkpoints
+    reference = _checkpoint_states(model, "rk4", fine, result.duration, spacing, count, result.start)
+    coarser = _checkpoint_states(model, "rk4", 2 * fine, result.duration, spacing, count, result.start)
+    origin = result.linear.point.qpos
+    assert _error(model, *coarser, *reference, origin) <= tol / 20  # the reference itself has converged
+    chosen = _checkpoint_states(model, pick["integrator"], pick["dt"], result.duration, spacing, count, result.start)
+    assert _error(model, *chosen, *reference, origin) <= tol
