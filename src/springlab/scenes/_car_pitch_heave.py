@@ -12,6 +12,7 @@ import numpy as np
 
 from .. import analytic
 from ..errors import ParameterError
+from ..linear import generator_system
 from ..linearize import OperatingPoint, operating_point
 from ..linearize import linearize as shared_linearize
 from ..scene import Reference, Setup
@@ -191,10 +192,10 @@ class PitchHeave(Variant):
         q, v = analytic.linear_response(
             time, linear.mass, linear.damping, linear.stiffness, q0, np.zeros(2), force=linear.preload
         )
-        a = analytic.state_matrix(linear.mass, linear.damping, linear.stiffness)
-        system = np.zeros((5, 5))
-        system[:4, :4] = a
-        system[2:4, 4] = np.linalg.solve(linear.mass, linear.preload)
+        # z = (q, v, 1): the preloads and gravity as a constant generator state
+        system = generator_system(
+            linear.mass, linear.damping, linear.stiffness, forcing=linear.preload[:, None], generator=[[0.0]]
+        )
         states = np.column_stack([q, v, np.ones_like(time)])
         return Reference(
             pos={"heave": q[:, 0], "pitch": q[:, 1]},
