@@ -114,7 +114,7 @@ class Audit:
         motion = "linear" if self.is_linear else "nonlinear"
         head = f"{self.model}: {len(self.linear.modes)} modes"
         if fastest is not None:
-            zeta = "" if fastest.damping_ratio is None else f", zeta {fastest.damping_ratio:.3g}"
+            zeta = "" if fastest.damping_ratio is None else f", zeta {fastest.damping_ratio + 0.0:.3g}"  # no -0
             head += f", fastest {fastest.frequency_hz:.4g} Hz ({fastest.kind}{zeta})"
         if unstable:
             head += f"; {unstable} physically unstable (the model's own dynamics, not the integrator)"
@@ -225,11 +225,14 @@ def load(model_or_path: Any) -> _Source:
 
 
 def _start(model: mujoco.MjModel, point: OperatingPoint, perturb: float, source: _Source) -> Setup:
-    """The sweep's start: a scene's scenario state, else the operating point moved by `perturb` [m or rad]
-    along a fixed pattern of every degree of freedom (seeded, so audits repeat)."""
+    """The sweep's start: a scene's scenario state (where it differs from the operating point), else the
+    operating point moved by `perturb` [m or rad] along a fixed pattern of every degree of freedom
+    (seeded, so audits repeat)."""
     if source.start is not None and source.start.qpos is not None:
-        qvel = source.start.qvel if source.start.qvel is not None else point.qvel
-        return Setup(np.asarray(source.start.qpos, float), np.asarray(qvel, float), point.act, point.ctrl)
+        qvel = np.asarray(source.start.qvel if source.start.qvel is not None else point.qvel, float)
+        qpos = np.asarray(source.start.qpos, float)
+        if np.any(qpos != point.qpos) or np.any(qvel != point.qvel):  # a scenario driven by inputs alone does not
+            return Setup(qpos, qvel, point.act, point.ctrl)  # move here (the audit holds controls): perturb it
     pattern = np.random.default_rng(0).uniform(-1.0, 1.0, model.nv)
     if model.nv:
         pattern /= np.max(np.abs(pattern))

@@ -148,7 +148,7 @@ class TrajectoryReference(Reference):
     def states(self, dt, rows):
         index = rows * (dt / self.dt)
         nearest = np.round(index).astype(np.int64)
-        kept = (np.abs(index - nearest) <= 1e-6 * np.maximum(1.0, index)) & (nearest < len(self.trajectory.time))
+        kept = (np.abs(index - nearest) <= 1e-6) & (nearest < len(self.trajectory.time))  # same time to 1e-6 step
         picked = nearest[kept]
         return self.trajectory.qpos[picked], self.trajectory.qvel[picked], kept
 
