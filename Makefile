@@ -17,13 +17,17 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(BIN)/springlab demo --output $(OUT)
 
+# random order (pytest-randomly): the header prints the seed, replay an order with ARGS=--randomly-seed=N;
+# a quick loop without the slow tests: make test ARGS='-m "not slow"'
+ARGS ?=
 test: $(STAMP)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest $(ARGS)
 
-# ruff (lint and format) over the whole tree
+# ruff (lint and format) over the whole tree, mypy over src/ (config in pyproject.toml)
 lint: $(STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
+	$(BIN)/mypy
 
 bench: $(STAMP)
 	for b in benchmarks/bench_*.py; do echo "== $$b"; $(BIN)/python $$b || exit 1; done

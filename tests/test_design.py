@@ -40,11 +40,13 @@ def test_default_sweep_has_at_least_1000_configurations():
     )
 
 
+@pytest.mark.slow
 def test_every_configuration_settles_for_good(default_study):
     assert default_study.size == 625
     assert np.all(np.isfinite(default_study.positioning_time_s))
 
 
+@pytest.mark.slow
 def test_no_configuration_beats_its_bang_bang_minimum(default_study):
     s = default_study
     total = s.values["carriage_mass"] + s.base["motor_mass"]
@@ -54,6 +56,7 @@ def test_no_configuration_beats_its_bang_bang_minimum(default_study):
     assert np.all(s.positioning_time_s >= minimum * (1 - 1e-12))
 
 
+@pytest.mark.slow
 def test_ranking_is_sorted_by_absolute_elasticity(default_study):
     elasticity = default_study.elasticities()
     magnitudes = [abs(elasticity[name]) for name in default_study.ranking()]
@@ -61,6 +64,7 @@ def test_ranking_is_sorted_by_absolute_elasticity(default_study):
     assert set(default_study.ranking()) == set(design.PROPERTIES)
 
 
+@pytest.mark.slow
 def test_elasticity_signs_are_physical(default_study):
     # stiffer belt (faster, smaller residual), more force (shorter move), more damping (faster decay)
     # all shorten the positioning; a heavier carriage lengthens it
@@ -71,6 +75,7 @@ def test_elasticity_signs_are_physical(default_study):
     assert elasticity["carriage_mass"] > 0
 
 
+@pytest.mark.slow
 def test_analytic_estimate_agrees_with_simulation(default_study):
     # the estimate uses the residual vibration's exact envelope, so it can only overshoot by where
     # the last band exit lies under the envelope: at most one vibration period
@@ -82,6 +87,7 @@ def test_analytic_estimate_agrees_with_simulation(default_study):
     assert s.estimate_s[i] / s.positioning_time_s[i] == pytest.approx(1.0, abs=0.05)
 
 
+@pytest.mark.slow
 def test_default_configuration_settles_as_the_exact_trajectory_says(small_study):
     # one configuration (the default) through the batch, vs expm on its own step grid
     study = small_study
@@ -118,6 +124,7 @@ def test_default_configuration_settles_as_the_exact_trajectory_says(small_study)
     assert last_exit <= study.positioning_time_s[i] <= last_exit + dt
 
 
+@pytest.mark.slow
 def test_design_json_has_the_documented_shape(capsys, tmp_path):
     code = main(["design", "printer_head", "--levels", "3", "--plane", "5", "--json", "--output", str(tmp_path / "d")])
     out, err = capsys.readouterr()
@@ -148,6 +155,7 @@ def test_design_json_has_the_documented_shape(capsys, tmp_path):
     assert json.loads((tmp_path / "d" / "design.json").read_text())["configurations"] == 81
 
 
+@pytest.mark.slow
 def test_design_text_answers_both_questions(capsys):
     code = main(["design", "printer_head", "--levels", "3", "--plane", "0"])
     out, _ = capsys.readouterr()
@@ -174,6 +182,7 @@ def test_design_bad_input_exits_2_with_one_line(argv, needle, capsys):
     assert needle in err
 
 
+@pytest.mark.slow
 def test_plane_spans_the_two_most_influential_properties_around_the_default(small_study):
     plane = small_study.plane
     assert (plane.y_name, plane.x_name) == tuple(small_study.ranking()[:2])

@@ -59,6 +59,7 @@ def _quick_start() -> list[list[str]]:
     return commands
 
 
+@pytest.mark.slow
 def test_readme_quick_start_commands_run(tmp_path):
     commands = _quick_start()
     assert len(commands) >= 3

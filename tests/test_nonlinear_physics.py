@@ -17,6 +17,7 @@ from springlab.simulate import quiet_mujoco
 SCENE = scenes.get("nonlinear")
 # models/nonlinear.xml: m = 1 kg, k1 = 100 N/m, k3 = -1e4 N/m^3 (softening); double well k1 = -100, k3 = 1e4
 M, K1, K3 = 1.0, 100.0, -1e4
+EPS = np.finfo(float).eps
 
 
 def _built(scenario_name, **overrides):
@@ -46,7 +47,10 @@ def test_polynomial_joint_stiffness_gives_minus_k1_x_minus_k3_x_cubed():
     for x in (-0.25, -0.05, 0.0, 0.03, 0.1, 0.2):
         data.qpos[0] = x
         mujoco.mj_forward(model, data)
-        assert data.qfrc_passive[0] == pytest.approx(-(K1 * x + K3 * x**3), rel=1e-14, abs=1e-15)
+        # at the saddle (x = 0.1 m) the two terms cancel: each carries a rounding of eps times its size,
+        # which MuJoCo (compiled with or without FMA) and this line need not share
+        terms = abs(K1 * x) + abs(K3 * x**3)
+        assert data.qfrc_passive[0] == pytest.approx(-(K1 * x + K3 * x**3), rel=0, abs=4 * EPS * terms)
 
 
 def test_softening_spring_force_peaks_at_sqrt_k1_over_3_abs_k3():
@@ -306,6 +310,7 @@ def forced():
     return springlab.run("nonlinear", "forced_duffing")
 
 
+@pytest.mark.slow
 def test_forced_duffing_agrees_with_an_independent_solver_until_its_accuracy_horizon(forced):
     p = forced.parameters
     omega = 2 * math.pi * p["force_frequency"]
@@ -329,6 +334,7 @@ def test_forced_duffing_agrees_with_an_independent_solver_until_its_accuracy_hor
     assert np.max(difference[t <= horizon]) < 1e-3
 
 
+@pytest.mark.slow
 def test_twin_runs_separate_like_the_variational_equation(forced):
     # d(dx)'' = -(k1 + 3 k3 x^2) dx / m - d dx' / m along the trajectory, integrated by scipy
     p = forced.parameters
@@ -357,6 +363,7 @@ def test_twin_runs_separate_like_the_variational_equation(forced):
         assert separation == pytest.approx(1e-9 * sol.sol(when)[2], rel=1e-3)
 
 
+@pytest.mark.slow
 def test_forced_duffing_is_chaotic(forced):
     q = forced.summary["quantities"]
     assert q["perturbation_m"] == 1e-9 and q["well_size_m"] == pytest.approx(0.1)

@@ -156,6 +156,7 @@ def test_plotting_never_touches_pyplot_global_state():
     subprocess.run([sys.executable, "-c", code], check=True)
 
 
+@pytest.mark.slow
 def test_tradeoff_stability_and_design_charts_leave_the_callers_backend_alone(tmp_path):
     # a library must not switch a notebook's backend (matplotlib.use) or import pyplot
     code = (

@@ -111,6 +111,7 @@ class _Links(html.parser.HTMLParser):
         self.refs += [value for name, value in attrs if name in ("href", "src") and value]
 
 
+@pytest.mark.slow
 def test_report_links_every_artifact_and_nothing_outside_the_folder(demo_out):
     out, state = demo_out
     page = (out / "index.html").read_text()
@@ -134,6 +135,7 @@ def test_report_links_every_artifact_and_nothing_outside_the_folder(demo_out):
     assert page.count('class="pass"') + page.count("class='pass'") >= len(state.validation)
 
 
+@pytest.mark.slow
 def test_report_loads_in_headless_chromium_with_playing_videos_and_no_errors(demo_out, tmp_path):
     chromium = _chromium()
     out, state = demo_out
@@ -175,6 +177,7 @@ def test_report_loads_in_headless_chromium_with_playing_videos_and_no_errors(dem
     assert pixels.std() > 20, "the screenshot shows a page, not a blank"
 
 
+@pytest.mark.slow
 def test_chromium_decodes_the_h264_videos_to_the_rendered_pictures(demo_out, tmp_path):
     """Debian's chromium could lack H.264; draw each video's first frame to a canvas to be sure it decodes."""
     chromium = _chromium()

@@ -76,6 +76,7 @@ def test_stability_limit_theory_matches_an_independent_derivation(integrator, ze
     assert stability_limit(integrator, zeta) == pytest.approx(_independent_limit(integrator, zeta), rel=1e-9)
 
 
+@pytest.mark.slow
 def test_measured_boundaries_are_within_2_percent_of_theory(report):
     rows = {(r["integrator"], r["zeta"]): r for r in report["boundaries"]}
     for integrator in INTEGRATORS:
@@ -90,6 +91,7 @@ def test_measured_boundaries_are_within_2_percent_of_theory(report):
             assert row["within_tolerance"]
 
 
+@pytest.mark.slow
 def test_rk4_limit_is_2_sqrt_2_undamped_and_shrinks_like_2_785_over_the_fast_root(report):
     rows = {(r["integrator"], r["zeta"]): r["measured_omega_dt"] for r in report["boundaries"]}
     assert rows[("rk4", 0.0)] == pytest.approx(2 * math.sqrt(2), rel=0.02)
@@ -151,6 +153,7 @@ def test_discrete_undamped_energy_decays_by_1_over_1_plus_omega2_dt2_per_step(om
     np.testing.assert_allclose(energy / energy[0], (1 + omega_dt**2) ** -n.astype(float), rtol=1e-10)
 
 
+@pytest.mark.slow
 def test_energy_report_agrees_with_the_formulas(report):
     rows = {r["integrator"]: r for r in report["energy"]}
     assert set(rows) == set(INTEGRATORS)
@@ -161,6 +164,7 @@ def test_energy_report_agrees_with_the_formulas(report):
     assert rows["rk4"]["final_ratio"] < 1 and rows["discrete"]["final_ratio"] < rows["rk4"]["final_ratio"]
 
 
+@pytest.mark.slow
 def test_extremes_cover_stiff_light_long_and_overdamped_at_three_fractions_of_each_limit(report):
     rows = [r for r in report["extremes"] if r["kind"] == "limit"]
     cases = {r["case"] for r in rows}
@@ -177,6 +181,7 @@ def test_extremes_cover_stiff_light_long_and_overdamped_at_three_fractions_of_ea
             ]
 
 
+@pytest.mark.slow
 def test_every_run_just_past_a_stability_limit_is_reported_diverged(report):
     past = [
         r for r in report["extremes"] if r["kind"] == "limit" and r["fraction"] > 1 and r["integrator"] != "discrete"
@@ -184,6 +189,7 @@ def test_every_run_just_past_a_stability_limit_is_reported_diverged(report):
     assert past and all(r["outcome"] == "diverged" for r in past)
 
 
+@pytest.mark.slow
 def test_no_run_inside_a_limit_diverges_while_mujoco_values_stay_in_range(report):
     inside = [
         r
@@ -195,6 +201,7 @@ def test_no_run_inside_a_limit_diverges_while_mujoco_values_stay_in_range(report
     assert inside and all(r["outcome"] != "diverged" for r in inside)
 
 
+@pytest.mark.slow
 def test_mujoco_value_limit_diverges_at_any_timestep_and_the_advice_says_rescale(report):
     # k = 1e12 N/m, x0 = 0.1 m: |qacc| = 1e11 m/s^2 > mjMAXVAL = 1e10, which MuJoCo treats as a blow-up
     rows = [r for r in report["extremes"] if r["case"] == "stiff-large-x0"]
@@ -202,6 +209,7 @@ def test_mujoco_value_limit_diverges_at_any_timestep_and_the_advice_says_rescale
     assert all("BADQACC" in r["detail"] and "rescale" in r["advice"] for r in rows)
 
 
+@pytest.mark.slow
 def test_every_row_is_classified_with_its_error_or_its_divergence_and_one_piece_of_advice(report):
     for r in report["extremes"]:
         if r["outcome"] == "diverged":
@@ -212,6 +220,7 @@ def test_every_row_is_classified_with_its_error_or_its_divergence_and_one_piece_
         assert r["advice"] and "\n" not in r["advice"]
 
 
+@pytest.mark.slow
 def test_the_advised_settings_are_accurate_when_run_over_the_whole_case(report):
     # cheap advice is run by default (the 1e4-period rk4 run of 1.1e6 steps only with --full)
     advised = {r["case"]: r for r in report["extremes"] if r["kind"] == "advised"}
@@ -282,6 +291,7 @@ def test_a_run_beyond_mujocos_value_limit_exits_3_for_every_integrator(capsys, i
     assert code == 3 and "diverged" in err
 
 
+@pytest.mark.slow
 def test_stability_cli_prints_json_and_writes_the_charts(tmp_path, capsys, monkeypatch, report):
     monkeypatch.setattr(stability, "stability_report", lambda full=False: report)
     code = main(["stability", "--json", "--output", str(tmp_path / "s")])

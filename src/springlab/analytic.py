@@ -13,11 +13,9 @@ Single degree of freedom
     and exact undamped resonance.
 
 Many degrees of freedom / general LTI systems
-    ``z' = A z + B u(t)`` with piecewise-constant ``u`` is solved exactly with
-    the matrix exponential of the augmented matrix ``[[A, B], [0, 0]]``
-    (:func:`expm`, scaling and squaring with Padé approximants, Al-Mohy &
-    Higham 2009).  One exponential is computed per distinct step, so long
-    uniform output grids are cheap.
+    ``z' = A z + B u(t)`` live in :mod:`springlab.linear` (matrix exponentials);
+    :func:`state_matrix`, :func:`linear_response` and :func:`lti_response` are
+    re-exported here, where the scenes first found them.
 
 Kinematics
     Polynomial motion, integration of a polynomial acceleration and the exact
@@ -32,6 +30,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.polynomial import Polynomial
+
+# re-exported: the scenes reach the multi-DOF references through analytic
+from .linear import linear_response, lti_response, state_matrix
 
 __all__ = [
     "natural_frequency",
@@ -43,7 +45,6 @@ __all__ = [
     "step_response",
     "harmonic_response",
     "steady_state_amplitude",
-    "expm",
     "state_matrix",
     "linear_response",
     "lti_response",
@@ -113,15 +114,22 @@ def _any_time(t) -> np.ndarray:
 def natural_frequency(mass: float, stiffness: float) -> float:
     """Undamped natural angular frequency.
 
-    Args:
-        mass: Mass m [kg], > 0.
-        stiffness: Spring constant k [N/m], >= 0.
+    Parameters
+    ----------
+    mass
+        Mass m [kg], > 0.
+    stiffness
+        Spring constant k [N/m], >= 0.
 
-    Returns:
+    Returns
+    -------
+    float
         omega_n = sqrt(k / m) [rad/s].
 
-    Raises:
-        ValueError: For non-finite input, m <= 0 or k < 0.
+    Raises
+    ------
+    ValueError
+        For non-finite input, m <= 0 or k < 0.
     """
     m, k, _ = _check_oscillator(mass, stiffness, 0.0)
     return math.sqrt(k / m)
@@ -130,17 +138,25 @@ def natural_frequency(mass: float, stiffness: float) -> float:
 def damping_ratio(mass: float, stiffness: float, damping: float) -> float:
     """Dimensionless damping ratio.
 
-    Args:
-        mass: Mass m [kg], > 0.
-        stiffness: Spring constant k [N/m], >= 0.
-        damping: Viscous damping coefficient d [N s/m], >= 0.
+    Parameters
+    ----------
+    mass
+        Mass m [kg], > 0.
+    stiffness
+        Spring constant k [N/m], >= 0.
+    damping
+        Viscous damping coefficient d [N s/m], >= 0.
 
-    Returns:
+    Returns
+    -------
+    float
         zeta = d / (2 sqrt(k m)) [-]; ``math.inf`` for k = 0 with d > 0 and
         0.0 for d = 0.
 
-    Raises:
-        ValueError: For non-physical or non-finite input.
+    Raises
+    ------
+    ValueError
+        For non-physical or non-finite input.
     """
     m, k, d = _check_oscillator(mass, stiffness, damping)
     if d == 0.0:
@@ -156,16 +172,24 @@ def damping_ratio(mass: float, stiffness: float, damping: float) -> float:
 def damped_frequency(mass: float, stiffness: float, damping: float) -> float:
     """Damped natural angular frequency.
 
-    Args:
-        mass: Mass m [kg], > 0.
-        stiffness: Spring constant k [N/m], >= 0.
-        damping: Viscous damping coefficient d [N s/m], >= 0.
+    Parameters
+    ----------
+    mass
+        Mass m [kg], > 0.
+    stiffness
+        Spring constant k [N/m], >= 0.
+    damping
+        Viscous damping coefficient d [N s/m], >= 0.
 
-    Returns:
+    Returns
+    -------
+    float
         omega_d = omega_n sqrt(1 - zeta^2) [rad/s] for zeta < 1, else 0.0.
 
-    Raises:
-        ValueError: For non-physical or non-finite input.
+    Raises
+    ------
+    ValueError
+        For non-physical or non-finite input.
     """
     m, k, d = _check_oscillator(mass, stiffness, damping)
     # Same beta as the time responses: sqrt((wn - sigma)(wn + sigma)), which
@@ -177,18 +201,26 @@ def damped_frequency(mass: float, stiffness: float, damping: float) -> float:
 def regime(mass: float, stiffness: float, damping: float) -> str:
     """Classify the free motion.
 
-    Args:
-        mass: Mass m [kg], > 0.
-        stiffness: Spring constant k [N/m], >= 0.
-        damping: Viscous damping coefficient d [N s/m], >= 0.
+    Parameters
+    ----------
+    mass
+        Mass m [kg], > 0.
+    stiffness
+        Spring constant k [N/m], >= 0.
+    damping
+        Viscous damping coefficient d [N s/m], >= 0.
 
-    Returns:
+    Returns
+    -------
+    str
         ``'undamped'`` iff d == 0; otherwise ``'critical'`` when
         |zeta - 1| <= 1e-12, ``'underdamped'`` for smaller zeta and
         ``'overdamped'`` for larger zeta (including k == 0 with d > 0).
 
-    Raises:
-        ValueError: For non-physical or non-finite input.
+    Raises
+    ------
+    ValueError
+        For non-physical or non-finite input.
     """
     zeta = damping_ratio(mass, stiffness, damping)
     if damping == 0.0:
@@ -223,19 +255,27 @@ def characteristic_roots(mass: float, stiffness: float, damping: float) -> tuple
     cannot overflow), so the slow root is accurate to a few ulps even for
     m = 1, k = 1, d = 1e9 (slow root ~ -1e-9).
 
-    Args:
-        mass: Mass m [kg], > 0.
-        stiffness: Spring constant k [N/m], >= 0.
-        damping: Viscous damping coefficient d [N s/m], >= 0.
+    Parameters
+    ----------
+    mass
+        Mass m [kg], > 0.
+    stiffness
+        Spring constant k [N/m], >= 0.
+    damping
+        Viscous damping coefficient d [N s/m], >= 0.
 
-    Returns:
+    Returns
+    -------
+    tuple[complex, complex]
         ``(s1, s2)`` [rad/s] as complex numbers.  Underdamped / undamped:
         ``(-sigma + i omega_d, -sigma - i omega_d)``.  Critical (beta^2 == 0
         exactly): both ``-sigma``.  Overdamped: ``(fast, slow)``, i.e. the more
         negative root first; for k == 0 the slow root is exactly 0.
 
-    Raises:
-        ValueError: For non-physical or non-finite input.
+    Raises
+    ------
+    ValueError
+        For non-physical or non-finite input.
     """
     m, k, d = _check_oscillator(mass, stiffness, damping)
     sigma, wn2, b2, beta = _oscillator_constants(m, k, d)
@@ -336,19 +376,30 @@ def free_response(
     x ~ x0 e^{-k t / d} of a heavily damped spring is exact.  Covers k = 0
     (free mass, with or without damping).
 
-    Args:
-        t: Time(s) since release [s], finite and >= 0; scalar or array.
-        mass: Mass m [kg], > 0.
-        stiffness: Spring constant k [N/m], >= 0.
-        damping: Viscous damping coefficient d [N s/m], >= 0.
-        x0: Initial displacement [m].
-        v0: Initial velocity [m/s].
+    Parameters
+    ----------
+    t
+        Time(s) since release [s], finite and >= 0; scalar or array.
+    mass
+        Mass m [kg], > 0.
+    stiffness
+        Spring constant k [N/m], >= 0.
+    damping
+        Viscous damping coefficient d [N s/m], >= 0.
+    x0
+        Initial displacement [m].
+    v0
+        Initial velocity [m/s].
 
-    Returns:
+    Returns
+    -------
+    tuple[ndarray, ndarray]
         (x, v): displacement [m] and velocity [m/s], arrays of t's shape.
 
-    Raises:
-        ValueError: For non-physical or non-finite input or negative t.
+    Raises
+    ------
+    ValueError
+        For non-physical or non-finite input or negative t.
     """
     m, k, d = _check_oscillator(mass, stiffness, damping)
     x0 = _finite_scalar("x0", x0)
@@ -456,20 +507,32 @@ def step_response(
     rest, is computed without the F/k - F/k cancellation (see
     ``_unit_step_displacement``), so tiny k and k == 0 are exact too.
 
-    Args:
-        t: Time(s) since the force was applied [s], finite and >= 0.
-        mass: Mass m [kg], > 0.
-        stiffness: Spring constant k [N/m], >= 0.
-        damping: Viscous damping coefficient d [N s/m], >= 0.
-        force: Constant applied force F [N].
-        x0: Initial displacement [m].
-        v0: Initial velocity [m/s].
+    Parameters
+    ----------
+    t
+        Time(s) since the force was applied [s], finite and >= 0.
+    mass
+        Mass m [kg], > 0.
+    stiffness
+        Spring constant k [N/m], >= 0.
+    damping
+        Viscous damping coefficient d [N s/m], >= 0.
+    force
+        Constant applied force F [N].
+    x0
+        Initial displacement [m].
+    v0
+        Initial velocity [m/s].
 
-    Returns:
+    Returns
+    -------
+    tuple[ndarray, ndarray]
         (x, v): displacement [m] and velocity [m/s], arrays of t's shape.
 
-    Raises:
-        ValueError: For non-physical or non-finite input or negative t.
+    Raises
+    ------
+    ValueError
+        For non-physical or non-finite input or negative t.
     """
     m, k, d = _check_oscillator(mass, stiffness, damping)
     force = _finite_scalar("force", force)
@@ -503,21 +566,31 @@ def steady_state_amplitude(
     x_ss(t) = X sin(W t - phi) with W = 2 pi f,
     X = F0 / sqrt((k - m W^2)^2 + (d W)^2), phi = atan2(d W, k - m W^2).
 
-    Args:
-        mass: Mass m [kg], > 0.
-        stiffness: Spring constant k [N/m], >= 0.
-        damping: Viscous damping coefficient d [N s/m], >= 0.
-        force_amplitude: F0 [N] (the amplitude carries its sign).
-        force_frequency: f [Hz], >= 0.
+    Parameters
+    ----------
+    mass
+        Mass m [kg], > 0.
+    stiffness
+        Spring constant k [N/m], >= 0.
+    damping
+        Viscous damping coefficient d [N s/m], >= 0.
+    force_amplitude
+        F0 [N] (the amplitude carries its sign).
+    force_frequency
+        f [Hz], >= 0.
 
-    Returns:
+    Returns
+    -------
+    tuple[float, float]
         (amplitude [m], phase lag [rad] in [0, pi]).  At undamped resonance
         (d == 0 and |k - m W^2| <= 1e-12 max(k, m W^2)) the amplitude is
         +-inf (0.0 if F0 == 0) and the phase pi/2.  A static force on a free
         mass (k == 0, f == 0) also gives an infinite amplitude.
 
-    Raises:
-        ValueError: For non-physical or non-finite input.
+    Raises
+    ------
+    ValueError
+        For non-physical or non-finite input.
     """
     m, k, d = _check_oscillator(mass, stiffness, damping)
     f0 = _finite_scalar("force_amplitude", force_amplitude)
@@ -591,24 +664,37 @@ def harmonic_response(
     through resonance.  For zeta > 0.5, overdamped and k == 0 the direct
     particular + transient form is used.
 
-    Args:
-        t: Time(s) since the force was applied [s], finite and >= 0.
-        mass: Mass m [kg], > 0.
-        stiffness: Spring constant k [N/m], >= 0.
-        damping: Viscous damping coefficient d [N s/m], >= 0.
-        force_amplitude: F0 [N].
-        force_frequency: f [Hz], >= 0 (f == 0 means zero force).
-        x0: Initial displacement [m].
-        v0: Initial velocity [m/s].
+    Parameters
+    ----------
+    t
+        Time(s) since the force was applied [s], finite and >= 0.
+    mass
+        Mass m [kg], > 0.
+    stiffness
+        Spring constant k [N/m], >= 0.
+    damping
+        Viscous damping coefficient d [N s/m], >= 0.
+    force_amplitude
+        F0 [N].
+    force_frequency
+        f [Hz], >= 0 (f == 0 means zero force).
+    x0
+        Initial displacement [m].
+    v0
+        Initial velocity [m/s].
 
-    Returns:
+    Returns
+    -------
+    tuple[ndarray, ndarray]
         (x, v): displacement [m] and velocity [m/s], arrays of t's shape.
         Accuracy is a few ulps relative to the response amplitude (points
         where x itself nearly vanishes, e.g. x ~ t^3 just after switch-on
         from rest, carry that absolute error).
 
-    Raises:
-        ValueError: For non-physical or non-finite input or negative t.
+    Raises
+    ------
+    ValueError
+        For non-physical or non-finite input or negative t.
     """
     m, k, d = _check_oscillator(mass, stiffness, damping)
     f0 = _finite_scalar("force_amplitude", force_amplitude)
@@ -652,509 +738,6 @@ def harmonic_response(
 
 
 # ---------------------------------------------------------------------------
-# matrix exponential (Al-Mohy & Higham 2009, Algorithm 5.1)
-# ---------------------------------------------------------------------------
-
-_PADE = {
-    3: (120.0, 60.0, 12.0, 1.0),
-    5: (30240.0, 15120.0, 3360.0, 420.0, 30.0, 1.0),
-    7: (17297280.0, 8648640.0, 1995840.0, 277200.0, 25200.0, 1512.0, 56.0, 1.0),
-    9: (17643225600.0, 8821612800.0, 2075673600.0, 302702400.0, 30270240.0, 2162160.0, 110880.0, 3960.0, 90.0, 1.0),
-    13: (
-        64764752532480000.0,
-        32382376266240000.0,
-        7771770303897600.0,
-        1187353796428800.0,
-        129060195264000.0,
-        10559470521600.0,
-        670442572800.0,
-        33522128640.0,
-        1323241920.0,
-        40840800.0,
-        960960.0,
-        16380.0,
-        182.0,
-        1.0,
-    ),
-}
-# Backward-error bounds theta_m for degree m (Al-Mohy & Higham 2009, Table 3.1).
-_THETA = {3: 1.495585217958292e-2, 5: 2.539398330063230e-1, 7: 9.504178996162932e-1, 9: 2.097847961257068e0, 13: 4.25}
-
-
-def _onenorm(a: np.ndarray) -> float:
-    return float(np.abs(a).sum(axis=0).max()) if a.size else 0.0
-
-
-def _ell(a: np.ndarray, m: int) -> int:
-    """Extra squarings needed to keep the backward error at unit roundoff."""
-    p = 2 * m + 1
-    # |c_{2m+1}|^-1 = (2m)! (2m+1)! / (m!)^2: leading coefficient of the
-    # backward-error series of the [m/m] Padé approximant.
-    c_recip = float(math.comb(2 * m, m) * math.factorial(2 * m + 1))
-    abs_a = np.abs(a)
-    # ||abs(A)^p||_1 exactly, via p vector-matrix products on the row of ones.
-    row = np.ones(a.shape[0])
-    for _ in range(p):
-        row = row @ abs_a
-    power_norm = float(row.max())
-    a_norm = _onenorm(a)
-    if power_norm == 0.0 or a_norm == 0.0:
-        return 0
-    alpha = power_norm / (a_norm * c_recip)
-    value = math.ceil(math.log2(alpha / 2.0**-53) / (2 * m))
-    return max(value, 0)
-
-
-def _pade_uv(m: int, a: np.ndarray, powers: dict, ident: np.ndarray):
-    b = _PADE[m]
-    if m == 13:
-        a2, a4, a6 = powers[2], powers[4], powers[6]
-        u = a @ (a6 @ (b[13] * a6 + b[11] * a4 + b[9] * a2) + b[7] * a6 + b[5] * a4 + b[3] * a2 + b[1] * ident)
-        v = a6 @ (b[12] * a6 + b[10] * a4 + b[8] * a2) + b[6] * a6 + b[4] * a4 + b[2] * a2 + b[0] * ident
-        return u, v
-    u_sum = b[1] * ident
-    v_sum = b[0] * ident
-    for j in range(1, m // 2 + 1):
-        pj = powers[2 * j]
-        u_sum = u_sum + b[2 * j + 1] * pj
-        v_sum = v_sum + b[2 * j] * pj
-    return a @ u_sum, v_sum
-
-
-def _pade_scaled(arr: np.ndarray):
-    """Degree and scaling of Al-Mohy & Higham 2009, Algorithm 5.1.
-
-    Returns (u, v, s): odd and even parts of the Padé approximant of
-    2^-s A, so that exp(A) ~ ((v - u)^-1 (v + u))^(2^s).
-    """
-    n = arr.shape[0]
-    ident = np.eye(n, dtype=arr.dtype)
-    a2 = arr @ arr
-    a4 = a2 @ a2
-    a6 = a2 @ a4
-    d4 = _onenorm(a4) ** 0.25
-    d6 = _onenorm(a6) ** (1.0 / 6.0)
-    eta1 = max(d4, d6)
-    powers = {2: a2, 4: a4, 6: a6}
-    for m in (3, 5):
-        if eta1 <= _THETA[m] and _ell(arr, m) == 0:
-            return (*_pade_uv(m, arr, powers, ident), 0)
-    a8 = a4 @ a4
-    powers[8] = a8
-    d8 = _onenorm(a8) ** 0.125
-    eta3 = max(d6, d8)
-    for m in (7, 9):
-        if eta3 <= _THETA[m] and _ell(arr, m) == 0:
-            return (*_pade_uv(m, arr, powers, ident), 0)
-    d10 = _onenorm(a4 @ a6) ** 0.1
-    eta5 = min(eta3, max(d8, d10))
-    s = 0 if eta5 == 0.0 else max(math.ceil(math.log2(eta5 / _THETA[13])), 0)
-    s += _ell(arr * 2.0**-s, 13)
-    scaled = arr * 2.0**-s
-    powers = {2: a2 * 4.0**-s, 4: a4 * 16.0**-s, 6: a6 * 64.0**-s}
-    return (*_pade_uv(13, scaled, powers, ident), s)
-
-
-def _square_matrix(name: str, a) -> np.ndarray:
-    arr = np.asarray(a)
-    if arr.ndim != 2 or arr.shape[0] != arr.shape[1]:
-        raise ValueError(f"{name} needs a square 2-D matrix, got shape {arr.shape}")
-    arr = arr.astype(np.result_type(arr.dtype, np.float64))
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} needs a finite matrix")
-    return arr
-
-
-def expm(a) -> np.ndarray:
-    """Matrix exponential by scaling and squaring with Padé approximants.
-
-    Al-Mohy & Higham (2009), "A new scaling and squaring algorithm for the
-    matrix exponential", Algorithm 5.1: Padé degree 3, 5, 7, 9 or 13 chosen
-    from exact 1-norms of powers of A (d_k = ||A^k||^{1/k}), the scaling s
-    from theta_13 = 4.25 plus the ell() correction that avoids overscaling,
-    followed by s squarings (the Higham 2005 degree-13 approximant and
-    constants).  Pure NumPy; agrees with scipy.linalg.expm to roundoff.
-
-    Args:
-        a: Square matrix (n, n), real or complex, finite.  Entries carry
-            whatever units make A dimensionless (e.g. A [1/s] times t [s]).
-
-    Returns:
-        exp(A) as an (n, n) ndarray (float for real input).
-
-    Raises:
-        ValueError: If ``a`` is not a finite square matrix.
-    """
-    arr = _square_matrix("expm", a)
-    n = arr.shape[0]
-    if n == 0:
-        return np.zeros((0, 0), dtype=arr.dtype)
-    if n == 1:
-        return np.exp(arr)
-    u, v, s = _pade_scaled(arr)
-    x = np.linalg.solve(v - u, v + u)
-    for _ in range(s):
-        x = x @ x
-    return x
-
-
-def _expm_minus_identity(arr: np.ndarray) -> np.ndarray:
-    """exp(A) - I with the same Padé/scaling, squared in the form D <- 2 D + D^2.
-
-    r(X) - I = (V - U)^-1 2 U is accurate relative to its own (small) size,
-    and carrying D = exp(X) - I through the squarings keeps modes with
-    exp(lambda) ~ 1 (e.g. the creep mode -k/d of a stiff damper, or
-    rigid-body modes) exact: squaring exp(X) itself would round them to
-    1 - ulp and then amplify that by 2^s.
-    """
-    n = arr.shape[0]
-    if n == 1:
-        return np.expm1(arr)
-    u, v, s = _pade_scaled(arr)
-    dx = np.linalg.solve(v - u, 2.0 * u)
-    for _ in range(s):
-        dx = 2.0 * dx + dx @ dx
-    return dx
-
-
-# ---------------------------------------------------------------------------
-# linear time-invariant systems
-# ---------------------------------------------------------------------------
-
-
-def _matrix(name: str, value, n: int | None = None) -> np.ndarray:
-    arr = np.atleast_2d(np.asarray(value, dtype=float))
-    if arr.ndim != 2 or arr.shape[0] != arr.shape[1]:
-        raise ValueError(f"{name} must be a square matrix, got shape {arr.shape}")
-    if n is not None and arr.shape[0] != n:
-        raise ValueError(f"{name} must be {n}x{n}, got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must be finite")
-    return arr
-
-
-def state_matrix(mass_matrix, damping_matrix, stiffness_matrix) -> np.ndarray:
-    """First-order state matrix of M q'' + C q' + K q = f.
-
-    Args:
-        mass_matrix: M (n, n) [kg], symmetric positive definite.
-        damping_matrix: C (n, n) [N s/m].
-        stiffness_matrix: K (n, n) [N/m] (may be singular, e.g. rigid-body modes).
-
-    Returns:
-        A = [[0, I], [-M^-1 K, -M^-1 C]] (2n, 2n) for the state z = (q, q')
-        (upper-right block dimensionless, lower blocks [1/s^2] and [1/s]).
-
-    Raises:
-        ValueError: For non-finite or mis-shaped matrices or an M that is not
-            symmetric positive definite.
-    """
-    mm = _matrix("mass_matrix", mass_matrix)
-    n = mm.shape[0]
-    cc = _matrix("damping_matrix", damping_matrix, n)
-    kk = _matrix("stiffness_matrix", stiffness_matrix, n)
-    _check_spd(mm)
-    a = np.zeros((2 * n, 2 * n))
-    a[:n, n:] = np.eye(n)
-    a[n:, :n] = -np.linalg.solve(mm, kk)
-    a[n:, n:] = -np.linalg.solve(mm, cc)
-    return a
-
-
-def _check_spd(mm: np.ndarray) -> None:
-    scale = float(np.abs(mm).max()) if mm.size else 0.0
-    if not np.allclose(mm, mm.T, rtol=0.0, atol=1e-12 * scale):
-        raise ValueError("mass_matrix must be symmetric")
-    try:
-        np.linalg.cholesky(mm)
-    except np.linalg.LinAlgError:
-        raise ValueError("mass_matrix must be positive definite") from None
-
-
-class _Propagator:
-    """Exact one-step maps for z' = A z + B u with u constant over the step.
-
-    A step of length h maps z -> e^{A h} z + G u with G = int_0^h e^{A s} ds B.
-    Two representations of e^{A h} are used:
-
-    * ``z + (D z + G u)`` with D = e^{A h} - I from ``_expm_minus_identity``
-      for ordinary steps.  Keeping D apart from the identity means reusing the
-      same step 1e5 times does not accumulate the rounding of I + small, and
-      slow modes of stiff systems stay exact.
-    * ``Phi z + G u`` with Phi = e^{A h} from :func:`expm` when the step is
-      strongly contracting (||Phi||_1 <= 1/2), where I + D would keep only
-      absolute accuracy while Phi keeps the decaying state relatively exact.
-    """
-
-    def __init__(self, a: np.ndarray, b: np.ndarray):
-        self.a = a
-        self.b = b
-        self.n = a.shape[0]
-        self.norm_a = _onenorm(a)
-        self._cache: dict = {}
-
-    def maps(self, h: float):
-        """(contracting, M, G) for step h [s]; M is Phi if contracting else D."""
-        hit = self._cache.get(h)
-        if hit is not None:
-            return hit
-        n = self.n
-        if h == 0.0:
-            out = (False, np.zeros((n, n)), np.zeros_like(self.b))
-        else:
-            aug = np.zeros((2 * n, 2 * n))
-            aug[:n, :n] = h * self.a
-            aug[:n, n:] = np.eye(n)
-            # exp([[hA, I], [0, 0]]) = [[e^{hA}, phi1(hA)], [0, I]],
-            # phi1(hA) = sum (hA)^j / (j+1)!, so G = h phi1(hA) B.
-            dx = _expm_minus_identity(aug)
-            gmat = h * (dx[:n, n:] @ self.b)
-            phi = expm(aug[:n, :n])
-            if _onenorm(phi) <= 0.5:
-                out = (True, phi, gmat)
-            else:
-                out = (False, dx[:n, :n], gmat)
-        self._cache[h] = out
-        return out
-
-    def step(self, z: np.ndarray, h: float, u: np.ndarray) -> np.ndarray:
-        if h == 0.0:
-            return z
-        contracting, mmat, gmat = self.maps(h)
-        if contracting:
-            return mmat @ z + gmat @ u
-        return z + (mmat @ z + gmat @ u)
-
-    def run(self, z_start: np.ndarray, s_start: float, s: np.ndarray, u: np.ndarray) -> np.ndarray:
-        """States at the non-decreasing times s >= s_start, from z(s_start)."""
-        n_out = s.size
-        out = np.empty((n_out, self.n))
-        if n_out == 0:
-            return out
-        bu = self.b @ u
-        span = s[-1] - s_start
-        h = span / n_out
-        grid = s_start + h * np.arange(1, n_out + 1)
-        delta = s - grid
-        max_delta = float(np.abs(delta).max())
-        if n_out >= 8 and max_delta * self.norm_a <= 1e-4:
-            self._run_uniform(out, z_start, h, u)
-            if max_delta > 0.0:
-                # Times deviate from the uniform grid by ulps: exact Taylor
-                # correction z(g + delta) (the 4th-order term is < 1e-17).
-                zd = out @ self.a.T + bu
-                z2 = zd @ self.a.T
-                z3 = z2 @ self.a.T
-                dl = delta[:, None]
-                out += dl * (zd + dl / 2.0 * (z2 + dl / 3.0 * z3))
-            return out
-        # Irregular grid: exact step by step, one exponential per distinct step.
-        z = z_start
-        prev = s_start
-        for i in range(n_out):
-            z = self.step(z, float(s[i] - prev), u)
-            prev = s[i]
-            out[i] = z
-        return out
-
-    def _run_uniform(self, out: np.ndarray, z_start: np.ndarray, h: float, u: np.ndarray) -> None:
-        n_out = out.shape[0]
-        block = min(n_out, 256)
-        contracting, mmat, gmat = self.maps(h)
-        # Maps for 1..block steps by doubling (j steps followed by L steps):
-        #   Phi form: Phi_{j+L} = Phi_L Phi_j,          g_{j+L} = Phi_L g_j + g_L
-        #   D form:   D_{j+L} = D_j + D_L + D_L D_j,    g_{j+L} = g_j + g_L + D_L g_j
-        ms = mmat[None, :, :].copy()
-        gs = (gmat @ u)[None, :].copy()
-        while ms.shape[0] < block:
-            ml, gl = ms[-1], gs[-1]
-            if contracting:
-                ms = np.concatenate([ms, ml @ ms])
-                gs = np.concatenate([gs, gs @ ml.T + gl])
-            else:
-                ms = np.concatenate([ms, ms + ml + ml @ ms])
-                gs = np.concatenate([gs, gs + gl + gs @ ml.T])
-        ms, gs = ms[:block], gs[:block]
-        if not contracting:
-            # z + D_j z is only relatively exact while e^{A j h} = I + D_j has
-            # not contracted the state; cap the block before that happens.
-            norms = np.abs(ms + np.eye(self.n)).sum(axis=1).max(axis=1)
-            small = np.flatnonzero(norms < 0.5)
-            if small.size:
-                block = max(1, int(small[0]))
-                ms, gs = ms[:block], gs[:block]
-        zb = z_start
-        for b0 in range(0, n_out, block):
-            cnt = min(block, n_out - b0)
-            if contracting:
-                out[b0 : b0 + cnt] = ms[:cnt] @ zb + gs[:cnt]
-            else:
-                out[b0 : b0 + cnt] = zb + (ms[:cnt] @ zb + gs[:cnt])
-            zb = out[b0 + cnt - 1]
-
-
-def _output_times(t) -> np.ndarray:
-    times = np.atleast_1d(np.asarray(t, dtype=float))
-    if times.ndim != 1:
-        raise ValueError(f"t must be a 1-D array of times [s], got shape {times.shape}")
-    if not np.all(np.isfinite(times)):
-        raise ValueError("t must contain only finite times [s]")
-    if times.size and times[0] < 0.0:
-        raise ValueError("t must start at t[0] >= 0 [s]")
-    if np.any(np.diff(times) < 0.0):
-        raise ValueError("t must be non-decreasing")
-    return times
-
-
-def _parse_input(b, u, n: int):
-    """-> (B (n, p), breakpoints (K,), values (K, p))."""
-    if u is None:
-        return np.zeros((n, 0)), np.zeros(1), np.zeros((1, 0))
-    if b is None:
-        raise ValueError("an input u needs an input matrix b")
-    bmat = np.asarray(b, dtype=float)
-    if bmat.ndim == 1:
-        bmat = bmat[:, None]
-    if bmat.ndim != 2 or bmat.shape[0] != n:
-        raise ValueError(f"b must have shape ({n}, p), got {bmat.shape}")
-    if not np.all(np.isfinite(bmat)):
-        raise ValueError("b must be finite")
-    p = bmat.shape[1]
-    if isinstance(u, tuple) and len(u) == 2 and np.ndim(u[0]) == 1:
-        bp = np.asarray(u[0], dtype=float)
-        vals = np.asarray(u[1], dtype=float)
-        if vals.ndim == 1 and p == 1:
-            vals = vals[:, None]
-        if bp.size == 0 or not np.all(np.isfinite(bp)):
-            raise ValueError("breakpoints must be a non-empty finite 1-D array [s]")
-        if bp[0] != 0.0:
-            raise ValueError("the first breakpoint must be 0 [s]")
-        if np.any(np.diff(bp) < 0.0):
-            raise ValueError("breakpoints must be sorted")
-        if vals.shape != (bp.size, p):
-            raise ValueError(f"input values must have shape ({bp.size}, {p}), got {vals.shape}")
-    else:
-        vals = np.atleast_1d(np.asarray(u, dtype=float))
-        if vals.shape != (p,):
-            raise ValueError(f"constant input must have shape ({p},), got {vals.shape}")
-        bp = np.zeros(1)
-        vals = vals[None, :]
-    if not np.all(np.isfinite(vals)):
-        raise ValueError("input values must be finite")
-    return bmat, bp, vals
-
-
-def lti_response(t, a, z0, b=None, u=None) -> np.ndarray:
-    """Exact solution of z' = A z + B u(t) with piecewise-constant input.
-
-    Over each interval of constant input the exact map is read off
-    expm([[A h, I], [0, 0]]) = [[e^{A h}, phi1(A h)], [0, I]], with
-    int_0^h e^{A s} ds B = h phi1(A h) B; this needs no inverse of A, so
-    singular A (rigid-body modes, harmonic generators) is exact.  The state is
-    propagated segment by segment and between output times.  Runs of
-    (near-)uniformly spaced output times reuse one exponential: maps for
-    1..256 steps are built by doubling and applied block-wise (vectorised),
-    and times that deviate from the uniform grid by roundoff are corrected
-    with an exact short Taylor step.  Irregular grids take one exponential
-    per distinct step size (slow if every step differs).
-
-    Args:
-        t: Output times [s], 1-D, non-decreasing, t[0] >= 0 (need not be uniform).
-        a: State matrix A (N, N) [1/s].
-        z0: State at t = 0, shape (N,).
-        b: Input matrix B (N, p); required iff u is given.
-        u: None (no input), a constant input (p,) applied for t >= 0, or a
-            tuple ``(breakpoints, values)``: sorted switch times (K,) [s] with
-            breakpoints[0] == 0, and values (K, p), value i acting on
-            [breakpoints[i], breakpoints[i+1]).
-
-    Returns:
-        z: states at the output times, shape (len(t), N).
-
-    Raises:
-        ValueError: For mis-shaped or non-finite input, unsorted times or
-            breakpoints, or a first breakpoint other than 0.
-    """
-    times = _output_times(t)
-    amat = _matrix("a", a)
-    n = amat.shape[0]
-    z = np.asarray(z0, dtype=float).reshape(-1)
-    if z.shape != (n,):
-        raise ValueError(f"z0 must have shape ({n},), got {np.shape(z0)}")
-    if not np.all(np.isfinite(z)):
-        raise ValueError("z0 must be finite")
-    bmat, bp, vals = _parse_input(b, u, n)
-    prop = _Propagator(amat, bmat)
-    out = np.empty((times.size, n))
-    if times.size == 0:
-        return out
-
-    tau = 0.0
-    j = 0
-    n_seg = bp.size
-    for seg in range(n_seg):
-        u_seg = vals[seg]
-        last = seg == n_seg - 1
-        j2 = times.size if last else int(np.searchsorted(times, bp[seg + 1], side="left"))
-        if j2 > j:
-            # First output of the segment separately, so the rest can form a
-            # uniform run even when the breakpoint is off the output grid.
-            z = prop.step(z, float(times[j] - tau), u_seg)
-            out[j] = z
-            if j2 > j + 1:
-                out[j + 1 : j2] = prop.run(z, float(times[j]), times[j + 1 : j2], u_seg)
-            z = out[j2 - 1]
-            tau = float(times[j2 - 1])
-            j = j2
-        if j >= times.size or last:
-            break
-        z = prop.step(z, float(bp[seg + 1] - tau), u_seg)
-        tau = float(bp[seg + 1])
-    return out
-
-
-def linear_response(
-    t, mass_matrix, damping_matrix, stiffness_matrix, q0, v0, force=None
-) -> tuple[np.ndarray, np.ndarray]:
-    """Exact response of M q'' + C q' + K q = f(t) for an n-DOF linear system.
-
-    Thin wrapper over :func:`lti_response` with A from :func:`state_matrix`
-    and B = [[0], [M^-1]], so singular K (free rigid-body modes) is exact.
-
-    Args:
-        t: Output times [s], 1-D, non-decreasing, t[0] >= 0.
-        mass_matrix: M (n, n) [kg], symmetric positive definite.
-        damping_matrix: C (n, n) [N s/m].
-        stiffness_matrix: K (n, n) [N/m].
-        q0: Initial displacements (n,) [m] at t = 0.
-        v0: Initial velocities (n,) [m/s] at t = 0.
-        force: None (free vibration), a constant force vector (n,) [N] for
-            t >= 0 (pass an array or list), or ``(breakpoints, values)`` with
-            breakpoints (K,) [s] starting at 0 and values (K, n) [N], value i
-            acting on [breakpoints[i], breakpoints[i+1]).
-
-    Returns:
-        (q, v): displacements [m] and velocities [m/s], each (len(t), n).
-
-    Raises:
-        ValueError: For non-physical, mis-shaped or non-finite input.
-    """
-    amat = state_matrix(mass_matrix, damping_matrix, stiffness_matrix)
-    n = amat.shape[0] // 2
-    q0 = np.asarray(q0, dtype=float).reshape(-1)
-    v0 = np.asarray(v0, dtype=float).reshape(-1)
-    if q0.shape != (n,) or v0.shape != (n,):
-        raise ValueError(f"q0 and v0 must have shape ({n},)")
-    bmat = None
-    if force is not None:
-        mm = np.atleast_2d(np.asarray(mass_matrix, dtype=float))
-        bmat = np.zeros((2 * n, n))
-        bmat[n:] = np.linalg.inv(mm)
-    z = lti_response(t, amat, np.concatenate([q0, v0]), bmat, force)
-    return z[:, :n], z[:, n:]
-
-
-# ---------------------------------------------------------------------------
 # kinematics
 # ---------------------------------------------------------------------------
 
@@ -1168,41 +751,35 @@ def _coefficients(name: str, coefficients) -> np.ndarray:
     return c
 
 
-def _derivative(c: np.ndarray) -> np.ndarray:
-    if c.size == 1:
-        return np.zeros(1)
-    return c[1:] * np.arange(1, c.size)
-
-
-def _polyval(t: np.ndarray, c: np.ndarray) -> np.ndarray:
-    acc = np.full(t.shape, c[-1])
-    for ci in c[-2::-1]:
-        acc = acc * t + ci
-    return acc
-
-
-def polynomial_motion(t: ArrayLike, coefficients) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def polynomial_motion(t: ArrayLike, coefficients: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Position, velocity and acceleration of x(t) = sum_i c_i t^i.
 
-    Args:
-        t: Time(s) [s], finite; scalar or array.
-        coefficients: c_0 [m], c_1 [m/s], c_2 [m/s^2], ... (increasing power).
+    Parameters
+    ----------
+    t
+        Time(s) [s], finite; scalar or array.
+    coefficients
+        c_0 [m], c_1 [m/s], c_2 [m/s^2], ... (increasing power).
 
-    Returns:
+    Returns
+    -------
+    tuple[ndarray, ndarray, ndarray]
         (x [m], v [m/s], a [m/s^2]) by exact differentiation, arrays of t's shape.
 
-    Raises:
-        ValueError: For empty or non-finite coefficients or non-finite t.
+    Raises
+    ------
+    ValueError
+        For empty or non-finite coefficients or non-finite t.
     """
     tt = _any_time(t)
     c = _coefficients("coefficients", coefficients)
-    dc = _derivative(c)
-    ddc = _derivative(dc)
-    return _polyval(tt, c), _polyval(tt, dc), _polyval(tt, ddc)
+    x = Polynomial(c)
+    v = x.deriv()
+    return x(tt), v(tt), v.deriv()(tt)
 
 
 def integrate_acceleration(
-    t: ArrayLike, accel_coefficients, x0: float, v0: float
+    t: ArrayLike, accel_coefficients: ArrayLike, x0: float, v0: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Motion under a polynomial acceleration a(t) = sum_i a_i t^i.
 
@@ -1212,17 +789,26 @@ def integrate_acceleration(
     a = 1.2 t + 3.0, v(0) = 15, x(0) = 150 gives v = 15 + 3 t + 0.6 t^2 and
     x = 150 + 15 t + 1.5 t^2 + 0.2 t^3.
 
-    Args:
-        t: Time(s) [s], finite; scalar or array.
-        accel_coefficients: a_0 [m/s^2], a_1 [m/s^3], ... (increasing power).
-        x0: Position at t = 0 [m].
-        v0: Velocity at t = 0 [m/s].
+    Parameters
+    ----------
+    t
+        Time(s) [s], finite; scalar or array.
+    accel_coefficients
+        a_0 [m/s^2], a_1 [m/s^3], ... (increasing power).
+    x0
+        Position at t = 0 [m].
+    v0
+        Velocity at t = 0 [m/s].
 
-    Returns:
+    Returns
+    -------
+    tuple[ndarray, ndarray, ndarray]
         (x [m], v [m/s], a [m/s^2]), arrays of t's shape.
 
-    Raises:
-        ValueError: For empty or non-finite input.
+    Raises
+    ------
+    ValueError
+        For empty or non-finite input.
     """
     acc = _coefficients("accel_coefficients", accel_coefficients)
     x0 = _finite_scalar("x0", x0)
@@ -1233,23 +819,32 @@ def integrate_acceleration(
 
 
 def piecewise_linear_velocity(
-    t: ArrayLike, knot_times, knot_velocities, x0: float = 0.0
+    t: ArrayLike, knot_times: ArrayLike, knot_velocities: ArrayLike, x0: float = 0.0
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Exact motion for a piecewise-linear velocity record (tachograph).
 
-    Args:
-        t: Time(s) [s] within [knot_times[0], knot_times[-1]].
-        knot_times: Strictly increasing knot times (>= 2) [s].
-        knot_velocities: Velocities at the knots [m/s].
-        x0: Position at knot_times[0] [m].
+    Parameters
+    ----------
+    t
+        Time(s) [s] within [knot_times[0], knot_times[-1]].
+    knot_times
+        Strictly increasing knot times (>= 2) [s].
+    knot_velocities
+        Velocities at the knots [m/s].
+    x0
+        Position at knot_times[0] [m].
 
-    Returns:
+    Returns
+    -------
+    tuple[ndarray, ndarray, ndarray]
         (x [m], v [m/s], a [m/s^2]): position is x0 plus the exact area under
         v; acceleration is the segment slope, taken from the segment to the
         right at an interior knot (and from the last segment at the final knot).
 
-    Raises:
-        ValueError: For bad knots, non-finite input or t outside the knot range.
+    Raises
+    ------
+    ValueError
+        For bad knots, non-finite input or t outside the knot range.
     """
     tk = np.asarray(knot_times, dtype=float)
     vk = np.asarray(knot_velocities, dtype=float)

@@ -38,15 +38,24 @@ _AUTO_ELSEWHERE = (
 class Result:
     """One run of a scenario: the trajectory, its reference, errors and summary.
 
-    Attributes:
-      scene, scenario: the names run.
-      parameters: parameter name -> value used (SI).
-      time: (n,) [s], one row per physics step, t = 0 included.
-      pos, vel: joint -> simulated position [m] / velocity [m/s] series.
-      ref_pos, ref_vel: joint -> exact series (empty where no reference exists).
-      summary: the summary.json dict (see README).
-      model: the compiled MjModel that ran.
-      trajectory: the raw Trajectory.
+    Attributes
+    ----------
+    scene, scenario
+        the names run.
+    parameters
+        parameter name -> value used (SI).
+    time
+        (n,) [s], one row per physics step, t = 0 included.
+    pos, vel
+        joint -> simulated position [m] / velocity [m/s] series.
+    ref_pos, ref_vel
+        joint -> exact series (empty where no reference exists).
+    summary
+        the summary.json dict (see README).
+    model
+        the compiled MjModel that ran.
+    trajectory
+        the raw Trajectory.
     """
 
     scene: str
@@ -73,7 +82,9 @@ class Result:
         return out
 
 
-def prepare(scene: str | Scene, scenario: str | None, parameters: dict[str, Any]):
+def prepare(
+    scene: str | Scene, scenario: str | None, parameters: dict[str, Any]
+) -> tuple[Scene, Scenario, dict[str, float]]:
     """Resolve names and parameters; return (Scene, Scenario, params)."""
     scene = scenes.get(scene) if isinstance(scene, str) else scene
     chosen = scene.scenario(scenario)
@@ -92,27 +103,40 @@ def run(
 ) -> Result:
     """Simulate a scenario headless in MuJoCo and compare it with its exact solution.
 
-    Args:
-      scene: scene name (see `springlab list`).
-      scenario: scenario name (None: the scene's default).
-      integrator: one of 'euler', 'implicit', 'implicitfast', 'rk4', 'discrete'
+    Parameters
+    ----------
+    scene
+        scene name (see `springlab list`).
+    scenario
+        scenario name (None: the scene's default).
+    integrator
+        one of 'euler', 'implicit', 'implicitfast', 'rk4', 'discrete'
         (None: the scene's validated default). 'auto' is springlab.run's
         (springlab.auto.run), not this function's.
-      dt: timestep [s] (None: the scene's validated default).
-      duration: simulated time [s] (None: the scenario's).
-      tol: relative accuracy [-] to hold the run to instead of the integrator's
+    dt
+        timestep [s] (None: the scene's validated default).
+    duration
+        simulated time [s] (None: the scenario's).
+    tol
+        relative accuracy [-] to hold the run to instead of the integrator's
         predicted error (see springlab.compare).
-      **parameters: scene parameters in SI units, e.g. mass=2.0 [kg].
+    **parameters
+        scene parameters in SI units, e.g. mass=2.0 [kg].
 
-    Returns:
-      The Result; `result.summary["passed"]` says whether every compared column
-      is within its tolerance and, without `tol`, the run is inside the range of
-      its error estimate; `result.summary["verdict"]` says which ('PASS', 'FAIL',
-      or springlab.compare.NOT_VALIDATED, with `estimate_range["reason"]`).
+    Returns
+    -------
+    Result
+        The Result; `result.summary["passed"]` says whether every compared column
+        is within its tolerance and, without `tol`, the run is inside the range of
+        its error estimate; `result.summary["verdict"]` says which ('PASS', 'FAIL',
+        or springlab.compare.NOT_VALIDATED, with `estimate_range["reason"]`).
 
-    Raises:
-      BadInputError: unknown names, non-physical values, bad dt/duration.
-      DivergedError: the simulation blew up (nothing is returned for it).
+    Raises
+    ------
+    BadInputError
+        unknown names, non-physical values, bad dt/duration.
+    DivergedError
+        the simulation blew up (nothing is returned for it).
     """
     if integrator == "auto":
         raise BadInputError(_AUTO_ELSEWHERE)
@@ -144,7 +168,12 @@ def run(
 
 
 def evaluate(
-    scene: Scene, scenario: Scenario, params, model, trajectory: Trajectory, tol: float | None = None
+    scene: Scene,
+    scenario: Scenario,
+    params: dict[str, float],
+    model: mujoco.MjModel,
+    trajectory: Trajectory,
+    tol: float | None = None,
 ) -> Result:
     """Compare a finished run with its reference: errors, tolerance, checks, summary -> Result.
 
@@ -185,6 +214,7 @@ def evaluate(
                 compare.system_rates(reference), trajectory.integrator, trajectory.dt, max(span, trajectory.dt)
             )
         else:
+            assert reference.tolerance is not None, "a reference without `system` states its tolerance"
             per_column = {column: min(reference.tolerance, compare.CERTIFIED_CAP) for column in errors}
             basis = reference.tolerance_basis
         tolerance = max(per_column.values())
@@ -289,18 +319,24 @@ def validate(
 ) -> list[dict[str, Any]]:
     """Run every scenario that has an exact reference at the scene's validated setting.
 
-    Args:
-      scene_names: scenes to validate (None: all).
-      integrator, dt: override the scenes' default setting ('auto' is
+    Parameters
+    ----------
+    scene_names
+        scenes to validate (None: all).
+    integrator, dt
+        override the scenes' default setting ('auto' is
         springlab.validate's, see springlab.auto.validate).
-      tol: relative tolerance [-] to hold every run to (None: the predicted error).
+    tol
+        relative tolerance [-] to hold every run to (None: the predicted error).
 
-    Returns:
-      One row per scenario: scene, scenario, integrator, dt, steps, max_rel_error,
-      tolerance, tolerance_basis, passed, verdict, wall_time_s, note (only for a run
-      that is not validated: why, and the largest dt inside), and checks (the scenario's
-      Check dicts; a scenario without compared columns shows its tightest check
-      in max_rel_error/tolerance).
+    Returns
+    -------
+    list[dict[str, Any]]
+        One row per scenario: scene, scenario, integrator, dt, steps, max_rel_error,
+        tolerance, tolerance_basis, passed, verdict, wall_time_s, note (only for a run
+        that is not validated: why, and the largest dt inside), and checks (the scenario's
+        Check dicts; a scenario without compared columns shows its tightest check
+        in max_rel_error/tolerance).
     """
     if integrator == "auto":
         raise BadInputError(_AUTO_ELSEWHERE)
@@ -313,14 +349,18 @@ def validate(
 def exact_scenarios(scene_names: list[str] | None = None) -> list[tuple[Scene, Scenario]]:
     """(scene, scenario) of every scenario with an exact solution, in catalogue order.
 
-    Args:
-      scene_names: scenes to list (None or empty: all).
+    Parameters
+    ----------
+    scene_names
+        scenes to list (None or empty: all).
 
-    Raises:
-      UnknownNameError: a scene name springlab does not have.
+    Raises
+    ------
+    UnknownNameError
+        a scene name springlab does not have.
     """
     names = list(scenes.SCENES) if not scene_names else scene_names
-    pairs = []
+    pairs: list[tuple[Scene, Scenario]] = []
     for name in names:
         scene = scenes.get(name)
         pairs.extend((scene, scenario) for scenario in scene.scenarios.values() if scenario.exact)

@@ -31,8 +31,10 @@ def auto_setting(
 ) -> tuple[str, float]:
     """(integrator, dt [s]) for `integrator='auto'`: the verified cheapest setting meeting `tol`.
 
-    Raises:
-      BadInputError: no tol, a dt given (auto chooses it), or no setting meets tol.
+    Raises
+    ------
+    BadInputError
+        no tol, a dt given (auto chooses it), or no setting meets tol.
     """
     if tol is None:
         raise BadInputError("integrator 'auto' needs tol, the relative error to meet (e.g. --tol 1e-6)")
@@ -40,11 +42,10 @@ def auto_setting(
         raise BadInputError("integrator 'auto' chooses dt itself; drop dt (--dt) or name an integrator")
     result = tradeoff(scene, scenario, tol=tol, duration=duration, **parameters)
     pick = result.recommendation
+    assert pick is not None, "a sweep with tol always answers, if only with integrator None"
     if pick["integrator"] is None:
-        best = min((r for r in result.runs if not r.diverged), key=lambda r: r.max_rel_error, default=None)
-        reach = (
-            f"; the best reached is {best.max_rel_error:.2g} ({best.integrator}, dt = {best.dt:g} s)" if best else ""
-        )
+        best = min((r for r in result.runs if not r.diverged), key=lambda r: r.error, default=None)
+        reach = f"; the best reached is {best.error:.2g} ({best.integrator}, dt = {best.dt:g} s)" if best else ""
         raise BadInputError(
             f"no integrator and timestep of the sweep meets tol = {tol:g} on {result.scene}"
             f" {result.scenario}{reach}; valid: a tol it can reach"
@@ -64,25 +65,38 @@ def run(
 ) -> api.Result:
     """`api.run`, where `integrator='auto'` first picks the cheapest setting meeting `tol` (`auto_setting`).
 
-    Args:
-      scene: scene name (see `springlab list`).
-      scenario: scenario name (None: the scene's default).
-      integrator: one of 'euler', 'implicit', 'implicitfast', 'rk4', 'discrete'
+    Parameters
+    ----------
+    scene
+        scene name (see `springlab list`).
+    scenario
+        scenario name (None: the scene's default).
+    integrator
+        one of 'euler', 'implicit', 'implicitfast', 'rk4', 'discrete'
         (None: the scene's validated default), or 'auto': the cheapest setting
         that meets `tol`, measured by springlab.tradeoff (then dt must be None).
-      dt: timestep [s] (None: the scene's validated default, or auto's).
-      duration: simulated time [s] (None: the scenario's).
-      tol: relative accuracy [-] to hold the run to instead of the integrator's
+    dt
+        timestep [s] (None: the scene's validated default, or auto's).
+    duration
+        simulated time [s] (None: the scenario's).
+    tol
+        relative accuracy [-] to hold the run to instead of the integrator's
         predicted error (see springlab.compare); needed by 'auto'.
-      **parameters: scene parameters in SI units, e.g. mass=2.0 [kg].
+    **parameters
+        scene parameters in SI units, e.g. mass=2.0 [kg].
 
-    Returns:
-      The Result (see `api.run`).
+    Returns
+    -------
+    api.Result
+        The Result (see `api.run`).
 
-    Raises:
-      BadInputError: unknown names, non-physical values, bad dt/duration; for
+    Raises
+    ------
+    BadInputError
+        unknown names, non-physical values, bad dt/duration; for
         'auto' no tol, a dt given, or no setting meeting tol.
-      DivergedError: the simulation blew up (nothing is returned for it).
+    DivergedError
+        the simulation blew up (nothing is returned for it).
     """
     if integrator == "auto":
         integrator, dt = auto_setting(scene, scenario, tol=tol, dt=dt, duration=duration, **parameters)
@@ -98,16 +112,23 @@ def validate(
 ) -> list[dict[str, Any]]:
     """`api.validate`, where `integrator='auto'` picks per scenario the cheapest setting meeting `tol`.
 
-    Args:
-      scene_names: scenes to validate (None: all).
-      integrator: integrator name, None (the scenes' own) or 'auto'.
-      dt: timestep [s] (None: the scenes' own; must be None with 'auto').
-      tol: relative tolerance [-] to hold every run to (None: the predicted error).
+    Parameters
+    ----------
+    scene_names
+        scenes to validate (None: all).
+    integrator
+        integrator name, None (the scenes' own) or 'auto'.
+    dt
+        timestep [s] (None: the scenes' own; must be None with 'auto').
+    tol
+        relative tolerance [-] to hold every run to (None: the predicted error).
 
-    Returns:
-      The rows of `api.validate`; a scenario validated by scalar checks alone
-      (nothing for 'auto' to sweep) runs at the scene's validated setting and
-      its row carries a "note" saying so.
+    Returns
+    -------
+    list[dict[str, Any]]
+        The rows of `api.validate`; a scenario validated by scalar checks alone
+        (nothing for 'auto' to sweep) runs at the scene's validated setting and
+        its row carries a "note" saying so.
     """
     if integrator != "auto":
         return api.validate(scene_names, integrator=integrator, dt=dt, tol=tol)

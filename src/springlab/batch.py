@@ -52,15 +52,22 @@ TIMING_STEPS = 4000
 class Job:
     """One simulation of a batch.
 
-    Attributes:
-      model: the compiled model; jobs sharing one model object run on it with
+    Attributes
+    ----------
+    model
+        the compiled model; jobs sharing one model object run on it with
         per-simulation timestep and integrator (Batch.expand), jobs with
         different models each run on a copy of theirs (Batch.set_models).
-      integrator: one of INTEGRATORS.
-      dt: timestep [s].
-      steps: number of steps.
-      setup: initial state and controls (control: (nu,) or (steps, nu), held over each step).
-      stop: the scene's stop condition (Scene.stop_condition), applied as `simulate` applies it.
+    integrator
+        one of INTEGRATORS.
+    dt
+        timestep [s].
+    steps
+        number of steps.
+    setup
+        initial state and controls (control: (nu,) or (steps, nu), held over each step).
+    stop
+        the scene's stop condition (Scene.stop_condition), applied as `simulate` applies it.
     """
 
     model: mujoco.MjModel
@@ -69,6 +76,12 @@ class Job:
     steps: int
     setup: Setup
     stop: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None
+
+
+def _present(controls: np.ndarray | None) -> np.ndarray:
+    """The control series of a job on a model with actuators (which always has one)."""
+    assert controls is not None, "a model with actuators runs with a control series"
+    return controls
 
 
 def _controls(job: Job) -> np.ndarray | None:
@@ -87,15 +100,20 @@ def run_batched(jobs: Sequence[Job], *, nthread: int = 0) -> list[Trajectory | D
     unfinished simulations together, segment by segment, so no simulation
     takes a step it does not need.
 
-    Args:
-      jobs: the simulations.
-      nthread: threads of the batch (0: one per CPU).
+    Parameters
+    ----------
+    jobs
+        the simulations.
+    nthread
+        threads of the batch (0: one per CPU).
 
-    Returns:
-      Per job its Trajectory (t = 0 included; wall_time_s is nan: batched runs
-      share threads, see `time_run` for a per-run cost), or the DivergedError
-      describing how it blew up (MuJoCo's BADQPOS/BADQVEL/BADQACC warnings, a
-      silent reset, non-finite values).
+    Returns
+    -------
+    list[Trajectory | DivergedError]
+        Per job its Trajectory (t = 0 included; wall_time_s is nan: batched runs
+        share threads, see `time_run` for a per-run cost), or the DivergedError
+        describing how it blew up (MuJoCo's BADQPOS/BADQVEL/BADQACC warnings, a
+        silent reset, non-finite values).
     """
     if not jobs:
         return []
@@ -136,10 +154,10 @@ def run_batched(jobs: Sequence[Job], *, nthread: int = 0) -> list[Trajectory | D
             count = int(end - done)
             control = None
             if base.nu:
-                control = np.stack([controls[i][done:end] for i in ids])
+                control = np.stack([_present(controls[i])[done:end] for i in ids])
             out = batch.rollout(count, control=control, record=[RECORD_SPEC], ids=ids)[RECORD_SPEC]
-            for row, i in enumerate(ids):
-                records[i].append(out[row])
+            for row, job_index in enumerate(ids):
+                records[job_index].append(out[row])
             done = int(end)
         warnings = np.array(batch.warning)
     results: list[Trajectory | DivergedError] = []
@@ -181,7 +199,7 @@ def time_run(job: Job, *, repeats: int = 3, max_steps: int = TIMING_STEPS) -> fl
     state0 = initial_state(model, job.setup.qpos, job.setup.qvel, job.setup.act)
     controls = None
     if model.nu:
-        controls = np.ascontiguousarray(_controls(job)[:timed])[None]
+        controls = np.ascontiguousarray(_present(_controls(job))[:timed])[None]
     data = mujoco.MjData(model)
     out = np.empty((1, timed, state0.size))
     sensors = np.empty((1, timed, model.nsensordata))

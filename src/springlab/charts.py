@@ -55,7 +55,7 @@ def plot_tradeoff(result: Tradeoff, path: str | pathlib.Path) -> pathlib.Path:
             continue
         order = result.orders.get(name)
         label = f"{name} (order {order:.2f})" if order is not None else name
-        errors = [max(r.max_rel_error, floor) for r in runs]
+        errors = [max(r.error, floor) for r in runs]
         left.loglog([r.dt for r in runs], errors, _STYLES[name], marker="o", ms=3, color=_COLORS[name], label=label)
         right.loglog(
             [r.wall_time_s for r in runs], errors, _STYLES[name], marker="o", ms=3, color=_COLORS[name], label=name
@@ -69,7 +69,7 @@ def plot_tradeoff(result: Tradeoff, path: str | pathlib.Path) -> pathlib.Path:
     front = result.pareto
     right.step(
         [r.wall_time_s for r in front],
-        [max(r.max_rel_error, floor) for r in front],
+        [max(r.error, floor) for r in front],
         where="post",
         color="black",
         lw=1.2,
@@ -110,7 +110,7 @@ RANGE_PERIODS = 10
 _RANGE = f"validated below ({RANGE_PERIODS} periods)"
 
 
-def estimate_range_line(integrator: str, zetas: Sequence[float]) -> list[float]:
+def estimate_range_line(integrator: str, zetas: Sequence[float] | np.ndarray) -> list[float]:
     """Largest omega*dt [-] inside the range of the error estimate for a run of RANGE_PERIODS periods, per zeta.
 
     On the unit oscillator (omega = 1 rad/s): its roots -zeta +- sqrt(zeta^2 - 1) are the modes
@@ -127,10 +127,14 @@ def estimate_range_line(integrator: str, zetas: Sequence[float]) -> list[float]:
 def plot_stability(report: dict[str, Any], amplification: dict[str, Any], path: str | pathlib.Path) -> pathlib.Path:
     """Per integrator: measured per-step amplification over (zeta, omega*dt), theory boundary, measured boundary.
 
-    Args:
-      report: `stability.stability_report` (its measured boundaries are drawn).
-      amplification: `stability.amplification_map` (the colour map).
-      path: the PNG to write.
+    Parameters
+    ----------
+    report
+        `stability.stability_report` (its measured boundaries are drawn).
+    amplification
+        `stability.amplification_map` (the colour map).
+    path
+        the PNG to write.
     """
     from matplotlib.colors import TwoSlopeNorm
 
@@ -235,10 +239,14 @@ def write_stability(
 ) -> list[pathlib.Path]:
     """Write DIR/stability.json, DIR/stability.png (map) and DIR/energy.png.
 
-    Args:
-      report: `stability.stability_report`.
-      amplification: `stability.amplification_map`, drawn in stability.png.
-      directory: the output folder.
+    Parameters
+    ----------
+    report
+        `stability.stability_report`.
+    amplification
+        `stability.amplification_map`, drawn in stability.png.
+    directory
+        the output folder.
     """
     written = outputs.write_text_files(directory, {"stability.json": outputs.dumps(report_json(report)) + "\n"})
     written.append(plot_stability(report, amplification, pathlib.Path(directory) / "stability.png"))

@@ -72,8 +72,8 @@ from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
+import scipy.linalg
 
-from . import analytic
 from .errors import BadInputError
 from .scene import Reference
 from .simulate import ORDERS
@@ -100,8 +100,10 @@ def check_tolerance(tol: Any) -> float:
 def column_errors(simulated: dict[str, np.ndarray], reference: dict[str, np.ndarray]) -> dict[str, dict]:
     """Per column: max_abs = max |sim - ref| and max_rel = max_abs / max |ref|.
 
-    Args:
-      simulated, reference: column name -> series (same length).
+    Parameters
+    ----------
+    simulated, reference
+        column name -> series (same length).
     """
     errors = {}
     for name, ref in reference.items():
@@ -114,14 +116,20 @@ def column_errors(simulated: dict[str, np.ndarray], reference: dict[str, np.ndar
 def predicted_error(reference: Reference, integrator: str, dt: float, time: np.ndarray) -> dict[str, float]:
     """Leading-order max absolute error per column [m or m/s] (see module docstring).
 
-    Args:
-      reference: exact solution with its `system` matrix A, `states` z(t) and
+    Parameters
+    ----------
+    reference
+        exact solution with its `system` matrix A, `states` z(t) and
         optional `switches` (A changes on step boundaries).
-      integrator: integrator name.
-      dt: timestep [s].
-      time: (n,) times of the states [s], uniformly dt apart.
+    integrator
+        integrator name.
+    dt
+        timestep [s].
+    time
+        (n,) times of the states [s], uniformly dt apart.
     """
     z = reference.states
+    assert z is not None, "tolerances() needs a linear reference (states and system)"
     order = ORDERS[integrator]
     scale = ERROR_CONSTANTS[integrator] * dt**order
     segments = [(float(time[0]), np.asarray(reference.system, float))]
@@ -137,7 +145,7 @@ def predicted_error(reference: Reference, integrator: str, dt: float, time: np.n
         elapsed = time[rows] - start
         error[rows] = scale * elapsed[:, None] * (z[rows] @ np.linalg.matrix_power(a, order + 1).T)
         if carried.any():
-            step = analytic.expm(a * dt)
+            step = scipy.linalg.expm(a * dt)
             propagated = np.empty((last + 1 - first, z.shape[1]))
             propagated[0] = carried
             for i in range(1, len(propagated)):
@@ -157,7 +165,7 @@ def tolerances(reference: Reference, integrator: str, dt: float, time: np.ndarra
     """Relative tolerance per compared column (see module docstring)."""
     floor = ROUNDOFF_PER_STEP * (len(time) - 1)
     predicted = predicted_error(reference, integrator, dt, time)
-    out = {}
+    out: dict[str, float] = {}
     for joint in reference.rows:
         for kind, series in (("pos", reference.pos[joint]), ("vel", reference.vel[joint])):
             column = f"{joint}_{kind}"
@@ -178,12 +186,18 @@ TOLERANCE_BASIS = (
 class EstimateRange:
     """Whether the leading-order error estimate holds for a run (see module docstring).
 
-    Attributes:
-      inside: the dropped terms fit inside the safety factor: the tolerance means something.
-      factor: the worst mode's bound F on (whole error) / (kept term) [-] (inf: no bound).
-      rate: that mode's eigenvalue lambda [1/s] (0 when A has no other).
-      dt: the run's timestep [s].
-      largest_dt: the largest timestep [s] inside the range for the same duration (2 significant
+    Attributes
+    ----------
+    inside
+        the dropped terms fit inside the safety factor: the tolerance means something.
+    factor
+        the worst mode's bound F on (whole error) / (kept term) [-] (inf: no bound).
+    rate
+        that mode's eigenvalue lambda [1/s] (0 when A has no other).
+    dt
+        the run's timestep [s].
+    largest_dt
+        the largest timestep [s] inside the range for the same duration (2 significant
         digits, rounded down; inf when every dt is).
     """
 
@@ -223,11 +237,16 @@ def _max_over_steps(values, steps: int, peak: float) -> float:
 def mode_factor(rate: complex, integrator: str, dt: float, duration: float) -> float:
     """F [-]: bound on a mode's whole error over the estimate's kept term (module docstring); inf if none.
 
-    Args:
-      rate: the mode's eigenvalue lambda [1/s].
-      integrator: integrator name.
-      dt: timestep [s].
-      duration: simulated time [s].
+    Parameters
+    ----------
+    rate
+        the mode's eigenvalue lambda [1/s].
+    integrator
+        integrator name.
+    dt
+        timestep [s].
+    duration
+        simulated time [s].
     """
     order = ORDERS[integrator]
     steps = max(1, round(duration / dt))
@@ -264,7 +283,7 @@ def mode_factor(rate: complex, integrator: str, dt: float, duration: float) -> f
 def system_rates(reference: Reference) -> list[complex]:
     """Eigenvalues lambda [1/s] of every system matrix of the reference (segments included), 0 dropped."""
     systems = [reference.system] + [a for _, a in reference.switches]
-    rates = []
+    rates: list[complex] = []
     for a in systems:
         values = np.linalg.eigvals(np.asarray(a, float))
         scale = max(float(np.max(np.abs(values))), 1e-300)
@@ -275,11 +294,16 @@ def system_rates(reference: Reference) -> list[complex]:
 def estimate_range(rates: Iterable[complex], integrator: str, dt: float, duration: float) -> EstimateRange:
     """Whether a run at dt [s] over duration [s] is inside the range of the error estimate.
 
-    Args:
-      rates: eigenvalues lambda [1/s] of the run's linear system (`system_rates`).
-      integrator: integrator name.
-      dt: timestep [s].
-      duration: simulated time [s].
+    Parameters
+    ----------
+    rates
+        eigenvalues lambda [1/s] of the run's linear system (`system_rates`).
+    integrator
+        integrator name.
+    dt
+        timestep [s].
+    duration
+        simulated time [s].
     """
     rates = list(rates)
     if not rates:

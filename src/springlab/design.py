@@ -123,12 +123,18 @@ MAX_DURATION = 5.0
 class Plane:
     """Positioning time on a dense grid of the two most influential properties, the others at default.
 
-    Attributes:
-      x_name, y_name: the properties along x and y (y the most influential).
-      x, y: their grid values, (nx,) and (ny,).
-      positioning_time_s, estimate_s: (ny, nx) simulated and estimated positioning time [s].
-      steps: physics steps taken.
-      wall_time_s: wall time of the batched simulation [s].
+    Attributes
+    ----------
+    x_name, y_name
+        the properties along x and y (y the most influential).
+    x, y
+        their grid values, (nx,) and (ny,).
+    positioning_time_s, estimate_s
+        (ny, nx) simulated and estimated positioning time [s].
+    steps
+        physics steps taken.
+    wall_time_s
+        wall time of the batched simulation [s].
     """
 
     x_name: str
@@ -145,22 +151,38 @@ class Plane:
 class Study:
     """A finished design sweep; arrays are per configuration, (n,).
 
-    Attributes:
-      base: the scene parameters the sweep starts from (SI).
-      grids: property -> its grid levels (the default in the middle).
-      values: property -> per-configuration value.
-      move_time_s: realized bang-bang move time [s].
-      settling_time_s: time after the move until the carriage stays in the band [s] (inf: never).
-      positioning_time_s: move + settling [s].
-      residual_amplitude_m: largest carriage deviation from the target after the move [m].
-      estimate_s: analytic estimate of positioning time [s] (module docstring).
-      worst_case_estimate_s: the phase-independent upper estimate [s].
-      natural_frequency_hz: belt mode [Hz].
-      dt_s: timestep of each simulation [s].
-      steps: physics steps taken in total.
-      wall_time_s: wall time of the batched simulation [s].
-      nthread: threads the batch ran on.
-      plane: the dense plane over the two most influential properties (None: not run).
+    Attributes
+    ----------
+    base
+        the scene parameters the sweep starts from (SI).
+    grids
+        property -> its grid levels (the default in the middle).
+    values
+        property -> per-configuration value.
+    move_time_s
+        realized bang-bang move time [s].
+    settling_time_s
+        time after the move until the carriage stays in the band [s] (inf: never).
+    positioning_time_s
+        move + settling [s].
+    residual_amplitude_m
+        largest carriage deviation from the target after the move [m].
+    estimate_s
+        analytic estimate of positioning time [s] (module docstring).
+    worst_case_estimate_s
+        the phase-independent upper estimate [s].
+    natural_frequency_hz
+        belt mode [Hz].
+    dt_s
+        timestep of each simulation [s].
+    steps
+        physics steps taken in total.
+    wall_time_s
+        wall time of the batched simulation [s].
+    nthread
+        threads the batch ran on.
+    plane
+        the dense plane over the two most influential properties (None: not run).
     """
 
     base: dict[str, float]
@@ -210,7 +232,7 @@ class Study:
         centre = self.levels // 2
         out = {}
         for axis, name in enumerate(self.grids):
-            index = [centre] * len(shape)
+            index: list[int | slice] = [centre] * len(shape)
             index[axis] = centre + 1
             upper = grid_times[tuple(index)]
             index[axis] = centre - 1
@@ -231,8 +253,10 @@ class Study:
 def base_parameters(overrides: Mapping[str, Any] | None = None) -> dict[str, float]:
     """The printer_head `move` parameters the sweep starts from (MJCF defaults < overrides).
 
-    Raises:
-      UnknownNameError, ParameterError: as for `springlab run`.
+    Raises
+    ------
+    UnknownNameError, ParameterError
+        as for `springlab run`.
     """
     scene = scenes.get("printer_head")
     return scene.resolve(scene.scenario("move"), dict(overrides or {}))
@@ -252,8 +276,10 @@ def default_properties(base: Mapping[str, float]) -> dict[str, float]:
 def make_grids(base: Mapping[str, float], levels: int = DEFAULT_LEVELS) -> dict[str, np.ndarray]:
     """Property -> `levels` values, default x span^u for u evenly in [-1, 1].
 
-    Raises:
-      BadInputError: `levels` is not an odd integer >= 3 (the default must be a grid point).
+    Raises
+    ------
+    BadInputError
+        `levels` is not an odd integer >= 3 (the default must be a grid point).
     """
     if not isinstance(levels, (int, np.integer)) or levels < 3 or levels % 2 == 0:
         raise BadInputError(f"levels must be an odd integer >= 3 (the default is the middle one), got {levels!r}")
@@ -325,23 +351,35 @@ def simulate_moves(
 ) -> dict[str, Any]:
     """Run the `move` scenario for every configuration in one mujoco.batch.Batch.
 
-    Args:
-      base: scene parameters (move_distance [m], positioning_band [m], motor_mass [kg], ...).
-      values: property -> (n,) values (PROPERTIES).
-      omega_dt: omega_n dt [-] of every simulation (RK4).
-      nthread: batch threads (0: one per CPU).
-      chunk: steps per rollout call.
-      max_duration: simulated time [s] after which an unsettled configuration is given up.
+    Parameters
+    ----------
+    base
+        scene parameters (move_distance [m], positioning_band [m], motor_mass [kg], ...).
+    values
+        property -> (n,) values (PROPERTIES).
+    omega_dt
+        omega_n dt [-] of every simulation (RK4).
+    nthread
+        batch threads (0: one per CPU).
+    chunk
+        steps per rollout call.
+    max_duration
+        simulated time [s] after which an unsettled configuration is given up.
 
-    Returns:
-      dict of (n,) arrays: move_time_s, settling_time_s, positioning_time_s,
-      residual_amplitude_m, dt_s, steps (per configuration); and steps_total,
-      wall_time_s, nthread.
+    Returns
+    -------
+    dict[str, Any]
+        dict of (n,) arrays: move_time_s, settling_time_s, positioning_time_s,
+        residual_amplitude_m, dt_s, steps (per configuration); and steps_total,
+        wall_time_s, nthread.
 
-    Raises:
-      DivergedError: a simulation blew up (MuJoCo's warning counters rose).
+    Raises
+    ------
+    DivergedError
+        a simulation blew up (MuJoCo's warning counters rose).
     """
-    scene: PrinterHead = scenes.get("printer_head")
+    scene = scenes.get("printer_head")
+    assert isinstance(scene, PrinterHead)
     scenario = scene.scenario("move")
     params = dict(base)
     model = scene.build(params, scenario)
@@ -482,18 +520,28 @@ def run_study(
 ) -> Study:
     """Sweep the four properties, simulate every configuration, and estimate each analytically.
 
-    Args:
-      scene: the scene to study (only 'printer_head' has a design study).
-      levels: odd number of grid points per property (levels^4 configurations).
-      plane_levels: odd number of grid points per axis of the dense plane over the two most
+    Parameters
+    ----------
+    scene
+        the scene to study (only 'printer_head' has a design study).
+    levels
+        odd number of grid points per property (levels^4 configurations).
+    plane_levels
+        odd number of grid points per axis of the dense plane over the two most
         influential properties (plane_levels^2 more configurations), 0 for none.
-      nthread: batch threads (0: one per CPU).
-      omega_dt: omega_n dt [-] of every simulation.
-      **overrides: printer_head parameters to start from (SI), e.g. move_distance=0.2 [m].
+    nthread
+        batch threads (0: one per CPU).
+    omega_dt
+        omega_n dt [-] of every simulation.
+    **overrides
+        printer_head parameters to start from (SI), e.g. move_distance=0.2 [m].
 
-    Raises:
-      UnknownNameError: an unknown scene or parameter.
-      BadInputError: bad levels, threads or parameter values.
+    Raises
+    ------
+    UnknownNameError
+        an unknown scene or parameter.
+    BadInputError
+        bad levels, threads or parameter values.
     """
     if scene not in STUDIES:
         raise UnknownNameError("design study", str(scene), STUDIES)
@@ -664,7 +712,7 @@ def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
         first, second = study.plane.y_name, study.plane.x_name
     else:
         shape = (study.levels,) * len(axes_order)
-        index = [centre] * len(shape)
+        index: list[int | slice] = [centre] * len(shape)
         index[axes_order.index(first)] = slice(None)
         index[axes_order.index(second)] = slice(None)
         plane = study.positioning_time_s.reshape(shape)[tuple(index)] * 1e3  # ms

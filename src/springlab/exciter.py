@@ -39,12 +39,18 @@ def add(
 ) -> None:
     """Add the exciter driving `joint` with F0 sin(2 pi f t) [N].
 
-    Args:
-      spec: the model to edit; `joint` must already have its final stiffness.
-      joint: name of the driven slide joint.
-      force_amplitude: F0 [N].
-      force_frequency: f [Hz], > 0.
-      driven_stiffness: scale of everything the exciter drives [N/m] (spring,
+    Parameters
+    ----------
+    spec
+        the model to edit; `joint` must already have its final stiffness.
+    joint
+        name of the driven slide joint.
+    force_amplitude
+        F0 [N].
+    force_frequency
+        f [Hz], > 0.
+    driven_stiffness
+        scale of everything the exciter drives [N/m] (spring,
         m omega^2, d omega, ...): the exciter is made 1e12 times stiffer.
     """
     omega = 2 * math.pi * force_frequency

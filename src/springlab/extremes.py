@@ -81,6 +81,7 @@ class ExtremeCase:
         if self.duration_periods is not None:
             return self.duration_periods * 2 * math.pi / self.omega
         slow = self.omega * (self.zeta - math.sqrt(self.zeta**2 - 1)) if self.zeta > 1 else self.omega * self.zeta
+        assert self.slow_time_constants is not None, "a case sets duration_periods or slow_time_constants"
         return self.slow_time_constants / slow
 
     @property
@@ -182,7 +183,12 @@ def _sample_steps(steps: int, count: int = 2000) -> np.ndarray:
     return np.unique(picks.astype(np.int64))
 
 
-def predicted_error(case: ExtremeCase, integrator: str, dt: float, context) -> float:
+def predicted_error(
+    case: ExtremeCase,
+    integrator: str,
+    dt: float,
+    context: tuple[mujoco.MjModel, Scene, Scenario, dict[str, float]],
+) -> float:
     """Max relative error [-] of a run of `case`, from MuJoCo's measured one-step map.
 
     The slider is linear, so a run is z_n = M^n z_0 exactly, with M measured
@@ -214,6 +220,7 @@ def predicted_error(case: ExtremeCase, integrator: str, dt: float, context) -> f
     if not np.isfinite(states).all():
         return math.inf
     reference = scene.reference(model, params, chosen, n * dt, dt=dt)
+    assert reference is not None, "the slider's free scenario has an exact reference"
     errors = []
     for k, series in ((0, reference.pos["slider"]), (1, reference.vel["slider"])):
         peak = float(np.max(np.abs(series)))
@@ -240,7 +247,7 @@ def _advice(case: ExtremeCase, context, costs: dict[str, float]) -> dict[str, An
                 f" omega^2 x0 = {case.peak_acceleration:.1e}; rescale units or amplitude"
             ),
         }
-    best = None
+    best: dict[str, Any] | None = None
     target = ACCURACY / 2
     for name in ADVICE_INTEGRATORS:
         high = min(0.9 * _limit(name, case.zeta) / case.omega, case.duration / 10)
@@ -266,6 +273,7 @@ def _advice(case: ExtremeCase, context, costs: dict[str, float]) -> dict[str, An
                 "cost_s": cost,
                 "predicted_error": predicted_error(case, name, dt, context),
             }
+    assert best is not None, "every integrator has a predicted error"
     best["phrase"] = (
         f"use {best['integrator']} with dt <= {best['dt']:.2g} s ({best['steps']:.2g} steps,"
         f" predicted error {best['predicted_error']:.1g})"
@@ -284,15 +292,18 @@ def extremes_table(
     Each case also gets a row for its advised setting (`_advice`), run in full
     over the case's duration when it takes at most `verify_steps` steps.
 
-    Returns:
-      One row per run: kind ('limit' or 'advised'), case, description,
-      integrator, fraction (of limit_of's stability limit; None for advised
-      rows), limit_of, omega_dt, limit_omega_dt, dt, duration, steps, outcome
-      ('accurate' | 'inaccurate' | 'diverged'), max_rel_error (None if
-      diverged), detail (how it diverged), advice (one phrase: which
-      integrator and dt to use instead).
+    Returns
+    -------
+    list[dict[str, Any]]
+        One row per run: kind ('limit' or 'advised'), case, description,
+        integrator, fraction (of limit_of's stability limit; None for advised
+        rows), limit_of, omega_dt, limit_omega_dt, dt, duration, steps, outcome
+        ('accurate' | 'inaccurate' | 'diverged'), max_rel_error (None if
+        diverged), detail (how it diverged), advice (one phrase: which
+        integrator and dt to use instead).
     """
-    jobs, meta = [], []
+    jobs: list[Job] = []
+    meta: list[tuple[str, ExtremeCase, str, float | None, float, str]] = []
     contexts = {}
     for case in cases:
         context = _case_model(case)
@@ -329,8 +340,8 @@ def extremes_table(
         )
     outcomes = run_batched(jobs, nthread=nthread)
     rows = []
-    for job, outcome, (kind, case, name, fraction, limit, limit_name) in zip(jobs, outcomes, meta):
-        outcome_name, error, detail = _classify(*contexts[case.name], outcome)
+    for job, outcome, (kind, case, name, of_limit, limit, limit_name) in zip(jobs, outcomes, meta):
+        outcome_name, max_error, detail = _classify(*contexts[case.name], outcome)
         pick = advice[case.name]
         if kind == "advised":
             phrase = f"the advice, run over the whole {case.duration:.3g} s"
@@ -342,7 +353,7 @@ def extremes_table(
                 "case": case.name,
                 "description": case.description,
                 "integrator": name,
-                "fraction": fraction,
+                "fraction": of_limit,
                 "limit_of": limit_name,
                 "omega_dt": job.dt * case.omega,
                 "limit_omega_dt": limit,
@@ -350,7 +361,7 @@ def extremes_table(
                 "duration": job.dt * job.steps,
                 "steps": job.steps,
                 "outcome": outcome_name,
-                "max_rel_error": error,
+                "max_rel_error": max_error,
                 "detail": detail,
                 "advice": phrase,
             }
@@ -366,8 +377,8 @@ def _classify(model, scene, chosen, params, outcome) -> tuple[str, float | None,
         result = api.evaluate(scene, chosen, params, model, outcome)
     except DivergedError as error:
         return "diverged", None, str(error)
-    error = max(e["max_rel"] for e in result.summary["errors"].values())
-    return ("accurate" if error <= ACCURACY else "inaccurate"), error, ""
+    worst = max(e["max_rel"] for e in result.summary["errors"].values())
+    return ("accurate" if worst <= ACCURACY else "inaccurate"), worst, ""
 
 
 def _advice_phrase(outcome: str, integrator: str, dt: float, limit: float, pick: dict) -> str:

@@ -29,7 +29,7 @@ def render_run(
     result: api.Result,
     output: str | os.PathLike,
     *,
-    fps: float = 30,
+    fps: int = 30,
     width: int = 640,
     height: int = 480,
     duration: float | None = None,
@@ -40,26 +40,39 @@ def render_run(
 ) -> dict[str, Any]:
     """Render a run to `output` (.mp4 H.264 or .gif); see render.render_video for the result dict.
 
-    Args:
-      result: the run (api.run).
-      output: video file; written completely or not at all.
-      fps: frames per second of the video (video time = simulation time).
-      width, height: size of the 3D view [px].
-      duration: seconds of simulation to show (default: the whole run).
-      composite: put the phase-plane trace (a height x height panel, one
+    Parameters
+    ----------
+    result
+        the run (api.run).
+    output
+        video file; written completely or not at all.
+    fps
+        frames per second of the video (video time = simulation time).
+    width, height
+        size of the 3D view [px].
+    duration
+        seconds of simulation to show (default: the whole run).
+    composite
+        put the phase-plane trace (a height x height panel, one
         phase plane per reported joint, up to 3, stacked) to the right of the
         3D view; the video is then (width + height) x height.
-      progress: progress bar on stderr (None: when stderr is a terminal).
-      slow_motion: factor >= 1 [-] the video is slowed by (drawing only); None:
+    progress
+        progress bar on stderr (None: when stderr is a terminal).
+    slow_motion
+        factor >= 1 [-] the video is slowed by (drawing only); None:
         render_scale.default_slow_motion of the shown duration and the scene's
         vibration modes (short runs slowed until they fill 90 frames and their
         fastest mode gets 6 frames per period; the printer move: 1/50 speed).
-      exaggerate: factor >= 1 [-] displacements are drawn magnified by; None:
+    exaggerate
+        factor >= 1 [-] displacements are drawn magnified by; None:
         render_scale.default_exaggeration of the motion (the car: x30).
 
-    Raises:
-      BadInputError: bad size, fps, extension or unwritable output.
-      SpringlabError: no off-screen OpenGL context or the encoder failed.
+    Raises
+    ------
+    BadInputError
+        bad size, fps, extension or unwritable output.
+    SpringlabError
+        no off-screen OpenGL context or the encoder failed.
     """
     render.check_video_arguments(output, fps, width, height)
     scene = scenes.get(result.scene)

@@ -26,11 +26,16 @@ from .errors import BadInputError
 class Artifact:
     """A file the demo wrote, for the report.
 
-    Attributes:
-      path: the file, relative to the output folder.
-      kind: 'data', 'plot', 'video' or 'report'.
-      title: one line saying what it shows.
-      scene, scenario: what it belongs to ('' for cross-scene artifacts).
+    Attributes
+    ----------
+    path
+        the file, relative to the output folder.
+    kind
+        'data', 'plot', 'video' or 'report'.
+    title
+        one line saying what it shows.
+    scene, scenario
+        what it belongs to ('' for cross-scene artifacts).
     """
 
     path: str

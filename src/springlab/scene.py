@@ -34,14 +34,22 @@ from .simulate import Trajectory, quiet_mujoco, stability_limit
 class Parameter:
     """A scene parameter in SI units.
 
-    Attributes:
-      name: as used by `--set NAME=VALUE` and keyword arguments.
-      unit: SI unit, e.g. 'kg', 'N/m', 'N s/m', 'm', 'm/s', 'Hz', '-' for none.
-      description: one line.
-      minimum: lowest valid value (None: unbounded).
-      minimum_inclusive: whether `minimum` itself is valid.
-      maximum: highest valid value (None: unbounded).
-      default: default value, or None when it is read back from the model.
+    Attributes
+    ----------
+    name
+        as used by `--set NAME=VALUE` and keyword arguments.
+    unit
+        SI unit, e.g. 'kg', 'N/m', 'N s/m', 'm', 'm/s', 'Hz', '-' for none.
+    description
+        one line.
+    minimum
+        lowest valid value (None: unbounded).
+    minimum_inclusive
+        whether `minimum` itself is valid.
+    maximum
+        highest valid value (None: unbounded).
+    default
+        default value, or None when it is read back from the model.
     """
 
     name: str
@@ -79,16 +87,25 @@ class Parameter:
 class Scenario:
     """A named question a scene answers.
 
-    Attributes:
-      name: scenario name.
-      description: one line.
-      duration: default simulated time [s].
-      presets: parameter values this scenario sets (user overrides win).
-      derive: optional function(params, explicitly_set_names) -> extra values,
+    Attributes
+    ----------
+    name
+        scenario name.
+    description
+        one line.
+    duration
+        default simulated time [s].
+    presets
+        parameter values this scenario sets (user overrides win).
+    derive
+        optional function(params, explicitly_set_names) -> extra values,
         for presets that depend on other parameters (e.g. damping from a ratio).
-      exact: whether an exact reference exists (validated by `validate`).
-      dt: the scenario's validated timestep [s] (None: the scene's `dt`).
-      variant: for a scene whose scenarios differ in their model (e.g. the car: 1 DOF,
+    exact
+        whether an exact reference exists (validated by `validate`).
+    dt
+        the scenario's validated timestep [s] (None: the scene's `dt`).
+    variant
+        for a scene whose scenarios differ in their model (e.g. the car: 1 DOF,
         pitch/heave, quarter car), the object that carries what differs; the scene's
         hooks delegate to it instead of dispatching on scenario names (None: unused).
     """
@@ -107,19 +124,27 @@ class Scenario:
 class Reference:
     """The exact solution of a scenario at the trajectory's times.
 
-    Attributes:
-      pos, vel: joint name -> exact position [m or rad] and velocity [m/s or rad/s].
-      system: for linear scenes, the matrix A [1/s] of the autonomous system
+    Attributes
+    ----------
+    pos, vel
+        joint name -> exact position [m or rad] and velocity [m/s or rad/s].
+    system
+        for linear scenes, the matrix A [1/s] of the autonomous system
         z' = A z that generated the reference (forcing included as generator
         states); None otherwise. Used to derive the error bound.
-      states: (n, dim) exact z(t), or None.
-      rows: joint name -> (row of its position, row of its velocity) in z.
-      tolerance: for scenes without `system`, the relative tolerance [-] every
+    states
+        (n, dim) exact z(t), or None.
+    rows
+        joint name -> (row of its position, row of its velocity) in z.
+    tolerance
+        for scenes without `system`, the relative tolerance [-] every
         compared column is held to, and `tolerance_basis` says why.
-      switches: for a linear scene whose input is switched on a step boundary:
+    switches
+        for a linear scene whose input is switched on a step boundary:
         [(time [s], A after it)], in time order; `system` holds before the first.
         The states z(t) stay continuous across a switch.
-      input_error: column -> exact max absolute difference [m or m/s] between the
+    input_error
+        column -> exact max absolute difference [m or m/s] between the
         responses to the input the model realizes and the true input, added to
         that column's tolerance (`tolerance_basis` says where it comes from).
     """
@@ -142,14 +167,21 @@ class Check:
     For scenes without an exact trajectory (non-linear ones), `validate` holds a
     scenario to its checks instead of (or besides) the compared columns.
 
-    Attributes:
-      name: what is checked, ending in its unit like a quantity, e.g. 'period_s'.
-      value: measured from the simulation (in the name's unit).
-      reference: the independent expectation (closed form, quadrature, ...).
-      tolerance: bound on `error` [-]: relative, or absolute in the name's unit
+    Attributes
+    ----------
+    name
+        what is checked, ending in its unit like a quantity, e.g. 'period_s'.
+    value
+        measured from the simulation (in the name's unit).
+    reference
+        the independent expectation (closed form, quadrature, ...).
+    tolerance
+        bound on `error` [-]: relative, or absolute in the name's unit
         when the reference is 0.
-      basis: why the tolerance is what it is (one line).
-      certifies_error: whether `error` is an error of a physical result, which a PASS
+    basis
+        why the tolerance is what it is (one line).
+    certifies_error
+        whether `error` is an error of a physical result, which a PASS
         without a requested tolerance certifies only up to springlab.compare.CERTIFIED_CAP
         (False for a diagnostic, e.g. an observed order of convergence against the
         integrator's).
@@ -190,9 +222,12 @@ class Check:
 class Setup:
     """Initial state and inputs of one run.
 
-    Attributes:
-      qpos, qvel, act: initial state (None: the model's rest state).
-      control: (nu,) or (steps, nu) open-loop controls, held over each step.
+    Attributes
+    ----------
+    qpos, qvel, act
+        initial state (None: the model's rest state).
+    control
+        (nu,) or (steps, nu) open-loop controls, held over each step.
     """
 
     qpos: np.ndarray | None = None
@@ -285,9 +320,12 @@ class Scene:
     def resolve(self, scenario: Scenario, overrides: Mapping[str, Any]) -> dict[str, float]:
         """Final parameter values: MJCF defaults < scenario presets < overrides.
 
-        Raises:
-          UnknownNameError: an override names no parameter of this scene.
-          ParameterError: a value is not a finite number in its valid range.
+        Raises
+        ------
+        UnknownNameError
+            an override names no parameter of this scene.
+        ParameterError
+            a value is not a finite number in its valid range.
         """
         for name in overrides:
             if name not in self.parameters:

@@ -62,15 +62,24 @@ MAX_STEPS = 20_000_000
 class Trajectory:
     """A recorded run, one row per physics step, t = 0 included.
 
-    Attributes:
-      time: (n,) simulation time [s].
-      qpos: (n, nq) joint positions [m or rad].
-      qvel: (n, nv) joint velocities [m/s or rad/s].
-      act: (n, na) actuator activations (units of the actuator).
-      integrator: springlab integrator name.
-      dt: timestep [s].
-      wall_time_s: wall time of the stepping itself [s].
-      stopped: True when a stop condition ended the run before its duration.
+    Attributes
+    ----------
+    time
+        (n,) simulation time [s].
+    qpos
+        (n, nq) joint positions [m or rad].
+    qvel
+        (n, nv) joint velocities [m/s or rad/s].
+    act
+        (n, na) actuator activations (units of the actuator).
+    integrator
+        springlab integrator name.
+    dt
+        timestep [s].
+    wall_time_s
+        wall time of the stepping itself [s].
+    stopped
+        True when a stop condition ended the run before its duration.
     """
 
     time: np.ndarray
@@ -185,26 +194,39 @@ def simulate(
 ) -> Trajectory:
     """Run `model` headless and record every step.
 
-    Args:
-      model: compiled model; never modified (the run steps a copy with `integrator` and
+    Parameters
+    ----------
+    model
+        compiled model; never modified (the run steps a copy with `integrator` and
         `dt` set, as mujoco.rollout never modifies its inputs).
-      integrator: one of INTEGRATORS.
-      dt: timestep [s].
-      duration: simulated time [s]; steps = round(duration / dt).
-      qpos, qvel, act: initial state (defaults: the model's rest state).
-      control: (nu,) constant or (steps, nu) per-step controls [actuator units];
+    integrator
+        one of INTEGRATORS.
+    dt
+        timestep [s].
+    duration
+        simulated time [s]; steps = round(duration / dt).
+    qpos, qvel, act
+        initial state (defaults: the model's rest state).
+    control
+        (nu,) constant or (steps, nu) per-step controls [actuator units];
         row k is held over step k, from t_k to t_k + dt.
-      data: scratch MjData to reuse (optional).
-      stop: optional event (qpos (n, nq), qvel (n, nv)) -> (n,) bool; the
+    data
+        scratch MjData to reuse (optional).
+    stop
+        optional event (qpos (n, nq), qvel (n, nv)) -> (n,) bool; the
         trajectory ends at the first step where it is True (`stopped` set), and
         whatever MuJoCo did after that step (e.g. a finite-time escape hitting
         its 1e10 limit) is discarded, not reported as a divergence.
 
-    Returns:
-      The Trajectory, t = 0 included.
+    Returns
+    -------
+    Trajectory
+        The Trajectory, t = 0 included.
 
-    Raises:
-      DivergedError: MuJoCo flagged or silently reset the run, or it went non-finite.
+    Raises
+    ------
+    DivergedError
+        MuJoCo flagged or silently reset the run, or it went non-finite.
     """
     steps = check_timing(dt, duration)
     model = configured(model, integrator, dt)
@@ -243,7 +265,9 @@ def simulate(
     return trajectory
 
 
-def cut_at_stop(trajectory: Trajectory, stop) -> tuple[Trajectory, bool]:
+def cut_at_stop(
+    trajectory: Trajectory, stop: Callable[[np.ndarray, np.ndarray], np.ndarray]
+) -> tuple[Trajectory, bool]:
     """The trajectory up to and including the first step where `stop` holds, and whether it did."""
     end = divergence_step(trajectory)
     end = len(trajectory.time) if end is None else end
@@ -314,9 +338,12 @@ def stability_limit(integrator: str, zeta: float) -> float:
     region (2.83 at zeta = 0, shrinking like 2.79/(2 zeta) for heavy damping).
     discrete makes springs implicit: unconditionally stable (inf).
 
-    Args:
-      integrator: one of INTEGRATORS.
-      zeta: damping ratio [-], >= 0.
+    Parameters
+    ----------
+    integrator
+        one of INTEGRATORS.
+    zeta
+        damping ratio [-], >= 0.
     """
     integrator_id(integrator)
     if integrator == "discrete":

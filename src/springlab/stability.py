@@ -41,6 +41,7 @@ from .batch import RECORD_SPEC, Job, run_batched
 from .errors import BadInputError, DivergedError
 from .extremes import ACCURACY, EXTREME_CASES, FULL_EXTREME_CASES, VERIFY_STEPS, extremes_table
 from .scene import Scenario, Scene
+from .scenes.slider import Slider
 from .simulate import BAD_WARNINGS, INTEGRATORS, integrator_id, quiet_mujoco, stability_limit
 
 #: damping ratios of the default boundary measurement (the contract needs 0, 0.1, 1, 10)
@@ -113,10 +114,12 @@ def measure_boundaries(
     between the last stable and the first growing omega*dt down to a ratio of
     1 + SEARCH_PRECISION. All pairs advance together in one batch.
 
-    Returns:
-      Rows {"integrator", "zeta", "measured_omega_dt", "theory_omega_dt",
-      "relative_difference", "within_tolerance"}; measured is inf when nothing
-      grew up to SEARCH_STOP.
+    Returns
+    -------
+    list[dict[str, Any]]
+        Rows {"integrator", "zeta", "measured_omega_dt", "theory_omega_dt",
+        "relative_difference", "within_tolerance"}; measured is inf when nothing
+        grew up to SEARCH_STOP.
     """
     pairs = [(name, float(z)) for name in integrators for z in zetas]
     for name, zeta in pairs:
@@ -132,7 +135,7 @@ def measure_boundaries(
     while active.any():
         ids = np.flatnonzero(active).astype(np.int32)
         grows = tester.grows(ids, probe[ids])
-        for i, grew in zip(ids, grows):
+        for i, grew in zip(ids.tolist(), grows):
             if grew:
                 high[i] = probe[i]
             else:
@@ -253,6 +256,7 @@ def energy_histories(
     integrator a summary with the formula and its largest deviation}.
     """
     scene = scenes.get("slider")
+    assert isinstance(scene, Slider)
     chosen = scene.scenario("undamped")
     params = scene.resolve(chosen, {})
     model = scene.build(params, chosen)
@@ -284,8 +288,9 @@ def energy_histories(
         }
         if "ratio" in formula:
             row["formula"] = "(1 - y^6/72 + y^8/576)^n" if name == "rk4" else "(1 + y^2)^-n"
-            row["formula_final_ratio"] = float(formula["ratio"][-1])
-            row["max_relative_deviation"] = float(np.max(np.abs(ratio[name] / formula["ratio"] - 1)))
+            exact = np.asarray(formula["ratio"])
+            row["formula_final_ratio"] = float(exact[-1])
+            row["max_relative_deviation"] = float(np.max(np.abs(ratio[name] / exact - 1)))
         else:
             invariant = (v**2 + omega**2 * x**2 - dt * omega**2 * x * v) / (
                 v0**2 + omega**2 * x0**2 - dt * omega**2 * x0 * v0

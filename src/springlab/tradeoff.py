@@ -60,15 +60,24 @@ WALL_TIME_BASIS = (
 class Run:
     """One (integrator, dt) of a sweep.
 
-    Attributes:
-      integrator: integrator name.
-      dt: timestep [s].
-      steps: steps taken.
-      max_rel_error: max over the compared columns of max |sim - ref| / max |ref| [-]; None if diverged.
-      wall_time_s: wall time of the run alone [s] (see module docstring).
-      diverged: the run blew up (detected, never reported as a result).
-      detail: how it diverged, for people.
-      verdict: what `springlab run` says of the same setting: 'PASS', 'FAIL' or 'not validated:
+    Attributes
+    ----------
+    integrator
+        integrator name.
+    dt
+        timestep [s].
+    steps
+        steps taken.
+    max_rel_error
+        max over the compared columns of max |sim - ref| / max |ref| [-]; None if diverged.
+    wall_time_s
+        wall time of the run alone [s] (see module docstring).
+    diverged
+        the run blew up (detected, never reported as a result).
+    detail
+        how it diverged, for people.
+    verdict
+        what `springlab run` says of the same setting: 'PASS', 'FAIL' or 'not validated:
         outside the range of the error estimate' (springlab.compare); None if diverged.
     """
 
@@ -85,6 +94,13 @@ class Run:
     def validated(self) -> bool:
         """Whether the run is inside the range of its error estimate (its verdict means something)."""
         return self.verdict in (compare.PASS, compare.FAIL)
+
+    @property
+    def error(self) -> float:
+        """max_rel_error of a run that did not diverge [-] (filter out diverged runs first)."""
+        if self.max_rel_error is None:
+            raise ValueError(f"{self.integrator} at dt = {self.dt:g} s diverged: it has no error")
+        return self.max_rel_error
 
     def row(self) -> dict[str, Any]:
         """The JSON row: integrator, dt, max_rel_error, steps, wall_time_s, diverged, verdict."""
@@ -103,16 +119,26 @@ class Run:
 class Tradeoff:
     """A speed-accuracy sweep of one scenario.
 
-    Attributes:
-      scene, scenario: names.
-      parameters: the parameter values used (SI).
-      overrides: the parameters the caller set (re-applied when verifying a recommendation).
-      duration: simulated time of every run [s].
-      runs: every (integrator, dt), grouped by integrator, dt descending.
-      orders: integrator -> observed order of accuracy (None: too few asymptotic points).
-      pareto: the runs no other run beats in both error and wall time, cheapest first.
-      recommendation: for a tolerance, the verified cheapest setting (see `recommend`).
-      sweep_wall_time_s: wall time of the whole sweep, timing pass included [s].
+    Attributes
+    ----------
+    scene, scenario
+        names.
+    parameters
+        the parameter values used (SI).
+    overrides
+        the parameters the caller set (re-applied when verifying a recommendation).
+    duration
+        simulated time of every run [s].
+    runs
+        every (integrator, dt), grouped by integrator, dt descending.
+    orders
+        integrator -> observed order of accuracy (None: too few asymptotic points).
+    pareto
+        the runs no other run beats in both error and wall time, cheapest first.
+    recommendation
+        for a tolerance, the verified cheapest setting (see `recommend`).
+    sweep_wall_time_s
+        wall time of the whole sweep, timing pass included [s].
     """
 
     scene: str
@@ -212,21 +238,34 @@ def sweep(
 ) -> Tradeoff:
     """Run every integrator at every timestep on one scenario, batched, and measure the trade.
 
-    Args:
-      scene: scene name or object.
-      scenario: scenario name (None: the scene's default); it needs an exact reference.
-      integrators: integrator names (default: all five).
-      dts: timesteps [s] (default: `timestep_grid` from the scenario's fastest rate).
-      duration: simulated time [s] (None: the scenario's).
-      timing_repeats: timed repetitions per configuration (best is kept).
-      nthread: threads of the batch (0: one per CPU).
-      **parameters: scene parameters in SI units.
+    Parameters
+    ----------
+    scene
+        scene name or object.
+    scenario
+        scenario name (None: the scene's default); it needs an exact reference.
+    integrators
+        integrator names (default: all five).
+    dts
+        timesteps [s] (default: `timestep_grid` from the scenario's fastest rate).
+    duration
+        simulated time [s] (None: the scenario's).
+    timing_repeats
+        timed repetitions per configuration (best is kept).
+    nthread
+        threads of the batch (0: one per CPU).
+    **parameters
+        scene parameters in SI units.
 
-    Returns:
-      The Tradeoff (runs, orders, Pareto front; no recommendation).
+    Returns
+    -------
+    Tradeoff
+        The Tradeoff (runs, orders, Pareto front; no recommendation).
 
-    Raises:
-      BadInputError: unknown names, non-physical values, a scenario without exact reference.
+    Raises
+    ------
+    BadInputError
+        unknown names, non-physical values, a scenario without exact reference.
     """
     started = _time.perf_counter()
     scene_obj, chosen, params = api.prepare(scene, scenario, parameters)
@@ -246,7 +285,7 @@ def sweep(
         dts = timestep_grid(fastest_rate(scene_obj, model, params, chosen), duration)
         dts = _accepted_grid(dts, lambda dt: _setup_or_none(scene_obj, model, params, chosen, dt, duration))
     stop = scene_obj.stop_condition(model, params, chosen)
-    jobs = []
+    jobs: list[Job] = []
     for dt in dts:
         steps = check_timing(dt, duration)
         setup = scene_obj.setup(model, params, chosen, steps, dt)
@@ -362,7 +401,7 @@ def observed_order(runs: Iterable[Run]) -> float | None:
     points = sorted(asymptotic_runs(runs), key=lambda r: r.dt)[:FIT_POINTS]
     if len({r.dt for r in points}) < 3:
         return None
-    log_dt, log_error = np.log([r.dt for r in points]), np.log([r.max_rel_error for r in points])
+    log_dt, log_error = np.log([r.dt for r in points]), np.log([r.error for r in points])
     slope, intercept = np.polyfit(log_dt, log_error, 1)
     if np.max(np.abs(log_error - (slope * log_dt + intercept))) > math.log(FIT_MAX_SCATTER):
         return None
@@ -371,12 +410,12 @@ def observed_order(runs: Iterable[Run]) -> float | None:
 
 def pareto_front(runs: Iterable[Run]) -> list[Run]:
     """Runs that no other run beats in both error and wall time, cheapest first (diverged runs excluded)."""
-    candidates = sorted((r for r in runs if not r.diverged), key=lambda r: (r.wall_time_s, r.max_rel_error))
+    candidates = sorted((r for r in runs if not r.diverged), key=lambda r: (r.wall_time_s, r.error))
     front, best = [], math.inf
     for r in candidates:
-        if r.max_rel_error < best:
+        if r.error < best:
             front.append(r)
-            best = r.max_rel_error
+            best = r.error
     return front
 
 
@@ -396,7 +435,7 @@ def _candidates(result: Tradeoff, tol: float) -> list[tuple[float, str, float, b
     out = []
     for name in dict.fromkeys(r.integrator for r in result.runs):
         runs = sorted((r for r in result.runs if r.integrator == name), key=lambda r: r.dt)
-        passing = [r for r in runs if not r.diverged and r.max_rel_error <= tol]
+        passing = [r for r in runs if not r.diverged and r.error <= tol]
         if not passing:
             continue
         grid = min(passing, key=lambda r: (r.steps, -r.dt))
@@ -404,8 +443,8 @@ def _candidates(result: Tradeoff, tol: float) -> list[tuple[float, str, float, b
         larger = [r for r in runs if r.dt > grid.dt]
         order = result.orders.get(name)
         order = order if order is not None and abs(order - ORDERS[name]) <= 0.5 else ORDERS[name]
-        if grid.max_rel_error > 0:
-            predicted = grid.dt * (REFINE_SAFETY * tol / grid.max_rel_error) ** (1.0 / order)
+        if grid.error > 0:
+            predicted = grid.dt * (REFINE_SAFETY * tol / grid.error) ** (1.0 / order)
         else:
             predicted = grid.dt
         ceiling = larger[0].dt if larger else 2 * grid.dt
@@ -423,14 +462,19 @@ def recommend(result: Tradeoff, tol: float, *, timing_repeats: int = 3) -> dict[
     the first one whose verification run meets tol wins, and its error and
     wall time (measured as the sweep's) are reported.
 
-    Args:
-      result: a sweep of the scenario.
-      tol: relative tolerance [-] on every compared column.
+    Parameters
+    ----------
+    result
+        a sweep of the scenario.
+    tol
+        relative tolerance [-] on every compared column.
 
-    Returns:
-      {"tol", "integrator", "dt", "max_rel_error", "wall_time_s"}; integrator,
-      dt, max_rel_error and wall_time_s are None when no setting of the sweep
-      meets tol.
+    Returns
+    -------
+    dict[str, Any]
+        {"tol", "integrator", "dt", "max_rel_error", "wall_time_s"}; integrator,
+        dt, max_rel_error and wall_time_s are None when no setting of the sweep
+        meets tol.
     """
     tol = compare.check_tolerance(tol)
     for _, name, dt, _refined in _candidates(result, tol):
