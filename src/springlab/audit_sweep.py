@@ -53,6 +53,8 @@ REFERENCE_MAX_STEPS = 50_000
 LINEARITY_PROBES = 4
 #: steps of the timing run behind each integrator's cost per step
 TIMING_STEPS = 1000
+#: ... or as many more as take at least this long [s]
+TIMING_MIN_S = 0.02
 
 
 @dataclasses.dataclass
@@ -320,8 +322,13 @@ def sweep_runs(
 
 
 def cost_per_step(model: mujoco.MjModel, start: Setup, integrator: str, dt: float) -> float:
-    """Wall time of one step [s] of `integrator` on `model`, run alone on the calling thread (best of 3 runs of
-    TIMING_STEPS steps, springlab.batch.time_run); a setting's wall time is steps x this (MuJoCo's cost per
-    step does not depend on dt; one long timing per integrator is steadier on a loaded machine than many
-    short ones)."""
-    return time_run(Job(copy.copy(model), integrator, dt, TIMING_STEPS, start), repeats=3) / TIMING_STEPS
+    """Wall time of one step [s] of `integrator` on `model`, run alone on the calling thread (springlab.batch
+    .time_run, best of 5, over TIMING_STEPS steps or as many as take TIMING_MIN_S); a setting's wall time
+    is steps x this (MuJoCo's cost per step does not depend on dt; one long timing per integrator is
+    steadier on a loaded machine than many short ones)."""
+    steps = TIMING_STEPS
+    while True:
+        seconds = time_run(Job(copy.copy(model), integrator, dt, steps, start), repeats=5, max_steps=steps)
+        if seconds >= TIMING_MIN_S or steps >= 64 * TIMING_STEPS:
+            return seconds / steps
+        steps *= 4
