@@ -13,6 +13,7 @@ n x n with n = 2 nv + na.
   A = [[0, I], [-M^-1 K, -M^-1 C]] (plus the activation rows and columns by
   centred differences of `mj_forward`), its eigenvalues lambda [1/s] and the
   modes they make (`Mode`).
+* `OperatingPoint.at(model, qpos=...)` / `operating_point(model, keyframe)`: where to linearize.
 * `one_step_map`: Phi(dt) = d x_{n+1} / d x_n of one `mj_step` for any
   integrator: `mjd_transitionFD` (centred) where MuJoCo supports it, centred
   differences of `mj_step` in the tangent space for RK4 (which
@@ -55,6 +56,30 @@ class OperatingPoint:
     act: np.ndarray
     ctrl: np.ndarray
     label: str = "qpos0"
+
+    @classmethod
+    def at(
+        cls,
+        model: mujoco.MjModel,
+        qpos: np.ndarray | None = None,
+        qvel: np.ndarray | None = None,
+        act: np.ndarray | None = None,
+        ctrl: np.ndarray | None = None,
+        label: str = "given state",
+    ) -> OperatingPoint:
+        """A point from whatever the caller has (the rest: qpos0, zero velocity, activation and control),
+        e.g. `linearize(model, OperatingPoint.at(model, qpos=sag))` for a scene's own linearization."""
+
+        def given(value, default):
+            return np.array(default if value is None else value, float)
+
+        return cls(
+            given(qpos, model.qpos0),
+            given(qvel, np.zeros(model.nv)),
+            given(act, np.zeros(model.na)),
+            given(ctrl, np.zeros(model.nu)),
+            label,
+        )
 
     def as_json(self) -> dict[str, Any]:
         """{"label", "qpos", "qvel", "act", "ctrl"} as plain lists."""
