@@ -11,13 +11,14 @@
    off, and encodes on ffmpeg's own process while the next frames render.
    Also the composite video (the same plus the 480 x 480 phase-plane panel).
    All are run alternately, best of N, and the ratios printed.
-2. End to end: `springlab render slider undamped --duration 10 --output x.mp4`
-   as a fresh process (interpreter start, imports, simulation, rendering,
-   encoding): wall time and frames per second; the target is >= 30 frames/s,
-   i.e. faster than real time.
+2. End to end: `springlab render slider undamped --duration 10`, `car road_bump`
+   and `printer_head move` at 640 x 480 as fresh processes (interpreter start,
+   imports, simulation, rendering, encoding): wall time and frames per second;
+   the target is >= 30 frames/s. `--before SRC` times another checkout's
+   src/ folder alternately with this one (before/after a change).
 
 The machine may be shared: ratios measured side by side hold better than
-absolute numbers. Run: python benchmarks/bench_render.py [--repeat N]
+absolute numbers. Run: python benchmarks/bench_render.py [--repeat N] [--before SRC] [--end-to-end-only]
 """
 
 from __future__ import annotations
@@ -132,52 +133,63 @@ def frames_per_second(repeat: int, folder: pathlib.Path) -> None:
     )
 
 
-def end_to_end(repeat: int, folder: pathlib.Path) -> None:
-    output = folder / "e2e.mp4"
-    command = [
-        sys.executable,
-        "-m",
-        "springlab.cli",
-        "render",
-        "slider",
-        "undamped",
-        "--duration",
-        str(DURATION),
-        "--fps",
-        str(FPS),
-        "--width",
-        str(WIDTH),
-        "--height",
-        str(HEIGHT),
-        "--output",
-        str(output),
-    ]
-    walls = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        subprocess.run(command, check=True, capture_output=True)
-        walls.append(time.perf_counter() - start)
-    frames = round(DURATION * FPS)
-    wall = min(walls)
-    print(f"2) end to end, a fresh process: {' '.join(command[1:4])} ... {frames} frames")
-    print(
-        f"   wall {wall:.2f} s (best of {repeat}; all: {', '.join(f'{w:.2f}' for w in walls)}),"
-        f" {frames / wall:.1f} frames/s, {DURATION / wall:.2f}x real time;"
-        f" target >= {FPS} frames/s: {'met' if frames / wall >= FPS else 'NOT met'}"
-    )
+#: end-to-end cases: (scene, scenario, extra arguments); the car and printer exercise the drawn
+#: springs, dampers, road and belt, and the defaults' slow motion (the printer move: 450 frames)
+END_TO_END = (
+    ("slider", "undamped", ["--duration", str(DURATION)]),
+    ("car", "road_bump", []),
+    ("printer_head", "move", []),
+)
+
+
+def _render_once(source: str | None, scene: str, scenario: str, extra: list[str], output: pathlib.Path):
+    """(wall time [s], frames) of one fresh `springlab render` process, using `source` (a src/ folder) if given."""
+    command = [sys.executable, "-m", "springlab.cli", "render", scene, scenario, *extra]
+    command += ["--fps", str(FPS), "--width", str(WIDTH), "--height", str(HEIGHT), "--output", str(output)]
+    env = dict(os.environ)
+    if source:
+        env["PYTHONPATH"] = source
+    start = time.perf_counter()
+    done = subprocess.run(command, check=True, capture_output=True, text=True, env=env)
+    wall = time.perf_counter() - start
+    frames = int(done.stdout.split(": ", 1)[1].split(" frames")[0])  # "wrote X: N frames, ..."
+    return wall, frames
+
+
+def end_to_end(repeat: int, folder: pathlib.Path, before: str | None = None) -> None:
+    """Fresh processes, best of `repeat`; with `before` (another checkout's src/), both alternately."""
+    versions = {"after": None, **({"before": before} if before else {})}
+    print(f"2) end to end, a fresh process per run: springlab render SCENE SCENARIO at {WIDTH}x{HEIGHT}, {FPS} fps")
+    print(f"   {'case':<26}{'version':<9}{'frames':>7}{'wall [s]':>10}{'frames/s':>10}")
+    for scene, scenario, extra in END_TO_END:
+        best = {name: (np.inf, 0) for name in versions}
+        for _ in range(repeat):  # alternate, so both see the same load
+            for name, source in versions.items():
+                wall, frames = _render_once(source, scene, scenario, extra, folder / f"{name}.mp4")
+                best[name] = min(best[name], (wall, frames))
+        for name, (wall, frames) in best.items():
+            verdict = (
+                ""
+                if name == "before"
+                else f"  target >= {FPS} frames/s: {'met' if frames / wall >= FPS else 'NOT met'}"
+            )
+            print(f"   {scene + ' ' + scenario:<26}{name:<9}{frames:>7}{wall:>10.2f}{frames / wall:>10.1f}{verdict}")
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=3, help="runs per path (best is kept)")
+    parser.add_argument("--before", metavar="SRC", help="another checkout's src/ folder to time end to end alongside")
+    parser.add_argument("--end-to-end-only", action="store_true", help="skip the in-process comparison")
     args = parser.parse_args()
     print(
         f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f} at start;"
         f" MUJOCO_GL={os.environ.get('MUJOCO_GL')}"
     )
     with tempfile.TemporaryDirectory() as folder:
-        frames_per_second(args.repeat, pathlib.Path(folder))
-        end_to_end(args.repeat, pathlib.Path(folder))
+        if not args.end_to_end_only:
+            frames_per_second(args.repeat, pathlib.Path(folder))
+        end_to_end(args.repeat, pathlib.Path(folder), args.before)
     print(f"load average {os.getloadavg()[0]:.2f} at the end")
 
 

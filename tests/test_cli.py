@@ -91,8 +91,8 @@ def test_an_inaccurate_run_is_written_flagged_and_exits_1(tmp_path, capsys):
 @pytest.mark.parametrize(
     "argv,needle",
     [
-        (["run", "slider", "--set", "mass=-1"], "mass must be a finite number > 0 kg"),
-        (["run", "slider", "--set", "mass=0"], "mass must be a finite number > 0 kg"),
+        (["run", "slider", "--set", "mass=-1"], "mass must be a finite number >= 1e-15 kg"),
+        (["run", "slider", "--set", "mass=0"], "mass must be a finite number >= 1e-15 kg"),
         (["run", "slider", "--set", "stiffness=-5"], "stiffness must be a finite number >= 0 N/m"),
         (["run", "slider", "--set", "damping=-1"], "damping must be a finite number >= 0 N s/m"),
         (["run", "slider", "--set", "x0=nan"], "x0 must be a finite number"),

@@ -305,6 +305,17 @@ def test_kinematics_degree_two_and_velocity_data(tmp_path):
     assert rel(result.estimates["a0"]["value"], 3.0) < 1e-9
 
 
+def test_kinematics_chooses_the_degree_of_uniformly_accelerated_motion(tmp_path):
+    rng = np.random.default_rng(8)
+    t = np.linspace(0, 5, 101)
+    x = 10.0 * t + t**2 + rng.normal(0, 0.01, t.size)  # eq. 5.5: a = 2 m/s^2 from 10 m/s, no jerk
+    result = fit("kinematics", write(tmp_path / "d.csv", {"time": t, "vehicle_pos": x}), run_scene=False)
+    assert result.free == ["x0", "v0", "a0"]
+    assert any("degree chosen" in note for note in result.record.notes)
+    low, high = result.estimates["a0"]["ci95"]
+    assert low <= 2.0 <= high
+
+
 def test_kinematics_refuses_an_offset(tmp_path):
     t = np.linspace(0, 5, 51)
     with pytest.raises(BadInputError, match="indistinguishable"):

@@ -50,9 +50,11 @@ LAYERS: dict[str, tuple[str, ...]] = {
         "fit_models",
         "fit_results",
         "sweep",
+        "sweeps",
         "executor",
+        "sobol",
     ),
-    "outputs": ("charts", "charts_audit", "fit_chart", "plots", "render", "report", "media"),
+    "outputs": ("charts", "charts_audit", "fit_chart", "plots", "render", "report", "media", "sweep_plot"),
     "front": ("cli", "demo", "__main__", "__init__"),
 }
 PREFIXES = {"scenes.": "physics", "render_": "outputs"}

@@ -4,6 +4,7 @@ import math
 import subprocess
 import sys
 
+import matplotlib.colors
 import numpy as np
 import pytest
 from matplotlib.quiver import Quiver
@@ -32,8 +33,9 @@ def test_time_series_overlays_the_exact_solution_and_puts_the_error_on_a_log_axi
         (sim,), (ref,) = _lines(ax, "MuJoCo"), _lines(ax, "exact")
         np.testing.assert_array_equal(sim.get_ydata(), series["slider"])
         np.testing.assert_array_equal(ref.get_ydata(), exact["slider"])
-    assert position.get_ylabel() == "slider [m]" and velocity.get_ylabel() == "slider velocity [m/s]"
-    assert error.get_yscale() == "log" and error.get_xlabel() == "time [s]"
+    assert position.get_ylabel() == "position x [m]" and velocity.get_ylabel() == "velocity v [m/s]"
+    assert position.get_title() == "joint slider"  # the joint in the title, the quantity and unit on the axis
+    assert error.get_yscale() == "log" and error.get_xlabel() == "time t [s]"
     labels = [line.get_label() for line in error.get_lines()]
     assert "|position error| [m]" in labels and "position tolerance" in labels
     # the plotted error is |sim - exact| (zeros left out of the log axis, not drawn at -inf)
@@ -46,8 +48,12 @@ def test_time_series_overlays_the_exact_solution_and_puts_the_error_on_a_log_axi
 def test_time_series_has_a_column_per_joint_with_its_units():
     figure = plots.time_series(api.run("car", "pitch_heave"))
     labels = [ax.get_ylabel() for ax in figure.axes]
-    assert "heave [m]" in labels and "pitch [rad]" in labels and "pitch velocity [rad/s]" in labels
+    assert "position x [m]" in labels and "angle θ [rad]" in labels and "angular velocity ω [rad/s]" in labels
+    assert {"joint heave", "joint pitch"} <= {ax.get_title() for ax in figure.axes}
     assert sum(ax.get_yscale() == "log" for ax in figure.axes) == 2
+    figure.canvas.draw()  # legends beside the axes: none covers data
+    legends = [ax.get_legend().get_window_extent() for ax in figure.axes if ax.get_legend()]
+    assert legends and not any(box.overlaps(ax.get_window_extent()) for box in legends for ax in figure.axes)
 
 
 def test_phase_plane_of_the_softening_spring_shows_field_equilibria_and_separatrix():
@@ -73,7 +79,8 @@ def test_phase_plane_of_the_softening_spring_shows_field_equilibria_and_separatr
     np.testing.assert_allclose(m * v**2 / 2 + potential(x), potential(saddle), atol=1e-9 * abs(potential(saddle)))
     (sim,), (_start,) = _lines(ax, "MuJoCo"), _lines(ax, "start")
     np.testing.assert_array_equal(sim.get_xdata(), result.pos["block"])
-    assert ax.get_xlabel() == "block [m]" and ax.get_ylabel() == "block velocity [m/s]"
+    assert ax.get_xlabel() == "position x [m]" and ax.get_ylabel() == "velocity v [m/s]"
+    assert ax.get_title() == "phase plane of joint block"
 
 
 def test_family_of_undamped_releases_are_ellipses_of_semi_axes_x0_and_omega_x0():
@@ -110,12 +117,22 @@ def test_family_across_the_separatrix_marks_exactly_the_releases_beyond_the_sadd
 def test_zeta_family_draws_each_damping_ratio_with_its_regime_and_exact_curve():
     figure = plots.zeta_family("slider", "free")
     response, phase = figure.axes
-    texts = _legend_texts(response)
+    texts = [text.get_text() for text in figure.legends[0].get_texts()]  # beside the axes, over no curve
     assert [t.split(" ")[2] for t in texts[:-1]] == [f"{z:g}" for z in plots.ZETAS]
     assert "ζ = 1 (critical)" in texts and "ζ = 2 (overdamped)" in texts and "ζ = 0 (undamped)" in texts
     solid = [line for line in response.get_lines() if line.get_label().startswith("ζ")]
     dashed = [line for line in response.get_lines() if line.get_linestyle() != "-"]
     assert len(solid) == len(plots.ZETAS) and len(dashed) >= len(plots.ZETAS)
+    # every pair of ratios is told apart by colour (zeta = 0 and 0.1 included), and the exact curves are
+    # white dashes inside them, not dark dashes over them
+    colours = np.array([matplotlib.colors.to_rgb(line.get_color()) for line in solid])
+    distances = np.linalg.norm(colours[:, None] - colours[None], axis=-1)[np.triu_indices(len(colours), 1)]
+    assert distances.min() > 0.25
+    assert all(matplotlib.colors.to_rgb(line.get_color()) == (1.0, 1.0, 1.0) for line in dashed)
+    # the legend sits beside the axes: it covers no data
+    figure.canvas.draw()
+    legend_box = figure.legends[0].get_window_extent()
+    assert not any(legend_box.overlaps(ax.get_window_extent()) for ax in figure.axes)
     # the critically damped curve is x0 (1 + omega t) e^{-omega t} (eq. 5.16 with v0 = 0)
     result = api.run("slider", "free")
     omega = math.sqrt(result.parameters["stiffness"] / result.parameters["mass"])

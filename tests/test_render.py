@@ -217,7 +217,7 @@ def test_render_command_writes_a_composite_video(tmp_path, capsys):
         (["--output", "v.webm"], "unsupported output extension '.webm'"),
         (["--output", "v.mp4", "--fps", "-5"], "fps must be > 0"),
         (["--output", "v.mp4", "--width", "0"], "width must be between 1 and 8192"),
-        (["--output", "v.mp4", "--set", "mass=-1"], "mass must be a finite number > 0"),
+        (["--output", "v.mp4", "--set", "mass=-1"], "mass must be a finite number >= 1e-15 kg"),
     ],
 )
 def test_render_command_bad_input_exits_2_with_one_line(tmp_path, capsys, monkeypatch, argv, message):

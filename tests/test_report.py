@@ -214,3 +214,25 @@ def test_chromium_decodes_the_h264_videos_to_the_rendered_pictures(demo_out, tmp
     for src, mean in means.items():
         # the first frame is the light 3D scene beside the white phase panel: bright, not black
         assert mean != "error" and float(mean) > 150, (src, mean)
+
+
+def test_report_reads_like_the_chapter(demo_out):
+    import html as html_module
+
+    from springlab import scenes
+
+    out, state = demo_out
+    page = (out / "index.html").read_text()
+    for (scene_name, scenario), result in state.results.items():
+        scene = scenes.get(scene_name)
+        question, answer = scene.question_and_answer(scenario, result.summary["quantities"], result.parameters)
+        assert question and answer, f"{scene_name}/{scenario} states its question and answer"
+        assert html_module.escape(question) in page and html_module.escape(answer) in page
+        for name in result.parameters:  # every parameter listed, with its value
+            assert f"<code>{name}</code> = " in page
+    # the count the CLI prints: every artifact, this report included
+    assert f"{len(state.artifacts)} files, this page included" in page
+    # each tolerance basis is one footnote, however many rows and checks share it
+    notes = re.findall(r"<li id='basis-\d+'>(.*?)</li>", page)
+    assert notes and len(notes) == len(set(notes))
+    assert "the demo's own steps, not physics time steps" in page

@@ -293,7 +293,7 @@ def test_a_run_beyond_mujocos_value_limit_exits_3_for_every_integrator(capsys, i
 
 @pytest.mark.slow
 def test_stability_cli_prints_json_and_writes_the_charts(tmp_path, capsys, monkeypatch, report):
-    monkeypatch.setattr(stability, "stability_report", lambda full=False: report)
+    monkeypatch.setattr(stability, "stability_report", lambda full=False, executor=None: report)
     code = main(["stability", "--json", "--output", str(tmp_path / "s")])
     out, err = capsys.readouterr()
     assert code == 0, err

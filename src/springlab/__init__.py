@@ -15,12 +15,14 @@ from .auto import run, validate
 from .errors import BadInputError, DivergedError, SpringlabError, UnknownNameError
 from .fit import fit
 from .scenes import SCENES
+from .sweeps import sweep
 
 __all__ = [
     "analytic",
     "errors",
     "run",
     "validate",
+    "sweep",
     "audit",
     "Audit",
     "fit",

@@ -11,17 +11,28 @@ which is what springlab.run and springlab.validate are).
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
+from collections.abc import Iterator
 from typing import Any
 
 import mujoco
 import numpy as np
 
 from . import compare, scenes
-from .errors import BadInputError, DivergedError
+from .errors import BadInputError, DivergedError, ParameterError, SpringlabError
 from .scene import Check, Scenario, Scene
-from .simulate import Trajectory, check_timing, integrator_id, simulate
+from .simulate import (
+    INTEGRATORS,
+    MAX_STEPS,
+    MAX_VALUE,
+    Trajectory,
+    beyond_mujoco_limits,
+    check_timing,
+    integrator_id,
+    simulate,
+)
 
 #: the verdict of a run that left its scene's equations (Scene.model_limits), whatever its errors
 OUTSIDE_MODEL = "not validated: outside the scene's model"
@@ -148,23 +159,48 @@ def run(
     steps = check_timing(dt, duration)
     if tol is not None:
         tol = compare.check_tolerance(tol)
-    model = scene_obj.build(params, chosen)
-    setup = scene_obj.setup(model, params, chosen, steps, dt)
+    with _within_double_precision(scene_obj, chosen, params):
+        model = scene_obj.build(params, chosen)
+        setup = scene_obj.setup(model, params, chosen, steps, dt)
+        try:
+            trajectory = simulate(
+                model,
+                integrator=integrator,
+                dt=dt,
+                duration=duration,
+                qpos=setup.qpos,
+                qvel=setup.qvel,
+                act=setup.act,
+                control=setup.control,
+                stop=scene_obj.stop_condition(model, params, chosen),
+            )
+        except DivergedError as error:
+            beyond = beyond_mujoco_limits(model, setup.qpos, setup.qvel, setup.act, setup.control)
+            advice = _stability_advice(scene_obj, model, params, chosen, integrator, dt, duration, beyond)
+            raise DivergedError(f"{error}{advice}") from None
+        return evaluate(scene_obj, chosen, params, model, trajectory, tol)
+
+
+@contextlib.contextmanager
+def _within_double_precision(scene: Scene, scenario: Scenario, params: dict[str, float]) -> Iterator[None]:
+    """Turn arithmetic that breaks down at extreme parameter values into one ParameterError.
+
+    Each value is checked against its range, but products of valid values can still
+    leave double precision (force_frequency = 1e300: omega^2 overflows; mass = 1e300:
+    rates underflow to 0). Such a run has no meaningful answer: exit 2, one line,
+    naming the most extreme value, instead of a traceback.
+    """
     try:
-        trajectory = simulate(
-            model,
-            integrator=integrator,
-            dt=dt,
-            duration=duration,
-            qpos=setup.qpos,
-            qvel=setup.qvel,
-            act=setup.act,
-            control=setup.control,
-            stop=scene_obj.stop_condition(model, params, chosen),
-        )
-    except DivergedError as error:
-        raise DivergedError(f"{error}{_stability_advice(scene_obj, model, params, chosen, integrator, dt)}") from None
-    return evaluate(scene_obj, chosen, params, model, trajectory, tol)
+        yield
+    except SpringlabError:
+        raise
+    except (ArithmeticError, np.linalg.LinAlgError, ValueError) as error:
+        name, value = max(params.items(), key=lambda item: abs(math.log10(abs(item[1]))) if item[1] else 0.0)
+        raise ParameterError(
+            f"{scene.name} {scenario.name} cannot be computed in double precision at these values (the most"
+            f" extreme: {name} = {value:g}): {type(error).__name__}: {str(error).splitlines()[0] if str(error) else ''}"
+            "; choose less extreme ones"
+        ) from None
 
 
 def evaluate(
@@ -185,6 +221,14 @@ def evaluate(
     vel = {j: c[1] for j, c in columns.items()}
     reference = scene.reference(model, params, scenario, trajectory.time, dt=trajectory.dt) if scenario.exact else None
     errors, tolerance, basis, passed, validity = {}, None, "", None, None
+    if reference is not None and not all(
+        np.isfinite(v).all() for v in (*reference.pos.values(), *reference.vel.values())
+    ):
+        # e.g. damping = 1e300: the run may be fine, the closed form overflows; not a divergence
+        raise ParameterError(
+            f"the exact solution of {scene.name} {scenario.name} is not finite in double precision at these"
+            f" parameter values ({', '.join(f'{k}={v:g}' for k, v in params.items())}); choose less extreme ones"
+        )
     if reference is not None:
         simulated = {f"{j}_{k}": (pos if k == "pos" else vel)[j] for j in reference.pos for k in ("pos", "vel")}
         exact = {
@@ -195,9 +239,12 @@ def evaluate(
         errors = compare.column_errors(simulated, exact)
         worst = max(e["max_rel"] for e in errors.values())
         if not math.isfinite(worst) or worst > BLOWUP_RATIO:
+            advice = _stability_advice(
+                scene, model, params, scenario, trajectory.integrator, trajectory.dt, trajectory.time[-1]
+            )
             raise DivergedError(
                 f"simulation diverged: error {worst:.3g} times the signal ({trajectory.integrator},"
-                f" dt = {trajectory.dt:g} s){_stability_advice(scene, model, params, scenario, trajectory.integrator, trajectory.dt)}"
+                f" dt = {trajectory.dt:g} s){advice}"
             )
         if tol is not None:
             # measured against the exact reference: true at any dt, no estimate involved
@@ -290,24 +337,65 @@ def _capped(check: Check, tol: float | None) -> Check:
     return dataclasses.replace(check, tolerance=compare.CERTIFIED_CAP, basis=basis)
 
 
-def _stability_advice(scene: Scene, model, params, scenario, integrator: str, dt: float) -> str:
-    """': omega*dt = ... exceeds the <integrator> stability limit ...; use ...' or ''."""
+def _stability_advice(
+    scene: Scene,
+    model,
+    params,
+    scenario,
+    integrator: str,
+    dt: float,
+    duration: float,
+    beyond: str | None = None,
+) -> str:
+    """Why a run diverged and what would help, as ': ...'.
+
+    Never contradicts itself: a state past MuJoCo's own cap (`beyond`, see
+    simulate.beyond_mujoco_limits) is not a timestep problem; a mode within its
+    stability limit gets no "use a smaller dt"; a dt too small to reach in
+    MAX_STEPS steps is not advised, the integrators stable at this dt are.
+    """
+    if beyond is not None:
+        return (
+            f": {beyond} is beyond MuJoCo's limit of {MAX_VALUE:g} on every position, velocity and acceleration"
+            " (mjMAXVAL, SI units), so no timestep or integrator can run it; choose values that keep them below it"
+        )
     worst = None
-    for omega, zeta in scene.modes(model, params, scenario):
+    modes = scene.modes(model, params, scenario)
+    for omega, zeta in modes:
         limit = scene.stability_limit(model, params, scenario, integrator, omega, zeta)
         ratio = omega * dt / limit
         if worst is None or ratio > worst[0]:
             worst = (ratio, omega, zeta, limit)
     if worst is None:
-        return ""
+        # no oscillating mode (a driven free mass): no timestep limit applies, only MuJoCo's cap
+        return (
+            f": {scene.name} has no mode whose stability limits dt, so a position, velocity or acceleration"
+            f" passed MuJoCo's limit of {MAX_VALUE:g} (mjMAXVAL); choose values that keep them below it"
+        )
     ratio, omega, zeta, limit = worst
-    if not math.isfinite(limit):
-        return f": omega*dt = {omega * dt:.4g} (zeta = {zeta:.3g})"
-    verdict = "exceeds" if ratio > 1 else "is within"
-    return (
-        f": omega*dt = {omega * dt:.4g} {verdict} the {integrator} stability limit {limit:.4g}"
-        f" (omega = {omega:.4g} rad/s, zeta = {zeta:.3g}); use dt < {limit / omega:.3g} s or integrator 'discrete'"
-    )
+    mode = f"(omega = {omega:.4g} rad/s, zeta = {zeta:.3g})"
+    if ratio <= 1:
+        within = (
+            f"is within the {integrator} stability limit {limit:.4g}"
+            if math.isfinite(limit)
+            else f"meets no stability limit ({integrator} has none on this mode)"
+        )
+        return (
+            f": omega*dt = {omega * dt:.4g} {within} {mode}, so this is not the timestep instability; look for"
+            f" values that reach MuJoCo's limit of {MAX_VALUE:g} (mjMAXVAL) on a position, velocity or"
+            " acceleration during the run"
+        )
+    stable = [
+        name
+        for name in INTEGRATORS
+        if all(w * dt < scene.stability_limit(model, params, scenario, name, w, z) for w, z in modes)
+    ]
+    others = f"an integrator stable at this dt ({', '.join(stable)})" if stable else "integrator 'discrete'"
+    smaller = limit / omega
+    exceeds = f": omega*dt = {omega * dt:.4g} exceeds the {integrator} stability limit {limit:.4g} {mode}"
+    if duration / smaller > MAX_STEPS:
+        return f"{exceeds}; the dt it needs (< {smaller:.3g} s) would take more than {MAX_STEPS} steps, so use {others}"
+    return f"{exceeds}; use dt < {smaller:.3g} s or {others}"
 
 
 def validate(
@@ -333,10 +421,11 @@ def validate(
     -------
     list[dict[str, Any]]
         One row per scenario: scene, scenario, integrator, dt, steps, max_rel_error,
-        tolerance, tolerance_basis, passed, verdict, wall_time_s, note (only for a run
-        that is not validated: why, and the largest dt inside), and checks (the scenario's
-        Check dicts; a scenario without compared columns shows its tightest check
-        in max_rel_error/tolerance).
+        measure, tolerance, tolerance_basis, passed, verdict, wall_time_s, note (only
+        for a run that is not validated: why, and the largest dt inside), and checks
+        (the scenario's Check dicts; a scenario without compared columns shows its
+        tightest check in max_rel_error/tolerance, and `measure` says which:
+        'trajectory max_rel', or '<check name> rel' / '<check name> abs').
     """
     if integrator == "auto":
         raise BadInputError(_AUTO_ELSEWHERE)
@@ -373,11 +462,13 @@ def validation_row(result: Result) -> dict[str, Any]:
     checks = s.get("checks", [])
     if s["errors"]:
         worst, tolerance, basis = max(e["max_rel"] for e in s["errors"].values()), s["tolerance"], s["tolerance_basis"]
+        measure = "trajectory max_rel"
     else:
         # no compared columns: the row shows the check closest to (or furthest past) its tolerance
         tightest = max(checks, key=lambda c: c["error"] / c["tolerance"] if c["tolerance"] > 0 else math.inf)
         worst, tolerance = tightest["error"], tightest["tolerance"]
         basis = f"{tightest['name']}: {tightest['basis']}"
+        measure = f"{tightest['name']} {'rel' if tightest['reference'] != 0 else 'abs'}"
     row = {
         "scene": s["scene"],
         "scenario": s["scenario"],
@@ -385,6 +476,7 @@ def validation_row(result: Result) -> dict[str, Any]:
         "dt": s["dt"],
         "steps": s["steps"],
         "max_rel_error": worst,
+        "measure": measure,
         "tolerance": tolerance,
         "tolerance_basis": basis,
         "passed": s["passed"],

@@ -1,26 +1,36 @@
-"""The `springlab` command line: argparse only, every command calls the library.
+"""Watch textbook vibration problems run in MuJoCo, each checked against its exact solution.
 
+The `springlab` command line (argparse; every command calls the library).
 Exit codes: 0 ok; 1 a validation fell outside its tolerance; 2 bad input;
-3 the simulation diverged (nothing written). Errors are one line on stderr.
+3 the simulation diverged (nothing written); 130 interrupted (Ctrl-C, SIGINT);
+143 terminated (SIGTERM). Errors are one line on stderr.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import pathlib
+import signal
 import sys
 import time
-from collections.abc import Callable, Sequence
+import warnings
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
-from . import api, auto, charts, charts_audit, compare, demo, outputs, scenes, stability, tradeoff
+import numpy as np
+
+from . import __version__, api, auto, charts, charts_audit, compare, demo, outputs, scenes, stability, tradeoff
 from .audit import DEFAULT_PERTURB, DEFAULT_TOL
 from .audit import audit as run_audit
 from .errors import BadInputError, SpringlabError
+from .executor import CONNECT_TIMEOUT_S, Executor
 from .simulate import INTEGRATORS
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_DIVERGED = 0, 1, 2, 3
+#: 128 + the signal number, as shells report a process a signal ended
+EXIT_INTERRUPTED, EXIT_TERMINATED = 128 + signal.SIGINT, 128 + signal.SIGTERM
 
 
 class _Parser(argparse.ArgumentParser):
@@ -28,6 +38,18 @@ class _Parser(argparse.ArgumentParser):
 
     def error(self, message: str) -> None:  # noqa: D401 - argparse hook
         raise BadInputError(f"{message} (see '{self.prog} --help')")
+
+    def parse_known_args(self, args=None, namespace=None):  # noqa: D401 - argparse hook
+        # a command's own parser takes options and positionals in any order
+        # (`run slider --set x0=0.05 harmonic`); argparse's intermixed parsing calls
+        # back into this method, hence the guard
+        if self._subparsers is not None or getattr(self, "_intermixing", False):
+            return super().parse_known_args(args, namespace)
+        self._intermixing = True
+        try:
+            return self.parse_known_intermixed_args(args, namespace)
+        finally:
+            self._intermixing = False
 
 
 def _parse_sets(pairs: Sequence[str]) -> dict[str, str]:
@@ -71,6 +93,26 @@ def _print_json(value: Any) -> None:
     print(outputs.dumps(value))
 
 
+def _executor_arguments(parser: argparse.ArgumentParser) -> None:
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument(
+        "--workers", type=int, metavar="N", help="run the chunks on a local dask cluster of N worker processes"
+    )
+    where.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="run the chunks on a running dask scheduler, e.g. tcp://10.0.0.5:8786"
+        f" (unreachable for {CONNECT_TIMEOUT_S:g} s: exit 2)",
+    )
+
+
+def _executor(args, nthread: int = 0) -> Executor:
+    """Where a study's chunks run: locally (default, on `nthread` threads), --workers N or --scheduler ADDRESS."""
+    return Executor(
+        workers=args.workers, scheduler=args.scheduler, progress=False if args.json else None, nthread=nthread
+    )
+
+
 # -- commands -----------------------------------------------------------------
 
 
@@ -85,6 +127,11 @@ def cmd_list(args) -> int:
                 "default_integrator": scene.integrator,
                 "default_dt": scene.dt,
                 "scenarios": {s.name: s.description for s in scene.scenarios.values()},
+                # the setting `run` and `validate` use for each scenario (a scenario may validate its own dt)
+                "scenario_settings": {
+                    s.name: {"integrator": scene.integrator, "dt": s.dt or scene.dt, "duration": s.duration}
+                    for s in scene.scenarios.values()
+                },
                 "parameters": {
                     p.name: {"unit": p.unit, "description": p.description, "valid": p.valid_range()}
                     for p in scene.parameters.values()
@@ -96,10 +143,13 @@ def cmd_list(args) -> int:
         return EXIT_OK
     for entry in catalogue:
         print(f"{entry['scene']}: {entry['title']}")
-        print(f"  default setting: {entry['default_integrator']}, dt = {entry['default_dt']:g} s")
-        print("  scenarios:")
+        print(
+            f"  default setting: {entry['default_integrator']}, dt = {entry['default_dt']:g} s unless a scenario says"
+        )
+        print("  scenarios (validated dt):")
         for name, text in entry["scenarios"].items():
-            print(f"    {name:<14} {text}")
+            dt = entry["scenario_settings"][name]["dt"]
+            print(f"    {name:<22} {f'{dt * 1e3:g} ms':>8}  {text}")
         print("  parameters:")
         for name, p in entry["parameters"].items():
             print(f"    {name:<16} [{p['unit']}] {p['description']} ({p['valid']})")
@@ -170,17 +220,20 @@ def _check_line(check: dict) -> str:
 
 
 def _validation_table(rows: list[dict]) -> str:
+    """The validate/demo table: one column says what each row's error measures (trajectory or a check)."""
     # columns as wide as their longest name, so long scenario names stay readable
     scene_width = max([12] + [len(r["scene"]) for r in rows]) + 1
     scenario_width = max([13] + [len(r["scenario"]) for r in rows]) + 1
+    measures = [r.get("measure", "trajectory max_rel") for r in rows]
+    measure_width = max([len("error of")] + [len(m) for m in measures]) + 2
     lines = [
         f"{'scene':<{scene_width}}{'scenario':<{scenario_width}}{'integrator':<11}{'dt [s]':>9}"
-        f"{'max rel err':>13}{'tolerance':>11}  result"
+        f"  {'error of':<{measure_width}}{'error':>9}{'tolerance':>11}  result"
     ]
-    for r in rows:
+    for r, measure in zip(rows, measures):
         lines.append(
             f"{r['scene']:<{scene_width}}{r['scenario']:<{scenario_width}}{r['integrator']:<11}{r['dt']:>9.2g}"
-            f"{r['max_rel_error']:>13.2e}{r['tolerance']:>11.2e}  {_row_result(r)}"
+            f"  {measure:<{measure_width}}{r['max_rel_error']:>9.2e}{r['tolerance']:>11.2e}  {_row_result(r)}"
         )
         lines.extend(f"    check {_check_line(c)}" for c in r.get("checks", []))
     return "\n".join(lines)
@@ -282,7 +335,12 @@ def _verdict(summary: dict) -> int:
 
 
 def cmd_tradeoff(args) -> int:
-    result = tradeoff.tradeoff(args.scene, args.scenario, tol=args.tol, duration=args.duration, **_parse_sets(args.set))
+    if args.output:
+        outputs.check_directory(args.output)  # before seconds of computing, not after
+    with _executor(args) as executor:
+        result = tradeoff.tradeoff(
+            args.scene, args.scenario, tol=args.tol, duration=args.duration, executor=executor, **_parse_sets(args.set)
+        )
     if args.output:
         charts.write_tradeoff(result, args.output)
     if args.json:
@@ -355,9 +413,13 @@ def cmd_audit(args) -> int:
 
 
 def cmd_stability(args) -> int:
-    report = stability.stability_report(full=args.full)
     if args.output:
-        charts.write_stability(report, stability.amplification_map(), args.output)
+        outputs.check_directory(args.output)  # before seconds of computing, not after
+    with _executor(args) as executor:
+        report = stability.stability_report(full=args.full, executor=executor)
+        amplification = stability.amplification_map(executor=executor) if args.output else None
+    if args.output:
+        charts.write_stability(report, amplification, args.output)
     if args.json:
         _print_json(stability.report_json(report))
     else:
@@ -404,16 +466,57 @@ def _print_stability(report: dict, output: str | None) -> None:
 def cmd_design(args) -> int:
     from . import design  # here, not at the top: mujoco.batch is only needed by this command
 
-    study = design.run_study(
-        args.scene, levels=args.levels, plane_levels=args.plane, nthread=args.threads, **_parse_sets(args.set)
-    )
     if args.output:
-        design.write(study, args.output)
+        outputs.check_directory(args.output)  # before seconds of computing, not after
+    overrides = _parse_sets(args.set)
+    if args.sobol is not None:
+        from . import sobol
+
+        sobol.check_base_samples(args.sobol)  # bad input before minutes of simulation
+    with _executor(args, nthread=args.threads) as executor:
+        study = design.run_study(
+            args.scene,
+            levels=args.levels,
+            plane_levels=args.plane,
+            executor=executor,
+            omega_dt=design.OMEGA_DT,
+            **overrides,
+        )
+        indices = None
+        if args.sobol is not None:
+            indices = sobol.printer_head(args.sobol, seed=args.seed, executor=executor, **overrides)
+    extra = {} if indices is None else {"sobol": indices.summary()}
+    if args.output:
+        design.write(study, args.output, extra)
+        if indices is not None:
+            charts.plot_sobol(indices, pathlib.Path(args.output) / "sobol.png")
     if args.json:
-        _print_json(design.summary(study))
+        _print_json({**design.summary(study), **extra})
     else:
         _print_design(design, study, args.output)
+        if indices is not None:
+            _print_sobol(sobol, indices, args.output)
     return EXIT_OK
+
+
+def _print_sobol(sobol, indices, output: str | None) -> None:
+    s = indices.summary()
+    print(
+        f"Sobol indices of positioning time: {s['runs']} runs in {s['wall_time_s']:.1f} s on {s['executor']}"
+        f" ({s['runs_per_s']:.0f}/s), {s['unsettled']} unsettled"
+    )
+    print(f"  {'property':<16}{'range':>24}{'S1':>14}{'ST':>14}{'ST-S1':>8}{'elasticity':>12}")
+    for name in s["ranking"]:
+        low, high = s["parameters"][name]["range"]
+        unit = sobol.PARAMETERS[name]
+        print(
+            f"  {name:<16}{f'{low:.3g}..{high:.3g} {unit}':>24}{s['S1'][name]:>8.3f}+-{s['S1_conf'][name]:<4.2f}"
+            f"{s['ST'][name]:>8.3f}+-{s['ST_conf'][name]:<4.2f}{s['interactions'][name]:>8.3f}"
+            f"{s['elasticities'][name]:>+12.3f}"
+        )
+    print(sobol.answer(indices))
+    if output:
+        print(f"  wrote {pathlib.Path(output) / 'sobol.png'} and the sobol entry of design.json")
 
 
 def _print_design(design, study, output: str | None) -> None:
@@ -421,7 +524,7 @@ def _print_design(design, study, output: str | None) -> None:
     print(
         f"{s['scene']} design study: {s['configurations']} configurations ({s['levels']} levels of "
         f"{', '.join(design.PROPERTIES)}) in {s['wall_time_s']:.1f} s, {s['configurations_per_s']:.0f}/s"
-        f" on {s['nthread']} threads"
+        + (f" on {s['nthread']} threads" if s["executor"] == "local" else f" on {s['executor']}")
     )
     print(f"  {'property':<16}{'default':>11}{'range':>22}{'elasticity':>12}{'local':>9}")
     for name in s["ranking"]:
@@ -439,6 +542,47 @@ def _print_design(design, study, output: str | None) -> None:
     print(design.answer(study))
     if output:
         print(f"  wrote {pathlib.Path(output) / 'design.json'}, configurations.csv and design.png")
+
+
+def cmd_sweep(args) -> int:
+    from . import sweep_plot, sweeps
+
+    with _executor(args) as executor:
+        result = sweeps.sweep(
+            args.scene,
+            args.scenario,
+            vary=args.vary,
+            samples=args.samples,
+            seed=args.seed,
+            integrator=args.integrator,
+            dt=args.dt,
+            duration=args.duration,
+            executor=executor,
+            **_parse_sets(args.set),
+        )
+    if args.output:
+        sweep_plot.write(result, args.output, args.quantity)
+    if args.json:
+        _print_json(result.summary())
+        return EXIT_OK
+    s = result.summary()
+    print(
+        f"{s['scene']} / {s['scenario']}: {s['configurations']} configurations ({s['integrator']}, dt = {s['dt']:g} s,"
+        f" {s['duration']:g} s each) in {s['wall_time_s']:.2f} s on {s['executor']}"
+        f" ({s['configurations_per_s']:.0f}/s, {s['chunks']} chunks)"
+    )
+    print(f"  passed {s['passed']}, failed {s['failed']}, diverged {s['diverged']}, invalid {s['invalid']}")
+    quantity = args.quantity or (sweep_plot.default_quantity(result) if s["diverged"] < s["configurations"] else None)
+    if quantity:
+        values = result.column(quantity)
+        finite = values[np.isfinite(values)]
+        if finite.size:
+            best = int(np.nanargmin(np.where(np.isfinite(values), values, np.nan)))
+            where = ", ".join(f"{n} = {result.values[n][best]:.4g}" for n in result.values)
+            print(f"  {quantity}: min {finite.min():.4g} (at {where}), max {finite.max():.4g}")
+    if args.output:
+        print(f"  wrote {pathlib.Path(args.output) / 'sweep.csv'} and sweep.png")
+    return EXIT_OK
 
 
 def cmd_fit(args) -> int:
@@ -501,7 +645,13 @@ def _print_fit(result, output: str | None) -> None:
 def cmd_demo(args) -> int:
     """The main job: validate every scene and write everything under the output folder."""
     start = time.perf_counter()
-    state = demo.run_demo(args.output)
+    try:
+        state = demo.run_demo(args.output)
+    except (KeyboardInterrupt, Terminated) as stop:
+        marker = pathlib.Path(args.output) / demo.INCOMPLETE_MARKER
+        if marker.exists():
+            stop.note = f"; {args.output}/ is incomplete (see {marker})"  # type: ignore[attr-defined]
+        raise
     print(_validation_table(state.validation))
     failed = sum(not r["passed"] for r in state.validation)
     print(
@@ -517,7 +667,13 @@ COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {}
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="springlab", description=__doc__.splitlines()[0])
+    parser = _Parser(
+        prog="springlab",
+        description=__doc__.splitlines()[0],
+        epilog="Start with 'springlab list' and 'springlab run slider'. Exit codes: 0 ok, 1 outside tolerance,"
+        " 2 bad input, 3 diverged, 130 interrupted, 143 terminated.",
+    )
+    parser.add_argument("--version", action="version", version=f"springlab {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser, metavar="COMMAND")
 
     p = sub.add_parser("list", help="scenes, scenarios and parameters")
@@ -593,6 +749,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--tol", type=float, metavar="TOL", help="recommend the cheapest setting meeting this relative error"
     )
     p.add_argument("--duration", type=float, metavar="SECONDS", help="simulated time [s] (default: the scenario's)")
+    _executor_arguments(p)
     p.add_argument("--output", metavar="DIR", help="write DIR/tradeoff.json and DIR/tradeoff.png")
     p.add_argument("--json", action="store_true", help="print tradeoff.json")
     COMMANDS["tradeoff"] = cmd_tradeoff
@@ -603,6 +760,7 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="more damping ratios and extreme cases, advice verified by running it (slower)",
     )
+    _executor_arguments(p)
     p.add_argument("--output", metavar="DIR", help="write DIR/stability.json, stability.png and energy.png")
     p.add_argument("--json", action="store_true", help="print stability.json")
     COMMANDS["stability"] = cmd_stability
@@ -650,9 +808,45 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="NAME=VALUE",
         help="start the sweep from another parameter value, SI units (repeatable)",
     )
-    p.add_argument("--output", metavar="DIR", help="write DIR/design.json, DIR/configurations.csv, DIR/design.png")
+    p.add_argument(
+        "--sobol",
+        type=int,
+        nargs="?",
+        const=16384,
+        metavar="N",
+        help="also Sobol indices of carriage mass, belt stiffness, damping ratio, force and move length:"
+        " N x 7 runs, N a power of 2 (bare --sobol: 16384, 114,688 runs)",
+    )
+    p.add_argument("--seed", type=int, default=0, help="seed of the Sobol sequence and bootstrap (default 0)")
+    _executor_arguments(p)
+    p.add_argument(
+        "--output", metavar="DIR", help="write DIR/design.json, configurations.csv, design.png (and sobol.png)"
+    )
     p.add_argument("--json", action="store_true", help="print design.json")
     COMMANDS["design"] = cmd_design
+
+    p = sub.add_parser("sweep", help="run a scenario over a grid (or random samples) of parameters, batched")
+    _scene_arguments(p)
+    p.add_argument(
+        "--vary",
+        action="append",
+        default=[],
+        required=True,
+        metavar="NAME=LOW:HIGH:N[:log]",
+        help="vary a parameter over N values from LOW to HIGH, SI units (repeatable; :log for log spacing)",
+    )
+    p.add_argument("--samples", type=int, metavar="N", help="N random points in the box instead of the full grid")
+    p.add_argument("--seed", type=int, default=0, help="seed of the random points (default 0)")
+    p.add_argument("--integrator", metavar="NAME", help=f"one of {', '.join(INTEGRATORS)} (default: the scene's)")
+    p.add_argument("--dt", type=float, metavar="SECONDS", help="timestep [s] (default: the scene's validated one)")
+    p.add_argument("--duration", type=float, metavar="SECONDS", help="simulated time [s] (default: the scenario's)")
+    p.add_argument(
+        "--quantity", metavar="NAME", help="what sweep.png shows (default: the scenario's headline quantity)"
+    )
+    _executor_arguments(p)
+    p.add_argument("--output", metavar="DIR", help="write DIR/sweep.csv and DIR/sweep.png")
+    p.add_argument("--json", action="store_true", help="print the sweep (setting, counts, every row) as JSON")
+    COMMANDS["sweep"] = cmd_sweep
 
     p = sub.add_parser("fit", help="identify a scene's parameters from a recorded signal (CSV)")
     p.add_argument("scene", help="slider, car, printer_head or kinematics")
@@ -680,17 +874,48 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(BaseException):
+    """SIGTERM arrived (a timeout, a batch scheduler): unwinds like Ctrl-C, so partial files are removed."""
+
+
+def _raise_terminated(signum, frame) -> None:
+    raise Terminated
+
+
+@contextlib.contextmanager
+def _sigterm_unwinds() -> Iterator[None]:
+    """Turn SIGTERM into the Terminated exception for the duration (main thread only; restored after)."""
+    try:
+        previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    except ValueError:  # not the main thread: leave signals alone
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the `springlab` console script; returns the exit code."""
     try:
-        args = build_parser().parse_args(argv)
-        return COMMANDS[args.command](args)
+        # the terminal gets springlab's one-line answers, never warning text (numpy's overflow
+        # warnings at extreme values, library deprecations); the API leaves warnings alone
+        with _sigterm_unwinds(), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            args = build_parser().parse_args(argv)
+            return COMMANDS[args.command](args)
+    except SystemExit as done:  # --help, --version
+        return done.code if isinstance(done.code, int) else EXIT_OK
     except SpringlabError as error:
         print(f"springlab: error: {error}", file=sys.stderr)
         return error.exit_code
-    except KeyboardInterrupt:
-        print("springlab: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as stop:
+        print(f"springlab: interrupted{getattr(stop, 'note', '')}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except Terminated as stop:
+        print(f"springlab: terminated{getattr(stop, 'note', '')}", file=sys.stderr)
+        return EXIT_TERMINATED
     except BrokenPipeError:
         # the reader went away (`springlab list | head`): stop quietly, as Unix tools do;
         # point stdout at devnull so the interpreter's final flush cannot raise again

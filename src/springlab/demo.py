@@ -3,8 +3,12 @@
 The demo runs in steps. The core step validates every scene and writes each
 scenario's trajectory.csv and summary.json under out/<scene>/<scenario>/.
 Features that add to the demo (videos, plots, trade-off charts, design
-studies) append a step to STEPS; each step takes the output folder and returns
-the artifacts it wrote, for the report.
+studies) are steps listed in STEPS; each step takes the output folder and
+returns the artifacts it wrote, for the report.
+
+An interrupted demo never leaves a report that looks whole: while it runs,
+out/INCOMPLETE.txt says so and the previous out/index.html is gone (its files
+are being replaced); the marker goes only after the new index.html is in place.
 """
 
 from __future__ import annotations
@@ -65,21 +69,36 @@ def report_step(state: DemoState) -> list[Artifact]:
     return [Artifact(path.name, "report", "this report")]
 
 
-#: the demo's steps, in order; features append theirs
-STEPS: list[Callable[[DemoState], list[Artifact]]] = [core_step, media_step]
-#: steps that run after every step in STEPS, whatever was appended (the report lists everything)
-FINAL_STEPS: list[Callable[[DemoState], list[Artifact]]] = [report_step]
+#: written into the output folder while the demo runs, removed once the report is complete
+INCOMPLETE_MARKER = "INCOMPLETE.txt"
+#: the report file, the folder's "this is whole" (report.write_report's name)
+REPORT_NAME = "index.html"
 
 
 def run_demo(out: str | pathlib.Path, log: Callable[[str], None] = print) -> DemoState:
-    """Run every step into `out`; return the shared state (validation rows, artifacts)."""
+    """Run every step into `out`; return the shared state (validation rows, artifacts).
+
+    While it runs, `out`/INCOMPLETE.txt marks the folder incomplete and no
+    index.html is there; an interruption (Ctrl-C, SIGTERM) or an error leaves
+    it so.
+    """
     state = DemoState(out=outputs.prepare_directory(out))
+    outputs.write_text_files(
+        state.out,
+        {
+            INCOMPLETE_MARKER: f"springlab demo started writing this folder at {time.strftime('%Y-%m-%d %H:%M:%S')}"
+            " and has not finished: its files may be a mix of this run and an earlier one, and it has no report"
+            " yet. Run 'springlab demo' again to complete it.\n"
+        },
+    )
+    (state.out / REPORT_NAME).unlink(missing_ok=True)  # a stale report would describe files being replaced
     for step in [*STEPS, *FINAL_STEPS]:
         start = time.perf_counter()
         state.artifacts.extend(step(state))
         seconds = time.perf_counter() - start
         state.timings.append((step.__name__, seconds))
         log(f"demo: {step.__name__} done in {seconds:.1f} s")
+    (state.out / INCOMPLETE_MARKER).unlink(missing_ok=True)
     return state
 
 
@@ -121,9 +140,6 @@ def tradeoff_step(state: DemoState) -> list[Artifact]:
     ]
 
 
-STEPS.append(tradeoff_step)
-
-
 def design_step(state: DemoState) -> list[Artifact]:
     """The printer head's design study: 7^4 = 2401 configurations, plus a 31 x 31 plane for the plot."""
     from . import design  # here: mujoco.batch is only needed by this step
@@ -157,9 +173,6 @@ def design_step(state: DemoState) -> list[Artifact]:
     ]
 
 
-STEPS.append(design_step)
-
-
 def audit_step(state: DemoState) -> list[Artifact]:
     """`springlab audit` on the car's model, as any MJCF would be: modes, limits, error vs cost."""
     from . import charts_audit  # here: matplotlib only when this step runs
@@ -179,4 +192,13 @@ def audit_step(state: DemoState) -> list[Artifact]:
     ]
 
 
-STEPS.append(audit_step)
+#: the demo's steps, in order (defined once, here: nothing is added at import time)
+STEPS: tuple[Callable[[DemoState], list[Artifact]], ...] = (
+    core_step,
+    media_step,
+    tradeoff_step,
+    design_step,
+    audit_step,
+)
+#: steps that run after every step in STEPS (the report lists everything)
+FINAL_STEPS: tuple[Callable[[DemoState], list[Artifact]], ...] = (report_step,)

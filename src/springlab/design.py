@@ -70,7 +70,9 @@ import numpy as np
 from mujoco import batch as mjbatch
 
 from . import outputs, scenes
-from .errors import BadInputError, DivergedError, UnknownNameError
+from .errors import BadInputError, DivergedError, ParameterError, UnknownNameError
+from .executor import Executor, chunked
+from .scene import Parameter
 from .scenes.printer_head import (
     PrinterHead,
     after_force_bound,
@@ -117,6 +119,10 @@ OMEGA_DT = 0.1
 CHUNK = 256
 #: simulated time [s] after which an unsettled configuration is given up (reported as inf)
 MAX_DURATION = 5.0
+#: configurations per chunk: one batched call each (about 2 s on one core), the unit of work on a cluster
+CHUNK_CONFIGURATIONS = 256
+#: the (n,) arrays simulate_moves returns per configuration
+_PER_CONFIGURATION = ("move_time_s", "settling_time_s", "positioning_time_s", "residual_amplitude_m", "dt_s", "steps")
 
 
 @dataclasses.dataclass
@@ -180,7 +186,9 @@ class Study:
     wall_time_s
         wall time of the batched simulation [s].
     nthread
-        threads the batch ran on.
+        threads each batch ran on.
+    executor
+        where the chunks ran ('local', '2 local dask workers', ...).
     plane
         the dense plane over the two most influential properties (None: not run).
     """
@@ -199,6 +207,7 @@ class Study:
     steps: int
     wall_time_s: float
     nthread: int
+    executor: str = "local"
     plane: Plane | None = None
 
     @property
@@ -253,13 +262,31 @@ class Study:
 def base_parameters(overrides: Mapping[str, Any] | None = None) -> dict[str, float]:
     """The printer_head `move` parameters the sweep starts from (MJCF defaults < overrides).
 
+    The design table's property `damping_ratio` [-] is accepted too: it sets the
+    belt damping c = 2 zeta sqrt(k m_c m_m / (m_c + m_m)) of the other values.
+
     Raises
     ------
     UnknownNameError, ParameterError
-        as for `springlab run`.
+        as for `springlab run`, and for damping_ratio given together with belt_damping.
     """
     scene = scenes.get("printer_head")
-    return scene.resolve(scene.scenario("move"), dict(overrides or {}))
+    overrides = dict(overrides or {})
+    for name in overrides:
+        if name != "damping_ratio" and name not in scene.parameters:
+            raise UnknownNameError(
+                "parameter of the printer_head design study", name, [*scene.parameters, "damping_ratio"]
+            )
+    ratio = overrides.pop("damping_ratio", None)
+    if ratio is None:
+        return scene.resolve(scene.scenario("move"), overrides)
+    if "belt_damping" in overrides:
+        raise ParameterError("give damping_ratio or belt_damping, not both (damping_ratio sets the belt damping)")
+    ratio = Parameter("damping_ratio", "-", "belt damping ratio", minimum=0.0).check(ratio)
+    base = scene.resolve(scene.scenario("move"), overrides)
+    reduced = base["carriage_mass"] * base["motor_mass"] / (base["carriage_mass"] + base["motor_mass"])
+    overrides["belt_damping"] = 2.0 * ratio * math.sqrt(base["belt_stiffness"] * reduced)
+    return scene.resolve(scene.scenario("move"), overrides)
 
 
 def default_properties(base: Mapping[str, float]) -> dict[str, float]:
@@ -308,8 +335,9 @@ def belt_damping(values: Mapping[str, np.ndarray], motor_mass: float) -> np.ndar
 def config_parameters(base: Mapping[str, float], values: Mapping[str, np.ndarray], i: int) -> dict[str, float]:
     """The scene parameters of configuration i (belt damping from its damping ratio)."""
     params = dict(base)
-    for name in ("belt_stiffness", "carriage_mass", "drive_force"):
-        params[name] = float(values[name][i])
+    for name in ("belt_stiffness", "carriage_mass", "drive_force", "move_distance"):
+        if name in values:  # move_distance: only the Sobol study varies it
+            params[name] = float(values[name][i])
     params["belt_damping"] = float(
         belt_damping({n: np.atleast_1d(values[n][i]) for n in PROPERTIES}, base["motor_mass"])[0]
     )
@@ -325,8 +353,14 @@ def timesteps(values: Mapping[str, np.ndarray], base: Mapping[str, float], omega
     motor_mass = base["motor_mass"]
     total = m_c + motor_mass
     largest = omega_dt / belt_omega(np.asarray(values["belt_stiffness"]), m_c, motor_mass)
-    half = np.sqrt(base["move_distance"] * total / np.asarray(values["drive_force"], float))
+    half = np.sqrt(move_distances(base, values) * total / np.asarray(values["drive_force"], float))
     return half / np.ceil(half / largest)
+
+
+def move_distances(base: Mapping[str, float], values: Mapping[str, np.ndarray]) -> np.ndarray:
+    """(n,) move distance [m] per configuration: values["move_distance"] if varied, else the base's."""
+    n = len(values["belt_stiffness"])
+    return np.broadcast_to(np.asarray(values.get("move_distance", base["move_distance"]), float), (n,)).copy()
 
 
 def move_profiles(
@@ -391,7 +425,7 @@ def simulate_moves(
     stiffness = np.asarray(values["belt_stiffness"], float)
     damping = belt_damping(values, m_m)
     limit = np.asarray(values["drive_force"], float)
-    distance, band = params["move_distance"], params["positioning_band"]
+    distance, band = move_distances(params, values), params["positioning_band"]
     dt = timesteps(values, params, omega_dt)
     half_steps, force = move_profiles(params, values, dt)
     move_steps = 2 * half_steps
@@ -431,7 +465,7 @@ def simulate_moves(
             bad = active[np.any(batch.warning[active, :, 1] > 0, axis=1)]
             raise DivergedError(f"design sweep: {len(bad)} simulations diverged (first: configuration {bad[0]})")
         qpos, qvel = record["qpos"], record["qvel"]
-        deviation = qpos[:, :, carriage] - distance
+        deviation = qpos[:, :, carriage] - distance[active][:, None]
         chunk_excess = np.column_stack([excess[active], np.abs(deviation) - band])
         # the last sample outside the band in [current state, chunk end]; exits interpolated linearly
         outside = chunk_excess > 0
@@ -454,7 +488,7 @@ def simulate_moves(
         q_c, q_m = qpos[:, -1, carriage], qpos[:, -1, motor]
         v_c, v_m = qvel[:, -1, carriage], qvel[:, -1, motor]
         centre = (m_c[active] * q_c + m_m * q_m) / total[active]
-        bound = after_force_bound(centre - distance, q_m - q_c, v_m - v_c, m_c[active], m_m, stiffness[active])
+        bound = after_force_bound(centre - distance[active], q_m - q_c, v_m - v_c, m_c[active], m_m, stiffness[active])
         certified = (steps[active] >= move_steps[active]) & (bound <= band)
         settled[active[certified]] = True
         active = active[~certified & (steps[active] * dt[active] <= max_duration)]
@@ -475,6 +509,48 @@ def simulate_moves(
     }
 
 
+def moves_chunk(payload: Mapping[str, Any], nthread: int = 0) -> dict[str, Any]:
+    """One chunk of a design study (a module-level function of plain data, for dask workers):
+    simulate_moves on payload["base"], payload["values"] and payload["omega_dt"]."""
+    return simulate_moves(payload["base"], payload["values"], omega_dt=payload["omega_dt"], nthread=nthread)
+
+
+def run_moves(
+    base: Mapping[str, float],
+    values: Mapping[str, np.ndarray],
+    *,
+    omega_dt: float = OMEGA_DT,
+    executor: Executor | None = None,
+    chunk_size: int = CHUNK_CONFIGURATIONS,
+    description: str = "design",
+) -> dict[str, Any]:
+    """simulate_moves over every configuration, cut into chunks of `chunk_size` on `executor`.
+
+    Each simulation's result depends only on its own parameters, and the chunks are concatenated
+    in order, so the arrays are identical whichever executor runs them (and whatever the chunk size).
+    Returns what simulate_moves returns; wall_time_s is the whole map's.
+    """
+    runner = Executor(progress=False) if executor is None else executor
+    n = len(values["belt_stiffness"])
+    pieces = chunked(n, chunk_size)
+    payloads = [
+        {
+            "base": dict(base),
+            "values": {name: np.asarray(v)[piece.start : piece.stop] for name, v in values.items()},
+            "omega_dt": omega_dt,
+        }
+        for piece in pieces
+    ]
+    start = _time.perf_counter()
+    parts = runner.map(moves_chunk, payloads, description=description, sizes=[len(p) for p in pieces], unit="config")
+    out: dict[str, Any] = {key: np.concatenate([part[key] for part in parts]) for key in _PER_CONFIGURATION}
+    out["steps_total"] = int(out["steps"].sum())
+    out["wall_time_s"] = _time.perf_counter() - start
+    out["nthread"] = int(parts[0]["nthread"]) if parts else 0
+    out["executor"] = runner.describe()
+    return out
+
+
 # -- the analytic estimate ---------------------------------------------------------
 
 
@@ -489,7 +565,7 @@ def estimates(
     """
     n = len(dt)
     estimate, worst, frequency = np.empty(n), np.empty(n), np.empty(n)
-    m_m, distance, band = base["motor_mass"], base["move_distance"], base["positioning_band"]
+    m_m, band = base["motor_mass"], base["positioning_band"]
     for i in range(n):
         params = config_parameters(base, values, i)
         m_c, k, force = params["carriage_mass"], params["belt_stiffness"], params["drive_force"]
@@ -502,7 +578,9 @@ def estimates(
         envelope = residual_envelope(stretch, rate, m_c, m_m, omega, zeta)
         estimate[i] = 2 * half_steps * dt[i] + settling_estimate(envelope, band, zeta, omega)
         worst_envelope = worst_case_envelope(force, m_c, m_m, k)
-        worst[i] = minimum_move_time(distance, total, force) + settling_estimate(worst_envelope, band, zeta, omega)
+        worst[i] = minimum_move_time(params["move_distance"], total, force) + settling_estimate(
+            worst_envelope, band, zeta, omega
+        )
     return estimate, worst, frequency
 
 
@@ -516,6 +594,7 @@ def run_study(
     plane_levels: int = PLANE_LEVELS,
     nthread: int = 0,
     omega_dt: float = OMEGA_DT,
+    executor: Executor | None = None,
     **overrides: Any,
 ) -> Study:
     """Sweep the four properties, simulate every configuration, and estimate each analytically.
@@ -533,6 +612,8 @@ def run_study(
         batch threads (0: one per CPU).
     omega_dt
         omega_n dt [-] of every simulation.
+    executor
+        where the chunks run (None: locally on `nthread` threads); the numbers are the same.
     **overrides
         printer_head parameters to start from (SI), e.g. move_distance=0.2 [m].
 
@@ -556,7 +637,8 @@ def run_study(
     base = base_parameters(overrides)
     grids = make_grids(base, levels)
     values = configurations(grids)
-    runs = simulate_moves(base, values, omega_dt=omega_dt, nthread=nthread)
+    executor = Executor(nthread=nthread, progress=False) if executor is None else executor
+    runs = run_moves(base, values, omega_dt=omega_dt, executor=executor)
     estimate, worst, frequency = estimates(base, values, runs["dt_s"])
     study = Study(
         base=base,
@@ -573,13 +655,21 @@ def run_study(
         steps=runs["steps_total"],
         wall_time_s=runs["wall_time_s"],
         nthread=runs["nthread"],
+        executor=runs["executor"],
     )
     if plane_levels:
-        study.plane = dense_plane(study, plane_levels, omega_dt=omega_dt, nthread=nthread)
+        study.plane = dense_plane(study, plane_levels, omega_dt=omega_dt, executor=executor)
     return study
 
 
-def dense_plane(study: Study, levels: int = PLANE_LEVELS, *, omega_dt: float = OMEGA_DT, nthread: int = 0) -> Plane:
+def dense_plane(
+    study: Study,
+    levels: int = PLANE_LEVELS,
+    *,
+    omega_dt: float = OMEGA_DT,
+    nthread: int = 0,
+    executor: Executor | None = None,
+) -> Plane:
     """Simulate the `levels` x `levels` plane of the study's two most influential properties.
 
     Each spans the study's range (default x SPANS^[-1, 1]); the other two stay at their defaults.
@@ -591,7 +681,8 @@ def dense_plane(study: Study, levels: int = PLANE_LEVELS, *, omega_dt: float = O
     y, x = np.meshgrid(axis[first], axis[second], indexing="ij")
     values = {name: np.full(y.size, defaults[name]) for name in PROPERTIES}
     values[first], values[second] = y.ravel(), x.ravel()
-    runs = simulate_moves(study.base, values, omega_dt=omega_dt, nthread=nthread)
+    executor = Executor(nthread=nthread, progress=False) if executor is None else executor
+    runs = run_moves(study.base, values, omega_dt=omega_dt, executor=executor, description="design plane")
     estimate, _, _ = estimates(study.base, values, runs["dt_s"])
     return Plane(
         x_name=second,
@@ -666,6 +757,7 @@ def summary(study: Study) -> dict[str, Any]:
         "wall_time_s": study.wall_time_s,
         "configurations_per_s": study.size / study.wall_time_s,
         "nthread": study.nthread,
+        "executor": study.executor,
         "plane": None
         if study.plane is None
         else {
@@ -781,8 +873,9 @@ def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
     return path
 
 
-def write(study: Study, directory: str | pathlib.Path) -> list[pathlib.Path]:
-    """Write design.json, configurations.csv and design.png (the plot) into `directory`."""
+def write(study: Study, directory: str | pathlib.Path, extra: Mapping[str, Any] | None = None) -> list[pathlib.Path]:
+    """Write design.json (the summary, plus `extra` entries such as `sobol`), configurations.csv and
+    design.png (the plot) into `directory`."""
     folder = outputs.prepare_directory(directory)
     columns = {name: study.values[name] for name in PROPERTIES}
     columns.update(
@@ -800,7 +893,7 @@ def write(study: Study, directory: str | pathlib.Path) -> list[pathlib.Path]:
     written = outputs.write_text_files(
         folder,
         {
-            "design.json": outputs.dumps(summary(study)) + "\n",
+            "design.json": outputs.dumps({**summary(study), **(extra or {})}) + "\n",
             "configurations.csv": outputs.csv_text(columns),
         },
     )

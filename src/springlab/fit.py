@@ -131,7 +131,8 @@ def fit(
       free: names to fit (None: the scene's default; see springlab.fit_models).
       scale: factor [SI per file unit] applied to the signal, e.g. 0.001 for mm.
       start: release time [s]: the record before it is dropped (None: detected).
-      degree: kinematics only: the polynomial's degree 0-3 (frees x0, v0, a0, jerk in order).
+      degree: kinematics only: the polynomial's degree 0-3 (frees x0, v0, a0, jerk in order);
+        None: chosen, from 3 down while the highest coefficient's 95 % interval contains 0.
       run_scene: also run the identified scene (FitResult.run) for trajectory.csv.
       **parameters: fixed values: scene parameters (e.g. mass=2.0 [kg]) and
         x0 [m], v0 [m/s], offset [signal unit], delay [s].
@@ -177,6 +178,7 @@ def fit(
         detect_release=not wants_delay,
         signals=how.signals,
     )
+    free_given = bool(free)
     free = _free_names(how, free, degree, record)
     forced = scenario == "step" and base.get("force_amplitude", 0.0) != 0.0
     force = base.get("force_amplitude", 0.0) if forced else 0.0
@@ -193,16 +195,32 @@ def fit(
             fixed["x0"] = float(record.values[0]) if record.signal == "pos" else how.equilibrium(base)
         if "v0" not in free and "v0" not in fixed:
             fixed["v0"] = 0.0
+    problem, solved = _identify(how, chosen, base, record, free, fixed, modal, force)
+    if scene == "kinematics" and not free_given and degree is None:
+        # the degree is chosen: drop the highest coefficient while its 95 % interval contains 0
+        result = _finish(problem, solved, run_scene=False)
+        while len(free) > 1:
+            low, high = result.estimates[free[-1]]["ci95"]
+            if not low <= 0.0 <= high:
+                break
+            record.notes.append(f"degree chosen: {free[-1]}'s 95 % interval [{low:.3g}, {high:.3g}] contains 0")
+            free = free[:-1]
+            problem, solved = _identify(how, chosen, base, record, free, fixed, modal, force)
+            result = _finish(problem, solved, run_scene=False)
+    return _finish(problem, solved, run_scene)
+
+
+def _identify(how, chosen, base, record, free, fixed, modal, force) -> tuple[Problem, dict[str, Any]]:
+    """The start, the problem and sysid's solution; the grid refined once if the estimate is faster than the start."""
     start_values = _start(how, record, base, fixed, free, force)
     problem = Problem(how, chosen, base, record, free, start_values, modal, force)
     solved = solve(problem, record)
-    # the grid was set for the start; if the estimate is faster, refine it once
     estimate = problem.values(solved["x"])
     if problem.fastest_rate(estimate) * problem.dt > 1.5 * OMEGA_DT:
         problem.start = dict(estimate)
         problem.set_grid(estimate)
         solved = solve(problem, record)
-    return _finish(problem, solved, run_scene)
+    return problem, solved
 
 
 def _start(how: SceneFit, record, base, fixed, free, force) -> dict[str, float]:

@@ -108,11 +108,13 @@ class Problem:
     # -- values ----------------------------------------------------------------
 
     def values(self, vector: np.ndarray) -> dict[str, float]:
+        """Every fit name's value (SI): the start, with the free ones taken from `vector` (in `free` order)."""
         values = dict(self.start)
         values.update(zip(self.free, (float(v) for v in np.ravel(vector))))
         return values
 
     def values_of(self, params) -> dict[str, float]:
+        """`values` of a sysid.ParameterDict."""
         return self.values(np.array([params[n].value[0] for n in self.free]))
 
     # -- the pieces sysid calls ----------------------------------------------------
@@ -123,6 +125,7 @@ class Problem:
         return self.compile(scene_params)
 
     def compile(self, scene_params: dict[str, float]) -> mujoco.MjModel:
+        """The candidate's MjModel, set to RK4 at the fit's dt [s]."""
         with quiet_mujoco():
             model = self.spec(scene_params).compile()
         model.opt.integrator = int(mujoco.mjtIntegrator.mjINT_RK4)

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import functools
 import pathlib
 
 _PACKAGED = pathlib.Path(__file__).resolve().parent / "models"
 _CHECKOUT = pathlib.Path(__file__).resolve().parents[2] / "models"
 
 
+@functools.cache  # a stat per call added up: every run and every sweep configuration asks
 def directory() -> pathlib.Path:
     """The folder holding the scene MJCF files."""
     # a wheel carries springlab/models; an editable install reads the checkout's models/

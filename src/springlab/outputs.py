@@ -57,6 +57,35 @@ def prepare_directory(directory: str | os.PathLike) -> pathlib.Path:
     return path
 
 
+def check_directory(directory: str | os.PathLike) -> pathlib.Path:
+    """Raise BadInputError unless a file can be written in `directory`; leave nothing behind.
+
+    For commands that compute for seconds before they write: a bad --output
+    fails at once. It tries for real (creates the missing folders and a probe
+    file, then removes them), so permissions, read-only mounts and /proc answer
+    as they will when the results are written.
+    """
+    path = pathlib.Path(directory)
+    if path.exists() and not path.is_dir():
+        raise BadInputError(f"output directory {str(path)!r} exists and is not a directory")
+    missing = []
+    for folder in [path, *path.parents]:
+        if folder.exists():
+            break
+        missing.append(folder)
+    try:
+        for folder in reversed(missing):
+            folder.mkdir()
+        os.unlink(temporary_beside(path / "probe"))
+    except OSError as error:
+        raise BadInputError(f"cannot write into output directory {str(path)!r}: {error.strerror or error}") from None
+    finally:
+        for folder in missing:
+            with contextlib.suppress(OSError):
+                folder.rmdir()
+    return path
+
+
 def temporary_beside(target: pathlib.Path) -> pathlib.Path:
     """Create a hidden, unique, empty file next to `target` and return its path.
 
@@ -90,7 +119,12 @@ def atomic_path(target: str | os.PathLike) -> Iterator[pathlib.Path]:
 
 
 def json_ready(value: Any) -> Any:
-    """Plain JSON types; inf/nan become strings so the file stays standard JSON."""
+    """Plain JSON types; inf and nan become null, so a key holds a number or null, never a string.
+
+    Where a quantity can be infinite or undefined (a carriage that never settles,
+    runs that never separate) the scene reports a boolean flag beside it
+    (`settled_for_good`, `separated`) that says why it is null.
+    """
     if isinstance(value, Mapping):
         return {str(k): json_ready(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
@@ -99,7 +133,7 @@ def json_ready(value: Any) -> Any:
         return json_ready(value.tolist())
     if isinstance(value, (np.floating, float)):
         value = float(value)
-        return value if math.isfinite(value) else str(value)
+        return value if math.isfinite(value) else None
     if isinstance(value, np.integer):
         return int(value)
     if isinstance(value, np.bool_):
@@ -112,10 +146,18 @@ def dumps(value: Any) -> str:
     return json.dumps(json_ready(value), indent=2)
 
 
+def recorded_rows(n: int, every: int = 1) -> np.ndarray:
+    """Indices of the rows `--record-every` keeps out of n: every `every`-th from 0, and always the last."""
+    rows = np.arange(0, n, every)
+    return rows if rows[-1] == n - 1 else np.append(rows, n - 1)
+
+
 def csv_text(columns: Mapping[str, np.ndarray], every: int = 1) -> str:
-    """CSV with a header row and every `every`-th row at full double precision (%.17g)."""
+    """CSV with a header row and every `every`-th row (the last always kept) at full double precision (%.17g)."""
     names = list(columns)
-    table = np.column_stack([np.asarray(columns[n], float)[::every] for n in names])
+    n = len(np.asarray(columns[names[0]]))
+    rows = recorded_rows(n, every)
+    table = np.column_stack([np.asarray(columns[name], float)[rows] for name in names])
     buffer = io.StringIO()
     buffer.write(",".join(names) + "\n")
     np.savetxt(buffer, table, fmt="%.17g", delimiter=",")
@@ -139,11 +181,17 @@ def write_text_files(directory: str | os.PathLike, files: Mapping[str, str]) -> 
 
 
 def write_run(directory: str | os.PathLike, result, every: int = 1) -> list[pathlib.Path]:
-    """Write a Result's trajectory.csv and summary.json into `directory`."""
+    """Write a Result's trajectory.csv and summary.json into `directory`.
+
+    The time column is k dt [s] for step k, exactly: the state after k steps is
+    the state at k dt (MuJoCo's data.time accumulates dt and drifts by rounding).
+    """
+    columns = result.columns()
+    columns["time"] = np.arange(len(columns["time"])) * float(result.summary["dt"])
     return write_text_files(
         directory,
         {
-            "trajectory.csv": csv_text(result.columns(), every),
+            "trajectory.csv": csv_text(columns, every),
             "summary.json": dumps(result.summary) + "\n",
         },
     )

@@ -54,6 +54,8 @@ FAMILY_SEPARATRIX_FRACTIONS = (0.3, 0.6, 0.9, 1.1, 1.3)
 
 SIMULATED = dict(color="C0", lw=1.6)
 EXACT = dict(color="k", lw=1.0, ls=(0, (4, 3)))
+#: the exact curves of the zeta family: white dashes drawn inside each coloured curve
+ZETA_EXACT = dict(color="white", lw=0.9, ls=(0, (4, 4)))
 FIELD_COLOR = "0.72"
 SEPARATRIX = dict(color="C3", lw=1.1, ls=(0, (6, 3)))
 
@@ -97,6 +99,13 @@ def _positive(values: np.ndarray) -> np.ndarray:
     """Values for a log axis: exact zeros (e.g. at t = 0) become gaps, not -inf."""
     values = np.abs(np.asarray(values, float))
     return np.where(values > 0, values, np.nan)
+
+
+def _labels(model: mujoco.MjModel, joint: str) -> tuple[str, str]:
+    """(position axis label, velocity axis label): the quantity and its unit, e.g. 'position x [m]'."""
+    if model.joint(joint).type[0] == mujoco.mjtJoint.mjJNT_HINGE:
+        return "angle θ [rad]", "angular velocity ω [rad/s]"
+    return "position x [m]", "velocity v [m/s]"
 
 
 def _legend_outside(ax) -> None:
@@ -161,10 +170,10 @@ def time_series(result: api.Result) -> Figure:
         if joint in result.ref_pos:
             ax_x.plot(result.time, result.ref_pos[joint], label="exact", **EXACT)
             ax_v.plot(result.time, result.ref_vel[joint], label="exact", **EXACT)
-        ax_x.set_ylabel(f"{joint} [{pos_unit}]")
-        ax_v.set_ylabel(f"{joint} velocity [{vel_unit}]")
-        ax_x.set_title(joint)
-        ax_x.legend(loc="best", fontsize=8)
+        pos_label, vel_label = _labels(result.model, joint)
+        ax_x.set_ylabel(pos_label)
+        ax_v.set_ylabel(vel_label)
+        ax_x.set_title(f"joint {joint}")
         if has_error:
             ax_e = axes[2, column]
             if joint in result.ref_pos:
@@ -182,11 +191,14 @@ def time_series(result: api.Result) -> Figure:
                             label=f"{name} tolerance",
                         )
                 ax_e.set_yscale("log")
-                ax_e.set_ylabel("|MuJoCo - exact|")
-                ax_e.legend(loc="best", fontsize=7, ncols=2)
+                ax_e.set_ylabel("|MuJoCo - exact| [m, m/s]" if pos_unit == "m" else "|MuJoCo - exact| [rad, rad/s]")
             else:
                 ax_e.set_axis_off()
-        axes[-1, column].set_xlabel("time [s]")
+        axes[-1, column].set_xlabel("time t [s]")
+    for row in range(rows - 1 if has_error else 1):  # legends beside the last column, never over a curve
+        _legend_outside(axes[row, -1])
+    if has_error and axes[2, -1].get_legend_handles_labels()[0]:
+        _legend_outside(axes[2, -1])
     verdict = ""
     if result.summary.get("passed") is not None:
         verdict = f", {result.summary.get('verdict') or ('PASS' if result.summary['passed'] else 'FAIL')}"
@@ -330,10 +342,10 @@ def phase_plane(result: api.Result) -> Figure:
         if joint in result.ref_pos:
             ax.plot(result.ref_pos[joint], result.ref_vel[joint], zorder=4, label="exact", **EXACT)
         ax.plot(result.pos[joint][:1], result.vel[joint][:1], "s", color="C0", ms=5, zorder=6, label="start")
-        pos_unit, vel_unit = _units(result.model, joint)
-        ax.set_xlabel(f"{joint} [{pos_unit}]")
-        ax.set_ylabel(f"{joint} velocity [{vel_unit}]")
-        ax.set_title(joint if len(joints) > 1 else "phase plane")
+        pos_label, vel_label = _labels(result.model, joint)
+        ax.set_xlabel(pos_label)
+        ax.set_ylabel(vel_label)
+        ax.set_title(f"phase plane of joint {joint}")
     _legend_outside(axes[-1])
     figure.suptitle(f"{_title(result)}: phase plane")
     return figure
@@ -471,8 +483,10 @@ def family_of(result: api.Result) -> Figure:
             label += " (outside separatrix)" if fractions[i] > 1 else " (inside)"
         ax.plot(x, v, color=color, lw=1.3, zorder=3, label=label)
         ax.plot(x[:1], v[:1], "s", color=color, ms=4, zorder=6)
-    ax.set_xlabel(f"{joint} [{pos_unit}]")
-    ax.set_ylabel(f"{joint} velocity [{vel_unit}]")
+    pos_label, vel_label = _labels(result.model, joint)
+    ax.set_xlabel(pos_label)
+    ax.set_ylabel(vel_label)
+    ax.set_title(f"joint {joint}")
     _legend_outside(ax)
     what = "released on both sides of the separatrix" if straddles else "released from several displacements"
     figure.suptitle(f"{_title(result)}: phase trajectories {what}")
@@ -481,6 +495,14 @@ def family_of(result: api.Result) -> Figure:
 
 def _damping_per_ratio(scene_name: str, scenario_name: str | None, parameters: dict[str, Any]) -> float:
     """Damping [N s/m] per unit damping ratio of the scene's single mode (zeta is linear in d)."""
+    # the number of modes first: a two-mode scenario (car pitch_heave) may not even take 'damping'
+    scene, scenario, params = api.prepare(scene_name, scenario_name, parameters)
+    count = len(scene.modes(scene.build(params, scenario), params, scenario))
+    if count != 1:
+        raise BadInputError(
+            f"plot kind 'zeta' needs a one-mode scene; {scene.name}/{scenario.name} has {count} modes"
+            " (use --kind time or phase)"
+        )
     scene, scenario, params = api.prepare(scene_name, scenario_name, {**parameters, "damping": 1.0})
     model = scene.build(params, scenario)
     modes = scene.modes(model, params, scenario)
@@ -534,25 +556,31 @@ def zeta_family(
             )
         runs.append((zeta, run))
     joint = next(iter(runs[0][1].pos))
-    pos_unit, vel_unit = _units(runs[0][1].model, joint)
     figure = _new_figure(10.0, 4.4)
     ax_t, ax_p = figure.subplots(1, 2, width_ratios=[1.5, 1])
-    colors = matplotlib.colormaps["plasma"](np.linspace(0.0, 0.85, len(runs)))
+    # distinct hues in order (tab10), so neighbouring ratios (0 and 0.1) never look alike; the exact
+    # solution is a thin white dash inside each coloured curve: it shows agreement without hiding the colour
+    colors = [matplotlib.colormaps["tab10"](i) for i in range(len(runs))]
     for (zeta, run), color in zip(runs, colors):
         regime = run.summary["quantities"].get("regime", "")
         label = f"ζ = {zeta:g}" + (f" ({regime})" if regime else "")
-        ax_t.plot(run.time, run.pos[joint], color=color, lw=1.5, label=label)
-        ax_t.plot(run.time, run.ref_pos[joint], color="k", lw=0.7, ls=(0, (3, 3)))
-        ax_p.plot(run.pos[joint], run.vel[joint], color=color, lw=1.3)
-        ax_p.plot(run.ref_pos[joint], run.ref_vel[joint], color="k", lw=0.7, ls=(0, (3, 3)))
-    ax_t.plot([], [], color="k", lw=0.7, ls=(0, (3, 3)), label="exact")
-    ax_t.set_xlabel("time [s]")
-    ax_t.set_ylabel(f"{joint} [{pos_unit}]")
-    ax_t.legend(loc="best", fontsize=7)
-    ax_p.set_xlabel(f"{joint} [{pos_unit}]")
-    ax_p.set_ylabel(f"{joint} velocity [{vel_unit}]")
-    ax_p.set_title("phase plane")
-    ax_t.set_title("response")
+        ax_t.plot(run.time, run.pos[joint], color=color, lw=2.4, label=label)
+        ax_t.plot(run.time, run.ref_pos[joint], **ZETA_EXACT)
+        ax_p.plot(run.pos[joint], run.vel[joint], color=color, lw=2.0)
+        ax_p.plot(run.ref_pos[joint], run.ref_vel[joint], **ZETA_EXACT)
+    handles, labels = ax_t.get_legend_handles_labels()
+    (under,) = ax_t.plot([], [], color="0.45", lw=2.4)
+    (dashes,) = ax_t.plot([], [], **ZETA_EXACT)
+    handles.append((under, dashes))  # a tuple is drawn overlaid: the white dash inside a curve
+    labels.append("exact (white dashes)")
+    pos_label, vel_label = _labels(runs[0][1].model, joint)
+    ax_t.set_xlabel("time t [s]")
+    ax_t.set_ylabel(pos_label)
+    ax_p.set_xlabel(pos_label)
+    ax_p.set_ylabel(vel_label)
+    ax_p.set_title(f"phase plane of joint {joint}")
+    ax_t.set_title(f"response of joint {joint}")
+    figure.legend(handles, labels, loc="outside right upper", fontsize=7)
     figure.suptitle(
         f"{scene} / {chosen.name}: the damping ratio ζ from 0 to {max(zetas):g} (d = {per_ratio:.4g} ζ N s/m)"
     )
@@ -627,9 +655,9 @@ class PhasePanel:
                     zorder=2,
                     label="exact",
                 )
-            pos_unit, vel_unit = _units(result.model, joint)
-            ax.set_xlabel(f"{joint} [{pos_unit}]", fontsize=8 * scale)
-            ax.set_ylabel(f"velocity [{vel_unit}]", fontsize=8 * scale)
+            pos_label, vel_label = _labels(result.model, joint)
+            ax.set_xlabel(pos_label, fontsize=8 * scale)
+            ax.set_ylabel(vel_label, fontsize=8 * scale)
             ax.tick_params(labelsize=7 * scale)
             ax.set_title(f"phase plane: {joint}", fontsize=9 * scale)
         canvas.draw()

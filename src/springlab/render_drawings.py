@@ -423,7 +423,7 @@ class Drawings:
         edges = start + np.linspace(0.0, bump.length, segments + 1)
         heights = bump.exaggeration * bump.height * np.sin(np.pi * (edges - start) / bump.length)
         rgba = np.array(BUMP_RGBA, np.float32)
-        y, half_y = road["track"] - 0.1, 0.3  # a strip along the wheel's track, reaching out towards the viewer
+        y, half_y = road["track"] - 0.4, 0.25  # a strip along the track, just in front of the tire (not hidden by it)
         for x0, x1, h0, h1 in zip(edges[:-1], edges[1:], heights[:-1], heights[1:]):
             if fade is not None and x1 <= fade:
                 continue

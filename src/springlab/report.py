@@ -51,6 +51,8 @@ video { max-width: 100%; background: #fff; border: 1px solid #ccc; }
 img.plot { width: 100%; border: 1px solid #e0e0e6; }
 details { margin: 0.3em 0 0.8em; } summary { cursor: pointer; color: #335; }
 nav a { margin-right: 0.8em; }
+p.question { background: #f5f7fb; border-left: 3px solid #6b8bd6; padding: 0.4em 0.7em; margin: 0.4em 0; }
+p.params { font-size: 0.88em; color: #444; }
 """
 
 _SCRIPT = """
@@ -129,19 +131,25 @@ def _validation_table(rows: list[dict]) -> str:
 
     out = [
         "<table><tr><th>scene</th><th>scenario</th><th>integrator</th><th>dt [s]</th><th>steps</th>"
-        "<th>max relative error</th><th>tolerance</th><th>result</th><th>basis</th></tr>"
+        "<th>error of</th><th>error</th><th>tolerance</th><th>result</th><th>basis</th></tr>"
     ]
     for r in rows:
+        checks = {c["name"] for c in r.get("checks", [])}
+        basis = r.get("note") or r.get("tolerance_basis", "")
+        head, _, tail = basis.partition(": ")
+        if head in checks and tail:  # "period_s: <the check's basis>": one footnote, not two
+            basis = tail
         out.append(
             f"<tr><td>{_e(r['scene'])}</td><td><a href='#{_e(r['scene'])}-{_e(r['scenario'])}'>"
             f"{_e(r['scenario'])}</a></td><td>{_e(r['integrator'])}</td><td class='num'>{_number(r['dt'], 'g')}</td>"
-            f"<td class='num'>{_e(r.get('steps', ''))}</td><td class='num'>{_number(r['max_rel_error'])}</td>"
+            f"<td class='num'>{_e(r.get('steps', ''))}</td><td>{_e(r.get('measure', 'trajectory max_rel'))}</td>"
+            f"<td class='num'>{_number(r['max_rel_error'])}</td>"
             f"<td class='num'>{_number(r['tolerance'])}</td><td>{_verdict(r['passed'], r.get('verdict'))}</td>"
-            f"<td>{note(r.get('note') or r.get('tolerance_basis', ''))}</td></tr>"
+            f"<td>{note(basis)}</td></tr>"
         )
         for c in r.get("checks", []):
             out.append(
-                f"<tr class='check'><td></td><td colspan='4'>check <code>{_e(c['name'])}</code>: "
+                f"<tr class='check'><td></td><td colspan='5'>check <code>{_e(c['name'])}</code>: "
                 f"{_number(c['value'], '.10g')} against {_number(c['reference'], '.10g')}</td>"
                 f"<td class='num'>{_number(c['error'])}</td><td class='num'>{_number(c['tolerance'])}</td>"
                 f"<td>{_verdict(c['passed'])}</td><td>{note(c.get('basis', ''))}</td></tr>"
@@ -217,6 +225,34 @@ def _quantities(summary: dict) -> str:
     return f"<details><summary>quantities</summary><table>{rows}</table></details>" if rows else ""
 
 
+def _question(scene, scenario_name: str, result) -> str:
+    """The scenario's textbook question and its answer sentence, from the scene's own metadata."""
+    if scene is None or result is None or not hasattr(scene, "question_and_answer"):
+        return ""
+    qa = scene.question_and_answer(scenario_name, result.summary.get("quantities") or {}, result.parameters)
+    if qa is None:
+        return ""
+    question, answer = qa
+    text = f"<p class='question'><b>Question.</b> {_e(question)}"
+    if answer:
+        text += f"<br><b>Answer.</b> {_e(answer)}"
+    return text + "</p>"
+
+
+def _parameters(scene, result) -> str:
+    """The run's parameters with their units, on one line."""
+    if result is None or not result.parameters:
+        return ""
+    units = {name: p.unit for name, p in getattr(scene, "parameters", {}).items()}
+    items = []
+    for name, value in result.parameters.items():
+        unit = units.get(name, "")
+        unit = "" if unit in ("", "-") else f" {unit}"
+        shown = _number(value, ".4g") if isinstance(value, (int, float)) else _e(value)
+        items.append(f"<code>{_e(name)}</code> = {shown}{_e(unit)}")
+    return f"<p class='params'><b>Parameters:</b> {', '.join(items)}</p>"
+
+
 def build_html(state, *, wall_time_s: float | None = None) -> str:
     """The report page for a finished demo state (validation rows, results, artifacts)."""
     ids = _Ids()
@@ -229,9 +265,10 @@ def build_html(state, *, wall_time_s: float | None = None) -> str:
     nav += " <a href='#all-files'>all files</a>"
     now = datetime.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z")
     timing = f"; demo wall time {wall_time_s:.1f} s" if wall_time_s is not None else ""
+    # the count the CLI prints ("wrote N files"): the artifacts so far plus this report itself
     body.append(
         f"<h1>springlab demo report</h1><p class='muted'>generated {_e(now)}{_e(timing)};"
-        f" {len(artifacts)} files</p><nav>{nav}</nav>"
+        f" {len(artifacts) + 1} files, this page included</p><nav>{nav}</nav>"
     )
     body.append("<pre id='load-errors' class='fail' hidden></pre>")
     body.append("<h2 id='validation'>Validation against the exact solutions</h2>")
@@ -240,7 +277,10 @@ def build_html(state, *, wall_time_s: float | None = None) -> str:
         rows = "".join(
             f"<tr><td>{_e(name)}</td><td class='num'>{seconds:.1f}</td></tr>" for name, seconds in state.timings
         )
-        body.append(f"<details><summary>time per step [s]</summary><table>{rows}</table></details>")
+        body.append(
+            "<details><summary>wall time of each step of the demo [s] (the demo's own steps, not physics"
+            f" time steps)</summary><table><tr><th>demo step</th><th>wall time [s]</th></tr>{rows}</table></details>"
+        )
 
     for name in scene_names:
         scene = scenes.SCENES.get(name)
@@ -265,6 +305,9 @@ def build_html(state, *, wall_time_s: float | None = None) -> str:
                 f"<h3 id='{_e(name)}-{_e(scenario_name)}'>{_e(name)} / {_e(scenario_name)}{verdict}</h3>"
                 f"<p class='muted'>{_e(description)}</p>"
             )
+            body.append(_question(scene, scenario_name, result))
+            if scene is not None:
+                body.append(_parameters(scene, result))
             media, rest = _media(sorted(items, key=_kind_rank), ids)
             body.append(media)
             if result is not None:

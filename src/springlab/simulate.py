@@ -325,6 +325,37 @@ def check_diverged(trajectory: Trajectory, dt: float, messages: list[str] | None
     raise DivergedError(f"simulation diverged{where} ({trajectory.integrator}, dt = {dt:g} s)")
 
 
+#: MuJoCo's cap on every |qpos|, |qvel| and |qacc| (mjMAXVAL, 1e10 in SI units): beyond it
+#: mj_checkPos/Vel/Acc flag the run and reset it, whatever the timestep or integrator
+MAX_VALUE = float(mujoco.mjMAXVAL)
+
+
+def beyond_mujoco_limits(
+    model: mujoco.MjModel,
+    qpos: np.ndarray | None = None,
+    qvel: np.ndarray | None = None,
+    act: np.ndarray | None = None,
+    control: np.ndarray | None = None,
+) -> str | None:
+    """Which part of the initial state is past MAX_VALUE, e.g. 'a position of 1e+300', or None.
+
+    Checks qpos [m or rad], qvel [m/s or rad/s] and the acceleration [m/s^2 or
+    rad/s^2] MuJoCo computes there (with the first control row); no timestep can
+    run a state MuJoCo itself rejects.
+    """
+    data = mujoco.MjData(model)
+    initial_state(model, qpos, qvel, act, data)
+    if model.nu and control is not None:
+        data.ctrl[:] = np.atleast_2d(np.asarray(control, float))[0]
+    with quiet_mujoco(), np.errstate(all="ignore"):
+        mujoco.mj_forward(model, data)
+    for what, values in (("position", data.qpos), ("velocity", data.qvel), ("acceleration", data.qacc)):
+        bad = ~np.isfinite(values) | (np.abs(values) > MAX_VALUE)
+        if bad.any():
+            return f"an initial {what} of {float(values[np.flatnonzero(bad)[0]]):.3g}"
+    return None
+
+
 def _rk4_amplification(z: np.ndarray) -> np.ndarray:
     return 1 + z + z**2 / 2 + z**3 / 6 + z**4 / 24
 
@@ -349,21 +380,33 @@ def stability_limit(integrator: str, zeta: float) -> float:
     if integrator == "discrete":
         return math.inf
     if integrator != "rk4":
-        return 2 * zeta + 2 * math.sqrt(zeta * zeta + 1)
+        return 2 * zeta + 2 * math.hypot(zeta, 1.0)  # hypot: no overflow for huge zeta
     # roots of s^2 + 2 zeta s + 1 (omega_n = 1), then the first omega*dt whose
     # amplification leaves the unit disc, by a scan and a bisection
-    disc = np.sqrt(complex(zeta * zeta - 1))
-    roots = np.array([-zeta + disc, -zeta - disc])
+    roots = _unit_oscillator_roots(zeta)
 
-    def unstable(h: float) -> bool:
-        return bool(np.max(np.abs(_rk4_amplification(h * roots))) > 1 + 1e-13)
+    def unstable(h: np.ndarray) -> np.ndarray:
+        # one vectorised evaluation per scan or bisection step (charts ask for hundreds of zetas)
+        return np.max(np.abs(_rk4_amplification(np.multiply.outer(h, roots))), axis=-1) > 1 + 1e-13
 
-    grid = np.linspace(1e-3, 3.0, 3000) / max(1.0, zeta + math.sqrt(max(zeta * zeta - 1, 0)))
-    first = next((h for h in grid if unstable(h)), None)
-    if first is None:
+    fastest = float(np.max(np.abs(roots)))  # zeta + sqrt(zeta^2 - 1) when overdamped, else 1
+    grid = np.linspace(1e-3, 3.0, 3000) / max(1.0, fastest)
+    hits = np.flatnonzero(unstable(grid))
+    if not hits.size:
         return math.inf
+    first = float(grid[hits[0]])
     low, high = first - (grid[1] - grid[0]), first
     for _ in range(60):
         mid = 0.5 * (low + high)
-        low, high = (low, mid) if unstable(mid) else (mid, high)
-    return low
+        low, high = (low, mid) if unstable(np.array(mid)) else (mid, high)
+    return float(low)
+
+
+def _unit_oscillator_roots(zeta: float) -> np.ndarray:
+    """Roots of s^2 + 2 zeta s + 1 [-], without overflow for huge zeta (e.g. damping = 1e300)."""
+    if zeta <= 1.0:
+        disc = np.sqrt(complex(zeta * zeta - 1))
+        return np.array([-zeta + disc, -zeta - disc])
+    # zeta (1 + sqrt(1 - 1/zeta^2)) never squares zeta; the slow root is 1 / the fast one (product 1)
+    fast = -zeta * (1.0 + math.sqrt((1.0 - 1.0 / zeta) * (1.0 + 1.0 / zeta)))
+    return np.array([1.0 / fast, fast], dtype=complex)

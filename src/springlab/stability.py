@@ -39,6 +39,7 @@ from mujoco import batch as _mjbatch
 from . import scenes
 from .batch import RECORD_SPEC, Job, run_batched
 from .errors import BadInputError, DivergedError
+from .executor import Executor, resolve
 from .extremes import ACCURACY, EXTREME_CASES, FULL_EXTREME_CASES, VERIFY_STEPS, extremes_table
 from .scene import Scenario, Scene
 from .scenes.slider import Slider
@@ -172,6 +173,25 @@ def measure_boundaries(
     return rows
 
 
+def boundaries_chunk(payload: dict[str, Any], nthread: int = 0) -> list[dict[str, Any]]:
+    """measure_boundaries for one integrator (a chunk of the map; plain data in and out, for dask workers)."""
+    return measure_boundaries([payload["integrator"]], payload["zetas"], steps=payload["steps"], nthread=nthread)
+
+
+def map_boundaries(
+    integrators: Iterable[str] = tuple(INTEGRATORS),
+    zetas: Iterable[float] = STABILITY_ZETAS,
+    *,
+    steps: int = GROWTH_STEPS,
+    executor: Executor | None = None,
+) -> list[dict[str, Any]]:
+    """measure_boundaries with one chunk per integrator on `executor` (None: locally); the same rows
+    in the same order (each pair's search is independent of the others)."""
+    zetas = [float(z) for z in zetas]
+    payloads = [{"integrator": name, "zetas": zetas, "steps": steps} for name in integrators]
+    return [row for part in resolve(executor).map(boundaries_chunk, payloads, description="stability") for row in part]
+
+
 def one_step_maps(integrator: str, zetas: np.ndarray, omega_dts: np.ndarray, *, nthread: int = 0) -> np.ndarray:
     """MuJoCo's one-step map of the unit oscillator, measured: (len(zetas), len(omega_dts), 2, 2).
 
@@ -197,19 +217,27 @@ def amplification_map(
     integrators: Iterable[str] = tuple(INTEGRATORS),
     zetas: np.ndarray | None = None,
     omega_dts: np.ndarray | None = None,
+    *,
+    executor: Executor | None = None,
 ) -> dict[str, Any]:
     """Spectral radius [-] of MuJoCo's measured one-step map over a (zeta, omega*dt) grid, per integrator.
 
-    > 1 means the response grows by that factor per step (unstable). Returns
-    {"zetas", "omega_dts", "radius": integrator -> (len(zetas), len(omega_dts))}.
+    > 1 means the response grows by that factor per step (unstable). One chunk per integrator on
+    `executor` (None: locally). Returns {"zetas", "omega_dts", "radius": integrator -> (len(zetas),
+    len(omega_dts))}.
     """
     zetas = np.concatenate([[0.0], np.geomspace(1e-2, 100.0, 40)]) if zetas is None else np.asarray(zetas)
     omega_dts = np.geomspace(1e-2, 1e3, 120) if omega_dts is None else np.asarray(omega_dts)
-    radius = {}
-    for name in integrators:
-        maps = one_step_maps(name, zetas, omega_dts)
-        radius[name] = np.max(np.abs(np.linalg.eigvals(maps)), axis=-1)
-    return {"zetas": zetas, "omega_dts": omega_dts, "radius": radius}
+    integrators = list(integrators)
+    payloads = [{"integrator": name, "zetas": zetas, "omega_dts": omega_dts} for name in integrators]
+    radii = resolve(executor).map(radius_chunk, payloads, description="stability map")
+    return {"zetas": zetas, "omega_dts": omega_dts, "radius": dict(zip(integrators, radii))}
+
+
+def radius_chunk(payload: dict[str, Any], nthread: int = 0) -> np.ndarray:
+    """Spectral radius [-] of one integrator's one-step maps over payload's (zetas, omega_dts) grid."""
+    maps = one_step_maps(payload["integrator"], payload["zetas"], payload["omega_dts"], nthread=nthread)
+    return np.max(np.abs(np.linalg.eigvals(maps)), axis=-1)
 
 
 # -- the energy ----------------------------------------------------------------
@@ -308,14 +336,16 @@ def energy_histories(
     }
 
 
-def stability_report(*, full: bool = False, nthread: int = 0) -> dict[str, Any]:
+def stability_report(*, full: bool = False, nthread: int = 0, executor: Executor | None = None) -> dict[str, Any]:
     """Boundaries, extremes and energy: `springlab stability`'s JSON (plus the map and energy series).
 
     full: more damping ratios, more extreme cases, and the advice of every
     extremes case run in full, however many steps it takes (slower: tens of seconds).
+    executor: where the boundary searches run, one chunk per integrator (None: locally on `nthread`).
     """
     started = _time.perf_counter()
-    boundaries = measure_boundaries(zetas=FULL_STABILITY_ZETAS if full else STABILITY_ZETAS, nthread=nthread)
+    executor = Executor(nthread=nthread, progress=False) if executor is None else executor
+    boundaries = map_boundaries(zetas=FULL_STABILITY_ZETAS if full else STABILITY_ZETAS, executor=executor)
     extremes = extremes_table(
         FULL_EXTREME_CASES if full else EXTREME_CASES, verify_steps=10**9 if full else VERIFY_STEPS, nthread=nthread
     )

@@ -26,6 +26,7 @@ import numpy as np
 from . import api, compare, scenes
 from .batch import TIMING_STEPS, Job, run_batched, time_run
 from .errors import BadInputError, DivergedError
+from .executor import Executor, chunked
 from .scene import Scenario, Scene, Setup
 from .simulate import INTEGRATORS, ORDERS, check_timing, integrator_id
 
@@ -34,6 +35,8 @@ SWEEP_TOP = 1.0
 SWEEP_DECADES = 3.0
 #: timesteps in the default sweep (>= 12 by contract)
 SWEEP_POINTS = 13
+#: (integrator, dt) runs per chunk of the grid (one batched call each)
+CHUNK_RUNS = 16
 #: most steps one sweep run may take; the smallest dt is raised to respect it
 MAX_SWEEP_STEPS = 200_000
 #: the order fit keeps errors below this (beyond it the leading term no longer dominates) ...
@@ -234,6 +237,7 @@ def sweep(
     duration: float | None = None,
     timing_repeats: int = 3,
     nthread: int = 0,
+    executor: Executor | None = None,
     **parameters: Any,
 ) -> Tradeoff:
     """Run every integrator at every timestep on one scenario, batched, and measure the trade.
@@ -253,7 +257,10 @@ def sweep(
     timing_repeats
         timed repetitions per configuration (best is kept).
     nthread
-        threads of the batch (0: one per CPU).
+        threads of the batch (0: one per CPU) when no executor is given.
+    executor
+        where the grid's chunks run (None: locally); errors and steps are the same whichever
+        runs them. Wall times are always measured here, each run alone (batch.time_run).
     **parameters
         scene parameters in SI units.
 
@@ -284,31 +291,29 @@ def sweep(
     if dts is None:
         dts = timestep_grid(fastest_rate(scene_obj, model, params, chosen), duration)
         dts = _accepted_grid(dts, lambda dt: _setup_or_none(scene_obj, model, params, chosen, dt, duration))
+    pairs = [(name, float(dt)) for dt in dts for name in integrators]
+    # a catalogue scene travels by name (workers rebuild it); another Scene object only runs locally
+    reference = scene_obj.name if scenes.SCENES.get(scene_obj.name) is scene_obj else scene_obj
+    runner = Executor(nthread=nthread, progress=False) if executor is None else executor
+    pieces = chunked(len(pairs), CHUNK_RUNS)
+    payloads = [
+        {
+            "scene": reference,
+            "scenario": chosen.name,
+            "parameters": dict(parameters),
+            "duration": duration,
+            "pairs": pairs[p.start : p.stop],
+        }
+        for p in pieces
+    ]
+    outcomes = [o for part in runner.map(grid_chunk, payloads, description="tradeoff") for o in part]
     stop = scene_obj.stop_condition(model, params, chosen)
-    jobs: list[Job] = []
-    for dt in dts:
-        steps = check_timing(dt, duration)
-        setup = scene_obj.setup(model, params, chosen, steps, dt)
-        jobs.extend(Job(model, name, dt, steps, setup, stop) for name in integrators)
-    outcomes = run_batched(jobs, nthread=nthread)
     runs = []
-    for job, outcome in zip(jobs, outcomes):
-        error, detail, steps, verdict = None, "", job.steps, None
-        if isinstance(outcome, DivergedError):
-            detail = str(outcome)
-        else:
-            steps = outcome.steps  # a stop condition may end a run early, as in `springlab run`
-            try:
-                # judged exactly as `springlab run` judges it: the reference is built for this run's own dt
-                result = api.evaluate(scene_obj, chosen, params, model, outcome)
-                error = max(e["max_rel"] for e in result.summary["errors"].values())
-                verdict = result.summary["verdict"]
-            except DivergedError as blown:
-                detail = str(blown)
+    for (name, dt), (error, detail, steps, verdict) in zip(pairs, outcomes):
+        full = check_timing(dt, duration)
+        job = Job(model, name, dt, full, scene_obj.setup(model, params, chosen, full, dt), stop)
         wall = time_run(job, repeats=timing_repeats)
-        runs.append(
-            Run(job.integrator, job.dt, steps, error, wall, diverged=error is None, detail=detail, verdict=verdict)
-        )
+        runs.append(Run(name, dt, steps, error, wall, diverged=error is None, detail=detail, verdict=verdict))
     runs.sort(key=lambda r: (integrators.index(r.integrator), -r.dt))
     orders = {name: observed_order([r for r in runs if r.integrator == name]) for name in integrators}
     return Tradeoff(
@@ -322,6 +327,38 @@ def sweep(
         pareto=pareto_front(runs),
         sweep_wall_time_s=_time.perf_counter() - started,
     )
+
+
+def grid_chunk(payload: dict[str, Any], nthread: int = 0) -> list[tuple[float | None, str, int, Any]]:
+    """One chunk of the grid as one batched call: per (integrator, dt) of payload["pairs"],
+    (max relative error [-] or None if it diverged, why it diverged, steps taken, the run's verdict).
+
+    A module-level function of plain data for dask workers: the model is rebuilt here from the
+    scene's MJCF and payload["parameters"], exactly as the caller built it.
+    """
+    scene_obj, chosen, params = api.prepare(payload["scene"], payload["scenario"], payload["parameters"])
+    model = scene_obj.build(params, chosen)
+    stop = scene_obj.stop_condition(model, params, chosen)
+    duration = payload["duration"]
+    jobs = []
+    for name, dt in payload["pairs"]:
+        steps = check_timing(dt, duration)
+        jobs.append(Job(model, name, dt, steps, scene_obj.setup(model, params, chosen, steps, dt), stop))
+    out = []
+    for job, outcome in zip(jobs, run_batched(jobs, nthread=nthread)):
+        if isinstance(outcome, DivergedError):
+            out.append((None, str(outcome), job.steps, None))
+            continue
+        try:
+            # judged exactly as `springlab run` judges it: the reference is built for this run's own dt
+            result = api.evaluate(scene_obj, chosen, params, model, outcome)
+        except DivergedError as blown:
+            out.append((None, str(blown), outcome.steps, None))
+            continue
+        # a stop condition may end a run early, as in `springlab run`
+        error = max(e["max_rel"] for e in result.summary["errors"].values())
+        out.append((error, "", outcome.steps, result.summary["verdict"]))
+    return out
 
 
 def sweepable(
@@ -513,13 +550,15 @@ def tradeoff(
     *,
     tol: float | None = None,
     duration: float | None = None,
+    executor: Executor | None = None,
     **parameters: Any,
 ) -> Tradeoff:
-    """`sweep` plus, with `tol` [-], the verified cheapest setting that meets it (`recommend`)."""
+    """`sweep` (its grid on `executor`, None: locally) plus, with `tol` [-], the verified cheapest
+    setting that meets it (`recommend`)."""
     if tol is not None:
         tol = compare.check_tolerance(tol)
     started = _time.perf_counter()
-    result = sweep(scene, scenario, duration=duration, **parameters)
+    result = sweep(scene, scenario, duration=duration, executor=executor, **parameters)
     if tol is not None:
         result.recommendation = recommend(result, tol)
     result.sweep_wall_time_s = _time.perf_counter() - started

@@ -143,8 +143,11 @@ class PitchHeave(Variant):
         m, a, b = params["mass"], params["front_axle_distance"], params["rear_axle_distance"]
         heave.stiffness = [0.0, 0.0, 0.0]  # the springs are the axle tendons now
         heave.damping = [0.0, 0.0, 0.0]
-        inertia = list(car.inertia)
-        car.inertia = [inertia[0], params["pitch_inertia"], inertia[2]]
+        # only the pitch axis turns: roll and yaw inertias follow it in the MJCF's proportion, so
+        # MuJoCo's triangle inequality (A + B >= C) holds for any pitch_inertia (identical at the default)
+        roll, pitch, yaw = (float(i) for i in car.inertia)
+        scale = params["pitch_inertia"] / pitch
+        car.inertia = [roll * scale, params["pitch_inertia"], yaw * scale]
         com = list(car.ipos)
         car.add_joint(name="pitch", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0.0, 1.0, 0.0], pos=com)
         # the picture follows the parameters: axle sites, hubs and wheels at a and b

@@ -72,9 +72,11 @@ def chaos(scene, model, params, scenario, trajectory: Trajectory) -> dict:
             converged = True
             break
     t_sep, ftle = found[-1]
+    # `separated` false: the pair never separated in the run; separation_time_s and ftle_per_s are then
+    # inf (null in JSON), so every key keeps one type
+    out["separated"] = bool(math.isfinite(t_sep))
     out["separation_time_s"] = t_sep
-    if math.isfinite(t_sep):
-        out["ftle_per_s"] = ftle
+    out["ftle_per_s"] = ftle if math.isfinite(t_sep) else math.inf
     out["separation_time_converged"] = converged
     out["separation_time_dt_s"] = trajectory.dt / 2 ** (len(found) - 1)
     out["separation_time_refinement_s"] = [float(t) for t, _ in found]

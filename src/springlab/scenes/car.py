@@ -86,7 +86,7 @@ import functools
 import mujoco
 
 from ..errors import ParameterError
-from ..scene import Parameter, Reference, Scenario, Scene, Setup
+from ..scene import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene, Setup
 from ..simulate import Trajectory, quiet_mujoco
 from ._car_parts import gravity
 from ._car_pitch_heave import FRONT_STIFFNESS_SHARE, PitchHeave, linearize, pitch_heave_defaults
@@ -107,6 +107,25 @@ class Car(Scene):
     integrator = "rk4"
     dt = 1e-3
     default_scenario = "push_release"
+    #: the textbook question each scenario answers, and its answer as a sentence (Scene.questions)
+    questions = {
+        "push_release": (
+            "Passers-by push the car down with 250 kg and let go: how does it move?",
+            "It bobs ±{static_sag_m:.3g} m about its rest height at {omega_rad_s:.4g} rad/s (period {period_s:.3g} s), undamped.",
+        ),
+        "damped_release": (
+            "The same release with shock absorbers at ζ = 0.3?",
+            "The bobbing dies out with logarithmic decrement {logarithmic_decrement:.3g} (time constant {decay_time_constant_s:.3g} s); the car rises at most to {max_height_m:.4g} m.",
+        ),
+        "pitch_heave": (
+            "With front and rear springs, how does the car pitch and heave after a push over the front axle?",
+            "Two modes at {frequency_1_hz:.3g} Hz and {frequency_2_hz:.3g} Hz, each a rotation about its own node ({mode_1_node_m:.3g} m and {mode_2_node_m:.3g} m from the centre of mass).",
+        ),
+        "road_bump": (
+            "A quarter car drives over an 8 cm half-sine bump at 8 m/s: what do the passengers feel?",
+            "A peak body acceleration of {peak_body_acceleration_m_s2:.3g} m/s² and {peak_suspension_travel_m:.3g} m of suspension travel; the tire keeps at least {min_tire_force_n:.4g} N on the road.",
+        ),
+    }
     parameters = {
         p.name: p
         for p in (
@@ -114,8 +133,8 @@ class Car(Scene):
                 "mass",
                 "kg",
                 "sprung mass: car + passengers, everything the springs carry (road_bump: mass/4 per corner)",
-                minimum=0.0,
-                minimum_inclusive=False,
+                minimum=MIN_MASS,
+                reason=MIN_MASS_REASON,
             ),
             Parameter("stiffness", "N/m", "the four springs together", minimum=0.0, minimum_inclusive=False),
             Parameter("damping", "N s/m", "the four dampers together", minimum=0.0),
@@ -141,8 +160,8 @@ class Car(Scene):
                 "pitch_inertia",
                 "kg m^2",
                 "moment of inertia about the lateral axis through the centre of mass",
-                minimum=0.0,
-                minimum_inclusive=False,
+                minimum=MIN_MASS,
+                reason=MIN_MASS_REASON,
             ),
             Parameter(
                 "front_axle_distance", "m", "a: centre of mass to front axle", minimum=0.0, minimum_inclusive=False
@@ -171,8 +190,8 @@ class Car(Scene):
                 "unsprung_mass",
                 "kg",
                 "one wheel with its share of brake, hub and axle",
-                minimum=0.0,
-                minimum_inclusive=False,
+                minimum=MIN_MASS,
+                reason=MIN_MASS_REASON,
             ),
             Parameter("tire_stiffness", "N/m", "vertical stiffness of one tire", minimum=0.0, minimum_inclusive=False),
             Parameter(
@@ -263,8 +282,31 @@ class Car(Scene):
         return {name: values[name] for name in relevant}
 
     def check_consistency(self, params: dict[str, float], scenario: Scenario) -> None:
+        self._check_body_masses(params, scenario)
         # the 2-DOF variants check the exact motion itself, in setup()
         scenario.variant.check_consistency(params, self.gravity())
+
+    def _check_body_masses(self, params: dict[str, float], scenario: Scenario) -> None:
+        """Every moving body's mass and principal inertias at or above MuJoCo's MIN_MASS (else it cannot compile)."""
+        if scenario.name == "road_bump" and params["mass"] / 4.0 < MIN_MASS:
+            raise ParameterError(
+                f"mass must be a finite number >= {4 * MIN_MASS:g} kg for road_bump (a quarter of it per corner;"
+                f" {MIN_MASS_REASON}), got {params['mass']!r}"
+            )
+        if scenario.name == "pitch_heave":
+            # roll and yaw inertias scale with pitch_inertia (_edit_pitch_heave): the smallest must reach MIN_MASS
+            inertia = self._mjcf_inertia()
+            lowest = MIN_MASS * inertia[1] / min(inertia)
+            if params["pitch_inertia"] < lowest:
+                raise ParameterError(
+                    f"pitch_inertia must be a finite number >= {lowest:.4g} kg m^2 (roll and yaw inertias scale"
+                    f" with it; {MIN_MASS_REASON}), got {params['pitch_inertia']!r}"
+                )
+
+    @functools.cache  # noqa: B019 - scenes are module-level singletons, never freed
+    def _mjcf_inertia(self) -> tuple[float, float, float]:
+        """The car body's principal inertias in the MJCF [kg m^2]: roll, pitch, yaw."""
+        return tuple(float(i) for i in self.model_spec().body("car").inertia)
 
     # -- model ---------------------------------------------------------------
 

@@ -53,7 +53,7 @@ import numpy as np
 
 from .. import analytic
 from ..errors import BadInputError, ParameterError
-from ..scene import Parameter, Reference, Scenario, Scene, Setup
+from ..scene import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene, Setup
 from ..simulate import Trajectory
 
 #: the tachograph record: knot times [s] and the velocities there [m/s]; v(t) is linear between them
@@ -109,10 +109,29 @@ class Kinematics(Scene):
     integrator = "rk4"
     dt = 1e-2
     default_scenario = "polynomial_position"
+    #: the textbook question each scenario answers, and its answer as a sentence (Scene.questions)
+    questions = {
+        "polynomial_position": (
+            "Given x(t) = 0.03 t³ + 0.2 t² + 1.2 t + 3 m, find v(t) and a(t).",
+            "{velocity_expression} and {acceleration_expression}; at t = {end_time_s:.3g} s, v = {v_end_m_s:.4g} m/s.",
+        ),
+        "linear_acceleration": (
+            "Given a(t) = 1.2 t + 3 m/s², v(0) = 15 m/s, x(0) = 150 m, find v(t) and x(t).",
+            "{velocity_expression} and {position_expression}: x = {x_end_m:.5g} m at t = {end_time_s:.3g} s.",
+        ),
+        "constant_acceleration": (
+            "Uniform acceleration (eq. 5.5): a = 2 m/s² from 10 m/s; where is the car after 5 s?",
+            "{position_expression}: {x_end_m:.4g} m, at {v_end_m_s:.4g} m/s.",
+        ),
+        "tachograph": (
+            "A bus's tachograph records v(t) over 12 s: how far did it go, and what were its accelerations?",
+            "The area under v(t) is {displacement_m:.4g} m; the slopes are {segment_accelerations_m_s2} m/s².",
+        ),
+    }
     parameters = {
         p.name: p
         for p in (
-            Parameter("mass", "kg", "mass of the vehicle", minimum=0.0, minimum_inclusive=False),
+            Parameter("mass", "kg", "mass of the vehicle", minimum=MIN_MASS, reason=MIN_MASS_REASON),
             Parameter("x0", "m", "initial position x(0)", default=0.0),
             Parameter("v0", "m/s", "initial velocity v(0)", default=0.0),
             Parameter("a0", "m/s^2", "initial acceleration a(0)", default=0.0),

@@ -88,7 +88,7 @@ import numpy as np
 from .. import events, exciter
 from ..checks import energy_drift_check, joint_jacobian, linearization_check, observed_order_check, richardson_check
 from ..errors import ParameterError
-from ..scene import Check, Parameter, Scenario, Scene, Setup
+from ..scene import MIN_MASS, MIN_MASS_REASON, Check, Parameter, Scenario, Scene, Setup
 from ..simulate import ORDERS, Trajectory, simulate
 from . import _nonlinear_chaos
 from ._nonlinear_chaos import (
@@ -203,10 +203,29 @@ class Nonlinear(Scene):
     integrator = "rk4"
     dt = 1e-3
     default_scenario = "softening"
+    #: the textbook question each scenario answers, and its answer as a sentence (Scene.questions)
+    questions = {
+        "softening": (
+            "A softening spring: where are the equilibria and is a release from 0.09 m bounded?",
+            "Equilibria at {equilibria_m} m (saddle, centre, saddle); the motion is {motion}, period {period_simulated_s:.4g} s, longer than the linear 2π/ω.",
+        ),
+        "softening_escape": (
+            "Released beyond the separatrix, does the softening spring hold the block?",
+            "No: its energy {energy_J:.3g} J exceeds the barrier {barrier_height_J:.3g} J and the block escapes (motion {motion}).",
+        ),
+        "double_well": (
+            "A double-well spring: how does a block released in one well move?",
+            "It stays in that well (energy {energy_J:.3g} J below the barrier), oscillating between {turning_points_m[0]:.3g} and {turning_points_m[1]:.3g} m with period {period_simulated_s:.4g} s.",
+        ),
+        "forced_duffing": (
+            "A damped, forced double well: is the motion predictable?",
+            "No, it is chaotic: nearby starts separate at about {lyapunov_exponent_per_s:.3g} 1/s, so the computed path is accurate only up to {accurate_until_s:.3g} s.",
+        ),
+    }
     parameters = {
         p.name: p
         for p in (
-            Parameter("mass", "kg", "mass of the block", minimum=0.0, minimum_inclusive=False),
+            Parameter("mass", "kg", "mass of the block", minimum=MIN_MASS, reason=MIN_MASS_REASON),
             Parameter("k1", "N/m", "linear spring coefficient (spring force k1 x + k3 x^3)"),
             Parameter("k3", "N/m^3", "cubic spring coefficient (< 0 softening, > 0 hardening)"),
             Parameter("damping", "N s/m", "damper coefficient d", minimum=0.0),

@@ -85,7 +85,7 @@ import mujoco
 import numpy as np
 
 from .. import analytic
-from ..scene import Parameter, Reference, Scenario, Scene, Setup
+from ..scene import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene, Setup
 from ..simulate import Trajectory, integrator_id, quiet_mujoco
 from ..simulate import stability_limit as joint_damping_stability_limit
 
@@ -110,18 +110,37 @@ class PrinterHead(Scene):
     integrator = "rk4"
     dt = 1e-4
     default_scenario = "move"
+    #: the textbook question each scenario answers, and its answer as a sentence (Scene.questions)
+    questions = {
+        "move": (
+            "How fast can the print head be positioned one inch away, to ±10 µm?",
+            "The minimum-time move takes {move_time_s:.3g} s; the {natural_frequency_hz:.4g} Hz belt ringing then settles in {settling_time_s:.3g} s: positioned in {positioning_time_s:.4g} s.",
+        ),
+        "step_force": (
+            "What does a constant motor force do to the carriage and the belt?",
+            "The carriage accelerates at {rigid_acceleration_m_s2:.4g} m/s² while the belt stretches to {max_belt_stretch_m:.3g} m, twice its static {static_belt_stretch_m:.3g} m, ringing at {natural_frequency_hz:.4g} Hz.",
+        ),
+        "settle": (
+            "Released from the belt stretch of full acceleration, how long does the carriage take to settle?",
+            "It rings at {natural_frequency_hz:.4g} Hz with ζ = {damping_ratio:.3g} and stays within the band after {settling_time_s:.3g} s.",
+        ),
+    }
     parameters = {
         p.name: p
         for p in (
             Parameter(
-                "carriage_mass", "kg", "mass of the carriage with the print head", minimum=0.0, minimum_inclusive=False
+                "carriage_mass",
+                "kg",
+                "mass of the carriage with the print head",
+                minimum=MIN_MASS,
+                reason=MIN_MASS_REASON,
             ),
             Parameter(
                 "motor_mass",
                 "kg",
                 "motor-side mass: rotor+pulley inertia J / r^2",
-                minimum=0.0,
-                minimum_inclusive=False,
+                minimum=MIN_MASS,
+                reason=MIN_MASS_REASON,
             ),
             Parameter(
                 "belt_stiffness",

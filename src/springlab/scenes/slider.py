@@ -34,7 +34,7 @@ import mujoco
 import numpy as np
 
 from .. import analytic, exciter
-from ..scene import Parameter, Reference, Scenario, Scene, Setup
+from ..scene import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene, Setup
 from ..simulate import Trajectory
 
 
@@ -69,10 +69,49 @@ class Slider(Scene):
     integrator = "rk4"
     dt = 2e-3
     default_scenario = "free"
+    #: the textbook question each scenario answers, and its answer as a sentence (Scene.questions)
+    questions = {
+        "free": (
+            "How does a lightly damped mass-spring system move after it is released?",
+            "It oscillates at {natural_frequency_hz:.3g} Hz (damped period {damped_period_s:.3g} s) with an amplitude decaying as e^(-ζωt), ζ = {damping_ratio:.3g}.",
+        ),
+        "undamped": (
+            "What is the motion of an undamped mass on a spring released from x0?",
+            "x(t) = x0 cos(ωt): ω = {omega_n_rad_s:.4g} rad/s, period {period_s:.4g} s, amplitude {max_displacement_m:.3g} m for ever.",
+        ),
+        "underdamped": (
+            "What does damping ratio 0.1 do to the free vibration?",
+            "It still oscillates, at ω_d = {omega_d_rad_s:.4g} rad/s (period {damped_period_s:.4g} s), each swing smaller than the last.",
+        ),
+        "critical": (
+            "How does a critically damped system return to rest?",
+            "Without overshoot, as (A + Bt) e^(-ωt) with the double root λ = {lambda_1_per_s:.3g} 1/s: the fastest return that does not oscillate.",
+        ),
+        "overdamped": (
+            "How does an overdamped system (ζ = 2) return to rest?",
+            "Without oscillating, as A e^(λ1 t) + B e^(λ2 t) with λ1 = {lambda_1_per_s:.4g} and λ2 = {lambda_2_per_s:.4g} 1/s, slower than critical damping.",
+        ),
+        "step": (
+            "What happens when a constant force is applied suddenly?",
+            "The mass overshoots its new static position {static_deflection_m:.3g} m, reaching {max_displacement_m:.3g} m (almost twice it), and rings about it.",
+        ),
+        "harmonic": (
+            "What is the steady response to a harmonic force?",
+            "At frequency ratio {frequency_ratio:.3g} the mass settles to amplitude {steady_state_amplitude_m:.3g} m, lagging the force by {phase_lag_rad:.3g} rad.",
+        ),
+        "resonance": (
+            "What happens when an undamped system is forced at its natural frequency?",
+            "Resonance: the amplitude grows linearly in time without bound (here to {max_displacement_m:.3g} m in the run).",
+        ),
+        "exercise": (
+            "The chapter's exercise: m = 1 kg, k = 2 N/m, c = 3 N s/m, released from 5 m; what is x(t)?",
+            "x(t) = {coefficient_A_m:.3g} e^({lambda_1_per_s:.3g} t) + ({coefficient_B_m:.3g}) e^({lambda_2_per_s:.3g} t) m: overdamped (ζ = {damping_ratio:.3g}), no oscillation.",
+        ),
+    }
     parameters = {
         p.name: p
         for p in (
-            Parameter("mass", "kg", "mass of the block", minimum=0.0, minimum_inclusive=False),
+            Parameter("mass", "kg", "mass of the block", minimum=MIN_MASS, reason=MIN_MASS_REASON),
             Parameter("stiffness", "N/m", "spring stiffness k", minimum=0.0),
             Parameter("damping", "N s/m", "damper coefficient d", minimum=0.0),
             Parameter("x0", "m", "initial stretch of the spring", default=0.1),
@@ -279,6 +318,8 @@ class Slider(Scene):
                 m, k, d, params["force_amplitude"], params["force_frequency"]
             )
             out["frequency_ratio"] = 2 * math.pi * params["force_frequency"] / math.sqrt(k / m) if k else math.inf
+            # undamped at resonance the response grows without bound: no steady state (inf, null in JSON)
+            out["steady_state_exists"] = bool(math.isfinite(amplitude))
             out["steady_state_amplitude_m"] = amplitude
             out["phase_lag_rad"] = phase
         x = trajectory.qpos[:, model.joint("slider").qposadr[0]]

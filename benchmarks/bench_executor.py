@@ -1,0 +1,178 @@
+"""What the executor costs and buys, side by side in one run.
+
+1. Printer-head design configurations per second per core: local threads vs a
+   dask LocalCluster with 1 and 2 worker processes (same chunks), the scaling
+   efficiency 1 -> 2 workers, and the executor's per-task overhead (a chunk that
+   does nothing).
+2. The default Sobol study (16384 x 7 = 114,688 runs): projected wall time on
+   this machine from the measured rate, and on a 64-core cluster from the
+   per-core rate and the per-task overhead.
+3. A 1000-configuration slider sweep: springlab's batched path (the sweep's
+   chunks through `batch.run_batched`) vs raw threaded `mujoco.rollout` over
+   the same compiled models (target >= 0.9x); the whole sweep with every row
+   evaluated; and a scipy `solve_ivp` loop at the same accuracy.
+4. `springlab.run` over the bare simulation (target <= 1.15), and what the
+   cached spec saves per run.
+
+Run: python benchmarks/bench_executor.py   (numbers depend on the load of the machine)
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+
+import mujoco
+import numpy as np
+from mujoco import rollout
+
+from springlab import analytic, api, design, model_files, scenes, sobol, sweeps
+from springlab.batch import Job, run_rollout
+from springlab.executor import Executor, chunked, ping
+from springlab.scene import parsed_spec
+from springlab.simulate import initial_state, simulate
+from timing import best_of
+
+
+def design_throughput() -> dict[str, float]:
+    base = design.base_parameters()
+    values = design.configurations(design.make_grids(base, 5))  # 625 configurations, 10 chunks of 64
+    n = len(values["belt_stiffness"])
+    cores = os.cpu_count() or 1
+
+    def rate(executor: Executor) -> float:
+        design.run_moves(base, {k: v[:64] for k, v in values.items()}, executor=executor, chunk_size=64)  # warm up
+        return n / best_of(lambda: design.run_moves(base, values, executor=executor, chunk_size=64), repeat=2)
+
+    print(f"1) printer-head design run, {n} configurations in chunks of 64, {cores} cores")
+    rates = {"local threads": rate(Executor(progress=False))}
+    overhead = {}
+    for workers in (1, 2):
+        with Executor(workers=workers, progress=False) as executor:
+            rates[f"LocalCluster {workers} worker{'s' if workers > 1 else ''}"] = rate(executor)
+            if workers == 2:
+                executor.map(ping, list(range(10)))
+                tasks = 200
+                overhead["task_s"] = best_of(lambda: executor.map(ping, list(range(tasks))), repeat=3) / tasks * workers
+    used = {"local threads": cores, "LocalCluster 1 worker": 1, "LocalCluster 2 workers": 2}
+    print(f"   {'runner':<24}{'configs/s':>11}{'configs/s/core':>16}")
+    for name, value in rates.items():
+        print(f"   {name:<24}{value:>11.1f}{value / used[name]:>16.1f}")
+    efficiency = rates["LocalCluster 2 workers"] / (2 * rates["LocalCluster 1 worker"])
+    print(f"   scaling efficiency 1 -> 2 workers: {efficiency:.0%} (target >= 80 % on 2 free cores)")
+    print(f"   per-task overhead (empty chunk, 2 workers): {overhead['task_s'] * 1e3:.2f} ms per task per worker")
+    return {"per_core": rates["LocalCluster 1 worker"], "two_core": max(rates.values()), **overhead}
+
+
+def sobol_projection(measured: dict[str, float]) -> None:
+    runs = sobol.DEFAULT_BASE_SAMPLES * (len(sobol.PARAMETERS) + 2)
+    chunks = math.ceil(runs / sobol.CHUNK_CONFIGURATIONS)
+    here = runs / measured["two_core"]
+    cluster = runs / (64 * measured["per_core"]) + chunks / 64 * measured["task_s"]
+    print(f"2) default Sobol study: {runs:,} runs in {chunks} chunks")
+    print(f"   projected on this machine (best 2-core rate): {here / 60:.1f} min")
+    print(f"   projected on 64 cores (per-core rate, + overhead per task): {cluster:.0f} s")
+
+
+def slider_sweep() -> None:
+    vary = ["damping=0.5:40:25:log", "stiffness=100:2000:40"]
+    scene = scenes.get("slider")
+    chosen = scene.scenario("free")
+    dt, duration = chosen.dt or scene.dt, chosen.duration
+    steps = round(duration / dt)
+    values = sweeps.configurations([sweeps.parse_axis(v) for v in vary])
+    n = len(values["damping"])
+    params = [scene.resolve(chosen, {k: float(values[k][i]) for k in values}) for i in range(n)]
+    models = [scene.build(p, chosen) for p in params]
+    setups = [scene.setup(m, p, chosen, steps, dt) for m, p in zip(models, params)]
+    jobs = [Job(m, scene.integrator, dt, steps, s) for m, s in zip(models, setups)]
+    print(f"3) slider sweep, {n} configurations x {steps} steps ({scene.integrator}, dt = {dt:g} s)")
+
+    def springlab_batched():
+        for piece in chunked(n, sweeps.CHUNK_CONFIGURATIONS):
+            run_rollout(jobs[piece.start : piece.stop], private_models=True)
+
+    nthread = os.cpu_count() or 1
+    for m in models:
+        m.opt.integrator = mujoco.mjtIntegrator.mjINT_RK4
+        m.opt.timestep = dt
+    datas = [mujoco.MjData(models[0]) for _ in range(nthread)]
+    states = np.stack([initial_state(m, s.qpos, s.qvel) for m, s in zip(models, setups)])
+    raw, ours = math.inf, math.inf
+    with rollout.Rollout(nthread=nthread) as pool:
+        for _ in range(3):  # interleaved, so both see the same load
+            raw = min(raw, best_of(lambda: pool.rollout(models, datas, states, nstep=steps), repeat=1))
+            ours = min(ours, best_of(springlab_batched, repeat=1))
+    whole = best_of(lambda: sweeps.sweep("slider", "free", vary=vary), repeat=1)
+    print(f"   raw threaded rollout ({nthread} threads):   {raw:.3f} s")
+    print(f"   springlab batched chunks:             {ours:.3f} s   raw / springlab = {raw / ours:.2f} (target >= 0.9)")
+    print(f"   whole sweep (build, run, evaluate):   {whole:.3f} s   ({n / whole:.0f} configurations/s)")
+    result = sweeps.sweep("slider", "free", vary=vary)
+    target = np.array([max(row["errors"].values()) for row in result.rows])
+    scipy_time, worst = _solve_ivp_loop(params, dt, steps, target)
+    print(
+        f"   scipy solve_ivp loop (DOP853, same or better accuracy on every row, worst error/target {worst:.2f}):"
+        f" {scipy_time:.3f} s   scipy / whole sweep = {scipy_time / whole:.1f}"
+    )
+
+
+def _solve_ivp_loop(params, dt, steps, target) -> tuple[float, float]:
+    from scipy.integrate import solve_ivp
+
+    t = np.arange(steps + 1) * dt
+    worst = 0.0
+    start = time.perf_counter()
+    for p, tol in zip(params, target):
+        m, k, d, x0, v0 = (p[n] for n in ("mass", "stiffness", "damping", "x0", "v0"))
+        solution = solve_ivp(
+            lambda _, z: (z[1], -(k * z[0] + d * z[1]) / m),
+            (0.0, t[-1]),
+            (x0, v0),
+            method="DOP853",
+            t_eval=t,
+            rtol=tol / 1000,  # DOP853 is 8th order: a tight tolerance costs few more steps
+            atol=tol * abs(x0) / 1000,
+        )
+        x, v = analytic.free_response(t, m, k, d, x0, v0)
+        # judged as springlab judges a run: max |error| / max |exact| of position and velocity
+        for simulated, exact in ((solution.y[0], x), (solution.y[1], v)):
+            worst = max(worst, float(np.max(np.abs(simulated - exact)) / np.max(np.abs(exact)) / tol))
+    return time.perf_counter() - start, worst
+
+
+def run_overhead() -> None:
+    scene = scenes.get("slider")
+    print("4) springlab.run over the bare simulation (same model, setting and steps)")
+    for name in ("free", "harmonic"):
+        chosen = scene.scenario(name)
+        params = scene.resolve(chosen, {})
+        dt = chosen.dt or scene.dt
+        model = scene.build(params, chosen)
+        steps = round(chosen.duration / dt)
+        setup = scene.setup(model, params, chosen, steps, dt)
+        bare = best_of(
+            lambda: simulate(
+                model, integrator=scene.integrator, dt=dt, duration=chosen.duration, qpos=setup.qpos,
+                qvel=setup.qvel, act=setup.act, control=setup.control,
+            ),
+            repeat=30,
+        )  # fmt: skip
+        whole = best_of(lambda: api.run("slider", name), repeat=30)
+        print(f"   {name:<9} simulate {bare * 1e3:7.3f} ms  run {whole * 1e3:7.3f} ms  run/simulate {whole / bare:.3f}")
+    path = str(model_files.path("slider"))
+    parse = best_of(lambda: mujoco.MjSpec.from_file(path), repeat=50)
+    copy = best_of(lambda: parsed_spec(path).copy(), repeat=50)
+    print(f"   MJCF parse {parse * 1e3:.3f} ms vs copy of the cached spec {copy * 1e3:.3f} ms per run")
+
+
+if __name__ == "__main__":  # LocalCluster workers are spawned processes: they re-import this file
+    import sys
+
+    parts = set(sys.argv[1:]) or {"design", "sweep", "run"}  # e.g. `bench_executor.py sweep run`
+    if "design" in parts:
+        sobol_projection(design_throughput())
+    if "sweep" in parts:
+        slider_sweep()
+    if "run" in parts:
+        run_overhead()

@@ -1,0 +1,155 @@
+"""The executor: the same numbers bit for bit locally and on a dask LocalCluster of 2 worker processes,
+a worker killed mid-sweep changes nothing, and an unreachable scheduler is a one-line exit 2 in time.
+
+The claim checked is exact equality (np.array_equal, ==), not closeness: every simulation's result
+depends only on its own model and state, the workers rebuild their models from the same MJCF, and
+the caller reduces the chunks in submission order.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import springlab
+from springlab import design, sobol, stability, tradeoff
+from springlab.cli import main
+from springlab.errors import BadInputError
+from springlab.executor import Executor, chunked
+
+pytest.importorskip("distributed", reason="the distributed extra (make test installs it)")
+
+pytestmark = pytest.mark.slow
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    """A LocalCluster of 2 worker processes (one thread each), shared by the module's tests."""
+    with Executor(workers=2, progress=False) as executor:
+        yield executor
+
+
+def _sweep(executor=None):
+    return springlab.sweep(
+        "slider", "free", vary=["damping=0.5:40:4:log", "stiffness=100:1000:3"], chunk_size=3, executor=executor
+    )
+
+
+def test_chunks_depend_only_on_the_count_and_size():
+    assert chunked(7, 3) == [range(0, 3), range(3, 6), range(6, 7)]
+    with pytest.raises(BadInputError):
+        chunked(7, 0)
+
+
+def test_sweep_on_two_workers_equals_the_local_sweep(cluster):
+    local, remote = _sweep(), _sweep(cluster)
+    assert remote.executor == "2 local dask workers" and local.executor == "local"
+    assert remote.rows == local.rows
+    for name in local.quantity_names():
+        assert np.array_equal(local.column(name), remote.column(name), equal_nan=True)
+
+
+def test_tradeoff_grid_on_two_workers_equals_the_local_grid(cluster):
+    def grid(executor):
+        result = tradeoff.sweep("slider", "free", duration=0.5, timing_repeats=1, executor=executor)
+        return [(r.integrator, r.dt, r.steps, r.max_rel_error, r.diverged) for r in result.runs]
+
+    assert grid(cluster) == grid(None)
+
+
+def test_design_study_on_two_workers_equals_the_local_study(cluster):
+    local = design.run_study(levels=3, plane_levels=0)
+    remote = design.run_study(levels=3, plane_levels=0, executor=cluster)
+    for field in ("positioning_time_s", "settling_time_s", "residual_amplitude_m", "dt_s", "estimate_s"):
+        assert np.array_equal(getattr(local, field), getattr(remote, field)), field
+    assert local.steps == remote.steps
+
+
+def test_sobol_indices_on_two_workers_equal_the_local_ones(cluster):
+    local = sobol.printer_head(8)
+    remote = sobol.printer_head(8, executor=cluster)
+    assert np.array_equal(local.positioning_time_s, remote.positioning_time_s)
+    assert local.indices == remote.indices  # the bootstrap is seeded: intervals too
+
+
+def test_stability_boundaries_on_two_workers_equal_the_local_ones(cluster):
+    local = stability.map_boundaries(["euler", "rk4"], [0.0, 1.0], steps=200)
+    assert stability.map_boundaries(["euler", "rk4"], [0.0, 1.0], steps=200, executor=cluster) == local
+
+
+def test_a_worker_killed_mid_sweep_changes_nothing():
+    expected = springlab.sweep("slider", "free", vary=["damping=0.5:40:8:log", "stiffness=100:1000:5"])
+    killed = []
+
+    def kill_one_worker(index):
+        # at the first finished chunk, SIGKILL one worker process: its chunks must rerun elsewhere
+        if killed:
+            return
+        pids = executor.client.run(os.getpid)
+        victim = sorted(pids.values())[0]
+        os.kill(victim, signal.SIGKILL)
+        killed.append(victim)
+
+    with Executor(workers=2, progress=False, on_result=kill_one_worker) as executor:
+        result = springlab.sweep(
+            "slider",
+            "free",
+            vary=["damping=0.5:40:8:log", "stiffness=100:1000:5"],
+            chunk_size=1,
+            executor=executor,
+        )
+        alive = set(executor.client.run(os.getpid).values())
+    assert killed and killed[0] not in alive  # the worker really died (its nanny started a new one)
+    assert result.rows == expected.rows
+
+
+def _free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+def test_an_unreachable_scheduler_is_a_one_line_exit_2_within_the_timeout(tmp_path, capsys):
+    address = f"tcp://127.0.0.1:{_free_port()}"  # nothing listens there
+    start = time.perf_counter()
+    code = main(["sweep", "slider", "--vary", "mass=1:2:2", "--scheduler", address, "--output", str(tmp_path / "o")])
+    elapsed = time.perf_counter() - start
+    err = capsys.readouterr().err
+    assert code == 2 and address in err and err.count("\n") == 1 and "Traceback" not in err
+    assert elapsed < 10.0 + 5.0  # CONNECT_TIMEOUT_S, plus the sweep's own set-up
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_scheduler_that_never_answers_gives_up_after_the_stated_timeout():
+    # a listening socket that never accepts: the TCP handshake completes, but no dask reply ever
+    # comes; the executor must give up after its timeout, not hang
+    with socket.socket() as silent:
+        silent.bind(("127.0.0.1", 0))
+        silent.listen(0)
+        address = f"tcp://127.0.0.1:{silent.getsockname()[1]}"
+        outcome = {}
+
+        def connect():
+            start = time.perf_counter()
+            try:
+                _ = Executor(scheduler=address, timeout=2.0).client
+            except BadInputError as error:
+                outcome["error"] = str(error)
+            outcome["elapsed"] = time.perf_counter() - start
+
+        worker = threading.Thread(target=connect, daemon=True)
+        worker.start()
+        worker.join(30.0)
+    assert "error" in outcome and address in outcome["error"]
+    assert outcome["elapsed"] < 2.0 + 8.0
+
+
+def test_workers_and_scheduler_together_are_refused(capsys):
+    code = main(["sweep", "slider", "--vary", "mass=1:2:2", "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"])
+    assert code == 2 and "not allowed with argument" in capsys.readouterr().err

@@ -1,0 +1,180 @@
+"""Videos show the physics: measured on decoded frames against the simulated (or closed-form) motion.
+
+Each test decodes the mp4 with ffmpeg (independently of the writer), finds a
+body by its material colour, and compares its image position with the
+trajectory the video claims to show. The slow-motion and exaggeration factors
+change only the drawing, so frame k shows simulation time k / (fps S).
+"""
+
+import math
+
+import imageio_ffmpeg
+import numpy as np
+import pytest
+
+from springlab import api, media, render, render_scale, scenes
+
+
+def _decode(path):
+    reader = imageio_ffmpeg.read_frames(str(path))
+    meta = next(reader)
+    width, height = meta["size"]
+    return np.array([np.frombuffer(raw, np.uint8).reshape(height, width, 3) for raw in reader])
+
+
+def _rgb(frames):
+    return (frames[..., i].astype(int) for i in range(3))
+
+
+def _paint(frames):
+    """The car's blue paint (0.16 0.38 0.72), any shading, not the pale blue glass."""
+    r, g, b = _rgb(frames)
+    return (b > 100) & (b > 1.6 * r) & (b > 1.25 * g) & (r < 110)
+
+
+def _frame_times(info, duration):
+    return render.frame_times(duration * info["slow_motion"], info["fps"]) / info["slow_motion"]
+
+
+def _row_centroid(mask):
+    rows = np.arange(mask.shape[1])[None, :, None]
+    return (mask * rows).sum(axis=(1, 2)) / mask.sum(axis=(1, 2))
+
+
+def _column_centroid(mask):
+    columns = np.arange(mask.shape[2])[None, None, :]
+    return (mask * columns).sum(axis=(1, 2)) / mask.sum(axis=(1, 2))
+
+
+@pytest.mark.slow
+def test_the_exaggerated_car_body_follows_the_heave_by_at_least_ten_pixels(tmp_path):
+    result = api.run("car", "push_release")
+    info = media.render_run(result, tmp_path / "car.mp4", progress=False)
+    assert info["exaggeration"] > 1  # a 4.9 mm motion of a 4.2 m car is magnified by default
+    frames = _decode(tmp_path / "car.mp4")
+    row = _row_centroid(_paint(frames))
+    heave = np.interp(_frame_times(info, float(result.time[-1])), result.time, result.pos["heave"])
+    assert abs(np.corrcoef(row, heave)[0, 1]) > 0.99
+    assert np.ptp(row) >= 10  # [px]
+    # and it moves by the exaggerated amount: a rigid heave moves the paint's centroid like the body
+    slope = np.polyfit(heave, row, 1)[0]
+    assert slope < 0  # image rows grow downwards
+
+
+@pytest.mark.slow
+def test_the_road_bump_rises_and_falls_under_the_front_wheel_with_r_of_t(tmp_path):
+    result = api.run("car", "road_bump")
+    info = media.render_run(result, tmp_path / "bump.mp4", progress=False)
+    assert info["slow_motion"] == 1 and info["exaggeration"] == 1  # the bump at real speed, real size
+    frames = _decode(tmp_path / "bump.mp4")
+    times = _frame_times(info, float(result.time[-1]))
+    p = result.parameters
+    passing = times < p["bump_length"] / p["speed"]
+    bump = np.where(passing, p["bump_height"] * np.sin(np.pi * p["speed"] * times / p["bump_length"]), 0.0)
+    # the front wheel's column: the tire's dark pixels in the right half of the first frame
+    r, g, b = _rgb(frames[:1])
+    tire = (r < 60) & (g < 60) & (b < 60)
+    tire[..., : frames.shape[2] // 2] = False
+    column = int(round(_column_centroid(tire)[0]))
+    window = frames[:, :, column - 12 : column + 12]
+    r, g, b = _rgb(window)
+    # the drawn bump's warm asphalt: not the grey road, not the yellow springs, below the wheel centre
+    road = (r > g + 20) & (g > b + 20) & (r > 80) & (g < 0.75 * r) & (b > 30)
+    road[:, : frames.shape[1] // 2] = False
+    # the bump's visible height in the wheel's column: its top face (constant) plus its front face (r(t))
+    extent = (road.sum(axis=2) >= road.shape[2] // 2).sum(axis=1)  # [px]
+    on = passing & (times > 0)
+    assert np.corrcoef(extent[on], bump[on])[0, 1] > 0.95
+    assert np.ptp(extent[on]) >= 5
+    assert np.all(extent[times > 1.0] == 0)  # gone once the wheel has left it
+
+
+@pytest.mark.slow
+def test_the_printer_move_is_slowed_to_many_frames_and_the_carriage_follows_its_simulated_position(tmp_path):
+    result = api.run("printer_head", "move")
+    info = media.render_run(result, tmp_path / "move.mp4", progress=False)
+    assert info["frames"] >= 90
+    # the 195 Hz belt gets frames per period enough to be seen ringing, not aliased
+    belt_hz = scenes.get("printer_head").modes(
+        result.model, result.parameters, scenes.get("printer_head").scenario("move")
+    )
+    frequency = max(omega for omega, _ in belt_hz) / (2 * math.pi)
+    assert info["fps"] * info["slow_motion"] / frequency >= render_scale.FRAMES_PER_PERIOD
+    frames = _decode(tmp_path / "move.mp4")
+    r, g, b = _rgb(frames)
+    carriage = (b > 120) & (b > 1.5 * r) & (g > 70) & (g < 0.8 * b)  # material 0.2 0.45 0.8
+    column = _column_centroid(carriage)
+    position = np.interp(_frame_times(info, float(result.time[-1])), result.time, result.pos["carriage"])
+    assert np.corrcoef(column, position)[0, 1] > 0.99
+
+
+def _inside_masks():
+    """Scene -> mask of its moving body's material, for the in-frame check."""
+
+    def orange(f):  # slider block and the kinematics vehicle: 0.85 0.33 0.18
+        r, g, b = _rgb(f)
+        return (r > 90) & (r > 2 * g) & (r > 2.5 * b)
+
+    def green(f):  # the non-linear block: 0.2 0.55 0.35
+        r, g, b = _rgb(f)
+        return (g > 70) & (g > 1.3 * r) & (g > 1.2 * b)
+
+    def carriage(f):
+        r, g, b = _rgb(f)
+        return (b > 120) & (b > 1.5 * r) & (g > 70) & (g < 0.8 * b)
+
+    return {"slider": orange, "kinematics": orange, "nonlinear": green, "car": _paint, "printer_head": carriage}
+
+
+CASES = [(s.name, c) for s in scenes.SCENES.values() for c in s.scenarios]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scene, scenario", CASES)
+def test_the_moving_body_is_inside_the_frame_in_every_frame(scene, scenario, tmp_path):
+    result = api.run(scene, scenario)
+    duration = min(float(result.time[-1]), 12.0)
+    info = media.render_run(
+        result, tmp_path / "v.mp4", fps=10, width=320, height=240, duration=duration, progress=False
+    )
+    frames = _decode(tmp_path / "v.mp4")
+    mask = _inside_masks()[scene](frames)
+    assert np.all(mask.sum(axis=(1, 2)) > 30), "the body is visible in every frame"
+    border = mask[:, [0, -1], :].any(axis=(1, 2)) | mask[:, :, [0, -1]].any(axis=(1, 2))
+    assert not border.any(), f"the body touches the edge in frames {np.flatnonzero(border)[:10]} of {info['frames']}"
+
+
+def _text_ink(frames):
+    """Dark text pixels in the top-left corner, where the overlay is written."""
+    corner = frames[:, : frames.shape[1] // 3, : frames.shape[2] // 2]
+    return (corner.max(axis=-1) < 80).sum(axis=(1, 2))
+
+
+@pytest.mark.parametrize("option", ["exaggerate", "slow_motion"])
+def test_a_scale_factor_other_than_one_is_written_on_every_frame(option, tmp_path):
+    result = api.run("car", "push_release", duration=0.5)  # white sky behind the text: only the text is dark
+    plain = dict(slow_motion=1, exaggerate=1)
+    scaled = {**plain, option: 3}
+    common = dict(fps=10, width=320, height=240, duration=0.5, camera="side", label="car / push_release")
+    render.render_video(result.model, result.time, result.trajectory.qpos, tmp_path / "a.mp4", **common, **plain)
+    render.render_video(result.model, result.time, result.trajectory.qpos, tmp_path / "b.mp4", **common, **scaled)
+    ink_plain, ink_scaled = _text_ink(_decode(tmp_path / "a.mp4")), _text_ink(_decode(tmp_path / "b.mp4"))
+    # one more line of text ("motion ×3" or "1/3 speed") on every frame of the scaled video
+    assert ink_scaled.min() > ink_plain.max() + 30
+
+
+def test_exaggeration_scales_every_coordinate_about_its_mean_and_leaves_the_trajectory_alone():
+    result = api.run("car", "road_bump", duration=0.5)
+    states = result.trajectory.qpos.copy()
+    drawn = render_scale.exaggerated(result.model, states, 5.0)
+    np.testing.assert_array_equal(states, result.trajectory.qpos)  # drawing only
+    centre = states.mean(axis=0)
+    np.testing.assert_allclose(drawn - centre, 5.0 * (states - centre), rtol=0, atol=1e-12)
+
+
+def test_default_factors_follow_the_stated_rules():
+    # a 3 s run at 30 fps already has 90 frames: real speed (the car's road bump)
+    assert render_scale.default_slow_motion(3.0, 30, [11.5]) == 1
+    # 0.3 s with a 195 Hz mode: >= 90 frames and 6 frames per period -> 39 -> the nice 50
+    assert render_scale.default_slow_motion(0.3, 30, [194.9]) == 50
+    assert [render_scale.nice_at_least(v) for v in (0.5, 1, 1.2, 2.5, 4, 17, 39, 51)] == [1, 1, 2, 3, 5, 20, 50, 100]
