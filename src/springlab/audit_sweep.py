@@ -76,8 +76,10 @@ class SweepRun:
 def checkpoint_spacing(dts: list[float], duration: float) -> float:
     """The smallest common multiple [s] of the timesteps (as decimals): every run has a step there.
 
-    Raises:
-      BadInputError: fewer than MIN_CHECKPOINTS such multiples fit in the duration.
+    Raises
+    ------
+    BadInputError
+        fewer than MIN_CHECKPOINTS such multiples fit in the duration.
     """
     fractions = [Fraction(dt).limit_denominator(10**12) for dt in dts]
     numerator = math.lcm(*(f.numerator for f in fractions))
@@ -127,10 +129,14 @@ def _tangent_distance(model: mujoco.MjModel, a: np.ndarray, b: np.ndarray) -> np
 class Reference:
     """The reference motion: `states(dt, rows)` gives (qpos, qvel, kept) at times rows * dt [s].
 
-    Attributes:
-      kind: what it is, for people.
-      error_estimate: its own estimated error [-] (0 for the exact solution).
-      dt: its timestep [s] (None for the exact solution).
+    Attributes
+    ----------
+    kind
+        what it is, for people.
+    error_estimate
+        its own estimated error [-] (0 for the exact solution).
+    dt
+        its timestep [s] (None for the exact solution).
     """
 
     kind = ""
@@ -147,7 +153,7 @@ class TrajectoryReference(Reference):
     def __init__(self, trajectory: Trajectory, kind: str = "", error_estimate: float = 0.0):
         self.trajectory, self.kind, self.error_estimate, self.dt = trajectory, kind, error_estimate, trajectory.dt
 
-    def states(self, dt, rows):
+    def states(self, dt: float, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         index = rows * (dt / self.dt)
         nearest = np.round(index).astype(np.int64)
         kept = (np.abs(index - nearest) <= 1e-6) & (nearest < len(self.trajectory.time))  # same time to 1e-6 step
@@ -183,7 +189,7 @@ class ExactReference(Reference):
         self.z0 = np.concatenate([x0, [1.0]])
         self.point = point
 
-    def states(self, dt, rows):
+    def states(self, dt: float, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         from scipy.linalg import expm  # scipy is a dependency; imported here to keep import time low
 
         stride = int(rows[1] - rows[0]) if len(rows) > 1 else 1  # sample_rows: evenly strided from 0
@@ -204,7 +210,9 @@ class ExactReference(Reference):
         return qpos, self.point.qvel + tangent[:, nv : 2 * nv], np.ones(len(rows), bool)
 
 
-def run_error(model: mujoco.MjModel, point: OperatingPoint, outcome, reference: Reference) -> float | None:
+def run_error(
+    model: mujoco.MjModel, point: OperatingPoint, outcome: Trajectory | DivergedError, reference: Reference
+) -> float | None:
     """A run's error [-] (module docstring) at its sampled steps, None if it diverged."""
     if isinstance(outcome, DivergedError):
         return None
