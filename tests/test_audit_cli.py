@@ -63,3 +63,13 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys, args,
     assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
     assert not out.exists() or not any(out.iterdir())
     assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
+
+
+def test_the_demo_report_gains_an_audit_section(tmp_path):
+    from springlab import demo, report
+
+    state = demo.DemoState(out=tmp_path)
+    state.artifacts.extend(demo.audit_step(state))
+    page = report.write_report(state).read_text()
+    assert sorted(p.name for p in (tmp_path / "audit").iterdir()) == ["audit.json", "audit.png"]
+    assert "audit/audit.png" in page and json.loads((tmp_path / "audit" / "audit.json").read_text())["model"]

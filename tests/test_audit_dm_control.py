@@ -3,8 +3,8 @@
 Each audits without error, and its recommended setting meets the tolerance against an independent
 reference computed here: MuJoCo's RK4 at a timestep far below the audit's, run with mujoco.rollout
 (not springlab's runner), itself checked converged (its distance to the run at twice its timestep is
-at most a twentieth of tol), and the error measured here at the audit's checkpoints with
-mj_differentiatePos. Durations: the humanoid and the cheetah first touch the floor at 0.22 s and
+at most a tenth of tol), and the error measured here at (up to 500 of) the recommended run's
+steps with mj_differentiatePos. Durations: the humanoid and the cheetah first touch the floor at 0.22 s and
 0.13 s; the cheetah's run includes its landing, the humanoid's stops before (a falling humanoid's
 contacts are chaotic: no RK4 reference converges in reasonable time, which `springlab audit` reports).
 """
@@ -35,8 +35,8 @@ CASES = {
 }
 
 
-def _checkpoint_states(model, integrator, dt, duration, spacing, count, start):
-    """qpos, qvel at t = k * spacing (k < count) of a run from `start`, by mujoco.rollout."""
+def _states(model, integrator, dt, duration, start, times):
+    """qpos, qvel at `times` [s] (multiples of dt) of a run from `start`, by mujoco.rollout."""
     work = model.__copy__()
     work.opt.integrator = INTEGRATORS[integrator]
     work.opt.timestep = dt
@@ -50,7 +50,7 @@ def _checkpoint_states(model, integrator, dt, duration, spacing, count, start):
     control = np.tile(start.control, (1, steps, 1)) if work.nu else None
     states, _ = rollout.rollout(work, data, state0[None], control, nstep=steps)
     states = np.concatenate([state0[None], states[0]])
-    rows = np.arange(count) * round(spacing / dt)
+    rows = np.round(np.asarray(times) / dt).astype(int)
     return states[rows, 1 : 1 + work.nq], states[rows, 1 + work.nq : 1 + work.nq + work.nv]
 
 
@@ -77,11 +77,12 @@ def test_dm_control_model_audits_and_its_recommendation_meets_tol(name):
     pick = result.recommendation
     assert pick["verified"], result.verdict()
     model = mujoco.MjModel.from_xml_path(str(path))
-    spacing, count = result.reference["checkpoint_spacing_s"], result.reference["checkpoints"]
-    fine = spacing / round(spacing / 2.5e-5)  # RK4 at ~25 us, a multiple of the checkpoints
-    reference = _checkpoint_states(model, "rk4", fine, result.duration, spacing, count, result.start)
-    coarser = _checkpoint_states(model, "rk4", 2 * fine, result.duration, spacing, count, result.start)
+    steps = round(result.duration / pick["dt"])
+    times = np.arange(0, steps + 1, max(1, steps // 500)) * pick["dt"]  # the recommended run's steps
+    fine = pick["dt"] / round(pick["dt"] / 1e-5)  # RK4 at ~10 us, dividing the recommended dt
+    reference = _states(model, "rk4", fine, result.duration, result.start, times)
+    coarser = _states(model, "rk4", 2 * fine, result.duration, result.start, times)
     origin = result.linear.point.qpos
-    assert _error(model, *coarser, *reference, origin) <= tol / 20  # the reference itself has converged
-    chosen = _checkpoint_states(model, pick["integrator"], pick["dt"], result.duration, spacing, count, result.start)
+    assert _error(model, *coarser, *reference, origin) <= tol / 10  # the reference itself has converged
+    chosen = _states(model, pick["integrator"], pick["dt"], result.duration, result.start, times)
     assert _error(model, *chosen, *reference, origin) <= tol

@@ -306,3 +306,11 @@ def test_lti_response_rejects_bad_input():
         linear.lti_response([0.0, 1.0], a, [1.0, 0.0, 0.0])
     with pytest.raises(ValueError, match="q0"):
         linear.linear_response([0.0, 1.0], np.eye(2), np.zeros((2, 2)), np.eye(2), [1.0], [0.0, 0.0])
+
+
+def test_generator_system_is_the_mechanics_with_its_inputs_as_states():
+    # m x'' + d x' + k x = F0 sin(w t), written out by hand with g = (F0 sin, F0 cos), g' = w (g2, -g1)
+    m, d, k, w = 2.0, 0.3, 50.0, 4.0
+    a = linear.generator_system([[m]], [[d]], [[k]], forcing=[[1.0, 0.0]], generator=[[0.0, w], [-w, 0.0]])
+    by_hand = np.array([[0, 1, 0, 0], [-k / m, -d / m, 1 / m, 0], [0, 0, 0, w], [0, 0, -w, 0]])
+    np.testing.assert_array_equal(a, by_hand)

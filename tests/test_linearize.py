@@ -107,7 +107,7 @@ def test_pendulum_at_the_bottom_swings_at_sqrt_g_over_l_and_upright_it_topples_a
     (mode,) = bottom.modes
     assert mode.kind == "oscillatory" and not mode.physically_unstable
     assert mode.frequency_hz * 2 * math.pi == pytest.approx(math.sqrt(g / length), rel=FD_RELATIVE)
-    top = lin.linearize(model, lin.operating_point(model, 1))
+    top = lin.linearize(model, lin.OperatingPoint.at(model, qpos=[math.pi]))
     assert top.physically_unstable  # physics, not a numerical failure
     assert top.max_growth_rate == pytest.approx(math.sqrt(g / length), rel=FD_RELATIVE)
     assert [m.kind for m in top.modes] == ["growing", "decaying"]

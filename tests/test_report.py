@@ -236,3 +236,15 @@ def test_report_reads_like_the_chapter(demo_out):
     notes = re.findall(r"<li id='basis-\d+'>(.*?)</li>", page)
     assert notes and len(notes) == len(set(notes))
     assert "the demo's own steps, not physics time steps" in page
+
+
+@pytest.mark.slow
+def test_every_scenario_states_its_question_and_an_answer_from_its_own_run():
+    from springlab import scenes
+
+    for scene in scenes.SCENES.values():
+        for scenario in scene.scenarios:
+            result = api.run(scene.name, scenario)
+            qa = scene.question_and_answer(scenario, result.summary["quantities"], result.parameters)
+            assert qa is not None and qa[0].strip() and qa[1].strip(), f"{scene.name}/{scenario}"
+            assert "{" not in qa[1], f"{scene.name}/{scenario}: unfilled template {qa[1]!r}"

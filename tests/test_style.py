@@ -22,11 +22,9 @@ PENDING = (
     "plots.py",
     "cli.py",
     "scenes/",
-    "audit",
     "fit",
     "checks.py",
     "events.py",
-    "linearize.py",
 )
 #: public functions whose argument is the demo's state or a Result from a layer above (typing them needs a
 #: Protocol in the lower layer); named here so the list can only shrink

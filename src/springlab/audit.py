@@ -65,22 +65,38 @@ _NAMES = {value: name for name, value in INTEGRATORS.items()}
 class Audit:
     """An audit of one model (see the module docstring); `as_json()` is audit.json.
 
-    Attributes:
-      model: where the model came from (path, scene name or "<MjModel>").
-      linear: the linearization at the operating point.
-      start: the perturbed start of the sweep runs.
-      duration: simulated time of every run [s].
-      tol: tolerance of the recommendation [-].
-      limits: integrator -> Limit (predicted / measured / confirmed stability limit [s]).
-      own: the model's own setting: {"integrator", "dt", "stable", "error", "margin"}.
-      constraints: constraint settings the own timestep breaks (solref timeconst < 2 dt).
-      is_linear, linearity: the linearity verdict and its measure {"change", "tolerance"}.
-      reference: {"kind", "error_estimate", "dt"}.
-      runs: the sweep, per integrator, largest dt first.
-      orders: integrator -> observed order (None: no clean power law, e.g. contacts).
-      pareto: runs no other beats in both error and wall time.
-      recommendation: {"integrator", "dt", "error", "tolerance", "verified", "wall_time_s"}.
-      timings: wall time of each stage [s].
+    Attributes
+    ----------
+    model
+        where the model came from (path, scene name or "<MjModel>").
+    linear
+        the linearization at the operating point.
+    start
+        the perturbed start of the sweep runs.
+    duration
+        simulated time of every run [s].
+    tol
+        tolerance of the recommendation [-].
+    limits
+        integrator -> Limit (predicted / measured / confirmed stability limit [s]).
+    own
+        the model's own setting: {"integrator", "dt", "stable", "error", "margin"}.
+    constraints
+        constraint settings the own timestep breaks (solref timeconst < 2 dt).
+    is_linear, linearity
+        the linearity verdict and its measure {"change", "tolerance"}.
+    reference
+        {"kind", "error_estimate", "dt"}.
+    runs
+        the sweep, per integrator, largest dt first.
+    orders
+        integrator -> observed order (None: no clean power law, e.g. contacts).
+    pareto
+        runs no other beats in both error and wall time.
+    recommendation
+        {"integrator", "dt", "error", "tolerance", "verified", "wall_time_s"}.
+    timings
+        wall time of each stage [s].
     """
 
     model: str
@@ -114,7 +130,7 @@ class Audit:
         motion = "linear" if self.is_linear else "nonlinear"
         head = f"{self.model}: {len(self.linear.modes)} modes"
         if fastest is not None:
-            zeta = "" if fastest.damping_ratio is None else f", zeta {fastest.damping_ratio:.3g}"
+            zeta = "" if fastest.damping_ratio is None else f", zeta {fastest.damping_ratio + 0.0:.3g}"  # no -0
             head += f", fastest {fastest.frequency_hz:.4g} Hz ({fastest.kind}{zeta})"
         if unstable:
             head += f"; {unstable} physically unstable (the model's own dynamics, not the integrator)"
@@ -198,8 +214,10 @@ def load(model_or_path: Any) -> _Source:
     A scene is built with its default scenario and parameters; its scenario's initial state is the
     sweep's start (as `springlab tradeoff` runs it) and its duration the default.
 
-    Raises:
-      BadInputError: no such file or scene, or MuJoCo cannot compile it (its message, one line).
+    Raises
+    ------
+    BadInputError
+        no such file or scene, or MuJoCo cannot compile it (its message, one line).
     """
     if isinstance(model_or_path, mujoco.MjModel):
         return _Source("<MjModel>", model_or_path)
@@ -225,11 +243,14 @@ def load(model_or_path: Any) -> _Source:
 
 
 def _start(model: mujoco.MjModel, point: OperatingPoint, perturb: float, source: _Source) -> Setup:
-    """The sweep's start: a scene's scenario state, else the operating point moved by `perturb` [m or rad]
-    along a fixed pattern of every degree of freedom (seeded, so audits repeat)."""
+    """The sweep's start: a scene's scenario state (where it differs from the operating point), else the
+    operating point moved by `perturb` [m or rad] along a fixed pattern of every degree of freedom
+    (seeded, so audits repeat)."""
     if source.start is not None and source.start.qpos is not None:
-        qvel = source.start.qvel if source.start.qvel is not None else point.qvel
-        return Setup(np.asarray(source.start.qpos, float), np.asarray(qvel, float), point.act, point.ctrl)
+        qvel = np.asarray(source.start.qvel if source.start.qvel is not None else point.qvel, float)
+        qpos = np.asarray(source.start.qpos, float)
+        if np.any(qpos != point.qpos) or np.any(qvel != point.qvel):  # a scenario driven by inputs alone does not
+            return Setup(qpos, qvel, point.act, point.ctrl)  # move here (the audit holds controls): perturb it
     pattern = np.random.default_rng(0).uniform(-1.0, 1.0, model.nv)
     if model.nv:
         pattern /= np.max(np.abs(pattern))
@@ -305,19 +326,29 @@ def audit(
 ) -> Audit:
     """Audit a model: modes, stability limits, accuracy vs cost, and the cheapest setting meeting `tol`.
 
-    Args:
-      model_or_path: an MjModel, a path to an MJCF (or URDF MuJoCo loads), or a shipped scene name.
-      keyframe: operating point, keyframe name or index (default: the first keyframe, else qpos0 at rest).
-      tol: tolerance on the error of the module docstring [-].
-      integrators: names to sweep (default all five), a list or "a,b".
-      dt: timesteps [s] to sweep (see `parse_dts`; default: a 12-point grid over 3 decades below 1.2x
+    Parameters
+    ----------
+    model_or_path
+        an MjModel, a path to an MJCF (or URDF MuJoCo loads), or a shipped scene name.
+    keyframe
+        operating point, keyframe name or index (default: the first keyframe, else qpos0 at rest).
+    tol
+        tolerance on the error of the module docstring [-].
+    integrators
+        names to sweep (default all five), a list or "a,b".
+    dt
+        timesteps [s] to sweep (see `parse_dts`; default: a 12-point grid over 3 decades below 1.2x
         the largest measured stability limit, whose top is a multiple of the model's own timestep).
-      duration: simulated time of every run [s] (default 1 s; a scene: its scenario's).
-      perturb: size of the initial perturbation of the operating point [m or rad].
-      nthread: threads of the batched runs (0: one per CPU).
+    duration
+        simulated time of every run [s] (default 1 s; a scene: its scenario's).
+    perturb
+        size of the initial perturbation of the operating point [m or rad].
+    nthread
+        threads of the batched runs (0: one per CPU).
 
-    Returns:
-      The Audit. Raises BadInputError for bad input (nothing is computed).
+    Returns
+    -------
+    The Audit. Raises BadInputError for bad input (nothing is computed).
     """
     stamps = {"start": _time.perf_counter()}
     tol = compare.check_tolerance(tol)

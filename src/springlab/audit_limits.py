@@ -61,14 +61,21 @@ CONFIRM_SIZE = 1e-6
 class Limit:
     """One integrator's stability limit.
 
-    Attributes:
-      integrator: name.
-      predicted_s: closed-form limit from the modes [s] (None: no closed form, or no limit).
-      measured_s: from the measured one-step map [s] (None: stable over the whole scan).
-      confirmed: runs of the nonlinear model at CONFIRM_BELOW x stay bounded and at CONFIRM_ABOVE x
+    Attributes
+    ----------
+    integrator
+        name.
+    predicted_s
+        closed-form limit from the modes [s] (None: no closed form, or no limit).
+    measured_s
+        from the measured one-step map [s] (None: stable over the whole scan).
+    confirmed
+        runs of the nonlinear model at CONFIRM_BELOW x stay bounded and at CONFIRM_ABOVE x
         grow (None: nothing to confirm).
-      growth_per_step_above: rho(Phi) / max(1, exp(sigma dt)) just above the limit [-].
-      detail: how the confirmation came out, for people.
+    growth_per_step_above
+        rho(Phi) / max(1, exp(sigma dt)) just above the limit [-].
+    detail
+        how the confirmation came out, for people.
     """
 
     integrator: str

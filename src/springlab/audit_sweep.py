@@ -53,6 +53,8 @@ REFERENCE_MAX_STEPS = 50_000
 LINEARITY_PROBES = 4
 #: steps of the timing run behind each integrator's cost per step
 TIMING_STEPS = 1000
+#: ... or as many more as take at least this long [s]
+TIMING_MIN_S = 0.02
 
 
 @dataclasses.dataclass
@@ -74,8 +76,10 @@ class SweepRun:
 def checkpoint_spacing(dts: list[float], duration: float) -> float:
     """The smallest common multiple [s] of the timesteps (as decimals): every run has a step there.
 
-    Raises:
-      BadInputError: fewer than MIN_CHECKPOINTS such multiples fit in the duration.
+    Raises
+    ------
+    BadInputError
+        fewer than MIN_CHECKPOINTS such multiples fit in the duration.
     """
     fractions = [Fraction(dt).limit_denominator(10**12) for dt in dts]
     numerator = math.lcm(*(f.numerator for f in fractions))
@@ -125,10 +129,14 @@ def _tangent_distance(model: mujoco.MjModel, a: np.ndarray, b: np.ndarray) -> np
 class Reference:
     """The reference motion: `states(dt, rows)` gives (qpos, qvel, kept) at times rows * dt [s].
 
-    Attributes:
-      kind: what it is, for people.
-      error_estimate: its own estimated error [-] (0 for the exact solution).
-      dt: its timestep [s] (None for the exact solution).
+    Attributes
+    ----------
+    kind
+        what it is, for people.
+    error_estimate
+        its own estimated error [-] (0 for the exact solution).
+    dt
+        its timestep [s] (None for the exact solution).
     """
 
     kind = ""
@@ -145,10 +153,10 @@ class TrajectoryReference(Reference):
     def __init__(self, trajectory: Trajectory, kind: str = "", error_estimate: float = 0.0):
         self.trajectory, self.kind, self.error_estimate, self.dt = trajectory, kind, error_estimate, trajectory.dt
 
-    def states(self, dt, rows):
+    def states(self, dt: float, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         index = rows * (dt / self.dt)
         nearest = np.round(index).astype(np.int64)
-        kept = (np.abs(index - nearest) <= 1e-6 * np.maximum(1.0, index)) & (nearest < len(self.trajectory.time))
+        kept = (np.abs(index - nearest) <= 1e-6) & (nearest < len(self.trajectory.time))  # same time to 1e-6 step
         picked = nearest[kept]
         return self.trajectory.qpos[picked], self.trajectory.qvel[picked], kept
 
@@ -181,7 +189,7 @@ class ExactReference(Reference):
         self.z0 = np.concatenate([x0, [1.0]])
         self.point = point
 
-    def states(self, dt, rows):
+    def states(self, dt: float, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         from scipy.linalg import expm  # scipy is a dependency; imported here to keep import time low
 
         stride = int(rows[1] - rows[0]) if len(rows) > 1 else 1  # sample_rows: evenly strided from 0
@@ -202,7 +210,9 @@ class ExactReference(Reference):
         return qpos, self.point.qvel + tangent[:, nv : 2 * nv], np.ones(len(rows), bool)
 
 
-def run_error(model: mujoco.MjModel, point: OperatingPoint, outcome, reference: Reference) -> float | None:
+def run_error(
+    model: mujoco.MjModel, point: OperatingPoint, outcome: Trajectory | DivergedError, reference: Reference
+) -> float | None:
     """A run's error [-] (module docstring) at its sampled steps, None if it diverged."""
     if isinstance(outcome, DivergedError):
         return None
@@ -320,8 +330,13 @@ def sweep_runs(
 
 
 def cost_per_step(model: mujoco.MjModel, start: Setup, integrator: str, dt: float) -> float:
-    """Wall time of one step [s] of `integrator` on `model`, run alone on the calling thread (best of 3 runs of
-    TIMING_STEPS steps, springlab.batch.time_run); a setting's wall time is steps x this (MuJoCo's cost per
-    step does not depend on dt; one long timing per integrator is steadier on a loaded machine than many
-    short ones)."""
-    return time_run(Job(copy.copy(model), integrator, dt, TIMING_STEPS, start), repeats=3) / TIMING_STEPS
+    """Wall time of one step [s] of `integrator` on `model`, run alone on the calling thread (springlab.batch
+    .time_run, best of 5, over TIMING_STEPS steps or as many as take TIMING_MIN_S); a setting's wall time
+    is steps x this (MuJoCo's cost per step does not depend on dt; one long timing per integrator is
+    steadier on a loaded machine than many short ones)."""
+    steps = TIMING_STEPS
+    while True:
+        seconds = time_run(Job(copy.copy(model), integrator, dt, steps, start), repeats=5, max_steps=steps)
+        if seconds >= TIMING_MIN_S or steps >= 64 * TIMING_STEPS:
+            return seconds / steps
+        steps *= 4

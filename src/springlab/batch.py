@@ -205,10 +205,14 @@ def run_rollout(
     bookkeeping). Jobs of different lengths or models of different structure fall back to
     `run_batched`. Returns what run_batched returns.
 
-    Args:
-      jobs: the simulations (each model is copied and set to its job's integrator and dt).
-      nthread: threads (0: one per CPU).
-      private_models: every job has its own model, which nobody else reads: set its integrator
+    Parameters
+    ----------
+    jobs
+        the simulations (each model is copied and set to its job's integrator and dt).
+    nthread
+        threads (0: one per CPU).
+    private_models
+        every job has its own model, which nobody else reads: set its integrator
         and dt in place instead of copying it (a sweep's chunk builds its models for itself).
     """
     if not jobs:

@@ -173,7 +173,32 @@ def design_step(state: DemoState) -> list[Artifact]:
     ]
 
 
+def audit_step(state: DemoState) -> list[Artifact]:
+    """`springlab audit` on the car's model, as any MJCF would be: modes, limits, error vs cost."""
+    from . import charts_audit  # here: matplotlib only when this step runs
+    from .audit import audit
+
+    result = audit("car")
+    charts_audit.write_audit(result, state.out / "audit")
+    state.timings.append(("audit of the car model (springlab audit)", result.timings["total_s"]))
+    return [
+        Artifact(
+            "audit/audit.png",
+            "plot",
+            "audit of the car model: modes, stability limit per integrator vs its own timestep, error vs cost"
+            " with the Pareto front and the cheapest setting for 1e-3",
+        ),
+        Artifact("audit/audit.json", "data", "audit of the car model (springlab audit car --json)"),
+    ]
+
+
 #: the demo's steps, in order (defined once, here: nothing is added at import time)
-STEPS: tuple[Callable[[DemoState], list[Artifact]], ...] = (core_step, media_step, tradeoff_step, design_step)
+STEPS: tuple[Callable[[DemoState], list[Artifact]], ...] = (
+    core_step,
+    media_step,
+    tradeoff_step,
+    design_step,
+    audit_step,
+)
 #: steps that run after every step in STEPS (the report lists everything)
 FINAL_STEPS: tuple[Callable[[DemoState], list[Artifact]], ...] = (report_step,)

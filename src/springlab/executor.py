@@ -98,14 +98,21 @@ def _check_reachable(address: str, timeout: float) -> None:
 class Executor:
     """Runs a study's chunks locally or on dask.distributed; results in submission order.
 
-    Args:
-      workers: start a LocalCluster of this many worker processes (one thread each).
-      scheduler: address of a running dask scheduler, e.g. 'tcp://10.0.0.5:8786'.
+    Parameters
+    ----------
+    workers
+        start a LocalCluster of this many worker processes (one thread each).
+    scheduler
+        address of a running dask scheduler, e.g. 'tcp://10.0.0.5:8786'.
         At most one of workers and scheduler; neither: run locally.
-      timeout: seconds [s] to wait for the scheduler (and for LocalCluster workers) to answer.
-      progress: None: a progress bar on a terminal only; False: never (--json, tests).
-      on_result: optional callback(chunk index) after each chunk's result arrives (tests use it).
-      nthread: batch threads of a local run (0: one per CPU); dask tasks always get 1.
+    timeout
+        seconds [s] to wait for the scheduler (and for LocalCluster workers) to answer.
+    progress
+        None: a progress bar on a terminal only; False: never (--json, tests).
+    on_result
+        optional callback(chunk index) after each chunk's result arrives (tests use it).
+    nthread
+        batch threads of a local run (0: one per CPU); dask tasks always get 1.
 
     Use as a context manager (or call `close`) so a LocalCluster started here is shut down;
     one Executor can run several maps (a study and its plane) on the same cluster.
@@ -208,16 +215,23 @@ class Executor:
 
         Locally `nthread` is the executor's (0: every CPU); on dask it is 1 (one task per worker thread).
 
-        Args:
-          function: a module-level (importable) function of plain data; it runs its chunk as one
+        Parameters
+        ----------
+        function
+            a module-level (importable) function of plain data; it runs its chunk as one
             batched MuJoCo call on `nthread` threads (0: every CPU) and returns plain data.
-          payloads: one per chunk (picklable plain data: names, numbers, numpy arrays).
-          description: the progress bar's label.
-          sizes: simulations per chunk, for the bar's rate (default: 1 per chunk).
-          unit: what `sizes` counts.
+        payloads
+            one per chunk (picklable plain data: names, numbers, numpy arrays).
+        description
+            the progress bar's label.
+        sizes
+            simulations per chunk, for the bar's rate (default: 1 per chunk).
+        unit
+            what `sizes` counts.
 
-        Raises:
-          Whatever a chunk raised (SpringlabErrors pass through unchanged).
+        Raises
+        ------
+            Whatever a chunk raised (SpringlabErrors pass through unchanged).
         """
         sizes = [1] * len(payloads) if sizes is None else list(sizes)
         results: list[Any] = [None] * len(payloads)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import pathlib
+import textwrap
 
 import numpy as np
 
@@ -45,8 +46,8 @@ def plot_fit(result, path: str | os.PathLike) -> pathlib.Path:
         _kinematics_panel(phase, result)
     else:
         _phase_panel(phase, result)
-    fig.suptitle(result.verdict, fontsize=9)
-    fig.tight_layout(rect=(0, 0, 1, 0.96))
+    fig.suptitle(textwrap.fill(result.verdict, 140), fontsize=9)
+    fig.tight_layout(rect=(0, 0, 1, 0.95))
     return charts._save(fig, path)
 
 

@@ -22,7 +22,7 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike
 
-__all__ = ["state_matrix", "lti_response", "linear_response", "expm_minus_identity"]
+__all__ = ["state_matrix", "generator_system", "lti_response", "linear_response", "expm_minus_identity"]
 
 
 def _onenorm(a: np.ndarray) -> float:
@@ -116,6 +116,44 @@ def state_matrix(mass_matrix: ArrayLike, damping_matrix: ArrayLike, stiffness_ma
     a[:n, n:] = np.eye(n)
     a[n:, :n] = -np.linalg.solve(mm, kk)
     a[n:, n:] = -np.linalg.solve(mm, cc)
+    return a
+
+
+def generator_system(
+    mass_matrix: ArrayLike,
+    damping_matrix: ArrayLike,
+    stiffness_matrix: ArrayLike,
+    forcing: ArrayLike,
+    generator: ArrayLike,
+) -> np.ndarray:
+    """State matrix of M q'' + C q' + K q = F g with the inputs g as states of their own, g' = G g.
+
+    The autonomous form a scene's reference and its error bound share: a constant force or
+    preload is a generator state with G = [[0]] (g = 1), a sinusoid a pair with
+    G = [[0, omega], [-omega, 0]].
+
+    Parameters
+    ----------
+    mass_matrix, damping_matrix, stiffness_matrix
+        M [kg], C [N s/m], K [N/m], (n, n) (see :func:`state_matrix`).
+    forcing
+        F (n, m): generalized force per unit of each generator state [N per unit].
+    generator
+        G (m, m) [1/s].
+
+    Returns
+    -------
+    ndarray
+        A (2n + m, 2n + m) [1/s] of z = (q, q', g): [[state_matrix, [0; M^-1 F]], [0, G]].
+    """
+    top = state_matrix(mass_matrix, damping_matrix, stiffness_matrix)
+    n = top.shape[0] // 2
+    ff = np.asarray(forcing, float).reshape(n, -1)
+    gg = np.asarray(generator, float).reshape(ff.shape[1], ff.shape[1])
+    a = np.zeros((2 * n + gg.shape[0],) * 2)
+    a[: 2 * n, : 2 * n] = top
+    a[n : 2 * n, 2 * n :] = np.linalg.solve(np.asarray(mass_matrix, float), ff)
+    a[2 * n :, 2 * n :] = gg
     return a
 
 

@@ -13,6 +13,7 @@ n x n with n = 2 nv + na.
   A = [[0, I], [-M^-1 K, -M^-1 C]] (plus the activation rows and columns by
   centred differences of `mj_forward`), its eigenvalues lambda [1/s] and the
   modes they make (`Mode`).
+* `OperatingPoint.at(model, qpos=...)` / `operating_point(model, keyframe)`: where to linearize.
 * `one_step_map`: Phi(dt) = d x_{n+1} / d x_n of one `mj_step` for any
   integrator: `mjd_transitionFD` (centred) where MuJoCo supports it, centred
   differences of `mj_step` in the tangent space for RK4 (which
@@ -56,6 +57,30 @@ class OperatingPoint:
     ctrl: np.ndarray
     label: str = "qpos0"
 
+    @classmethod
+    def at(
+        cls,
+        model: mujoco.MjModel,
+        qpos: np.ndarray | None = None,
+        qvel: np.ndarray | None = None,
+        act: np.ndarray | None = None,
+        ctrl: np.ndarray | None = None,
+        label: str = "given state",
+    ) -> OperatingPoint:
+        """A point from whatever the caller has (the rest: qpos0, zero velocity, activation and control),
+        e.g. `linearize(model, OperatingPoint.at(model, qpos=sag))` for a scene's own linearization."""
+
+        def given(value, default):
+            return np.array(default if value is None else value, float)
+
+        return cls(
+            given(qpos, model.qpos0),
+            given(qvel, np.zeros(model.nv)),
+            given(act, np.zeros(model.na)),
+            given(ctrl, np.zeros(model.nu)),
+            label,
+        )
+
     def as_json(self) -> dict[str, Any]:
         """{"label", "qpos", "qvel", "act", "ctrl"} as plain lists."""
         return {
@@ -79,8 +104,10 @@ def operating_point(model: mujoco.MjModel, keyframe: str | int | None = None) ->
     """The model's operating point: the keyframe named or numbered `keyframe`; None: the first keyframe
     if the model has one, else qpos0 at rest.
 
-    Raises:
-      BadInputError: no such keyframe (the message lists the valid ones).
+    Raises
+    ------
+    BadInputError
+        no such keyframe (the message lists the valid ones).
     """
     if keyframe is None and model.nkey == 0:
         return OperatingPoint(
@@ -112,13 +139,19 @@ def _point_or_default(model: mujoco.MjModel, point: OperatingPoint | None) -> Op
 class Mode:
     """One mode of the continuous-time linearization.
 
-    Attributes:
-      eigenvalue: lambda [1/s] (for an oscillatory pair, the one with Im > 0).
-      kind: 'oscillatory' (complex pair), 'decaying' / 'growing' (real lambda < 0 / > 0),
+    Attributes
+    ----------
+    eigenvalue
+        lambda [1/s] (for an oscillatory pair, the one with Im > 0).
+    kind
+        'oscillatory' (complex pair), 'decaying' / 'growing' (real lambda < 0 / > 0),
         or 'rigid' (|lambda| within the growth tolerance of 0: a free or unsprung direction).
-      frequency_hz: natural frequency |lambda| / (2 pi) [Hz] (0 for rigid).
-      damping_ratio: -Re(lambda) / |lambda| [-] (1 for decaying, -1 for growing, None for rigid).
-      physically_unstable: Re(lambda) beyond the growth tolerance: the model's own dynamics grows
+    frequency_hz
+        natural frequency |lambda| / (2 pi) [Hz] (0 for rigid).
+    damping_ratio
+        -Re(lambda) / |lambda| [-] (1 for decaying, -1 for growing, None for rigid).
+    physically_unstable
+        Re(lambda) beyond the growth tolerance: the model's own dynamics grows
         there (an upright pendulum), which no integrator should be blamed for.
     """
 
@@ -174,17 +207,27 @@ def modes_of(eigenvalues: Sequence[complex], growth_tolerance: float) -> list[Mo
 class Linearization:
     """A model linearized at an operating point (tangent-space state x = (dq, dv, dact), n = 2 nv + na).
 
-    Attributes:
-      point: the operating point.
-      M: (nv, nv) mass matrix df/da [kg, kg m^2].
-      C: (nv, nv) damping df/dv [N s/m, N m s/rad] (joint damping, actuator gains on velocity, contacts).
-      K: (nv, nv) stiffness df/dq [N/m, N m/rad] (springs, gravity's restoring or toppling term, servos,
+    Attributes
+    ----------
+    point
+        the operating point.
+    M
+        (nv, nv) mass matrix df/da [kg, kg m^2].
+    C
+        (nv, nv) damping df/dv [N s/m, N m s/rad] (joint damping, actuator gains on velocity, contacts).
+    K
+        (nv, nv) stiffness df/dq [N/m, N m/rad] (springs, gravity's restoring or toppling term, servos,
         contacts).
-      A: (n, n) continuous-time system matrix, dx/dt = A x [1/s and the units above].
-      eigenvalues: (n,) eigenvalues of A [1/s].
-      modes: the modes, fastest first (`modes_of`).
-      fd_error: estimated absolute error of the entries of A from finite differences [1/s^2 in the K block].
-      growth_tolerance: [1/s] eigenvalue moves the finite differences can cause (sqrt of fd_error for a
+    A
+        (n, n) continuous-time system matrix, dx/dt = A x [1/s and the units above].
+    eigenvalues
+        (n,) eigenvalues of A [1/s].
+    modes
+        the modes, fastest first (`modes_of`).
+    fd_error
+        estimated absolute error of the entries of A from finite differences [1/s^2 in the K block].
+    growth_tolerance
+        [1/s] eigenvalue moves the finite differences can cause (sqrt of fd_error for a
         Jordan block, plus sqrt(eps) |A|); growth below it is not called physical.
     """
 
@@ -301,14 +344,19 @@ def linearize(model: mujoco.MjModel, point: OperatingPoint | None = None, *, ste
     activations). The operating point need not be an equilibrium: A is then the linearization of
     the flow along the motion through it. `model` is not modified.
 
-    Args:
-      model: any compiled model.
-      point: where to linearize.
-      step: finite-difference step in the tangent space [m, rad, m/s, rad/s].
+    Parameters
+    ----------
+    model
+        any compiled model.
+    point
+        where to linearize.
+    step
+        finite-difference step in the tangent space [m, rad, m/s, rad/s].
 
-    Returns:
-      The Linearization: M, C, K [SI], A [1/s], eigenvalues [1/s], modes (frequency [Hz], damping
-      ratio, physically unstable) and the finite-difference error estimates.
+    Returns
+    -------
+    The Linearization: M, C, K [SI], A [1/s], eigenvalues [1/s], modes (frequency [Hz], damping
+    ratio, physically unstable) and the finite-difference error estimates.
     """
     point = _point_or_default(model, point)
     work = _continuous_model(model)
@@ -390,8 +438,12 @@ def one_step_map(
     for loops that own a scratch copy: copying a large model costs more than its map); `data` is
     optional scratch.
 
-    Raises:
-      UnknownNameError: unknown integrator. BadInputError: dt not a finite number > 0.
+    Raises
+    ------
+    UnknownNameError
+        unknown integrator.
+    BadInputError
+        dt not a finite number > 0.
     """
     kind = integrator_id(integrator)
     if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):

@@ -166,14 +166,34 @@ def properties(base: Mapping[str, float], names: list[str], exponents: np.ndarra
 class SobolStudy:
     """Sobol indices of the printer head's positioning time.
 
-    Attributes:
-      base: the scene parameters the ranges are centred on (SI).
-      names: the varied properties; ranges: name -> (low, high) [its unit], log-uniform.
-      base_samples: N; runs: N (D + 2) simulations.
-      indices: SALib's S1, S1_conf, ST, ST_conf (name -> value [-]).
-      positioning_time_s: (runs,) output [s]; unsettled: how many never settled within design.MAX_DURATION.
-      elasticities: d ln T / d ln p [-] by least squares over the same runs; regression_r2 its R^2 [-].
-      wall_time_s: wall time of the simulations [s]; executor: where they ran.
+    Attributes
+    ----------
+    base
+        the scene parameters the ranges are centred on (SI).
+    names
+        the varied properties.
+    ranges
+        name -> (low, high) [its unit], log-uniform.
+    base_samples
+        N.
+    runs
+        N (D + 2) simulations.
+    seed
+        seed of the sample and of the bootstrap.
+    indices
+        SALib's S1, S1_conf, ST, ST_conf (name -> value [-]).
+    positioning_time_s
+        (runs,) output [s].
+    unsettled
+        how many never settled within design.MAX_DURATION (counted there).
+    elasticities
+        d ln T / d ln p [-] by least squares over the same runs.
+    regression_r2
+        R^2 [-] of that fit.
+    wall_time_s
+        wall time of the simulations [s].
+    executor
+        where they ran.
     """
 
     base: dict[str, float]
@@ -242,16 +262,25 @@ def printer_head(
 ) -> SobolStudy:
     """Sobol indices of positioning time over carriage mass, belt stiffness, damping ratio, force and move length.
 
-    Args:
-      base_samples: N, a power of 2; the study runs N x 7 simulations (default 114,688).
-      seed: seed of the scrambled Sobol' sequence and of the bootstrap.
-      omega_dt: omega_n dt [-] of every simulation (RK4), as the design study.
-      executor: where the chunks run (None: locally); the indices are the same bit for bit.
-      chunk_size: simulations per batched call.
-      **overrides: printer_head parameters the ranges are centred on (SI).
+    Parameters
+    ----------
+    base_samples
+        N, a power of 2; the study runs N x 7 simulations (default 114,688).
+    seed
+        seed of the scrambled Sobol' sequence and of the bootstrap.
+    omega_dt
+        omega_n dt [-] of every simulation (RK4), as the design study.
+    executor
+        where the chunks run (None: locally); the indices are the same bit for bit.
+    chunk_size
+        simulations per batched call.
+    **overrides
+        printer_head parameters the ranges are centred on (SI).
 
-    Raises:
-      BadInputError: N not a power of 2, bad parameter values.
+    Raises
+    ------
+    BadInputError
+        N not a power of 2, bad parameter values.
     """
     base_samples = check_base_samples(base_samples)
     base = design.base_parameters(overrides)

@@ -65,8 +65,10 @@ class Axis:
 def parse_axis(text: str) -> Axis:
     """'NAME=LOW:HIGH:N[:log]' (N may be left out for --samples) -> Axis.
 
-    Raises:
-      BadInputError: the text does not have that form, or the numbers make no range.
+    Raises
+    ------
+    BadInputError
+        the text does not have that form, or the numbers make no range.
     """
     name, sep, spec = str(text).partition("=")
     form = "--vary takes NAME=LOW:HIGH:N[:log], e.g. damping=0.5:40:30:log"
@@ -103,18 +105,30 @@ def make_axis(name: str, low: float, high: float, count: int | None, log: bool =
 class Sweep:
     """A finished sweep; one row per configuration, in order (the last axis fastest on a grid).
 
-    Attributes:
-      scene, scenario, integrator: names run.
-      dt: timestep [s]; duration: simulated time [s].
-      axes: the varied parameters.
-      samples: random points drawn (None: the full grid).
-      values: varied parameter -> (n,) values [its unit].
-      rows: per configuration: "parameters" (all, SI), "quantities", "errors" (column -> max_rel [-]),
+    Attributes
+    ----------
+    scene, scenario, integrator
+        names run.
+    dt
+        timestep [s].
+    duration
+        simulated time [s].
+    axes
+        the varied parameters.
+    samples
+        random points drawn (None: the full grid).
+    values
+        varied parameter -> (n,) values [its unit].
+    rows
+        per configuration: "parameters" (all, SI), "quantities", "errors" (column -> max_rel [-]),
         "passed" (bool or None: no reference), "diverged" (bool), "detail" (why it diverged, or
         "invalid: ..." for a configuration the scenario cannot start from, e.g. a bump that lifts the car).
-      wall_time_s: wall time of the whole sweep [s].
-      executor: where it ran ('local', '2 local dask workers', ...).
-      chunks: batched calls made.
+    wall_time_s
+        wall time of the whole sweep [s].
+    executor
+        where it ran ('local', '2 local dask workers', ...).
+    chunks
+        batched calls made.
     """
 
     scene: str
@@ -235,9 +249,12 @@ def run_chunk(payload: Mapping[str, Any], nthread: int = 0) -> list[dict[str, An
     payload names the scene, scenario and setting and lists each configuration's
     parameter overrides; every model is rebuilt here from the scene's MJCF.
 
-    Args:
-      payload: {"scene", "scenario", "integrator", "dt" [s], "duration" [s], "configurations": [overrides]}.
-      nthread: batch threads (0: one per CPU).
+    Parameters
+    ----------
+    payload
+        {"scene", "scenario", "integrator", "dt" [s], "duration" [s], "configurations": [overrides]}.
+    nthread
+        batch threads (0: one per CPU).
     """
     scene = scenes.get(payload["scene"])
     chosen = scene.scenario(payload["scenario"])
@@ -300,23 +317,36 @@ def sweep(
 ) -> Sweep:
     """Run a scenario over a grid (or random samples) of parameters, batched; one row per configuration.
 
-    Args:
-      scene: scene name (see `springlab list`).
-      scenario: scenario name (None: the scene's default).
-      vary: parameter -> (low, high, n) or (low, high, n, "log") [parameter's unit], or a list of
+    Parameters
+    ----------
+    scene
+        scene name (see `springlab list`).
+    scenario
+        scenario name (None: the scene's default).
+    vary
+        parameter -> (low, high, n) or (low, high, n, "log") [parameter's unit], or a list of
         'NAME=LOW:HIGH:N[:log]' strings. n may be None when `samples` is given.
-      samples: draw this many random points in the box instead of the full grid.
-      seed: seed of the random points.
-      integrator, dt, duration: the setting (None: the scene's validated one, as `springlab run`).
-      chunk_size: configurations per batched call.
-      executor: where the chunks run (None: locally, in this process).
-      **parameters: fixed parameter values (SI), like `--set`.
+    samples
+        draw this many random points in the box instead of the full grid.
+    seed
+        seed of the random points.
+    integrator, dt, duration
+        the setting (None: the scene's validated one, as `springlab run`).
+    chunk_size
+        configurations per batched call.
+    executor
+        where the chunks run (None: locally, in this process).
+    **parameters
+        fixed parameter values (SI), like `--set`.
 
-    Returns:
-      The Sweep; rows equal single `springlab.run` calls at the same parameters.
+    Returns
+    -------
+        The Sweep; rows equal single `springlab.run` calls at the same parameters.
 
-    Raises:
-      BadInputError: unknown names, bad ranges, a configuration with non-physical values.
+    Raises
+    ------
+    BadInputError
+        unknown names, bad ranges, a configuration with non-physical values.
     """
     started = _time.perf_counter()
     scene_obj, chosen, _ = api.prepare(scene, scenario, parameters)

@@ -12,8 +12,10 @@ import numpy as np
 
 from .. import analytic
 from ..errors import ParameterError
+from ..linear import generator_system
+from ..linearize import OperatingPoint, operating_point
+from ..linearize import linearize as shared_linearize
 from ..scene import Reference, Setup
-from ..simulate import quiet_mujoco
 from ._car_parts import Variant, damped_modes, gravity, refuse_motion, tendon
 
 #: pitch_heave: share of the springs' stiffness at the front axle [-]. Below the
@@ -96,27 +98,18 @@ def undamped_modes(mass: np.ndarray, stiffness: np.ndarray) -> list[tuple[float,
 
 
 def linearize(model: mujoco.MjModel, qpos: np.ndarray) -> dict[str, np.ndarray]:
-    """MuJoCo's continuous-time linearization at rest at `qpos` [m, rad]: M, C, K (nv x nv).
+    """MuJoCo's continuous-time linearization at rest at `qpos` = (heave [m], pitch [rad]): M, C, K (nv x nv).
 
-    mujoco.mjd_inverseFD finite-differences the inverse dynamics f(q, v, a):
-    M = df/da, C = df/dv, K = df/dq (it returns them transposed; RK4 is not
-    supported, so the integrator is set to implicit for the call and restored).
+    springlab.linearize.linearize: centred differences of MuJoCo's inverse dynamics f(q, v, a),
+    M = df/da, C = df/dv, K = df/dq; `model` is not modified.
     """
-    data = mujoco.MjData(model)
-    data.qpos[:] = model.qpos0
+    point = operating_point(model, None)
+    full = model.qpos0.copy()
     for name, value in zip(("heave", "pitch"), qpos):
-        data.qpos[model.joint(name).qposadr[0]] = value
-    integrator = model.opt.integrator
-    model.opt.integrator = mujoco.mjtIntegrator.mjINT_IMPLICIT
-    nv = model.nv
-    dfdq, dfdv, dfda = np.zeros((nv, nv)), np.zeros((nv, nv)), np.zeros((nv, nv))
-    try:
-        with quiet_mujoco():
-            mujoco.mj_forward(model, data)
-            mujoco.mjd_inverseFD(model, data, 1e-6, False, dfdq, dfdv, dfda, None, None, None, None)
-    finally:
-        model.opt.integrator = integrator
-    return {"M": dfda.T.copy(), "C": dfdv.T.copy(), "K": dfdq.T.copy()}
+        full[model.joint(name).qposadr[0]] = value
+    at_rest = OperatingPoint(qpos=full, qvel=np.zeros(model.nv), act=point.act, ctrl=point.ctrl, label="equilibrium")
+    linear = shared_linearize(model, at_rest)
+    return {"M": linear.M, "C": linear.C, "K": linear.K}
 
 
 class PitchHeave(Variant):
@@ -202,10 +195,10 @@ class PitchHeave(Variant):
         q, v = analytic.linear_response(
             time, linear.mass, linear.damping, linear.stiffness, q0, np.zeros(2), force=linear.preload
         )
-        a = analytic.state_matrix(linear.mass, linear.damping, linear.stiffness)
-        system = np.zeros((5, 5))
-        system[:4, :4] = a
-        system[2:4, 4] = np.linalg.solve(linear.mass, linear.preload)
+        # z = (q, v, 1): the preloads and gravity as a constant generator state
+        system = generator_system(
+            linear.mass, linear.damping, linear.stiffness, forcing=linear.preload[:, None], generator=[[0.0]]
+        )
         states = np.column_stack([q, v, np.ones_like(time)])
         return Reference(
             pos={"heave": q[:, 0], "pitch": q[:, 1]},

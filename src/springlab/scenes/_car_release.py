@@ -10,7 +10,7 @@ import math
 import mujoco
 import numpy as np
 
-from .. import analytic, events
+from .. import analytic, events, linear
 from ..errors import ParameterError
 from ..scene import Reference, Setup
 from ._car_parts import Variant, gravity
@@ -86,7 +86,7 @@ class Release(Variant):
         x0 = springref - (m + params["push_mass"]) * g / k
         x, v = analytic.free_response(time, m, k, d, x0 - rest, 0.0)
         # z = (x, v, 1): the spring's preload and gravity as a constant generator state
-        system = np.array([[0.0, 1.0, 0.0], [-k / m, -d / m, k * rest / m], [0.0, 0.0, 0.0]])
+        system = linear.generator_system([[m]], [[d]], [[k]], forcing=[[k * rest]], generator=[[0.0]])
         states = np.column_stack([x + rest, v, np.ones_like(time)])
         return Reference(
             pos={"heave": x + rest}, vel={"heave": v}, system=system, states=states, rows={"heave": (0, 1)}

@@ -78,15 +78,15 @@ divergence advice is right for every integrator.
 
 from __future__ import annotations
 
-import copy
 import math
 
 import mujoco
 import numpy as np
 
 from .. import analytic
+from ..linearize import one_step_map, operating_point
 from ..scene import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene, Setup
-from ..simulate import Trajectory, integrator_id, quiet_mujoco
+from ..simulate import Trajectory, integrator_id
 from ..simulate import stability_limit as joint_damping_stability_limit
 
 #: relative round-off allowed in the centre-of-mass target (the bang-bang stops it at D exactly)
@@ -522,30 +522,11 @@ def move_residual_stretch(params: dict[str, float], dt: float) -> tuple[float, f
 def step_matrix(model: mujoco.MjModel, integrator: str, dt: float) -> np.ndarray:
     """MuJoCo's one-step Jacobian d(qpos, qvel)_{n+1} / d(qpos, qvel)_n at rest, (2 nv, 2 nv).
 
-    Central differences of mj_step on a copy of `model` (controls zero). The
-    model is linear, so the differences are exact up to round-off. Works for
-    every integrator, RK4 included (mjd_transitionFD refuses RK4).
+    springlab.linearize.one_step_map at qpos0 at rest (controls zero): centred differences of
+    the step, every integrator (RK4 included); `model` is not modified. The model is linear, so
+    the differences are exact up to round-off.
     """
-    model = copy.copy(model)
-    model.opt.integrator = integrator_id(integrator)
-    model.opt.timestep = dt
-    data = mujoco.MjData(model)
-    nv = model.nv
-    step = 1e-6
-    jacobian = np.empty((2 * nv, 2 * nv))
-    with quiet_mujoco():
-        for j in range(2 * nv):
-            columns = []
-            for sign in (1.0, -1.0):
-                mujoco.mj_resetData(model, data)
-                if j < nv:
-                    data.qpos[j] += sign * step
-                else:
-                    data.qvel[j - nv] += sign * step
-                mujoco.mj_step(model, data)
-                columns.append(np.concatenate([data.qpos - model.qpos0, data.qvel]))
-            jacobian[:, j] = (columns[0] - columns[1]) / (2 * step)
-    return jacobian
+    return one_step_map(model, integrator, dt, operating_point(model))
 
 
 def linearized_mode(model: mujoco.MjModel, integrator: str, dt: float) -> tuple[float, float, float]:

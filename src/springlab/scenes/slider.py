@@ -34,6 +34,7 @@ import mujoco
 import numpy as np
 
 from .. import analytic, exciter
+from ..linear import generator_system, state_matrix
 from ..scene import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene, Setup
 from ..simulate import Trajectory
 
@@ -259,15 +260,16 @@ class Slider(Scene):
         # the autonomous system z' = A z behind the reference, forcing as generator states
         if forcing == "harmonic":
             x, v = analytic.harmonic_response(time, m, k, d, f0, params["force_frequency"], x0, v0)
-            system = np.array([[0, 1, 0, 0], [-k / m, -d / m, 1 / m, 0], [0, 0, 0, omega], [0, 0, -omega, 0]])
+            # g = (F sin, F cos): F(t) is the first, a rotation at omega
+            system = generator_system([[m]], [[d]], [[k]], forcing=[[1.0, 0.0]], generator=[[0, omega], [-omega, 0]])
             states = np.column_stack([x, v, f0 * np.sin(omega * time), f0 * np.cos(omega * time)])
         elif forcing == "step":
             x, v = analytic.step_response(time, m, k, d, f0, x0, v0)
-            system = np.array([[0, 1, 0], [-k / m, -d / m, 1 / m], [0, 0, 0]])
+            system = generator_system([[m]], [[d]], [[k]], forcing=[[1.0]], generator=[[0.0]])  # g = F, constant
             states = np.column_stack([x, v, np.full_like(time, f0)])
         else:
             x, v = analytic.free_response(time, m, k, d, x0, v0)
-            system = np.array([[0.0, 1.0], [-k / m, -d / m]])
+            system = state_matrix([[m]], [[d]], [[k]])
             states = np.column_stack([x, v])
         return Reference(pos={"slider": x}, vel={"slider": v}, system=system, states=states, rows={"slider": (0, 1)})
 
