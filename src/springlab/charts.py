@@ -254,7 +254,7 @@ def write_stability(
     return written
 
 
-def plot_sobol(study, path: str | pathlib.Path) -> pathlib.Path:
+def plot_sobol(study: Any, path: str | pathlib.Path) -> pathlib.Path:
     """Two panels of a springlab.sobol.SobolStudy: first-order and total Sobol indices with their
     confidence intervals per property (total minus first-order is the interactions' share), and the
     elasticities |d ln T / d ln p| from the same runs, for the ranking they would give."""

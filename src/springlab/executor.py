@@ -157,7 +157,7 @@ class Executor:
     # -- lifecycle ---------------------------------------------------------------
 
     @property
-    def client(self):
+    def client(self) -> Any:
         """The dask Client (connecting or starting the cluster on first use)."""
         if self._client is None:
             self._client = self._connect()
