@@ -31,7 +31,7 @@ def _start(*argv, cwd):
     )
 
 
-def _wait_for(condition, proc, timeout=120.0):
+def _wait_for(condition, proc, timeout=600.0):  # a ceiling for loaded CI machines, not a measurement
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         if condition():
@@ -45,7 +45,7 @@ def _wait_for(condition, proc, timeout=120.0):
 
 
 def _finish(proc):
-    out, err = proc.communicate(timeout=120)
+    out, err = proc.communicate(timeout=600)
     return proc.returncode, out, err
 
 

@@ -8,6 +8,7 @@ both cores are busy.
 
 from __future__ import annotations
 
+import logging
 import os
 import queue
 import threading
@@ -53,7 +54,14 @@ class Mp4Sink:
             raise RuntimeError("ffmpeg produced no output (see its messages above)")
 
     def abort(self) -> None:
-        self._gen.close()
+        # an abandoned video is removed by the caller; imageio-ffmpeg's "no frames have been
+        # written" warning (an interrupt before the first frame) would only be noise on stderr
+        ffmpeg_log = logging.getLogger("imageio_ffmpeg")
+        was_disabled, ffmpeg_log.disabled = ffmpeg_log.disabled, True
+        try:
+            self._gen.close()
+        finally:
+            ffmpeg_log.disabled = was_disabled
 
 
 class GifSink:
