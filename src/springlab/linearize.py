@@ -177,7 +177,7 @@ class Mode:
         }
 
 
-def modes_of(eigenvalues: Sequence[complex], growth_tolerance: float) -> list[Mode]:
+def modes_of(eigenvalues: Sequence[complex] | np.ndarray, growth_tolerance: float) -> list[Mode]:
     """Modes [fastest first] from the eigenvalues [1/s] of a real continuous-time A.
 
     Complex pairs become one oscillatory mode; real eigenvalues one mode each.
@@ -394,7 +394,7 @@ def _rk4_map(model: mujoco.MjModel, data: mujoco.MjData, point: OperatingPoint, 
     saved = np.empty(mujoco.mj_stateSize(model, _INTEGRATION))
     mujoco.mj_getState(model, data, saved, _INTEGRATION)
     phi = np.empty((n, n))
-    after = []
+    after: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # (qpos, qvel, act) after the + and - nudge
     for j in range(n):
         after.clear()
         for sign in (1.0, -1.0):
