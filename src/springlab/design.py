@@ -21,7 +21,7 @@ respect to each property p, (1) by least squares of ln T on all ln p over the
 whole grid (global, the ranking), and (2) by central differences between the
 grid neighbours of the default (local). The properties are ranked by |global
 elasticity|, and the positioning time is plotted over the two most
-influential ones, the other two at their defaults.
+influential ones, the other two at their defaults (springlab.design_chart).
 
 The analytic estimate beside every simulated time:
 

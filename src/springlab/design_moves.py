@@ -121,7 +121,7 @@ def simulate_moves(
     base
         scene parameters (move_distance [m], positioning_band [m], motor_mass [kg], ...).
     values
-        property -> (n,) values (PROPERTIES).
+        property -> (n,) values (springlab.design.PROPERTIES).
     omega_dt
         omega_n dt [-] of every simulation (RK4).
     nthread
