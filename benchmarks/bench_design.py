@@ -1,6 +1,6 @@
 """Speed of the printer-head design sweep, side by side in one run.
 
-The batched sweep (springlab.design.simulate_moves: one mujoco.batch.Batch, every
+The batched sweep (springlab.design_moves.simulate_moves: one mujoco.batch.Batch, every
 configuration its own simulation with its own timestep, settling certified and
 stopped per simulation) against a plain Python loop over mujoco.mj_step that
 integrates the same configurations for the same number of steps (taken from the
@@ -21,7 +21,7 @@ import time
 import mujoco
 import numpy as np
 
-from springlab import design, scenes
+from springlab import design, design_moves, scenes
 from springlab.simulate import quiet_mujoco
 
 
@@ -30,11 +30,11 @@ def loop_configurations(base, values, runs, indices) -> float:
     scene = scenes.get("printer_head")
     scenario = scene.scenario("move")
     dt_all = runs["dt_s"]
-    half_steps, force = design.move_profiles(base, values, dt_all)
+    half_steps, force = design_moves.move_profiles(base, values, dt_all)
     start = time.perf_counter()
     with quiet_mujoco():
         for i in indices:
-            params = design.config_parameters(base, values, int(i))
+            params = design_moves.config_parameters(base, values, int(i))
             model = scene.build(params, scenario)  # per-configuration model, as a user's loop would
             model.opt.integrator = mujoco.mjtIntegrator.mjINT_RK4
             model.opt.timestep = float(dt_all[i])
@@ -54,8 +54,8 @@ def main() -> None:
     n = len(values["belt_stiffness"])
     print(f"printer_head design sweep: {n} configurations ({levels}^4), {os.cpu_count()} CPUs")
 
-    runs = design.simulate_moves(base, values)  # all threads
-    single = design.simulate_moves(base, values, nthread=1)
+    runs = design_moves.simulate_moves(base, values)  # all threads
+    single = design_moves.simulate_moves(base, values, nthread=1)
     steps = runs["steps_total"]
     indices = np.linspace(0, n - 1, min(subset, n)).astype(int)
     loop_wall = loop_configurations(base, values, runs, indices)

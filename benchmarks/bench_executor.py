@@ -27,7 +27,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from springlab import analytic, api, design, model_files, scenes, sobol, sweeps
+from springlab import analytic, api, design, design_moves, model_files, scenes, sobol, sweeps
 from springlab.batch import Job, run_rollout
 from springlab.executor import Executor, chunked, ping
 from springlab.scene import parsed_spec
@@ -42,8 +42,10 @@ def design_throughput() -> dict[str, float]:
     cores = os.cpu_count() or 1
 
     def rate(executor: Executor) -> float:
-        design.run_moves(base, {k: v[:64] for k, v in values.items()}, executor=executor, chunk_size=64)  # warm up
-        return n / best_of(lambda: design.run_moves(base, values, executor=executor, chunk_size=64), repeat=2)
+        design_moves.run_moves(
+            base, {k: v[:64] for k, v in values.items()}, executor=executor, chunk_size=64
+        )  # warm up
+        return n / best_of(lambda: design_moves.run_moves(base, values, executor=executor, chunk_size=64), repeat=2)
 
     print(f"1) printer-head design run, {n} configurations in chunks of 64, {cores} cores")
     rates = {"local threads": rate(Executor(progress=False))}

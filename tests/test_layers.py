@@ -41,6 +41,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
         "extremes",
         "auto",
         "design",
+        "design_moves",
         "audit",
         "audit_limits",
         "audit_sweep",
@@ -54,7 +55,17 @@ LAYERS: dict[str, tuple[str, ...]] = {
         "executor",
         "sobol",
     ),
-    "outputs": ("charts", "charts_audit", "fit_chart", "plots", "render", "report", "media", "sweep_plot"),
+    "outputs": (
+        "charts",
+        "charts_audit",
+        "design_chart",
+        "fit_chart",
+        "plots",
+        "render",
+        "report",
+        "media",
+        "sweep_plot",
+    ),
     "front": ("cli", "demo", "__main__", "__init__"),
 }
 PREFIXES = {"scenes.": "physics", "render_": "outputs"}

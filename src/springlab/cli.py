@@ -470,7 +470,7 @@ def _print_stability(report: dict, output: str | None) -> None:
 
 
 def cmd_design(args) -> int:
-    from . import design  # here, not at the top: mujoco.batch is only needed by this command
+    from . import design, design_chart  # here, not at the top: mujoco.batch is only needed by this command
 
     if args.output:
         outputs.check_directory(args.output)  # before seconds of computing, not after
@@ -494,6 +494,7 @@ def cmd_design(args) -> int:
     extra = {} if indices is None else {"sobol": indices.summary()}
     if args.output:
         design.write(study, args.output, extra)
+        design_chart.plot(study, pathlib.Path(args.output) / "design.png")
         if indices is not None:
             charts.plot_sobol(indices, pathlib.Path(args.output) / "sobol.png")
     if args.json:

@@ -142,10 +142,11 @@ def tradeoff_step(state: DemoState) -> list[Artifact]:
 
 def design_step(state: DemoState) -> list[Artifact]:
     """The printer head's design study: 7^4 = 2401 configurations, plus a 31 x 31 plane for the plot."""
-    from . import design  # here: mujoco.batch is only needed by this step
+    from . import design, design_chart  # here: mujoco.batch is only needed by this step
 
     study = design.run_study("printer_head")
     design.write(study, state.out / "design")
+    design_chart.plot(study, state.out / "design" / "design.png")
     state.timings.append(("design sweep (batched MuJoCo)", study.wall_time_s))
     return [
         Artifact(
