@@ -33,6 +33,7 @@ from .audit_sweep import (
     MAX_SAMPLES,
     REFERENCE_FRACTION,
     ExactReference,
+    Reference,
     SweepRun,
     checkpoint_spacing,
     converged_reference,
@@ -47,7 +48,7 @@ from .audit_sweep import (
 from .errors import BadInputError, DivergedError
 from .linearize import Linearization, OperatingPoint, linearize, operating_point
 from .scene import Setup
-from .simulate import INTEGRATORS, integrator_id, quiet_mujoco, simulate
+from .simulate import INTEGRATORS, Trajectory, integrator_id, quiet_mujoco, simulate
 from .tradeoff import Run, observed_order, pareto_front
 
 #: defaults of the command line and the API
@@ -271,8 +272,8 @@ def parse_dts(spec: Any) -> list[float] | None:
         text = spec.strip()
         try:
             if ":" in text:
-                low, high, count = text.split(":")
-                low, high, count = float(low), float(high), int(count)
+                low_text, high_text, count_text = text.split(":")
+                low, high, count = float(low_text), float(high_text), int(count_text)
                 if not (0 < low < high and math.isfinite(high) and count >= 2):
                     raise ValueError
                 values = sorted({high / round(high / v) for v in np.geomspace(low, high, count)}, reverse=True)
@@ -381,11 +382,13 @@ def audit(
     change = math.inf if isinstance(probe, DivergedError) else linearity_change(model, linear, probe)
     threshold = linearity_tolerance(linear, tol, run_duration)
     is_linear = change <= threshold
+    reference: Reference
     if is_linear:
         reference = ExactReference(model, linear, start)
     else:
         step = reference_step(dts, spacing)
-        reference = converged_reference(model, point, start, step, run_duration, tol, coarse=probe, nthread=nthread)
+        coarse = probe if isinstance(probe, Trajectory) else None
+        reference = converged_reference(model, point, start, step, run_duration, tol, coarse=coarse, nthread=nthread)
     stamps["reference"] = _time.perf_counter()
 
     runs = []
@@ -459,12 +462,13 @@ def _order(runs: list[SweepRun], reference_error: float) -> float | None:
     first-order method rises by the full ratio). Runs within 10x the floor are left out: there the
     reference or round-off, not the integrator, sets the error.
     """
-    finest_first = sorted((r for r in runs if r.error is not None and r.error > 0), key=lambda r: r.dt)
+    # (dt [s], error [-]) of the runs with an error, finest first
+    finest_first = sorted(((r.dt, r.error) for r in runs if r.error is not None and r.error > 0), key=lambda p: p[0])
     floor = reference_error
-    for finer, coarser in zip(finest_first, finest_first[1:]):
-        if coarser.error > finer.error * math.sqrt(coarser.dt / finer.dt):
+    for (finer_dt, finer_error), (coarser_dt, coarser_error) in zip(finest_first, finest_first[1:]):
+        if coarser_error > finer_error * math.sqrt(coarser_dt / finer_dt):
             break
-        floor = max(floor, finer.error, coarser.error)
+        floor = max(floor, finer_error, coarser_error)
     return observed_order([r for r in _as_runs(runs) if r.max_rel_error is None or r.max_rel_error > 10 * floor])
 
 

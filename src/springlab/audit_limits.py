@@ -130,9 +130,11 @@ def predicted_limit(linear: Linearization, integrator: str) -> float | None:
     if integrator == "rk4":
         limits = [_rk4_limit(m.eigenvalue) / m.rate_rad_s for m in stable]
     else:
-        limits = [
-            stability_limit(integrator, m.damping_ratio) / m.rate_rad_s for m in stable if m.kind == "oscillatory"
-        ]
+        limits = []
+        for m in stable:
+            if m.kind == "oscillatory":
+                assert m.damping_ratio is not None, "an oscillatory mode has a damping ratio"
+                limits.append(stability_limit(integrator, m.damping_ratio) / m.rate_rad_s)
     finite = [limit for limit in limits if math.isfinite(limit)]
     return min(finite) if finite else None
 

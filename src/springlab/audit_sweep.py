@@ -23,6 +23,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
+from collections.abc import Sequence
 from fractions import Fraction
 from typing import Any
 
@@ -154,7 +155,7 @@ class TrajectoryReference(Reference):
         self.trajectory, self.kind, self.error_estimate, self.dt = trajectory, kind, error_estimate, trajectory.dt
 
     def states(self, dt: float, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        index = rows * (dt / self.dt)
+        index = rows * (dt / self.trajectory.dt)  # self.dt, typed as a float
         nearest = np.round(index).astype(np.int64)
         kept = (np.abs(index - nearest) <= 1e-6) & (nearest < len(self.trajectory.time))  # same time to 1e-6 step
         picked = nearest[kept]
@@ -283,9 +284,10 @@ def converged_reference(
         if max(steps) > REFERENCE_MAX_STEPS:
             break
         outcomes = run_batched([Job(model, "rk4", d, s, start) for d, s in zip(dts, steps)], nthread=nthread)
-        if any(isinstance(o, DivergedError) for o in outcomes):
+        finished = [o for o in outcomes if isinstance(o, Trajectory)]
+        if len(finished) < len(outcomes):  # one diverged
             break
-        levels.extend(outcomes)
+        levels.extend(finished)
         if len(levels) >= 2:
             diff = run_error(model, point, levels[-2], TrajectoryReference(levels[-1]))
             diffs.append(math.inf if diff is None else diff)
@@ -315,7 +317,7 @@ def sweep_runs(
     dts: list[float],
     duration: float,
     *,
-    extra: list[tuple[str, float]] = (),
+    extra: Sequence[tuple[str, float]] = (),
     nthread: int = 0,
 ) -> dict[tuple[str, float], Trajectory | DivergedError]:
     """Every (integrator, dt) plus `extra` settings, batched: (integrator, dt) -> Trajectory or DivergedError."""

@@ -237,7 +237,7 @@ def run_rollout(
     )
     controls = None
     if base.nu:
-        controls = np.ascontiguousarray(np.stack([_controls(job) for job in jobs]))
+        controls = np.ascontiguousarray(np.stack([_present(_controls(job)) for job in jobs]))
     out = np.empty((len(jobs), count, state0.shape[1]))
     sensors = np.empty((len(jobs), count, base.nsensordata))
     with quiet_mujoco():

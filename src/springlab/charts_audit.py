@@ -74,22 +74,27 @@ def _limits_panel(result: Audit, ax) -> None:
 def _cost_panel(result: Audit, ax) -> None:
     floor = 1e-17
     for name in dict.fromkeys(r.integrator for r in result.runs):
-        runs = [r for r in result.runs if r.integrator == name and not r.diverged]
-        if not runs:
+        # (wall time [s], error [-]) of the runs that finished (a diverged run has no error)
+        points = [
+            (r.wall_time_s, r.error)
+            for r in result.runs
+            if r.integrator == name and not r.diverged and r.error is not None
+        ]
+        if not points:
             continue
         order = result.orders.get(name)
         label = f"{name} (order {order:.2f})" if order is not None else name
         ax.loglog(
-            [r.wall_time_s for r in runs],
-            [max(r.error, floor) for r in runs],
+            [wall for wall, _ in points],
+            [max(error, floor) for _, error in points],
             marker="o",
             ms=3,
             color=_COLORS.get(name, "grey"),
             label=label,
         )
-    front = [r for r in result.pareto if r.error is not None]
+    front = [(r.wall_time_s, r.error) for r in result.pareto if r.error is not None]
     if front:
-        ax.loglog([r.wall_time_s for r in front], [max(r.error, floor) for r in front], "k-", lw=2, alpha=0.4)
+        ax.loglog([wall for wall, _ in front], [max(error, floor) for _, error in front], "k-", lw=2, alpha=0.4)
     ax.axhline(result.tol, color="k", ls=":", lw=1, label=f"tol {result.tol:g}")
     own = result.own
     if own["error"] is not None:

@@ -17,7 +17,7 @@ import sys
 import time
 import warnings
 from collections.abc import Callable, Iterator, Sequence
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 
@@ -36,7 +36,7 @@ EXIT_INTERRUPTED, EXIT_TERMINATED = 128 + signal.SIGINT, 128 + signal.SIGTERM
 class _Parser(argparse.ArgumentParser):
     """argparse with one-line errors and exit code 2."""
 
-    def error(self, message: str) -> None:  # noqa: D401 - argparse hook
+    def error(self, message: str) -> NoReturn:  # noqa: D401 - argparse hook
         raise BadInputError(f"{message} (see '{self.prog} --help')")
 
     def parse_known_args(self, args=None, namespace=None):  # noqa: D401 - argparse hook
@@ -52,9 +52,12 @@ class _Parser(argparse.ArgumentParser):
             self._intermixing = False
 
 
-def _parse_sets(pairs: Sequence[str]) -> dict[str, str]:
-    """['mass=2', ...] -> {'mass': '2'}; values are checked by the scene."""
-    out = {}
+def _parse_sets(pairs: Sequence[str]) -> dict[str, Any]:
+    """['mass=2', ...] -> {'mass': '2'}; values are checked by the scene.
+
+    The values are strings; typed Any because they travel as ``**parameters`` next to typed keywords.
+    """
+    out: dict[str, Any] = {}
     for pair in pairs or ():
         name, sep, value = pair.partition("=")
         if not sep or not name.strip():
@@ -117,7 +120,7 @@ def _executor(args, nthread: int = 0) -> Executor:
 
 
 def cmd_list(args) -> int:
-    catalogue = []
+    catalogue: list[dict[str, Any]] = []
     for scene in scenes.SCENES.values():
         catalogue.append(
             {
@@ -421,6 +424,7 @@ def cmd_stability(args) -> int:
         report = stability.stability_report(full=args.full, executor=executor)
         amplification = stability.amplification_map(executor=executor) if args.output else None
     if args.output:
+        assert amplification is not None  # computed above whenever there is an output folder
         charts.write_stability(report, amplification, args.output)
     if args.json:
         _print_json(stability.report_json(report))
@@ -656,7 +660,7 @@ def cmd_demo(args) -> int:
     except (KeyboardInterrupt, Terminated) as stop:
         marker = pathlib.Path(args.output) / demo.INCOMPLETE_MARKER
         if marker.exists():
-            stop.note = f"; {args.output}/ is incomplete (see {marker})"  # type: ignore[attr-defined]
+            stop.add_note(f"; {args.output}/ is incomplete (see {marker})")  # main() prints it
         raise
     print(_validation_table(state.validation))
     failed = sum(not r["passed"] for r in state.validation)
@@ -917,10 +921,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"springlab: error: {error}", file=sys.stderr)
         return error.exit_code
     except KeyboardInterrupt as stop:
-        print(f"springlab: interrupted{getattr(stop, 'note', '')}", file=sys.stderr)
+        print(f"springlab: interrupted{''.join(getattr(stop, '__notes__', ()))}", file=sys.stderr)
         return EXIT_INTERRUPTED
     except Terminated as stop:
-        print(f"springlab: terminated{getattr(stop, 'note', '')}", file=sys.stderr)
+        print(f"springlab: terminated{''.join(getattr(stop, '__notes__', ()))}", file=sys.stderr)
         return EXIT_TERMINATED
     except BrokenPipeError:
         # the reader went away (`springlab list | head`): stop quietly, as Unix tools do;

@@ -25,6 +25,7 @@ from . import api, fit_data, fit_results, scenes
 from .errors import BadInputError, ParameterError, SpringlabError
 from .fit_engine import OMEGA_DT, Problem, check_identifiable, solve
 from .fit_models import ALIASES, FITS, MODAL, SceneFit
+from .scenes.car import Car
 
 
 @dataclasses.dataclass
@@ -284,7 +285,7 @@ def _finish(problem: Problem, solved: dict[str, Any], run_scene: bool) -> FitRes
     fitted = record.values + residual
     values = problem.values(x)
     units = how.units()
-    estimates = {}
+    estimates: dict[str, dict[str, Any]] = {}
     for i, name in enumerate(free):
         unit = record.unit if name == "offset" else units[name]
         estimates[name] = {
@@ -366,9 +367,10 @@ def _scene_run(problem: Problem, values: dict[str, float], params: dict[str, flo
     """The identified scene's own run over the record's span, or (None, why not)."""
     how, scene = problem.how, problem.scene
     chosen = problem.scenario
-    overrides = {k: v for k, v in params.items() if k in scene.parameters}
+    overrides: dict[str, Any] = {k: v for k, v in params.items() if k in scene.parameters}
     note = ""
     if how.scene == "car":
+        assert isinstance(scene, Car)  # scenes.get("car") is the Car scene
         g = scene.gravity()
         overrides["push_mass"] = (params["clearance"] - values["x0"]) * params["stiffness"] / g
         overrides.pop("damping_ratio", None)

@@ -48,7 +48,7 @@ def plot_fit(result, path: str | os.PathLike) -> pathlib.Path:
         _phase_panel(phase, result)
     fig.suptitle(textwrap.fill(result.verdict, 140), fontsize=9)
     fig.tight_layout(rect=(0, 0, 1, 0.95))
-    return charts._save(fig, path)
+    return charts._save(fig, pathlib.Path(path))
 
 
 def _phase_panel(ax, result) -> None:

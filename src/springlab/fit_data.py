@@ -188,12 +188,13 @@ def load(
     t_index, y_index = names.index("time"), names.index(chosen)
     joint, signal = chosen.rsplit("_", 1)
     column = header[y_index]
-    time, values = [], []
+    time_cells: list[float] = []
+    value_cells: list[float] = []
     for number, row in enumerate(rows, start=2):
         cells = row + [""] * (len(header) - len(row))
-        time.append(_number(cells[t_index], number, header[t_index], path))
-        values.append(_number(cells[y_index], number, column, path))
-    time, values = np.array(time, float), np.array(values, float) * scale
+        time_cells.append(_number(cells[t_index], number, header[t_index], path))
+        value_cells.append(_number(cells[y_index], number, column, path))
+    time, values = np.array(time_cells, float), np.array(value_cells, float) * scale
     if not (np.all(np.isfinite(time[np.isfinite(time)])) and np.all(np.isfinite(values[np.isfinite(values)]))):
         raise BadInputError(f"{str(path)!r} holds an infinite value; valid: finite numbers")
     keep = np.isfinite(time) & np.isfinite(values)

@@ -73,7 +73,7 @@ class Problem:
         self.t = record.model_time
         self.scale = float(np.std(record.values)) or 1.0
         self.rollouts = 0
-        self._spec = None
+        self._spec: mujoco.MjSpec | None = None
         self.rollout_time = 0.0
         self.set_grid(start)
         # a thread pool costs ~5 ms per rollout call: worth it only for long batches

@@ -77,8 +77,8 @@ class SceneFit:
 
     def units(self) -> dict[str, str]:
         """Every name a fit may free -> its unit."""
-        units = {self.mass: "kg", self.stiffness: "N/m", self.damping: "N s/m"}
-        units.pop(None, None)
+        named = ((self.mass, "kg"), (self.stiffness, "N/m"), (self.damping, "N s/m"))
+        units = {name: unit for name, unit in named if name is not None}
         return {**MODAL, **units, **NUISANCE}
 
     def check_free(self, free: list[str], fixed: dict[str, float], params: dict[str, float], forced: bool, signal: str):
@@ -242,8 +242,10 @@ class SceneFit:
         if self.mass is None:
             m = self.mode_mass(params)
         if self.stiffness in free_physical:
+            assert m is not None, "a free stiffness needs the mass: given, freed or the mode's"
             values[self.stiffness] = m * omega**2
         if self.damping in free_physical:
+            assert m is not None, "a free damping needs the mass: given, freed or the mode's"
             values[self.damping] = 2.0 * zeta * m * omega
 
     def bounds(self, name: str, start: float, record: Record) -> tuple[float, float]:

@@ -177,7 +177,7 @@ class Mode:
         }
 
 
-def modes_of(eigenvalues: Sequence[complex], growth_tolerance: float) -> list[Mode]:
+def modes_of(eigenvalues: Sequence[complex] | np.ndarray, growth_tolerance: float) -> list[Mode]:
     """Modes [fastest first] from the eigenvalues [1/s] of a real continuous-time A.
 
     Complex pairs become one oscillatory mode; real eigenvalues one mode each.
@@ -292,6 +292,23 @@ def _forward_rates(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
     return np.concatenate([data.qacc, data.act_dot])
 
 
+def _nudge(model: mujoco.MjModel, data: mujoco.MjData, j: int, delta: float) -> None:
+    """Move data's state by `delta` along tangent-space coordinate j of (dq, dv, dact).
+
+    Positions move through mj_integratePos, so quaternion joints stay unit length; `delta` is in the
+    coordinate's unit (rad or m for dq, rad/s or m/s for dv, the actuator's unit for dact).
+    """
+    nv = model.nv
+    if j < nv:
+        direction = np.zeros(nv)
+        direction[j] = delta
+        mujoco.mj_integratePos(model, data.qpos, direction, 1.0)
+    elif j < 2 * nv:
+        data.qvel[j - nv] += delta
+    else:
+        data.act[j - 2 * nv] += delta
+
+
 def _activation_blocks(model: mujoco.MjModel, data: mujoco.MjData, point: OperatingPoint, step: float) -> np.ndarray:
     """Centred d(qacc, act_dot)/d(dq, dv, dact), (nv + na, n), by mj_forward in the tangent space."""
     nv, na = model.nv, model.na
@@ -301,14 +318,7 @@ def _activation_blocks(model: mujoco.MjModel, data: mujoco.MjData, point: Operat
         sides = []
         for sign in (1.0, -1.0):
             point.load(model, data)
-            if j < nv:
-                direction = np.zeros(nv)
-                direction[j] = sign * step
-                mujoco.mj_integratePos(model, data.qpos, direction, 1.0)
-            elif j < 2 * nv:
-                data.qvel[j - nv] += sign * step
-            else:
-                data.act[j - 2 * nv] += sign * step
+            _nudge(model, data, j, sign * step)
             sides.append(_forward_rates(model, data))
         jac[:, j] = (sides[0] - sides[1]) / (2 * step)
     return jac
@@ -394,19 +404,12 @@ def _rk4_map(model: mujoco.MjModel, data: mujoco.MjData, point: OperatingPoint, 
     saved = np.empty(mujoco.mj_stateSize(model, _INTEGRATION))
     mujoco.mj_getState(model, data, saved, _INTEGRATION)
     phi = np.empty((n, n))
-    after = []
+    after: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # (qpos, qvel, act) after the + and - nudge
     for j in range(n):
         after.clear()
         for sign in (1.0, -1.0):
             mujoco.mj_setState(model, data, saved, _INTEGRATION)
-            if j < nv:
-                direction = np.zeros(nv)
-                direction[j] = sign * step
-                mujoco.mj_integratePos(model, data.qpos, direction, 1.0)
-            elif j < 2 * nv:
-                data.qvel[j - nv] += sign * step
-            else:
-                data.act[j - 2 * nv] += sign * step
+            _nudge(model, data, j, sign * step)
             mujoco.mj_step(model, data)
             after.append((data.qpos.copy(), data.qvel.copy(), data.act.copy()))
         (q_plus, v_plus, a_plus), (q_minus, v_minus, a_minus) = after

@@ -267,7 +267,7 @@ def _separatrix_window(curves, center_xs: Sequence[float]):
 def draw_phase_background(ax, field, equilibria, separatrices, xlim, vlim, *, arrows: int = 21) -> None:
     """Vector field (normalized arrows, grey), separatrices and equilibria on `ax` within the limits."""
     if field is not None:
-        gx, gv = np.meshgrid(np.linspace(*xlim, arrows), np.linspace(*vlim, int(arrows * 0.8)))
+        gx, gv = np.meshgrid(np.linspace(xlim[0], xlim[1], arrows), np.linspace(vlim[0], vlim[1], int(arrows * 0.8)))
         with np.errstate(all="ignore"):
             dx, dv = field(gx, gv)
             dx, dv = np.broadcast_to(dx, gx.shape), np.broadcast_to(dv, gx.shape)
@@ -600,7 +600,7 @@ def figure_for(
     """The figure of one plot kind (see KINDS) for a scene's scenario."""
     if kind not in KINDS:
         raise BadInputError(f"unknown plot kind {kind!r}; valid: {', '.join(KINDS)}")
-    timing = dict(integrator=integrator, dt=dt, duration=duration)
+    timing: dict[str, Any] = dict(integrator=integrator, dt=dt, duration=duration)
     if kind == "family":
         return phase_family(scene, scenario, **timing, **parameters)
     if kind == "zeta":
@@ -669,7 +669,7 @@ class PhasePanel:
         self._canvas = self._background.copy()
         self._draw = ImageDraw.Draw(self._canvas)
         self._ImageDraw = ImageDraw
-        self._last = [None] * len(self.joints)
+        self._last: list[np.ndarray | None] = [None] * len(self.joints)  # each joint's newest pixel
         self._next_sample = 0
         self._line = max(2, round(2 * scale))
         self._dot = max(4, round(5 * scale))
@@ -690,8 +690,9 @@ class PhasePanel:
             new = self._pixels(
                 index, np.append(x[self._next_sample : end], xt), np.append(v[self._next_sample : end], vt)
             )
-            if self._last[index] is not None:
-                new = np.vstack([self._last[index], new])
+            previous = self._last[index]
+            if previous is not None:
+                new = np.vstack([previous, new])
             if len(new) > 1:
                 self._draw.line([tuple(p) for p in new], fill=self._color, width=self._line, joint="curve")
             self._last[index] = new[-1:]
@@ -699,6 +700,7 @@ class PhasePanel:
         image = self._canvas.copy()
         draw = self._ImageDraw.Draw(image)
         for last in self._last:
+            assert last is not None  # every joint got its newest pixel in the loop above
             cx, cy = last[0]
             r = self._dot
             draw.ellipse((cx - r, cy - r, cx + r, cy + r), fill=(214, 39, 40), outline=(0, 0, 0))

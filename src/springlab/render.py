@@ -35,6 +35,7 @@ import os
 import time as _time
 from collections.abc import Callable
 from pathlib import Path
+from typing import cast
 
 import mujoco
 import numpy as np
@@ -75,7 +76,7 @@ GIF_MAX_FPS = 50
 # --------------------------------------------------------------------------- time
 
 
-def frame_times(duration: float, fps: int) -> np.ndarray:
+def frame_times(duration: float, fps: float) -> np.ndarray:
     """Return the frame times [s] of a video of ``duration`` seconds at ``fps``.
 
     The times are ``0, 1/fps, 2/fps, ...``; there are ``round(duration * fps)``
@@ -147,12 +148,13 @@ def sample_states(time: np.ndarray, qpos: np.ndarray, at: np.ndarray) -> np.ndar
 # ----------------------------------------------------------------- validation
 
 
-def _check_fps(fps) -> int | float:
+def _check_fps(fps: object) -> float:
     if isinstance(fps, bool) or not isinstance(fps, (int, float, np.integer, np.floating)):
         raise BadInputError(f"fps must be a positive number of frames per second, got {fps!r}")
     if not math.isfinite(fps) or fps <= 0:
         raise BadInputError(f"fps must be > 0, got {fps!r}")
-    return fps
+    # a numpy scalar passes through unchanged: it acts as a float in every use (arithmetic, formatting)
+    return cast(float, fps)
 
 
 def _check_size(name: str, value) -> int:
@@ -202,7 +204,7 @@ def _output_kind(output) -> tuple[Path, str]:
     return path, ext
 
 
-def check_video_arguments(output, fps, width, height) -> tuple[Path, str, int | float, int, int]:
+def check_video_arguments(output, fps, width, height) -> tuple[Path, str, float, int, int]:
     """Validate a video request before any work: (path, extension, fps, width, height).
 
     Raises ``BadInputError`` (a ``ValueError``) for an extension other than
@@ -253,7 +255,7 @@ def render_video(
     qpos: np.ndarray,
     output: str | os.PathLike,
     *,
-    fps: int = 30,
+    fps: float = 30,
     width: int = 640,
     height: int = 480,
     camera: str | int | None = None,
@@ -421,6 +423,7 @@ def render_video(
             video_w += video_w % 2
             video_h += video_h % 2
 
+        sink: Mp4Sink | GifSink
         if ext == ".mp4":
             sink = Mp4Sink(tmp_name, video_w, video_h, fps)
         else:
@@ -440,6 +443,7 @@ def render_video(
             scene.render(data, view)
             text.draw(view, t)
             if panel is not None:
+                assert first_panel is not None  # drawn before the loop whenever there is a panel
                 img = first_panel if i == 0 else _as_panel_image(panel(i, t), i, height, panel_w)
                 frame[:height, width : width + panel_w] = img
             if video_w > width + panel_w:  # even-size padding: repeat the edge

@@ -106,12 +106,12 @@ def covering_guides(model: mujoco.MjModel, states: np.ndarray, margin: float = 0
     if not rails or moving.size == 0:
         return model
     data = mujoco.MjData(model)
-    centres = []
+    positions = []
     for q in states:
         data.qpos[:] = q
         mujoco.mj_kinematics(model, data)
-        centres.append(data.geom_xpos[moving].copy())
-    centres = np.concatenate(centres)
+        positions.append(data.geom_xpos[moving].copy())
+    centres = np.concatenate(positions)
     covered = model
     for g in rails:
         kind = model.geom_type[g]
@@ -416,6 +416,7 @@ class Drawings:
 
     def _bump(self, scene, data) -> None:
         bump, road = self.road_bump, self._road
+        assert bump is not None and road is not None  # the bump is drawn only when the scene has one
         wheel_x = float(data.geom_xpos[self.model.geom(bump.wheel_geom).id][0])
         start = wheel_x - bump.speed * float(data.time)  # where the bump begins (it reached the wheel at t = 0)
         fade = road["fade"]  # quarter car: the bump is not drawn under the other axle, which it does not move
@@ -444,6 +445,7 @@ class Drawings:
 
     def _distance_marks(self, scene, data) -> None:
         marks = self._marks
+        assert marks is not None  # the marks are drawn only when the model has a road plane
         moving = np.flatnonzero(self.model.body_weldid != 0)
         x = float(data.xpos[moving[0]][0]) if moving.size else 0.0  # marks around the first moving body
         white = np.array([0.95, 0.95, 0.95, 1.0], np.float32)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import importlib.util
 import math
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -37,7 +38,9 @@ def _find_font() -> str | None:
 class TextOverlay:
     """Dark text on a translucent white box at the top-left of the 3D view."""
 
-    def __init__(self, label: str, view_height: int, max_time: float, notes: list[str] = (), time_step: float = 0.01):
+    def __init__(
+        self, label: str, view_height: int, max_time: float, notes: Sequence[str] = (), time_step: float = 0.01
+    ):
         """``label`` on the first line, then ``notes`` (e.g. "motion ×30"), then the time.
 
         ``max_time`` [s] fixes the width of the time field; ``time_step`` [s]

@@ -9,12 +9,16 @@ from __future__ import annotations
 import csv
 import io
 import pathlib
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from . import outputs
 from .errors import BadInputError
 from .sweeps import Sweep
+
+if TYPE_CHECKING:  # matplotlib is imported only when a figure is drawn
+    from matplotlib.cm import ScalarMappable
 
 
 def default_quantity(sweep: Sweep) -> str:
@@ -90,7 +94,9 @@ def plot(sweep: Sweep, path: str | pathlib.Path, quantity: str | None = None) ->
                 keep &= sweep.values[other.name] == grid[len(grid) // 2]
             title += "\n" + ", ".join(f"{o.name} = {o.values()[len(o.values()) // 2]:g}" for o in axes[2:])
         finite = keep & np.isfinite(z)
+        mesh: ScalarMappable
         if sweep.samples is None:
+            assert a.count is not None and b.count is not None, "a grid sweep's axes all have N"
             shape = (a.count, b.count)
             plane = np.where(finite, z, np.nan)[keep].reshape(shape)
             mesh = ax.pcolormesh(b.values(), a.values(), plane, shading="nearest", cmap="viridis")

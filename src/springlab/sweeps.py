@@ -49,6 +49,7 @@ class Axis:
 
     def values(self) -> np.ndarray:
         """The grid values (count of them), ends included."""
+        assert self.count is not None, "only an axis with N (NAME=LOW:HIGH:N) has grid values"
         if self.count == 1:
             return np.array([self.low])
         if self.log:
@@ -177,7 +178,7 @@ class Sweep:
             for name, value in row["quantities"].items():
                 if name not in quantities and (_is_number(value) or isinstance(value, str)):
                     quantities.append(name)
-        errors = []
+        errors: list[str] = []
         for row in self.rows:
             errors.extend(c for c in row["errors"] if c not in errors)
         header = list(self.values) + quantities + [f"{c}_max_rel" for c in errors] + ["passed", "diverged", "detail"]
@@ -235,7 +236,8 @@ def configurations(axes: Sequence[Axis], samples: int | None = None, seed: int =
     missing = [a.name for a in axes if a.count is None]
     if missing:
         raise BadInputError(f"--vary {missing[0]} needs N (NAME=LOW:HIGH:N) unless --samples is given")
-    total = math.prod(a.count for a in axes)
+    counts = [a.count for a in axes if a.count is not None]  # all of them: checked just above
+    total = math.prod(counts)
     if total > MAX_CONFIGURATIONS:
         raise BadInputError(f"the grid has {total} configurations, more than {MAX_CONFIGURATIONS}; use --samples")
     mesh = np.meshgrid(*[a.values() for a in axes], indexing="ij")
@@ -263,7 +265,14 @@ def run_chunk(payload: Mapping[str, Any], nthread: int = 0) -> list[dict[str, An
     prepared, jobs, rows = [], [], []
     for overrides in payload["configurations"]:
         params = scene.resolve(chosen, overrides)
-        row = {"parameters": params, "quantities": {}, "errors": {}, "passed": None, "diverged": False, "detail": ""}
+        row: dict[str, Any] = {
+            "parameters": params,
+            "quantities": {},
+            "errors": {},
+            "passed": None,
+            "diverged": False,
+            "detail": "",
+        }
         rows.append(row)
         model = scene.build(params, chosen)
         try:
@@ -290,7 +299,7 @@ def run_chunk(payload: Mapping[str, Any], nthread: int = 0) -> list[dict[str, An
 
 def _scalars(quantities: Mapping[str, Any]) -> dict[str, Any]:
     """The scalar quantities (numbers, bools, strings) as plain Python values."""
-    out = {}
+    out: dict[str, bool | float | str] = {}
     for name, value in quantities.items():
         if isinstance(value, (bool, np.bool_)):
             out[name] = bool(value)

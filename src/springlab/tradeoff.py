@@ -344,7 +344,7 @@ def grid_chunk(payload: dict[str, Any], nthread: int = 0) -> list[tuple[float | 
     for name, dt in payload["pairs"]:
         steps = check_timing(dt, duration)
         jobs.append(Job(model, name, dt, steps, scene_obj.setup(model, params, chosen, steps, dt), stop))
-    out = []
+    out: list[tuple[float | None, str, int, Any]] = []
     for job, outcome in zip(jobs, run_batched(jobs, nthread=nthread)):
         if isinstance(outcome, DivergedError):
             out.append((None, str(outcome), job.steps, None))

@@ -126,7 +126,7 @@ def lyapunov_exponent(
     state = (lead.qpos[-1].copy(), lead.qvel[-1].copy())
     twin = (state[0].copy(), state[1].copy())
     twin[0][qpos_adr] += PERTURBATION
-    rates = []
+    rates: list[float] = []
     segments = max(1, round(total / interval))
     for _ in range(segments):
         lead = scene.rerun(params, scenario, integrator, dt, interval, state=state, model=model)
@@ -140,5 +140,7 @@ def lyapunov_exponent(
         twin = (state[0].copy(), state[1].copy())
         twin[0][qpos_adr] += dx * PERTURBATION / distance
         twin[1][dof] += dv * PERTURBATION / distance
-    rates = np.array(rates)
-    return float(np.mean(rates)), float(np.std(rates, ddof=1) / math.sqrt(len(rates))) if len(rates) > 1 else math.inf
+    samples = np.array(rates)
+    # standard error of the mean rate [1/s]; one segment has no spread to measure
+    error = float(np.std(samples, ddof=1) / math.sqrt(len(samples))) if len(samples) > 1 else math.inf
+    return float(np.mean(samples)), error

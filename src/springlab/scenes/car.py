@@ -306,7 +306,8 @@ class Car(Scene):
     @functools.cache  # noqa: B019 - scenes are module-level singletons, never freed
     def _mjcf_inertia(self) -> tuple[float, float, float]:
         """The car body's principal inertias in the MJCF [kg m^2]: roll, pitch, yaw."""
-        return tuple(float(i) for i in self.model_spec().body("car").inertia)
+        roll, pitch, yaw = (float(i) for i in self.model_spec().body("car").inertia)
+        return roll, pitch, yaw
 
     # -- model ---------------------------------------------------------------
 

@@ -29,6 +29,7 @@ Exact references: analytic.free_response / step_response / harmonic_response.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import mujoco
 import numpy as np
@@ -39,7 +40,7 @@ from ..scene import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, S
 from ..simulate import Trajectory
 
 
-def _damping_for_ratio(zeta: float) -> callable:
+def _damping_for_ratio(zeta: float) -> Callable[[dict[str, float], set[str]], dict[str, float]]:
     """Scenario preset: damping [N s/m] = 2 zeta sqrt(k m) from the other parameters."""
 
     def derive(params: dict[str, float], explicit: set[str]) -> dict[str, float]:
