@@ -178,3 +178,44 @@ def test_default_factors_follow_the_stated_rules():
     # 0.3 s with a 195 Hz mode: >= 90 frames and 6 frames per period -> 39 -> the nice 50
     assert render_scale.default_slow_motion(0.3, 30, [194.9]) == 50
     assert [render_scale.nice_at_least(v) for v in (0.5, 1, 1.2, 2.5, 4, 17, 39, 51)] == [1, 1, 2, 3, 5, 20, 50, 100]
+
+
+def _mark_spacing(row_bright):
+    """Pixel distance between neighbouring distance marks along one image row, from the bright runs' centres."""
+    edges = np.diff(np.concatenate([[0], row_bright.astype(int), [0]]))
+    centres = 0.5 * (np.flatnonzero(edges == 1) + np.flatnonzero(edges == -1) - 1)
+    gaps = np.diff(centres)
+    gaps = gaps[gaps > 0.5 * np.max(gaps, initial=0)] if gaps.size else gaps
+    return float(np.min(gaps)) if gaps.size else math.nan  # a mark hidden by a wheel doubles a gap
+
+
+@pytest.mark.slow
+def test_the_tachograph_vehicle_is_drawn_bus_length_against_the_distance_marks(tmp_path):
+    # Chapter 5.2: the tachograph is a touring bus's; springlab draws it 12 m long (scenes/_kinematics_bus.py).
+    # Marks lie every MARK_SPACING m on the road. The bus's near side stands between the road's near edge
+    # (largest mark spacing in px) and the road seen under the bus (smallest), so 12 m measured with those two
+    # spacings must bracket the image length; quantisation: +-1 px at each end of the bus, +-1 px per spacing.
+    from springlab.render_drawings import MARK_SPACING
+    from springlab.scenes._kinematics_bus import BUS_LENGTH
+
+    result = api.run("kinematics", "tachograph")
+    media.render_run(result, tmp_path / "v.mp4", fps=2, width=640, height=480, duration=12.0, progress=False)
+    frames = _decode(tmp_path / "v.mp4")
+    checked = 0
+    for frame in frames[[4, 12, 20]]:  # pulling away, cruising, braking
+        r, g, b = (frame[..., i].astype(int) for i in range(3))
+        body = (r > 90) & (r > 2 * g) & (r > 2.5 * b)  # the bus's paint (0.85 0.33 0.18)
+        columns, rows = np.flatnonzero(body.any(axis=0)), np.flatnonzero(body.any(axis=1))
+        length_px = columns.max() - columns.min() + 1
+        road = (np.abs(r - g) < 15) & (np.abs(g - b) < 25) & (r > 50) & (r < 140)
+        road_rows = [y for y in range(rows.max() + 3, frame.shape[0]) if road[y].sum() > frame.shape[1] // 2]
+        bright = (r > 150) & (np.abs(r - b) < 30)  # the white marks, lit
+        spacings = np.array([_mark_spacing(bright[y]) for y in road_rows])
+        spacings = spacings[np.isfinite(spacings)]
+        spacings = spacings[spacings < 1.5 * np.median(spacings)]  # rows where one gap spans a hidden mark
+        near, far = float(np.max(spacings)), float(np.min(spacings))
+        assert MARK_SPACING * (length_px - 2) / (near + 1) <= BUS_LENGTH
+        assert MARK_SPACING * (length_px + 2) / (far - 1) >= BUS_LENGTH
+        assert near / far < 1.3  # the bracket is tight: a 4.2 m car would fail it by a factor of 2.5
+        checked += 1
+    assert checked == 3

@@ -55,6 +55,7 @@ from .. import analytic
 from ..errors import BadInputError, ParameterError
 from ..scene import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene, Setup
 from ..simulate import Trajectory
+from ._kinematics_bus import dress_as_bus
 
 #: the tachograph record: knot times [s] and the velocities there [m/s]; v(t) is linear between them
 TACHOGRAPH_TIMES = (0.0, 4.0, 8.0, 12.0)
@@ -176,6 +177,8 @@ class Kinematics(Scene):
 
     def edit(self, spec: mujoco.MjSpec, params: dict[str, float], scenario: Scenario) -> None:
         spec.body("vehicle").mass = params["mass"]
+        if scenario.name == "tachograph":  # the chapter's tachograph is a bus's; the other examples are a car's
+            dress_as_bus(spec)
 
     @staticmethod
     def mass(model: mujoco.MjModel) -> float:
