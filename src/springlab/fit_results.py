@@ -13,8 +13,6 @@ import math
 from typing import Any
 
 import numpy as np
-import scipy.optimize
-import scipy.stats
 
 from . import analytic
 
@@ -112,6 +110,8 @@ def cross_check(problem, x: np.ndarray, half_widths: np.ndarray, fitted: np.ndar
 
     start = np.array([problem.start[n] for n in problem.free])
     bounds = np.array([how.bounds(n, problem.start[n], record) for n in problem.free]).T
+    import scipy.optimize  # here, not at module top: it adds ~0.3 s to every command's start-up
+
     solution = scipy.optimize.least_squares(
         residual, start, bounds=(bounds[0], bounds[1]), x_scale="jac", xtol=1e-15, ftol=1e-15, gtol=1e-15
     )
@@ -131,6 +131,8 @@ def cross_check(problem, x: np.ndarray, half_widths: np.ndarray, fitted: np.ndar
 
 def t_quantile(dof: int) -> float:
     """Two-sided 95 % Student t quantile for `dof` degrees of freedom."""
+    import scipy.stats  # here, not at module top: it adds ~0.5 s to every command's start-up
+
     return float(scipy.stats.t.ppf(0.975, max(dof, 1)))
 
 

@@ -15,7 +15,7 @@ import pathlib
 import time
 from typing import Any
 
-from . import api, plots, progress, render, render_scale, scenes
+from . import api, progress, render, render_scale, scenes
 from .errors import BadInputError, SpringlabError
 from .outputs import Artifact
 
@@ -81,7 +81,11 @@ def render_run(
         duration = min(float(duration), end) if end > 0 else float(duration)
     if slow_motion is None:
         slow_motion = default_slow_motion(result, duration if duration is not None else end, fps)
-    panel = plots.PhasePanel(result, height) if composite else None
+    panel = None
+    if composite:
+        from . import plots  # imported here: matplotlib adds ~0.8 s to start-up, a plain video does not need it
+
+        panel = plots.PhasePanel(result, height)
     road_bump = None
     if {"bump_height", "bump_length", "speed"} <= set(result.parameters) and "road" in _joint_names(result.model):
         # the quarter car: the road it drives over is drawn, the exciter that realizes it is not
@@ -131,6 +135,8 @@ def plot_files(result: api.Result, folder: pathlib.Path, out: pathlib.Path) -> l
     Time series and phase plane always; the family of initial displacements
     and the zeta family where the scene defines them (skipped otherwise).
     """
+    from . import plots  # see render_run: matplotlib only when plots are drawn
+
     written = []
     figures = [
         ("time_series.png", "time series with the exact solution and the error", lambda: plots.time_series(result)),
@@ -167,6 +173,8 @@ def media_step(state) -> list[Artifact]:
     most the first DEMO_CLIP_SECONDS of a run, which keeps the demo within a
     few minutes on two cores.
     """
+    from . import plots  # see render_run: matplotlib only when plots are drawn
+
     written = []
     films = progress.bar(len(state.results), description="demo: filming", unit="video")  # on a terminal only
     for (scene_name, scenario_name), result in state.results.items():
