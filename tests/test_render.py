@@ -4,6 +4,7 @@ import math
 import os
 
 import imageio_ffmpeg
+import mujoco
 import numpy as np
 import pytest
 
@@ -287,3 +288,28 @@ def test_the_video_gets_ordinary_file_permissions_not_the_temp_files(undamped, t
         os.umask(umask)
     assert (tmp_path / "v.mp4").stat().st_mode & 0o777 == 0o644
     assert [p.name for p in tmp_path.iterdir()] == ["v.mp4"]  # no temporary file left next to it
+
+
+def test_multisampling_only_when_asked_and_the_model_keeps_its_own_setting(undamped):
+    # without multisampling an edge pixel is one surface's colour or the other's; with it (antialias=True,
+    # the model's offsamples, MuJoCo's default 4) edge pixels are blends, so the picture has more distinct
+    # colours. The sample count is set for the GL context only, never in the caller's model.
+    from springlab.render_gl import OffscreenScene
+
+    model = undamped.model
+    before = (model.vis.global_.offwidth, model.vis.global_.offheight, model.vis.quality.offsamples)
+    assert before[2] > 0  # the model asks for multisampling
+    data = mujoco.MjData(model)
+    data.qpos[:] = undamped.trajectory.qpos[0]
+    mujoco.mj_forward(model, data)
+    colours = {}
+    for multisample in (False, True):
+        scene = OffscreenScene(model, 640, 480, -1, multisample=multisample)
+        try:
+            frame = np.empty((480, 640, 3), np.uint8)
+            scene.render(data, frame)
+        finally:
+            scene.close()
+        colours[multisample] = len(np.unique(frame.reshape(-1, 3), axis=0))
+        assert (model.vis.global_.offwidth, model.vis.global_.offheight, model.vis.quality.offsamples) == before
+    assert colours[True] > colours[False]

@@ -286,6 +286,7 @@ def cmd_render(args) -> int:
         composite=args.composite,
         slow_motion=args.slow_motion,
         exaggerate=args.exaggerate,
+        antialias=args.antialias,
     )
     scaled = "".join(f", {note}" for note in render.render_scale.labels(info["slow_motion"], info["exaggeration"]))
     print(
@@ -736,6 +737,11 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="FACTOR",
         help="draw displacements FACTOR times larger around their mean (drawing only; default: motions below"
         " 1%% of the body's size magnified to about 3%%, e.g. the car x30; written on every frame)",
+    )
+    p.add_argument(
+        "--antialias",
+        action="store_true",
+        help="smooth edges by multisampling (about 3x slower per frame on a CPU renderer; default off)",
     )
     COMMANDS["render"] = cmd_render
 
