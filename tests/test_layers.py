@@ -66,7 +66,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
         "media",
         "sweep_plot",
     ),
-    "front": ("cli", "demo", "__main__", "__init__"),
+    "front": ("cli", "cli_text", "demo", "__main__", "__init__"),
 }
 PREFIXES = {"scenes.": "physics", "render_": "outputs"}
 ORDER = list(LAYERS)
