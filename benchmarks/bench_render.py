@@ -96,7 +96,7 @@ def fast_video(model, time_s, qpos, output, panel=None) -> int:
 
 
 def frames_per_second(repeat: int, folder: pathlib.Path) -> None:
-    from springlab import plots
+    from springlab import plots_panel
 
     result = springlab.run("slider", "undamped", duration=DURATION)
     args = (result.model, result.time, result.trajectory.qpos)
@@ -104,7 +104,7 @@ def frames_per_second(repeat: int, folder: pathlib.Path) -> None:
         "naive": naive_video,
         "springlab": fast_video,
         # the composite video: the same plus a 480 x 480 phase-plane panel (built anew each run)
-        "composite": lambda *a: fast_video(*a, panel=plots.PhasePanel(result, HEIGHT)),
+        "composite": lambda *a: fast_video(*a, panel=plots_panel.PhasePanel(result, HEIGHT)),
     }
     best = {name: np.inf for name in paths}
     frames = {}
