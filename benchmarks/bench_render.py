@@ -98,7 +98,7 @@ def fast_video(model, time_s, qpos, output, panel=None, antialias=False) -> int:
 
 
 def frames_per_second(repeat: int, folder: pathlib.Path) -> None:
-    from springlab import plots
+    from springlab import plots_panel
 
     result = springlab.run("slider", "undamped", duration=DURATION)
     args = (result.model, result.time, result.trajectory.qpos)
@@ -108,7 +108,7 @@ def frames_per_second(repeat: int, folder: pathlib.Path) -> None:
         # the same with the model's 4x multisampling, as the naive path has (render --antialias)
         "antialias": lambda *a: fast_video(*a, antialias=True),
         # the composite video: the same plus a 480 x 480 phase-plane panel (built anew each run)
-        "composite": lambda *a: fast_video(*a, panel=plots.PhasePanel(result, HEIGHT)),
+        "composite": lambda *a: fast_video(*a, panel=plots_panel.PhasePanel(result, HEIGHT)),
     }
     best = {name: np.inf for name in paths}
     frames = {}

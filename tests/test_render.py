@@ -8,7 +8,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from springlab import api, media, plots, render
+from springlab import api, media, plots_panel, render
 from springlab.cli import main
 from springlab.errors import BadInputError
 
@@ -164,7 +164,7 @@ def test_a_failure_mid_video_leaves_no_partial_file(undamped, tmp_path):
 
 
 def test_composite_panel_marker_follows_the_phase_point(undamped):
-    panel = plots.PhasePanel(undamped, 240)
+    panel = plots_panel.PhasePanel(undamped, 240)
     times = np.linspace(0, 1.5, 24)
     images = np.array([panel(i, t) for i, t in enumerate(times)])
     assert images.shape == (24, 240, 240, 3)

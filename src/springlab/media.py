@@ -86,9 +86,9 @@ def render_run(
         slow_motion = default_slow_motion(result, duration if duration is not None else end, fps)
     panel = None
     if composite:
-        from . import plots  # imported here: matplotlib adds ~0.8 s to start-up, a plain video does not need it
+        from . import plots_panel  # imported here: matplotlib adds ~0.8 s to start-up, a plain video does not need it
 
-        panel = plots.PhasePanel(result, height)
+        panel = plots_panel.PhasePanel(result, height)
     road_bump = None
     if {"bump_height", "bump_length", "speed"} <= set(result.parameters) and "road" in _joint_names(result.model):
         # the quarter car: the road it drives over is drawn, the exciter that realizes it is not
