@@ -139,10 +139,13 @@ def test_an_in_memory_mjmodel_runs_locally_but_asks_for_a_path_on_workers():
     assert local.runs and local.runs[0].error is not None
 
 
-def test_runs_are_cut_into_chunks_of_about_equal_steps_whatever_runs_them():
+def test_runs_are_cut_into_at_most_n_chunks_of_about_equal_steps():
     assert cut([100, 100, 100, 100], 2) == [range(0, 2), range(2, 4)]
+    assert cut([3, 3, 3, 3, 3], 2) == [range(0, 2), range(2, 5)]  # the middle run's middle is at half
     assert cut([1000, 10, 10, 10], 4) == [range(0, 1), range(1, 4)]
     assert cut([5], 16) == [range(0, 1)]
+    pieces = cut(list(range(1, 63)), 16)
+    assert len(pieces) <= 16 and [i for p in pieces for i in p] == list(range(62))
     assert Runner(None, None).distributed is False
 
 

@@ -202,16 +202,20 @@ def runs_chunk(payload: dict[str, Any], nthread: int = 0) -> list[Trajectory | D
 
 
 def cut(steps: Sequence[int], chunks: int = SHIP_CHUNKS) -> list[range]:
-    """Consecutive index ranges of about equal total steps, at most `chunks` of them (each at least one run)."""
-    target = math.ceil(sum(steps) / max(1, min(chunks, len(steps)))) if steps else 1
-    pieces, first, total = [], 0, 0
-    for index, count in enumerate(steps):
-        if index > first and total + count > target:
+    """Consecutive index ranges of about equal total steps, at most `chunks` of them: run i goes to the
+    chunk its middle step falls in when the total is split into `chunks` equal parts (empty parts dropped)."""
+    total = sum(steps)
+    if not steps or total <= 0:
+        return [range(0, len(steps))] if steps else []
+    owner, before = [], 0
+    for count in steps:
+        owner.append(min(chunks - 1, int((before + count / 2) * chunks // total)))
+        before += count
+    pieces, first = [], 0
+    for index in range(1, len(steps) + 1):
+        if index == len(steps) or owner[index] != owner[first]:
             pieces.append(range(first, index))
-            first, total = index, 0
-        total += count
-    if first < len(steps):
-        pieces.append(range(first, len(steps)))
+            first = index
     return pieces
 
 
