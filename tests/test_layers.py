@@ -44,6 +44,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
         "design_moves",
         "audit",
         "audit_limits",
+        "audit_ship",
         "audit_sweep",
         "fit",
         "fit_data",

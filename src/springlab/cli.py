@@ -283,15 +283,17 @@ def cmd_tradeoff(args) -> int:
 def cmd_audit(args) -> int:
     if args.output:
         outputs.check_directory(args.output)  # before seconds of computing, not after
-    result = run_audit(
-        args.model,
-        keyframe=args.keyframe,
-        tol=args.tol,
-        integrators=args.integrators,
-        dt=args.dt,
-        duration=args.duration,
-        perturb=args.perturb,
-    )
+    with _executor(args) as executor:
+        result = run_audit(
+            args.model,
+            keyframe=args.keyframe,
+            tol=args.tol,
+            integrators=args.integrators,
+            dt=args.dt,
+            duration=args.duration,
+            perturb=args.perturb,
+            executor=executor,
+        )
     if args.output:
         charts_audit.write_audit(result, args.output)
     if args.json:
@@ -552,6 +554,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--output", metavar="DIR", help="write DIR/audit.json and DIR/audit.png")
     p.add_argument("--json", action="store_true", help="print audit.json")
+    _executor_arguments(p)
     COMMANDS["audit"] = cmd_audit
 
     p = sub.add_parser("design", help="design study: positioning time over a property sweep, ranked sensitivities")
