@@ -372,7 +372,7 @@ def audit(
     point = operating_point(model, keyframe)
     distributed = executor is not None and executor.distributed
     run = Runner(executor, ship(source.origin, model) if distributed else None, nthread)
-    if distributed:
+    if executor is not None and executor.distributed:
         _ = executor.client  # an unreachable scheduler is exit 2 now, not after the limit scan
     own_name, own_dt = _NAMES[int(model.opt.integrator)], float(model.opt.timestep)
     linear = linearize(model, point)
