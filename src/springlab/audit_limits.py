@@ -9,12 +9,24 @@ and that is no integrator's fault). MAP_MARGIN covers the finite differences: a 
 double eigenvalue 1 (a free body, an unsprung direction) moves by sqrt(error) ~ 1e-5.
 
 The measured limit is the smallest such dt: a doubling scan from SCAN_START / |lambda|_max, then a
-geometric bisection to a ratio of 1 + LIMIT_PRECISION. The closed-form prediction from the modes:
-euler / implicit / implicitfast treat joint damping implicitly and springs explicitly, stable while
-omega dt < 2 zeta + 2 sqrt(zeta^2 + 1) per oscillatory mode (`simulate.stability_limit`; tendon
-damping, treated explicitly or only on the diagonal, is not in that formula); rk4 is R(dt A) on a
-linear model, R(z) = 1 + z + z^2/2 + z^3/6 + z^4/24, so its limit is the first dt at which
-|R(dt lambda)| > 1 for a stable lambda (2.83/omega undamped); discrete has none.
+geometric bisection to a ratio of 1 + LIMIT_PRECISION.
+
+The closed-form prediction from the modes. euler / implicit / implicitfast make the velocity update
+(M + dt D) v' = (M + dt D) v + dt f(q, v), q' = q + dt v', with springs explicit and D the part of the
+damping each treats implicitly (MuJoCo's computation chapter, "Integrators"): euler only joint damping
+(`dof_damping`; none with the eulerdamp flag off); implicit and implicitfast every velocity derivative
+(joint and tendon damping, actuator gains on velocity...) but only inside the sparsity of M, so a tendon
+between two branches of the tree keeps its diagonal implicit and its coupling explicit
+(`implicit_damping` reads D from MuJoCo's own qDeriv). Per oscillatory mode (omega, zeta, real
+M-normalised shape phi) the map reduces to x' = x + dt v', v' = v + dt g (-omega^2 x - 2 zeta omega v)
+with g(dt) = phi' M (M + dt D)^-1 M phi; its trace condition is the limit,
+dt^2 g omega^2 + 2 dt g (2 zeta omega) < 4. When D phi = c_i M phi (D keeps the mode to itself) g is
+1 / (1 + dt c_i), and with zeta_i = c_i / (2 omega) the implicit and zeta_e = zeta - zeta_i the explicit
+damping ratio: omega dt < 2 s + 2 sqrt(s^2 + 1), s = zeta_i - zeta_e (all implicit: the classic
+2 zeta + 2 sqrt(zeta^2 + 1) of `simulate.stability_limit`; all explicit: -2 zeta + 2 sqrt(zeta^2 + 1)).
+Otherwise (printer_head: the belt's implicit diagonal also pushes the rigid mode) the trace condition is
+solved for dt. rk4 is R(dt A) on a linear model, R(z) = 1 + z + z^2/2 + z^3/6 + z^4/24, so its limit is
+the first dt at which |R(dt lambda)| > 1 for a stable lambda (2.83/omega undamped); discrete has none.
 """
 
 from __future__ import annotations
@@ -30,9 +42,9 @@ import numpy as np
 
 from .batch import Job, run_batched
 from .errors import DivergedError
-from .linearize import Linearization, OperatingPoint, one_step_map
+from .linearize import Linearization, Mode, OperatingPoint, one_step_map
 from .scene import Setup
-from .simulate import stability_limit
+from .simulate import integrator_id, quiet_mujoco, stability_limit
 
 #: growth of the one-step map beyond the exact flow's that counts as numerical instability [-]
 MAP_MARGIN = 1e-4
@@ -122,8 +134,102 @@ def _rk4_limit(eigenvalue: complex) -> float:
     return low
 
 
-def predicted_limit(linear: Linearization, integrator: str) -> float | None:
-    """The closed-form stability limit [s] of `integrator` from the stable modes (module docstring), or None."""
+#: implicit damping integrators (the velocity update with M + dt D; `implicit_damping`)
+IMPLICIT_DAMPING_INTEGRATORS = ("euler", "implicit", "implicitfast")
+#: an explicit share of a mode's damping below this is finite-difference noise in C [-]: C is good to
+#: ~1e-8 relative (centred differences at FD_STEP), so 1e-6 leaves two decades
+EXPLICIT_SHARE_NOISE = 1e-6
+#: D keeps a mode to itself when |D phi - c_i M phi| <= this x |D phi| (D is MuJoCo's analytic qDeriv)
+COUPLING_NOISE = 1e-9
+
+
+def implicit_damping(model: mujoco.MjModel, point: OperatingPoint, integrator: str) -> np.ndarray:
+    """The damping matrix D [N s/m, N m s/rad] (nv, nv) `integrator` treats implicitly at `point`.
+
+    euler: diag(dof_damping) (zero with the eulerdamp flag disabled); implicit / implicitfast: -qDeriv,
+    MuJoCo's own analytic velocity derivative restricted to the sparsity of M (and symmetrised for
+    implicitfast), read after one mj_step from `point`; any other integrator: zero.
+    """
+    nv = model.nv
+    if integrator == "euler":
+        if model.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_EULERDAMP):
+            return np.zeros((nv, nv))
+        return np.diag(np.asarray(model.dof_damping, float))
+    if integrator not in ("implicit", "implicitfast"):
+        return np.zeros((nv, nv))
+    work = copy.copy(model)
+    work.opt.integrator = integrator_id(integrator)
+    data = mujoco.MjData(work)
+    point.load(work, data)
+    with quiet_mujoco():
+        mujoco.mj_step(work, data)  # qDeriv is taken at the step's start state
+    dense = np.zeros((nv, nv))
+    for row in range(nv):
+        start, count = work.D_rowadr[row], work.D_rownnz[row]
+        dense[row, work.D_colind[start : start + count]] = -data.qDeriv[start : start + count]
+    return dense
+
+
+def _closed_form_omega_dt(zeta_implicit: float, zeta_explicit: float) -> float:
+    """omega dt [-] at which x' = x + dt v', v' = v + dt (-omega^2 x - 2 zeta omega v) / (1 + 2 zeta_i omega dt)
+    leaves the unit disc: 2 s + 2 sqrt(s^2 + 1), s = zeta_i - zeta_e (module docstring)."""
+    s = zeta_implicit - zeta_explicit
+    root = math.hypot(s, 1.0)
+    return 2 * (s + root) if s >= 0 else 2 / (root - s)  # no cancellation for a mostly explicit damping
+
+
+def _mode_shape(linear: Linearization, eigenvalue: complex) -> np.ndarray:
+    """The real, M-normalised position part phi (nv,) of `eigenvalue`'s eigenvector of A [1/sqrt(kg)]."""
+    nv = linear.M.shape[0]
+    values, vectors = np.linalg.eig(linear.A)
+    psi = vectors[:nv, int(np.argmin(np.abs(values - eigenvalue)))]
+    phi = np.real(psi * np.exp(-1j * np.angle(psi[int(np.argmax(np.abs(psi)))])))  # a damped mode's phase
+    return phi / math.sqrt(float(phi @ linear.M @ phi))
+
+
+def _implicit_limit(linear: Linearization, mode: Mode, damping: np.ndarray) -> float:
+    """The euler / implicit / implicitfast limit [s] of one stable oscillatory mode with implicit damping
+    `damping` (D, (nv, nv)): the trace condition of the module docstring."""
+    omega, zeta = mode.rate_rad_s, float(mode.damping_ratio)
+    if not np.any(damping) or zeta <= 0:
+        # nothing implicit, or nothing to split: the classic bound with all of zeta explicit or implicit
+        return stability_limit("euler", zeta) / omega if zeta <= 0 else _closed_form_omega_dt(0.0, zeta) / omega
+    phi = _mode_shape(linear, mode.eigenvalue)
+    mass_phi = linear.M @ phi
+    c_total, c_implicit = float(phi @ linear.C @ phi), float(phi @ damping @ phi)  # [1/s]
+    explicit_share = (c_total - c_implicit) / c_total if c_total > 0 else 0.0
+    if abs(explicit_share) < EXPLICIT_SHARE_NOISE:
+        explicit_share = 0.0
+    zeta_explicit = zeta * explicit_share
+    closed = _closed_form_omega_dt(zeta - zeta_explicit, zeta_explicit) / omega
+    pushed = damping @ phi
+    if np.linalg.norm(pushed - c_implicit * mass_phi) <= COUPLING_NOISE * np.linalg.norm(pushed):
+        return closed
+    # D couples the mode to others (the implicit solve spreads its force): g(dt) from the solve itself
+
+    def trace_excess(dt: float) -> float:
+        g = float(mass_phi @ np.linalg.solve(linear.M + dt * damping, mass_phi))
+        return dt * dt * g * omega**2 + 2 * dt * g * 2 * zeta * omega - 4
+
+    low, high = closed, closed
+    while trace_excess(low) > 0:
+        low /= 2
+    while trace_excess(high) < 0:
+        high *= 2
+    for _ in range(100):  # bisection to round-off: each evaluation is one nv x nv solve
+        mid = 0.5 * (low + high)
+        if mid in (low, high):
+            break
+        low, high = (low, mid) if trace_excess(mid) > 0 else (mid, high)
+    return low
+
+
+def predicted_limit(linear: Linearization, integrator: str, damping: np.ndarray | None = None) -> float | None:
+    """The closed-form stability limit [s] of `integrator` from the stable modes (module docstring), or None.
+
+    `damping`: the (nv, nv) damping `integrator` treats implicitly (`implicit_damping`) [N s/m, N m s/rad];
+    None: all of C (joint damping, as `simulate.stability_limit` assumes).
+    """
     stable = [m for m in linear.modes if m.kind != "rigid" and not m.physically_unstable]
     if integrator == "discrete":
         return None
@@ -134,7 +240,10 @@ def predicted_limit(linear: Linearization, integrator: str) -> float | None:
         for m in stable:
             if m.kind == "oscillatory":
                 assert m.damping_ratio is not None, "an oscillatory mode has a damping ratio"
-                limits.append(stability_limit(integrator, m.damping_ratio) / m.rate_rad_s)
+                if damping is None:
+                    limits.append(stability_limit(integrator, m.damping_ratio) / m.rate_rad_s)
+                else:
+                    limits.append(_implicit_limit(linear, m, damping))
     finite = [limit for limit in limits if math.isfinite(limit)]
     return min(finite) if finite else None
 
@@ -324,7 +433,8 @@ def stability_limits(
     scale = 1.0 / fastest.rate_rad_s if fastest is not None else model.opt.timestep
     out = {}
     for name in integrators:
-        predicted = predicted_limit(linear, name)
+        damping = implicit_damping(model, linear.point, name) if name in IMPLICIT_DAMPING_INTEGRATORS else None
+        predicted = predicted_limit(linear, name, damping)
         out[name] = Limit(name, predicted, measured_limit(model, linear, name, scale, stop_s, predicted))
     confirm(model, linear, out.values(), nthread=nthread, run=run)
     return out
