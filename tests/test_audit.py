@@ -1,7 +1,9 @@
 """`springlab.audit` on models with known answers: a chain of masses and springs (closed-form
 eigenfrequencies, so closed-form stability limits), a pendulum (linear only near its bottom), a sphere
-on a soft contact, and the shipped slider, whose limits and orders `springlab stability` and
-`springlab tradeoff` already measure.
+on a soft contact, and the five shipped scenes: slider and car, whose limits and orders `springlab stability`
+and `springlab tradeoff` already measure; printer_head, whose belt damping lives on a tendon (closed forms
+for where each integrator puts it); nonlinear (its linearization's undamped oscillator); kinematics (all
+rigid: no limit).
 
 Tolerances: the measured limit is bisected to a ratio of 1 + 1e-4 (audit_limits.LIMIT_PRECISION) on a
 map good to ~1e-10, so 1e-3 relative to the closed form is wide; the contract asks agreement with
@@ -16,8 +18,9 @@ import mujoco
 import numpy as np
 import pytest
 from scipy.linalg import expm
+from scipy.optimize import brentq
 
-from springlab import stability, tradeoff
+from springlab import model_files, stability, tradeoff
 from springlab.audit import INTEGRATORS, audit
 from springlab.errors import BadInputError, UnknownNameError
 from springlab.simulate import stability_limit
@@ -147,6 +150,84 @@ def test_a_shipped_scene_audit_agrees_with_stability_and_tradeoff(scene):
     assert {"euler", "rk4"} <= set(compared)
     for name in compared:
         assert result.orders[name] == pytest.approx(sweep.orders[name], abs=0.1), name
+
+
+def _belt(model):
+    """(m_c, m_m, k, c) [kg, kg, N/m, N s/m] of the printer head's two slides and its belt tendon."""
+    m_c, m_m = (float(model.body(name).mass[0]) for name in ("carriage", "motor"))
+    belt = model.tendon("belt")
+    return m_c, m_m, float(model.tendon_stiffness[belt.id]), float(model.tendon_damping[belt.id])
+
+
+@pytest.mark.slow
+def test_printer_head_audit_places_the_belt_damping_where_each_integrator_does():
+    # the belt is a fixed tendon between two slides on separate branches: euler integrates its damping
+    # explicitly (only dof_damping is implicit), implicit/implicitfast only its diagonal (D keeps the
+    # sparsity of M). Closed forms in the relative coordinate e = q_m - q_c, u = e':
+    # u' = u + h g (-k e - c u), e' = e + h u', stable while h^2 g k + 2 h g c < 4, with
+    # g = 1/m_c + 1/m_m (euler) or 1/(m_c + h c) + 1/(m_m + h c) (the implicit solve with D = c I)
+    result = audit("printer_head", tol=1e-3)
+    m_c, m_m, k, c = _belt(mujoco.MjModel.from_xml_path(str(model_files.path("printer_head"))))
+    reduced = m_c * m_m / (m_c + m_m)
+    omega, zeta = math.sqrt(k / reduced), c / (2 * math.sqrt(k * reduced))
+    oscillatory = [m for m in result.linear.modes if m.kind == "oscillatory"]
+    assert len(oscillatory) == 1 and all(m.kind == "rigid" for m in result.linear.modes if m not in oscillatory)
+    (mode,) = oscillatory
+    assert mode.rate_rad_s == pytest.approx(omega, rel=1e-6) and mode.damping_ratio == pytest.approx(zeta, rel=1e-6)
+
+    def limit(g):
+        return brentq(lambda h: h * h * g(h) * k + 2 * h * g(h) * c - 4, 0.1 / omega, 4 / omega, xtol=1e-15)
+
+    expected = {
+        "euler": limit(lambda h: 1 / m_c + 1 / m_m),
+        "implicit": limit(lambda h: 1 / (m_c + h * c) + 1 / (m_m + h * c)),
+    }
+    expected["implicitfast"] = expected["implicit"]
+    assert expected["euler"] * omega == pytest.approx(-2 * zeta + 2 * math.hypot(zeta, 1))  # all explicit
+    for name, dt in expected.items():
+        assert result.limits[name].measured_s == pytest.approx(dt, rel=LIMIT_RELATIVE), name
+        assert result.limits[name].predicted_s == pytest.approx(dt, rel=LIMIT_RELATIVE), name
+    # rk4 is explicit in everything: where the damping lives does not matter, the slider's boundary holds
+    (row,) = stability.measure_boundaries(("rk4",), (zeta,))
+    assert result.limits["rk4"].measured_s * omega == pytest.approx(row["measured_omega_dt"], rel=5e-3)
+    assert all(result.limits[name].confirmed for name in ("euler", "implicit", "implicitfast", "rk4"))
+    sweep = tradeoff.sweep("printer_head", result.model.split("'")[3])
+    compared = [name for name, order in sweep.orders.items() if order is not None and result.orders[name] is not None]
+    assert {"euler", "implicit", "implicitfast", "rk4"} <= set(compared)
+    for name in compared:
+        assert result.orders[name] == pytest.approx(sweep.orders[name], abs=0.1), name
+
+
+@pytest.mark.slow
+def test_nonlinear_audit_limits_are_the_undamped_oscillators_and_euler_is_first_order():
+    # the softening spring f = -(k1 x + k3 x^3) linearizes at x = 0 to omega = sqrt(k1 / m), undamped;
+    # its default scenario has no exact reference, so the orders are checked against the textbook's
+    result = audit("nonlinear", tol=1e-3)
+    model = mujoco.MjModel.from_xml_path(str(model_files.path("nonlinear")))
+    omega = math.sqrt(float(model.jnt_stiffness[0]) / float(model.body("block").mass[0]))
+    (mode,) = result.linear.modes
+    assert mode.kind == "oscillatory" and mode.rate_rad_s == pytest.approx(omega, rel=1e-6)
+    for row in stability.measure_boundaries(("euler", "implicitfast", "rk4"), (0.0,)):
+        assert result.limits[row["integrator"]].measured_s * omega == pytest.approx(row["measured_omega_dt"], rel=5e-3)
+    for name, omega_dt in {"euler": 2.0, "implicit": 2.0, "implicitfast": 2.0, "rk4": 2 * math.sqrt(2)}.items():
+        assert result.limits[name].measured_s * omega == pytest.approx(omega_dt, rel=LIMIT_RELATIVE), name
+        assert result.limits[name].confirmed, name
+    assert not result.is_linear and result.reference["converged"]
+    for name in ("euler", "implicit", "implicitfast"):
+        assert result.orders[name] == pytest.approx(1.0, abs=0.1), name
+
+
+def test_kinematics_audit_has_no_limit_because_every_mode_is_rigid():
+    # free slides driven by prescribed forces: no stiffness and no damping, so no timestep is too large
+    result = audit("kinematics", tol=1e-3)
+    model = mujoco.MjModel.from_xml_path(str(model_files.path("kinematics")))
+    assert not np.any(model.jnt_stiffness) and not np.any(model.dof_damping)
+    assert result.linear.modes and all(m.kind == "rigid" for m in result.linear.modes)
+    assert result.linear.fastest is None
+    for limit in result.limits.values():
+        assert limit.predicted_s is None and limit.measured_s is None and limit.confirmed is None
+        assert "every mode is rigid" in limit.detail
+    assert "every mode is rigid" in "\n".join(result.verdict())
 
 
 def test_bad_input_is_one_error_before_any_work(tmp_path):

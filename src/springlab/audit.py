@@ -135,12 +135,16 @@ class Audit:
         if fastest is not None:
             zeta = "" if fastest.damping_ratio is None else f", zeta {fastest.damping_ratio + 0.0:.3g}"  # no -0
             head += f", fastest {fastest.frequency_hz:.4g} Hz ({fastest.kind}{zeta})"
+        else:
+            head += ", all rigid"
         if unstable:
             head += f"; {unstable} physically unstable (the model's own dynamics, not the integrator)"
         lines.append(f"{head}; {motion} along the motion")
         own, limit = self.own, self.limits[self.own["integrator"]]
         if limit.measured_s is None:
             stable = "has no stability limit up to the duration"
+            if fastest is None:
+                stable += " (every mode is rigid: no time scale for a timestep to miss)"
         elif own["stable"]:
             stable = f"is stable with margin {limit.measured_s / own['dt']:.3g}x (limit {limit.measured_s:.3g} s)"
         else:

@@ -365,6 +365,12 @@ def confirm(
     for limit in limits:
         if limit.measured_s is None:
             limit.detail = "no limit found: nothing to confirm"
+            if linear.fastest is None:
+                # no stiffness, no damping at the point: the map is a shear of the free flow at any dt
+                limit.detail = (
+                    "no limit: every mode is rigid (no stiffness or damping at the operating point),"
+                    " so no timestep makes the map grow; nothing to confirm"
+                )
             continue
         probe = _MapProbe(model, linear, limit.integrator)
         above = CONFIRM_ABOVE * limit.measured_s
