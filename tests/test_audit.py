@@ -22,7 +22,9 @@ from scipy.optimize import brentq
 
 from springlab import model_files, stability, tradeoff
 from springlab.audit import INTEGRATORS, audit
+from springlab.audit_limits import stability_limits
 from springlab.errors import BadInputError, UnknownNameError
+from springlab.linearize import linearize
 from springlab.simulate import stability_limit
 from test_linearize import chain_frequencies, chain_xml, pendulum_xml
 
@@ -150,6 +152,33 @@ def test_a_shipped_scene_audit_agrees_with_stability_and_tradeoff(scene):
     assert {"euler", "rk4"} <= set(compared)
     for name in compared:
         assert result.orders[name] == pytest.approx(sweep.orders[name], abs=0.1), name
+
+
+def test_limits_split_joint_and_tendon_damping_as_each_integrator_does():
+    # one slide (m 1 kg, k 100 N/m: omega 10 rad/s) damped by its joint (zeta_j 0.05) and by a fixed
+    # tendon on the same joint (zeta_t 0.15). euler: only joint damping implicit; implicit(fast): the
+    # tendon too (it stays inside M's sparsity). v' = v + h (-w^2 x - 2 zeta w v) / (1 + 2 zeta_i w h),
+    # x' = x + h v' has trace < 1 + det while w h < 2 s + 2 sqrt(s^2 + 1), s = zeta_i - zeta_e
+    zeta_joint, zeta_tendon, omega = 0.05, 0.15, 10.0
+    xml = (
+        '<mujoco><option gravity="0 0 0"/><worldbody><body><joint name="x" type="slide" axis="1 0 0"'
+        f' stiffness="100" damping="{2 * zeta_joint * omega}"/><inertial pos="0 0 0" mass="1"'
+        ' diaginertia="1 1 1"/></body></worldbody><tendon><fixed'
+        f' damping="{2 * zeta_tendon * omega}"><joint joint="x" coef="1"/></fixed></tendon></mujoco>'
+    )
+    model = mujoco.MjModel.from_xml_string(xml)
+    linear = linearize(model)
+    limits = stability_limits(model, linear, ("euler", "implicit", "implicitfast"), 10.0)
+
+    def bound(s):
+        return 2 * s + 2 * math.hypot(s, 1.0)
+
+    expected = {"euler": bound(zeta_joint - zeta_tendon), "implicit": bound(zeta_joint + zeta_tendon)}
+    expected["implicitfast"] = expected["implicit"]
+    for name, omega_dt in expected.items():
+        assert limits[name].predicted_s * omega == pytest.approx(omega_dt, rel=LIMIT_RELATIVE), name
+        assert limits[name].measured_s * omega == pytest.approx(omega_dt, rel=LIMIT_RELATIVE), name
+        assert limits[name].confirmed, name
 
 
 def _belt(model):
