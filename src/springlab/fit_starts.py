@@ -8,7 +8,8 @@ cycles and misses the rest. `fit(..., starts=N)` therefore runs N independent
 * start 1 is the single fit's own start (linear prediction and linear least
   squares, springlab.fit_models), so `starts=1` is exactly the single fit;
 * starts 2..N spread the *nonlinear* free names (omega_n, zeta, mass,
-  stiffness, damping, delay) over the box bounds of start 1 with a scrambled
+  stiffness, damping, delay) over the box bounds of start 1 (less the 1e-3 of
+  the range at each end that sysid keeps a start off a bound) with a scrambled
   Sobol sequence of fixed seed (`SEED`): log-uniform where the bounds are
   positive and span a decade or more (a stiffness from k/100 to 100 k),
   uniform otherwise (a damping ratio from 0). The names that enter the
@@ -23,7 +24,10 @@ the same simulation grid so the final costs compare like for like: start 1's
 grid (omega dt <= 0.05 at its mode), made finer where needed so that RK4 stays
 stable at the fastest pole anywhere in the box (|s| dt <= `STABLE_RATE_DT`;
 RK4's real-axis limit is 2.785), because the optimizer may step to any corner;
-the winner is the lowest cost, the first start on a tie. The result is the same
+the winner is the first start whose cost is within 0.01 / dof (relative) of the
+lowest: statistically the same point (`SAME_IN_SE` below, since a cost excess of
+d^2 / dof relative is a Mahalanobis distance of d standard errors), so start 1
+wins whenever it found the minimum and `starts=N` then equals the single fit. The result is the same
 bit for bit locally and on a dask cluster: same chunks, same code, the choice
 made in the caller over the results in start order.
 
@@ -110,7 +114,10 @@ def sample(start: dict[str, float], bounds: dict[str, tuple[float, float]], free
         values = dict(start)
         for name, u in zip(names, row):
             low, high = bounds[name]
-            if low > 0 and high / low >= LOG_SPAN:
+            logarithmic = low > 0 and high / low >= LOG_SPAN  # a bound at 0 (a damping) is sampled uniformly
+            # the interior sysid starts from (fit_engine._parameter_dict keeps a start 1e-3 of the range off a bound)
+            low, high = low + 1e-3 * (high - low), high - 1e-3 * (high - low)
+            if logarithmic:
                 values[name] = float(math.exp(math.log(low) + u * (math.log(high) - math.log(low))))
             else:
                 values[name] = float(low + u * (high - low))
@@ -240,7 +247,9 @@ def run(problem: Problem, count: int, executor: Executor | None = None) -> tuple
     payloads = [dict(common, index=i, start=values) for i, values in enumerate(starts)]
     runner = resolve(executor)
     results = runner.map(run_start, payloads, description="fit starts", unit="start")
-    best = int(np.argmin([r["cost"] for r in results]))  # the first of equal costs
+    costs = np.array([r["cost"] for r in results])
+    dof = max(record.time.size - len(free), 1)
+    best = int(np.flatnonzero(costs <= costs.min() * (1.0 + SAME_IN_SE**2 / dof))[0])
     chosen = results[best]
     if chosen["failed"]:
         raise DivergedError(f"every one of the {count} starts failed to simulate; start 1: {results[0]['failed']}")
