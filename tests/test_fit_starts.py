@@ -19,6 +19,7 @@ import springlab  # noqa: F401 - loads springlab.fit the module
 from springlab import fit_starts
 from springlab.cli import main
 from springlab.errors import BadInputError
+from springlab.executor import Executor
 
 fit_module = sys.modules["springlab.fit"]
 
@@ -120,3 +121,9 @@ def test_cli_prints_one_line_about_the_starts(tmp_path, capsys):
     assert doc["starts"]["count"] == 2 and len(doc["starts"]["runs"]) == 2
     single = fit_module.fit("slider", data, mass=MASS, run_scene=False)
     assert single.starts == {"count": 1, "best": 1, "at_best_minimum": 1, "method": "the linear-algebra start only"}
+
+
+def test_an_executor_and_workers_together_are_bad_input(tmp_path):
+    data = _ring_down(tmp_path / "ring.csv", n=100)
+    with Executor(progress=False) as executor, pytest.raises(BadInputError, match="not both"):
+        fit_module.fit("slider", data, mass=MASS, starts=2, workers=2, executor=executor)
