@@ -27,9 +27,10 @@ RK4's real-axis limit is 2.785), because the optimizer may step to any corner;
 the winner is the first start whose cost is within 0.01 / dof (relative) of the
 lowest: statistically the same point (`SAME_IN_SE` below, since a cost excess of
 d^2 / dof relative is a Mahalanobis distance of d standard errors), so start 1
-wins whenever it found the minimum and `starts=N` then equals the single fit. The result is the same
-bit for bit locally and on a dask cluster: same chunks, same code, the choice
-made in the caller over the results in start order.
+wins whenever it found the minimum (then `starts=N` equals the single fit up to
+the RK4 bias of a finer grid, < 1e-7 relative). The result is the same bit for
+bit locally and on a dask cluster: same chunks, same code, the choice made in
+the caller over the results in start order.
 
 A start *reached the best minimum* when every free name lies within
 `SAME_IN_SE` of its standard error of the best start's estimate (statistically
