@@ -313,6 +313,7 @@ def summary(runs: dict[str, Any] | None, free: list[str], covariance: np.ndarray
                 "status": r["status"],
                 "failed": r["failed"],
                 "iterations": r["iterations"],
+                "wall_time_s": r["wall_time_s"],
                 "at_best_minimum": flag,
             }
             for r, flag in zip(results, at_best)
