@@ -44,6 +44,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
         "design_moves",
         "audit",
         "audit_limits",
+        "audit_ship",
         "audit_sweep",
         "fit",
         "fit_data",
@@ -62,12 +63,15 @@ LAYERS: dict[str, tuple[str, ...]] = {
         "design_chart",
         "fit_chart",
         "plots",
+        "plots_style",
+        "plots_phase",
+        "plots_panel",
         "render",
         "report",
         "media",
         "sweep_plot",
     ),
-    "front": ("cli", "demo", "__main__", "__init__"),
+    "front": ("cli", "cli_text", "demo", "__main__", "__init__"),
 }
 PREFIXES = {"scenes.": "physics", "render_": "outputs"}
 ORDER = list(LAYERS)

@@ -198,6 +198,7 @@ def test_plotting_leaves_the_callers_rcparams_alone_and_still_uses_its_own_style
         f"p.save(figure, {str(tmp_path / 't.png')!r})\n"
         "changed = [k for k, v in matplotlib.rcParams.items() if before[k] != v]\n"
         "assert not changed, changed\n"
-        "assert figure.axes[0].xaxis.label.get_fontsize() == p.STYLE['font.size']\n"
+        "from springlab.plots_style import STYLE\n"
+        "assert figure.axes[0].xaxis.label.get_fontsize() == STYLE['font.size']\n"
     )
     subprocess.run([sys.executable, "-c", code], check=True, timeout=120)

@@ -4,10 +4,11 @@ import math
 import os
 
 import imageio_ffmpeg
+import mujoco
 import numpy as np
 import pytest
 
-from springlab import api, media, plots, render
+from springlab import api, media, plots_panel, render
 from springlab.cli import main
 from springlab.errors import BadInputError
 
@@ -163,7 +164,7 @@ def test_a_failure_mid_video_leaves_no_partial_file(undamped, tmp_path):
 
 
 def test_composite_panel_marker_follows_the_phase_point(undamped):
-    panel = plots.PhasePanel(undamped, 240)
+    panel = plots_panel.PhasePanel(undamped, 240)
     times = np.linspace(0, 1.5, 24)
     images = np.array([panel(i, t) for i, t in enumerate(times)])
     assert images.shape == (24, 240, 240, 3)
@@ -287,3 +288,28 @@ def test_the_video_gets_ordinary_file_permissions_not_the_temp_files(undamped, t
         os.umask(umask)
     assert (tmp_path / "v.mp4").stat().st_mode & 0o777 == 0o644
     assert [p.name for p in tmp_path.iterdir()] == ["v.mp4"]  # no temporary file left next to it
+
+
+def test_multisampling_only_when_asked_and_the_model_keeps_its_own_setting(undamped):
+    # without multisampling an edge pixel is one surface's colour or the other's; with it (antialias=True,
+    # the model's offsamples, MuJoCo's default 4) edge pixels are blends, so the picture has more distinct
+    # colours. The sample count is set for the GL context only, never in the caller's model.
+    from springlab.render_gl import OffscreenScene
+
+    model = undamped.model
+    before = (model.vis.global_.offwidth, model.vis.global_.offheight, model.vis.quality.offsamples)
+    assert before[2] > 0  # the model asks for multisampling
+    data = mujoco.MjData(model)
+    data.qpos[:] = undamped.trajectory.qpos[0]
+    mujoco.mj_forward(model, data)
+    colours = {}
+    for multisample in (False, True):
+        scene = OffscreenScene(model, 640, 480, -1, multisample=multisample)
+        try:
+            frame = np.empty((480, 640, 3), np.uint8)
+            scene.render(data, frame)
+        finally:
+            scene.close()
+        colours[multisample] = len(np.unique(frame.reshape(-1, 3), axis=0))
+        assert (model.vis.global_.offwidth, model.vis.global_.offheight, model.vis.quality.offsamples) == before
+    assert colours[True] > colours[False]

@@ -29,6 +29,7 @@ import numpy as np
 
 from . import api, compare, scenes
 from .audit_limits import Limit, constraint_flags, stability_limits
+from .audit_ship import Runner, ship
 from .audit_sweep import (
     MAX_SAMPLES,
     REFERENCE_FRACTION,
@@ -46,6 +47,7 @@ from .audit_sweep import (
     sweep_runs,
 )
 from .errors import BadInputError, DivergedError
+from .executor import Executor
 from .linearize import Linearization, OperatingPoint, linearize, operating_point
 from .scene import Setup
 from .simulate import INTEGRATORS, Trajectory, integrator_id, quiet_mujoco, simulate
@@ -207,6 +209,7 @@ class _Source:
     model: mujoco.MjModel
     start: Setup | None = None  # a shipped scene's scenario start
     duration: float | None = None
+    origin: tuple[str, str] | None = None  # ("path", file) or ("scene", name): what dask workers rebuild it from
 
 
 def load(model_or_path: Any) -> _Source:
@@ -231,7 +234,7 @@ def load(model_or_path: Any) -> _Source:
         model = scene.build(params, chosen)
         steps = max(1, round(chosen.duration / model.opt.timestep))
         setup = scene.setup(model, params, chosen, steps, model.opt.timestep)
-        return _Source(f"scene {text!r} (scenario {chosen.name!r})", model, setup, chosen.duration)
+        return _Source(f"scene {text!r} (scenario {chosen.name!r})", model, setup, chosen.duration, ("scene", text))
     if not path.is_file():
         raise BadInputError(f"no such model file or scene {text!r}; scenes: {', '.join(sorted(scenes.SCENES))}")
     try:
@@ -240,7 +243,7 @@ def load(model_or_path: Any) -> _Source:
     except Exception as error:  # MuJoCo raises ValueError with its compiler's message
         message = " ".join(str(error).split())
         raise BadInputError(f"cannot load {text!r}: {message}") from None
-    return _Source(text, model)
+    return _Source(text, model, origin=("path", text))
 
 
 def _start(model: mujoco.MjModel, point: OperatingPoint, perturb: float, source: _Source) -> Setup:
@@ -324,6 +327,7 @@ def audit(
     duration: float | None = None,
     perturb: float = DEFAULT_PERTURB,
     nthread: int = 0,
+    executor: Executor | None = None,
 ) -> Audit:
     """Audit a model: modes, stability limits, accuracy vs cost, and the cheapest setting meeting `tol`.
 
@@ -345,7 +349,13 @@ def audit(
     perturb
         size of the initial perturbation of the operating point [m or rad].
     nthread
-        threads of the batched runs (0: one per CPU).
+        threads of the batched runs (0: one per CPU) when no executor is given.
+    executor
+        where the simulations run (the limit confirmations, the sweep, the RK4 reference's levels;
+        springlab.audit_ship): None or a local Executor, this process as always; `Executor(workers=N)`
+        or `Executor(scheduler=ADDRESS)`, dask workers, which rebuild the model from its file's text and
+        named files (or a scene by name; an MjModel passed in memory cannot be sent: BadInputError).
+        The numbers are identical either way; linearization, timings and the verification run stay here.
 
     Returns
     -------
@@ -360,9 +370,13 @@ def audit(
     duration = _check_number("duration", duration if duration is not None else source.duration or DEFAULT_DURATION)
     model = source.model
     point = operating_point(model, keyframe)
+    distributed = executor is not None and executor.distributed
+    run = Runner(executor, ship(source.origin, model) if distributed else None, nthread)
+    if executor is not None and executor.distributed:
+        _ = executor.client  # an unreachable scheduler is exit 2 now, not after the limit scan
     own_name, own_dt = _NAMES[int(model.opt.integrator)], float(model.opt.timestep)
     linear = linearize(model, point)
-    limits = stability_limits(model, linear, list(dict.fromkeys([*names, own_name])), duration, nthread=nthread)
+    limits = stability_limits(model, linear, list(dict.fromkeys([*names, own_name])), duration, run=run)
     stamps["limits"] = _time.perf_counter()
 
     if dts is None:
@@ -375,7 +389,7 @@ def audit(
     start = _start(model, point, perturb, source)
     finest = min(dts)
     extra = [(own_name, own_dt), ("rk4", finest)]  # the own setting; the linearity probe and coarsest reference
-    outcomes = sweep_runs(model, start, names, dts, run_duration, extra=extra, nthread=nthread)
+    outcomes = sweep_runs(model, start, names, dts, run_duration, extra=extra, run=run)
     stamps["sweep"] = _time.perf_counter()
 
     probe = outcomes[("rk4", finest)]
@@ -388,7 +402,7 @@ def audit(
     else:
         step = reference_step(dts, spacing)
         coarse = probe if isinstance(probe, Trajectory) else None
-        reference = converged_reference(model, point, start, step, run_duration, tol, coarse=coarse, nthread=nthread)
+        reference = converged_reference(model, point, start, step, run_duration, tol, coarse=coarse, run=run)
     stamps["reference"] = _time.perf_counter()
 
     runs = []

@@ -22,7 +22,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
 import mujoco
@@ -234,13 +234,21 @@ def _deviation(model: mujoco.MjModel, run_a, run_b) -> float:
     return float(max(np.max(np.abs(dq), initial=0.0), np.max(np.abs(run_a.qvel[-1] - run_b.qvel[-1]), initial=0.0)))
 
 
-def confirm(model: mujoco.MjModel, linear: Linearization, limits: Iterable[Limit], *, nthread: int = 0) -> None:
+def confirm(
+    model: mujoco.MjModel,
+    linear: Linearization,
+    limits: Iterable[Limit],
+    *,
+    nthread: int = 0,
+    run: Callable[[Sequence[Job]], list] | None = None,
+) -> None:
     """Run the nonlinear model just below and just above each measured limit and set `confirmed`.
 
     Per limit four runs, batched: the operating point as it is and perturbed by CONFIRM_SIZE along the
     most unstable eigenvector of Phi(CONFIRM_ABOVE x limit), at CONFIRM_BELOW and CONFIRM_ABOVE x the
     limit. Confirmed: above, the deviation grows beyond GROWTH_SEEN x the exact flow's growth (or the
-    run blows up); below, it does not.
+    run blows up); below, it does not. `run` runs the jobs (default: one batch.run_batched call on
+    `nthread` threads; the audit passes audit_ship.Runner, which may send them to dask workers).
     """
     point = linear.point
     jobs, plan = [], []
@@ -274,7 +282,7 @@ def confirm(model: mujoco.MjModel, linear: Linearization, limits: Iterable[Limit
             for setup in (base, start):
                 jobs.append(Job(model, limit.integrator, dt, steps, setup))
             plan.append((limit, fraction, steps, dt))
-    outcomes = run_batched(jobs, nthread=nthread)
+    outcomes = run(jobs) if run is not None else run_batched(jobs, nthread=nthread)
     verdicts: dict[int, dict[float, bool]] = {}
     for index, (limit, fraction, steps, dt) in enumerate(plan):
         plain, pushed = outcomes[2 * index], outcomes[2 * index + 1]
@@ -302,16 +310,23 @@ def _perturbed(model: mujoco.MjModel, point: OperatingPoint, direction: np.ndarr
 
 
 def stability_limits(
-    model: mujoco.MjModel, linear: Linearization, integrators: Iterable[str], stop_s: float, *, nthread: int = 0
+    model: mujoco.MjModel,
+    linear: Linearization,
+    integrators: Iterable[str],
+    stop_s: float,
+    *,
+    nthread: int = 0,
+    run: Callable[[Sequence[Job]], list] | None = None,
 ) -> dict[str, Limit]:
-    """Predicted, measured (scanned up to `stop_s` [s]) and confirmed limits per integrator name."""
+    """Predicted, measured (scanned up to `stop_s` [s]) and confirmed limits per integrator name (the
+    confirmation runs through `run`, see `confirm`)."""
     fastest = linear.fastest
     scale = 1.0 / fastest.rate_rad_s if fastest is not None else model.opt.timestep
     out = {}
     for name in integrators:
         predicted = predicted_limit(linear, name)
         out[name] = Limit(name, predicted, measured_limit(model, linear, name, scale, stop_s, predicted))
-    confirm(model, linear, out.values(), nthread=nthread)
+    confirm(model, linear, out.values(), nthread=nthread, run=run)
     return out
 
 

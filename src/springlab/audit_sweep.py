@@ -23,7 +23,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from fractions import Fraction
 from typing import Any
 
@@ -52,6 +52,9 @@ REFERENCE_FRACTION = 0.01
 REFERENCE_MAX_STEPS = 50_000
 #: states along the motion where the linearization is re-taken to test linearity
 LINEARITY_PROBES = 4
+#: runs a list of jobs, as batch.run_batched (audit_ship.Runner: locally or on dask workers)
+RunJobs = Callable[[Sequence[Job]], list[Trajectory | DivergedError]]
+
 #: steps of the timing run behind each integrator's cost per step
 TIMING_STEPS = 1000
 #: ... or as many more as take at least this long [s]
@@ -266,11 +269,14 @@ def converged_reference(
     *,
     coarse: Trajectory | None = None,
     nthread: int = 0,
+    run: RunJobs | None = None,
 ) -> Reference:
     """RK4 at `step`, step/2, ... [s] until its Richardson error estimate is at most REFERENCE_FRACTION x tol
     (module docstring), REFERENCE_MAX_STEPS, or the observed order cannot get there within that cap; the
     finest level is returned with its estimate (which says whether it converged). `coarse`: an RK4 run
-    at 2 x step (the sweep's finest), used as the coarsest level instead of running it again."""
+    at 2 x step (the sweep's finest), used as the coarsest level instead of running it again. `run`: runs
+    the levels' jobs (default: batch.run_batched on `nthread` threads)."""
+    run = run or _local(nthread)
     levels: list[Trajectory] = []
     while 2 * round(duration / step) > REFERENCE_MAX_STEPS and 2 * step * MIN_CHECKPOINTS <= duration:
         step *= 2  # too fine for the cap: the finest runs are then compared where their steps meet its steps
@@ -283,7 +289,7 @@ def converged_reference(
         steps = [round(duration / d) for d in dts]
         if max(steps) > REFERENCE_MAX_STEPS:
             break
-        outcomes = run_batched([Job(model, "rk4", d, s, start) for d, s in zip(dts, steps)], nthread=nthread)
+        outcomes = run([Job(model, "rk4", d, s, start) for d, s in zip(dts, steps)])
         finished = [o for o in outcomes if isinstance(o, Trajectory)]
         if len(finished) < len(outcomes):  # one diverged
             break
@@ -319,8 +325,12 @@ def sweep_runs(
     *,
     extra: Sequence[tuple[str, float]] = (),
     nthread: int = 0,
+    run: RunJobs | None = None,
 ) -> dict[tuple[str, float], Trajectory | DivergedError]:
-    """Every (integrator, dt) plus `extra` settings, batched: (integrator, dt) -> Trajectory or DivergedError."""
+    """Every (integrator, dt) plus `extra` settings, batched: (integrator, dt) -> Trajectory or DivergedError.
+
+    `run` runs the jobs (default: one batch.run_batched call on `nthread` threads)."""
+    run = run or _local(nthread)
     settings = list(dict.fromkeys([(name, dt) for name in integrators for dt in dts] + list(extra)))
     jobs = []
     for name, dt in settings:
@@ -328,7 +338,12 @@ def sweep_runs(
         if steps > MAX_STEPS:
             raise BadInputError(f"dt = {dt:g} s needs {steps} steps for {duration:g} s (limit {MAX_STEPS})")
         jobs.append(Job(model, name, dt, max(1, steps), start))
-    return dict(zip(settings, run_batched(jobs, nthread=nthread)))
+    return dict(zip(settings, run(jobs)))
+
+
+def _local(nthread: int) -> RunJobs:
+    """batch.run_batched on `nthread` threads (0: one per CPU): the audit's runs in this process."""
+    return lambda jobs: run_batched(jobs, nthread=nthread)
 
 
 def cost_per_step(model: mujoco.MjModel, start: Setup, integrator: str, dt: float) -> float:

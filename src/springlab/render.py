@@ -266,6 +266,7 @@ def render_video(
     slow_motion: float = 1.0,
     exaggerate: float | None = 1.0,
     road_bump: RoadBump | None = None,
+    antialias: bool = False,
 ) -> dict:
     """Render a recorded trajectory to a video file.
 
@@ -321,6 +322,10 @@ def render_video(
     road_bump:
         Optional :class:`render_drawings.RoadBump`: the road profile drawn under
         a quarter car (its height follows the exaggeration).
+    antialias:
+        Smooth the edges with the model's multisampling
+        (``vis.quality.offsamples``, MuJoCo's default 4); off by default, as
+        it makes a frame about 3 times slower on a CPU rasteriser.
 
     Returns
     -------
@@ -403,7 +408,7 @@ def render_video(
     writer = None
     bar = progress_bar(n_frames, description="rendering", unit="frame", enabled=progress)
     try:
-        scene = OffscreenScene(model, width, height, cam_id, drawings=drawings)
+        scene = OffscreenScene(model, width, height, cam_id, drawings=drawings, multisample=antialias)
         data = mujoco.MjData(model)
         text = TextOverlay(
             label,

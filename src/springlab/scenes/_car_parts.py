@@ -28,6 +28,10 @@ class Variant:
     def check_consistency(self, params: dict[str, float], g: float) -> None:
         """Raise ParameterError for non-physical combinations decidable from the parameters alone."""
 
+    def check_body_masses(self, params: dict[str, float], mjcf_inertia: tuple[float, float, float]) -> None:
+        """Raise ParameterError where a moving body's mass [kg] or inertia [kg m^2] would fall below MuJoCo's
+        MIN_MASS (the model would not compile); `mjcf_inertia` is the car body's (roll, pitch, yaw) in the MJCF."""
+
     def edit(self, spec: mujoco.MjSpec, params: dict[str, float], g: float) -> None:
         """MjSpec edits beyond the body's clearance and mass."""
 

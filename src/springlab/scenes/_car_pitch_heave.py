@@ -15,7 +15,7 @@ from ..errors import ParameterError
 from ..linear import generator_system
 from ..linearize import OperatingPoint, operating_point
 from ..linearize import linearize as shared_linearize
-from ..scene import Reference, Setup
+from ..scene import MIN_MASS, MIN_MASS_REASON, Reference, Setup
 from ._car_parts import Variant, damped_modes, gravity, refuse_motion, tendon
 
 #: pitch_heave: share of the springs' stiffness at the front axle [-]. Below the
@@ -129,6 +129,15 @@ class PitchHeave(Variant):
         "push_mass",
         "push_position",
     )
+
+    def check_body_masses(self, params: dict[str, float], mjcf_inertia: tuple[float, float, float]) -> None:
+        """Roll and yaw inertias scale with pitch_inertia (`edit`): the smallest must reach MIN_MASS."""
+        lowest = MIN_MASS * mjcf_inertia[1] / min(mjcf_inertia)
+        if params["pitch_inertia"] < lowest:
+            raise ParameterError(
+                f"pitch_inertia must be a finite number >= {lowest:.4g} kg m^2 (roll and yaw inertias scale"
+                f" with it; {MIN_MASS_REASON}), got {params['pitch_inertia']!r}"
+            )
 
     def edit(self, spec: mujoco.MjSpec, params: dict[str, float], g: float) -> None:
         """The pitch hinge through the CoM and the axle springs as fixed tendons (module docstring)."""

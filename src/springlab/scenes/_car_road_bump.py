@@ -12,7 +12,8 @@ import mujoco
 import numpy as np
 
 from .. import analytic, events
-from ..scene import Reference, Setup
+from ..errors import ParameterError
+from ..scene import MIN_MASS, MIN_MASS_REASON, Reference, Setup
 from ..simulate import Trajectory
 from ._car_parts import Variant, damped_modes, gravity, refuse_motion, tendon
 
@@ -173,6 +174,14 @@ class RoadBump(Variant):
         "bump_length",
         "speed",
     )
+
+    def check_body_masses(self, params: dict[str, float], mjcf_inertia: tuple[float, float, float]) -> None:
+        """A quarter of the mass per corner, at or above MIN_MASS."""
+        if params["mass"] / 4.0 < MIN_MASS:
+            raise ParameterError(
+                f"mass must be a finite number >= {4 * MIN_MASS:g} kg for road_bump (a quarter of it per corner;"
+                f" {MIN_MASS_REASON}), got {params['mass']!r}"
+            )
 
     def edit(self, spec: mujoco.MjSpec, params: dict[str, float], g: float) -> None:
         """One corner: sprung mass, suspension tendon, wheel, tire springs gated onto the bump exciter."""

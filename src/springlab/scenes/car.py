@@ -282,26 +282,10 @@ class Car(Scene):
         return {name: values[name] for name in relevant}
 
     def check_consistency(self, params: dict[str, float], scenario: Scenario) -> None:
-        self._check_body_masses(params, scenario)
+        # every moving body's mass and principal inertias at or above MuJoCo's MIN_MASS (else it cannot compile)
+        scenario.variant.check_body_masses(params, self._mjcf_inertia())
         # the 2-DOF variants check the exact motion itself, in setup()
         scenario.variant.check_consistency(params, self.gravity())
-
-    def _check_body_masses(self, params: dict[str, float], scenario: Scenario) -> None:
-        """Every moving body's mass and principal inertias at or above MuJoCo's MIN_MASS (else it cannot compile)."""
-        if scenario.name == "road_bump" and params["mass"] / 4.0 < MIN_MASS:
-            raise ParameterError(
-                f"mass must be a finite number >= {4 * MIN_MASS:g} kg for road_bump (a quarter of it per corner;"
-                f" {MIN_MASS_REASON}), got {params['mass']!r}"
-            )
-        if scenario.name == "pitch_heave":
-            # roll and yaw inertias scale with pitch_inertia (_edit_pitch_heave): the smallest must reach MIN_MASS
-            inertia = self._mjcf_inertia()
-            lowest = MIN_MASS * inertia[1] / min(inertia)
-            if params["pitch_inertia"] < lowest:
-                raise ParameterError(
-                    f"pitch_inertia must be a finite number >= {lowest:.4g} kg m^2 (roll and yaw inertias scale"
-                    f" with it; {MIN_MASS_REASON}), got {params['pitch_inertia']!r}"
-                )
 
     @functools.cache  # noqa: B019 - scenes are module-level singletons, never freed
     def _mjcf_inertia(self) -> tuple[float, float, float]:

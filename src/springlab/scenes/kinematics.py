@@ -44,24 +44,25 @@ allowance; the first-order integrators get C h t |A^2 z|, i.e. O(dt).
 
 Exact references: analytic.integrate_acceleration (polynomial scenarios) and
 analytic.piecewise_linear_velocity (tachograph).
+
+Code layout: each scenario carries its variant (`Scenario.variant`), as the car's
+do: `Polynomial` here for the three polynomial scenarios, `Tachograph` in
+_kinematics_tachograph.py (which draws the vehicle as a bus, _kinematics_bus.py).
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
 
 import mujoco
 import numpy as np
 
 from .. import analytic
-from ..errors import BadInputError, ParameterError
 from ..scene import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene, Setup
 from ..simulate import Trajectory
-from ._kinematics_bus import dress_as_bus
+from ._kinematics_tachograph import TACHOGRAPH_TIMES, TACHOGRAPH_VELOCITIES, Tachograph, reject_profile_parameters
 
-#: the tachograph record: knot times [s] and the velocities there [m/s]; v(t) is linear between them
-TACHOGRAPH_TIMES = (0.0, 4.0, 8.0, 12.0)
-TACHOGRAPH_VELOCITIES = (0.0, 6.0, 6.0, 0.0)
-#: parameters that the tachograph's profile replaces
-_PROFILE_PARAMETERS = ("v0", "a0", "jerk")
+__all__ = ["SCENE", "Kinematics", "Polynomial", "TACHOGRAPH_TIMES", "TACHOGRAPH_VELOCITIES", "polynomial_expression"]
 
 
 def polynomial_expression(symbol: str, coefficients, unit: str) -> str:
@@ -89,15 +90,75 @@ def polynomial_expression(symbol: str, coefficients, unit: str) -> str:
     return f"{symbol}(t) = {text} {unit}"
 
 
-def _reject_profile_parameters(params: dict[str, float], explicit: set[str]) -> dict[str, float]:
-    """Tachograph preset: its v(t) profile fixes v0, a0 and jerk, so setting them is an error."""
-    clash = sorted(explicit & set(_PROFILE_PARAMETERS))
-    if clash:
-        raise ParameterError(
-            f"tachograph takes its velocity from the recorded v(t) profile, so {', '.join(clash)}"
-            " cannot be set; valid for tachograph: mass, x0"
+class Polynomial:
+    """The variant of the polynomial scenarios: a(t) = a0 + jerk t from the parameters, x(t) a cubic.
+
+    The `force_ramp` actuator's activation is the force m a0 and its control the constant m jerk,
+    so F(t) = m (a0 + jerk t) is exactly linear in time at every RK4 stage (module docstring).
+    """
+
+    @staticmethod
+    def acceleration_coefficients(params: dict[str, float]) -> tuple[float, float]:
+        """(a0 [m/s^2], jerk [m/s^3]) of a(t) = a0 + jerk t."""
+        return params["a0"], params["jerk"]
+
+    def edit(self, spec: mujoco.MjSpec) -> None:
+        """Nothing: the chapter's polynomial examples are a car's, as the MJCF draws it."""
+
+    def setup(self, m: float, params: dict[str, float], steps: int, dt: float) -> Setup:
+        """Released from x0 at v0; the activation starts at m a0 [N] and grows at m jerk [N/s]."""
+        qpos = np.array([params["x0"]])
+        a0, jerk = self.acceleration_coefficients(params)
+        return Setup(
+            qpos=qpos, qvel=np.array([params["v0"]]), act=np.array([m * a0]), control=np.array([m * jerk, 0.0])
         )
-    return {"v0": TACHOGRAPH_VELOCITIES[0], "a0": 0.0, "jerk": 0.0}
+
+    def exact(
+        self, m: float, params: dict[str, float], time: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(x [m], v [m/s], state matrix, states) at `time` [s]: z = (x, v, F, dF/dt)."""
+        a0, jerk = self.acceleration_coefficients(params)
+        x, v, a = analytic.integrate_acceleration(time, [a0, jerk], params["x0"], params["v0"])
+        # z = (x, v, F, dF/dt): a force ramp, generated exactly
+        system = np.zeros((4, 4))
+        system[0, 1], system[1, 2], system[2, 3] = 1.0, 1.0 / m, 1.0
+        states = np.column_stack([x, v, m * np.asarray(a, float) * np.ones_like(time), np.full_like(time, m * jerk)])
+        return x, v, system, states
+
+    def phase_field(self, params: dict[str, float]) -> Callable | None:
+        """(x, v) -> (v, a) under a constant a (orbits: the parabolas v^2 = v0^2 + 2 a (x - x0)), else None."""
+        if params["jerk"] != 0.0:
+            return None
+        a0 = params["a0"]
+        return lambda x, v: (np.asarray(v, float), np.full(np.shape(v), a0, dtype=float))
+
+    def quantities(
+        self, m: float, params: dict[str, float], trajectory: Trajectory, t_end: float, x_sim: float, v_sim: float
+    ) -> dict:
+        """x(t), v(t), a(t), F(t) as expressions and their values at `t_end` [s], beside MuJoCo's."""
+        a0, jerk = self.acceleration_coefficients(params)
+        x0, v0 = params["x0"], params["v0"]
+        position = [x0, v0, a0 / 2.0, jerk / 6.0]
+        velocity = [v0, a0, jerk / 2.0]
+        acceleration = [a0, jerk]
+        x_end, v_end, a_end = (
+            float(np.polynomial.polynomial.polyval(t_end, c)) for c in (position, velocity, acceleration)
+        )
+        return {
+            "position_expression": polynomial_expression("x", position, "m"),
+            "velocity_expression": polynomial_expression("v", velocity, "m/s"),
+            "acceleration_expression": polynomial_expression("a", acceleration, "m/s^2"),
+            "force_expression": polynomial_expression("F", [m * a0, m * jerk], "N"),
+            "end_time_s": t_end,
+            "x_end_m": x_end,
+            "v_end_m_s": v_end,
+            "a_end_m_s2": a_end,
+            "displacement_m": x_end - x0,
+            "x_end_simulated_m": x_sim,
+            "v_end_simulated_m_s": v_sim,
+            # the force is the activation: a = act / m
+            "a_end_simulated_m_s2": float(trajectory.act[-1, 0]) / m,
+        }
 
 
 class Kinematics(Scene):
@@ -147,25 +208,29 @@ class Kinematics(Scene):
                 "x(t) = 0.03 t^3 + 0.2 t^2 + 1.2 t + 3.0 m: find v(t) and a(t)",
                 10.0,
                 {"x0": 3.0, "v0": 1.2, "a0": 0.4, "jerk": 0.18},
+                variant=Polynomial(),
             ),
             Scenario(
                 "linear_acceleration",
                 "a(t) = 1.2 t + 3.0 m/s^2, v(0) = 15 m/s, x(0) = 150 m: find v(t), x(t)",
                 5.0,
                 {"x0": 150.0, "v0": 15.0, "a0": 3.0, "jerk": 1.2},
+                variant=Polynomial(),
             ),
             Scenario(
                 "constant_acceleration",
                 "uniformly accelerated motion, eq. 5.5: a = 2 m/s^2 from 10 m/s",
                 5.0,
                 {"x0": 0.0, "v0": 10.0, "a0": 2.0, "jerk": 0.0},
+                variant=Polynomial(),
             ),
             Scenario(
                 "tachograph",
                 "a bus's 12 s v-t record: displacement = area under v(t), a = its slope",
                 TACHOGRAPH_TIMES[-1],
                 {"x0": 0.0},
-                derive=_reject_profile_parameters,
+                derive=reject_profile_parameters,
+                variant=Tachograph(),
             ),
         )
     }
@@ -177,86 +242,20 @@ class Kinematics(Scene):
 
     def edit(self, spec: mujoco.MjSpec, params: dict[str, float], scenario: Scenario) -> None:
         spec.body("vehicle").mass = params["mass"]
-        if scenario.name == "tachograph":  # the chapter's tachograph is a bus's; the other examples are a car's
-            dress_as_bus(spec)
+        scenario.variant.edit(spec)
 
     @staticmethod
     def mass(model: mujoco.MjModel) -> float:
         """Mass of the vehicle in `model` [kg]."""
         return float(model.body("vehicle").mass[0])
 
-    @staticmethod
-    def acceleration_coefficients(params: dict[str, float]) -> tuple[float, float]:
-        """(a0 [m/s^2], jerk [m/s^3]) of a(t) = a0 + jerk t."""
-        return params["a0"], params["jerk"]
-
-    @staticmethod
-    def tachograph_accelerations() -> np.ndarray:
-        """Acceleration on each segment of the tachograph record [m/s^2] (the slopes of v(t))."""
-        return np.diff(TACHOGRAPH_VELOCITIES) / np.diff(TACHOGRAPH_TIMES)
-
     def setup(self, model, params, scenario, steps, dt) -> Setup:
-        m = self.mass(model)
-        qpos = np.array([params["x0"]])
-        if scenario.name == "tachograph":
-            self._check_knots_on_grid(dt)
-            if steps * dt > TACHOGRAPH_TIMES[-1] * (1 + 1e-12):
-                raise BadInputError(
-                    f"the tachograph record covers {TACHOGRAPH_TIMES[-1]:g} s;"
-                    f" duration must be <= {TACHOGRAPH_TIMES[-1]:g} s, got {steps * dt:g} s"
-                )
-            # the motor carries m a on each step; a is read at the step's midpoint, which lies
-            # strictly inside one segment because every knot is a step boundary
-            midpoints = (np.arange(steps) + 0.5) * dt
-            accel = self._tachograph_acceleration(midpoints)
-            control = np.column_stack([np.zeros(steps), m * accel])
-            return Setup(qpos=qpos, qvel=np.array([TACHOGRAPH_VELOCITIES[0]]), act=np.array([0.0]), control=control)
-        a0, jerk = self.acceleration_coefficients(params)
-        return Setup(
-            qpos=qpos, qvel=np.array([params["v0"]]), act=np.array([m * a0]), control=np.array([m * jerk, 0.0])
-        )
+        return scenario.variant.setup(self.mass(model), params, steps, dt)
 
-    @staticmethod
-    def _tachograph_acceleration(time: np.ndarray) -> np.ndarray:
-        """a(t) [m/s^2] of the tachograph record; at a knot, the segment that starts there."""
-        slopes = np.diff(TACHOGRAPH_VELOCITIES) / np.diff(TACHOGRAPH_TIMES)
-        index = np.clip(np.searchsorted(TACHOGRAPH_TIMES, time, side="right") - 1, 0, len(slopes) - 1)
-        return slopes[index]
-
-    @staticmethod
-    def _check_knots_on_grid(dt: float) -> None:
-        """The acceleration may switch only at step boundaries, else the run is not exact."""
-        for knot in TACHOGRAPH_TIMES[1:-1]:
-            ratio = knot / dt
-            if abs(ratio - round(ratio)) > 1e-9 * max(ratio, 1.0):
-                knots = ", ".join(f"{k:g}" for k in TACHOGRAPH_TIMES[1:-1])
-                raise BadInputError(
-                    f"tachograph switches its acceleration at t = {knots} s, so dt must divide them"
-                    f" (e.g. 0.01, 0.005, 0.001 s), got dt = {dt:g} s"
-                )
-
-    # -- exact reference -------------------------------------------------------
+    # -- exact reference (the scenario's variant) ----------------------------------
 
     def reference(self, model, params, scenario, time, *, dt) -> Reference:
-        m = self.mass(model)
-        if scenario.name == "tachograph":
-            # MuJoCo's accumulated time may overshoot the record's end by round-off
-            inside = np.clip(time, TACHOGRAPH_TIMES[0], TACHOGRAPH_TIMES[-1])
-            x, v, a = analytic.piecewise_linear_velocity(
-                inside, TACHOGRAPH_TIMES, TACHOGRAPH_VELOCITIES, x0=params["x0"]
-            )
-            # z = (x, v, F): the force is constant on every step
-            system = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0 / m], [0.0, 0.0, 0.0]])
-            states = np.column_stack([x, v, m * np.asarray(a, float) * np.ones_like(time)])
-        else:
-            a0, jerk = self.acceleration_coefficients(params)
-            x, v, a = analytic.integrate_acceleration(time, [a0, jerk], params["x0"], params["v0"])
-            # z = (x, v, F, dF/dt): a force ramp, generated exactly
-            system = np.zeros((4, 4))
-            system[0, 1], system[1, 2], system[2, 3] = 1.0, 1.0 / m, 1.0
-            states = np.column_stack(
-                [x, v, m * np.asarray(a, float) * np.ones_like(time), np.full_like(time, m * jerk)]
-            )
+        x, v, system, states = scenario.variant.exact(self.mass(model), params, time)
         return Reference(
             pos={"vehicle": np.asarray(x, float)},
             vel={"vehicle": np.asarray(v, float)},
@@ -273,79 +272,16 @@ class Kinematics(Scene):
         With a(t) varying in time the phase plane has no fixed vector field; under a
         constant a the orbits are the parabolas v^2 = v0^2 + 2 a (x - x0).
         """
-        if scenario.name == "tachograph" or params["jerk"] != 0.0:
-            return None
-        a0 = params["a0"]
-        return lambda x, v: (np.asarray(v, float), np.full(np.shape(v), a0, dtype=float))
+        return scenario.variant.phase_field(params)
 
     # -- results -------------------------------------------------------------
 
     def quantities(self, model, params, scenario, trajectory: Trajectory) -> dict:
-        m = self.mass(model)
         # the nominal end time; MuJoCo's accumulated time differs from it by round-off only
         t_end = trajectory.steps * trajectory.dt
         x_sim = float(trajectory.qpos[-1, 0])
         v_sim = float(trajectory.qvel[-1, 0])
-        if scenario.name == "tachograph":
-            return self._tachograph_quantities(params, t_end, x_sim, v_sim)
-        a0, jerk = self.acceleration_coefficients(params)
-        x0, v0 = params["x0"], params["v0"]
-        position = [x0, v0, a0 / 2.0, jerk / 6.0]
-        velocity = [v0, a0, jerk / 2.0]
-        acceleration = [a0, jerk]
-        x_end, v_end, a_end = (
-            float(np.polynomial.polynomial.polyval(t_end, c)) for c in (position, velocity, acceleration)
-        )
-        return {
-            "position_expression": polynomial_expression("x", position, "m"),
-            "velocity_expression": polynomial_expression("v", velocity, "m/s"),
-            "acceleration_expression": polynomial_expression("a", acceleration, "m/s^2"),
-            "force_expression": polynomial_expression("F", [m * a0, m * jerk], "N"),
-            "end_time_s": t_end,
-            "x_end_m": x_end,
-            "v_end_m_s": v_end,
-            "a_end_m_s2": a_end,
-            "displacement_m": x_end - x0,
-            "x_end_simulated_m": x_sim,
-            "v_end_simulated_m_s": v_sim,
-            # the force is the activation: a = act / m
-            "a_end_simulated_m_s2": float(trajectory.act[-1, 0]) / m,
-        }
-
-    def _tachograph_quantities(self, params, t_end, x_sim, v_sim) -> dict:
-        times = np.array(TACHOGRAPH_TIMES)
-        velocities = np.array(TACHOGRAPH_VELOCITIES)
-        slopes = self.tachograph_accelerations()
-        areas = 0.5 * (velocities[1:] + velocities[:-1]) * np.diff(times)
-        pieces = []
-        for i, slope in enumerate(slopes):
-            start, v_start = times[i], velocities[i]
-            shifted = "t" if start == 0 else f"(t - {start:g})"
-            if slope == 0:
-                v_text = f"{v_start:g}"
-            else:
-                lead = f"{v_start:g} {'+' if slope > 0 else '-'} " if v_start else ("-" if slope < 0 else "")
-                v_text = f"{lead}{abs(slope):g} {shifted}"
-            pieces.append(f"{v_text} m/s for {start:g} <= t <= {times[i + 1]:g} s")
-        x_end, v_end, a_end = analytic.piecewise_linear_velocity(
-            np.array([min(t_end, TACHOGRAPH_TIMES[-1])]), TACHOGRAPH_TIMES, TACHOGRAPH_VELOCITIES, x0=params["x0"]
-        )
-        return {
-            "velocity_profile": "v(t) = " + "; ".join(pieces),
-            "acceleration_profile": "a(t) = "
-            + "; ".join(f"{s:g} m/s^2 for {times[i]:g} < t < {times[i + 1]:g} s" for i, s in enumerate(slopes)),
-            "knot_times_s": times.tolist(),
-            "knot_velocities_m_s": velocities.tolist(),
-            "segment_accelerations_m_s2": slopes.tolist(),
-            "segment_displacements_m": areas.tolist(),
-            "displacement_m": float(np.sum(areas)),
-            "max_velocity_m_s": float(np.max(velocities)),
-            "end_time_s": t_end,
-            "x_end_m": float(np.asarray(x_end).ravel()[0]),
-            "v_end_m_s": float(np.asarray(v_end).ravel()[0]),
-            "x_end_simulated_m": x_sim,
-            "v_end_simulated_m_s": v_sim,
-        }
+        return scenario.variant.quantities(self.mass(model), params, trajectory, t_end, x_sim, v_sim)
 
 
 SCENE = Kinematics()

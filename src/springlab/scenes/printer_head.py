@@ -74,6 +74,11 @@ move stops 2 h c D / M short (52 um at the defaults and dt = 0.1 ms, five times
 the band: never settled). `discrete` makes the belt spring implicit and has no
 limit. `stability_limit` computes the limit from MuJoCo's own step map, so
 divergence advice is right for every integrator.
+
+Code layout: this module is the scene; each scenario carries its variant
+(`Scenario.variant`: `Move`, `StepForce`, `Settle`), which gives its force
+segments and its own quantities, in _printer_head_moves.py with the formulas
+of the move and the settling that the design study shares.
 """
 
 from __future__ import annotations
@@ -88,6 +93,43 @@ from ..linearize import one_step_map, operating_point
 from ..scene import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene, Setup
 from ..simulate import Trajectory, integrator_id
 from ..simulate import stability_limit as joint_damping_stability_limit
+from ._printer_head_moves import (
+    BeltRun,
+    Move,
+    Settle,
+    StepForce,
+    after_force_bound,
+    belt_damping_for,
+    belt_damping_ratio,
+    belt_omega,
+    minimum_move_time,
+    move_profile,
+    move_residual_stretch,
+    reduced_mass,
+    residual_envelope,
+    settling_estimate,
+    settling_time,
+    worst_case_envelope,
+)
+
+#: the formulas the design study shares live in _printer_head_moves; named here, where it imports them
+__all__ = [
+    "SCENE",
+    "PrinterHead",
+    "after_force_bound",
+    "belt_damping_for",
+    "belt_damping_ratio",
+    "belt_omega",
+    "linearized_mode",
+    "minimum_move_time",
+    "move_residual_stretch",
+    "reduced_mass",
+    "residual_envelope",
+    "settling_estimate",
+    "settling_time",
+    "step_matrix",
+    "worst_case_envelope",
+]
 
 #: relative round-off allowed in the centre-of-mass target (the bang-bang stops it at D exactly)
 _TARGET_ROUNDOFF = 1e-12
@@ -165,13 +207,24 @@ class PrinterHead(Scene):
     scenarios = {
         s.name: s
         for s in (
-            Scenario("move", "bang-bang move of move_distance at the force limit, then residual vibration", 0.3),
-            Scenario("step_force", "constant drive_force from rest: rigid-body motion + one belt mode", 0.05),
+            Scenario(
+                "move",
+                "bang-bang move of move_distance at the force limit, then residual vibration",
+                0.3,
+                variant=Move(),
+            ),
+            Scenario(
+                "step_force",
+                "constant drive_force from rest: rigid-body motion + one belt mode",
+                0.05,
+                variant=StepForce(),
+            ),
             Scenario(
                 "settle",
                 "release at rest from the belt stretch of full-force acceleration",
                 0.2,
                 derive=_quasi_static_deflection,
+                variant=Settle(),
             ),
         )
     }
@@ -218,29 +271,10 @@ class PrinterHead(Scene):
         coupling = np.array([[1.0, -1.0], [-1.0, 1.0]])  # the belt stretches by q_m - q_c
         return np.diag([m_c, m_m]), c * coupling, k * coupling
 
-    # -- the force profile ---------------------------------------------------
+    # -- the force profile (each scenario's variant gives its segments) -----------
 
-    @staticmethod
-    def move_profile(params: dict[str, float], dt: float) -> tuple[int, float]:
-        """(steps per half-move n, force [N]) of the bang-bang move on a grid of dt [s].
-
-        The half-move time is the minimum sqrt(D M / F) rounded up to whole steps,
-        and the force is lowered to M D / (n dt)^2 so the centre of mass stops at D.
-        """
-        total = params["carriage_mass"] + params["motor_mass"]
-        half = math.sqrt(params["move_distance"] * total / params["drive_force"])
-        n = max(1, math.ceil(half / dt - 1e-9))
-        force = min(params["drive_force"], total * params["move_distance"] / (n * dt) ** 2)
-        return n, force
-
-    def _segments(self, params, scenario, dt) -> tuple[np.ndarray, np.ndarray]:
-        """(breakpoints [s], motor force per segment [N]) of the scenario's input."""
-        if scenario.name == "step_force":
-            return np.array([0.0]), np.array([params["drive_force"]])
-        if scenario.name == "move":
-            n, force = self.move_profile(params, dt)
-            return np.array([0.0, n * dt, 2 * n * dt]), np.array([force, -force, 0.0])
-        return np.array([0.0]), np.array([0.0])
+    #: (steps per half-move n, force [N]) of the bang-bang move on a grid of dt [s] (_printer_head_moves)
+    move_profile = staticmethod(move_profile)
 
     def _initial(self, params) -> tuple[np.ndarray, np.ndarray]:
         """(q0, v0) in (q_c, q_m): belt stretched by `deflection`, centre of mass at rest at 0."""
@@ -254,7 +288,7 @@ class PrinterHead(Scene):
         for joint, q, v in zip(self.joints, q0, v0):
             qpos[model.joint(joint).qposadr[0]] = q
             qvel[model.joint(joint).dofadr[0]] = v
-        breaks, forces = self._segments(params, scenario, dt)
+        breaks, forces = scenario.variant.segments(params, dt)
         # segment i holds from step round(breaks[i]/dt): switches on step boundaries are exact
         first = np.round(breaks / dt).astype(int)
         control = np.zeros((steps, model.nu))
@@ -267,7 +301,7 @@ class PrinterHead(Scene):
     def reference(self, model, params, scenario, time, *, dt) -> Reference:
         mass, damping, stiffness = self.matrices(model)
         q0, v0 = self._initial(params)
-        breaks, forces = self._segments(params, scenario, dt)  # the move switches on the run's own grid
+        breaks, forces = scenario.variant.segments(params, dt)  # the move switches on the run's own grid
         values = np.column_stack([np.zeros_like(forces), forces])  # the motor joint carries the force
         q, v = analytic.linear_response(time, mass, damping, stiffness, q0, v0, force=(breaks, values))
         # z = (q_c, q_m, v_c, v_m, F): the force is a generator state, constant within each step
@@ -340,183 +374,9 @@ class PrinterHead(Scene):
         out["reduced_mass_kg"] = reduced
         out["vibration_share"] = m_m / total  # carriage deviation per metre of belt stretch
         columns = self.joint_columns(model, trajectory)
-        q_c, v_c = columns["carriage"]
-        q_m, v_m = columns["motor"]
-        band = params["positioning_band"]
-        if scenario.name == "step_force":
-            force = params["drive_force"]
-            out["rigid_acceleration_m_s2"] = force / total
-            out["static_belt_stretch_m"] = force * m_c / (total * k)
-            out["max_belt_stretch_m"] = float(np.max(np.abs(q_m - q_c)))
-            return out
-        out["settling_band_m"] = band
-        if scenario.name == "move":
-            n, force = self.move_profile(params, dt)
-            end = 2 * n
-            out["move_distance_m"] = params["move_distance"]
-            out["move_force_n"] = force
-            out["move_time_s"] = end * dt
-            out["minimum_move_time_s"] = minimum_move_time(params["move_distance"], total, params["drive_force"])
-            # an undamped belt is left vibrating at 4 sin^2(omega_n T / 4) times the static stretch:
-            # nothing when each half of the move lasts a whole number of belt periods
-            out["half_move_belt_periods"] = n * dt * omega_n / (2 * math.pi)
-            target, start = params["move_distance"], end
-        else:  # settle: release at t = 0, the centre of mass stays at 0
-            out["initial_deviation_m"] = abs(float(q_c[0]))
-            target, start = 0.0, 0
-        if start >= len(q_c):
-            out["settled_for_good"] = False
-            out["settling_time_s"] = math.inf
-            return out
-        deviation = q_c[start:] - target
-        out["residual_amplitude_m"] = float(np.max(np.abs(deviation)))
-        centre = (m_c * q_c[-1] + m_m * q_m[-1]) / total
-        stretch, stretch_rate = q_m[-1] - q_c[-1], v_m[-1] - v_c[-1]
-        bound = after_force_bound(centre - target, stretch, stretch_rate, m_c, m_m, k)
-        out["final_deviation_bound_m"] = float(bound)
-        out["settled_for_good"] = bool(bound <= band)
-        settle = settling_time(trajectory.time[start:] - trajectory.time[start], deviation, band)
-        out["settling_time_s"] = settle if out["settled_for_good"] else math.inf
-        if scenario.name == "move":
-            out["positioning_time_s"] = out["move_time_s"] + out["settling_time_s"]
-        # the analytic estimate: envelope of the residual vibration down to the band
-        if zeta < 1.0 and k > 0:
-            s0 = q_m[start] - q_c[start]
-            s0_rate = v_m[start] - v_c[start]
-            if scenario.name == "move":
-                s0, s0_rate = move_residual_stretch(params, dt)
-            envelope = residual_envelope(s0, s0_rate, m_c, m_m, omega_n, zeta)
-            out["residual_envelope_m"] = envelope
-            out["settling_time_estimate_s"] = settling_estimate(envelope, band, zeta, omega_n)
-            if scenario.name == "move":
-                out["positioning_time_estimate_s"] = out["move_time_s"] + out["settling_time_estimate_s"]
-        return out
-
-
-# -- helpers shared with the design study ------------------------------------------
-
-
-def reduced_mass(carriage_mass, motor_mass):
-    """Reduced mass mu = m_c m_m / (m_c + m_m) [kg] of the belt mode (floats or arrays)."""
-    return carriage_mass * motor_mass / (carriage_mass + motor_mass)
-
-
-def belt_damping_for(damping_ratio, stiffness, carriage_mass, motor_mass):
-    """Belt damping c = 2 zeta sqrt(k mu) [N s/m] giving the belt mode `damping_ratio` [-] (floats or arrays)."""
-    return 2.0 * damping_ratio * np.sqrt(stiffness * reduced_mass(carriage_mass, motor_mass))
-
-
-def belt_damping_ratio(damping: float, stiffness: float, carriage_mass: float, motor_mass: float) -> float:
-    """The belt mode's damping ratio zeta = c / (2 sqrt(k mu)) [-] of belt damping c [N s/m]."""
-    return damping / (2.0 * math.sqrt(stiffness * reduced_mass(carriage_mass, motor_mass)))
-
-
-def belt_omega(stiffness, carriage_mass, motor_mass):
-    """The belt mode's undamped natural frequency omega_n = sqrt(k / mu) [rad/s] (floats or arrays)."""
-    return np.sqrt(stiffness / reduced_mass(carriage_mass, motor_mass))
-
-
-def residual_envelope(
-    stretch: float, stretch_rate: float, carriage_mass: float, motor_mass: float, omega_n: float, zeta: float
-) -> float:
-    """Envelope A [m] of the carriage's residual vibration A e^(-zeta omega_n t) once the force is off.
-
-    The carriage moves (m_m / M) times the belt stretch s; a damped free vibration from (s, s') has
-    amplitude hypot(s, (s' + zeta omega_n s) / omega_d), omega_d = omega_n sqrt(1 - zeta^2).
-    """
-    omega_d = omega_n * math.sqrt(1 - zeta * zeta)
-    share = motor_mass / (carriage_mass + motor_mass)
-    return share * math.hypot(stretch, (stretch_rate + zeta * omega_n * stretch) / omega_d)
-
-
-def worst_case_envelope(force: float, carriage_mass: float, motor_mass: float, stiffness: float) -> float:
-    """Largest residual envelope [m] any bang-bang move at `force` [N] can leave: 4 F m_c m_m / (M^2 k).
-
-    The residual stretch of an undamped belt is 4 sin^2(omega_n T / 4) <= 4 times the static
-    stretch F m_c / (M k), and the carriage moves m_m / M of it.
-    """
-    total = carriage_mass + motor_mass
-    return 4 * force * carriage_mass * motor_mass / (total**2 * stiffness)
-
-
-def minimum_move_time(distance: float, mass: float, force: float) -> float:
-    """Minimum time [s] of a rigid move of `distance` [m] of `mass` [kg] at force limit `force` [N].
-
-    Bang-bang: accelerate for half the time at +F, decelerate at -F: T = 2 sqrt(D m / F).
-    """
-    return 2.0 * math.sqrt(distance * mass / force)
-
-
-def settling_estimate(envelope: float, band: float, zeta: float, omega_n: float) -> float:
-    """Time [s] for a vibration envelope `envelope` e^(-zeta omega_n t) [m] to shrink into `band` [m].
-
-    ln(envelope / band) / (zeta omega_n), 0 if already inside, inf if undamped. For a
-    release at rest from amplitude a0 the envelope is a0 / sqrt(1 - zeta^2), giving
-    the chapter-style ln(1 / (band / a0 sqrt(1 - zeta^2))) / (zeta omega_n).
-    """
-    if envelope <= band:
-        return 0.0
-    if zeta <= 0.0:
-        return math.inf
-    return math.log(envelope / band) / (zeta * omega_n)
-
-
-def after_force_bound(centre_offset, stretch, stretch_rate, carriage_mass, motor_mass, stiffness):
-    """Bound [m] on the carriage's future distance from the target once the force is off.
-
-    The carriage is q_c = X - (m_m / M) s; with no force the centre of mass X
-    stays where it is (at rest after a bang-bang move or a release) and the belt
-    energy E = mu s'^2 / 2 + k s^2 / 2 cannot grow, so |s| <= sqrt(2 E / k) for
-    ever and |q_c - target| <= |X - target| + (m_m / M) sqrt(2 E / k).
-
-    Every argument may be a float or an array (elementwise).
-
-    Args:
-      centre_offset: X - target [m].
-      stretch, stretch_rate: belt stretch s [m] and its rate s' [m/s].
-      carriage_mass, motor_mass: [kg].
-      stiffness: belt stiffness k [N/m].
-    """
-    total = carriage_mass + motor_mass
-    reduced = carriage_mass * motor_mass / total
-    energy = 0.5 * reduced * stretch_rate**2 + 0.5 * stiffness * stretch**2
-    return np.abs(centre_offset) + (motor_mass / total) * np.sqrt(2.0 * energy / stiffness)
-
-
-def settling_time(time: np.ndarray, deviation: np.ndarray, band: float) -> float:
-    """Time [s] after which |deviation| [m] stays within `band` [m] in this record.
-
-    The last exit from the band, interpolated linearly between the samples
-    around it; 0 if the record never leaves the band.
-    """
-    outside = np.flatnonzero(np.abs(deviation) > band)
-    if outside.size == 0:
-        return 0.0
-    i = int(outside[-1])
-    if i + 1 >= len(time):
-        return float(time[-1])
-    excess = np.abs(deviation[i]) - band
-    inside = np.abs(deviation[i + 1]) - band
-    return float(time[i] + (time[i + 1] - time[i]) * excess / (excess - inside))
-
-
-def move_residual_stretch(params: dict[str, float], dt: float) -> tuple[float, float]:
-    """Exact belt stretch [m] and rate [m/s] at the end of the bang-bang move on a grid of dt [s].
-
-    The belt mode obeys mu s'' + c s' + k s = (m_c / M) F(t) with F = +F', -F', 0 on
-    [0, T/2), [T/2, T), [T, ...): superposed step responses (analytic), from the
-    initial stretch `deflection` at rest.
-    """
-    m_c, m_m = params["carriage_mass"], params["motor_mass"]
-    k, c = params["belt_stiffness"], params["belt_damping"]
-    total, reduced = m_c + m_m, m_c * m_m / (m_c + m_m)
-    n, force = PrinterHead.move_profile(params, dt)
-    half = n * dt
-    modal = force * m_c / total
-    t = np.array([2 * half])
-    s, v = analytic.step_response(t, reduced, k, c, modal, params["deflection"], 0.0)
-    s2, v2 = analytic.step_response(t - half, reduced, k, c, -2.0 * modal)
-    return float(s[0] + s2[0]), float(v[0] + v2[0])
+        (q_c, v_c), (q_m, v_m) = columns["carriage"], columns["motor"]
+        run = BeltRun(params, m_c, m_m, k, omega_n, zeta, dt, trajectory.time, q_c, v_c, q_m, v_m)
+        return scenario.variant.quantities(out, run)
 
 
 def step_matrix(model: mujoco.MjModel, integrator: str, dt: float) -> np.ndarray:

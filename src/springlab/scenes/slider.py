@@ -58,6 +58,9 @@ def _resonant(params: dict[str, float], explicit: set[str]) -> dict[str, float]:
 
 
 _FORCE_FREE = {"force_amplitude": 0.0}
+#: the variant of a harmonically forced scenario (Scenario.variant): its force_amplitude drives a sine at
+#: force_frequency through the exciter (a 0 Hz frequency is a step); any other scenario's force is a step
+HARMONIC = "harmonic"
 
 
 class Slider(Scene):
@@ -171,6 +174,7 @@ class Slider(Scene):
                 10.0,
                 {"force_amplitude": 1.0, "x0": 0.0, "v0": 0.0},
                 dt=2e-3,
+                variant=HARMONIC,
             ),
             Scenario(
                 "resonance",
@@ -179,6 +183,7 @@ class Slider(Scene):
                 {"force_amplitude": 1.0, "x0": 0.0, "v0": 0.0},
                 derive=_resonant,
                 dt=2.5e-3,
+                variant=HARMONIC,
             ),
             Scenario(
                 "exercise",
@@ -205,7 +210,7 @@ class Slider(Scene):
         """'harmonic', 'step' or 'none' for these parameters."""
         if params["force_amplitude"] == 0.0:
             return "none"
-        if scenario.name in ("harmonic", "resonance") and params["force_frequency"] > 0:
+        if scenario.variant == HARMONIC and params["force_frequency"] > 0:
             return "harmonic"
         return "step"
 
