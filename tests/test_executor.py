@@ -9,6 +9,7 @@ the caller reduces the chunks in submission order.
 from __future__ import annotations
 
 import os
+import pathlib
 import signal
 import socket
 import threading
@@ -115,14 +116,26 @@ def _free_port() -> int:
         return probe.getsockname()[1]
 
 
-def test_an_unreachable_scheduler_is_a_one_line_exit_2_within_the_timeout(tmp_path, capsys):
+#: every command that takes --scheduler, with cheap arguments (the scheduler is reached before the work)
+_SCHEDULED_COMMANDS = {
+    "sweep": ["sweep", "slider", "--vary", "mass=1:2:2"],
+    "audit": ["audit", "slider", "--duration", "1"],
+    "fit": [
+        "fit", "slider", str(pathlib.Path(__file__).parent.parent / "docs" / "examples" / "decay_mm.csv"),
+        "--map", "t=time", "--map", "x_mm=slider_pos", "--scale", "0.001", "--set", "mass=2", "--starts", "2",
+    ],
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("command", sorted(_SCHEDULED_COMMANDS))
+def test_an_unreachable_scheduler_is_a_one_line_exit_2_within_the_timeout(command, tmp_path, capsys):
     address = f"tcp://127.0.0.1:{_free_port()}"  # nothing listens there
     start = time.perf_counter()
-    code = main(["sweep", "slider", "--vary", "mass=1:2:2", "--scheduler", address, "--output", str(tmp_path / "o")])
+    code = main([*_SCHEDULED_COMMANDS[command], "--scheduler", address, "--output", str(tmp_path / "o")])
     elapsed = time.perf_counter() - start
     err = capsys.readouterr().err
     assert code == 2 and address in err and err.count("\n") == 1 and "Traceback" not in err
-    assert elapsed < 10.0 + 5.0  # CONNECT_TIMEOUT_S, plus the sweep's own set-up
+    assert elapsed < 10.0 + 5.0  # CONNECT_TIMEOUT_S, plus the command's own set-up
     assert not (tmp_path / "o").exists()
 
 

@@ -62,6 +62,19 @@ def test_fit_json_prints_fit_json(tmp_path, capsys):
             "cannot all",
         ),
         ("time,slider_pos\n" + "".join(f"{i},{i}\n" for i in range(20)), ("--scale", "0"), "--scale"),
+        ("time,slider_pos\n" + "".join(f"{i},{i}\n" for i in range(20)), ("--starts", "0"), "--starts"),
+        ("time,slider_pos\n" + "".join(f"{i},{i}\n" for i in range(20)), ("--starts", "two"), "--starts"),
+        ("time,slider_pos\n" + "".join(f"{i},{i}\n" for i in range(20)), ("--starts", "1.5"), "--starts"),
+        (
+            "time,slider_pos\n" + "".join(f"{i},{i}\n" for i in range(20)),
+            ("--free", "x0,v0", "--starts", "3"),
+            "linearly",
+        ),
+        (
+            "time,slider_pos\n" + "".join(f"{i},{i}\n" for i in range(20)),
+            ("--starts", "3", "--workers", "0"),
+            "workers",
+        ),
     ],
 )
 def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys, content, extra, message):

@@ -51,6 +51,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
         "fit_engine",
         "fit_models",
         "fit_results",
+        "fit_starts",
         "sweep",
         "sweeps",
         "executor",

@@ -394,17 +394,20 @@ def cmd_fit(args) -> int:
 
     if args.output:
         outputs.check_directory(args.output)  # before seconds of computing, not after
-    result = fit(
-        args.scene,
-        args.data,
-        args.scenario,
-        map=args.map,
-        free=args.free or None,
-        scale=args.scale,
-        start=args.start,
-        degree=args.degree,
-        **_parse_sets(args.set),
-    )
+    with _executor(args) as executor:
+        result = fit(
+            args.scene,
+            args.data,
+            args.scenario,
+            map=args.map,
+            free=args.free or None,
+            scale=args.scale,
+            start=args.start,
+            degree=args.degree,
+            starts=args.starts,
+            executor=executor,
+            **_parse_sets(args.set),
+        )
     if args.output:
         write(result, args.output)
         plot_fit(result, pathlib.Path(args.output) / "fit.png")
@@ -638,6 +641,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--start", type=float, metavar="S", help="release time [s]: drop the record before it")
     p.add_argument("--scale", type=float, default=1.0, metavar="FACTOR", help="SI units per file unit (mm: 0.001)")
     p.add_argument("--degree", type=int, metavar="N", help="kinematics: degree 0-3 of the polynomial")
+    p.add_argument(
+        "--starts",
+        type=int,
+        default=1,
+        metavar="N",
+        help="independent optimizations, the lowest cost wins (default 1: the linear-algebra start)",
+    )
+    _executor_arguments(p)
     p.add_argument("--output", metavar="DIR", help="write fit.json, fit.png, trajectory.csv and summary.json")
     p.add_argument("--json", action="store_true", help="print fit.json")
     COMMANDS["fit"] = cmd_fit

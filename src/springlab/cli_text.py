@@ -300,6 +300,10 @@ def print_fit(result: FitResult, output: str | None) -> None:
         f"  optimizer: {o['status']} after {o['iterations']} iterations, {o['rollouts']} rollouts"
         f" of {o['steps']} steps ({o['time_per_rollout_s'] * 1e3:.1f} ms each), {o['wall_time_s']:.2f} s"
     )
+    if result.starts.get("count", 1) > 1:
+        from .fit_starts import line  # here: fit_starts loads MuJoCo's sysid machinery, needed only for a fit
+
+        print(line(result.starts))
     if result.run_note:
         print(f"  note: {result.run_note}")
     print(result.verdict)

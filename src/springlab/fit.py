@@ -21,8 +21,9 @@ from typing import Any
 
 import numpy as np
 
-from . import api, fit_data, fit_results, scenes
+from . import api, fit_data, fit_results, fit_starts, scenes
 from .errors import BadInputError, ParameterError, SpringlabError
+from .executor import Executor
 from .fit_engine import OMEGA_DT, Problem, check_identifiable, solve
 from .fit_models import ALIASES, FITS, MODAL, SceneFit
 from .scenes.car import Car
@@ -49,6 +50,7 @@ class FitResult:
       verdict: the one-line answer.
       converged: whether the optimizer stopped on a tolerance.
       run: the identified scene's own run (api.Result) or None, and `run_note`.
+      starts: the multi-start record (springlab.fit_starts.summary): count, best, at_best_minimum, spread.
     """
 
     scene: str
@@ -71,6 +73,7 @@ class FitResult:
     run_note: str = ""
     curves: dict[str, Any] = dataclasses.field(default_factory=dict)
     amplitude: float = 0.0
+    starts: dict[str, Any] = dataclasses.field(default_factory=dict)
 
     def as_dict(self) -> dict[str, Any]:
         """fit.json's content (see DESIGN.md, `fit`)."""
@@ -98,6 +101,7 @@ class FitResult:
             "curves": self.curves,
             "cross_check": self.cross_check,
             "optimizer": self.optimizer,
+            "starts": self.starts,
             "converged": self.converged,
             "run_note": self.run_note,
             "verdict": self.verdict,
@@ -119,6 +123,10 @@ def fit(
     start: float | None = None,
     degree: int | None = None,
     run_scene: bool = True,
+    starts: int = 1,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    executor: Executor | None = None,
     **parameters: Any,
 ) -> FitResult:
     """Identify `scene` from the record in `data` (a CSV file).
@@ -135,6 +143,11 @@ def fit(
       degree: kinematics only: the polynomial's degree 0-3 (frees x0, v0, a0, jerk in order);
         None: chosen, from 3 down while the highest coefficient's 95 % interval contains 0.
       run_scene: also run the identified scene (FitResult.run) for trajectory.csv.
+      starts: independent optimizations (springlab.fit_starts): 1 is the linear-algebra start alone;
+        N > 1 adds N - 1 starts spread over the nonlinear free names' bounds and keeps the lowest cost.
+      workers, scheduler, executor: where the starts run (springlab.executor): a LocalCluster of `workers`
+        processes, a running dask scheduler's address, or an Executor; none: in this process. Same numbers
+        either way. A single start always runs in this process.
       **parameters: fixed values: scene parameters (e.g. mass=2.0 [kg]) and
         x0 [m], v0 [m/s], offset [signal unit], delay [s].
 
@@ -144,6 +157,9 @@ def fit(
     Raises:
       BadInputError: bad file or names, or a free set the record cannot identify.
     """
+    starts = fit_starts.check_count(starts)
+    if executor is not None and (workers is not None or scheduler is not None):
+        raise BadInputError("give an executor or workers/scheduler, not both")
     if scene not in FITS:
         raise BadInputError(
             f"scene {scene!r} cannot be fitted; valid: {', '.join(FITS)} (nonlinear has no identification yet)"
@@ -184,6 +200,7 @@ def fit(
     forced = scenario == "step" and base.get("force_amplitude", 0.0) != 0.0
     force = base.get("force_amplitude", 0.0) if forced else 0.0
     how.check_free(free, nuisance, base, forced, record.signal)
+    fit_starts.check_spreadable(free, starts)
     if len(free) + 2 > record.time.size:
         raise BadInputError(
             f"{record.time.size} samples cannot fit {len(free)} parameters; a fit needs at least {len(free) + 2}"
@@ -196,7 +213,11 @@ def fit(
             fixed["x0"] = float(record.values[0]) if record.signal == "pos" else how.equilibrium(base)
         if "v0" not in free and "v0" not in fixed:
             fixed["v0"] = 0.0
-    problem, solved = _identify(how, chosen, base, record, free, fixed, modal, force)
+    if starts > 1 and executor is None:
+        with Executor(workers=workers, scheduler=scheduler, progress=False) as own:
+            problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force, starts, own)
+    else:
+        problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force, starts, executor)
     if scene == "kinematics" and not free_given and degree is None:
         # the degree is chosen: drop the highest coefficient while its 95 % interval contains 0
         result = _finish(problem, solved, run_scene=False)
@@ -206,22 +227,31 @@ def fit(
                 break
             record.notes.append(f"degree chosen: {free[-1]}'s 95 % interval [{low:.3g}, {high:.3g}] contains 0")
             free = free[:-1]
-            problem, solved = _identify(how, chosen, base, record, free, fixed, modal, force)
+            problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force)
             result = _finish(problem, solved, run_scene=False)
-    return _finish(problem, solved, run_scene)
+    result = _finish(problem, solved, run_scene)
+    result.starts = fit_starts.summary(runs, result.free, result.covariance, record.unit)
+    return result
 
 
-def _identify(how, chosen, base, record, free, fixed, modal, force) -> tuple[Problem, dict[str, Any]]:
-    """The start, the problem and sysid's solution; the grid refined once if the estimate is faster than the start."""
+def _identify(
+    how, chosen, base, record, free, fixed, modal, force, starts=1, executor=None
+) -> tuple[Problem, dict[str, Any], dict[str, Any] | None]:
+    """The start(s), the problem and sysid's solution (the best start's, and the starts' record or None);
+    the grid refined once if the estimate is faster than the start."""
     start_values = _start(how, record, base, fixed, free, force)
     problem = Problem(how, chosen, base, record, free, start_values, modal, force)
-    solved = solve(problem, record)
+    runs = None
+    if starts == 1:
+        solved = solve(problem, record)
+    else:
+        solved, runs = fit_starts.run(problem, starts, executor)
     estimate = problem.values(solved["x"])
     if problem.fastest_rate(estimate) * problem.dt > 1.5 * OMEGA_DT:
         problem.start = dict(estimate)
         problem.set_grid(estimate)
         solved = solve(problem, record)
-    return problem, solved
+    return problem, solved, runs
 
 
 def _start(how: SceneFit, record, base, fixed, free, force) -> dict[str, float]:

@@ -75,6 +75,8 @@ class Problem:
         self.rollouts = 0
         self._spec: mujoco.MjSpec | None = None
         self.rollout_time = 0.0
+        #: name -> (low, high) box bounds held fixed (multi-starts: the first start's); None: around the start
+        self.bounds: dict[str, tuple[float, float]] | None = None
         self.set_grid(start)
         # a thread pool costs ~5 ms per rollout call: worth it only for long batches
         self.threads = 2 if self.steps * (len(free) + 1) >= 200_000 and (os.cpu_count() or 1) > 1 else 1
@@ -91,11 +93,13 @@ class Problem:
         omega, zeta = math.sqrt(k / m), d / (2 * math.sqrt(k * m))
         return omega * (zeta + math.sqrt(max(zeta * zeta - 1.0, 0.0))) if zeta > 1 else omega
 
-    def set_grid(self, values: dict[str, float]) -> None:
-        """dt [s] and steps of the simulation grid covering the record (and a delay's reach)."""
+    def set_grid(self, values: dict[str, float], rate: float | None = None) -> None:
+        """dt [s] and steps of the simulation grid covering the record (and a delay's reach).
+
+        `rate` [1/s] overrides the values' fastest rate (multi-starts: a grid stable over the whole box)."""
         span = float(self.t[-1])
         reach = 1.1 * span if "delay" in self.free else span
-        rate = self.fastest_rate(values)
+        rate = self.fastest_rate(values) if rate is None else rate
         # bounds let omega move 10x: keep even that stable (RK4 limit 2.8), accurate at the start
         self.dt = min(OMEGA_DT / rate if rate > 0 else math.inf, span / 200.0)
         self.steps = int(math.ceil(reach / self.dt)) + 3
@@ -326,7 +330,10 @@ def _parameter_dict(problem: Problem):
 
     params = sysid.ParameterDict()
     for name in problem.free:
-        low, high = problem.how.bounds(name, problem.start[name], problem.record)
+        if problem.bounds is not None:
+            low, high = problem.bounds[name]
+        else:
+            low, high = problem.how.bounds(name, problem.start[name], problem.record)
         value = min(max(problem.start[name], low + 1e-3 * (high - low)), high - 1e-3 * (high - low))
         problem.start[name] = value
         params.add(sysid.Parameter(name, nominal=value, min_value=low, max_value=high))
