@@ -141,6 +141,8 @@ IMPLICIT_DAMPING_INTEGRATORS = ("euler", "implicit", "implicitfast")
 EXPLICIT_SHARE_NOISE = 1e-6
 #: D keeps a mode to itself when |D phi - c_i M phi| <= this x |D phi| (D is MuJoCo's analytic qDeriv)
 COUPLING_NOISE = 1e-9
+#: the coupled trace condition is bracketed around the closed form by at most this many halvings/doublings
+BRACKET_DOUBLINGS = 60
 
 
 def implicit_damping(model: mujoco.MjModel, point: OperatingPoint, integrator: str) -> np.ndarray:
@@ -167,7 +169,9 @@ def implicit_damping(model: mujoco.MjModel, point: OperatingPoint, integrator: s
     for row in range(nv):
         start, count = work.D_rowadr[row], work.D_rownnz[row]
         dense[row, work.D_colind[start : start + count]] = -data.qDeriv[start : start + count]
-    return dense
+    # implicitfast factorises a symmetrised D (MuJoCo's computation chapter); symmetric already in
+    # every model seen here, so this only guards the documented contract
+    return 0.5 * (dense + dense.T) if integrator == "implicitfast" else dense
 
 
 def _closed_form_omega_dt(zeta_implicit: float, zeta_explicit: float) -> float:
@@ -212,10 +216,19 @@ def _implicit_limit(linear: Linearization, mode: Mode, damping: np.ndarray) -> f
         return dt * dt * g * omega**2 + 2 * dt * g * 2 * zeta * omega - 4
 
     low, high = closed, closed
-    while trace_excess(low) > 0:
-        low /= 2
-    while trace_excess(high) < 0:
-        high *= 2
+    try:
+        for _ in range(BRACKET_DOUBLINGS):
+            if trace_excess(low) <= 0:
+                break
+            low /= 2
+        for _ in range(BRACKET_DOUBLINGS):
+            if trace_excess(high) >= 0:
+                break
+            high *= 2
+    except np.linalg.LinAlgError:  # M + dt D singular: D is not dissipative there, no closed form
+        return closed
+    if not (trace_excess(low) <= 0 <= trace_excess(high)):
+        return closed  # a D that feeds energy in (an actuator's positive velocity gain): no bracket
     for _ in range(100):  # bisection to round-off: each evaluation is one nv x nv solve
         mid = 0.5 * (low + high)
         if mid in (low, high):
