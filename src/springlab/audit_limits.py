@@ -194,6 +194,7 @@ def _mode_shape(linear: Linearization, eigenvalue: complex) -> np.ndarray:
 def _implicit_limit(linear: Linearization, mode: Mode, damping: np.ndarray) -> float:
     """The euler / implicit / implicitfast limit [s] of one stable oscillatory mode with implicit damping
     `damping` (D, (nv, nv)): the trace condition of the module docstring."""
+    assert mode.damping_ratio is not None  # an oscillatory mode always has one
     omega, zeta = mode.rate_rad_s, float(mode.damping_ratio)
     if not np.any(damping) or zeta <= 0:
         # nothing implicit, or nothing to split: the classic bound with all of zeta explicit or implicit
