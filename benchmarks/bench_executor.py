@@ -41,18 +41,18 @@ def design_throughput() -> dict[str, float]:
     n = len(values["belt_stiffness"])
     cores = os.cpu_count() or 1
 
-    def rate(executor: Executor) -> float:
-        design_moves.run_moves(
-            base, {k: v[:64] for k, v in values.items()}, executor=executor, chunk_size=64
-        )  # warm up
-        return n / best_of(lambda: design_moves.run_moves(base, values, executor=executor, chunk_size=64), repeat=2)
+    def rate(executor: Executor, workers: int = 1) -> float:
+        # warm up every worker (imports and the cached spec on its first task), not just the first one
+        warm = {k: v[: 64 * workers] for k, v in values.items()}
+        design_moves.run_moves(base, warm, executor=executor, chunk_size=64)
+        return n / best_of(lambda: design_moves.run_moves(base, values, executor=executor, chunk_size=64), repeat=3)
 
     print(f"1) printer-head design run, {n} configurations in chunks of 64, {cores} cores")
     rates = {"local threads": rate(Executor(progress=False))}
     overhead = {}
     for workers in (1, 2):
         with Executor(workers=workers, progress=False) as executor:
-            rates[f"LocalCluster {workers} worker{'s' if workers > 1 else ''}"] = rate(executor)
+            rates[f"LocalCluster {workers} worker{'s' if workers > 1 else ''}"] = rate(executor, workers)
             if workers == 2:
                 executor.map(ping, list(range(10)))
                 tasks = 200
