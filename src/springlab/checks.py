@@ -122,10 +122,14 @@ def richardson_check(
 def observed_order_check(positions: list[np.ndarray], order: int, window: float) -> Check:
     """'observed_order': log2 |x(dt) - x(dt/2)| / |x(dt/2) - x(dt/4)| against the integrator's order.
 
-    Args:
-      positions: three series of one coordinate at dt, dt/2, dt/4, sampled at the same times.
-      order: the integrator's formal order.
-      window: the time they span [s] (for the basis line).
+    Parameters
+    ----------
+    positions
+        Three series of one coordinate at dt, dt/2, dt/4, sampled at the same times.
+    order
+        The integrator's formal order.
+    window
+        The time they span [s] (for the basis line).
     """
     n = min(len(p) for p in positions)
     coarse = float(np.max(np.abs(positions[0][:n] - positions[1][:n])))

@@ -25,7 +25,7 @@ import math
 import numpy as np
 
 
-def hermite_value(t0: float, t1: float, y0, y1, dy0, dy1, t: float) -> float:
+def hermite_value(t0: float, t1: float, y0: float, y1: float, dy0: float, dy1: float, t: float) -> float:
     """The cubic Hermite interpolant of (y, dy) on [t0, t1] [s] at time t [s]."""
     h = t1 - t0
     s = (t - t0) / h
@@ -33,7 +33,7 @@ def hermite_value(t0: float, t1: float, y0, y1, dy0, dy1, t: float) -> float:
     return float(h00 * y0 + h10 * h * dy0 + h01 * y1 + h11 * h * dy1)
 
 
-def hermite_root(t0: float, t1: float, y0, y1, dy0, dy1, target: float = 0.0) -> float:
+def hermite_root(t0: float, t1: float, y0: float, y1: float, dy0: float, dy1: float, target: float = 0.0) -> float:
     """Time in [t0, t1] [s] where the cubic Hermite interpolant of y (slopes dy) equals `target`.
 
     Of several roots in the interval, the one nearest the linear interpolant's root.
@@ -124,6 +124,6 @@ def richardson_error(coarse: float, fine: float, order: int) -> float:
     return 2**order / (2**order - 1) * abs(coarse - fine)
 
 
-def richardson_extrapolate(coarse, fine, order: int):
+def richardson_extrapolate(coarse: float, fine: float, order: int) -> float:
     """The order-p error term of a value at h cancelled with its value at h/2: fine + (fine - coarse) / (2^p - 1)."""
     return (2**order * fine - coarse) / (2**order - 1)
