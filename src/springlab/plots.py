@@ -85,8 +85,10 @@ def _positive(values: np.ndarray) -> np.ndarray:
 def save(figure: Figure, output: str | os.PathLike) -> pathlib.Path:
     """Write `figure` to `output` (.png, .svg or .pdf), atomically: a complete file or none.
 
-    Raises:
-      BadInputError: unsupported extension or unwritable folder.
+    Raises
+    ------
+    BadInputError
+        Unsupported extension or unwritable folder.
     """
     path = pathlib.Path(output)
     check_output(path)
@@ -287,9 +289,11 @@ def phase_family(
     family shows both sides. Members that a stop condition ends early (an
     escape to infinity) are drawn in red.
 
-    Raises:
-      BadInputError: the scene has no phase plane for this scenario (several
-        joints or a time-dependent field) or no equilibrium to start from.
+    Raises
+    ------
+    BadInputError
+        The scene has no phase plane for this scenario (several joints or a
+        time-dependent field) or no equilibrium to start from.
     """
     return family_of(api.run(scene, scenario, integrator=integrator, dt=dt, duration=duration, **parameters))
 
@@ -376,9 +380,11 @@ def zeta_family(
     (zeta is linear in d for fixed mass and stiffness), so any linear scene
     with a `damping` parameter and one mode works.
 
-    Raises:
-      BadInputError: the scene has no `damping` parameter, no exact linear
-        reference for this scenario, or more than one mode.
+    Raises
+    ------
+    BadInputError
+        The scene has no `damping` parameter, no exact linear reference for
+        this scenario, or more than one mode.
     """
     scene_obj = scenes.get(scene)
     chosen = scene_obj.scenario(scenario)

@@ -204,7 +204,9 @@ def _output_kind(output) -> tuple[Path, str]:
     return path, ext
 
 
-def check_video_arguments(output, fps, width, height) -> tuple[Path, str, float, int, int]:
+def check_video_arguments(
+    output: str | os.PathLike[str], fps: object, width: object, height: object
+) -> tuple[Path, str, float, int, int]:
     """Validate a video request before any work: (path, extension, fps, width, height).
 
     Raises ``BadInputError`` (a ``ValueError``) for an extension other than

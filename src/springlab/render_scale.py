@@ -71,7 +71,7 @@ def nice_at_least(value: float) -> float:
     return 10.0 * decade  # pragma: no cover - the loop always returns
 
 
-def check_factor(name: str, value) -> float:
+def check_factor(name: str, value: float | str) -> float:
     """``value`` as a float >= 1, or BadInputError naming the option and what is valid."""
     try:
         number = float(value)
