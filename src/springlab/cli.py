@@ -120,7 +120,7 @@ def _executor_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def _executor(args, nthread: int = 0) -> Executor:
+def _executor(args: argparse.Namespace, nthread: int = 0) -> Executor:
     """Where a study's chunks run: locally (default, on `nthread` threads), --workers N or --scheduler ADDRESS."""
     return Executor(
         workers=args.workers, scheduler=args.scheduler, progress=False if args.json else None, nthread=nthread
@@ -130,7 +130,7 @@ def _executor(args, nthread: int = 0) -> Executor:
 # -- commands -----------------------------------------------------------------
 
 
-def cmd_list(args) -> int:
+def cmd_list(args: argparse.Namespace) -> int:
     catalogue: list[dict[str, Any]] = []
     for scene in scenes.SCENES.values():
         catalogue.append(
@@ -159,7 +159,7 @@ def cmd_list(args) -> int:
     return EXIT_OK
 
 
-def _run_scenario(args) -> api.Result:
+def _run_scenario(args: argparse.Namespace) -> api.Result:
     """api.run from the scene, timing and --set arguments that run, render and plot share."""
     return auto.run(
         args.scene,
@@ -172,7 +172,7 @@ def _run_scenario(args) -> api.Result:
     )
 
 
-def cmd_run(args) -> int:
+def cmd_run(args: argparse.Namespace) -> int:
     if args.record_every < 1:
         raise BadInputError(f"--record-every must be an integer >= 1, got {args.record_every}")
     result = _run_scenario(args)
@@ -188,7 +188,7 @@ def cmd_run(args) -> int:
     return EXIT_FAILED if summary["passed"] is False else EXIT_OK
 
 
-def cmd_validate(args) -> int:
+def cmd_validate(args: argparse.Namespace) -> int:
     rows = auto.validate(args.scenes, integrator=args.integrator, dt=args.dt, tol=args.tol)
     if args.json:
         _print_json(rows)
@@ -197,7 +197,7 @@ def cmd_validate(args) -> int:
     return EXIT_FAILED if any(not r["passed"] for r in rows) else EXIT_OK
 
 
-def cmd_render(args) -> int:
+def cmd_render(args: argparse.Namespace) -> int:
     """Simulate a scenario and film it off-screen (mp4 H.264 or gif), optionally with its phase plane."""
     from . import media, render  # GL and matplotlib only for the commands that draw
 
@@ -222,7 +222,7 @@ def cmd_render(args) -> int:
     return _verdict(result.summary)
 
 
-def cmd_plot(args) -> int:
+def cmd_plot(args: argparse.Namespace) -> int:
     """Plot a scenario: time series (default), phase plane, family of displacements or zeta family."""
     from . import plots
 
@@ -263,7 +263,7 @@ def _verdict(summary: dict) -> int:
     return EXIT_OK
 
 
-def cmd_tradeoff(args) -> int:
+def cmd_tradeoff(args: argparse.Namespace) -> int:
     if args.output:
         outputs.check_directory(args.output)  # before seconds of computing, not after
     with _executor(args) as executor:
@@ -280,7 +280,7 @@ def cmd_tradeoff(args) -> int:
     return EXIT_FAILED if pick is not None and pick["integrator"] is None else EXIT_OK
 
 
-def cmd_audit(args) -> int:
+def cmd_audit(args: argparse.Namespace) -> int:
     if args.output:
         outputs.check_directory(args.output)  # before seconds of computing, not after
     with _executor(args) as executor:
@@ -306,7 +306,7 @@ def cmd_audit(args) -> int:
     return EXIT_OK if result.own_ok else EXIT_FAILED
 
 
-def cmd_stability(args) -> int:
+def cmd_stability(args: argparse.Namespace) -> int:
     if args.output:
         outputs.check_directory(args.output)  # before seconds of computing, not after
     with _executor(args) as executor:
@@ -322,7 +322,7 @@ def cmd_stability(args) -> int:
     return EXIT_OK if all(r["within_tolerance"] for r in report["boundaries"]) else EXIT_FAILED
 
 
-def cmd_design(args) -> int:
+def cmd_design(args: argparse.Namespace) -> int:
     from . import design, design_chart  # here, not at the top: mujoco.batch is only needed by this command
 
     if args.output:
@@ -359,7 +359,7 @@ def cmd_design(args) -> int:
     return EXIT_OK
 
 
-def cmd_sweep(args) -> int:
+def cmd_sweep(args: argparse.Namespace) -> int:
     from . import sweep_plot, sweeps
 
     if args.output:
@@ -386,7 +386,7 @@ def cmd_sweep(args) -> int:
     return EXIT_OK
 
 
-def cmd_fit(args) -> int:
+def cmd_fit(args: argparse.Namespace) -> int:
     # here, not at the top: mujoco.sysid and scipy load only for fits; `from .fit import`, because
     # springlab.fit (the attribute) is the function once springlab/__init__ has run
     from .fit import fit, write
@@ -418,7 +418,7 @@ def cmd_fit(args) -> int:
     return EXIT_OK if result.converged else EXIT_FAILED
 
 
-def cmd_demo(args) -> int:
+def cmd_demo(args: argparse.Namespace) -> int:
     """The main job: validate every scene and write everything under the output folder."""
     start = time.perf_counter()
     try:
