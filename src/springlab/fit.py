@@ -33,24 +33,42 @@ from .scenes.car import Car
 class FitResult:
     """An identified scene.
 
-    Attributes:
-      scene, scenario: what was fitted.
-      record: the cleaned record (springlab.fit_data.Record).
-      free: fitted names, in order.
-      estimates: name -> {'value', 'ci95' [low, high], 'unit'}.
-      derived: the same for quantities computed from the estimates.
-      correlation: (p, p) correlation matrix of the estimates.
-      covariance: (p, p) covariance [units of the names].
-      residual_rms: RMS of measured - fitted [signal unit].
-      dof: degrees of freedom n - p.
-      parameters: the scene's parameters at the estimate (SI).
-      fitted: (n,) the fitted signal at the recorded times.
-      cross_check: the closed form fitted independently, and how far it is.
-      optimizer: status, iterations, rollouts, times.
-      verdict: the one-line answer.
-      converged: whether the optimizer stopped on a tolerance.
-      run: the identified scene's own run (api.Result) or None, and `run_note`.
-      starts: the multi-start record (springlab.fit_starts.summary): count, best, at_best_minimum, spread.
+    Attributes
+    ----------
+    scene, scenario
+        What was fitted.
+    record
+        The cleaned record (springlab.fit_data.Record).
+    free
+        Fitted names, in order.
+    estimates
+        Name -> {'value', 'ci95' [low, high], 'unit'}.
+    derived
+        The same for quantities computed from the estimates.
+    correlation
+        (p, p) correlation matrix of the estimates.
+    covariance
+        (p, p) covariance [units of the names].
+    residual_rms
+        RMS of measured - fitted [signal unit].
+    dof
+        Degrees of freedom n - p.
+    parameters
+        The scene's parameters at the estimate (SI).
+    fitted
+        (n,) the fitted signal at the recorded times.
+    cross_check
+        The closed form fitted independently, and how far it is.
+    optimizer
+        Status, iterations, rollouts, times.
+    verdict
+        The one-line answer.
+    converged
+        Whether the optimizer stopped on a tolerance.
+    run
+        The identified scene's own run (api.Result) or None, and `run_note`.
+    starts
+        The multi-start record (springlab.fit_starts.summary): count, best, at_best_minimum, spread.
     """
 
     scene: str
@@ -131,31 +149,48 @@ def fit(
 ) -> FitResult:
     """Identify `scene` from the record in `data` (a CSV file).
 
-    Args:
-      scene: 'slider', 'car', 'printer_head' or 'kinematics'.
-      data: CSV with a header: `time` [s] and one signal `<joint>_pos` [m],
+    Parameters
+    ----------
+    scene
+        'slider', 'car', 'printer_head' or 'kinematics'.
+    data
+        CSV with a header: `time` [s] and one signal `<joint>_pos` [m],
         `<joint>_vel` [m/s] or `<joint>_acc` [m/s^2] (see springlab.fit_data).
-      scenario: the scene's scenario the record shows (None: the fit's default for the scene).
-      map: file column -> springlab name, e.g. {'t': 'time', 'x_mm': 'slider_pos'}.
-      free: names to fit (None: the scene's default; see springlab.fit_models).
-      scale: factor [SI per file unit] applied to the signal, e.g. 0.001 for mm.
-      start: release time [s]: the record before it is dropped (None: detected).
-      degree: kinematics only: the polynomial's degree 0-3 (frees x0, v0, a0, jerk in order);
+    scenario
+        The scene's scenario the record shows (None: the fit's default for the scene).
+    map
+        File column -> springlab name, e.g. {'t': 'time', 'x_mm': 'slider_pos'}.
+    free
+        Names to fit (None: the scene's default; see springlab.fit_models).
+    scale
+        Factor [SI per file unit] applied to the signal, e.g. 0.001 for mm.
+    start
+        Release time [s]: the record before it is dropped (None: detected).
+    degree
+        Kinematics only: the polynomial's degree 0-3 (frees x0, v0, a0, jerk in order);
         None: chosen, from 3 down while the highest coefficient's 95 % interval contains 0.
-      run_scene: also run the identified scene (FitResult.run) for trajectory.csv.
-      starts: independent optimizations (springlab.fit_starts): 1 is the linear-algebra start alone;
+    run_scene
+        Also run the identified scene (FitResult.run) for trajectory.csv.
+    starts
+        Independent optimizations (springlab.fit_starts): 1 is the linear-algebra start alone;
         N > 1 adds N - 1 starts spread over the nonlinear free names' bounds and keeps the lowest cost.
-      workers, scheduler, executor: where the starts run (springlab.executor): a LocalCluster of `workers`
+    workers, scheduler, executor
+        Where the starts run (springlab.executor): a LocalCluster of `workers`
         processes, a running dask scheduler's address, or an Executor; none: in this process. Same numbers
         either way. A single start always runs in this process.
-      **parameters: fixed values: scene parameters (e.g. mass=2.0 [kg]) and
+    **parameters
+        Fixed values: scene parameters (e.g. mass=2.0 [kg]) and
         x0 [m], v0 [m/s], offset [signal unit], delay [s].
 
-    Returns:
-      The FitResult (estimates with 95 % intervals, derived quantities, verdict).
+    Returns
+    -------
+    FitResult
+        Estimates with 95 % intervals, derived quantities, verdict.
 
-    Raises:
-      BadInputError: bad file or names, or a free set the record cannot identify.
+    Raises
+    ------
+    BadInputError
+        Bad file or names, or a free set the record cannot identify.
     """
     starts = fit_starts.check_count(starts)
     if executor is not None and (workers is not None or scheduler is not None):

@@ -9,16 +9,20 @@ from __future__ import annotations
 import os
 import pathlib
 import textwrap
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from . import charts
 
+if TYPE_CHECKING:  # annotations only: the fit machinery is not needed to draw
+    from .fit import FitResult
+
 _DATA, _FIT, _BAND = "#7f7f7f", "#d62728", "#f4a6a6"
 _SIGNAL = {"pos": "position", "vel": "velocity", "acc": "acceleration"}
 
 
-def plot_fit(result, path: str | os.PathLike) -> pathlib.Path:
+def plot_fit(result: FitResult, path: str | os.PathLike) -> pathlib.Path:
     """Write fit.png for a FitResult: data and fit, residuals, and the phase plane (or v(t), a(t) for kinematics)."""
     record = result.record
     from matplotlib.figure import Figure  # a bare Figure: the caller's pyplot state stays untouched

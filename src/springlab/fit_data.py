@@ -42,18 +42,30 @@ MIN_SAMPLES = 10
 class Record:
     """A measured signal of one joint, cleaned.
 
-    Attributes:
-      time: (n,) recorded times [s], strictly increasing, only the kept samples.
-      values: (n,) the signal in SI units (after `scale`).
-      joint: the joint it measures.
-      signal: 'pos', 'vel' or 'acc'.
-      column: the file's column it came from.
-      origin: time [s] the model's t = 0 corresponds to (first kept sample, or `start`).
-      rows: data rows in the file.
-      skipped_nan: rows skipped because the time or the signal was missing/NaN.
-      dropped_before_start: samples before the release (or `start`) left out.
-      release_detected: whether the release was found in the data (not given).
-      notes: one line per thing done to the data.
+    Attributes
+    ----------
+    time
+        (n,) recorded times [s], strictly increasing, only the kept samples.
+    values
+        (n,) the signal in SI units (after `scale`).
+    joint
+        The joint it measures.
+    signal
+        'pos', 'vel' or 'acc'.
+    column
+        The file's column it came from.
+    origin
+        Time [s] the model's t = 0 corresponds to (first kept sample, or `start`).
+    rows
+        Data rows in the file.
+    skipped_nan
+        Rows skipped because the time or the signal was missing/NaN.
+    dropped_before_start
+        Samples before the release (or `start`) left out.
+    release_detected
+        Whether the release was found in the data (not given).
+    notes
+        One line per thing done to the data.
     """
 
     time: np.ndarray
@@ -151,17 +163,27 @@ def load(
 ) -> Record:
     """Read DATA.csv into a Record of the first joint in `joints` that has a signal column.
 
-    Args:
-      path: the CSV file (header row, then numbers).
-      joints: the scene's joints that may be measured, most natural first.
-      mapping: file column -> springlab name ('time', '<joint>_pos', ...).
-      scale: factor [SI unit per file unit] applied to the signal (not the time).
-      start: time [s] of the release; samples before it are dropped and the model's t = 0 is there.
-      detect_release: without `start`, find and drop a held part at the beginning.
-      signals: the signal kinds this scene can fit.
+    Parameters
+    ----------
+    path
+        The CSV file (header row, then numbers).
+    joints
+        The scene's joints that may be measured, most natural first.
+    mapping
+        File column -> springlab name ('time', '<joint>_pos', ...).
+    scale
+        Factor [SI unit per file unit] applied to the signal (not the time).
+    start
+        Time [s] of the release; samples before it are dropped and the model's t = 0 is there.
+    detect_release
+        Without `start`, find and drop a held part at the beginning.
+    signals
+        The signal kinds this scene can fit.
 
-    Raises:
-      BadInputError: no such file, no header, an unknown column, no time or signal column,
+    Raises
+    ------
+    BadInputError
+        No such file, no header, an unknown column, no time or signal column,
         non-monotone time, text in a number cell, too few samples, a non-positive scale.
     """
     if not isinstance(scale, (int, float)) or not math.isfinite(scale) or scale == 0:

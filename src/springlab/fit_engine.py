@@ -24,15 +24,20 @@ import logging
 import math
 import os
 import time as _time
-from typing import Any
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import mujoco
 import numpy as np
 
 from . import scenes
 from .errors import BadInputError
+from .fit_data import Record
 from .fit_models import SceneFit
 from .simulate import quiet_mujoco
+
+if TYPE_CHECKING:  # annotations only: mujoco.sysid is imported when a fit runs
+    from mujoco import sysid
 
 #: growth of the Levenberg-Marquardt regularizer per rejected step: mujoco.minimize's 10^0.1 spends ~70 rollouts
 #: climbing from 1e-6 to 10 once the objective sits on its round-off floor at the optimum
@@ -117,13 +122,13 @@ class Problem:
         values.update(zip(self.free, (float(v) for v in np.ravel(vector))))
         return values
 
-    def values_of(self, params) -> dict[str, float]:
+    def values_of(self, params: sysid.ParameterDict) -> dict[str, float]:
         """`values` of a sysid.ParameterDict."""
         return self.values(np.array([params[n].value[0] for n in self.free]))
 
     # -- the pieces sysid calls ----------------------------------------------------
 
-    def build_model(self, params, spec=None) -> mujoco.MjModel:
+    def build_model(self, params: sysid.ParameterDict, spec: mujoco.MjSpec | None = None) -> mujoco.MjModel:
         """Compile the scene for a candidate: its own MjSpec edits, one jointpos sensor for sysid's bookkeeping."""
         scene_params = self.how.scene_params(self.values_of(params), self.base, self.modal)
         return self.compile(scene_params)
@@ -150,7 +155,7 @@ class Problem:
         )
         return spec
 
-    def initial(self, model, values):
+    def initial(self, model: mujoco.MjModel, values: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
         """(full physics state at t = 0, (steps + 1, nu) controls) of a candidate."""
         params = self.how.scene_params(values, self.base, self.modal)
         setup = self.scene.setup(model, params, self.scenario, self.steps, self.dt)
@@ -168,7 +173,16 @@ class Problem:
             control[: min(len(rows), self.steps + 1)] = rows[: self.steps + 1]
         return state, control
 
-    def rollout(self, *, models, datas, control_signal, initial_states, param_dicts, **mappings):
+    def rollout(
+        self,
+        *,
+        models: Sequence[mujoco.MjModel],
+        datas: Sequence[mujoco.MjData],
+        control_signal: Sequence[sysid.TimeSeries],
+        initial_states: Sequence[np.ndarray],
+        param_dicts: Sequence[sysid.ParameterDict],
+        **mappings: Any,
+    ) -> Sequence[sysid.SystemTrajectory]:
         """sysid's custom rollout: each candidate from its own initial state and controls."""
         from mujoco import sysid
 
@@ -193,17 +207,27 @@ class Problem:
         self.rollouts += len(models)
         return out
 
-    def modify_residual(self, params, predicted, measured, model, return_pred_all, state=None, **_):
+    def modify_residual(
+        self,
+        params: sysid.ParameterDict,
+        predicted: sysid.TimeSeries,
+        measured: sysid.TimeSeries,
+        model: mujoco.MjModel,
+        return_pred_all: bool,
+        state: np.ndarray | None = None,
+        **_: Any,
+    ) -> tuple[np.ndarray, sysid.TimeSeries, sysid.TimeSeries]:
         """sysid's residual hook: the candidate's signal at the recorded times minus the record, scaled."""
         from mujoco import sysid
 
+        assert state is not None, "sysid passes every rollout's states as state="
         values = self.values_of(params)
         y = self.predict(model, values, state)
         residual = (y - self.record.values) / self.scale
         fitted = sysid.TimeSeries(measured.times, y[:, None], measured.signal_mapping)
         return residual, fitted, measured
 
-    def predict(self, model, values, state) -> np.ndarray:
+    def predict(self, model: mujoco.MjModel, values: dict[str, float], state: np.ndarray) -> np.ndarray:
         """The signal at the recorded times [signal unit] from a rollout's states ((steps, nstate), t = dt on)."""
         joint = model.joint(self.how.joint)
         q = np.concatenate([[values["x0"]], state[:, 1 + joint.qposadr[0]]])
@@ -247,7 +271,7 @@ def derivative(y: np.ndarray, dt: float) -> np.ndarray:
     return d
 
 
-def solve(problem: Problem, record) -> dict[str, Any]:
+def solve(problem: Problem, record: Record) -> dict[str, Any]:
     """Run sysid's optimize on the problem; return the estimate, Jacobian, residuals, status and timing."""
     from mujoco import sysid
 

@@ -51,13 +51,20 @@ ALIASES = {"damping_ratio": "zeta", "omega": "omega_n"}
 class SceneFit:
     """A scene's fit description (see the module docstring). Oscillators use this class directly.
 
-    Attributes:
-      scene: scene name.
-      joint: the measured joint.
-      scenarios: scenarios a record can be fitted with; the first is the default.
-      mass, stiffness, damping: the scene's parameter names of m, k, d (mass None: derived, fixed).
-      default_free: free names when the user names none.
-      signals: signal kinds it fits.
+    Attributes
+    ----------
+    scene
+        Scene name.
+    joint
+        The measured joint.
+    scenarios
+        Scenarios a record can be fitted with; the first is the default.
+    mass, stiffness, damping
+        The scene's parameter names of m, k, d (mass None: derived, fixed).
+    default_free
+        Free names when the user names none.
+    signals
+        Signal kinds it fits.
     """
 
     scene: str
@@ -81,7 +88,9 @@ class SceneFit:
         units = {name: unit for name, unit in named if name is not None}
         return {**MODAL, **units, **NUISANCE}
 
-    def check_free(self, free: list[str], fixed: dict[str, float], params: dict[str, float], forced: bool, signal: str):
+    def check_free(
+        self, free: list[str], fixed: dict[str, float], params: dict[str, float], forced: bool, signal: str
+    ) -> None:
         """Raise BadInputError for an unknown or unidentifiable free set."""
         valid = self.units()
         for name in free:
@@ -159,7 +168,9 @@ class SceneFit:
                 params[name] = values[name]
         return params
 
-    def initial(self, model: mujoco.MjModel, params: dict[str, float], x0: float, v0: float):
+    def initial(
+        self, model: mujoco.MjModel, params: dict[str, float], x0: float, v0: float
+    ) -> tuple[np.ndarray, np.ndarray]:
         """(qpos, qvel) with the observed coordinate at x0 [m], v0 [m/s] (the rest of the scene at rest)."""
         qpos, qvel = model.qpos0.copy(), np.zeros(model.nv)
         if self.scene == "printer_head":
@@ -174,7 +185,9 @@ class SceneFit:
 
     # -- the closed form ---------------------------------------------------------
 
-    def closed_form(self, t: np.ndarray, params: dict[str, float], values: dict[str, float], signal: str, force=0.0):
+    def closed_form(
+        self, t: np.ndarray, params: dict[str, float], values: dict[str, float], signal: str, force: float = 0.0
+    ) -> np.ndarray:
         """The exact signal at times since the origin t [s] (analytic.free/step_response), offset and delay applied."""
         m, k, d = self.mode_mass(params), params[self.stiffness], params[self.damping]
         eq = self.equilibrium(params)
@@ -190,7 +203,9 @@ class SceneFit:
 
     # -- a start from the data ---------------------------------------------------
 
-    def start(self, record: Record, params: dict[str, float], fixed: dict[str, float], free: list[str], force=0.0):
+    def start(
+        self, record: Record, params: dict[str, float], fixed: dict[str, float], free: list[str], force: float = 0.0
+    ) -> dict[str, float]:
         """Start values of every fit name: modal from a linear prediction of the data, then x0, v0, offset by
         linear least squares on the closed form (no optimizer involved)."""
         values = self.values_from_params(params)
@@ -276,7 +291,9 @@ class KinematicsFit(SceneFit):
     def units(self) -> dict[str, str]:
         return {"x0": "m", "v0": "m/s", "a0": "m/s^2", "jerk": "m/s^3"}
 
-    def check_free(self, free, fixed, params, forced, signal):
+    def check_free(
+        self, free: list[str], fixed: dict[str, float], params: dict[str, float], forced: bool, signal: str
+    ) -> None:
         valid = self.units()
         for name in free:
             if name in ("offset", "delay"):
@@ -294,19 +311,23 @@ class KinematicsFit(SceneFit):
                     f" {name}=VALUE and free only {', '.join(n for n in valid if n not in lost)}"
                 )
 
-    def values_from_params(self, params):
+    def values_from_params(self, params: dict[str, float]) -> dict[str, float]:
         return {n: params[n] for n in ("x0", "v0", "a0", "jerk")} | {"offset": 0.0, "delay": 0.0}
 
-    def scene_params(self, values, base, modal):
+    def scene_params(self, values: dict[str, float], base: dict[str, float], modal: bool) -> dict[str, float]:
         return dict(base) | {n: values[n] for n in ("x0", "v0", "a0", "jerk")}
 
-    def initial(self, model, params, x0, v0):
+    def initial(
+        self, model: mujoco.MjModel, params: dict[str, float], x0: float, v0: float
+    ) -> tuple[np.ndarray, np.ndarray]:
         qpos, qvel = model.qpos0.copy(), np.zeros(model.nv)
         qpos[model.joint(self.joint).qposadr[0]] = x0
         qvel[model.joint(self.joint).dofadr[0]] = v0
         return qpos, qvel
 
-    def closed_form(self, t, params, values, signal, force=0.0):
+    def closed_form(
+        self, t: np.ndarray, params: dict[str, float], values: dict[str, float], signal: str, force: float = 0.0
+    ) -> np.ndarray:
         t = np.asarray(t, float)
         x0, v0, a0, j = (values[n] for n in ("x0", "v0", "a0", "jerk"))
         return {
@@ -315,7 +336,9 @@ class KinematicsFit(SceneFit):
             "acc": a0 + j * t + 0.0 * t,
         }[signal]
 
-    def start(self, record, params, fixed, free, force=0.0):
+    def start(
+        self, record: Record, params: dict[str, float], fixed: dict[str, float], free: list[str], force: float = 0.0
+    ) -> dict[str, float]:
         """Linear least squares on the monomials: exact for a polynomial (the MuJoCo fit then confirms it)."""
         values = self.values_from_params(params) | {n: 0.0 for n in ("x0", "v0", "a0", "jerk")}
         values.update({k: v for k, v in fixed.items() if k in values})
@@ -334,7 +357,7 @@ class KinematicsFit(SceneFit):
             values.update({n: float(v) for n, v in zip(names, solution)})
         return values
 
-    def bounds(self, name, start, record):
+    def bounds(self, name: str, start: float, record: Record) -> tuple[float, float]:
         scale = float(np.max(np.abs(record.values))) + 1.0
         width = 1e3 * scale * (1.0 + float(record.model_time[-1])) ** 3
         return start - width, start + width

@@ -10,11 +10,16 @@ step 1e-6: error ~1e-12 on these smooth closed forms).
 from __future__ import annotations
 
 import math
-from typing import Any
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from . import analytic
+
+if TYPE_CHECKING:  # annotations only
+    from .fit_engine import Problem
+    from .fit_models import SceneFit
 
 #: units of derived quantities
 DERIVED_UNITS = {
@@ -36,7 +41,7 @@ def interval(value: float, half: float) -> list[float]:
     return [value - half, value + half]
 
 
-def derived_quantities(how, problem, values: dict[str, float]) -> dict[str, float]:
+def derived_quantities(how: SceneFit, problem: Problem, values: dict[str, float]) -> dict[str, float]:
     """Named results computed from the fitted values (SI)."""
     params = how.scene_params(values, problem.base, problem.modal)
     if how.scene == "kinematics":
@@ -63,7 +68,7 @@ def derived_quantities(how, problem, values: dict[str, float]) -> dict[str, floa
     return out
 
 
-def gradient(function, x: np.ndarray) -> dict[str, np.ndarray]:
+def gradient(function: Callable[[np.ndarray], Mapping[str, float]], x: np.ndarray) -> dict[str, np.ndarray]:
     """Central-difference gradients of every entry of function(x) (a dict of floats) in x."""
     columns = []
     for i in range(x.size):
@@ -76,7 +81,9 @@ def gradient(function, x: np.ndarray) -> dict[str, np.ndarray]:
     return {k: np.array([c[k] for c in columns]) for k in columns[0]} if columns else {}
 
 
-def delta_intervals(function, x, covariance, t_quantile) -> dict[str, dict[str, Any]]:
+def delta_intervals(
+    function: Callable[[np.ndarray], Mapping[str, float]], x: np.ndarray, covariance: np.ndarray, t_quantile: float
+) -> dict[str, dict[str, Any]]:
     """name -> {'value', 'ci95', 'unit'} of derived quantities by the delta method."""
     center = function(x)
     grads = gradient(function, x)
@@ -95,7 +102,7 @@ def _poly_unit(name: str) -> str:
     return "-"
 
 
-def cross_check(problem, x: np.ndarray, half_widths: np.ndarray, fitted: np.ndarray) -> dict[str, Any]:
+def cross_check(problem: Problem, x: np.ndarray, half_widths: np.ndarray, fitted: np.ndarray) -> dict[str, Any]:
     """The closed form (springlab.analytic) fitted independently with scipy, and how far MuJoCo's fit is from it."""
     how, record = problem.how, problem.record
     t = record.model_time
