@@ -60,7 +60,10 @@ _BELT_PROPERTIES = ("belt_stiffness", "carriage_mass", "damping_ratio")
 def belt_damping(values: Mapping[str, np.ndarray], motor_mass: float) -> np.ndarray:
     """Belt damping c = 2 zeta sqrt(k mu) [N s/m] of each configuration."""
     m_c = np.asarray(values["carriage_mass"], float)
-    return belt_damping_for(np.asarray(values["damping_ratio"]), np.asarray(values["belt_stiffness"]), m_c, motor_mass)
+    # asarray: belt_damping_for takes floats or arrays; these are arrays
+    return np.asarray(
+        belt_damping_for(np.asarray(values["damping_ratio"]), np.asarray(values["belt_stiffness"]), m_c, motor_mass)
+    )
 
 
 def config_parameters(base: Mapping[str, float], values: Mapping[str, np.ndarray], i: int) -> dict[str, float]:

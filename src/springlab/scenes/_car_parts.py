@@ -8,6 +8,8 @@ instead of dispatching on scenario names.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import mujoco
 import numpy as np
 
@@ -19,8 +21,10 @@ from ..simulate import Trajectory
 class Variant:
     """What one kind of car scenario provides; `Car`'s hooks of the same names delegate here.
 
-    Attributes:
-      relevant: the parameters the scenario uses, in the order summaries list them.
+    Attributes
+    ----------
+    relevant
+        The parameters the scenario uses, in the order summaries list them.
     """
 
     relevant: tuple[str, ...] = ()
@@ -51,7 +55,9 @@ class Variant:
         """Named results, SI, names ending in their unit."""
         raise NotImplementedError
 
-    def phase_field(self, model: mujoco.MjModel, params: dict[str, float]):
+    def phase_field(
+        self, model: mujoco.MjModel, params: dict[str, float]
+    ) -> Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None:
         """(x, v) -> (x', v') of a one-joint variant, else None."""
         return None
 
@@ -103,12 +109,18 @@ def damped_modes(a: np.ndarray) -> list[tuple[float, float]]:
 def refuse_motion(what: str, fix: str, time: np.ndarray, bottoms: dict, springs: dict) -> None:
     """ParameterError if an exact motion puts the car bottom below ground or makes springs pull.
 
-    Args:
-      what: the cause, e.g. 'push_mass = 250 kg at push_position = 1.2 m'.
-      fix: what to do instead.
-      time: (n,) [s].
-      bottoms: where -> (n,) height of the car bottom there [m].
-      springs: which -> (n,) compressive force of those springs and dampers [N].
+    Parameters
+    ----------
+    what
+        The cause, e.g. 'push_mass = 250 kg at push_position = 1.2 m'.
+    fix
+        What to do instead.
+    time
+        (n,) [s].
+    bottoms
+        Where -> (n,) height of the car bottom there [m].
+    springs
+        Which -> (n,) compressive force of those springs and dampers [N].
     """
     for where, bottom in bottoms.items():
         if bottom.min() < 0.0:

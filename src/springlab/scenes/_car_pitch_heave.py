@@ -6,6 +6,7 @@ M q'' + C q' + K q = f0,   q = (heave [m], pitch [rad]),   M = diag(m, I_pitch)
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 import mujoco
 import numpy as np
@@ -16,6 +17,7 @@ from ..linear import generator_system
 from ..linearize import OperatingPoint, operating_point
 from ..linearize import linearize as shared_linearize
 from ..scene import MIN_MASS, MIN_MASS_REASON, Reference, Setup
+from ..simulate import Trajectory
 from ._car_parts import Variant, damped_modes, gravity, refuse_motion, tendon
 
 #: pitch_heave: share of the springs' stiffness at the front axle [-]. Below the
@@ -79,7 +81,9 @@ def push_force(model: mujoco.MjModel, params: dict[str, float]) -> np.ndarray:
     return np.array([-force, force * station])  # height there = heave - station * pitch
 
 
-def axle_force(linear: Linear2Dof, axle: int, x, theta, vel) -> np.ndarray:
+def axle_force(
+    linear: Linear2Dof, axle: int, x: np.ndarray, theta: np.ndarray, vel: Mapping[str, np.ndarray]
+) -> np.ndarray:
     """Compressive force [N] of one axle's springs and dampers along a motion."""
     jac = linear.jacobian[axle]
     length = jac[0] * x + jac[1] * theta
@@ -173,7 +177,7 @@ class PitchHeave(Variant):
             spring.wrap_joint("heave", 1.0)
             spring.wrap_joint("pitch", coef)
 
-    def setup(self, model, params, steps, dt) -> Setup:
+    def setup(self, model: mujoco.MjModel, params: dict[str, float], steps: int, dt: float) -> Setup:
         qpos = model.qpos0.copy()
         linear = Linear2Dof(model)
         q0 = linear.equilibrium + np.linalg.solve(linear.stiffness, push_force(model, params))
@@ -198,7 +202,7 @@ class PitchHeave(Variant):
             },
         )
 
-    def reference(self, model, params, time, dt) -> Reference:
+    def reference(self, model: mujoco.MjModel, params: dict[str, float], time: np.ndarray, dt: float) -> Reference:
         linear = Linear2Dof(model)
         q0 = linear.equilibrium + np.linalg.solve(linear.stiffness, push_force(model, params))
         q, v = analytic.linear_response(
@@ -217,11 +221,11 @@ class PitchHeave(Variant):
             rows={"heave": (0, 2), "pitch": (1, 3)},
         )
 
-    def modes(self, model, params) -> list[tuple[float, float]]:
+    def modes(self, model: mujoco.MjModel, params: dict[str, float]) -> list[tuple[float, float]]:
         linear = Linear2Dof(model)
         return damped_modes(analytic.state_matrix(linear.mass, linear.damping, linear.stiffness))
 
-    def quantities(self, model, params, trajectory) -> dict:
+    def quantities(self, model: mujoco.MjModel, params: dict[str, float], trajectory: Trajectory) -> dict:
         linear = Linear2Dof(model)
         measured = linearize(model, linear.equilibrium)
         analytic_modes = undamped_modes(linear.mass, linear.stiffness)

@@ -6,6 +6,7 @@ m x'' + d x' + k (x - springref) = -m g,   springref = clearance + m g / k
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import mujoco
 import numpy as np
@@ -13,6 +14,7 @@ import numpy as np
 from .. import analytic, events, linear
 from ..errors import ParameterError
 from ..scene import Reference, Setup
+from ..simulate import Trajectory
 from ._car_parts import Variant, gravity
 
 
@@ -74,13 +76,13 @@ class Release(Variant):
         heave.damping = [params["damping"], 0.0, 0.0]
         heave.springref = params["clearance"] + m * g / k  # static equilibrium at the clearance
 
-    def setup(self, model, params, steps, dt) -> Setup:
+    def setup(self, model: mujoco.MjModel, params: dict[str, float], steps: int, dt: float) -> Setup:
         qpos = model.qpos0.copy()
         m, k, d, springref, g = one_dof(model)
         qpos[model.joint("heave").qposadr[0]] = springref - (m + params["push_mass"]) * g / k  # pushed down
         return Setup(qpos=qpos, qvel=np.zeros(model.nv))
 
-    def reference(self, model, params, time, dt) -> Reference:
+    def reference(self, model: mujoco.MjModel, params: dict[str, float], time: np.ndarray, dt: float) -> Reference:
         m, k, d, springref, g = one_dof(model)
         rest = springref - m * g / k
         x0 = springref - (m + params["push_mass"]) * g / k
@@ -92,20 +94,22 @@ class Release(Variant):
             pos={"heave": x + rest}, vel={"heave": v}, system=system, states=states, rows={"heave": (0, 1)}
         )
 
-    def modes(self, model, params) -> list[tuple[float, float]]:
+    def modes(self, model: mujoco.MjModel, params: dict[str, float]) -> list[tuple[float, float]]:
         m, k, d, _, _ = one_dof(model)
         return [(math.sqrt(k / m), analytic.damping_ratio(m, k, d))]
 
-    def phase_field(self, model, params):
+    def phase_field(
+        self, model: mujoco.MjModel, params: dict[str, float]
+    ) -> Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None:
         m, k, d, springref, g = one_dof(model)
         rest = springref - m * g / k
         return lambda x, v: (v, -(k * (x - rest) + d * v) / m)
 
-    def equilibria(self, model, params) -> list[dict]:
+    def equilibria(self, model: mujoco.MjModel, params: dict[str, float]) -> list[dict]:
         m, k, d, springref, g = one_dof(model)
         return [{"x": springref - m * g / k, "stable": True}]
 
-    def quantities(self, model, params, trajectory) -> dict:
+    def quantities(self, model: mujoco.MjModel, params: dict[str, float], trajectory: Trajectory) -> dict:
         m, k, d, springref, g = one_dof(model)
         rest = springref - m * g / k
         sag = params["push_mass"] * g / k

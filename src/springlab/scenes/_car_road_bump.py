@@ -66,11 +66,13 @@ class QuarterCar:
         """Step at whose start the tire leaves the bump: the step boundary nearest the bump's end."""
         return int(round(self.bump_time / dt))
 
-    def suspension_force(self, xs, xw, vs, vw) -> np.ndarray:
+    def suspension_force(
+        self, xs: float | np.ndarray, xw: float | np.ndarray, vs: float | np.ndarray, vw: float | np.ndarray
+    ) -> np.ndarray:
         """Compressive force [N] of the suspension spring and damper."""
         return self.ks * (self.rest - (xs - xw)) - self.cs * (vs - vw)
 
-    def tire_force(self, xw, road_height) -> np.ndarray:
+    def tire_force(self, xw: np.ndarray, road_height: float | np.ndarray) -> np.ndarray:
         """Compressive tire force [N] (negative: the tire would have to pull on the road)."""
         return self.kt * (self.radius + road_height - xw)
 
@@ -236,7 +238,7 @@ class RoadBump(Variant):
             ctrllimited=0,
         )
 
-    def setup(self, model, params, steps, dt) -> Setup:
+    def setup(self, model: mujoco.MjModel, params: dict[str, float], steps: int, dt: float) -> Setup:
         qvel = np.zeros(model.nv)
         quarter = QuarterCar(model, params)
         qvel[model.joint("road").dofadr[0]] = quarter.height * quarter.omega
@@ -265,7 +267,7 @@ class RoadBump(Variant):
             },
         )
 
-    def reference(self, model, params, time, dt) -> Reference:
+    def reference(self, model: mujoco.MjModel, params: dict[str, float], time: np.ndarray, dt: float) -> Reference:
         quarter = QuarterCar(model, params)
         z0 = quarter.initial_state()
         true = piecewise_lti(time, z0, [(0.0, quarter.on_bump), (quarter.bump_time, quarter.on_road)])
@@ -293,11 +295,11 @@ class RoadBump(Variant):
             tolerance_basis=basis,
         )
 
-    def modes(self, model, params) -> list[tuple[float, float]]:
+    def modes(self, model: mujoco.MjModel, params: dict[str, float]) -> list[tuple[float, float]]:
         quarter = QuarterCar(model, params)
         return damped_modes(quarter.on_road[:4, :4]) + [(quarter.omega, 0.0)]
 
-    def quantities(self, model, params, trajectory) -> dict:
+    def quantities(self, model: mujoco.MjModel, params: dict[str, float], trajectory: Trajectory) -> dict:
         quarter = QuarterCar(model, params)
         peaks = quarter.measured(model, trajectory)
         body_modes = damped_modes(quarter.on_road[:4, :4])
@@ -322,7 +324,7 @@ class RoadBump(Variant):
             out["tire_lift_off_time_s"] = peaks["lift_off_time"]
         return out
 
-    def model_limits(self, model, params, trajectory) -> list[str]:
+    def model_limits(self, model: mujoco.MjModel, params: dict[str, float], trajectory: Trajectory) -> list[str]:
         quarter = QuarterCar(model, params)
         peaks = quarter.measured(model, trajectory)
         if peaks["min_tire_force"] >= 0.0:

@@ -8,10 +8,13 @@ settings and initial states.
 from __future__ import annotations
 
 import math
+from typing import Protocol
 
+import mujoco
 import numpy as np
 
 from .. import events
+from ..scene import Scenario
 from ..simulate import ORDERS, Trajectory
 from ._nonlinear_orbits import curvature
 
@@ -27,7 +30,37 @@ LYAPUNOV_TRANSIENT, LYAPUNOV_TIME, LYAPUNOV_INTERVAL = 10.0, 100.0, 1.0
 ACCURACY_FRACTION = 0.01
 
 
-def separation(scene, model, params, lead: Trajectory, twin: Trajectory) -> tuple[float, float]:
+class ChaosScene(Protocol):
+    """What these functions use of the nonlinear scene (a Protocol: scenes.nonlinear imports this module)."""
+
+    @property
+    def joints(self) -> tuple[str, ...]: ...
+
+    def build(self, params: dict[str, float], scenario: Scenario) -> mujoco.MjModel: ...
+
+    def physical(self, model: mujoco.MjModel) -> tuple[float, float, float, float]: ...
+
+    def block(self, model: mujoco.MjModel, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]: ...
+
+    def well_size(self, params: dict[str, float], model: mujoco.MjModel) -> float: ...
+
+    def rerun(
+        self,
+        params: dict[str, float],
+        scenario: Scenario,
+        integrator: str,
+        dt: float,
+        duration: float,
+        x0: float | None = None,
+        v0: float | None = None,
+        state: tuple | None = None,
+        model: mujoco.MjModel | None = None,
+    ) -> Trajectory: ...
+
+
+def separation(
+    scene: ChaosScene, model: mujoco.MjModel, params: dict[str, float], lead: Trajectory, twin: Trajectory
+) -> tuple[float, float]:
     """(time [s] the pair's positions first lie the well size apart, finite-time Lyapunov exponent [1/s]).
 
     The crossing of |x_twin - x| = well is located by cubic Hermite interpolation of the gap with its
@@ -44,7 +77,9 @@ def separation(scene, model, params, lead: Trajectory, twin: Trajectory) -> tupl
     return float(t_sep), math.log(well / PERTURBATION) / float(t_sep)
 
 
-def chaos(scene, model, params, scenario, trajectory: Trajectory) -> dict:
+def chaos(
+    scene: ChaosScene, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, trajectory: Trajectory
+) -> dict:
     """Sensitivity to initial conditions: a second run from x0 + PERTURBATION, refined until the
     separation time converges (a claim about the physics needs a run converged for it)."""
     x = scene.block(model, trajectory)[0]
@@ -101,9 +136,9 @@ def chaos(scene, model, params, scenario, trajectory: Trajectory) -> dict:
 
 
 def lyapunov_exponent(
-    scene,
-    params,
-    scenario,
+    scene: ChaosScene,
+    params: dict[str, float],
+    scenario: Scenario,
     integrator: str,
     dt: float,
     transient: float = LYAPUNOV_TRANSIENT,

@@ -7,28 +7,29 @@ the energy-integral periods and transit times by tanh-sinh quadrature (module no
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
 
-def potential(x, k1: float, k3: float):
+def potential(x: float | np.ndarray, k1: float, k3: float) -> np.ndarray:
     """Spring potential energy V(x) = k1 x^2 / 2 + k3 x^4 / 4 [J] at stretch x [m]."""
     x = np.asarray(x, float)
     return 0.5 * k1 * x**2 + 0.25 * k3 * x**4
 
 
-def spring_force(x, k1: float, k3: float):
+def spring_force(x: float | np.ndarray, k1: float, k3: float) -> np.ndarray:
     """Spring force on the block -(k1 x + k3 x^3) [N] at stretch x [m]."""
     x = np.asarray(x, float)
     return -(k1 * x + k3 * x**3)
 
 
-def curvature(x, k1: float, k3: float):
+def curvature(x: float | np.ndarray, k1: float, k3: float) -> np.ndarray:
     """V''(x) = k1 + 3 k3 x^2 [N/m]: the spring's local stiffness at stretch x [m]."""
     return k1 + 3.0 * k3 * np.asarray(x, float) ** 2
 
 
-def energy(x, v, mass: float, k1: float, k3: float):
+def energy(x: float | np.ndarray, v: float | np.ndarray, mass: float, k1: float, k3: float) -> np.ndarray:
     """Mechanical energy m v^2 / 2 + V(x) [J] at position x [m] and velocity v [m/s]."""
     return 0.5 * mass * np.asarray(v, float) ** 2 + potential(x, k1, k3)
 
@@ -47,7 +48,7 @@ def linear_eigenvalues(mass: float, local_stiffness: float, damping: float) -> t
     return (-damping + disc) / (2.0 * mass), (-damping - disc) / (2.0 * mass)
 
 
-def equilibrium_kind(eigenvalues) -> str:
+def equilibrium_kind(eigenvalues: tuple[complex, complex]) -> str:
     """'center', 'stable focus', 'stable node', 'saddle', 'unstable focus/node' or 'degenerate'
     from the two eigenvalues [1/s] of the linearization."""
     s1, s2 = eigenvalues
@@ -105,7 +106,7 @@ def crossings_through(x_ref: float, k1: float, k3: float) -> np.ndarray:
     return np.unique(roots)
 
 
-def gap_below(x_ref: float, x, k1: float, k3: float):
+def gap_below(x_ref: float, x: float | np.ndarray, k1: float, k3: float) -> np.ndarray:
     """V(x_ref) - V(x) [J], factored as (x_ref^2 - x^2) (k1/2 + k3 (x_ref^2 + x^2) / 4): exact
     next to x_ref, and next to a saddle x_ref, where it vanishes quadratically."""
     x = np.asarray(x, float)
@@ -134,7 +135,12 @@ def turning_points(x0: float, v0: float, mass: float, k1: float, k3: float) -> t
     return (float(left[-1]) if left.size else -math.inf, float(right[0]) if right.size else math.inf)
 
 
-def tanh_sinh(integrand, half_width: float, rtol: float = 1e-14, max_level: int = 12) -> tuple[float, float]:
+def tanh_sinh(
+    integrand: Callable[[np.ndarray, np.ndarray], np.ndarray],
+    half_width: float,
+    rtol: float = 1e-14,
+    max_level: int = 12,
+) -> tuple[float, float]:
     """(integral, error estimate) of integrand(left, right) over an interval of half-width
     `half_width`, where left/right are the distances of the abscissa from the interval's ends.
 
@@ -207,8 +213,10 @@ def transit_time(mass: float, k1: float, k3: float, x_from: float, v_from: float
     start at a turning point (v_from = 0) is an integrable 1/sqrt singularity, which the
     tanh-sinh quadrature handles.
 
-    Raises:
-      ValueError: the block turns back before reaching x_to.
+    Raises
+    ------
+    ValueError
+        The block turns back before reaching x_to.
     """
     length = x_to - x_from
     if length == 0:

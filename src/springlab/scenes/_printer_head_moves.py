@@ -175,12 +175,17 @@ class Settle(_Settling):
 # -- formulas shared with the design study ------------------------------------------
 
 
-def reduced_mass(carriage_mass, motor_mass):
+def reduced_mass(carriage_mass: float | np.ndarray, motor_mass: float | np.ndarray) -> float | np.ndarray:
     """Reduced mass mu = m_c m_m / (m_c + m_m) [kg] of the belt mode (floats or arrays)."""
     return carriage_mass * motor_mass / (carriage_mass + motor_mass)
 
 
-def belt_damping_for(damping_ratio, stiffness, carriage_mass, motor_mass):
+def belt_damping_for(
+    damping_ratio: float | np.ndarray,
+    stiffness: float | np.ndarray,
+    carriage_mass: float | np.ndarray,
+    motor_mass: float | np.ndarray,
+) -> float | np.ndarray:
     """Belt damping c = 2 zeta sqrt(k mu) [N s/m] giving the belt mode `damping_ratio` [-] (floats or arrays)."""
     return 2.0 * damping_ratio * np.sqrt(stiffness * reduced_mass(carriage_mass, motor_mass))
 
@@ -190,7 +195,9 @@ def belt_damping_ratio(damping: float, stiffness: float, carriage_mass: float, m
     return damping / (2.0 * math.sqrt(stiffness * reduced_mass(carriage_mass, motor_mass)))
 
 
-def belt_omega(stiffness, carriage_mass, motor_mass):
+def belt_omega(
+    stiffness: float | np.ndarray, carriage_mass: float | np.ndarray, motor_mass: float | np.ndarray
+) -> float | np.ndarray:
     """The belt mode's undamped natural frequency omega_n = sqrt(k / mu) [rad/s] (floats or arrays)."""
     return np.sqrt(stiffness / reduced_mass(carriage_mass, motor_mass))
 
@@ -240,7 +247,14 @@ def settling_estimate(envelope: float, band: float, zeta: float, omega_n: float)
     return math.log(envelope / band) / (zeta * omega_n)
 
 
-def after_force_bound(centre_offset, stretch, stretch_rate, carriage_mass, motor_mass, stiffness):
+def after_force_bound(
+    centre_offset: float | np.ndarray,
+    stretch: float | np.ndarray,
+    stretch_rate: float | np.ndarray,
+    carriage_mass: float | np.ndarray,
+    motor_mass: float | np.ndarray,
+    stiffness: float | np.ndarray,
+) -> float | np.ndarray:
     """Bound [m] on the carriage's future distance from the target once the force is off.
 
     The carriage is q_c = X - (m_m / M) s; with no force the centre of mass X
@@ -250,11 +264,16 @@ def after_force_bound(centre_offset, stretch, stretch_rate, carriage_mass, motor
 
     Every argument may be a float or an array (elementwise).
 
-    Args:
-      centre_offset: X - target [m].
-      stretch, stretch_rate: belt stretch s [m] and its rate s' [m/s].
-      carriage_mass, motor_mass: [kg].
-      stiffness: belt stiffness k [N/m].
+    Parameters
+    ----------
+    centre_offset
+        X - target [m].
+    stretch, stretch_rate
+        Belt stretch s [m] and its rate s' [m/s].
+    carriage_mass, motor_mass
+        [kg].
+    stiffness
+        Belt stiffness k [N/m].
     """
     total = carriage_mass + motor_mass
     reduced = carriage_mass * motor_mass / total

@@ -82,8 +82,11 @@ presets the softer springs.
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable, Mapping
+from typing import Any
 
 import mujoco
+import numpy as np
 
 from ..errors import ParameterError
 from ..scene import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene, Setup
@@ -270,7 +273,7 @@ class Car(Scene):
         with quiet_mujoco():
             return gravity(self.model_spec().compile())
 
-    def resolve(self, scenario: Scenario, overrides) -> dict[str, float]:
+    def resolve(self, scenario: Scenario, overrides: Mapping[str, Any]) -> dict[str, float]:
         """Only the parameters the scenario uses; setting one it does not use is an error."""
         values = super().resolve(scenario, overrides)
         relevant = scenario.variant.relevant
@@ -295,7 +298,7 @@ class Car(Scene):
 
     # -- model ---------------------------------------------------------------
 
-    def joint_columns(self, model, trajectory):
+    def joint_columns(self, model: mujoco.MjModel, trajectory: Trajectory) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         present = [j for j in self.joints if mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, j) >= 0]
         columns = {}
         for joint in present:
@@ -312,27 +315,37 @@ class Car(Scene):
         car.mass = params["mass"]
         scenario.variant.edit(spec, params, g)
 
-    def setup(self, model, params, scenario, steps, dt) -> Setup:
+    def setup(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, steps: int, dt: float
+    ) -> Setup:
         return scenario.variant.setup(model, params, steps, dt)
 
     # -- exact references, modes, results (the scenario's variant) -------------
 
-    def reference(self, model, params, scenario, time, *, dt) -> Reference:
+    def reference(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, time: np.ndarray, *, dt: float
+    ) -> Reference:
         return scenario.variant.reference(model, params, time, dt)
 
-    def modes(self, model, params, scenario) -> list[tuple[float, float]]:
+    def modes(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[tuple[float, float]]:
         return scenario.variant.modes(model, params)
 
-    def phase_field(self, model, params, scenario):
+    def phase_field(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario
+    ) -> Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None:
         return scenario.variant.phase_field(model, params)
 
-    def equilibria(self, model, params, scenario) -> list[dict]:
+    def equilibria(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[dict]:
         return scenario.variant.equilibria(model, params)
 
-    def quantities(self, model, params, scenario, trajectory: Trajectory) -> dict:
+    def quantities(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, trajectory: Trajectory
+    ) -> dict:
         return scenario.variant.quantities(model, params, trajectory)
 
-    def model_limits(self, model, params, scenario, trajectory) -> list[str]:
+    def model_limits(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, trajectory: Trajectory
+    ) -> list[str]:
         return scenario.variant.model_limits(model, params, trajectory)
 
 

@@ -52,7 +52,7 @@ _kinematics_tachograph.py (which draws the vehicle as a bus, _kinematics_bus.py)
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import mujoco
 import numpy as np
@@ -65,7 +65,7 @@ from ._kinematics_tachograph import TACHOGRAPH_TIMES, TACHOGRAPH_VELOCITIES, Tac
 __all__ = ["SCENE", "Kinematics", "Polynomial", "TACHOGRAPH_TIMES", "TACHOGRAPH_VELOCITIES", "polynomial_expression"]
 
 
-def polynomial_expression(symbol: str, coefficients, unit: str) -> str:
+def polynomial_expression(symbol: str, coefficients: Sequence[float], unit: str) -> str:
     """'x(t) = 0.03 t^3 + 0.2 t^2 + 1.2 t + 3 m' from ascending coefficients [c0, c1, ...]."""
     terms = []
     for power in range(len(coefficients) - 1, -1, -1):
@@ -249,12 +249,16 @@ class Kinematics(Scene):
         """Mass of the vehicle in `model` [kg]."""
         return float(model.body("vehicle").mass[0])
 
-    def setup(self, model, params, scenario, steps, dt) -> Setup:
+    def setup(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, steps: int, dt: float
+    ) -> Setup:
         return scenario.variant.setup(self.mass(model), params, steps, dt)
 
     # -- exact reference (the scenario's variant) ----------------------------------
 
-    def reference(self, model, params, scenario, time, *, dt) -> Reference:
+    def reference(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, time: np.ndarray, *, dt: float
+    ) -> Reference:
         x, v, system, states = scenario.variant.exact(self.mass(model), params, time)
         return Reference(
             pos={"vehicle": np.asarray(x, float)},
@@ -266,7 +270,9 @@ class Kinematics(Scene):
 
     # -- phase plane -------------------------------------------------------------
 
-    def phase_field(self, model, params, scenario):
+    def phase_field(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario
+    ) -> Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None:
         """(x, v) -> (v, a): autonomous only for a constant acceleration (None otherwise).
 
         With a(t) varying in time the phase plane has no fixed vector field; under a
@@ -276,7 +282,9 @@ class Kinematics(Scene):
 
     # -- results -------------------------------------------------------------
 
-    def quantities(self, model, params, scenario, trajectory: Trajectory) -> dict:
+    def quantities(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, trajectory: Trajectory
+    ) -> dict:
         # the nominal end time; MuJoCo's accumulated time differs from it by round-off only
         t_end = trajectory.steps * trajectory.dt
         x_sim = float(trajectory.qpos[-1, 0])

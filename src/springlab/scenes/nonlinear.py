@@ -81,6 +81,7 @@ check builders (for any joint) in springlab.checks; this module is the scene.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import mujoco
 import numpy as np
@@ -173,7 +174,7 @@ def turning_times(time: np.ndarray, velocity: np.ndarray, acceleration: np.ndarr
     return events.down_crossings(time, velocity, acceleration)
 
 
-def measured_period(time, position, velocity, acceleration) -> float:
+def measured_period(time: np.ndarray, position: np.ndarray, velocity: np.ndarray, acceleration: np.ndarray) -> float:
     """Mean spacing of successive position maxima [s] (nan with fewer than two)."""
     peaks = turning_times(time, velocity, acceleration)
     if len(peaks) < 2:
@@ -181,7 +182,7 @@ def measured_period(time, position, velocity, acceleration) -> float:
     return float((peaks[-1] - peaks[0]) / (len(peaks) - 1))
 
 
-def crossing_time(time, position, velocity, radius: float) -> float:
+def crossing_time(time: np.ndarray, position: np.ndarray, velocity: np.ndarray, radius: float) -> float:
     """First time [s] |x| reaches `radius` [m], to O(dt^4) by cubic Hermite interpolation (nan: never)."""
     return events.first_crossing(time, position, velocity, radius)
 
@@ -325,7 +326,9 @@ class Nonlinear(Scene):
         """sqrt(|k1/k3|) [m], the distance of the non-trivial equilibria (0 when k1 or k3 is 0)."""
         return math.sqrt(abs(params["k1"] / params["k3"])) if params["k3"] and params["k1"] else 0.0
 
-    def setup(self, model, params, scenario, steps, dt) -> Setup:
+    def setup(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, steps: int, dt: float
+    ) -> Setup:
         return self._setup(model, params, params["x0"], params["v0"])
 
     def _setup(self, model, params, x0: float, v0: float) -> Setup:
@@ -373,7 +376,9 @@ class Nonlinear(Scene):
         a, b = turning_points(params["x0"], params["v0"], m, k1, k3)
         return not (math.isfinite(a) and math.isfinite(b))
 
-    def stop_condition(self, model, params, scenario):
+    def stop_condition(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario
+    ) -> Callable[[np.ndarray, np.ndarray], np.ndarray] | None:
         # a bounded orbit that reaches the radius is a numerical blow-up, left to divergence detection
         if not self.can_escape(model, params):
             return None
@@ -381,7 +386,7 @@ class Nonlinear(Scene):
         column = model.joint(self.joints[0]).qposadr[0]
         return lambda qpos, qvel: np.abs(qpos[:, column]) >= radius
 
-    def modes(self, model, params, scenario) -> list[tuple[float, float]]:
+    def modes(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[tuple[float, float]]:
         m, k1, k3, d = self.physical(model)
         modes = []
         for x_e in equilibrium_positions(k1, k3):
@@ -404,7 +409,9 @@ class Nonlinear(Scene):
 
     # -- phase plane -----------------------------------------------------------
 
-    def phase_field(self, model, params, scenario):
+    def phase_field(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario
+    ) -> Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None:
         m, k1, k3, d = self.physical(model)
 
         def field(x, v):
@@ -413,12 +420,14 @@ class Nonlinear(Scene):
 
         return field
 
-    def equilibria(self, model, params, scenario) -> list[dict]:
+    def equilibria(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[dict]:
         """Every equilibrium with its linearization (springlab.scenes._nonlinear_orbits.equilibria)."""
         m, k1, k3, d = self.physical(model)
         return equilibria(m, k1, k3, d)
 
-    def separatrices(self, model, params, scenario, points: int = 401) -> list[tuple[np.ndarray, np.ndarray]]:
+    def separatrices(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, points: int = 401
+    ) -> list[tuple[np.ndarray, np.ndarray]]:
         """The saddles' energy levels as (x [m], v [m/s]) curves (springlab.scenes._nonlinear_orbits.separatrices)."""
         m, k1, k3, d = self.physical(model)
         return separatrices(m, k1, k3, points)
@@ -460,8 +469,8 @@ class Nonlinear(Scene):
 
     def rerun(
         self,
-        params,
-        scenario,
+        params: dict[str, float],
+        scenario: Scenario,
         integrator: str,
         dt: float,
         duration: float,
@@ -489,7 +498,7 @@ class Nonlinear(Scene):
             stop=self.stop_condition(model, params, scenario),
         )
 
-    def block(self, model, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
+    def block(self, model: mujoco.MjModel, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
         j = model.joint(self.joints[0])
         return trajectory.qpos[:, j.qposadr[0]], trajectory.qvel[:, j.dofadr[0]]
 
@@ -500,7 +509,9 @@ class Nonlinear(Scene):
         m, k1, k3, d = self.physical(model)
         return orbit(m, k1, k3, params["x0"], params["v0"])
 
-    def quantities(self, model, params, scenario, trajectory: Trajectory) -> dict:
+    def quantities(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, trajectory: Trajectory
+    ) -> dict:
         m, k1, k3, d = self.physical(model)
         x, v = self.block(model, trajectory)
         equilibria = self.equilibria(model, params, scenario)
@@ -526,8 +537,10 @@ class Nonlinear(Scene):
             out.update(self._orbit(model, params))
             if out["motion"] == "bounded":
                 out["period_simulated_s"] = measured_period(trajectory.time, x, v, self._acceleration(model, x, v))
-            e = energy(x, v, m, k1, k3)
-            out["energy_drift_relative"] = float(np.max(np.abs(e - e[0])) / max(np.max(0.5 * m * v**2), 1e-300))
+            energy_j = energy(x, v, m, k1, k3)
+            out["energy_drift_relative"] = float(
+                np.max(np.abs(energy_j - energy_j[0])) / max(np.max(0.5 * m * v**2), 1e-300)
+            )
         out["max_displacement_m"] = float(np.max(np.abs(x)))
         radius = self.escape_radius(model, params)
         if math.isfinite(radius):
@@ -550,7 +563,7 @@ class Nonlinear(Scene):
         m, k1, k3, d = self.physical(model)
         return (spring_force(x, k1, k3) - d * v) / m
 
-    def well_size(self, params: dict[str, float], model) -> float:
+    def well_size(self, params: dict[str, float], model: mujoco.MjModel) -> float:
         """The distance from the saddle to a well [m] (or the largest displacement without wells)."""
         m, k1, k3, d = self.physical(model)
         return self._length_scale({"k1": k1, "k3": k3}) or max(abs(params["x0"]), 1e-3)
@@ -561,8 +574,8 @@ class Nonlinear(Scene):
 
     def lyapunov_exponent(
         self,
-        params,
-        scenario,
+        params: dict[str, float],
+        scenario: Scenario,
         integrator: str,
         dt: float,
         transient: float = LYAPUNOV_TRANSIENT,
@@ -575,7 +588,9 @@ class Nonlinear(Scene):
 
     # -- validation ------------------------------------------------------------------
 
-    def checks(self, model, params, scenario, trajectory: Trajectory) -> list[Check]:
+    def checks(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, trajectory: Trajectory
+    ) -> list[Check]:
         m, k1, k3, d = self.physical(model)
         out = self._linearization_checks(model, params)
         integrator, dt = trajectory.integrator, trajectory.dt

@@ -282,7 +282,9 @@ class PrinterHead(Scene):
         s0 = params["deflection"]
         return np.array([-m_m * s0, m_c * s0]) / (m_c + m_m), np.zeros(2)
 
-    def setup(self, model, params, scenario, steps, dt) -> Setup:
+    def setup(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, steps: int, dt: float
+    ) -> Setup:
         q0, v0 = self._initial(params)
         qpos, qvel = np.zeros(model.nq), np.zeros(model.nv)
         for joint, q, v in zip(self.joints, q0, v0):
@@ -298,7 +300,9 @@ class PrinterHead(Scene):
 
     # -- exact solution ------------------------------------------------------
 
-    def reference(self, model, params, scenario, time, *, dt) -> Reference:
+    def reference(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, time: np.ndarray, *, dt: float
+    ) -> Reference:
         mass, damping, stiffness = self.matrices(model)
         q0, v0 = self._initial(params)
         breaks, forces = scenario.variant.segments(params, dt)  # the move switches on the run's own grid
@@ -330,10 +334,18 @@ class PrinterHead(Scene):
         reduced = m_c * m_m / (m_c + m_m)
         return analytic.natural_frequency(reduced, k), analytic.damping_ratio(reduced, k, c)
 
-    def modes(self, model, params, scenario) -> list[tuple[float, float]]:
+    def modes(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[tuple[float, float]]:
         return [self.belt_mode(model)]
 
-    def stability_limit(self, model, params, scenario, integrator: str, omega: float, zeta: float) -> float:
+    def stability_limit(
+        self,
+        model: mujoco.MjModel,
+        params: dict[str, float],
+        scenario: Scenario,
+        integrator: str,
+        omega: float,
+        zeta: float,
+    ) -> float:
         """Largest omega_n dt [-] at which `integrator` is stable on this model's belt mode.
 
         Measured from MuJoCo's own step map (see `linearized_mode`) by bisection,
@@ -357,7 +369,9 @@ class PrinterHead(Scene):
 
     # -- results -------------------------------------------------------------
 
-    def quantities(self, model, params, scenario, trajectory: Trajectory) -> dict:
+    def quantities(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, trajectory: Trajectory
+    ) -> dict:
         m_c, m_m, k, c = self.physical(model)
         total, reduced = m_c + m_m, m_c * m_m / (m_c + m_m)
         omega_n, zeta = self.belt_mode(model)

@@ -233,7 +233,9 @@ class Slider(Scene):
             driven_stiffness=params["stiffness"] + params["mass"] * omega**2 + params["damping"] * omega,
         )
 
-    def setup(self, model, params, scenario, steps, dt) -> Setup:
+    def setup(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, steps: int, dt: float
+    ) -> Setup:
         qpos = np.zeros(model.nq)
         qvel = np.zeros(model.nv)
         qpos[model.joint("slider").qposadr[0]] = params["x0"]
@@ -258,7 +260,9 @@ class Slider(Scene):
         stiffness = float(joint.stiffness[0]) + exciter.coupling_stiffness(model)
         return float(model.body("block").mass[0]), stiffness, float(model.dof_damping[dof])
 
-    def reference(self, model, params, scenario, time, *, dt) -> Reference:
+    def reference(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, time: np.ndarray, *, dt: float
+    ) -> Reference:
         m, k, d = self.physical(model)
         x0, v0, f0 = params["x0"], params["v0"], params["force_amplitude"]
         forcing = self._forcing(params, scenario)
@@ -279,7 +283,7 @@ class Slider(Scene):
             states = np.column_stack([x, v])
         return Reference(pos={"slider": x}, vel={"slider": v}, system=system, states=states, rows={"slider": (0, 1)})
 
-    def modes(self, model, params, scenario) -> list[tuple[float, float]]:
+    def modes(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[tuple[float, float]]:
         m, k, d = self.physical(model)
         modes = []
         if k > 0:
@@ -288,17 +292,21 @@ class Slider(Scene):
             modes.append((2 * math.pi * params["force_frequency"], 0.0))  # the exciter
         return modes
 
-    def phase_field(self, model, params, scenario):
+    def phase_field(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario
+    ) -> Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None:
         m, k, d = self.physical(model)
         return lambda x, v: (v, -(k * x + d * v) / m)
 
-    def equilibria(self, model, params, scenario) -> list[dict]:
+    def equilibria(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[dict]:
         m, k, d = self.physical(model)
         return [{"x": 0.0, "stable": k > 0}]
 
     # -- results -------------------------------------------------------------
 
-    def quantities(self, model, params, scenario, trajectory: Trajectory) -> dict:
+    def quantities(
+        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, trajectory: Trajectory
+    ) -> dict:
         m, k, d = self.physical(model)
         out: dict = {"regime": analytic.regime(m, k, d), "damping_ratio": analytic.damping_ratio(m, k, d)}
         if k > 0:
