@@ -376,7 +376,8 @@ def audit(
     point = operating_point(model, keyframe)
     distributed = executor is not None and executor.distributed
     run = Runner(executor, ship(source.origin, model) if distributed else None, nthread)
-    if executor is not None and executor.distributed:
+    if distributed:
+        assert executor is not None  # distributed implies an executor
         _ = executor.client  # an unreachable scheduler is exit 2 now, not after the limit scan
     own_name, own_dt = _NAMES[int(model.opt.integrator)], float(model.opt.timestep)
     linear = linearize(model, point)

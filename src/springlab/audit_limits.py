@@ -44,7 +44,7 @@ from .batch import Job, run_batched
 from .errors import DivergedError
 from .linearize import Linearization, Mode, OperatingPoint, one_step_map
 from .scene import Setup
-from .simulate import integrator_id, quiet_mujoco, stability_limit
+from .simulate import integrator_id, quiet_mujoco, rk4_limit, stability_limit
 
 #: growth of the one-step map beyond the exact flow's that counts as numerical instability [-]
 MAP_MARGIN = 1e-4
@@ -116,22 +116,7 @@ def _rk4_limit(eigenvalue: complex) -> float:
     """Largest h |lambda| [-] with |R(h lambda)| <= 1 for a stable eigenvalue (2.828 on the imaginary axis)."""
     unit = eigenvalue / abs(eigenvalue)
     unit = complex(min(unit.real, 0.0), unit.imag)  # a stable mode's round-off growth is no growth
-
-    def grows(y: float) -> bool:
-        z = y * unit
-        return abs(1 + z + z**2 / 2 + z**3 / 6 + z**4 / 24) > 1 + 1e-13
-
-    grid = np.linspace(1e-3, 3.0, 3000)
-    z = grid * unit
-    growing = np.flatnonzero(np.abs(1 + z + z**2 / 2 + z**3 / 6 + z**4 / 24) > 1 + 1e-13)
-    if not growing.size:
-        return math.inf
-    first = float(grid[growing[0]])
-    low, high = first - (grid[1] - grid[0]), first
-    for _ in range(60):
-        mid = 0.5 * (low + high)
-        low, high = (low, mid) if grows(mid) else (mid, high)
-    return low
+    return rk4_limit(np.array([unit]))
 
 
 #: implicit damping integrators (the velocity update with M + dt D; `implicit_damping`)

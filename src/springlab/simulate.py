@@ -381,9 +381,24 @@ def stability_limit(integrator: str, zeta: float) -> float:
         return math.inf
     if integrator != "rk4":
         return 2 * zeta + 2 * math.hypot(zeta, 1.0)  # hypot: no overflow for huge zeta
-    # roots of s^2 + 2 zeta s + 1 (omega_n = 1), then the first omega*dt whose
-    # amplification leaves the unit disc, by a scan and a bisection
-    roots = _unit_oscillator_roots(zeta)
+    # roots of s^2 + 2 zeta s + 1 (omega_n = 1), in units where omega_n dt = h
+    return rk4_limit(_unit_oscillator_roots(zeta))
+
+
+def rk4_limit(roots: np.ndarray) -> float:
+    """Largest h [-] at which RK4 is stable on every mode exp(s t), s in `roots` [-]: the first h whose
+    amplification |R(h s)| leaves the unit disc (by more than 1e-13), found by a scan and a bisection.
+
+    Parameters
+    ----------
+    roots
+        complex eigenvalues in units of the timestep's scale (e.g. divided by omega_n, so h = omega_n dt);
+        the scan covers h up to 3 / max(1, max |s|).
+
+    Returns
+    -------
+    h [-], or inf when no h in the scan is unstable.
+    """
 
     def unstable(h: np.ndarray) -> np.ndarray:
         # one vectorised evaluation per scan or bisection step (charts ask for hundreds of zetas)
