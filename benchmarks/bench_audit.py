@@ -1,9 +1,9 @@
 """Speed of `springlab audit` on a 27-DOF model nobody here wrote: dm_control's humanoid.
 
-1. Linearization and stability limits alone (springlab.linearize + springlab.audit_limits: modes,
+1. Linearization and stability limits alone (springlab.exact.linearize + springlab.studies.audit.limits: modes,
    five integrators' limits measured on the one-step map and confirmed by nonlinear runs), best of 3,
    against the 2 s budget.
-2. The sweep's runs, batched (springlab.batch.run_batched: one mujoco.batch.Batch, all CPUs) against
+2. The sweep's runs, batched (springlab.sim.batch.run_batched: one mujoco.batch.Batch, all CPUs) against
    a plain Python loop of mujoco.mj_step over the same (integrator, dt) settings, side by side; the
    ratio. (On the grid's 10 coarsest timesteps x 5 integrators, to keep the plain loop short.)
 3. The whole audit, 5 integrators x 12 timesteps (+ the model's own), 1 s of motion, against the
@@ -21,12 +21,11 @@ import time
 import dm_control
 import mujoco
 
-from springlab import batch
-from springlab.audit import audit
-from springlab.audit_limits import stability_limits
-from springlab.linearize import linearize, operating_point
-from springlab.scene import Setup
-from springlab.simulate import INTEGRATORS, quiet_mujoco
+from springlab.exact.linearize import linearize, operating_point
+from springlab.sim import batch
+from springlab.sim.simulate import INTEGRATORS, Setup, quiet_mujoco
+from springlab.studies.audit.audit import audit
+from springlab.studies.audit.limits import stability_limits
 from timing import best_of
 
 HUMANOID = pathlib.Path(dm_control.__file__).parent / "suite" / "humanoid.xml"

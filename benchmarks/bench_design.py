@@ -1,6 +1,6 @@
 """Speed of the printer-head design sweep, side by side in one run.
 
-The batched sweep (springlab.design_moves.simulate_moves: one mujoco.batch.Batch, every
+The batched sweep (springlab.studies.design.moves.simulate_moves: one mujoco.batch.Batch, every
 configuration its own simulation with its own timestep, settling certified and
 stopped per simulation) against a plain Python loop over mujoco.mj_step that
 integrates the same configurations for the same number of steps (taken from the
@@ -21,8 +21,10 @@ import time
 import mujoco
 import numpy as np
 
-from springlab import design, design_moves, scenes
-from springlab.simulate import quiet_mujoco
+from springlab import scenes
+from springlab.sim.simulate import quiet_mujoco
+from springlab.studies.design import moves as design_moves
+from springlab.studies.design import study as design
 
 
 def loop_configurations(base, values, runs, indices) -> float:

@@ -27,11 +27,18 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from springlab import analytic, api, design, design_moves, model_files, scenes, sobol, sweeps
-from springlab.batch import Job, run_rollout
-from springlab.executor import Executor, chunked, ping
-from springlab.scene import parsed_spec
-from springlab.simulate import initial_state, simulate
+from springlab import scenes
+from springlab.exact import analytic
+from springlab.runs.run import run_scenario
+from springlab.scenes.base import parsed_spec
+from springlab.sim import model_files
+from springlab.sim.batch import Job, run_rollout
+from springlab.sim.simulate import initial_state, simulate
+from springlab.studies import sweeps
+from springlab.studies.design import moves as design_moves
+from springlab.studies.design import sobol
+from springlab.studies.design import study as design
+from springlab.studies.executor import Executor, chunked, ping
 from timing import best_of
 
 
@@ -161,7 +168,7 @@ def run_overhead() -> None:
             ),
             repeat=30,
         )  # fmt: skip
-        whole = best_of(lambda: api.run("slider", name), repeat=30)
+        whole = best_of(lambda: run_scenario("slider", name), repeat=30)
         print(f"   {name:<9} simulate {bare * 1e3:7.3f} ms  run {whole * 1e3:7.3f} ms  run/simulate {whole / bare:.3f}")
     path = str(model_files.path("slider"))
     parse = best_of(lambda: mujoco.MjSpec.from_file(path), repeat=50)

@@ -2,7 +2,7 @@
 
 Prints the wall time of the whole fit (best of 3), the number of MuJoCo
 rollouts it took and the time per rollout, beside one plain run of the same
-motion (springlab.simulate on the fit's grid) for the ratio.
+motion (springlab.sim.simulate on the fit's grid) for the ratio.
 
 Run: python benchmarks/bench_fit.py
 """
@@ -15,7 +15,7 @@ import time
 import numpy as np
 
 import springlab
-from springlab.simulate import simulate
+from springlab.sim.simulate import simulate
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from timing import best_of  # noqa: E402
@@ -24,7 +24,7 @@ TARGET_S = 2.0
 m, k, d = 2.0, 800.0, 4.0
 rng = np.random.default_rng(0)
 t = np.arange(10_001) * 1e-3
-x, _ = springlab.analytic.free_response(t, m, k, d, 0.05, 0.0)
+x, _ = springlab.exact.analytic.free_response(t, m, k, d, 0.05, 0.0)
 y = x + 0.002 + rng.normal(0, 5e-4, t.size)
 
 with tempfile.TemporaryDirectory() as folder:
@@ -57,4 +57,6 @@ print(
     f"  {o['iterations']} LM iterations, {o['rollouts']} rollouts of {o['steps']} RK4 steps (dt = {o['dt'] * 1e3:.2f} ms),"
     f" {o['time_per_rollout_s'] * 1e3:.2f} ms per rollout inside sysid, {o['rollout_time_s']:.2f} s rolling out"
 )
-print(f"  one plain springlab.simulate of the same grid: {plain * 1e3:.2f} ms; fit / plain run = {wall / plain:.0f}")
+print(
+    f"  one plain springlab.sim.simulate of the same grid: {plain * 1e3:.2f} ms; fit / plain run = {wall / plain:.0f}"
+)

@@ -1,6 +1,6 @@
 """Speed of springlab's video path, side by side in one run.
 
-1. Frames per second of springlab.render.render_video against a naive loop on
+1. Frames per second of springlab.render.video.render_video against a naive loop on
    the same slider trajectory (10 s at 30 fps = 300 frames, 640 x 480):
    the naive loop is what one writes first with MuJoCo's own tools:
    `mujoco.Renderer` with MuJoCo's default visual settings (shadows,
@@ -41,7 +41,7 @@ import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
 import springlab  # noqa: E402
-from springlab import render  # noqa: E402
+from springlab.render import video as render  # noqa: E402
 
 DURATION, FPS, WIDTH, HEIGHT = 10.0, 30, 640, 480
 MUJOCO_DEFAULT_SHADOWSIZE = 4096
@@ -98,7 +98,7 @@ def fast_video(model, time_s, qpos, output, panel=None, antialias=False) -> int:
 
 
 def frames_per_second(repeat: int, folder: pathlib.Path) -> None:
-    from springlab import plots_panel
+    from springlab.plots import panel as plots_panel
 
     result = springlab.run("slider", "undamped", duration=DURATION)
     args = (result.model, result.time, result.trajectory.qpos)
@@ -124,7 +124,7 @@ def frames_per_second(repeat: int, folder: pathlib.Path) -> None:
         f"{frames['naive'] / best['naive']:>10.1f}"
     )
     print(
-        f"   {'springlab.render.render_video':<42}{best['springlab']:>10.2f}"
+        f"   {'springlab.render.video.render_video':<42}{best['springlab']:>10.2f}"
         f"{frames['springlab'] / best['springlab']:>10.1f}"
     )
     print(
@@ -153,7 +153,7 @@ END_TO_END = (
 
 def _render_once(source: str | None, scene: str, scenario: str, extra: list[str], output: pathlib.Path):
     """(wall time [s], frames) of one fresh `springlab render` process, using `source` (a src/ folder) if given."""
-    command = [sys.executable, "-m", "springlab.cli", "render", scene, scenario, *extra]
+    command = [sys.executable, "-m", "springlab.cli.main", "render", scene, scenario, *extra]
     command += ["--fps", str(FPS), "--width", str(WIDTH), "--height", str(HEIGHT), "--output", str(output)]
     env = dict(os.environ)
     if source:

@@ -1,6 +1,6 @@
 """Speed of springlab's simulate path, side by side in one run.
 
-1. springlab.simulate vs raw mujoco.rollout on the same compiled slider model
+1. springlab.sim.simulate vs raw mujoco.rollout on the same compiled slider model
    and integrator (steps/s and their ratio; the target is >= 0.9).
 2. The slider's default validated setting (rk4, 2 ms) on `free` against
    scipy's solve_ivp methods tuned to the same accuracy (max relative error
@@ -16,8 +16,9 @@ import numpy as np
 from mujoco import rollout
 
 import springlab
-from springlab import analytic, scenes
-from springlab.simulate import configured, initial_state, simulate
+from springlab import scenes
+from springlab.exact import analytic
+from springlab.sim.simulate import configured, initial_state, simulate
 from timing import best_of
 
 

@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from springlab.simulate import _rk4_amplification, stability_limit
+from springlab.exact.limits import _rk4_amplification, stability_limit
 from timing import best_of
 
 ZETAS = np.concatenate([[0.0], np.geomspace(1e-2, 100.0, 200)])

@@ -1,9 +1,9 @@
 """Speed of springlab's trade-off sweep, side by side in one run.
 
 1. The accuracy pass of the full slider `free` sweep (5 integrators x 13
-   timesteps, 65 runs, 0.5 M steps): springlab.batch.run_batched (one
+   timesteps, 65 runs, 0.5 M steps): springlab.sim.batch.run_batched (one
    mujoco.batch.Batch, all CPUs, and on one thread) against a plain loop of
-   springlab.simulate.simulate calls; best of 3 each, and the ratios.
+   springlab.sim.simulate.simulate calls; best of 3 each, and the ratios.
 2. The whole `springlab tradeoff slider free --tol 1e-6` (sweep, timing pass,
    verified recommendation) against its 10 s budget.
 
@@ -17,8 +17,10 @@ import time
 
 import numpy as np
 
-from springlab import batch, scenes, tradeoff
-from springlab.simulate import INTEGRATORS, simulate
+from springlab import scenes
+from springlab.sim import batch
+from springlab.sim.simulate import INTEGRATORS, simulate
+from springlab.studies import tradeoff
 from timing import best_of
 
 

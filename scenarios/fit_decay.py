@@ -20,7 +20,7 @@ import springlab
 # the "measurement": k = 800 N/m, d = 4 N s/m, released from 50 mm at t = 0.3 s, 0.3 mm noise
 rng = np.random.default_rng(2)
 time = np.cumsum(rng.uniform(0.004, 0.006, 600))
-x, _ = springlab.analytic.free_response(np.clip(time - 0.3, 0, None), 2.0, 800.0, 4.0, 0.05, 0.0)
+x, _ = springlab.exact.analytic.free_response(np.clip(time - 0.3, 0, None), 2.0, 800.0, 4.0, 0.05, 0.0)
 position_mm = 1e3 * x + rng.normal(0, 0.3, time.size)
 
 with tempfile.TemporaryDirectory() as folder:

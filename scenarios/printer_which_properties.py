@@ -7,11 +7,11 @@ elasticity d ln T / d ln p of positioning time, beside the analytic estimate.
 Run: python scenarios/printer_which_properties.py
 """
 
-import springlab.design
+import springlab.studies.design.study
 
-study = springlab.design.run_study("printer_head", plane_levels=0)  # the dense plane is only for the plot
-summary = springlab.design.summary(study)
-print(springlab.design.answer(study))
+study = springlab.studies.design.study.run_study("printer_head", plane_levels=0)  # the dense plane is only for the plot
+summary = springlab.studies.design.study.summary(study)
+print(springlab.studies.design.study.answer(study))
 print()
 print("Elasticity of positioning time d ln T / d ln p (global fit over the grid; local at the default):")
 for name in summary["ranking"]:

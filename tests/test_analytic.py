@@ -1,4 +1,4 @@
-"""Tests for springlab.analytic.
+"""Tests for springlab.exact.analytic.
 
 Every assertion compares against a reference that does not share the code
 path under test: textbook closed forms worked by hand, a 60-digit
@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from springlab import analytic as an
+from springlab.exact import analytic as an
 
 # ---------------------------------------------------------------------------
 # 60-digit reference: the plain textbook formulas (distinct roots, complex

@@ -20,12 +20,13 @@ import pytest
 from scipy.linalg import expm
 from scipy.optimize import brentq
 
-from springlab import model_files, stability, tradeoff
-from springlab.audit import INTEGRATORS, audit
-from springlab.audit_limits import stability_limits
 from springlab.errors import BadInputError, UnknownNameError
-from springlab.linearize import linearize
-from springlab.simulate import stability_limit
+from springlab.exact.limits import stability_limit
+from springlab.exact.linearize import linearize
+from springlab.sim import model_files
+from springlab.studies import stability, tradeoff
+from springlab.studies.audit.audit import INTEGRATORS, audit
+from springlab.studies.audit.limits import stability_limits
 from test_linearize import chain_frequencies, chain_xml, pendulum_xml
 
 LIMIT_RELATIVE = 1e-3

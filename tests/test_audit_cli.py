@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from springlab.cli import main
+from springlab.cli.main import main
 from test_linearize import chain_xml, pendulum_xml
 
 
@@ -66,7 +66,8 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys, args,
 
 
 def test_the_demo_report_gains_an_audit_section(tmp_path):
-    from springlab import demo, report
+    from springlab.demo import report
+    from springlab.demo import steps as demo
 
     state = demo.DemoState(out=tmp_path)
     state.artifacts.extend(demo.audit_step(state))

@@ -19,13 +19,14 @@ import mujoco
 import numpy as np
 import pytest
 
-from springlab import audit_ship, outputs
-from springlab.audit import audit
-from springlab.audit_ship import Runner, cut, runs_chunk, ship
-from springlab.batch import Job, run_batched
+from springlab import files
 from springlab.errors import BadInputError
-from springlab.executor import Executor
-from springlab.scene import Setup
+from springlab.sim.batch import Job, run_batched
+from springlab.sim.simulate import Setup
+from springlab.studies.audit import ship as audit_ship
+from springlab.studies.audit.audit import audit
+from springlab.studies.audit.ship import Runner, cut, runs_chunk, ship
+from springlab.studies.executor import Executor
 
 pytest.importorskip("distributed", reason="the distributed extra (make test installs it)")
 
@@ -43,14 +44,14 @@ def cluster():
 
 @pytest.fixture
 def fixed_costs(monkeypatch):
-    module = importlib.import_module("springlab.audit")  # the package's `audit` attribute is the function
+    module = importlib.import_module("springlab.studies.audit.audit")  # the package's `audit` attribute is the function
     monkeypatch.setattr(module, "cost_per_step", lambda model, start, name, dt: COSTS[name])
 
 
 def _json_without_timings(result) -> str:
     data = result.as_json()
     data.pop("timings_s")
-    return outputs.dumps(data)
+    return files.dumps(data)
 
 
 def _twice(cluster, model, **options):

@@ -19,8 +19,8 @@ import numpy as np
 import pytest
 from mujoco import rollout
 
-from springlab.audit import audit
-from springlab.simulate import INTEGRATORS
+from springlab.sim.simulate import INTEGRATORS
+from springlab.studies.audit.audit import audit
 
 SUITE = pathlib.Path(dm_control.__file__).parent / "suite"
 _FULL = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)

@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from springlab.cli import main
+from springlab.cli.main import main
 
 
 def _run(capsys, *argv):

@@ -15,7 +15,7 @@ import scipy.linalg
 
 import springlab
 from springlab import scenes
-from springlab.scenes import car as car_scene
+from springlab.scenes.car import scene as car_scene
 
 G = 9.81
 M, J, A, B = 1000.0, 1500.0, 1.2, 1.5

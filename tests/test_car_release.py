@@ -12,8 +12,9 @@ import numpy as np
 import pytest
 
 import springlab
-from springlab import model_files, scenes
-from springlab.simulate import quiet_mujoco
+from springlab import scenes
+from springlab.sim import model_files
+from springlab.sim.simulate import quiet_mujoco
 
 G = 9.81
 M, K, CLEARANCE, PUSH = 1000.0, 1e6, 0.10, 250.0

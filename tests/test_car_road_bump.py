@@ -102,7 +102,7 @@ def test_ride_quantities_agree_with_the_exact_response(bump):
         xs, xw, vs, vw = state(t)
         return (-KS * (xs - xw) - CS * (vs - vw)) / MS
 
-    # peaks between the samples (springlab.events), to the run's tolerance
+    # peaks between the samples (springlab.exact.events), to the run's tolerance
     tolerance = 2 * result.summary["tolerance"]
     assert q["peak_body_acceleration_m_s2"] == pytest.approx(continuous_peak(body_acceleration), rel=tolerance)
     assert q["peak_suspension_travel_m"] == pytest.approx(

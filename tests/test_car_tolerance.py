@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 
 import springlab
-from springlab import compare, scenes
-from springlab.scene import Reference
+from springlab import scenes
+from springlab.runs import compare
+from springlab.scenes.base import Reference
 
 
 def _oscillator_reference(time, omega=30.0, zeta=0.1):

@@ -9,7 +9,7 @@ import sys
 import numpy as np
 import pytest
 
-from springlab.cli import main
+from springlab.cli.main import main
 
 
 def _run(capsys, *argv):
@@ -110,6 +110,7 @@ def test_an_inaccurate_run_is_written_flagged_and_exits_1(tmp_path, capsys):
         (["run", "slider", "--record-every", "0"], "--record-every must be an integer >= 1"),
         (["run", "slider", "--tol", "-1"], "tol must be a finite number > 0"),
         (["fly"], "invalid choice"),
+        (["plot", "slider", "--kind", "pie", "--output", "p.png"], "invalid choice: 'pie'"),
     ],
 )
 def test_bad_input_exits_2_with_one_line_naming_what_is_valid(argv, needle, capsys):
@@ -155,7 +156,7 @@ def test_console_script_prints_no_traceback_and_leaves_no_mujoco_log(tmp_path):
         [
             sys.executable,
             "-m",
-            "springlab.cli",
+            "springlab.cli.main",
             "run",
             "slider",
             "--integrator",
@@ -206,7 +207,7 @@ def test_outputs_get_ordinary_file_permissions(tmp_path, capsys):
 def test_a_closed_pipe_ends_quietly_without_a_traceback():
     # `springlab list | head -1`: the reader leaves early
     proc = subprocess.Popen(
-        [sys.executable, "-m", "springlab.cli", "list"], stdout=subprocess.PIPE, stderr=subprocess.PIPE
+        [sys.executable, "-m", "springlab.cli.main", "list"], stdout=subprocess.PIPE, stderr=subprocess.PIPE
     )
     proc.stdout.close()  # before the child writes: its first write hits a closed pipe
     err = proc.stderr.read().decode()

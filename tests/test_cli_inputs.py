@@ -9,8 +9,9 @@ import mujoco
 import pytest
 
 import springlab
-from springlab import api, scenes
+from springlab import scenes
 from springlab.errors import DivergedError, ParameterError, SpringlabError
+from springlab.runs.run import prepare
 
 MASS_UNITS = ("kg", "kg m^2")
 
@@ -28,7 +29,7 @@ def _mass_like():
 
 
 def _build(scene_name, scenario, overrides):
-    scene, chosen, params = api.prepare(scene_name, scenario, overrides)
+    scene, chosen, params = prepare(scene_name, scenario, overrides)
     return scene.build(params, chosen)
 
 
@@ -163,7 +164,7 @@ def test_a_divergence_within_the_stability_limit_never_advises_a_smaller_dt():
 )
 def test_values_at_the_edge_of_double_precision_get_one_line_and_no_warning(argv, capsys):
     # each value is inside its stated range; their products leave double precision or MuJoCo's caps
-    from springlab.cli import main
+    from springlab.cli.main import main
 
     code = main(list(argv))
     err = capsys.readouterr().err

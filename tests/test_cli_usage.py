@@ -7,8 +7,11 @@ import pathlib
 import pytest
 
 import springlab
-from springlab import demo, design, model_files, scenes
-from springlab.cli import build_parser, main
+from springlab import scenes
+from springlab.cli.main import build_parser, main
+from springlab.demo import steps as demo
+from springlab.sim import model_files
+from springlab.studies.design import study as design
 
 #: a recorded signal shipped with the docs, for fit's argument parsing
 EXAMPLE_CSV = pathlib.Path(__file__).parent.parent / "docs" / "examples" / "decay_mm.csv"
@@ -46,12 +49,12 @@ def test_an_extra_positional_is_still_refused_in_one_line(capsys):
 @pytest.mark.parametrize(
     "command, module, function",
     [
-        (["tradeoff", "slider"], "springlab.tradeoff", "tradeoff"),
-        (["stability"], "springlab.stability", "stability_report"),
-        (["design", "printer_head"], "springlab.design", "run_study"),
-        (["sweep", "slider", "--vary", "mass=1:2:3"], "springlab.sweeps", "sweep"),
-        (["audit", str(model_files.path("slider"))], "springlab.cli", "run_audit"),
-        (["fit", "slider", str(EXAMPLE_CSV)], "springlab.fit", "fit"),
+        (["tradeoff", "slider"], "springlab.studies.tradeoff", "tradeoff"),
+        (["stability"], "springlab.studies.stability", "stability_report"),
+        (["design", "printer_head"], "springlab.studies.design.study", "run_study"),
+        (["sweep", "slider", "--vary", "mass=1:2:3"], "springlab.studies.sweeps", "sweep"),
+        (["audit", str(model_files.path("slider"))], "springlab.cli.main", "run_audit"),
+        (["fit", "slider", str(EXAMPLE_CSV)], "springlab.studies.fit.fit", "fit"),
     ],
 )
 def test_an_unwritable_output_fails_before_any_computing(tmp_path, capsys, monkeypatch, command, module, function):
@@ -69,9 +72,9 @@ def test_an_unwritable_output_fails_before_any_computing(tmp_path, capsys, monke
 
 
 def test_the_output_check_leaves_no_folder_behind(tmp_path):
-    from springlab import outputs
+    from springlab import files
 
-    outputs.check_directory(tmp_path / "a" / "b")
+    files.check_directory(tmp_path / "a" / "b")
     assert list(tmp_path.iterdir()) == []
 
 
@@ -115,7 +118,7 @@ def test_zeta_plot_of_a_two_mode_scene_says_it_needs_one_mode(tmp_path, capsys):
     assert "does not apply" not in err
 
 
-@pytest.mark.parametrize("module", ["demo", "cli"])
+@pytest.mark.parametrize("module", ["demo/steps", "cli/main"])
 def test_importing_the_front_end_runs_nothing(module):
     # no side effects at import: only definitions at module level (demo appended its steps there)
     import ast
@@ -133,13 +136,13 @@ def test_importing_the_front_end_runs_nothing(module):
 def test_the_rk4_limit_costs_a_vectorised_scan_not_thousands_of_calls(monkeypatch):
     # the stability chart's theory curve asks for 201 damping ratios per integrator; each rk4 limit was a
     # Python loop of up to 3000 scalar amplification calls + 60 bisection steps (605k calls, ~22 s)
-    from springlab import simulate
+    from springlab.exact import limits
 
     calls = []
-    original = simulate._rk4_amplification
-    monkeypatch.setattr(simulate, "_rk4_amplification", lambda z: calls.append(1) or original(z))
+    original = limits._rk4_amplification
+    monkeypatch.setattr(limits, "_rk4_amplification", lambda z: calls.append(1) or original(z))
     for zeta in (0.0, 0.3, 1.0, 5.0, 100.0):
-        simulate.stability_limit("rk4", zeta)
+        limits.stability_limit("rk4", zeta)
     assert len(calls) <= 5 * (1 + 60)
 
 
@@ -161,6 +164,6 @@ def test_starting_the_command_line_leaves_the_heavy_libraries_for_the_commands_t
     import subprocess
     import sys
 
-    probe = "import sys, springlab.cli; print(sorted(m for m in ('matplotlib', 'scipy.stats', 'scipy.optimize') if m in sys.modules))"
+    probe = "import sys, springlab.cli.main; print(sorted(m for m in ('matplotlib', 'scipy.stats', 'scipy.optimize') if m in sys.modules))"
     loaded = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True).stdout.strip()
     assert loaded == "[]"

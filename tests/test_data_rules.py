@@ -7,8 +7,8 @@ import math
 import pytest
 
 import springlab
-from springlab import outputs, scenes
-from springlab.cli import main
+from springlab import files, scenes
+from springlab.cli.main import main
 
 
 def _rows(path):
@@ -83,7 +83,7 @@ def _reject_constant(name):
 def test_every_quantity_of_every_scene_keeps_one_json_type_and_null_comes_with_a_flag():
     types: dict[tuple[str, str], set[str]] = {}
     for summary in _summaries():
-        text = outputs.dumps(summary)
+        text = files.dumps(summary)
         data = json.loads(text, parse_constant=_reject_constant)
         assert '"inf"' not in text and '"nan"' not in text and '"-inf"' not in text
         quantities = data["quantities"]

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from springlab import design
-from springlab.cli import main
+from springlab.cli.main import main
+from springlab.studies.design import study as design
 
 
 @pytest.fixture(scope="module")

@@ -19,10 +19,12 @@ import numpy as np
 import pytest
 
 import springlab
-from springlab import design, sobol, stability, tradeoff
-from springlab.cli import main
+from springlab.cli.main import main
 from springlab.errors import BadInputError
-from springlab.executor import Executor, chunked
+from springlab.studies import stability, tradeoff
+from springlab.studies.design import sobol
+from springlab.studies.design import study as design
+from springlab.studies.executor import Executor, chunked
 
 pytest.importorskip("distributed", reason="the distributed extra (make test installs it)")
 

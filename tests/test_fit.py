@@ -21,7 +21,7 @@ import pytest
 
 from springlab import scenes
 from springlab.errors import BadInputError
-from springlab.fit import fit
+from springlab.studies.fit.fit import fit
 
 EXACT = 1e-6
 
@@ -359,7 +359,7 @@ def test_car_intervals_cover_the_truth_95_percent_of_the_time(tmp_path):
 
 
 def test_fit_json_has_the_contract_keys(tmp_path):
-    from springlab.fit import write as write_fit
+    from springlab.studies.fit.fit import write as write_fit
 
     t = np.arange(0, 1, 2e-3)
     x, _, _ = free_decay(t, 20.0, 0.05, 0.05, 0.0)

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from springlab.cli import main
+from springlab.cli.main import main
 
 
 def _run(capsys, *argv):

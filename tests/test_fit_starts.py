@@ -16,12 +16,12 @@ import numpy as np
 import pytest
 
 import springlab  # noqa: F401 - loads springlab.fit the module
-from springlab import fit_starts
-from springlab.cli import main
+from springlab.cli.main import main
 from springlab.errors import BadInputError
-from springlab.executor import Executor
+from springlab.studies.executor import Executor
+from springlab.studies.fit import starts as fit_starts
 
-fit_module = sys.modules["springlab.fit"]
+fit_module = sys.modules["springlab.studies.fit.fit"]
 
 MASS, STIFFNESS, DAMPING, X0 = 2.0, 800.0, 1.6, 0.05
 

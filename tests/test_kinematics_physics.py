@@ -6,10 +6,11 @@ import numpy as np
 import pytest
 
 import springlab
-from springlab import model_files, scenes
+from springlab import scenes
 from springlab.errors import BadInputError, ParameterError
-from springlab.scenes.kinematics import polynomial_expression
-from springlab.simulate import quiet_mujoco
+from springlab.scenes.kinematics.scene import polynomial_expression
+from springlab.sim import model_files
+from springlab.sim.simulate import quiet_mujoco
 
 EPS = np.finfo(float).eps
 

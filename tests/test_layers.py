@@ -1,5 +1,8 @@
-"""The package's import graph is one-way: a module imports only from its own layer or the layers below, and
-nothing imports in a circle (CONTRIBUTING.md, "Layers").
+"""The package's folders are its layers, and its import graph runs one way (CONTRIBUTING.md, "Layers").
+
+A module imports only from its own package or the packages of the layers below, nothing imports in a
+circle, and no study, run, plot or renderer names a scene: what a scene can do it declares (`Scene`),
+and the layers above read the declaration.
 
 The graph is read from the source with `ast`, function-local imports included (an import inside a function is
 still a dependency, only a later one), so the check runs without importing springlab.
@@ -14,79 +17,34 @@ import pytest
 
 PACKAGE = pathlib.Path(__file__).resolve().parents[1] / "src" / "springlab"
 
-#: lowest first; a new module adds its name here (scenes/* are physics, render_* are outputs)
+#: lowest first: layer -> the packages (folders) and root modules in it; a module may import from its own
+#: layer's packages or any layer below. A new top-level package or root module adds its name here and to
+#: CONTRIBUTING.md's table (tests/test_style.py checks the two agree).
 LAYERS: dict[str, tuple[str, ...]] = {
-    "physics": (
-        "errors",
-        "progress",
-        "model_files",
-        "outputs",
-        "exciter",
-        "simulate",
-        "analytic",
-        "linear",
-        "linearize",
-        "polynomials",
-        "compare",
-        "events",
-        "scene",
-        "checks",
-        "scenes",
-    ),
-    "one run": ("api",),
-    "studies": (
-        "batch",
-        "tradeoff",
-        "stability",
-        "extremes",
-        "auto",
-        "design",
-        "design_moves",
-        "audit",
-        "audit_limits",
-        "audit_ship",
-        "audit_sweep",
-        "fit",
-        "fit_data",
-        "fit_engine",
-        "fit_models",
-        "fit_results",
-        "fit_starts",
-        "sweep",
-        "sweeps",
-        "executor",
-        "sobol",
-    ),
-    "outputs": (
-        "charts",
-        "charts_audit",
-        "design_chart",
-        "fit_chart",
-        "plots",
-        "plots_style",
-        "plots_phase",
-        "plots_panel",
-        "render",
-        "report",
-        "media",
-        "sweep_plot",
-    ),
-    "front": ("cli", "cli_text", "demo", "__main__", "__init__"),
+    "foundation": ("errors", "files", "progress", "tables"),
+    "simulation": ("sim",),
+    "exact": ("exact",),
+    "scenes": ("scenes",),
+    "one run": ("runs",),
+    "studies": ("studies",),
+    "plots": ("plots",),
+    "render": ("render",),
+    "front": ("cli", "demo", "__init__", "__main__"),
 }
-PREFIXES = {"scenes.": "physics", "render_": "outputs"}
 ORDER = list(LAYERS)
+#: the study packages: each answers its own question and none imports another (they share the
+#: modules at the root of studies/: the executor, convergence, tradeoff ...)
+STUDY_PACKAGES = ("audit", "design", "fit")
 
 
 def layer_of(module: str) -> str:
-    """The layer of `module` (dotted, relative to springlab)."""
+    """The layer of `module` (dotted, relative to springlab): that of its top-level package."""
+    top = module.split(".")[0]
     for layer, names in LAYERS.items():
-        if module in names:
-            return layer
-    for prefix, layer in PREFIXES.items():
-        if module.startswith(prefix):
+        if top in names:
             return layer
     raise AssertionError(
-        f"springlab.{module} has no layer: add it to LAYERS in tests/test_layers.py (and CONTRIBUTING.md)"
+        f"springlab.{module} is in no layer: add {top!r} to LAYERS in tests/test_layers.py (and CONTRIBUTING.md)"
     )
 
 
@@ -123,9 +81,9 @@ def imports(module: str, path: pathlib.Path, known: set[str]) -> set[str]:
                 continue
             for alias in node.names:
                 candidate = ".".join([*target, alias.name])
-                if candidate in known:  # `from . import api`: a submodule
+                if candidate in known:  # `from springlab.sim import batch`: a submodule
                     found.add(candidate)
-                else:  # `from .scene import Scene`: a name of a module
+                else:  # `from springlab.scenes.base import Scene`: a name of a module
                     found.add(".".join(target) or "__init__")
     found.discard(module)
     return found
@@ -139,10 +97,17 @@ def graph() -> dict[str, set[str]]:
 def test_the_import_graph_is_read_from_the_source():
     # the reader itself: it must see the imports this test relies on, or the checks below prove nothing
     edges = graph()
-    assert {"simulate", "scene", "compare", "scenes"} <= edges["api"]
-    assert "api" in edges["tradeoff"] and "batch" in edges["tradeoff"]
-    assert "analytic" in edges["scenes.slider"]
-    assert {"auto", "api"} <= edges["__init__"]
+    assert {"sim.simulate", "scenes", "runs.compare"} <= edges["runs.run"]
+    assert "runs.run" in edges["studies.tradeoff"] and "sim.batch" in edges["studies.tradeoff"]
+    assert "exact.analytic" in edges["scenes.slider.scene"]
+    assert "scenes.car.scene" in edges["scenes.car"]  # a scene folder hands on its SCENE
+    assert {"studies.auto", "runs.run"} <= edges["__init__"]
+
+
+def test_every_top_level_package_and_root_module_has_a_layer():
+    tops = {path.relative_to(PACKAGE).parts[0].removesuffix(".py") for path in PACKAGE.rglob("*.py")}
+    listed = {name for names in LAYERS.values() for name in names}
+    assert tops == listed
 
 
 def test_every_module_imports_only_from_its_layer_or_below():
@@ -174,3 +139,27 @@ def test_the_import_graph_has_no_cycle():
     for module in sorted(edges):
         if module not in state:
             visit(module)
+
+
+def test_no_study_package_imports_another():
+    crossing = []
+    for module, targets in graph().items():
+        parts = module.split(".")
+        if parts[0] != "studies" or len(parts) < 3 or parts[1] not in STUDY_PACKAGES:
+            continue
+        for target in targets:
+            other = target.split(".")
+            if other[0] == "studies" and len(other) > 1 and other[1] in STUDY_PACKAGES and other[1] != parts[1]:
+                crossing.append(f"{module} imports {target}")
+    assert not crossing, "\n".join(crossing)
+
+
+def _scene_names() -> set[str]:
+    scenes = PACKAGE / "scenes"
+    found = {p.stem for p in scenes.glob("*.py")} | {p.name for p in scenes.iterdir() if (p / "__init__.py").exists()}
+    return found - {"__init__", "base", "checks"}
+
+
+def test_the_scene_names_this_test_knows_are_the_shipped_models():
+    models = PACKAGE.parents[1] / "models"
+    assert _scene_names() == {p.stem for p in models.glob("*.xml")}

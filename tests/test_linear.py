@@ -1,4 +1,4 @@
-"""Tests for springlab.linear: exact responses of linear time-invariant systems.
+"""Tests for springlab.exact.linear: exact responses of linear time-invariant systems.
 
 The matrix exponential itself is scipy's; what is tested here is springlab's use of it: that
 exp(X) - I keeps its own relative accuracy (small steps, creep and rigid-body modes), and that the
@@ -16,8 +16,8 @@ import pytest
 import scipy.linalg
 from scipy.integrate import solve_ivp
 
-from springlab import analytic as an
-from springlab import linear
+from springlab.exact import analytic as an
+from springlab.exact import linear
 
 EPS = np.finfo(float).eps
 

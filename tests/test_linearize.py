@@ -1,4 +1,4 @@
-"""MuJoCo's linearization of any model (springlab.linearize) against closed forms: a chain of masses
+"""MuJoCo's linearization of any model (springlab.exact.linearize) against closed forms: a chain of masses
 and springs, a pendulum at the bottom and upright, a free body, a sphere resting on a soft contact.
 
 Tolerances: the finite differences are centred with step h = FD_STEP; on a linear model they are
@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from springlab import linearize as lin
 from springlab.errors import BadInputError
+from springlab.exact import linearize as lin
 
 FD_RELATIVE = 1e-7  # see the module docstring: ~1e-10 expected, 1000x margin for conditioning
 

@@ -4,8 +4,9 @@ import mujoco
 import numpy as np
 import pytest
 
-from springlab import model_files, scenes
-from springlab.simulate import quiet_mujoco
+from springlab import scenes
+from springlab.sim import model_files
+from springlab.sim.simulate import quiet_mujoco
 
 MODEL_FILES = sorted(model_files.directory().glob("*.xml"))
 

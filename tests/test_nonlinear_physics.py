@@ -11,8 +11,8 @@ from scipy.special import ellipk, ellipkm1
 
 import springlab
 from springlab import scenes
-from springlab.scenes import nonlinear
-from springlab.simulate import quiet_mujoco
+from springlab.scenes.nonlinear import scene as nonlinear
+from springlab.sim.simulate import quiet_mujoco
 
 SCENE = scenes.get("nonlinear")
 # models/nonlinear.xml: m = 1 kg, k1 = 100 N/m, k3 = -1e4 N/m^3 (softening); double well k1 = -100, k3 = 1e4
@@ -442,7 +442,7 @@ def test_forced_runs_are_checked_at_the_integrators_own_order():
 
 
 def test_a_failed_check_flags_the_run_and_the_cli_exits_1(capsys):
-    from springlab.cli import main
+    from springlab.cli.main import main
 
     code = main(["run", "nonlinear", "softening", "--integrator", "euler", "--duration", "2"])
     out = capsys.readouterr().out
@@ -451,7 +451,7 @@ def test_a_failed_check_flags_the_run_and_the_cli_exits_1(capsys):
 
 
 def test_validation_row_of_a_checked_scenario_shows_its_tightest_check():
-    from springlab.api import validation_row
+    from springlab.runs.run import validation_row
 
     result = springlab.run("nonlinear", "double_well")
     row = validation_row(result)
@@ -468,10 +468,10 @@ def test_validation_row_of_a_checked_scenario_shows_its_tightest_check():
 
 
 def test_a_stop_condition_cuts_a_run_at_its_event():
-    from springlab.simulate import simulate
+    from springlab.sim.simulate import simulate
 
     with quiet_mujoco():
-        model = mujoco.MjModel.from_xml_path(str(springlab.model_files.path("slider")))
+        model = mujoco.MjModel.from_xml_path(str(springlab.sim.model_files.path("slider")))
     free = simulate(model, integrator="rk4", dt=1e-3, duration=1.0, qpos=[0.1])
     cut = simulate(model, integrator="rk4", dt=1e-3, duration=1.0, qpos=[0.1], stop=lambda q, v: q[:, 0] < 0)
     first = int(np.flatnonzero(free.qpos[:, 0] < 0)[0])

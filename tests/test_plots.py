@@ -9,9 +9,11 @@ import numpy as np
 import pytest
 from matplotlib.quiver import Quiver
 
-from springlab import api, plots
-from springlab.cli import main
+from springlab.cli.main import main
 from springlab.errors import BadInputError
+from springlab.plots import run as plots
+from springlab.runs.run import run_scenario
+from springlab.studies import families
 
 
 def _lines(ax, label=None):
@@ -24,7 +26,7 @@ def _legend_texts(ax):
 
 
 def test_time_series_overlays_the_exact_solution_and_puts_the_error_on_a_log_axis():
-    result = api.run("slider", "underdamped")
+    result = run_scenario("slider", "underdamped")
     figure = plots.time_series(result)
     axes = figure.axes
     assert len(axes) == 3
@@ -46,7 +48,7 @@ def test_time_series_overlays_the_exact_solution_and_puts_the_error_on_a_log_axi
 
 
 def test_time_series_has_a_column_per_joint_with_its_units():
-    figure = plots.time_series(api.run("car", "pitch_heave"))
+    figure = plots.time_series(run_scenario("car", "pitch_heave"))
     labels = [ax.get_ylabel() for ax in figure.axes]
     assert "position x [m]" in labels and "angle θ [rad]" in labels and "angular velocity ω [rad/s]" in labels
     assert {"joint heave", "joint pitch"} <= {ax.get_title() for ax in figure.axes}
@@ -57,7 +59,7 @@ def test_time_series_has_a_column_per_joint_with_its_units():
 
 
 def test_phase_plane_of_the_softening_spring_shows_field_equilibria_and_separatrix():
-    result = api.run("nonlinear", "softening")
+    result = run_scenario("nonlinear", "softening")
     k1, k3 = result.parameters["k1"], result.parameters["k3"]
     saddle = math.sqrt(-k1 / k3)  # force -(k1 x + k3 x^3) vanishes at 0 and +-sqrt(-k1/k3)
     figure = plots.phase_plane(result)
@@ -84,13 +86,13 @@ def test_phase_plane_of_the_softening_spring_shows_field_equilibria_and_separatr
 
 
 def test_family_of_undamped_releases_are_ellipses_of_semi_axes_x0_and_omega_x0():
-    figure = plots.phase_family("slider", "undamped")
+    figure = plots.phase_family(families.run_phase_family(run_scenario("slider", "undamped")))
     ax = figure.axes[0]
-    result = api.run("slider", "undamped")
+    result = run_scenario("slider", "undamped")
     omega = math.sqrt(result.parameters["stiffness"] / result.parameters["mass"])
     members = [line for line in ax.get_lines() if line.get_label().startswith("slider(0) = ")]
-    assert len(members) == len(plots.FAMILY_FRACTIONS)
-    for line, fraction in zip(members, plots.FAMILY_FRACTIONS):
+    assert len(members) == len(families.FAMILY_FRACTIONS)
+    for line, fraction in zip(members, families.FAMILY_FRACTIONS):
         x, v = line.get_xdata(), line.get_ydata()
         x0 = fraction * result.parameters["x0"]
         assert x[0] == pytest.approx(x0)
@@ -100,12 +102,12 @@ def test_family_of_undamped_releases_are_ellipses_of_semi_axes_x0_and_omega_x0()
 
 
 def test_family_across_the_separatrix_marks_exactly_the_releases_beyond_the_saddle_as_escaping():
-    figure = plots.phase_family("nonlinear", "softening")
+    figure = plots.phase_family(families.run_phase_family(run_scenario("nonlinear", "softening")))
     ax = figure.axes[0]
-    result = api.run("nonlinear", "softening")
+    result = run_scenario("nonlinear", "softening")
     saddle = math.sqrt(-result.parameters["k1"] / result.parameters["k3"])
     members = [line for line in ax.get_lines() if line.get_label().startswith("block(0) = ")]
-    assert len(members) == len(plots.FAMILY_SEPARATRIX_FRACTIONS)
+    assert len(members) == len(families.FAMILY_SEPARATRIX_FRACTIONS)
     for line in members:
         start = line.get_xdata()[0]
         # released at rest beyond the saddle, the spring force pushes outwards: escape (section 5.5)
@@ -115,14 +117,14 @@ def test_family_across_the_separatrix_marks_exactly_the_releases_beyond_the_sadd
 
 
 def test_zeta_family_draws_each_damping_ratio_with_its_regime_and_exact_curve():
-    figure = plots.zeta_family("slider", "free")
+    figure = plots.zeta_family(families.run_zeta_family("slider", "free"))
     response, phase = figure.axes
     texts = [text.get_text() for text in figure.legends[0].get_texts()]  # beside the axes, over no curve
-    assert [t.split(" ")[2] for t in texts[:-1]] == [f"{z:g}" for z in plots.ZETAS]
+    assert [t.split(" ")[2] for t in texts[:-1]] == [f"{z:g}" for z in families.ZETAS]
     assert "ζ = 1 (critical)" in texts and "ζ = 2 (overdamped)" in texts and "ζ = 0 (undamped)" in texts
     solid = [line for line in response.get_lines() if line.get_label().startswith("ζ")]
     dashed = [line for line in response.get_lines() if line.get_linestyle() != "-"]
-    assert len(solid) == len(plots.ZETAS) and len(dashed) >= len(plots.ZETAS)
+    assert len(solid) == len(families.ZETAS) and len(dashed) >= len(families.ZETAS)
     # every pair of ratios is told apart by colour (zeta = 0 and 0.1 included), and the exact curves are
     # white dashes inside them, not dark dashes over them
     colours = np.array([matplotlib.colors.to_rgb(line.get_color()) for line in solid])
@@ -134,21 +136,19 @@ def test_zeta_family_draws_each_damping_ratio_with_its_regime_and_exact_curve():
     legend_box = figure.legends[0].get_window_extent()
     assert not any(legend_box.overlaps(ax.get_window_extent()) for ax in figure.axes)
     # the critically damped curve is x0 (1 + omega t) e^{-omega t} (eq. 5.16 with v0 = 0)
-    result = api.run("slider", "free")
+    result = run_scenario("slider", "free")
     omega = math.sqrt(result.parameters["stiffness"] / result.parameters["mass"])
-    critical = solid[plots.ZETAS.index(1.0)]
+    critical = solid[families.ZETAS.index(1.0)]
     t, x = critical.get_xdata(), critical.get_ydata()
     np.testing.assert_allclose(x, result.parameters["x0"] * (1 + omega * t) * np.exp(-omega * t), atol=1e-6)
-    assert len(phase.get_lines()) == 2 * len(plots.ZETAS)
+    assert len(phase.get_lines()) == 2 * len(families.ZETAS)
 
 
 def test_kinds_that_do_not_apply_say_so():
     with pytest.raises(BadInputError, match="family"):
-        plots.phase_family("kinematics", "tachograph")
+        families.run_phase_family(run_scenario("kinematics", "tachograph"))
     with pytest.raises(BadInputError, match="damping"):
-        plots.zeta_family("kinematics")
-    with pytest.raises(BadInputError, match="unknown plot kind 'pie'; valid: time, phase, family, zeta"):
-        plots.figure_for("pie", "slider")
+        families.run_zeta_family("kinematics")
 
 
 def test_plot_command_writes_png_and_svg_and_refuses_other_formats(tmp_path, capsys):
@@ -166,8 +166,8 @@ def test_plot_command_writes_png_and_svg_and_refuses_other_formats(tmp_path, cap
 
 def test_plotting_never_touches_pyplot_global_state():
     code = (
-        "import sys, springlab.plots as p, springlab.api as a\n"
-        "p.phase_plane(a.run('slider', 'free'))\n"
+        "import sys, springlab.plots.run as p, springlab.runs.run as a\n"
+        "p.phase_plane(a.run_scenario('slider', 'free'))\n"
         "assert 'matplotlib.pyplot' not in sys.modules, 'pyplot imported'\n"
     )
     subprocess.run([sys.executable, "-c", code], check=True)
@@ -179,7 +179,9 @@ def test_tradeoff_stability_and_design_charts_leave_the_callers_backend_alone(tm
     code = (
         "import sys, matplotlib\n"
         "matplotlib.use('svg')\n"
-        "from springlab import charts, tradeoff, design, design_chart\n"
+        "from springlab.plots import charts, design as design_chart\n"
+        "from springlab.studies import tradeoff\n"
+        "from springlab.studies.design import study as design\n"
         f"charts.plot_tradeoff(tradeoff.sweep('slider', 'free', duration=0.5), {str(tmp_path / 't.png')!r})\n"
         f"design_chart.plot(design.run_study(levels=3), {str(tmp_path / 'd.png')!r})\n"
         "assert matplotlib.get_backend() == 'svg', matplotlib.get_backend()\n"
@@ -193,12 +195,12 @@ def test_plotting_leaves_the_callers_rcparams_alone_and_still_uses_its_own_style
     code = (
         "import matplotlib\n"
         "before = dict(matplotlib.rcParams)\n"
-        "import springlab.plots as p, springlab.api as a\n"
-        "figure = p.time_series(a.run('slider', 'free', duration=0.2))\n"
+        "import springlab.plots.run as p, springlab.runs.run as a\n"
+        "figure = p.time_series(a.run_scenario('slider', 'free', duration=0.2))\n"
         f"p.save(figure, {str(tmp_path / 't.png')!r})\n"
         "changed = [k for k, v in matplotlib.rcParams.items() if before[k] != v]\n"
         "assert not changed, changed\n"
-        "from springlab.plots_style import STYLE\n"
+        "from springlab.plots.style import STYLE\n"
         "assert figure.axes[0].xaxis.label.get_fontsize() == STYLE['font.size']\n"
     )
     subprocess.run([sys.executable, "-c", code], check=True, timeout=120)

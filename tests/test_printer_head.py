@@ -15,8 +15,8 @@ import pytest
 import scipy.linalg
 
 import springlab
-import springlab.model_files
-from springlab.cli import main
+import springlab.sim.model_files
+from springlab.cli.main import main
 
 BELT = np.array([[1.0, -1.0], [-1.0, 1.0]])  # the belt stretches by q_m - q_c
 
@@ -258,7 +258,7 @@ def test_non_physical_values_exit_2_with_one_line(argv, needle, capsys):
 
 
 def test_model_is_lean_the_belt_is_the_only_tendon():
-    model = mujoco.MjModel.from_xml_path(str(springlab.model_files.path("printer_head")))
+    model = mujoco.MjModel.from_xml_path(str(springlab.sim.model_files.path("printer_head")))
     assert np.all(model.opt.gravity == 0)
     assert model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONTACT
     assert model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONSTRAINT  # nothing is limited

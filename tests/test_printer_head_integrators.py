@@ -1,6 +1,6 @@
 """How MuJoCo's integrators treat the belt's TENDON damping, measured, and what it does to stability.
 
-Joint damping is implicit in euler, implicit and implicitfast (DESIGN.md). The belt's damping is a
+Joint damping is implicit in euler, implicit and implicitfast (docs/stability.md). The belt's damping is a
 tendon's, and MuJoCo treats it differently; measured here on the printer head's own model, to
 1e-9, from MuJoCo's one-step maps (mjd_transitionFD, and central differences of mj_step for rk4):
 
@@ -24,7 +24,7 @@ import pytest
 import springlab
 from springlab import scenes
 from springlab.errors import DivergedError
-from springlab.simulate import stability_limit as joint_damping_limit
+from springlab.exact.limits import stability_limit as joint_damping_limit
 
 BELT = np.array([[1.0, -1.0], [-1.0, 1.0]])
 I2 = np.eye(2)
@@ -47,7 +47,7 @@ def _belt_mode(params):
 
 def _measured_map(model, integrator: str, dt: float) -> np.ndarray:
     """MuJoCo's one-step Jacobian in (q_c, q_m, v_c, v_m): mjd_transitionFD, or mj_step differences for rk4."""
-    model.opt.integrator = springlab.simulate.INTEGRATORS[integrator]
+    model.opt.integrator = springlab.sim.simulate.INTEGRATORS[integrator]
     model.opt.timestep = dt
     data = mujoco.MjData(model)
     if integrator != "rk4":

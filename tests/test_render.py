@@ -8,9 +8,12 @@ import mujoco
 import numpy as np
 import pytest
 
-from springlab import api, media, plots_panel, render
-from springlab.cli import main
+from springlab.cli.main import main
 from springlab.errors import BadInputError
+from springlab.plots import panel as plots_panel
+from springlab.render import media
+from springlab.render import video as render
+from springlab.runs.run import run_scenario
 
 
 def _decode(path):
@@ -31,7 +34,7 @@ def _block_mask(frames):
 @pytest.fixture(scope="module")
 def undamped():
     # undamped slider: x(t) = 0.1 cos(10 t) m, a full swing across the rail every 0.31 s
-    return api.run("slider", "undamped", duration=3.0)
+    return run_scenario("slider", "undamped", duration=3.0)
 
 
 def test_video_decodes_with_duration_times_fps_frames_of_the_asked_size(undamped, tmp_path):
@@ -107,7 +110,7 @@ def test_gif_frames_last_one_over_fps_each(undamped, tmp_path):
 
 def test_camera_backs_off_when_the_motion_leaves_the_view(tmp_path):
     # the chapter's exercise starts 5 m out, far outside the camera's 0.9 m wide view of the rail
-    result = api.run("slider", "exercise")
+    result = run_scenario("slider", "exercise")
     position = result.model.cam_pos[0].copy()
     render.render_video(
         result.model,
@@ -247,7 +250,7 @@ def test_render_run_clips_to_the_requested_seconds(undamped, tmp_path):
 
 def test_declared_springs_are_drawn_between_their_sites():
     # the slider's spring is a custom "spring:" text, drawn as a capsule from the wall to the block
-    result = api.run("slider", "free", duration=0.1)
+    result = run_scenario("slider", "free", duration=0.1)
     springs = render.drawn_springs(result.model)
     assert len(springs) == 1
     first, second, width, rgba = springs[0]
@@ -294,7 +297,7 @@ def test_multisampling_only_when_asked_and_the_model_keeps_its_own_setting(undam
     # without multisampling an edge pixel is one surface's colour or the other's; with it (antialias=True,
     # the model's offsamples, MuJoCo's default 4) edge pixels are blends, so the picture has more distinct
     # colours. The sample count is set for the GL context only, never in the caller's model.
-    from springlab.render_gl import OffscreenScene
+    from springlab.render.gl import OffscreenScene
 
     model = undamped.model
     before = (model.vis.global_.offwidth, model.vis.global_.offheight, model.vis.quality.offsamples)

@@ -12,7 +12,11 @@ import imageio_ffmpeg
 import numpy as np
 import pytest
 
-from springlab import api, media, render, render_scale, scenes
+from springlab import scenes
+from springlab.render import media
+from springlab.render import scale as render_scale
+from springlab.render import video as render
+from springlab.runs.run import run_scenario
 
 
 def _decode(path):
@@ -48,7 +52,7 @@ def _column_centroid(mask):
 
 @pytest.mark.slow
 def test_the_exaggerated_car_body_follows_the_heave_by_at_least_ten_pixels(tmp_path):
-    result = api.run("car", "push_release")
+    result = run_scenario("car", "push_release")
     info = media.render_run(result, tmp_path / "car.mp4", progress=False)
     assert info["exaggeration"] > 1  # a 4.9 mm motion of a 4.2 m car is magnified by default
     frames = _decode(tmp_path / "car.mp4")
@@ -63,7 +67,7 @@ def test_the_exaggerated_car_body_follows_the_heave_by_at_least_ten_pixels(tmp_p
 
 @pytest.mark.slow
 def test_the_road_bump_rises_and_falls_under_the_front_wheel_with_r_of_t(tmp_path):
-    result = api.run("car", "road_bump")
+    result = run_scenario("car", "road_bump")
     info = media.render_run(result, tmp_path / "bump.mp4", progress=False)
     assert info["slow_motion"] == 1 and info["exaggeration"] == 1  # the bump at real speed, real size
     frames = _decode(tmp_path / "bump.mp4")
@@ -91,7 +95,7 @@ def test_the_road_bump_rises_and_falls_under_the_front_wheel_with_r_of_t(tmp_pat
 
 @pytest.mark.slow
 def test_the_printer_move_is_slowed_to_many_frames_and_the_carriage_follows_its_simulated_position(tmp_path):
-    result = api.run("printer_head", "move")
+    result = run_scenario("printer_head", "move")
     info = media.render_run(result, tmp_path / "move.mp4", progress=False)
     assert info["frames"] >= 90
     # the 195 Hz belt gets frames per period enough to be seen ringing, not aliased
@@ -132,7 +136,7 @@ CASES = [(s.name, c) for s in scenes.SCENES.values() for c in s.scenarios]
 @pytest.mark.slow
 @pytest.mark.parametrize("scene, scenario", CASES)
 def test_the_moving_body_is_inside_the_frame_in_every_frame(scene, scenario, tmp_path):
-    result = api.run(scene, scenario)
+    result = run_scenario(scene, scenario)
     duration = min(float(result.time[-1]), 12.0)
     info = media.render_run(
         result, tmp_path / "v.mp4", fps=10, width=320, height=240, duration=duration, progress=False
@@ -152,7 +156,7 @@ def _text_ink(frames):
 
 @pytest.mark.parametrize("option", ["exaggerate", "slow_motion"])
 def test_a_scale_factor_other_than_one_is_written_on_every_frame(option, tmp_path):
-    result = api.run("car", "push_release", duration=0.5)  # white sky behind the text: only the text is dark
+    result = run_scenario("car", "push_release", duration=0.5)  # white sky behind the text: only the text is dark
     plain = dict(slow_motion=1, exaggerate=1)
     scaled = {**plain, option: 3}
     common = dict(fps=10, width=320, height=240, duration=0.5, camera="side", label="car / push_release")
@@ -164,7 +168,7 @@ def test_a_scale_factor_other_than_one_is_written_on_every_frame(option, tmp_pat
 
 
 def test_exaggeration_scales_every_coordinate_about_its_mean_and_leaves_the_trajectory_alone():
-    result = api.run("car", "road_bump", duration=0.5)
+    result = run_scenario("car", "road_bump", duration=0.5)
     states = result.trajectory.qpos.copy()
     drawn = render_scale.exaggerated(result.model, states, 5.0)
     np.testing.assert_array_equal(states, result.trajectory.qpos)  # drawing only
@@ -195,10 +199,10 @@ def test_the_tachograph_vehicle_is_drawn_bus_length_against_the_distance_marks(t
     # Marks lie every MARK_SPACING m on the road. The bus's near side stands between the road's near edge
     # (largest mark spacing in px) and the road seen under the bus (smallest), so 12 m measured with those two
     # spacings must bracket the image length; quantisation: +-1 px at each end of the bus, +-1 px per spacing.
-    from springlab.render_drawings import MARK_SPACING
-    from springlab.scenes._kinematics_bus import BUS_LENGTH
+    from springlab.render.drawings import MARK_SPACING
+    from springlab.scenes.kinematics.bus import BUS_LENGTH
 
-    result = api.run("kinematics", "tachograph")
+    result = run_scenario("kinematics", "tachograph")
     media.render_run(result, tmp_path / "v.mp4", fps=2, width=640, height=480, duration=12.0, progress=False)
     frames = _decode(tmp_path / "v.mp4")
     checked = 0

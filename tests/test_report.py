@@ -14,7 +14,8 @@ import subprocess
 import numpy as np
 import pytest
 
-from springlab import api, demo, media
+from springlab.demo import steps as demo
+from springlab.runs.run import run_scenario, validation_row
 
 CHROMIUM_FLAGS = [
     "--headless",
@@ -78,15 +79,15 @@ def demo_out(tmp_path_factory):
     out = tmp_path_factory.mktemp("demo")
     state = demo.DemoState(out=out)
     for scene, scenario in SCENARIOS:
-        result = api.run(scene, scenario)
+        result = run_scenario(scene, scenario)
         state.results[(scene, scenario)] = result
-        state.validation.append(api.validation_row(result))
-    saved = media.DEMO_CLIP_SECONDS
-    media.DEMO_CLIP_SECONDS = CLIP_SECONDS  # short clips keep the test quick; the page is the same
+        state.validation.append(validation_row(result))
+    saved = demo.DEMO_CLIP_SECONDS
+    demo.DEMO_CLIP_SECONDS = CLIP_SECONDS  # short clips keep the test quick; the page is the same
     try:
-        state.artifacts.extend(media.media_step(state))
+        state.artifacts.extend(demo.media_step(state))
     finally:
-        media.DEMO_CLIP_SECONDS = saved
+        demo.DEMO_CLIP_SECONDS = saved
     # artifacts from steps this report does not know (e.g. a trade-off study): listed by kind alone
     (out / "tradeoff").mkdir()
     (out / "tradeoff" / "pareto.csv").write_text("dt,error\n0.001,1e-9\n")
@@ -244,7 +245,7 @@ def test_every_scenario_states_its_question_and_an_answer_from_its_own_run():
 
     for scene in scenes.SCENES.values():
         for scenario in scene.scenarios:
-            result = api.run(scene.name, scenario)
+            result = run_scenario(scene.name, scenario)
             qa = scene.question_and_answer(scenario, result.summary["quantities"], result.parameters)
             assert qa is not None and qa[0].strip() and qa[1].strip(), f"{scene.name}/{scenario}"
             assert "{" not in qa[1], f"{scene.name}/{scenario}: unfilled template {qa[1]!r}"

@@ -15,7 +15,7 @@ import time
 
 import pytest
 
-from springlab import demo
+from springlab.demo import steps as demo
 
 
 def _start(*argv, cwd):
@@ -28,6 +28,9 @@ def _start(*argv, cwd):
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        # a shell without job control starts background jobs with SIGINT ignored, and the child
+        # inherits that; a user's springlab runs with the default disposition, so the test does too
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
 
 
@@ -94,7 +97,7 @@ def test_a_signalled_demo_leaves_its_folder_marked_incomplete(tmp_path, signum, 
 
 def test_sigterm_in_process_unwinds_like_ctrl_c(tmp_path, capsys, monkeypatch):
     # the handler is installed only while main() runs, and the previous one comes back
-    from springlab import cli
+    from springlab.cli import main as cli
 
     def command(args):
         os.kill(os.getpid(), signal.SIGTERM)

@@ -9,7 +9,8 @@ import pytest
 import springlab
 from springlab import scenes
 from springlab.errors import DivergedError
-from springlab.simulate import INTEGRATORS, simulate, stability_limit
+from springlab.exact.limits import stability_limit
+from springlab.sim.simulate import INTEGRATORS, simulate
 
 
 def _slider_model(scenario="step"):

@@ -7,7 +7,7 @@ import pytest
 import scipy.linalg
 
 import springlab
-from springlab.simulate import ORDERS
+from springlab.sim.simulate import ORDERS
 
 
 @pytest.mark.parametrize(
@@ -24,7 +24,7 @@ def test_default_setting_reaches_1e6_relative_accuracy(scenario):
 @pytest.mark.parametrize("integrator", list(ORDERS))
 @pytest.mark.parametrize("scenario", ["undamped", "underdamped", "critical", "overdamped", "step", "harmonic"])
 def test_the_predicted_tolerance_bounds_the_measured_error(integrator, scenario):
-    # What this checks, plainly: springlab.compare's predicted bound (the code's own formula) is an upper
+    # What this checks, plainly: springlab.runs.compare's predicted bound (the code's own formula) is an upper
     # bound of the error the run reports, and the verdict follows the 1e-2 cap. It is not an independent
     # check of that error; test_unforced_error_is_the_exact_error_of_the_integrators_one_step_map is.
     result = springlab.run("slider", scenario, integrator=integrator, dt=1e-3, duration=2.0)
@@ -33,12 +33,12 @@ def test_the_predicted_tolerance_bounds_the_measured_error(integrator, scenario)
     scene = springlab.scenes.get("slider")
     chosen = scene.scenario(scenario)
     reference = scene.reference(result.model, result.parameters, chosen, result.time, dt=1e-3)
-    predicted = springlab.compare.tolerances(reference, integrator, 1e-3, result.time)
+    predicted = springlab.runs.compare.tolerances(reference, integrator, 1e-3, result.time)
     for column, error in summary["errors"].items():
         assert error["max_rel"] <= predicted[column], column
     # a PASS certifies at most 1e-2 (discrete's dissipation costs it more over 2 s)
     worst = max(e["max_rel"] for e in summary["errors"].values())
-    assert summary["passed"] is (worst <= springlab.compare.CERTIFIED_CAP)
+    assert summary["passed"] is (worst <= springlab.runs.compare.CERTIFIED_CAP)
 
 
 def _one_step_map(integrator, m, k, d, h):
@@ -169,7 +169,7 @@ def test_model_values_are_read_back_from_the_mjcf():
     # the defaults come from models/slider.xml, not from a Python copy
     import mujoco
 
-    from springlab import model_files
+    from springlab.sim import model_files
 
     model = mujoco.MjModel.from_xml_path(str(model_files.path("slider")))
     result = springlab.run("slider", "free", duration=0.1)

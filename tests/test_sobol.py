@@ -8,9 +8,9 @@ import math
 
 import pytest
 
-from springlab import sobol
-from springlab.cli import main
+from springlab.cli.main import main
 from springlab.errors import BadInputError
+from springlab.studies.design import sobol
 
 
 def ishigami_exact(a: float, b: float) -> tuple[list[float], list[float]]:

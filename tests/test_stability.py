@@ -17,9 +17,11 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from springlab import extremes, scenes, stability
-from springlab.cli import main
-from springlab.simulate import INTEGRATORS, simulate, stability_limit
+from springlab import scenes
+from springlab.cli.main import main
+from springlab.exact.limits import stability_limit
+from springlab.sim.simulate import INTEGRATORS, simulate
+from springlab.studies import extremes, stability
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 EULER_FAMILY = ("euler", "implicit", "implicitfast")

@@ -15,15 +15,10 @@ PACKAGE = pathlib.Path(__file__).resolve().parents[1] / "src" / "springlab"
 #: modules other branches are writing or rewriting (issue 11), by file-name prefix; each leaves this list
 #: when it lands in the house style
 PENDING: tuple[str, ...] = ()
-#: public functions whose argument is the demo's state or a Result from a layer above (typing them needs a
-#: Protocol in the lower layer), or a FitResult, whose module fit.py imports fit_results (a cycle, even under
-#: TYPE_CHECKING: tests/test_layers.py reads every import); named here so the list can only shrink
+#: public functions whose argument is a FitResult, whose module fit.py imports fit_results (a cycle, even
+#: under TYPE_CHECKING: tests/test_layers.py reads every import); named here so the list can only shrink
 UNTYPED = {
-    "media.py:media_step",
-    "report.py:build_html",
-    "report.py:write_report",
-    "outputs.py:write_run",
-    "fit_results.py:verdict",
+    "studies/fit/results.py:verdict",
 }
 
 GOOGLE_SECTION = re.compile(r"^\s*(Args|Arguments|Returns|Yields|Raises|Attributes|Keyword Args):\s*$", re.M)
@@ -92,3 +87,20 @@ def test_contributing_lists_the_layers_of_test_layers():
         if len(cells) == 3 and cells[0] in LAYERS:
             table[cells[0]] = tuple(re.findall(r"`([\w.]+)`", cells[1]))
     assert table == LAYERS
+
+
+def test_contributing_shows_the_package_tree_as_it_is():
+    text = (PACKAGE.parents[1] / "CONTRIBUTING.md").read_text()
+    block = text.split("```\nsrc/springlab/\n", 1)[1].split("```", 1)[0]
+    shown, folders = set(), []
+    for line in block.splitlines():
+        depth = (len(line) - len(line.lstrip())) // 2  # two spaces a level under src/springlab/
+        words = line.split()
+        if words and words[0].endswith("/"):
+            folders[depth - 1 :] = [words[0].rstrip("/")]
+            words = words[1:]
+        else:
+            folders = folders[: depth - 1]
+        shown.update("/".join([*folders, w]) for w in words)
+    actual = {p.relative_to(PACKAGE).as_posix() for p in PACKAGE.rglob("*.py")}
+    assert shown == actual, f"missing from CONTRIBUTING.md: {sorted(actual - shown)}; gone: {sorted(shown - actual)}"

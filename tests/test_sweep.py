@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 import springlab
-from springlab import sweep_plot
-from springlab.cli import main
+from springlab.cli.main import main
 from springlab.errors import BadInputError, DivergedError
-from springlab.simulate import stability_limit
-from springlab.sweeps import configurations, parse_axis
+from springlab.exact.limits import stability_limit
+from springlab.plots import sweep as sweep_plot
+from springlab.studies.sweeps import configurations, parse_axis
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 

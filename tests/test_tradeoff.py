@@ -7,10 +7,12 @@ import numpy as np
 import pytest
 
 import springlab
-from springlab import batch, scenes, tradeoff
-from springlab.cli import main
+from springlab import scenes
+from springlab.cli.main import main
 from springlab.errors import BadInputError, DivergedError
-from springlab.simulate import INTEGRATORS, simulate
+from springlab.sim import batch
+from springlab.sim.simulate import INTEGRATORS, simulate
+from springlab.studies import tradeoff
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 

@@ -1,6 +1,6 @@
 """A PASS means something: the error estimate is used only inside its range, and a PASS certifies at most 1e-2.
 
-The range rule (springlab.compare.estimate_range) is checked against the exact
+The range rule (springlab.runs.compare.estimate_range) is checked against the exact
 error of the integrators' known one-step maps on the scalar test equation; the
 verdicts of real runs are checked against their exact references across every
 integrator and timestep up to the stability limit.
@@ -12,9 +12,11 @@ import numpy as np
 import pytest
 
 import springlab
-from springlab import api, compare, tradeoff
 from springlab.errors import BadInputError, DivergedError
-from springlab.simulate import INTEGRATORS
+from springlab.runs import compare
+from springlab.runs.run import exact_scenarios
+from springlab.sim.simulate import INTEGRATORS
+from springlab.studies import tradeoff
 
 #: the one-step maps R(z) of the scalar test equation y' = lambda y, z = h lambda, in closed form
 AMPLIFICATIONS = {
@@ -81,7 +83,7 @@ def test_a_system_without_nonzero_modes_is_inside_at_every_dt():
     ],
 )
 def test_runs_far_outside_the_estimates_range_are_not_validated_and_exit_1(argv, capsys):
-    from springlab.cli import main
+    from springlab.cli.main import main
 
     code = main(list(argv))
     out, err = capsys.readouterr()
@@ -112,7 +114,7 @@ def test_a_requested_tolerance_is_a_measurement_and_holds_at_any_dt():
 
 
 def _exact_scenarios():
-    return [(scene, scenario) for scene, scenario in api.exact_scenarios() if tradeoff.sweepable(scene, scenario, None)]
+    return [(scene, scenario) for scene, scenario in exact_scenarios() if tradeoff.sweepable(scene, scenario, None)]
 
 
 def _stability_dt(scene, scenario, integrator: str) -> float | None:

@@ -8,14 +8,16 @@
 True
 """
 
-from . import analytic, errors
-from .api import Result
-from .audit import Audit, audit
-from .auto import run, validate
+from springlab.exact import analytic
+from springlab.runs.run import Result
+from springlab.studies.audit.audit import Audit, audit
+from springlab.studies.auto import run, validate
+from springlab.studies.fit.fit import fit
+from springlab.studies.sweeps import sweep
+
+from . import errors
 from .errors import BadInputError, DivergedError, SpringlabError, UnknownNameError
-from .fit import fit
 from .scenes import SCENES
-from .sweeps import sweep
 
 __all__ = [
     "analytic",

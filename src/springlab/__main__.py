@@ -2,7 +2,7 @@
 
 import sys
 
-from .cli import main
+from springlab.cli.main import main
 
 if __name__ == "__main__":  # not when a worker process imports it (multiprocessing spawn)
     sys.exit(main())

@@ -1,7 +1,9 @@
-"""The scene registry: one module per MJCF file under models/, same name.
+"""The scene registry: one module or folder per MJCF file under models/, same name.
 
-Scene modules are discovered, so a new scene is a new module with a module-level
-`SCENE` and a models/<name>.xml; nothing else needs editing.
+Scenes are discovered, so a new scene is a new module (`scenes/<name>.py`) or folder
+(`scenes/<name>/`, its `__init__` handing on `SCENE`) with a module-level `SCENE` and a
+models/<name>.xml; nothing else needs editing. `base` (what every scene provides) and
+`checks` (scalar claims) are the scenes' shared machinery, not scenes.
 """
 
 from __future__ import annotations
@@ -9,15 +11,18 @@ from __future__ import annotations
 import importlib
 import pkgutil
 
-from ..errors import UnknownNameError
-from ..scene import Scene
+from springlab.errors import UnknownNameError
 
+from .base import Scene
+
+#: modules of this package that serve the scenes and are none
+MACHINERY = ("base", "checks")
 #: the chapter's order; discovered scenes not listed here follow alphabetically
 CATALOGUE_ORDER = ("slider", "car", "printer_head", "kinematics", "nonlinear")
 
 
 def _discover() -> dict[str, Scene]:
-    names = sorted(m.name for m in pkgutil.iter_modules(__path__) if not m.name.startswith("_"))
+    names = sorted(m.name for m in pkgutil.iter_modules(__path__) if m.name not in MACHINERY)
     names.sort(key=lambda n: (CATALOGUE_ORDER.index(n) if n in CATALOGUE_ORDER else len(CATALOGUE_ORDER), n))
     found = {}
     for name in names:

@@ -1,0 +1,323 @@
+"""The human-readable answers of the `springlab` commands: tables and lines printed to stdout.
+
+`cli` parses the arguments and calls the library; this module only formats what came back
+(`--json` prints the same results machine-readably and does not come through here). Times are
+printed in seconds [s] or milliseconds [ms] as each header says; errors are relative [-].
+"""
+
+from __future__ import annotations
+
+import pathlib
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from springlab.render import scale as render_scale
+from springlab.runs import compare
+from springlab.studies import tradeoff
+
+if TYPE_CHECKING:  # annotations only: these load mujoco.batch, scipy or sysid, which the commands import lazily
+    from springlab.studies.design.sobol import SobolStudy
+    from springlab.studies.design.study import Study
+    from springlab.studies.fit.fit import FitResult
+    from springlab.studies.sweeps import Sweep
+
+
+def check_line(check: dict) -> str:
+    """'period_s  value 1.234  ref 1.234  error 1.0e-09 <= 1.0e-06 pass' for a Check dict."""
+    return (
+        f"{check['name']:<30} value {check['value']:<14.10g} ref {check['reference']:<14.10g}"
+        f" error {check['error']:.2e} {'<=' if check['passed'] else '>'} {check['tolerance']:.2e}"
+        f"  {'pass' if check['passed'] else 'FAIL'}"
+    )
+
+
+def print_list(catalogue: list[dict[str, Any]]) -> None:
+    """`springlab list`: each scene's title, default setting, scenarios (validated dt [ms]) and parameters."""
+    for entry in catalogue:
+        print(f"{entry['scene']}: {entry['title']}")
+        print(
+            f"  default setting: {entry['default_integrator']}, dt = {entry['default_dt']:g} s unless a scenario says"
+        )
+        print("  scenarios (validated dt):")
+        for name, text in entry["scenarios"].items():
+            dt = entry["scenario_settings"][name]["dt"]
+            print(f"    {name:<22} {f'{dt * 1e3:g} ms':>8}  {text}")
+        print("  parameters:")
+        for name, p in entry["parameters"].items():
+            print(f"    {name:<16} [{p['unit']}] {p['description']} ({p['valid']})")
+
+
+def print_run(summary: dict, output: str | None) -> None:
+    """`springlab run`: setting, quantities, errors against the exact solution, checks and the verdict."""
+    print(
+        f"{summary['scene']} / {summary['scenario']}: {summary['integrator']}, dt = {summary['dt']:g} s,"
+        f" {summary['steps']} steps in {summary['wall_time_s'] * 1e3:.1f} ms"
+    )
+    for name, value in summary["quantities"].items():
+        print(f"  {name:<26} {value:.10g}" if isinstance(value, float) else f"  {name:<26} {value}")
+    for column, error in summary["errors"].items():
+        print(f"  error {column:<20} max_abs {error['max_abs']:.3e}  max_rel {error['max_rel']:.3e}")
+    for check in summary.get("checks", []):
+        print(f"  check {check_line(check)}")
+    if summary["tolerance"] is not None or summary.get("checks"):
+        verdict = summary["verdict"] if summary["verdict"] != "FAIL" else "FAIL (outside tolerance)"
+        print(
+            f"  tolerance {summary['tolerance']:.3e}: {verdict}"
+            if summary["tolerance"] is not None
+            else f"  checks: {verdict}"
+        )
+        validity = summary.get("estimate_range")
+        if validity is not None and not validity["inside"]:
+            print(f"  basis: {validity['reason']}")
+    if output:
+        print(f"  wrote {pathlib.Path(output) / 'trajectory.csv'} and summary.json")
+
+
+def validation_table(rows: list[dict]) -> str:
+    """The validate/demo table: one column says what each row's error measures (trajectory or a check)."""
+    # columns as wide as their longest name, so long scenario names stay readable
+    scene_width = max([12] + [len(r["scene"]) for r in rows]) + 1
+    scenario_width = max([13] + [len(r["scenario"]) for r in rows]) + 1
+    measures = [r.get("measure", "trajectory max_rel") for r in rows]
+    measure_width = max([len("error of")] + [len(m) for m in measures]) + 2
+    lines = [
+        f"{'scene':<{scene_width}}{'scenario':<{scenario_width}}{'integrator':<11}{'dt [s]':>9}"
+        f"  {'error of':<{measure_width}}{'error':>9}{'tolerance':>11}  result"
+    ]
+    for r, measure in zip(rows, measures):
+        lines.append(
+            f"{r['scene']:<{scene_width}}{r['scenario']:<{scenario_width}}{r['integrator']:<11}{r['dt']:>9.2g}"
+            f"  {measure:<{measure_width}}{r['max_rel_error']:>9.2e}{r['tolerance']:>11.2e}  {_row_result(r)}"
+        )
+        lines.extend(f"    check {check_line(c)}" for c in r.get("checks", []))
+    return "\n".join(lines)
+
+
+def _row_result(row: dict) -> str:
+    """'pass', 'FAIL' or 'not validated' (outside the range of the error estimate) for a validate row."""
+    if row["passed"]:
+        return "pass"
+    return "not validated" if row.get("verdict") == compare.NOT_VALIDATED else "FAIL"
+
+
+def print_validate(rows: list[dict]) -> None:
+    """`springlab validate`: the table, the tolerance bases, the scenarios' notes and the count."""
+    print(validation_table(rows))
+    for basis in dict.fromkeys(r["tolerance_basis"] for r in rows):
+        print(f"tolerance = {basis}")
+    for r in rows:
+        if r.get("note"):
+            print(f"{r['scene']} {r['scenario']}: {r['note']}")
+    failed = sum(not r["passed"] for r in rows)
+    unvalidated = sum(r.get("verdict") == compare.NOT_VALIDATED for r in rows)
+    outside = f" ({unvalidated} not validated: outside the range of the error estimate)" if unvalidated else ""
+    print(f"{len(rows) - failed} passed, {failed} failed{outside}")
+
+
+def print_render(info: dict) -> None:
+    """`springlab render`: the file written, its frames and the simulated time [s] they cover."""
+    scaled = "".join(f", {note}" for note in render_scale.labels(info["slow_motion"], info["exaggeration"]))
+    print(
+        f"wrote {info['path']}: {info['frames']} frames, {info['width']}x{info['height']} at {info['fps']:g} fps"
+        f" ({info['frames'] / info['fps'] / info['slow_motion']:.3g} s of simulation{scaled})"
+        f" in {info['seconds']:.1f} s ({info['frames'] / max(info['seconds'], 1e-9):.0f} frames/s)"
+    )
+
+
+def _run_verdict(run: tradeoff.Run) -> str:
+    """A sweep row's verdict in a word or two: pass, FAIL, not validated, or blank when diverged."""
+    if run.verdict is None:
+        return ""
+    return {compare.PASS: "pass", compare.FAIL: "FAIL"}.get(run.verdict, "not validated")
+
+
+def print_tradeoff(result: tradeoff.Tradeoff, output: str | None) -> None:
+    """`springlab tradeoff`: every (integrator, dt) run, the observed orders and the recommendation."""
+    print(
+        f"{result.scene} / {result.scenario}: {len(result.runs)} runs over {result.duration:g} s"
+        f" in {result.sweep_wall_time_s:.1f} s"
+    )
+    print(
+        f"  {'integrator':<13}{'dt [s]':>10}{'steps':>9}{'max rel err':>13}{'wall [ms]':>11}{'wall/sim s':>12}"
+        "  pareto  verdict"
+    )
+    front = {id(r) for r in result.pareto}
+    for r in result.runs:
+        error = "diverged" if r.diverged else f"{r.max_rel_error:.3e}"
+        print(
+            f"  {r.integrator:<13}{r.dt:>10.3g}{r.steps:>9}{error:>13}{r.wall_time_s * 1e3:>11.3f}"
+            f"{r.wall_time_s / result.duration * 1e3:>10.3f}ms  {'*' if id(r) in front else ' ':<6}  {_run_verdict(r)}"
+        )
+    orders = ", ".join(f"{name} {p:.2f}" if p is not None else f"{name} -" for name, p in result.orders.items())
+    print(f"  observed order: {orders}")
+    pick = result.recommendation
+    if pick is not None:
+        if pick["integrator"] is None:
+            print(f"  tol {pick['tol']:g}: no setting of the sweep meets it")
+        else:
+            print(
+                f"  tol {pick['tol']:g}: use {pick['integrator']} at dt = {pick['dt']:g} s (verified: error"
+                f" {pick['max_rel_error']:.3e}, {pick['wall_time_s'] * 1e3:.3f} ms)"
+            )
+    print(f"  wall time: {tradeoff.WALL_TIME_BASIS}")
+    if output:
+        print(f"  wrote {pathlib.Path(output) / 'tradeoff.json'} and tradeoff.png")
+
+
+def print_stability(report: dict, output: str | None) -> None:
+    """`springlab stability`: boundaries omega*dt [-] against theory, the extremes table, undamped energy."""
+    print("stability boundary omega*dt (measured by a growth test vs theory)")
+    print(f"  {'integrator':<13}{'zeta':>7}{'measured':>12}{'theory':>12}{'rel diff':>10}")
+    for r in report["boundaries"]:
+        print(
+            f"  {r['integrator']:<13}{r['zeta']:>7g}{r['measured_omega_dt']:>12.5g}{r['theory_omega_dt']:>12.5g}"
+            f"{r['relative_difference']:>10.1e}"
+        )
+    print(f"extremes (accurate: max rel error <= {report['accuracy_threshold']:g})")
+    print(
+        f"  {'case':<15}{'integrator':<13}{'x limit':>8}{'omega*dt':>10}{'steps':>8}  {'outcome':<11}"
+        f"{'error':>9}  advice"
+    )
+    for r in report["extremes"]:
+        error = "-" if r["max_rel_error"] is None else f"{r['max_rel_error']:.1e}"
+        if r["fraction"] is None:
+            fraction = "advised"
+        else:
+            fraction = f"{r['fraction']:g}" + ("*" if r["limit_of"] != r["integrator"] else "")
+        print(
+            f"  {r['case']:<15}{r['integrator']:<13}{fraction:>8}{r['omega_dt']:>10.4g}{r['steps']:>8}"
+            f"  {r['outcome']:<11}{error:>9}  {r['advice']}"
+        )
+    print("  * discrete has no stability limit: fractions of the euler limit")
+    print("undamped energy E/E0 vs the exact step-map formulas")
+    for r in report["energy"]:
+        print(
+            f"  {r['integrator']:<13} omega*dt {r['omega_dt']:g}, {r['steps']} steps: E/E0 in"
+            f" [{r['min_ratio']:.6g}, {r['max_ratio']:.6g}], final {r['final_ratio']:.6g};"
+            f" {r['formula']}: max deviation {r['max_relative_deviation']:.1e}"
+        )
+    print(f"done in {report['wall_time_s']:.1f} s")
+    if output:
+        print(f"  wrote {pathlib.Path(output) / 'stability.json'}, stability.png and energy.png")
+
+
+def print_design(design: ModuleType, study: Study, output: str | None) -> None:
+    """`springlab design`: the study's size and speed, ranked elasticities [-] and the answer.
+
+    `design` is the springlab.studies.design.study module, passed in because the command imports it lazily.
+    """
+    s = design.summary(study)
+    print(
+        f"{s['scene']} design study: {s['configurations']} configurations ({s['levels']} levels of "
+        f"{', '.join(design.PROPERTIES)}) in {s['wall_time_s']:.1f} s, {s['configurations_per_s']:.0f}/s"
+        + (f" on {s['nthread']} threads" if s["executor"] == "local" else f" on {s['executor']}")
+    )
+    print(f"  {'property':<16}{'default':>11}{'range':>22}{'elasticity':>12}{'local':>9}")
+    for name in s["ranking"]:
+        grid = s["properties"][name]["grid"]
+        unit = design.PROPERTIES[name]
+        print(
+            f"  {name:<16}{s['default']['properties'][name]:>11.4g}{f'{grid[0]:.3g}..{grid[-1]:.3g} {unit}':>22}"
+            f"{s['elasticities'][name]:>+12.3f}{s['local_elasticities'][name]:>+9.3f}"
+        )
+    ratio = s["estimate_over_simulation"]
+    print(
+        f"  log-log fit R^2 {s['regression_r2']:.3f}; analytic estimate / simulation: median"
+        f" {ratio['median']:.3f}, 5-95% {ratio['p05']:.3f}-{ratio['p95']:.3f}"
+    )
+    print(design.answer(study))
+    if output:
+        print(f"  wrote {pathlib.Path(output) / 'design.json'}, configurations.csv and design.png")
+
+
+def print_sobol(sobol: ModuleType, indices: SobolStudy, output: str | None) -> None:
+    """`springlab design --sobol`: first-order and total Sobol indices [-] with their 95% half-widths.
+
+    `sobol` is the springlab.studies.design.sobol module, passed in because the command imports it lazily.
+    """
+    s = indices.summary()
+    print(
+        f"Sobol indices of positioning time: {s['runs']} runs in {s['wall_time_s']:.1f} s on {s['executor']}"
+        f" ({s['runs_per_s']:.0f}/s), {s['unsettled']} unsettled"
+    )
+    print(f"  {'property':<16}{'range':>24}{'S1':>14}{'ST':>14}{'ST-S1':>8}{'elasticity':>12}")
+    for name in s["ranking"]:
+        low, high = s["parameters"][name]["range"]
+        unit = sobol.PARAMETERS[name]
+        print(
+            f"  {name:<16}{f'{low:.3g}..{high:.3g} {unit}':>24}{s['S1'][name]:>8.3f}+-{s['S1_conf'][name]:<4.2f}"
+            f"{s['ST'][name]:>8.3f}+-{s['ST_conf'][name]:<4.2f}{s['interactions'][name]:>8.3f}"
+            f"{s['elasticities'][name]:>+12.3f}"
+        )
+    print(sobol.answer(indices))
+    if output:
+        print(f"  wrote {pathlib.Path(output) / 'sobol.png'} and the sobol entry of design.json")
+
+
+def print_sweep(result: Sweep, quantity: str | None, output: str | None) -> None:
+    """`springlab sweep`: counts by outcome and the range of `quantity` (default: the scenario's headline)."""
+    from springlab.plots import sweep as sweep_plot  # mujoco.batch only for the command that sweeps
+
+    s = result.summary()
+    print(
+        f"{s['scene']} / {s['scenario']}: {s['configurations']} configurations ({s['integrator']}, dt = {s['dt']:g} s,"
+        f" {s['duration']:g} s each) in {s['wall_time_s']:.2f} s on {s['executor']}"
+        f" ({s['configurations_per_s']:.0f}/s, {s['chunks']} chunks)"
+    )
+    print(f"  passed {s['passed']}, failed {s['failed']}, diverged {s['diverged']}, invalid {s['invalid']}")
+    quantity = quantity or (sweep_plot.default_quantity(result) if s["diverged"] < s["configurations"] else None)
+    if quantity:
+        values = result.column(quantity)
+        finite = values[np.isfinite(values)]
+        if finite.size:
+            best = int(np.nanargmin(np.where(np.isfinite(values), values, np.nan)))
+            where = ", ".join(f"{n} = {result.values[n][best]:.4g}" for n in result.values)
+            print(f"  {quantity}: min {finite.min():.4g} (at {where}), max {finite.max():.4g}")
+    if output:
+        print(f"  wrote {pathlib.Path(output) / 'sweep.csv'} and sweep.png")
+
+
+def print_fit(result: FitResult, output: str | None) -> None:
+    """`springlab fit`: the record used, each estimate with its 95% interval (in its unit), the verdict."""
+    record = result.record
+    print(
+        f"{result.scene} / {result.scenario} from {record.column} ({record.time.size} samples,"
+        f" {record.time[0]:g} to {record.time[-1]:g} s): fitted {', '.join(result.free)}"
+    )
+    for note in record.notes:
+        print(f"  data: {note}")
+    for name, q in {**result.estimates, **result.derived}.items():
+        low, high = q["ci95"]
+        unit = "" if q["unit"] == "-" else q["unit"]
+        print(f"  {name:<26} {q['value']:<16.10g} 95% [{low:.8g}, {high:.8g}] {unit}")
+    check = result.cross_check
+    print(
+        f"  closed-form cross-check: max relative difference {check['max_relative_difference']:.1e}"
+        f" ({'agrees' if check['agrees'] else 'DISAGREES'})"
+    )
+    o = result.optimizer
+    print(
+        f"  optimizer: {o['status']} after {o['iterations']} iterations, {o['rollouts']} rollouts"
+        f" of {o['steps']} steps ({o['time_per_rollout_s'] * 1e3:.1f} ms each), {o['wall_time_s']:.2f} s"
+    )
+    if result.starts.get("count", 1) > 1:
+        from springlab.studies.fit.starts import (
+            line,  # here: fit_starts loads MuJoCo's sysid machinery, needed only for a fit
+        )
+
+        print(line(result.starts))
+    if result.run_note:
+        print(f"  note: {result.run_note}")
+    print(result.verdict)
+    if output:
+        wrote = "fit.json, fit.png" + (", trajectory.csv and summary.json" if result.run is not None else "")
+        print(f"  wrote {wrote} under {output}")
+
+
+def print_demo(rows: list[dict], artifacts: int, out: pathlib.Path | str, seconds: float) -> None:
+    """`springlab demo`: the validation table and what was written where, in how many seconds [s]."""
+    print(validation_table(rows))
+    failed = sum(not r["passed"] for r in rows)
+    print(f"{len(rows) - failed} passed, {failed} failed; wrote {artifacts} files under {out}/ in {seconds:.1f} s")

@@ -1,0 +1,269 @@
+"""`springlab demo`, the main job: validate every scene and write everything a user looks at.
+
+The demo runs in steps. The core step validates every scene and writes each
+scenario's trajectory.csv and summary.json under out/<scene>/<scenario>/.
+Features that add to the demo (videos, plots, trade-off charts, design
+studies) are steps listed in STEPS; each step takes the output folder and
+returns the artifacts it wrote, for the report.
+
+An interrupted demo never leaves a report that looks whole: while it runs,
+out/INCOMPLETE.txt says so and the previous out/index.html is gone (its files
+are being replaced); the marker goes only after the new index.html is in place.
+"""
+
+from __future__ import annotations
+
+import pathlib
+import time
+from collections.abc import Callable
+
+from springlab import files, progress, scenes
+from springlab.errors import BadInputError
+from springlab.runs.run import run_scenario, validation_row, write_run
+from springlab.studies import families
+from springlab.studies.families import PhaseFamily
+
+from .state import Artifact, DemoState
+
+
+def core_step(state: DemoState) -> list[Artifact]:
+    """Validate every scene; run every scenario at its default setting and write its files."""
+    written = []
+    for scene in scenes.SCENES.values():
+        for scenario in scene.scenarios.values():
+            result = run_scenario(scene.name, scenario.name)
+            state.results[(scene.name, scenario.name)] = result
+            if scenario.exact:
+                state.validation.append(validation_row(result))
+            folder = pathlib.Path(scene.name) / scenario.name
+            write_run(state.out / folder, result)
+            written.append(Artifact(str(folder / "trajectory.csv"), "data", "trajectory", scene.name, scenario.name))
+            written.append(Artifact(str(folder / "summary.json"), "data", "summary", scene.name, scenario.name))
+    files.write_text_files(state.out, {"validation.json": files.dumps(state.validation) + "\n"})
+    written.append(Artifact("validation.json", "data", "validation table"))
+    return written
+
+
+#: the demo's video settings: small enough that every scenario fits in the demo's time budget
+DEMO_VIDEO: dict[str, int] = dict(fps=30, width=480, height=360)
+#: longest video the demo films of a scenario [s of video] (the time overlay shows where it is)
+DEMO_CLIP_SECONDS = 15.0
+
+
+def media_step(state: DemoState) -> list[Artifact]:
+    """Demo step: every scenario's composite video and plots, and each scene's zeta family.
+
+    Videos are 480 x 360 (+ a 360 x 360 phase panel) at 30 fps and show at
+    most the first DEMO_CLIP_SECONDS of a run, which keeps the demo within a
+    few minutes on two cores.
+    """
+    # GL and matplotlib are imported only when the demo draws
+    from springlab.plots import run as plots
+    from springlab.render import scale as render_scale
+    from springlab.render.media import default_slow_motion, plot_files, render_run
+
+    written = []
+    films = progress.bar(len(state.results), description="demo: filming", unit="video")  # on a terminal only
+    for (scene_name, scenario_name), result in state.results.items():
+        folder = state.out / scene_name / scenario_name
+        start = time.perf_counter()
+        video = folder / "video.mp4"
+        slow = default_slow_motion(result, float(result.time[-1]), DEMO_VIDEO["fps"])
+        clip = min(DEMO_CLIP_SECONDS / slow, float(result.time[-1]))
+        info = render_run(
+            result,
+            video,
+            fps=DEMO_VIDEO["fps"],
+            width=DEMO_VIDEO["width"],
+            height=DEMO_VIDEO["height"],
+            duration=clip,
+            composite=True,
+            progress=False,
+            slow_motion=slow,
+        )
+        shown = "" if clip >= float(result.time[-1]) else f", first {clip:g} s of {float(result.time[-1]):g} s"
+        shown += "".join(", " + note for note in render_scale.labels(info["slow_motion"], info["exaggeration"]))
+        written.append(
+            Artifact(
+                str(video.relative_to(state.out)),
+                "video",
+                f"3D scene beside its phase-plane trace, {info['fps']:g} fps{shown}",
+                scene_name,
+                scenario_name,
+            )
+        )
+        try:
+            family: PhaseFamily | None = families.run_phase_family(result)
+        except BadInputError:
+            family = None  # no phase plane with an equilibrium for this scenario
+        for path, _, title in plot_files(result, folder, state.out, family):
+            written.append(Artifact(path, "plot", title, scene_name, scenario_name))
+        state.timings.append((f"media {scene_name}/{scenario_name}", time.perf_counter() - start))
+        films.update(1)
+    films.close()
+    for scene in scenes.SCENES.values():
+        target = state.out / scene.name / "zeta_family.png"
+        try:
+            zetas = families.run_zeta_family(scene.name, scene.default_scenario)
+        except BadInputError:
+            continue  # no damping parameter, no exact linear reference, or several modes
+        plots.save(plots.zeta_family(zetas), target)
+        written.append(
+            Artifact(
+                str(target.relative_to(state.out)),
+                "plot",
+                "the damping ratio from 0 to 2 (the chapter's zeta slider)",
+                scene.name,
+                scene.default_scenario,
+            )
+        )
+    return written
+
+
+def report_step(state: DemoState) -> list[Artifact]:
+    """out/index.html: validation table, plots, videos and a link to every artifact (springlab.demo.steps.report)."""
+    from . import report
+
+    path = report.write_report(state, wall_time_s=time.perf_counter() - state.started)
+    return [Artifact(path.name, "report", "this report")]
+
+
+#: written into the output folder while the demo runs, removed once the report is complete
+INCOMPLETE_MARKER = "INCOMPLETE.txt"
+#: the report file, the folder's "this is whole" (report.write_report's name)
+REPORT_NAME = "index.html"
+
+
+def run_demo(out: str | pathlib.Path, log: Callable[[str], None] = print) -> DemoState:
+    """Run every step into `out`; return the shared state (validation rows, artifacts).
+
+    While it runs, `out`/INCOMPLETE.txt marks the folder incomplete and no
+    index.html is there; an interruption (Ctrl-C, SIGTERM) or an error leaves
+    it so.
+    """
+    state = DemoState(out=files.prepare_directory(out))
+    files.write_text_files(
+        state.out,
+        {
+            INCOMPLETE_MARKER: f"springlab demo started writing this folder at {time.strftime('%Y-%m-%d %H:%M:%S')}"
+            " and has not finished: its files may be a mix of this run and an earlier one, and it has no report"
+            " yet. Run 'springlab demo' again to complete it.\n"
+        },
+    )
+    (state.out / REPORT_NAME).unlink(missing_ok=True)  # a stale report would describe files being replaced
+    for step in [*STEPS, *FINAL_STEPS]:
+        start = time.perf_counter()
+        state.artifacts.extend(step(state))
+        seconds = time.perf_counter() - start
+        state.timings.append((step.__name__, seconds))
+        log(f"demo: {step.__name__} done in {seconds:.1f} s")
+    (state.out / INCOMPLETE_MARKER).unlink(missing_ok=True)
+    return state
+
+
+def tradeoff_step(state: DemoState) -> list[Artifact]:
+    """The slider's speed-accuracy trade (with the setting for 1e-6) and the stability map, extremes, energy."""
+    from springlab.plots import charts
+    from springlab.studies import (
+        stability,
+        tradeoff,  # here: mujoco.batch and matplotlib only when this step runs
+    )
+
+    result = tradeoff.tradeoff("slider", "free", tol=1e-6)
+    charts.write_tradeoff(result, state.out / "tradeoff")
+    report = stability.stability_report()
+    charts.write_stability(report, stability.amplification_map(), state.out / "stability")
+    return [
+        Artifact(
+            "tradeoff/tradeoff.json",
+            "data",
+            "slider free: error, steps and wall time of every integrator"
+            " x timestep; orders, Pareto front, cheapest setting for 1e-6",
+            "slider",
+            "free",
+        ),
+        Artifact(
+            "tradeoff/tradeoff.png",
+            "plot",
+            "slider free: error vs timestep and error vs cost (Pareto front)",
+            "slider",
+            "free",
+        ),
+        Artifact(
+            "stability/stability.json",
+            "data",
+            "measured stability boundaries vs theory, extremes table, undamped energy vs formulas",
+        ),
+        Artifact(
+            "stability/stability.png",
+            "plot",
+            "stability map: measured per-step amplification over (zeta, omega*dt), theory and measured boundaries",
+        ),
+        Artifact("stability/energy.png", "plot", "undamped energy of each integrator vs its exact formula"),
+    ]
+
+
+def design_step(state: DemoState) -> list[Artifact]:
+    """The printer head's design study: 7^4 = 2401 configurations, plus a 31 x 31 plane for the plot."""
+    from springlab.plots import design as design_chart  # here: mujoco.batch is only needed by this step
+    from springlab.studies.design import study as design
+
+    study = design.run_study("printer_head")
+    design.write(study, state.out / "design")
+    design_chart.plot(study, state.out / "design" / "design.png")
+    state.timings.append(("design sweep (batched MuJoCo)", study.wall_time_s))
+    return [
+        Artifact(
+            "design/design.json",
+            "data",
+            "printer head: how fast can it be positioned, which properties"
+            " matter (elasticities, analytic estimate vs simulation)",
+            "printer_head",
+            "move",
+        ),
+        Artifact(
+            "design/configurations.csv",
+            "data",
+            f"printer head: every one of the {study.size} configurations' move, settling and positioning time",
+            "printer_head",
+            "move",
+        ),
+        Artifact(
+            "design/design.png",
+            "plot",
+            "printer head: positioning time over the two most influential properties; analytic estimate vs simulation",
+            "printer_head",
+            "move",
+        ),
+    ]
+
+
+def audit_step(state: DemoState) -> list[Artifact]:
+    """`springlab audit` on the car's model, as any MJCF would be: modes, limits, error vs cost."""
+    from springlab.plots import audit as charts_audit  # here: matplotlib only when this step runs
+    from springlab.studies.audit.audit import audit
+
+    result = audit("car")
+    charts_audit.write_audit(result, state.out / "audit")
+    state.timings.append(("audit of the car model (springlab audit)", result.timings["total_s"]))
+    return [
+        Artifact(
+            "audit/audit.png",
+            "plot",
+            "audit of the car model: modes, stability limit per integrator vs its own timestep, error vs cost"
+            " with the Pareto front and the cheapest setting for 1e-3",
+        ),
+        Artifact("audit/audit.json", "data", "audit of the car model (springlab audit car --json)"),
+    ]
+
+
+#: the demo's steps, in order (defined once, here: nothing is added at import time)
+STEPS: tuple[Callable[[DemoState], list[Artifact]], ...] = (
+    core_step,
+    media_step,
+    tradeoff_step,
+    design_step,
+    audit_step,
+)
+#: steps that run after every step in STEPS (the report lists everything)
+FINAL_STEPS: tuple[Callable[[DemoState], list[Artifact]], ...] = (report_step,)

@@ -1,0 +1,473 @@
+"""Linearizing any MuJoCo model at an operating point: M, C, K, the continuous-time A, its modes,
+and every integrator's one-step map.
+
+All matrices live in MuJoCo's tangent space: the state deviation is
+x = (dq, dv, dact) with dq of length nv (a ball or free joint's rotation is a
+3-vector, `mj_differentiatePos`), so every square matrix here is
+n x n with n = 2 nv + na.
+
+* `linearize`: M = df/da, C = df/dv, K = df/dq of the inverse dynamics
+  f(q, v, a) (MuJoCo's `mjd_inverseFD`, actuator forces counted as internal,
+  so a position servo shows as stiffness), centred by averaging MuJoCo's
+  forward difference with step +h and -h; the continuous-time
+  A = [[0, I], [-M^-1 K, -M^-1 C]] (plus the activation rows and columns by
+  centred differences of `mj_forward`), its eigenvalues lambda [1/s] and the
+  modes they make (`Mode`).
+* `OperatingPoint.at(model, qpos=...)` / `operating_point(model, keyframe)`: where to linearize.
+* `one_step_map`: Phi(dt) = d x_{n+1} / d x_n of one `mj_step` for any
+  integrator: `mjd_transitionFD` (centred) where MuJoCo supports it, centred
+  differences of `mj_step` in the tangent space for RK4 (which
+  `mjd_transitionFD` refuses).
+
+Finite differences cost accuracy: the derivatives are good to about
+sqrt(eps)-to-eps^(2/3) relative, and a double eigenvalue (a free body, an
+unsprung direction: a Jordan block) moves by the *square root* of that. So
+`Linearization.growth_tolerance` [1/s] is estimated from the model itself (the
+centred difference at two steps), and nothing here trusts |mu| <= 1 + 1e-9.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from springlab.errors import BadInputError
+from springlab.sim.simulate import integrator_id, quiet_mujoco
+
+#: finite-difference step in the tangent space [m, rad, m/s, rad/s or activation units]
+FD_STEP = 1e-6
+_EPS = float(np.finfo(float).eps)
+_INTEGRATION = int(mujoco.mjtState.mjSTATE_INTEGRATION)
+
+
+@dataclasses.dataclass(frozen=True)
+class OperatingPoint:
+    """Where a model is linearized: qpos (nq,) [m, rad, quaternion], qvel (nv,) [m/s, rad/s],
+    act (na,) and ctrl (nu,) [actuator units]; `label` says where it came from (e.g. "keyframe 'home'")."""
+
+    qpos: np.ndarray
+    qvel: np.ndarray
+    act: np.ndarray
+    ctrl: np.ndarray
+    label: str = "qpos0"
+
+    @classmethod
+    def at(
+        cls,
+        model: mujoco.MjModel,
+        qpos: np.ndarray | None = None,
+        qvel: np.ndarray | None = None,
+        act: np.ndarray | None = None,
+        ctrl: np.ndarray | None = None,
+        label: str = "given state",
+    ) -> OperatingPoint:
+        """A point from whatever the caller has (the rest: qpos0, zero velocity, activation and control),
+        e.g. `linearize(model, OperatingPoint.at(model, qpos=sag))` for a scene's own linearization."""
+
+        def given(value, default):
+            return np.array(default if value is None else value, float)
+
+        return cls(
+            given(qpos, model.qpos0),
+            given(qvel, np.zeros(model.nv)),
+            given(act, np.zeros(model.na)),
+            given(ctrl, np.zeros(model.nu)),
+            label,
+        )
+
+    def as_json(self) -> dict[str, Any]:
+        """{"label", "qpos", "qvel", "act", "ctrl"} as plain lists."""
+        return {
+            "label": self.label,
+            "qpos": self.qpos.tolist(),
+            "qvel": self.qvel.tolist(),
+            "act": self.act.tolist(),
+            "ctrl": self.ctrl.tolist(),
+        }
+
+    def load(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        """Reset `data` and put this point into it (time 0, MuJoCo's other defaults)."""
+        mujoco.mj_resetData(model, data)
+        data.qpos[:] = self.qpos
+        data.qvel[:] = self.qvel
+        data.act[:] = self.act
+        data.ctrl[:] = self.ctrl
+
+
+def operating_point(model: mujoco.MjModel, keyframe: str | int | None = None) -> OperatingPoint:
+    """The model's operating point: the keyframe named or numbered `keyframe`; None: the first keyframe
+    if the model has one, else qpos0 at rest.
+
+    Raises
+    ------
+    BadInputError
+        no such keyframe (the message lists the valid ones).
+    """
+    if keyframe is None and model.nkey == 0:
+        return OperatingPoint(
+            model.qpos0.copy(), np.zeros(model.nv), np.zeros(model.na), np.zeros(model.nu), "qpos0 (no keyframe)"
+        )
+    names = [model.key(i).name or str(i) for i in range(model.nkey)]
+    index = 0 if keyframe is None else None
+    if keyframe is not None:
+        text = str(keyframe)
+        if text in names:
+            index = names.index(text)
+        elif text.lstrip("-").isdigit() and 0 <= int(text) < model.nkey:
+            index = int(text)
+    if index is None:
+        valid = ", ".join(f"{i} ({n})" if n != str(i) else str(i) for i, n in enumerate(names)) or "none"
+        raise BadInputError(f"unknown keyframe {str(keyframe)!r}; valid: {valid}")
+    key = model.key(index)
+    label = f"keyframe {names[index]!r}" if names[index] != str(index) else f"keyframe {index}"
+    return OperatingPoint(
+        np.array(key.qpos, float), np.array(key.qvel, float), np.array(key.act, float), np.array(key.ctrl, float), label
+    )
+
+
+def _point_or_default(model: mujoco.MjModel, point: OperatingPoint | None) -> OperatingPoint:
+    return operating_point(model, None) if point is None else point
+
+
+@dataclasses.dataclass(frozen=True)
+class Mode:
+    """One mode of the continuous-time linearization.
+
+    Attributes
+    ----------
+    eigenvalue
+        lambda [1/s] (for an oscillatory pair, the one with Im > 0).
+    kind
+        'oscillatory' (complex pair), 'decaying' / 'growing' (real lambda < 0 / > 0),
+        or 'rigid' (|lambda| within the growth tolerance of 0: a free or unsprung direction).
+    frequency_hz
+        natural frequency |lambda| / (2 pi) [Hz] (0 for rigid).
+    damping_ratio
+        -Re(lambda) / |lambda| [-] (1 for decaying, -1 for growing, None for rigid).
+    physically_unstable
+        Re(lambda) beyond the growth tolerance: the model's own dynamics grows
+        there (an upright pendulum), which no integrator should be blamed for.
+    """
+
+    eigenvalue: complex
+    kind: str
+    frequency_hz: float
+    damping_ratio: float | None
+    physically_unstable: bool
+
+    @property
+    def rate_rad_s(self) -> float:
+        """|lambda| [rad/s]: what a timestep must resolve."""
+        return abs(self.eigenvalue)
+
+    def as_json(self) -> dict[str, Any]:
+        """{"frequency_hz", "damping_ratio", "physically_unstable", "kind", "eigenvalue": [re, im] [1/s]}."""
+        return {
+            "frequency_hz": self.frequency_hz,
+            "damping_ratio": self.damping_ratio,
+            "physically_unstable": self.physically_unstable,
+            "kind": self.kind,
+            "eigenvalue": [self.eigenvalue.real, self.eigenvalue.imag],
+        }
+
+
+def modes_of(eigenvalues: Sequence[complex] | np.ndarray, growth_tolerance: float) -> list[Mode]:
+    """Modes [fastest first] from the eigenvalues [1/s] of a real continuous-time A.
+
+    Complex pairs become one oscillatory mode; real eigenvalues one mode each.
+    `growth_tolerance` [1/s]: |lambda| below it is rigid, Re(lambda) above it is growth.
+    """
+    modes = []
+    for lam in np.asarray(eigenvalues, complex):
+        size = abs(lam)
+        if size <= growth_tolerance:
+            modes.append(Mode(complex(lam), "rigid", 0.0, None, False))
+            continue
+        if abs(lam.imag) > growth_tolerance:
+            if lam.imag < 0:
+                continue  # its conjugate carries the mode
+            kind = "oscillatory"
+            zeta = -lam.real / size
+        else:
+            lam = complex(lam.real, 0.0)
+            kind = "decaying" if lam.real < 0 else "growing"
+            zeta = 1.0 if lam.real < 0 else -1.0
+        modes.append(Mode(complex(lam), kind, size / (2 * math.pi), float(zeta), bool(lam.real > growth_tolerance)))
+    modes.sort(key=lambda mode: -mode.rate_rad_s)
+    return modes
+
+
+@dataclasses.dataclass
+class Linearization:
+    """A model linearized at an operating point (tangent-space state x = (dq, dv, dact), n = 2 nv + na).
+
+    Attributes
+    ----------
+    point
+        the operating point.
+    M
+        (nv, nv) mass matrix df/da [kg, kg m^2].
+    C
+        (nv, nv) damping df/dv [N s/m, N m s/rad] (joint damping, actuator gains on velocity, contacts).
+    K
+        (nv, nv) stiffness df/dq [N/m, N m/rad] (springs, gravity's restoring or toppling term, servos,
+        contacts).
+    A
+        (n, n) continuous-time system matrix, dx/dt = A x [1/s and the units above].
+    eigenvalues
+        (n,) eigenvalues of A [1/s].
+    modes
+        the modes, fastest first (`modes_of`).
+    fd_error
+        estimated absolute error of the entries of A from finite differences [1/s^2 in the K block].
+    growth_tolerance
+        [1/s] eigenvalue moves the finite differences can cause (sqrt of fd_error for a
+        Jordan block, plus sqrt(eps) |A|); growth below it is not called physical.
+    """
+
+    point: OperatingPoint
+    M: np.ndarray
+    C: np.ndarray
+    K: np.ndarray
+    A: np.ndarray
+    eigenvalues: np.ndarray
+    modes: list[Mode]
+    fd_error: float
+    growth_tolerance: float
+
+    @property
+    def fastest(self) -> Mode | None:
+        """The mode with the largest |lambda| that is not rigid, or None (a model with nothing but rigid motion)."""
+        return next((mode for mode in self.modes if mode.kind != "rigid"), None)
+
+    @property
+    def physically_unstable(self) -> bool:
+        """Whether any mode grows in the continuous dynamics itself."""
+        return any(mode.physically_unstable for mode in self.modes)
+
+    @property
+    def max_growth_rate(self) -> float:
+        """max Re(lambda) over the physically unstable modes [1/s], 0 if none."""
+        return max((mode.eigenvalue.real for mode in self.modes if mode.physically_unstable), default=0.0)
+
+    def exact_map(self, dt: float) -> np.ndarray:
+        """expm(A dt): the exact one-step map of the linearization over dt [s], (n, n)."""
+        from scipy.linalg import expm  # scipy is a dependency; imported here to keep import time low
+
+        return expm(self.A * dt)
+
+
+def _continuous_model(model: mujoco.MjModel) -> mujoco.MjModel:
+    """A copy of `model` whose forward pass computes the continuous-time dynamics.
+
+    The 'discrete' integrator folds dt^2 K into qacc itself and mj_inverse would then invert
+    that; Euler's forward pass is the plain continuous one (its implicit damping is applied
+    after the forward pass, in the step).
+    """
+    work = copy.copy(model)
+    work.opt.integrator = int(mujoco.mjtIntegrator.mjINT_EULER)
+    return work
+
+
+def _inverse_jacobians(model: mujoco.MjModel, data: mujoco.MjData, step: float) -> tuple[np.ndarray, ...]:
+    """Centred (M, C, K) [SI] from mjd_inverseFD's forward differences at +step and -step."""
+    nv = model.nv
+    out = []
+    for h in (step, -step):
+        dfdq, dfdv, dfda = (np.zeros((nv, nv)) for _ in range(3))
+        mujoco.mjd_inverseFD(model, data, h, 1, dfdq, dfdv, dfda, None, None, None, None)
+        out.append((dfda.T, dfdv.T, dfdq.T))
+    return tuple(0.5 * (a + b) for a, b in zip(*out))
+
+
+def _forward_rates(model: mujoco.MjModel, data: mujoco.MjData) -> np.ndarray:
+    """(qacc, act_dot) after mj_forward at data's state."""
+    mujoco.mj_forward(model, data)
+    return np.concatenate([data.qacc, data.act_dot])
+
+
+def _nudge(model: mujoco.MjModel, data: mujoco.MjData, j: int, delta: float) -> None:
+    """Move data's state by `delta` along tangent-space coordinate j of (dq, dv, dact).
+
+    Positions move through mj_integratePos, so quaternion joints stay unit length; `delta` is in the
+    coordinate's unit (rad or m for dq, rad/s or m/s for dv, the actuator's unit for dact).
+    """
+    nv = model.nv
+    if j < nv:
+        direction = np.zeros(nv)
+        direction[j] = delta
+        mujoco.mj_integratePos(model, data.qpos, direction, 1.0)
+    elif j < 2 * nv:
+        data.qvel[j - nv] += delta
+    else:
+        data.act[j - 2 * nv] += delta
+
+
+def _activation_blocks(model: mujoco.MjModel, data: mujoco.MjData, point: OperatingPoint, step: float) -> np.ndarray:
+    """Centred d(qacc, act_dot)/d(dq, dv, dact), (nv + na, n), by mj_forward in the tangent space."""
+    nv, na = model.nv, model.na
+    n = 2 * nv + na
+    jac = np.empty((nv + na, n))
+    for j in range(n):
+        sides = []
+        for sign in (1.0, -1.0):
+            point.load(model, data)
+            _nudge(model, data, j, sign * step)
+            sides.append(_forward_rates(model, data))
+        jac[:, j] = (sides[0] - sides[1]) / (2 * step)
+    return jac
+
+
+def _system_matrix(model, data, point, step) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    point.load(model, data)
+    mujoco.mj_forward(model, data)
+    mass, damping, stiffness = _inverse_jacobians(model, data, step)
+    nv, na = model.nv, model.na
+    n = 2 * nv + na
+    a = np.zeros((n, n))
+    a[:nv, nv : 2 * nv] = np.eye(nv)
+    try:
+        a[nv : 2 * nv, :nv] = -np.linalg.solve(mass, stiffness)
+        a[nv : 2 * nv, nv : 2 * nv] = -np.linalg.solve(mass, damping)
+    except np.linalg.LinAlgError:
+        raise BadInputError(
+            "the model's mass matrix is singular at the operating point; add mass or armature"
+        ) from None
+    if na:
+        blocks = _activation_blocks(model, data, point, step)
+        a[nv : 2 * nv, 2 * nv :] = blocks[:nv, 2 * nv :]
+        a[2 * nv :, :] = blocks[nv:, :]
+    return mass, damping, stiffness, a
+
+
+def linearize(model: mujoco.MjModel, point: OperatingPoint | None = None, *, step: float = FD_STEP) -> Linearization:
+    """Linearize `model`'s continuous-time dynamics at `point` (default: `operating_point(model)`).
+
+    M, C, K come from MuJoCo's `mjd_inverseFD` (centred: the mean of its forward differences with
+    steps +step and -step), A from them (plus centred differences of `mj_forward` for actuator
+    activations). The operating point need not be an equilibrium: A is then the linearization of
+    the flow along the motion through it. `model` is not modified.
+
+    Parameters
+    ----------
+    model
+        any compiled model.
+    point
+        where to linearize.
+    step
+        finite-difference step in the tangent space [m, rad, m/s, rad/s].
+
+    Returns
+    -------
+    The Linearization: M, C, K [SI], A [1/s], eigenvalues [1/s], modes (frequency [Hz], damping
+    ratio, physically unstable) and the finite-difference error estimates.
+    """
+    point = _point_or_default(model, point)
+    work = _continuous_model(model)
+    data = mujoco.MjData(work)
+    with quiet_mujoco():
+        mass, damping, stiffness, a = _system_matrix(work, data, point, step)
+        *_, a_coarse = _system_matrix(work, data, point, 2 * step)
+    eigenvalues = np.linalg.eigvals(a)
+    # centred differences err like step^2 (truncation) or eps/step (round-off); the two-step
+    # difference bounds the finer one's error. A Jordan block's double eigenvalue moves by the
+    # square root of an entry's error, an ordinary eigenvalue by sqrt(eps) |A| at worst.
+    fd_error = float(np.max(np.abs(a - a_coarse))) if a.size else 0.0
+    scale = float(np.max(np.abs(eigenvalues))) if a.size else 0.0
+    growth_tolerance = 10.0 * math.sqrt(fd_error + _EPS * scale**2) + math.sqrt(_EPS) * scale
+    return Linearization(
+        point=point,
+        M=mass,
+        C=damping,
+        K=stiffness,
+        A=a,
+        eigenvalues=eigenvalues,
+        modes=modes_of(eigenvalues, growth_tolerance),
+        fd_error=fd_error,
+        growth_tolerance=growth_tolerance,
+    )
+
+
+def _rk4_map(model: mujoco.MjModel, data: mujoco.MjData, point: OperatingPoint, step: float) -> np.ndarray:
+    """Centred differences of mj_step in the tangent space: (n, n)."""
+    nv, na = model.nv, model.na
+    n = 2 * nv + na
+    point.load(model, data)
+    mujoco.mj_forward(model, data)
+    data.qacc_warmstart[:] = data.qacc
+    saved = np.empty(mujoco.mj_stateSize(model, _INTEGRATION))
+    mujoco.mj_getState(model, data, saved, _INTEGRATION)
+    phi = np.empty((n, n))
+    after: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # (qpos, qvel, act) after the + and - nudge
+    for j in range(n):
+        after.clear()
+        for sign in (1.0, -1.0):
+            mujoco.mj_setState(model, data, saved, _INTEGRATION)
+            _nudge(model, data, j, sign * step)
+            mujoco.mj_step(model, data)
+            after.append((data.qpos.copy(), data.qvel.copy(), data.act.copy()))
+        (q_plus, v_plus, a_plus), (q_minus, v_minus, a_minus) = after
+        dq = np.zeros(nv)
+        mujoco.mj_differentiatePos(model, dq, 2 * step, q_minus, q_plus)
+        phi[:nv, j] = dq
+        phi[nv : 2 * nv, j] = (v_plus - v_minus) / (2 * step)
+        phi[2 * nv :, j] = (a_plus - a_minus) / (2 * step)
+    return phi
+
+
+def one_step_map(
+    model: mujoco.MjModel,
+    integrator: str,
+    dt: float,
+    point: OperatingPoint | None = None,
+    *,
+    step: float = FD_STEP,
+    data: mujoco.MjData | None = None,
+    copy_model: bool = True,
+) -> np.ndarray:
+    """MuJoCo's one-step map Phi = d x_{n+1} / d x_n of `integrator` at timestep `dt` [s], (n, n).
+
+    x = (dq, dv, dact) in the tangent space (n = 2 nv + na); for a linear model x_{n+1} = Phi x_n
+    exactly, so |eigenvalues| > 1 of Phi are growth per step [-]. Centred differences with step
+    `step`: `mjd_transitionFD` for euler, implicit, implicitfast and discrete; `mj_step` differenced
+    in the tangent space (`mj_integratePos` / `mj_differentiatePos`) for rk4. `model` is not
+    modified (a copy takes the integrator and timestep; copy_model=False sets them on `model` itself,
+    for loops that own a scratch copy: copying a large model costs more than its map); `data` is
+    optional scratch.
+
+    Raises
+    ------
+    UnknownNameError
+        unknown integrator.
+    BadInputError
+        dt not a finite number > 0.
+    """
+    kind = integrator_id(integrator)
+    if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
+        raise BadInputError(f"dt must be a finite number > 0 s, got {dt!r}")
+    point = _point_or_default(model, point)
+    work = copy.copy(model) if copy_model else model
+    work.opt.integrator = kind
+    work.opt.timestep = dt
+    data = mujoco.MjData(work) if data is None else data
+    n = 2 * work.nv + work.na
+    with quiet_mujoco():
+        if integrator == "rk4":
+            return _rk4_map(work, data, point, step)
+        point.load(work, data)
+        mujoco.mj_forward(work, data)
+        data.qacc_warmstart[:] = data.qacc
+        phi = np.zeros((n, n))
+        mujoco.mjd_transitionFD(work, data, step, 1, phi, None, None, None)
+    return phi
+
+
+def spectral_radius(matrix: np.ndarray) -> float:
+    """max |eigenvalue| of a square matrix [-] (0 for an empty one)."""
+    return float(np.max(np.abs(np.linalg.eigvals(matrix)))) if matrix.size else 0.0

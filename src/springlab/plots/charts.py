@@ -1,0 +1,298 @@
+"""Charts of the studies: the speed-accuracy trade, the stability map and the energy of each integrator.
+
+They read results (springlab.studies.tradeoff, springlab.studies.stability) and never
+simulate; each figure is a bare matplotlib Figure (no pyplot), saved atomically.
+"""
+
+from __future__ import annotations
+
+import math
+import pathlib
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from springlab import files
+from springlab.exact.limits import stability_limit
+from springlab.runs import compare
+from springlab.studies.stability import EULER_FAMILY, energy_formula, report_json
+from springlab.studies.tradeoff import Tradeoff
+
+_COLORS = {
+    "euler": "#1f77b4",
+    "implicit": "#17becf",
+    "implicitfast": "#2ca02c",
+    "rk4": "#d62728",
+    "discrete": "#9467bd",
+}
+_STYLES = {"euler": "-", "implicit": "--", "implicitfast": ":", "rk4": "-", "discrete": "-"}
+
+
+def _figure(ncols: int, figsize: tuple[float, float], **options):
+    """A bare matplotlib Figure and its axes: no pyplot, so a caller's backend and figures stay untouched."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=figsize, layout=options.pop("layout", None))
+    return fig, fig.subplots(1, ncols, **options)
+
+
+def _save(fig, path: str | pathlib.Path) -> pathlib.Path:
+    path = pathlib.Path(path)
+    files.prepare_directory(path.parent)
+    with files.atomic_path(path) as temporary:
+        fig.savefig(temporary, dpi=110, format="png")
+    return path
+
+
+def plot_tradeoff(result: Tradeoff, path: str | pathlib.Path) -> pathlib.Path:
+    """Two log-log panels: error vs dt (with the observed orders) and error vs wall time (Pareto front)."""
+    fig, (left, right) = _figure(2, (12, 5))
+    diverged = sum(r.diverged for r in result.runs)
+    floor = 1e-17
+    for name in dict.fromkeys(r.integrator for r in result.runs):
+        runs = [r for r in result.runs if r.integrator == name and not r.diverged]
+        if not runs:
+            continue
+        order = result.orders.get(name)
+        label = f"{name} (order {order:.2f})" if order is not None else name
+        errors = [max(r.error, floor) for r in runs]
+        left.loglog([r.dt for r in runs], errors, _STYLES[name], marker="o", ms=3, color=_COLORS[name], label=label)
+        right.loglog(
+            [r.wall_time_s for r in runs], errors, _STYLES[name], marker="o", ms=3, color=_COLORS[name], label=name
+        )
+        # runs outside the range of their error estimate: `springlab run` calls them not validated
+        outside = [(r, e) for r, e in zip(runs, errors) if not r.validated]
+        for axis, x in ((left, [r.dt for r, _ in outside]), (right, [r.wall_time_s for r, _ in outside])):
+            axis.plot(x, [e for _, e in outside], "x", ms=8, mew=1.5, color=_COLORS[name])
+    if any(not r.diverged and not r.validated for r in result.runs):
+        left.plot([], [], "x", ms=8, mew=1.5, color="gray", label="not validated (outside the estimate's range)")
+    front = result.pareto
+    right.step(
+        [r.wall_time_s for r in front],
+        [max(r.error, floor) for r in front],
+        where="post",
+        color="black",
+        lw=1.2,
+        alpha=0.7,
+        label="Pareto front",
+    )
+    pick = result.recommendation
+    if pick and pick.get("integrator"):
+        right.axhline(pick["tol"], color="gray", lw=0.8, ls="--")
+        right.plot(
+            [pick["wall_time_s"]],
+            [max(pick["max_rel_error"], floor)],
+            "*",
+            ms=14,
+            color="gold",
+            markeredgecolor="black",
+            label=f"tol {pick['tol']:g}: {pick['integrator']}, dt = {pick['dt']:g} s",
+        )
+    left.set_xlabel("timestep dt [s]")
+    left.set_ylabel("max relative error [-]")
+    left.set_title("error vs timestep (slope = order)")
+    right.set_xlabel("wall time of the run [s]")
+    right.set_ylabel("max relative error [-]")
+    right.set_title("error vs cost")
+    for axis in (left, right):
+        axis.grid(True, which="both", alpha=0.3)
+        axis.legend(fontsize=8)
+    unvalidated = sum(not r.diverged and not r.validated for r in result.runs)
+    note = f"; {diverged} diverged runs not shown" if diverged else ""
+    note += f"; x: {unvalidated} not validated" if unvalidated else ""
+    fig.suptitle(f"{result.scene} / {result.scenario}: {len(result.runs)} runs over {result.duration:g} s{note}")
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+#: run length [natural periods] of the estimate-range line drawn on the stability map
+RANGE_PERIODS = 10
+_RANGE = f"validated below ({RANGE_PERIODS} periods)"
+
+
+def estimate_range_line(integrator: str, zetas: Sequence[float] | np.ndarray) -> list[float]:
+    """Largest omega*dt [-] inside the range of the error estimate for a run of RANGE_PERIODS periods, per zeta.
+
+    On the unit oscillator (omega = 1 rad/s): its roots -zeta +- sqrt(zeta^2 - 1) are the modes
+    `compare.estimate_range` judges; above the line `springlab run` says "not validated".
+    """
+    out = []
+    for zeta in zetas:
+        root = np.sqrt(complex(zeta * zeta - 1.0))
+        rates = [-zeta + root, -zeta - root]
+        out.append(compare.estimate_range(rates, integrator, 0.1, RANGE_PERIODS * 2 * math.pi).largest_dt)
+    return out
+
+
+def plot_stability(report: dict[str, Any], amplification: dict[str, Any], path: str | pathlib.Path) -> pathlib.Path:
+    """Per integrator: measured per-step amplification over (zeta, omega*dt), theory boundary, measured boundary.
+
+    Parameters
+    ----------
+    report
+        `stability.stability_report` (its measured boundaries are drawn).
+    amplification
+        `stability.amplification_map` (the colour map).
+    path
+        the PNG to write.
+    """
+    from matplotlib.colors import TwoSlopeNorm
+
+    zetas, omega_dts = amplification["zetas"], amplification["omega_dts"]
+    names = list(amplification["radius"])
+    fig, axes = _figure(len(names), (3.4 * len(names) + 1.5, 4.4), sharey=True, layout="constrained")
+    axes = np.atleast_1d(axes)
+    norm = TwoSlopeNorm(vmin=-3.0, vcenter=0.0, vmax=3.0)
+    theory_zetas = np.concatenate([[0.0], np.geomspace(1e-2, 100.0, 200)])
+    image = None
+    for axis, name in zip(axes, names):
+        log_radius = np.log10(np.clip(amplification["radius"][name], 1e-300, None))
+        image = axis.pcolormesh(
+            zetas, omega_dts, np.clip(log_radius, -3, 3).T, cmap="RdBu_r", norm=norm, shading="nearest"
+        )
+        theory = [stability_limit(name, z) for z in theory_zetas]
+        if all(math.isinf(t) for t in theory):
+            axis.text(0.5, 0.5, "no limit: never unstable", transform=axis.transAxes, ha="center", fontsize=9)
+        else:
+            axis.plot(theory_zetas, theory, color="black", lw=1.2, label="theory")
+        # below this line a run of RANGE_PERIODS periods is inside the range of its error estimate (springlab.runs.compare)
+        range_zetas = theory_zetas[::5]
+        axis.plot(range_zetas, estimate_range_line(name, range_zetas), color="black", lw=1.0, ls="--", label=_RANGE)
+        rows = [r for r in report["boundaries"] if r["integrator"] == name and math.isfinite(r["measured_omega_dt"])]
+        axis.plot(
+            [r["zeta"] for r in rows],
+            [r["measured_omega_dt"] for r in rows],
+            "o",
+            mfc="none",
+            color="gold",
+            mew=1.5,
+            label="measured (growth test)",
+        )
+        axis.set_xscale("symlog", linthresh=0.01)
+        axis.set_yscale("log")
+        axis.set_ylim(omega_dts[0], omega_dts[-1])
+        axis.set_xlabel("damping ratio zeta [-]")
+        axis.set_title(name)
+        axis.legend(fontsize=7, loc="upper left")
+    axes[0].set_ylabel("omega * dt [-]")
+    fig.colorbar(image, ax=list(axes), label="log10 per-step amplification (> 0: grows)", shrink=0.85)
+    fig.suptitle("stability map: MuJoCo's measured one-step amplification, theory (line), measured boundary (o)")
+    return _save(fig, path)
+
+
+def plot_energy(series: dict[str, Any], path: str | pathlib.Path) -> pathlib.Path:
+    """E/E0 over time of every integrator on the undamped slider, each against its exact formula."""
+    fig, (euler, rk4, discrete) = _figure(3, (15, 4.4))
+    t = series["time_periods"]
+    y = series["omega_dt"]
+    n = np.arange(len(t))
+    first = t <= 3.0
+    for name in EULER_FAMILY:
+        euler.plot(t[first], series["ratio"][name][first] - 1, _STYLES[name], color=_COLORS[name], lw=1.2, label=name)
+    euler.axhline(1 / (1 - y / 2) - 1, color="black", lw=0.8, ls="--", label="1/(1 - y/2) - 1 (sharp bound)")
+    euler.axhline(1 / (1 + y / 2) - 1, color="black", lw=0.8, ls=":", label="1/(1 + y/2) - 1")
+    euler.set_title("euler family: bounded oscillation (first 3 periods)")
+    stride = max(1, len(t) // 4000)
+    rk4.plot(t[::stride], series["ratio"]["rk4"][::stride] - 1, color=_COLORS["rk4"], lw=2.5, alpha=0.6, label="rk4")
+    rk4.plot(
+        t,
+        energy_formula("rk4", y, n)["ratio"] - 1,
+        color="black",
+        lw=0.8,
+        ls="--",
+        label="(1 - y^6/72 + y^8/576)^n - 1",
+    )
+    rk4.set_title("rk4: slow decay")
+    discrete.semilogy(
+        t[::stride],
+        series["ratio"]["discrete"][::stride],
+        color=_COLORS["discrete"],
+        lw=2.5,
+        alpha=0.6,
+        label="discrete",
+    )
+    discrete.semilogy(
+        t, energy_formula("discrete", y, n)["ratio"], color="black", lw=0.8, ls="--", label="(1 + y^2)^-n"
+    )
+    discrete.set_title("discrete: decay by 1/(1 + y^2) per step")
+    euler.set_ylabel("E/E0 - 1 [-]")
+    rk4.set_ylabel("E/E0 - 1 [-]")
+    discrete.set_ylabel("E/E0 [-]")
+    for axis in (euler, rk4, discrete):
+        axis.set_xlabel("time [periods]")
+        axis.grid(True, alpha=0.3)
+        axis.legend(fontsize=8)
+    fig.suptitle(f"undamped slider, omega*dt = y = {y:g}: energy from qpos/qvel vs each step map's exact formula")
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def write_tradeoff(result: Tradeoff, directory: str | pathlib.Path) -> list[pathlib.Path]:
+    """Write DIR/tradeoff.json and DIR/tradeoff.png."""
+    written = files.write_text_files(directory, {"tradeoff.json": files.dumps(result.as_json()) + "\n"})
+    written.append(plot_tradeoff(result, pathlib.Path(directory) / "tradeoff.png"))
+    return written
+
+
+def write_stability(
+    report: dict[str, Any], amplification: dict[str, Any], directory: str | pathlib.Path
+) -> list[pathlib.Path]:
+    """Write DIR/stability.json, DIR/stability.png (map) and DIR/energy.png.
+
+    Parameters
+    ----------
+    report
+        `stability.stability_report`.
+    amplification
+        `stability.amplification_map`, drawn in stability.png.
+    directory
+        the output folder.
+    """
+    written = files.write_text_files(directory, {"stability.json": files.dumps(report_json(report)) + "\n"})
+    written.append(plot_stability(report, amplification, pathlib.Path(directory) / "stability.png"))
+    written.append(plot_energy(report["_energy_series"], pathlib.Path(directory) / "energy.png"))
+    return written
+
+
+def plot_sobol(study: Any, path: str | pathlib.Path) -> pathlib.Path:
+    """Two panels of a springlab.studies.design.sobol.SobolStudy: first-order and total Sobol indices with their
+    confidence intervals per property (total minus first-order is the interactions' share), and the
+    elasticities |d ln T / d ln p| from the same runs, for the ranking they would give."""
+    fig, (left, right) = _figure(2, (12, 4.8), layout="constrained")
+    names = study.ranking()
+    x = np.arange(len(names))
+    s1, st = study.indices["S1"], study.indices["ST"]
+    left.bar(
+        x - 0.2,
+        [s1[n] for n in names],
+        0.4,
+        yerr=[study.indices["S1_conf"][n] for n in names],
+        capsize=3,
+        label="first order S1 (alone)",
+        color="#1f77b4",
+    )
+    left.bar(
+        x + 0.2,
+        [st[n] for n in names],
+        0.4,
+        yerr=[study.indices["ST_conf"][n] for n in names],
+        capsize=3,
+        label="total ST (alone + interactions)",
+        color="#d62728",
+    )
+    left.axhline(0.0, color="k", linewidth=0.6)
+    left.set_xticks(x, [n.replace("_", "\n") for n in names])
+    left.set_ylabel("share of Var(positioning time) [-]")
+    left.set_title(
+        f"Sobol indices, {study.runs} runs ({study.base_samples} x 7), {int(round(100 * 0.95))}% bootstrap intervals;"
+        f"\nsum S1 = {sum(s1.values()):.2f}",
+        fontsize=10,
+    )
+    left.legend(fontsize=8)
+    elastic = [abs(study.elasticities[n]) for n in names]
+    right.bar(x, elastic, 0.5, color="#7f7f7f")
+    right.set_xticks(x, [n.replace("_", "\n") for n in names])
+    right.set_ylabel("|elasticity d ln T / d ln p| [-]")
+    right.set_title(f"elasticities from the same runs (log-log fit, R^2 = {study.regression_r2:.2f})", fontsize=10)
+    return _save(fig, path)

@@ -1,0 +1,109 @@
+"""design.png: the printer-head design study's chart (positioning time over the two most
+influential properties, and the analytic estimates against every simulated time).
+
+Reads a springlab.studies.design.study.Study (never re-simulates).  Times are drawn in [ms].
+"""
+
+from __future__ import annotations
+
+import pathlib
+
+import numpy as np
+
+from springlab import files
+from springlab.studies.design.study import Study, default_properties
+
+_LABELS = {
+    "belt_stiffness": "belt stiffness k [N/m]",
+    "carriage_mass": "carriage mass m_c [kg]",
+    "damping_ratio": "belt damping ratio zeta [-]",
+    "drive_force": "drive force F [N]",
+}
+
+
+def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
+    """PNG: positioning time over the two most influential properties (the others at their
+    defaults; the dense plane if the study has one, else the grid's slice), and simulated vs
+    analytic positioning time of every configuration."""
+    import matplotlib.colors
+    import matplotlib.ticker
+    from matplotlib.figure import Figure  # no pyplot: a caller's backend and figures stay untouched
+
+    first, second = study.ranking()[:2]
+    axes_order = list(study.grids)
+    centre = study.levels // 2
+    estimate_plane = None
+    if study.plane is not None:
+        x, y = study.plane.x, study.plane.y
+        plane = study.plane.positioning_time_s * 1e3  # ms, rows: the most influential property
+        estimate_plane = study.plane.estimate_s * 1e3
+        first, second = study.plane.y_name, study.plane.x_name
+    else:
+        shape = (study.levels,) * len(axes_order)
+        index: list[int | slice] = [centre] * len(shape)
+        index[axes_order.index(first)] = slice(None)
+        index[axes_order.index(second)] = slice(None)
+        plane = study.positioning_time_s.reshape(shape)[tuple(index)] * 1e3  # ms
+        if axes_order.index(first) > axes_order.index(second):
+            plane = plane.T  # rows: first property
+        x, y = study.grids[second], study.grids[first]
+    fig = Figure(figsize=(12.5, 5.2), layout="constrained")
+    left, right = fig.subplots(1, 2)
+    norm = matplotlib.colors.LogNorm(vmin=float(np.min(plane)), vmax=float(np.max(plane)))
+    mesh = left.pcolormesh(x, y, plane, shading="nearest", cmap="viridis", norm=norm)
+    candidates = np.array([50, 100, 200, 400, 800, 1600])  # few, so the phase stripes stay readable
+    levels = candidates[(candidates > np.min(plane)) & (candidates < np.max(plane))]
+    if levels.size:
+        contours = left.contour(x, y, plane, levels=levels, colors="white", linewidths=0.8)
+        left.clabel(contours, fmt="%.0f ms", fontsize=8)
+        if estimate_plane is not None:
+            left.contour(x, y, estimate_plane, levels=levels, colors="white", linewidths=0.6, linestyles="dashed")
+    default = default_properties(study.base)
+    left.plot(default[second], default[first], "w*", markersize=14, markeredgecolor="k", label="default")
+    if estimate_plane is not None:
+        left.plot([], [], "w--", linewidth=0.6, label="analytic estimate (contours)")
+    left.set_xscale("log")
+    left.set_yscale("log")
+    for axis in (left.xaxis, left.yaxis):  # plain numbers at 1, 2, 5 x 10^n: scientific minor labels collide
+        axis.set_major_locator(matplotlib.ticker.LogLocator(subs=(1.0, 2.0, 5.0)))
+        axis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda value, _: f"{value:g}"))
+        axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    left.set_xlabel(_LABELS[second])
+    left.set_ylabel(_LABELS[first])
+    elasticity = study.elasticities()
+    others = [p for p in axes_order if p not in (first, second)]
+    left.set_title(
+        f"positioning time [ms], {study.base['move_distance'] * 1e3:.4g} mm to "
+        f"+-{study.base['positioning_band'] * 1e6:.3g} um\n" + ", ".join(f"{p} = {default[p]:.3g}" for p in others),
+        fontsize=10,
+    )
+    legend = left.legend(loc="upper right", fontsize=8, facecolor="0.3", labelcolor="white")
+    legend.get_frame().set_alpha(0.6)
+    bar = fig.colorbar(mesh, ax=left, label="positioning time [ms]")
+    bar.ax.yaxis.set_major_formatter(matplotlib.ticker.FormatStrFormatter("%.0f"))
+    bar.ax.yaxis.set_minor_formatter(matplotlib.ticker.FormatStrFormatter("%.0f"))
+
+    finite = np.isfinite(study.positioning_time_s)
+    sim, est = study.positioning_time_s[finite] * 1e3, study.estimate_s[finite] * 1e3
+    right.loglog(sim, est, ".", markersize=3, alpha=0.5, label="analytic estimate")
+    right.loglog(
+        sim, study.worst_case_estimate_s[finite] * 1e3, ".", markersize=2, alpha=0.3, label="worst-case estimate"
+    )
+    span = [min(sim.min(), est.min()) * 0.9, max(sim.max(), est.max()) * 1.1]
+    right.plot(span, span, "k-", linewidth=0.8, label="equal")
+    right.set_xlabel("simulated positioning time [ms] (MuJoCo, batched)")
+    right.set_ylabel("estimated positioning time [ms]")
+    for axis in (right.xaxis, right.yaxis):  # plain numbers at 1, 2, 5 x 10^n
+        axis.set_major_locator(matplotlib.ticker.LogLocator(subs=(1.0, 2.0, 5.0)))
+        axis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda value, _: f"{value:g}"))
+        axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    right.set_title(
+        f"{study.size} configurations; elasticities d ln T / d ln p:\n"
+        + ", ".join(f"{p.split('_')[0]} {elasticity[p]:+.2f}" for p in study.ranking()),
+        fontsize=10,
+    )
+    right.legend(fontsize=8)
+    path = pathlib.Path(path)
+    with files.atomic_path(path) as temporary:
+        fig.savefig(temporary, dpi=110, format="png")
+    return path

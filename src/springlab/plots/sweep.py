@@ -1,0 +1,134 @@
+"""Files of a parameter sweep: sweep.csv (one row per configuration) and sweep.png (a quantity over the parameters).
+
+Reads a finished springlab.studies.sweeps.Sweep; never simulates. The figure is a bare
+matplotlib Figure (no pyplot), saved atomically.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import pathlib
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from springlab import files
+from springlab.errors import BadInputError
+from springlab.studies.sweeps import Sweep
+
+if TYPE_CHECKING:  # matplotlib is imported only when a figure is drawn
+    from matplotlib.cm import ScalarMappable
+
+
+def default_quantity(sweep: Sweep) -> str:
+    """The quantity sweep.png shows by default: the scenario's last numeric quantity that every
+    configuration that ran has (its headline result, e.g. max_displacement_m), else the first error column."""
+    ran = [row for row in sweep.rows if row["quantities"]]
+    names = [n for n in sweep.quantity_names() if all(n in row["quantities"] for row in ran)]
+    if names:
+        return names[-1]
+    errors = [c for row in sweep.rows for c in row["errors"]]
+    if errors:
+        return f"{errors[0]}_max_rel"
+    raise BadInputError("the sweep has no numeric quantity to plot (every configuration diverged?)")
+
+
+def csv_text(sweep: Sweep) -> str:
+    """sweep.csv: header, then one row per configuration; numbers at full precision (repr)."""
+    header, body = sweep.table()
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(header)
+    for line in body:
+        writer.writerow([_cell(value) for value in line])
+    return buffer.getvalue()
+
+
+def _cell(value) -> str:
+    if isinstance(value, (bool, np.bool_)):
+        return "true" if value else "false"
+    if isinstance(value, (float, np.floating, int, np.integer)):
+        return repr(float(value)) if isinstance(value, (float, np.floating)) else str(int(value))
+    return str(value)
+
+
+def plot(sweep: Sweep, path: str | pathlib.Path, quantity: str | None = None) -> pathlib.Path:
+    """PNG of `quantity` over the varied parameters.
+
+    One varied parameter: the quantity against it (diverged configurations as red crosses on the
+    axis). Two or more: a colour map over the first two (a grid: the other axes at their middle
+    value; random samples: every point coloured). Log axes where the range is log-spaced.
+    """
+    from matplotlib.figure import Figure
+
+    quantity = default_quantity(sweep) if quantity is None else quantity
+    known = list(sweep.values) + sweep.quantity_names() + [f"{c}_max_rel" for row in sweep.rows for c in row["errors"]]
+    if quantity not in known:
+        raise BadInputError(f"unknown quantity {quantity!r} of this sweep; valid: {', '.join(dict.fromkeys(known))}")
+    z = sweep.column(quantity)
+    diverged = np.array([bool(r["diverged"]) for r in sweep.rows])
+    axes = sweep.axes
+    fig = Figure(figsize=(7.5, 5.0), layout="constrained")
+    ax = fig.subplots()
+    title = f"{sweep.scene} / {sweep.scenario}: {quantity} ({sweep.size} configurations, {sweep.integrator}"
+    title += f", dt = {sweep.dt:g} s)"
+    if len(axes) == 1:
+        x = sweep.values[axes[0].name]
+        order = np.argsort(x, kind="stable")
+        ax.plot(x[order], z[order], ".-" if sweep.samples is None else ".", label=quantity)
+        if diverged.any():
+            ax.plot(x[diverged], np.zeros(diverged.sum()), "rx", label="diverged")
+            ax.legend(fontsize=8)
+        ax.set_xlabel(axes[0].name)
+        ax.set_ylabel(quantity)
+        if axes[0].log:
+            ax.set_xscale("log")
+    else:
+        a, b = axes[0], axes[1]
+        x, y = sweep.values[b.name], sweep.values[a.name]
+        keep = np.ones(sweep.size, bool)
+        if sweep.samples is None and len(axes) > 2:
+            for other in axes[2:]:
+                grid = other.values()
+                keep &= sweep.values[other.name] == grid[len(grid) // 2]
+            title += "\n" + ", ".join(f"{o.name} = {o.values()[len(o.values()) // 2]:g}" for o in axes[2:])
+        finite = keep & np.isfinite(z)
+        mesh: ScalarMappable
+        if sweep.samples is None:
+            assert a.count is not None and b.count is not None, "a grid sweep's axes all have N"
+            shape = (a.count, b.count)
+            plane = np.where(finite, z, np.nan)[keep].reshape(shape)
+            mesh = ax.pcolormesh(b.values(), a.values(), plane, shading="nearest", cmap="viridis")
+        else:
+            mesh = ax.scatter(x[finite], y[finite], c=z[finite], s=12, cmap="viridis")
+        fig.colorbar(mesh, ax=ax, label=quantity)
+        bad = keep & diverged
+        if bad.any():
+            ax.plot(x[bad], y[bad], "rx", markersize=5, label="diverged")
+            ax.legend(fontsize=8)
+        ax.set_xlabel(b.name)
+        ax.set_ylabel(a.name)
+        if b.log:
+            ax.set_xscale("log")
+        if a.log:
+            ax.set_yscale("log")
+    ax.set_title(title, fontsize=9)
+    path = pathlib.Path(path)
+    files.prepare_directory(path.parent)
+    with files.atomic_path(path) as temporary:
+        fig.savefig(temporary, dpi=110, format="png")
+    return path
+
+
+def write(sweep: Sweep, directory: str | pathlib.Path, quantity: str | None = None) -> list[pathlib.Path]:
+    """Write sweep.csv and sweep.png into `directory`."""
+    folder = files.prepare_directory(directory)
+    png = folder / "sweep.png"
+    plot(sweep, png, quantity)  # first: a bad --quantity leaves no file behind
+    try:
+        written = files.write_text_files(folder, {"sweep.csv": csv_text(sweep)})
+    except BaseException:
+        png.unlink(missing_ok=True)
+        raise
+    return [*written, png]

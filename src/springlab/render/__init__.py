@@ -1,0 +1,3 @@
+"""Layer 4, render: off-screen videos of finished runs (`video`, `media`), drawn with MuJoCo's renderer on
+EGL (`gl`), framed (`framing`), annotated (`drawings`, `text`, `scale`) and encoded (`sink`). Nothing here simulates.
+"""

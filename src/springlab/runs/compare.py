@@ -1,0 +1,326 @@
+"""Errors against the exact reference, and the tolerance each run is held to.
+
+The tolerance is not tuned: it is the integrator's leading-order global error,
+predicted from its order p and the timestep h, times a safety factor of 2.
+
+For a linear scene the reference comes from an autonomous system z' = A z
+(forcing included as exact generator states: a constant, a sine/cosine pair).
+A one-step method of order p commits a local error C h^(p+1) A^(p+1) z per
+step; for a linear time-invariant system these errors add up without
+interfering, so after time t the global error is, to leading order,
+
+    e(t) = C h^p t A^(p+1) z(t)
+
+exactly for RK4 (C = 1/120, from R(hA) = e^(hA) - (hA)^5/120 + ...). For the
+first-order integrators (euler, implicit, implicitfast, discrete) the same
+form with C = 1/2, the local error constant of a first-order method, is an
+upper estimate: the symplectic ones keep the energy bounded, so their real
+error grows more slowly than t. The bound on column `<joint>_pos` is
+
+    tol = 2 max_t |e_x(t)| / max_t |x_ref(t)| + 100 eps N
+
+(velocity columns likewise, in the scaled norm |(x, v / rho)| with rho the
+spectral radius of A), the last term the round-off of N steps.
+
+Piecewise-constant systems: an input switched on or off on a step boundary
+changes A at that instant (`Reference.switches`). The errors committed before
+the switch are then carried on by the exact flow of the new system, and the
+new segment adds its own, so on segment j (from s_j, matrix A_j)
+
+    e(t) = exp(A_j (t - s_j)) e(s_j) + C h^p (t - s_j) A_j^(p+1) z(t)
+
+which reduces to the formula above when nothing switches. A scene whose model
+can only approximate its true input states the exact size of the difference
+(`Reference.input_error`, absolute per column); it is added to the tolerance
+as it is (it is computed exactly, not estimated).
+
+The range of the estimate (`estimate_range`). The formula keeps the first
+term of two expansions and drops the rest; it is a tolerance only where the
+dropped terms are small. Take one mode lambda of A (every segment's A), h =
+dt, z = h lambda, sigma = -Re(lambda), n steps. With the integrator's one-step
+map R(z), the mode's exact global error relative to its size at t = 0 is
+
+    e_n = e^(nz) ((1 + eps)^n - 1),   eps = R(z) e^(-z) - 1,
+
+and the estimate keeps L_n = n C |z|^(p+1) e^(-sigma n h). Two bounds make
+e_n computable without R:
+
+* local: R(z) - e^z is minus the exponential's tail from z^(p+1) on (exactly
+  so for rk4 and explicit Euler, the model of the first-order integrators'
+  local error the estimate already uses), whose terms shrink by at least
+  r = |z| / (p + 2) each, so |eps| <= a = C |z|^(p+1) e^(sigma h) / (1 - r);
+* accumulation: |(1 + eps)^n - 1| <= (1 + a)^n - 1.
+
+So max_n |e_n| <= max_n e^(-sigma n h) ((1 + a)^n - 1), and the ratio F of
+that bound to max_n L_n (both maxima in closed form over n = 1..N) bounds how
+far the whole error can exceed the kept term. The run is inside the range
+when F <= SAFETY for every mode: the dropped terms then fit inside the factor
+the tolerance already allows. Outside it the formula is no tolerance
+(`springlab run slider undamped --integrator euler --dt 0.05 --duration 20`
+predicts 1e2 for a measured error of 1.86) and the run is "not validated".
+F grows with h, so the largest dt inside is found by bisection and reported.
+
+A PASS without --tol never certifies more than CERTIFIED_CAP: the tolerance
+of a compared column is min(2 x prediction + round-off, CERTIFIED_CAP).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Iterable
+from typing import Any
+
+import numpy as np
+import scipy.linalg
+
+from springlab.errors import BadInputError
+from springlab.scenes.base import Reference
+from springlab.sim.simulate import ORDERS
+
+#: safety factor on the predicted leading-order error
+SAFETY = 2.0
+#: leading local-error constants C: first-order methods 1/2, RK4 1/120
+ERROR_CONSTANTS = {name: (1.0 / 120.0 if order == 4 else 0.5) for name, order in ORDERS.items()}
+#: round-off allowance per step, relative
+ROUNDOFF_PER_STEP = 100 * np.finfo(float).eps
+#: the most relative error [-] a PASS certifies without a requested tolerance
+CERTIFIED_CAP = 1e-2
+#: the verdicts of a run held to a tolerance
+PASS, FAIL, NOT_VALIDATED = "PASS", "FAIL", "not validated: outside the range of the error estimate"
+
+
+def check_tolerance(tol: Any) -> float:
+    """A requested relative tolerance [-] as a float, or BadInputError saying what is valid."""
+    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not math.isfinite(tol) or tol <= 0:
+        raise BadInputError(f"tol must be a finite number > 0 (relative error), got {tol!r}")
+    return float(tol)
+
+
+def column_errors(simulated: dict[str, np.ndarray], reference: dict[str, np.ndarray]) -> dict[str, dict]:
+    """Per column: max_abs = max |sim - ref| and max_rel = max_abs / max |ref|.
+
+    Parameters
+    ----------
+    simulated, reference
+        column name -> series (same length).
+    """
+    errors = {}
+    for name, ref in reference.items():
+        max_abs = float(np.max(np.abs(simulated[name] - ref)))
+        scale = float(np.max(np.abs(ref)))
+        errors[name] = {"max_abs": max_abs, "max_rel": max_abs / scale if scale > 0 else max_abs}
+    return errors
+
+
+def predicted_error(reference: Reference, integrator: str, dt: float, time: np.ndarray) -> dict[str, float]:
+    """Leading-order max absolute error per column [m or m/s] (see module docstring).
+
+    Parameters
+    ----------
+    reference
+        exact solution with its `system` matrix A, `states` z(t) and
+        optional `switches` (A changes on step boundaries).
+    integrator
+        integrator name.
+    dt
+        timestep [s].
+    time
+        (n,) times of the states [s], uniformly dt apart.
+    """
+    z = reference.states
+    assert z is not None, "tolerances() needs a linear reference (states and system)"
+    order = ORDERS[integrator]
+    scale = ERROR_CONSTANTS[integrator] * dt**order
+    segments = [(float(time[0]), np.asarray(reference.system, float))]
+    segments += [(float(s), np.asarray(a, float)) for s, a in reference.switches if time[0] < s < time[-1]]
+    error = np.zeros_like(z)  # signed leading-order global error vectors e(t)
+    carried = np.zeros(z.shape[1])
+    for j, (start, a) in enumerate(segments):
+        first = int(np.argmin(np.abs(time - start)))
+        if abs(time[first] - start) > 1e-6 * dt:  # MuJoCo accumulates time by t += dt
+            raise ValueError(f"system switch at t = {start} s is not on the step grid (dt = {dt} s)")
+        last = int(np.argmin(np.abs(time - segments[j + 1][0]))) if j + 1 < len(segments) else len(time) - 1
+        rows = slice(first, last + 1)
+        elapsed = time[rows] - start
+        error[rows] = scale * elapsed[:, None] * (z[rows] @ np.linalg.matrix_power(a, order + 1).T)
+        if carried.any():
+            step = scipy.linalg.expm(a * dt)
+            propagated = np.empty((last + 1 - first, z.shape[1]))
+            propagated[0] = carried
+            for i in range(1, len(propagated)):
+                propagated[i] = step @ propagated[i - 1]
+            error[rows] += propagated
+        carried = error[last].copy()
+    rho = max(max(float(np.max(np.abs(np.linalg.eigvals(a)))) for _, a in segments), 1.0 / max(float(time[-1]), 1e-300))
+    out = {}
+    for joint, (ip, iv) in reference.rows.items():
+        scaled = np.hypot(error[:, ip], error[:, iv] / rho)
+        out[f"{joint}_pos"] = float(np.max(scaled))
+        out[f"{joint}_vel"] = float(np.max(scaled)) * rho
+    return out
+
+
+def tolerances(reference: Reference, integrator: str, dt: float, time: np.ndarray) -> dict[str, float]:
+    """Relative tolerance per compared column (see module docstring)."""
+    floor = ROUNDOFF_PER_STEP * (len(time) - 1)
+    predicted = predicted_error(reference, integrator, dt, time)
+    out: dict[str, float] = {}
+    for joint in reference.rows:
+        for kind, series in (("pos", reference.pos[joint]), ("vel", reference.vel[joint])):
+            column = f"{joint}_{kind}"
+            scale = float(np.max(np.abs(series)))
+            rel = predicted[column] / scale if scale > 0 else predicted[column]
+            known = reference.input_error.get(column, 0.0)
+            out[column] = SAFETY * rel + (known / scale if scale > 0 else known) + floor
+    return out
+
+
+TOLERANCE_BASIS = (
+    "2 x the leading-order global error C h^p t |A^(p+1) z(t)| of an order-p integrator"
+    " (C = 1/120 for rk4, 1/2 for first-order) + 100 eps per step"
+)
+
+
+@dataclasses.dataclass(frozen=True)
+class EstimateRange:
+    """Whether the leading-order error estimate holds for a run (see module docstring).
+
+    Attributes
+    ----------
+    inside
+        the dropped terms fit inside the safety factor: the tolerance means something.
+    factor
+        the worst mode's bound F on (whole error) / (kept term) [-] (inf: no bound).
+    rate
+        that mode's eigenvalue lambda [1/s] (0 when A has no other).
+    dt
+        the run's timestep [s].
+    largest_dt
+        the largest timestep [s] inside the range for the same duration (2 significant
+        digits, rounded down; inf when every dt is).
+    """
+
+    inside: bool
+    factor: float
+    rate: complex
+    dt: float
+    largest_dt: float
+
+    def reason(self) -> str:
+        """One line: why the run is outside (or inside) the range, and which dt is inside."""
+        if self.inside:
+            return f"inside the range of the error estimate (the error can reach at most {self.factor:.3g} x it)"
+        rate = self.rate
+        mode = f"the {abs(rate):.4g} 1/s mode (damping ratio {-rate.real / abs(rate) + 0.0:.3g})"
+        bound = f"{self.factor:.3g} x" if math.isfinite(self.factor) else "any multiple of"
+        line = (
+            f"h|lambda| = {self.dt * abs(rate):.3g} on {mode}: its error can reach {bound} the leading-order"
+            f" estimate, over the safety factor {SAFETY:g}"
+        )
+        return f"{line}; dt <= {self.largest_dt:.2g} s is inside" if math.isfinite(self.largest_dt) else line
+
+
+def _round_down(value: float, digits: int = 2) -> float:
+    """`value` > 0 rounded down to `digits` significant digits."""
+    unit = 10.0 ** (math.floor(math.log10(value)) - digits + 1)
+    out = float(f"{math.floor(value / unit * (1 + 1e-12)) * unit:.{digits - 1}e}")
+    return out if out <= value else float(f"{out - unit:.{digits - 1}e}")
+
+
+def _max_over_steps(values, steps: int, peak: float) -> float:
+    """max of values(n) over the integers n in [1, steps] next to a real peak (the function is unimodal)."""
+    candidates = {1, steps, min(max(math.floor(peak), 1), steps), min(max(math.ceil(peak), 1), steps)}
+    return max(values(n) for n in candidates)
+
+
+def mode_factor(rate: complex, integrator: str, dt: float, duration: float) -> float:
+    """F [-]: bound on a mode's whole error over the estimate's kept term (module docstring); inf if none.
+
+    Parameters
+    ----------
+    rate
+        the mode's eigenvalue lambda [1/s].
+    integrator
+        integrator name.
+    dt
+        timestep [s].
+    duration
+        simulated time [s].
+    """
+    order = ORDERS[integrator]
+    steps = max(1, round(duration / dt))
+    size = dt * abs(rate)
+    decay = -float(np.real(rate)) * dt  # sigma h
+    tail = size / (order + 2)
+    if tail >= 1.0:
+        return math.inf
+    kept = ERROR_CONSTANTS[integrator] * size ** (order + 1)
+    local = kept * math.exp(decay) / (1.0 - tail)  # bound a on |eps|
+    growth = math.log1p(local)
+
+    def whole(n: int) -> float:
+        # e^(-sigma h n) ((1 + a)^n - 1) in logs: log(expm1(x)) = x + log1p(-e^-x), no overflow
+        x = growth * n
+        if x <= 0.0:
+            return 0.0
+        log_expm1 = math.log(math.expm1(x)) if x < 30.0 else x + math.log1p(-math.exp(-x))
+        return math.exp(min(-decay * n + log_expm1, 700.0))
+
+    # e^(-sigma h n) ((1 + a)^n - 1) peaks where its derivative vanishes (or at the end if it never decays)
+    rate_of_change = growth - decay
+    if rate_of_change >= 0.0 or decay <= 0.0:
+        peak = float(steps)
+    else:
+        peak = math.log(decay / -rate_of_change) / growth
+    numerator = _max_over_steps(whole, steps, peak)
+    denominator = _max_over_steps(lambda n: n * kept * math.exp(-decay * n), steps, 1.0 / decay if decay > 0 else steps)
+    if denominator <= 0.0 or not math.isfinite(numerator):
+        return math.inf
+    return numerator / denominator
+
+
+def system_rates(reference: Reference) -> list[complex]:
+    """Eigenvalues lambda [1/s] of every system matrix of the reference (segments included), 0 dropped."""
+    systems = [reference.system] + [a for _, a in reference.switches]
+    rates: list[complex] = []
+    for a in systems:
+        values = np.linalg.eigvals(np.asarray(a, float))
+        scale = max(float(np.max(np.abs(values))), 1e-300)
+        rates.extend(complex(v) for v in values if abs(v) > 1e-12 * scale)
+    return rates
+
+
+def estimate_range(rates: Iterable[complex], integrator: str, dt: float, duration: float) -> EstimateRange:
+    """Whether a run at dt [s] over duration [s] is inside the range of the error estimate.
+
+    Parameters
+    ----------
+    rates
+        eigenvalues lambda [1/s] of the run's linear system (`system_rates`).
+    integrator
+        integrator name.
+    dt
+        timestep [s].
+    duration
+        simulated time [s].
+    """
+    rates = list(rates)
+    if not rates:
+        return EstimateRange(True, 1.0, 0j, dt, math.inf)
+
+    def worst(h: float) -> tuple[float, complex]:
+        return max(((mode_factor(r, integrator, h, duration), r) for r in rates), key=lambda item: item[0])
+
+    factor, rate = worst(dt)
+    inside = factor <= SAFETY
+    # F grows with h: bracket the boundary by decades, then bisect in log h
+    low, high = (dt, 10.0 * dt) if inside else (dt / 10.0, dt)
+    while worst(high)[0] <= SAFETY and high < dt * 1e12:
+        low, high = high, 10.0 * high
+    while worst(low)[0] > SAFETY and low > dt * 1e-12:
+        low, high = low / 10.0, low
+    for _ in range(24):  # a decade to 1e-7 relative: far below the 2 digits reported
+        mid = math.sqrt(low * high)
+        low, high = (mid, high) if worst(mid)[0] <= SAFETY else (low, mid)
+    return EstimateRange(inside, factor, rate, dt, _round_down(low))

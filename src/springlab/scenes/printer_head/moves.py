@@ -1,0 +1,317 @@
+"""printer_head's inputs and what follows them: the scenarios' variants, the move, the settling.
+
+Each scenario carries its variant (`Scenario.variant`), as the car's do: `Move` (the bang-bang
+move, then settling), `StepForce` (a held force) and `Settle` (a release from a stretched belt).
+A variant gives the motor's force segments and the quantities that differ. The formulas of the
+move and of the residual vibration live here too; the design study shares them.
+Masses [kg], stiffness [N/m], damping [N s/m], forces [N], times [s], positions [m].
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from springlab.exact import analytic
+
+
+def move_profile(params: dict[str, float], dt: float) -> tuple[int, float]:
+    """(steps per half-move n, force [N]) of the bang-bang move on a grid of dt [s].
+
+    The half-move time is the minimum sqrt(D M / F) rounded up to whole steps,
+    and the force is lowered to M D / (n dt)^2 so the centre of mass stops at D.
+    """
+    total = params["carriage_mass"] + params["motor_mass"]
+    half = math.sqrt(params["move_distance"] * total / params["drive_force"])
+    n = max(1, math.ceil(half / dt - 1e-9))
+    force = min(params["drive_force"], total * params["move_distance"] / (n * dt) ** 2)
+    return n, force
+
+
+@dataclasses.dataclass(frozen=True)
+class BeltRun:
+    """What a variant's quantities read of one run: its parameters, the belt mode and the joints' columns.
+
+    Masses [kg], stiffness [N/m], omega_n [rad/s], zeta [-], dt and time [s], positions [m], velocities [m/s].
+    """
+
+    params: dict[str, float]
+    m_c: float
+    m_m: float
+    k: float
+    omega_n: float
+    zeta: float
+    dt: float
+    time: np.ndarray
+    q_c: np.ndarray
+    v_c: np.ndarray
+    q_m: np.ndarray
+    v_m: np.ndarray
+
+
+class StepForce:
+    """step_force's variant (Scenario.variant): drive_force [N] from rest, held; no settling."""
+
+    def segments(self, params: dict[str, float], dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """(breakpoints [s], motor force per segment [N]): one step at t = 0."""
+        return np.array([0.0]), np.array([params["drive_force"]])
+
+    def quantities(self, out: dict, run: BeltRun) -> dict:
+        """The rigid-body acceleration [m/s^2] and the belt's static and largest stretch [m]."""
+        total = run.m_c + run.m_m
+        force = run.params["drive_force"]
+        out["rigid_acceleration_m_s2"] = force / total
+        out["static_belt_stretch_m"] = force * run.m_c / (total * run.k)
+        out["max_belt_stretch_m"] = float(np.max(np.abs(run.q_m - run.q_c)))
+        return out
+
+
+class _Settling:
+    """A variant whose force ends, after which the carriage settles about a target (move, settle).
+
+    `quantities` measures the settling into +-positioning_band from the step `release` returns,
+    certified by the belt-energy bound, and the analytic estimate; the subclasses say what came before.
+    """
+
+    def segments(self, params: dict[str, float], dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """(breakpoints [s], motor force per segment [N]) of the scenario's input."""
+        raise NotImplementedError
+
+    def release(self, out: dict, run: BeltRun) -> tuple[float, int]:
+        """(target [m], first step of the force-free motion); records what the input did in `out`."""
+        raise NotImplementedError
+
+    def residual_stretch(self, run: BeltRun, start: int) -> tuple[float, float]:
+        """Belt stretch [m] and rate [m/s] once the force is off, for the estimate: the measured ones."""
+        return run.q_m[start] - run.q_c[start], run.v_m[start] - run.v_c[start]
+
+    def positioning(self, out: dict, settling: float) -> float | None:
+        """Positioning time [s] of a settling time [s] (None: no move to add it to)."""
+        return None
+
+    def quantities(self, out: dict, run: BeltRun) -> dict:
+        """Residual amplitude [m], settling time [s] (inf unless settled for good) and their estimates."""
+        m_c, m_m, k, q_c, q_m = run.m_c, run.m_m, run.k, run.q_c, run.q_m
+        total = m_c + m_m
+        band = run.params["positioning_band"]
+        out["settling_band_m"] = band
+        target, start = self.release(out, run)
+        if start >= len(q_c):
+            out["settled_for_good"] = False
+            out["settling_time_s"] = math.inf
+            return out
+        deviation = q_c[start:] - target
+        out["residual_amplitude_m"] = float(np.max(np.abs(deviation)))
+        centre = (m_c * q_c[-1] + m_m * q_m[-1]) / total
+        stretch, stretch_rate = q_m[-1] - q_c[-1], run.v_m[-1] - run.v_c[-1]
+        bound = after_force_bound(centre - target, stretch, stretch_rate, m_c, m_m, k)
+        out["final_deviation_bound_m"] = float(bound)
+        out["settled_for_good"] = bool(bound <= band)
+        settle = settling_time(run.time[start:] - run.time[start], deviation, band)
+        out["settling_time_s"] = settle if out["settled_for_good"] else math.inf
+        positioning = self.positioning(out, out["settling_time_s"])
+        if positioning is not None:
+            out["positioning_time_s"] = positioning
+        # the analytic estimate: envelope of the residual vibration down to the band
+        if run.zeta < 1.0 and k > 0:
+            s0, s0_rate = self.residual_stretch(run, start)
+            envelope = residual_envelope(s0, s0_rate, m_c, m_m, run.omega_n, run.zeta)
+            out["residual_envelope_m"] = envelope
+            out["settling_time_estimate_s"] = settling_estimate(envelope, band, run.zeta, run.omega_n)
+            positioning = self.positioning(out, out["settling_time_estimate_s"])
+            if positioning is not None:
+                out["positioning_time_estimate_s"] = positioning
+        return out
+
+
+class Move(_Settling):
+    """move's variant (Scenario.variant): the bang-bang move of move_distance on the step grid, then settling."""
+
+    def segments(self, params: dict[str, float], dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """+F for n steps, -F for n steps, then 0 (PrinterHead.move_profile)."""
+        n, force = move_profile(params, dt)
+        return np.array([0.0, n * dt, 2 * n * dt]), np.array([force, -force, 0.0])
+
+    def release(self, out: dict, run: BeltRun) -> tuple[float, int]:
+        """The move's distance [m], force [N] and times [s]; it ends at move_distance after 2 n steps."""
+        params, dt = run.params, run.dt
+        n, force = move_profile(params, dt)
+        end = 2 * n
+        out["move_distance_m"] = params["move_distance"]
+        out["move_force_n"] = force
+        out["move_time_s"] = end * dt
+        out["minimum_move_time_s"] = minimum_move_time(
+            params["move_distance"], run.m_c + run.m_m, params["drive_force"]
+        )
+        # an undamped belt is left vibrating at 4 sin^2(omega_n T / 4) times the static stretch:
+        # nothing when each half of the move lasts a whole number of belt periods
+        out["half_move_belt_periods"] = n * dt * run.omega_n / (2 * math.pi)
+        return params["move_distance"], end
+
+    def residual_stretch(self, run: BeltRun, start: int) -> tuple[float, float]:
+        """The exact stretch [m] and rate [m/s] at the end of the move (move_residual_stretch)."""
+        return move_residual_stretch(run.params, run.dt)
+
+    def positioning(self, out: dict, settling: float) -> float | None:
+        """Move time + settling time [s]."""
+        return out["move_time_s"] + settling
+
+
+class Settle(_Settling):
+    """settle's variant (Scenario.variant): no force; released at rest from the belt stretch `deflection`."""
+
+    def segments(self, params: dict[str, float], dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """No force at all."""
+        return np.array([0.0]), np.array([0.0])
+
+    def release(self, out: dict, run: BeltRun) -> tuple[float, int]:
+        """Released at t = 0: the centre of mass stays at 0; the carriage starts `initial_deviation_m` off it."""
+        out["initial_deviation_m"] = abs(float(run.q_c[0]))
+        return 0.0, 0
+
+
+# -- formulas shared with the design study ------------------------------------------
+
+
+def reduced_mass(carriage_mass: float | np.ndarray, motor_mass: float | np.ndarray) -> float | np.ndarray:
+    """Reduced mass mu = m_c m_m / (m_c + m_m) [kg] of the belt mode (floats or arrays)."""
+    return carriage_mass * motor_mass / (carriage_mass + motor_mass)
+
+
+def belt_damping_for(
+    damping_ratio: float | np.ndarray,
+    stiffness: float | np.ndarray,
+    carriage_mass: float | np.ndarray,
+    motor_mass: float | np.ndarray,
+) -> float | np.ndarray:
+    """Belt damping c = 2 zeta sqrt(k mu) [N s/m] giving the belt mode `damping_ratio` [-] (floats or arrays)."""
+    return 2.0 * damping_ratio * np.sqrt(stiffness * reduced_mass(carriage_mass, motor_mass))
+
+
+def belt_damping_ratio(damping: float, stiffness: float, carriage_mass: float, motor_mass: float) -> float:
+    """The belt mode's damping ratio zeta = c / (2 sqrt(k mu)) [-] of belt damping c [N s/m]."""
+    return damping / (2.0 * math.sqrt(stiffness * reduced_mass(carriage_mass, motor_mass)))
+
+
+def belt_omega(
+    stiffness: float | np.ndarray, carriage_mass: float | np.ndarray, motor_mass: float | np.ndarray
+) -> float | np.ndarray:
+    """The belt mode's undamped natural frequency omega_n = sqrt(k / mu) [rad/s] (floats or arrays)."""
+    return np.sqrt(stiffness / reduced_mass(carriage_mass, motor_mass))
+
+
+def residual_envelope(
+    stretch: float, stretch_rate: float, carriage_mass: float, motor_mass: float, omega_n: float, zeta: float
+) -> float:
+    """Envelope A [m] of the carriage's residual vibration A e^(-zeta omega_n t) once the force is off.
+
+    The carriage moves (m_m / M) times the belt stretch s; a damped free vibration from (s, s') has
+    amplitude hypot(s, (s' + zeta omega_n s) / omega_d), omega_d = omega_n sqrt(1 - zeta^2).
+    """
+    omega_d = omega_n * math.sqrt(1 - zeta * zeta)
+    share = motor_mass / (carriage_mass + motor_mass)
+    return share * math.hypot(stretch, (stretch_rate + zeta * omega_n * stretch) / omega_d)
+
+
+def worst_case_envelope(force: float, carriage_mass: float, motor_mass: float, stiffness: float) -> float:
+    """Largest residual envelope [m] any bang-bang move at `force` [N] can leave: 4 F m_c m_m / (M^2 k).
+
+    The residual stretch of an undamped belt is 4 sin^2(omega_n T / 4) <= 4 times the static
+    stretch F m_c / (M k), and the carriage moves m_m / M of it.
+    """
+    total = carriage_mass + motor_mass
+    return 4 * force * carriage_mass * motor_mass / (total**2 * stiffness)
+
+
+def minimum_move_time(distance: float, mass: float, force: float) -> float:
+    """Minimum time [s] of a rigid move of `distance` [m] of `mass` [kg] at force limit `force` [N].
+
+    Bang-bang: accelerate for half the time at +F, decelerate at -F: T = 2 sqrt(D m / F).
+    """
+    return 2.0 * math.sqrt(distance * mass / force)
+
+
+def settling_estimate(envelope: float, band: float, zeta: float, omega_n: float) -> float:
+    """Time [s] for a vibration envelope `envelope` e^(-zeta omega_n t) [m] to shrink into `band` [m].
+
+    ln(envelope / band) / (zeta omega_n), 0 if already inside, inf if undamped. For a
+    release at rest from amplitude a0 the envelope is a0 / sqrt(1 - zeta^2), giving
+    the chapter-style ln(1 / (band / a0 sqrt(1 - zeta^2))) / (zeta omega_n).
+    """
+    if envelope <= band:
+        return 0.0
+    if zeta <= 0.0:
+        return math.inf
+    return math.log(envelope / band) / (zeta * omega_n)
+
+
+def after_force_bound(
+    centre_offset: float | np.ndarray,
+    stretch: float | np.ndarray,
+    stretch_rate: float | np.ndarray,
+    carriage_mass: float | np.ndarray,
+    motor_mass: float | np.ndarray,
+    stiffness: float | np.ndarray,
+) -> float | np.ndarray:
+    """Bound [m] on the carriage's future distance from the target once the force is off.
+
+    The carriage is q_c = X - (m_m / M) s; with no force the centre of mass X
+    stays where it is (at rest after a bang-bang move or a release) and the belt
+    energy E = mu s'^2 / 2 + k s^2 / 2 cannot grow, so |s| <= sqrt(2 E / k) for
+    ever and |q_c - target| <= |X - target| + (m_m / M) sqrt(2 E / k).
+
+    Every argument may be a float or an array (elementwise).
+
+    Parameters
+    ----------
+    centre_offset
+        X - target [m].
+    stretch, stretch_rate
+        Belt stretch s [m] and its rate s' [m/s].
+    carriage_mass, motor_mass
+        [kg].
+    stiffness
+        Belt stiffness k [N/m].
+    """
+    total = carriage_mass + motor_mass
+    reduced = carriage_mass * motor_mass / total
+    energy = 0.5 * reduced * stretch_rate**2 + 0.5 * stiffness * stretch**2
+    return np.abs(centre_offset) + (motor_mass / total) * np.sqrt(2.0 * energy / stiffness)
+
+
+def settling_time(time: np.ndarray, deviation: np.ndarray, band: float) -> float:
+    """Time [s] after which |deviation| [m] stays within `band` [m] in this record.
+
+    The last exit from the band, interpolated linearly between the samples
+    around it; 0 if the record never leaves the band.
+    """
+    outside = np.flatnonzero(np.abs(deviation) > band)
+    if outside.size == 0:
+        return 0.0
+    i = int(outside[-1])
+    if i + 1 >= len(time):
+        return float(time[-1])
+    excess = np.abs(deviation[i]) - band
+    inside = np.abs(deviation[i + 1]) - band
+    return float(time[i] + (time[i + 1] - time[i]) * excess / (excess - inside))
+
+
+def move_residual_stretch(params: dict[str, float], dt: float) -> tuple[float, float]:
+    """Exact belt stretch [m] and rate [m/s] at the end of the bang-bang move on a grid of dt [s].
+
+    The belt mode obeys mu s'' + c s' + k s = (m_c / M) F(t) with F = +F', -F', 0 on
+    [0, T/2), [T/2, T), [T, ...): superposed step responses (analytic), from the
+    initial stretch `deflection` at rest.
+    """
+    m_c, m_m = params["carriage_mass"], params["motor_mass"]
+    k, c = params["belt_stiffness"], params["belt_damping"]
+    total, reduced = m_c + m_m, m_c * m_m / (m_c + m_m)
+    n, force = move_profile(params, dt)
+    half = n * dt
+    modal = force * m_c / total
+    t = np.array([2 * half])
+    s, v = analytic.step_response(t, reduced, k, c, modal, params["deflection"], 0.0)
+    s2, v2 = analytic.step_response(t - half, reduced, k, c, -2.0 * modal)
+    return float(s[0] + s2[0]), float(v[0] + v2[0])

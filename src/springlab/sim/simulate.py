@@ -1,0 +1,374 @@
+"""Headless MuJoCo runs: integrators, timesteps, batched rollouts, divergence.
+
+One run is one call to `mujoco.rollout` on the calling thread: no Python work
+per step. Inputs are open-loop control sequences (one row per step, held over
+the step) and MJCF-native generators, so RK4 keeps its order wherever the scene
+says so.
+
+MuJoCo resets a blown-up simulation *silently* (time jumps back, qpos zeroed).
+`simulate` checks every run for that, for non-finite values and for MuJoCo's
+BADQPOS/BADQVEL/BADQACC warnings, and raises `DivergedError` instead of
+returning such a run.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import copy
+import dataclasses
+import math
+import threading
+import time as _time
+from collections.abc import Callable, Iterator, Mapping
+
+import mujoco
+import numpy as np
+from mujoco import rollout as _rollout
+
+from springlab.errors import BadInputError, DivergedError, UnknownNameError
+
+#: MuJoCo's five integrators by springlab name.
+INTEGRATORS: Mapping[str, int] = {
+    "euler": int(mujoco.mjtIntegrator.mjINT_EULER),
+    "implicit": int(mujoco.mjtIntegrator.mjINT_IMPLICIT),
+    "implicitfast": int(mujoco.mjtIntegrator.mjINT_IMPLICITFAST),
+    "rk4": int(mujoco.mjtIntegrator.mjINT_RK4),
+    "discrete": int(mujoco.mjtIntegrator.mjINT_DISCRETE),
+}
+
+#: Order of accuracy of each integrator on smooth problems.
+ORDERS: Mapping[str, int] = {
+    "euler": 1,
+    "implicit": 1,
+    "implicitfast": 1,
+    "rk4": 4,
+    "discrete": 1,
+}
+
+_FULL = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
+_CTRL = int(mujoco.mjtState.mjSTATE_CTRL)
+#: MuJoCo's warnings that mean a blow-up (it then resets the state silently)
+BAD_WARNINGS = [
+    int(mujoco.mjtWarning.mjWARN_BADQPOS),
+    int(mujoco.mjtWarning.mjWARN_BADQVEL),
+    int(mujoco.mjtWarning.mjWARN_BADQACC),
+]
+
+#: Most steps one run may take (memory: 8 bytes x state size per step).
+MAX_STEPS = 20_000_000
+
+
+@dataclasses.dataclass
+class Trajectory:
+    """A recorded run, one row per physics step, t = 0 included.
+
+    Attributes
+    ----------
+    time
+        (n,) simulation time [s].
+    qpos
+        (n, nq) joint positions [m or rad].
+    qvel
+        (n, nv) joint velocities [m/s or rad/s].
+    act
+        (n, na) actuator activations (units of the actuator).
+    integrator
+        springlab integrator name.
+    dt
+        timestep [s].
+    wall_time_s
+        wall time of the stepping itself [s].
+    stopped
+        True when a stop condition ended the run before its duration.
+    """
+
+    time: np.ndarray
+    qpos: np.ndarray
+    qvel: np.ndarray
+    act: np.ndarray
+    integrator: str
+    dt: float
+    wall_time_s: float
+    stopped: bool = False
+
+    @property
+    def steps(self) -> int:
+        """Number of physics steps taken."""
+        return len(self.time) - 1
+
+
+_log = threading.local()
+
+
+def _collect_warning(message: str) -> None:
+    # MuJoCo's default handler prints and writes MUJOCO_LOG.TXT into the cwd;
+    # springlab reports problems itself, in one clear line.
+    getattr(_log, "messages", []).append(message)
+
+
+@contextlib.contextmanager
+def quiet_mujoco() -> Iterator[list[str]]:
+    """Route MuJoCo's warnings into a list for the duration (no log file, no print)."""
+    previous = mujoco.get_mju_user_warning()
+    _log.messages = []
+    mujoco.set_mju_user_warning(_collect_warning)
+    try:
+        yield _log.messages
+    finally:
+        mujoco.set_mju_user_warning(previous)
+
+
+def integrator_id(name: str) -> int:
+    """MuJoCo's enum value for an integrator name; UnknownNameError lists the valid names."""
+    try:
+        return INTEGRATORS[name]
+    except KeyError:
+        raise UnknownNameError("integrator", str(name), INTEGRATORS) from None
+
+
+def check_timing(dt: float, duration: float) -> int:
+    """Validate dt [s] and duration [s]; return the number of steps."""
+    for label, value in (("dt", dt), ("duration", duration)):
+        if not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+            raise BadInputError(f"{label} must be a finite number > 0 s, got {value!r}")
+    steps = round(duration / dt)
+    if steps < 1:
+        raise BadInputError(f"duration {duration} s is shorter than one step of dt = {dt} s")
+    if steps > MAX_STEPS:
+        raise BadInputError(
+            f"duration/dt = {steps} steps exceeds the limit of {MAX_STEPS}; use a larger dt or a shorter duration"
+        )
+    return steps
+
+
+def configured(model: mujoco.MjModel, integrator: str, dt: float) -> mujoco.MjModel:
+    """A copy of `model` set to `integrator` and timestep `dt` [s]; `model` itself is left as it was.
+
+    A caller's model may serve many runs (a sweep, a reference built from it): writing the
+    timestep into it would leak one run's setting into the next.
+    """
+    work = copy.copy(model)
+    work.opt.integrator = integrator_id(integrator)
+    work.opt.timestep = dt
+    return work
+
+
+def initial_state(
+    model: mujoco.MjModel,
+    qpos: np.ndarray | None = None,
+    qvel: np.ndarray | None = None,
+    act: np.ndarray | None = None,
+    data: mujoco.MjData | None = None,
+) -> np.ndarray:
+    """The full physics state vector at t = 0 (defaults: the model's qpos0, rest).
+
+    `data` (optional) is reset and used as scratch.
+    """
+    if data is None:
+        data = mujoco.MjData(model)
+    else:
+        mujoco.mj_resetData(model, data)
+    if qpos is not None:
+        data.qpos[:] = qpos
+    if qvel is not None:
+        data.qvel[:] = qvel
+    if act is not None:
+        data.act[:] = act
+    state = np.empty(mujoco.mj_stateSize(model, _FULL))
+    mujoco.mj_getState(model, data, state, _FULL)
+    return state
+
+
+def simulate(
+    model: mujoco.MjModel,
+    *,
+    integrator: str,
+    dt: float,
+    duration: float,
+    qpos: np.ndarray | None = None,
+    qvel: np.ndarray | None = None,
+    act: np.ndarray | None = None,
+    control: np.ndarray | None = None,
+    data: mujoco.MjData | None = None,
+    stop: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
+) -> Trajectory:
+    """Run `model` headless and record every step.
+
+    Parameters
+    ----------
+    model
+        compiled model; never modified (the run steps a copy with `integrator` and
+        `dt` set, as mujoco.rollout never modifies its inputs).
+    integrator
+        one of INTEGRATORS.
+    dt
+        timestep [s].
+    duration
+        simulated time [s]; steps = round(duration / dt).
+    qpos, qvel, act
+        initial state (defaults: the model's rest state).
+    control
+        (nu,) constant or (steps, nu) per-step controls [actuator units];
+        row k is held over step k, from t_k to t_k + dt.
+    data
+        scratch MjData to reuse (optional).
+    stop
+        optional event (qpos (n, nq), qvel (n, nv)) -> (n,) bool; the
+        trajectory ends at the first step where it is True (`stopped` set), and
+        whatever MuJoCo did after that step (e.g. a finite-time escape hitting
+        its 1e10 limit) is discarded, not reported as a divergence.
+
+    Returns
+    -------
+    Trajectory
+        The Trajectory, t = 0 included.
+
+    Raises
+    ------
+    DivergedError
+        MuJoCo flagged or silently reset the run, or it went non-finite.
+    """
+    steps = check_timing(dt, duration)
+    model = configured(model, integrator, dt)
+    data = mujoco.MjData(model) if data is None else data
+    state0 = initial_state(model, qpos, qvel, act, data)
+    controls = None
+    if model.nu:
+        controls = np.zeros((1, model.nu)) if control is None else np.asarray(control, float)
+        controls = np.ascontiguousarray(np.broadcast_to(controls, (steps, model.nu)))[None]
+    out = np.empty((1, steps, state0.size))
+    sensors = np.empty((1, steps, model.nsensordata))
+    with quiet_mujoco() as messages:
+        start = _time.perf_counter()
+        # skip_checks: the shapes are right by construction, and the checks cost per call
+        _rollout.rollout(
+            [model],
+            [data],
+            state0[None],
+            controls,
+            control_spec=_CTRL,
+            state=out,
+            sensordata=sensors,
+            nstep=steps,
+            skip_checks=True,
+        )
+        wall = _time.perf_counter() - start
+    states = np.concatenate([state0[None], out[0]])
+    trajectory = _split(model, states, integrator, dt, wall)
+    if stop is not None:
+        trajectory, stopped = cut_at_stop(trajectory, stop)
+        if stopped:
+            # MuJoCo's warnings may come from steps after the event; a blow-up before it
+            # still shows in the kept part (time jumping back, non-finite values)
+            messages = []
+    check_diverged(trajectory, dt, messages)
+    return trajectory
+
+
+def cut_at_stop(
+    trajectory: Trajectory, stop: Callable[[np.ndarray, np.ndarray], np.ndarray]
+) -> tuple[Trajectory, bool]:
+    """The trajectory up to and including the first step where `stop` holds, and whether it did."""
+    end = divergence_step(trajectory)
+    end = len(trajectory.time) if end is None else end
+    with np.errstate(all="ignore"):
+        hits = np.flatnonzero(np.asarray(stop(trajectory.qpos[:end], trajectory.qvel[:end]), bool))
+    if not hits.size:
+        return trajectory, False
+    keep = int(hits[0]) + 1
+    return dataclasses.replace(
+        trajectory,
+        time=trajectory.time[:keep],
+        qpos=trajectory.qpos[:keep],
+        qvel=trajectory.qvel[:keep],
+        act=trajectory.act[:keep],
+        stopped=True,
+    ), True
+
+
+def _split(model, states, integrator, dt, wall) -> Trajectory:
+    nq, nv, na = model.nq, model.nv, model.na
+    return Trajectory(
+        time=states[:, 0],
+        qpos=states[:, 1 : 1 + nq],
+        qvel=states[:, 1 + nq : 1 + nq + nv],
+        act=states[:, 1 + nq + nv : 1 + nq + nv + na],
+        integrator=integrator,
+        dt=dt,
+        wall_time_s=wall,
+    )
+
+
+def divergence_step(trajectory: Trajectory) -> int | None:
+    """Index of the first step that shows a blow-up or a silent MuJoCo reset, else None."""
+    t = trajectory.time
+    dt = trajectory.dt
+    # a reset sets time back to 0; rollout then repeats its last record
+    bad_time = np.flatnonzero(np.abs(np.diff(t) - dt) > 1e-6 * dt + 1e-12 * np.abs(t[1:]))
+    finite = np.isfinite(trajectory.qpos).all(axis=1) & np.isfinite(trajectory.qvel).all(axis=1)
+    candidates = []
+    if bad_time.size:
+        candidates.append(int(bad_time[0]) + 1)
+    if not finite.all():
+        candidates.append(int(np.flatnonzero(~finite)[0]))
+    return min(candidates) if candidates else None
+
+
+def check_diverged(trajectory: Trajectory, dt: float, messages: list[str] | None = None) -> None:
+    """Raise DivergedError if the run blew up (see module docstring)."""
+    index = divergence_step(trajectory)
+    flagged = any(("unstable" in m.lower() or "nan" in m.lower()) for m in (messages or []))
+    if index is None and not flagged:
+        return
+    when = trajectory.time[index - 1] + dt if index else float("nan")
+    where = f" at t = {when:.6g} s" if index else ""
+    raise DivergedError(f"simulation diverged{where} ({trajectory.integrator}, dt = {dt:g} s)")
+
+
+#: MuJoCo's cap on every |qpos|, |qvel| and |qacc| (mjMAXVAL, 1e10 in SI units): beyond it
+#: mj_checkPos/Vel/Acc flag the run and reset it, whatever the timestep or integrator
+MAX_VALUE = float(mujoco.mjMAXVAL)
+
+
+def beyond_mujoco_limits(
+    model: mujoco.MjModel,
+    qpos: np.ndarray | None = None,
+    qvel: np.ndarray | None = None,
+    act: np.ndarray | None = None,
+    control: np.ndarray | None = None,
+) -> str | None:
+    """Which part of the initial state is past MAX_VALUE, e.g. 'a position of 1e+300', or None.
+
+    Checks qpos [m or rad], qvel [m/s or rad/s] and the acceleration [m/s^2 or
+    rad/s^2] MuJoCo computes there (with the first control row); no timestep can
+    run a state MuJoCo itself rejects.
+    """
+    data = mujoco.MjData(model)
+    initial_state(model, qpos, qvel, act, data)
+    if model.nu and control is not None:
+        data.ctrl[:] = np.atleast_2d(np.asarray(control, float))[0]
+    with quiet_mujoco(), np.errstate(all="ignore"):
+        mujoco.mj_forward(model, data)
+    for what, values in (("position", data.qpos), ("velocity", data.qvel), ("acceleration", data.qacc)):
+        bad = ~np.isfinite(values) | (np.abs(values) > MAX_VALUE)
+        if bad.any():
+            return f"an initial {what} of {float(values[np.flatnonzero(bad)[0]]):.3g}"
+    return None
+
+
+@dataclasses.dataclass
+class Setup:
+    """Initial state and inputs of one run.
+
+    Attributes
+    ----------
+    qpos, qvel, act
+        initial state (None: the model's rest state).
+    control
+        (nu,) or (steps, nu) open-loop controls, held over each step.
+    """
+
+    qpos: np.ndarray | None = None
+    qvel: np.ndarray | None = None
+    act: np.ndarray | None = None
+    control: np.ndarray | None = None

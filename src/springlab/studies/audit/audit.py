@@ -1,0 +1,561 @@
+"""`springlab audit MODEL`: which integrator and timestep any MuJoCo model needs, how close to blowing up
+it is, and what accuracy each setting buys for its compute.
+
+1. Linear analysis at the operating point (springlab.exact.linearize): modes [Hz], damping ratios, the
+   physically unstable ones, the fastest.
+2. Stability limits per integrator (springlab.studies.audit.limits): predicted from the modes, measured on
+   MuJoCo's one-step map, confirmed by runs of the nonlinear model just below and above; the margin of
+   the model's own timestep; constraint time constants shorter than 2 dt.
+3. Accuracy vs cost (springlab.studies.audit.sweep): every integrator over a timestep grid from the perturbed
+   operating point, batched, against the exact solution of the linearization (linear models) or a
+   converged RK4 reference; observed orders, the Pareto front, and the cheapest setting meeting tol,
+   verified by a run of its own.
+
+`audit(model_or_path, ...)` returns an `Audit`; `Audit.as_json()` is audit.json.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import pathlib
+import time as _time
+from collections.abc import Sequence
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from springlab import scenes
+from springlab.errors import BadInputError, DivergedError
+from springlab.exact.linearize import Linearization, OperatingPoint, linearize, operating_point
+from springlab.runs import compare
+from springlab.runs.run import prepare
+from springlab.sim.simulate import INTEGRATORS, Setup, Trajectory, integrator_id, quiet_mujoco, simulate
+from springlab.studies.convergence import Run, observed_order, pareto_front
+from springlab.studies.executor import Executor
+
+from .limits import Limit, constraint_flags, stability_limits
+from .ship import Runner, ship
+from .sweep import (
+    MAX_SAMPLES,
+    REFERENCE_FRACTION,
+    ExactReference,
+    Reference,
+    SweepRun,
+    checkpoint_spacing,
+    converged_reference,
+    cost_per_step,
+    default_grid,
+    linearity_change,
+    linearity_tolerance,
+    reference_step,
+    run_error,
+    sweep_runs,
+)
+
+#: defaults of the command line and the API
+DEFAULT_TOL = 1e-3
+DEFAULT_DURATION = 1.0
+DEFAULT_PERTURB = 1e-3
+#: a recommended timestep keeps this fraction of its integrator's measured stability limit
+RECOMMEND_LIMIT_FRACTION = 0.9
+#: the default grid's largest timestep: this multiple of the largest measured limit (runs beyond show the blow-up)
+GRID_TOP_OVER_LIMIT = 1.2
+_NAMES = {value: name for name, value in INTEGRATORS.items()}
+
+
+@dataclasses.dataclass
+class Audit:
+    """An audit of one model (see the module docstring); `as_json()` is audit.json.
+
+    Attributes
+    ----------
+    model
+        where the model came from (path, scene name or "<MjModel>").
+    linear
+        the linearization at the operating point.
+    start
+        the perturbed start of the sweep runs.
+    duration
+        simulated time of every run [s].
+    tol
+        tolerance of the recommendation [-].
+    limits
+        integrator -> Limit (predicted / measured / confirmed stability limit [s]).
+    own
+        the model's own setting: {"integrator", "dt", "stable", "error", "margin"}.
+    constraints
+        constraint settings the own timestep breaks (solref timeconst < 2 dt).
+    is_linear, linearity
+        the linearity verdict and its measure {"change", "tolerance"}.
+    reference
+        {"kind", "error_estimate", "dt"}.
+    runs
+        the sweep, per integrator, largest dt first.
+    orders
+        integrator -> observed order (None: no clean power law, e.g. contacts).
+    pareto
+        runs no other beats in both error and wall time.
+    recommendation
+        {"integrator", "dt", "error", "tolerance", "verified", "wall_time_s"}.
+    timings
+        wall time of each stage [s].
+    """
+
+    model: str
+    linear: Linearization
+    start: Setup
+    duration: float
+    tol: float
+    perturb: float
+    limits: dict[str, Limit]
+    own: dict[str, Any]
+    constraints: list[dict[str, Any]]
+    is_linear: bool
+    linearity: dict[str, float]
+    reference: dict[str, Any]
+    runs: list[SweepRun]
+    orders: dict[str, float | None]
+    pareto: list[SweepRun]
+    recommendation: dict[str, Any]
+    timings: dict[str, float]
+
+    @property
+    def own_ok(self) -> bool:
+        """The model's own setting is stable and meets tol (exit 0 of the CLI; otherwise 1)."""
+        return bool(self.own["stable"]) and self.own["error"] is not None and self.own["error"] <= self.tol
+
+    def verdict(self) -> list[str]:
+        """A few lines for the terminal: modes, the own setting's margin and error, the recommendation."""
+        lines = []
+        fastest = self.linear.fastest
+        unstable = sum(m.physically_unstable for m in self.linear.modes)
+        motion = "linear" if self.is_linear else "nonlinear"
+        head = f"{self.model}: {len(self.linear.modes)} modes"
+        if fastest is not None:
+            zeta = "" if fastest.damping_ratio is None else f", zeta {fastest.damping_ratio + 0.0:.3g}"  # no -0
+            head += f", fastest {fastest.frequency_hz:.4g} Hz ({fastest.kind}{zeta})"
+        else:
+            head += ", all rigid"
+        if unstable:
+            head += f"; {unstable} physically unstable (the model's own dynamics, not the integrator)"
+        lines.append(f"{head}; {motion} along the motion")
+        own, limit = self.own, self.limits[self.own["integrator"]]
+        if limit.measured_s is None:
+            stable = "has no stability limit up to the duration"
+            if fastest is None:
+                stable += " (every mode is rigid: no time scale for a timestep to miss)"
+        elif own["stable"]:
+            stable = f"is stable with margin {limit.measured_s / own['dt']:.3g}x (limit {limit.measured_s:.3g} s)"
+        else:
+            stable = f"is UNSTABLE: its limit is {limit.measured_s:.3g} s"
+        error = "not compared" if own["error"] is None else f"{own['error']:.2g}"
+        meets = "" if own["error"] is None else (" (meets tol)" if own["error"] <= self.tol else " (misses tol)")
+        lines.append(
+            f"your setting, {own['integrator']} at {own['dt'] * 1e3:.3g} ms, {stable};"
+            f" its error over {self.duration:g} s is {error}{meets}"
+        )
+        pick = self.recommendation
+        if pick["integrator"] is None:
+            lines.append(f"no swept setting meets tol {self.tol:g} (verified runs); try --dt lower or a longer grid")
+        else:
+            own_cost = own.get("wall_time_s")
+            ratio = f" at {pick['wall_time_s'] / own_cost:.2g}x the cost of yours" if own_cost else ""
+            lines.append(
+                f"cheapest meeting tol {self.tol:g}: {pick['integrator']} at {pick['dt'] * 1e3:.3g} ms, error"
+                f" {pick['error']:.2g}{ratio} (verified by a run)"
+            )
+        if self.constraints:
+            names = ", ".join(f"{c['element']} ({c['timeconst_s']:g} s)" for c in self.constraints[:3])
+            more = f" and {len(self.constraints) - 3} more" if len(self.constraints) > 3 else ""
+            lines.append(f"solref time constants shorter than 2 dt (MuJoCo stiffens nothing, it clamps): {names}{more}")
+        if not self.reference["converged"]:
+            lines.append(
+                f"note: the RK4 reference did not converge to 1% of tol (estimate {self.reference['error_estimate']:.2g});"
+                " errors below that are not resolved"
+            )
+        return lines
+
+    def as_json(self) -> dict[str, Any]:
+        """audit.json (docs/json.md's contract, plus orders, pareto, reference, constraints and timings)."""
+        fastest = self.linear.fastest
+        return {
+            "model": self.model,
+            "operating_point": self.linear.point.as_json(),
+            "perturb": self.perturb,
+            "duration_s": self.duration,
+            "linear": self.is_linear,
+            "linearity": self.linearity,
+            "modes": [m.as_json() for m in self.linear.modes],
+            "fastest_mode": fastest.as_json() if fastest else None,
+            "stability": {name: limit.as_json(self.own["dt"]) for name, limit in self.limits.items()},
+            "stability_criterion": (
+                "numerically unstable: the measured one-step map amplifies a mode more than the exact flow"
+                " exp(lambda dt) does, by more than 1e-4 per step"
+            ),
+            "own_setting": self.own,
+            "constraints_broken": self.constraints,
+            "reference": self.reference,
+            "sweep": [r.row() for r in self.runs],
+            "orders": self.orders,
+            "pareto": [r.row() for r in self.pareto],
+            "recommendation": self.recommendation,
+            "timings_s": self.timings,
+        }
+
+
+# -- the model -----------------------------------------------------------------
+
+
+@dataclasses.dataclass
+class _Source:
+    label: str
+    model: mujoco.MjModel
+    start: Setup | None = None  # a shipped scene's scenario start
+    duration: float | None = None
+    origin: tuple[str, str] | None = None  # ("path", file) or ("scene", name): what dask workers rebuild it from
+
+
+def load(model_or_path: Any) -> _Source:
+    """A compiled model from an MjModel, a path to an MJCF / URDF, or a shipped scene name.
+
+    A scene is built with its default scenario and parameters; its scenario's initial state is the
+    sweep's start (as `springlab tradeoff` runs it) and its duration the default.
+
+    Raises
+    ------
+    BadInputError
+        no such file or scene, or MuJoCo cannot compile it (its message, one line).
+    """
+    if isinstance(model_or_path, mujoco.MjModel):
+        return _Source("<MjModel>", model_or_path)
+    if not isinstance(model_or_path, (str, os.PathLike)):
+        raise BadInputError(f"model must be an MjModel, a path to an MJCF file or a scene name, got {model_or_path!r}")
+    text = os.fspath(model_or_path)
+    path = pathlib.Path(text)
+    if not path.exists() and text in scenes.SCENES:
+        scene, chosen, params = prepare(text, None, {})
+        model = scene.build(params, chosen)
+        steps = max(1, round(chosen.duration / model.opt.timestep))
+        setup = scene.setup(model, params, chosen, steps, model.opt.timestep)
+        return _Source(f"scene {text!r} (scenario {chosen.name!r})", model, setup, chosen.duration, ("scene", text))
+    if not path.is_file():
+        raise BadInputError(f"no such model file or scene {text!r}; scenes: {', '.join(sorted(scenes.SCENES))}")
+    try:
+        with quiet_mujoco():
+            model = mujoco.MjModel.from_xml_path(str(path))
+    except Exception as error:  # MuJoCo raises ValueError with its compiler's message
+        message = " ".join(str(error).split())
+        raise BadInputError(f"cannot load {text!r}: {message}") from None
+    return _Source(text, model, origin=("path", text))
+
+
+def _start(model: mujoco.MjModel, point: OperatingPoint, perturb: float, source: _Source) -> Setup:
+    """The sweep's start: a scene's scenario state (where it differs from the operating point), else the
+    operating point moved by `perturb` [m or rad] along a fixed pattern of every degree of freedom
+    (seeded, so audits repeat)."""
+    if source.start is not None and source.start.qpos is not None:
+        qvel = np.asarray(source.start.qvel if source.start.qvel is not None else point.qvel, float)
+        qpos = np.asarray(source.start.qpos, float)
+        if np.any(qpos != point.qpos) or np.any(qvel != point.qvel):  # a scenario driven by inputs alone does not
+            return Setup(qpos, qvel, point.act, point.ctrl)  # move here (the audit holds controls): perturb it
+    pattern = np.random.default_rng(0).uniform(-1.0, 1.0, model.nv)
+    if model.nv:
+        pattern /= np.max(np.abs(pattern))
+    qpos = point.qpos.copy()
+    mujoco.mj_integratePos(model, qpos, perturb * pattern, 1.0)
+    return Setup(qpos, point.qvel.copy(), point.act.copy(), point.ctrl.copy())
+
+
+# -- options -------------------------------------------------------------------
+
+
+def parse_dts(spec: Any) -> list[float] | None:
+    """--dt: None, a list of seconds, "a,b,c", or a range "LOW:HIGH:N" (N log-spaced values, each snapped to
+    HIGH / m for an integer m so that they share checkpoints); returned largest first."""
+    if spec is None:
+        return None
+    if isinstance(spec, str):
+        text = spec.strip()
+        try:
+            if ":" in text:
+                low_text, high_text, count_text = text.split(":")
+                low, high, count = float(low_text), float(high_text), int(count_text)
+                if not (0 < low < high and math.isfinite(high) and count >= 2):
+                    raise ValueError
+                values = sorted({high / round(high / v) for v in np.geomspace(low, high, count)}, reverse=True)
+            else:
+                values = [float(v) for v in text.split(",") if v.strip()]
+        except ValueError:
+            raise BadInputError(
+                f"--dt must be seconds 'a,b,c' or a range 'LOW:HIGH:N' with 0 < LOW < HIGH, N >= 2; got {spec!r}"
+            ) from None
+    else:
+        values = [float(v) for v in spec]
+    if not values or any(not (math.isfinite(v) and v > 0) for v in values):
+        raise BadInputError(f"every dt must be a finite number > 0 s, got {spec!r}")
+    return sorted(set(values), reverse=True)
+
+
+def _check_number(name: str, value: Any, *, allow_zero: bool = False) -> float:
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    if not ok or value < 0 or (value == 0 and not allow_zero):
+        bound = ">= 0" if allow_zero else "> 0"
+        raise BadInputError(f"{name} must be a finite number {bound}, got {value!r}")
+    return float(value)
+
+
+def _integrators(names: Any) -> list[str]:
+    if names is None:
+        return list(INTEGRATORS)
+    if isinstance(names, str):
+        names = [n.strip() for n in names.split(",") if n.strip()]
+    names = list(dict.fromkeys(names))
+    for name in names:
+        integrator_id(name)
+    if not names:
+        raise BadInputError(f"--integrators needs at least one of {', '.join(INTEGRATORS)}")
+    return names
+
+
+# -- the audit -----------------------------------------------------------------
+
+
+def audit(
+    model_or_path: Any,
+    *,
+    keyframe: str | int | None = None,
+    tol: float = DEFAULT_TOL,
+    integrators: Sequence[str] | str | None = None,
+    dt: Sequence[float] | str | None = None,
+    duration: float | None = None,
+    perturb: float = DEFAULT_PERTURB,
+    nthread: int = 0,
+    executor: Executor | None = None,
+) -> Audit:
+    """Audit a model: modes, stability limits, accuracy vs cost, and the cheapest setting meeting `tol`.
+
+    Parameters
+    ----------
+    model_or_path
+        an MjModel, a path to an MJCF (or URDF MuJoCo loads), or a shipped scene name.
+    keyframe
+        operating point, keyframe name or index (default: the first keyframe, else qpos0 at rest).
+    tol
+        tolerance on the error of the module docstring [-].
+    integrators
+        names to sweep (default all five), a list or "a,b".
+    dt
+        timesteps [s] to sweep (see `parse_dts`; default: a 12-point grid over 3 decades below 1.2x
+        the largest measured stability limit, whose top is a multiple of the model's own timestep).
+    duration
+        simulated time of every run [s] (default 1 s; a scene: its scenario's).
+    perturb
+        size of the initial perturbation of the operating point [m or rad].
+    nthread
+        threads of the batched runs (0: one per CPU) when no executor is given.
+    executor
+        where the simulations run (the limit confirmations, the sweep, the RK4 reference's levels;
+        springlab.studies.audit.ship): None or a local Executor, this process as always; `Executor(workers=N)`
+        or `Executor(scheduler=ADDRESS)`, dask workers, which rebuild the model from its file's text and
+        named files (or a scene by name; an MjModel passed in memory cannot be sent: BadInputError).
+        The numbers are identical either way; linearization, timings and the verification run stay here.
+
+    Returns
+    -------
+    The Audit. Raises BadInputError for bad input (nothing is computed).
+    """
+    stamps = {"start": _time.perf_counter()}
+    tol = compare.check_tolerance(tol)
+    perturb = _check_number("perturb", perturb, allow_zero=True)
+    names = _integrators(integrators)
+    dts = parse_dts(dt)
+    source = load(model_or_path)
+    duration = _check_number("duration", duration if duration is not None else source.duration or DEFAULT_DURATION)
+    model = source.model
+    point = operating_point(model, keyframe)
+    distributed = executor is not None and executor.distributed
+    run = Runner(executor, ship(source.origin, model) if distributed else None, nthread)
+    if distributed:
+        assert executor is not None  # distributed implies an executor
+        _ = executor.client  # an unreachable scheduler is exit 2 now, not after the limit scan
+    own_name, own_dt = _NAMES[int(model.opt.integrator)], float(model.opt.timestep)
+    linear = linearize(model, point)
+    limits = stability_limits(model, linear, list(dict.fromkeys([*names, own_name])), duration, run=run)
+    stamps["limits"] = _time.perf_counter()
+
+    if dts is None:
+        finite = [lim.measured_s for lim in limits.values() if lim.measured_s is not None]
+        ceiling = min(GRID_TOP_OVER_LIMIT * max(finite), duration / 10) if finite else duration / 10
+        top = _grid_top(duration, ceiling, own_dt)
+        dts = default_grid(top)
+    spacing = checkpoint_spacing(dts, duration)
+    run_duration = spacing * math.floor(duration / spacing * (1 + 1e-12))  # every run ends on a common time
+    start = _start(model, point, perturb, source)
+    finest = min(dts)
+    extra = [(own_name, own_dt), ("rk4", finest)]  # the own setting; the linearity probe and coarsest reference
+    outcomes = sweep_runs(model, start, names, dts, run_duration, extra=extra, run=run)
+    stamps["sweep"] = _time.perf_counter()
+
+    probe = outcomes[("rk4", finest)]
+    change = math.inf if isinstance(probe, DivergedError) else linearity_change(model, linear, probe)
+    threshold = linearity_tolerance(linear, tol, run_duration)
+    is_linear = change <= threshold
+    reference: Reference
+    if is_linear:
+        reference = ExactReference(model, linear, start)
+    else:
+        step = reference_step(dts, spacing)
+        coarse = probe if isinstance(probe, Trajectory) else None
+        reference = converged_reference(model, point, start, step, run_duration, tol, coarse=coarse, run=run)
+    stamps["reference"] = _time.perf_counter()
+
+    runs = []
+    middle = sorted(dts)[len(dts) // 2]
+    costs = {name: cost_per_step(model, start, name, middle) for name in dict.fromkeys([*names, own_name])}
+    for name in names:
+        for dt_run in dts:
+            error = run_error(model, point, outcomes[(name, dt_run)], reference)
+            steps = round(run_duration / dt_run)
+            runs.append(SweepRun(name, dt_run, steps, error, costs[name] * steps, error is None))
+    orders = {name: _order([r for r in runs if r.integrator == name], reference.error_estimate) for name in names}
+    own = _own_setting(model, point, outcomes[(own_name, own_dt)], own_name, own_dt, limits, reference)
+    own["wall_time_s"] = costs[own_name] * round(run_duration / own_dt)
+    recommendation = _recommend(model, point, start, runs, limits, tol, run_duration, reference)
+    stamps["end"] = _time.perf_counter()
+    return Audit(
+        model=source.label,
+        linear=linear,
+        start=start,
+        duration=run_duration,
+        tol=tol,
+        perturb=perturb,
+        limits=limits,
+        own=own,
+        constraints=constraint_flags(model, own_dt),
+        is_linear=is_linear,
+        linearity={"change": change, "tolerance": threshold},
+        reference={
+            "kind": reference.kind,
+            "error_estimate": reference.error_estimate,
+            "dt": reference.dt,
+            "converged": reference.error_estimate <= REFERENCE_FRACTION * tol,
+            "compared_at": f"every step of each run (every k-th for at most {MAX_SAMPLES})",
+            "common_time_spacing_s": spacing,
+        },
+        runs=runs,
+        orders=orders,
+        pareto=_pareto(runs),
+        recommendation=recommendation,
+        timings={
+            "linearization_and_limits_s": stamps["limits"] - stamps["start"],
+            "sweep_s": stamps["sweep"] - stamps["limits"],
+            "reference_s": stamps["reference"] - stamps["sweep"],
+            "total_s": stamps["end"] - stamps["start"],
+        },
+    )
+
+
+def _grid_top(duration: float, ceiling: float, own_dt: float) -> float:
+    """The default grid's largest timestep [s]: duration / J for the fewest intervals J that keep it at most
+    `ceiling` [s], with J dividing duration / own_dt when that is an integer (so the model's own timestep
+    divides it and is compared at the same checkpoints)."""
+    fewest = max(1, math.ceil(duration / ceiling * (1 - 1e-12)))
+    own_steps = duration / own_dt
+    if abs(own_steps - round(own_steps)) <= 1e-9 * own_steps and own_dt <= ceiling:
+        steps = round(own_steps)
+        divisors = [j for j in range(fewest, steps + 1) if steps % j == 0]
+        return duration / divisors[0]
+    return duration / fewest
+
+
+def _as_runs(runs: list[SweepRun]) -> list[Run]:
+    return [Run(r.integrator, r.dt, r.steps, r.error, r.wall_time_s, diverged=r.diverged) for r in runs]
+
+
+def _order(runs: list[SweepRun], reference_error: float) -> float | None:
+    """springlab.studies.tradeoff's observed order over the runs clear of the error floor.
+
+    The floor: the reference's own error estimate, or where the errors stop falling at the fine end (from
+    the finest run, coarser runs whose error is not at least sqrt(dt ratio) above the next finer one's: a
+    first-order method rises by the full ratio). Runs within 10x the floor are left out: there the
+    reference or round-off, not the integrator, sets the error.
+    """
+    # (dt [s], error [-]) of the runs with an error, finest first
+    finest_first = sorted(((r.dt, r.error) for r in runs if r.error is not None and r.error > 0), key=lambda p: p[0])
+    floor = reference_error
+    for (finer_dt, finer_error), (coarser_dt, coarser_error) in zip(finest_first, finest_first[1:]):
+        if coarser_error > finer_error * math.sqrt(coarser_dt / finer_dt):
+            break
+        floor = max(floor, finer_error, coarser_error)
+    return observed_order([r for r in _as_runs(runs) if r.max_rel_error is None or r.max_rel_error > 10 * floor])
+
+
+def _pareto(runs: list[SweepRun]) -> list[SweepRun]:
+    front = {(r.integrator, r.dt) for r in pareto_front(_as_runs(runs))}
+    chosen = [r for r in runs if (r.integrator, r.dt) in front]
+    return sorted(chosen, key=lambda r: r.wall_time_s)
+
+
+def _stable_at(limits: dict[str, Limit], name: str, dt: float) -> bool:
+    limit = limits[name].measured_s
+    return limit is None or dt < limit
+
+
+def _own_setting(model, point, outcome, name, dt, limits, reference) -> dict[str, Any]:
+    error = run_error(model, point, outcome, reference)
+    return {
+        "integrator": name,
+        "dt": dt,
+        "stable": _stable_at(limits, name, dt) and not isinstance(outcome, DivergedError),
+        "error": error,
+        "margin": limits[name].margin(dt),
+    }
+
+
+def _recommend(model, point, start, runs, limits, tol, duration, reference) -> dict[str, Any]:
+    """The cheapest swept setting meeting tol within RECOMMEND_LIMIT_FRACTION of its stability limit,
+    verified by a run of its own (springlab.sim.simulate, not the batch). Meeting tol means error + the
+    reference's own error estimate <= tol, so a reference that did not fully converge cannot pass a
+    setting that misses tol."""
+    budget = tol - reference.error_estimate
+    candidates = sorted(
+        (
+            r
+            for r in runs
+            if r.error is not None
+            and r.error <= budget
+            and (
+                limits[r.integrator].measured_s is None
+                or r.dt <= RECOMMEND_LIMIT_FRACTION * limits[r.integrator].measured_s
+            )
+        ),
+        key=lambda r: r.wall_time_s,
+    )
+    for run in candidates:
+        try:
+            trajectory = simulate(
+                model.__copy__(),
+                integrator=run.integrator,
+                dt=run.dt,
+                duration=duration,
+                qpos=start.qpos,
+                qvel=start.qvel,
+                act=start.act,
+                control=start.control,
+            )
+        except DivergedError:
+            continue
+        error = run_error(model, point, trajectory, reference)
+        if error is not None and error <= budget:
+            return {
+                "integrator": run.integrator,
+                "dt": run.dt,
+                "error": error,
+                "tolerance": tol,
+                "verified": True,
+                "wall_time_s": run.wall_time_s,
+            }
+    return {"integrator": None, "dt": None, "error": None, "tolerance": tol, "verified": False, "wall_time_s": None}

@@ -1,0 +1,478 @@
+"""Stability limits of any model, per integrator: predicted from its modes, measured on its one-step map,
+confirmed on the nonlinear model; and the constraint settings a timestep breaks.
+
+Numerical instability, as measured here: at timestep dt the one-step map Phi(dt) (springlab.exact.linearize)
+amplifies some mode more than the exact flow does, spectral radius
+rho(Phi) > (1 + MAP_MARGIN) max(1, exp(sigma dt)), with sigma the largest growth rate of the
+continuous linearization (0 unless the model is physically unstable: an upright pole *should* fall,
+and that is no integrator's fault). MAP_MARGIN covers the finite differences: a Jordan block's
+double eigenvalue 1 (a free body, an unsprung direction) moves by sqrt(error) ~ 1e-5.
+
+The measured limit is the smallest such dt: a doubling scan from SCAN_START / |lambda|_max, then a
+geometric bisection to a ratio of 1 + LIMIT_PRECISION.
+
+The closed-form prediction from the modes. euler / implicit / implicitfast make the velocity update
+(M + dt D) v' = (M + dt D) v + dt f(q, v), q' = q + dt v', with springs explicit and D the part of the
+damping each treats implicitly (MuJoCo's computation chapter, "Integrators"): euler only joint damping
+(`dof_damping`; none with the eulerdamp flag off); implicit and implicitfast every velocity derivative
+(joint and tendon damping, actuator gains on velocity...) but only inside the sparsity of M, so a tendon
+between two branches of the tree keeps its diagonal implicit and its coupling explicit
+(`implicit_damping` reads D from MuJoCo's own qDeriv). Per oscillatory mode (omega, zeta, real
+M-normalised shape phi) the map reduces to x' = x + dt v', v' = v + dt g (-omega^2 x - 2 zeta omega v)
+with g(dt) = phi' M (M + dt D)^-1 M phi; its trace condition is the limit,
+dt^2 g omega^2 + 2 dt g (2 zeta omega) < 4. When D phi = c_i M phi (D keeps the mode to itself) g is
+1 / (1 + dt c_i), and with zeta_i = c_i / (2 omega) the implicit and zeta_e = zeta - zeta_i the explicit
+damping ratio: omega dt < 2 s + 2 sqrt(s^2 + 1), s = zeta_i - zeta_e (all implicit: the classic
+2 zeta + 2 sqrt(zeta^2 + 1) of `simulate.stability_limit`; all explicit: -2 zeta + 2 sqrt(zeta^2 + 1)).
+Otherwise (printer_head: the belt's implicit diagonal also pushes the rigid mode) the trace condition is
+solved for dt. rk4 is R(dt A) on a linear model, R(z) = 1 + z + z^2/2 + z^3/6 + z^4/24, so its limit is
+the first dt at which |R(dt lambda)| > 1 for a stable lambda (2.83/omega undamped); discrete has none.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import math
+from collections.abc import Callable, Iterable, Sequence
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from springlab.errors import DivergedError
+from springlab.exact.limits import rk4_limit, stability_limit
+from springlab.exact.linearize import Linearization, Mode, OperatingPoint, one_step_map
+from springlab.sim.batch import Job, run_batched
+from springlab.sim.simulate import Setup, integrator_id, quiet_mujoco
+
+#: growth of the one-step map beyond the exact flow's that counts as numerical instability [-]
+MAP_MARGIN = 1e-4
+#: the scan starts at SCAN_START / |lambda|_max and doubles ...
+SCAN_START = 0.01
+#: ... up to SCAN_STOP / |lambda|_max (or SCAN_STOP_S without a mode) [s]
+SCAN_STOP = 1e4
+SCAN_STOP_S = 10.0
+#: bisection down to this ratio between stable and unstable timesteps
+LIMIT_PRECISION = 1e-4
+#: a predicted limit p is first bracketed by [p / GUESS_BRACKET, p * GUESS_BRACKET]
+GUESS_BRACKET = 1.01
+#: confirmation runs at these fractions of the measured limit
+CONFIRM_BELOW, CONFIRM_ABOVE = 0.98, 1.02
+#: a confirmation run "grows" when its deviation from the unperturbed run grows GROWTH_SEEN x beyond the
+#: exact flow's growth, and stays bounded when it does not; the run is long enough for the map to
+#: predict GROWTH_TARGET x, within [CONFIRM_MIN_STEPS, CONFIRM_MAX_STEPS] steps
+GROWTH_SEEN = 100.0
+GROWTH_TARGET = 1e6
+CONFIRM_MIN_STEPS, CONFIRM_MAX_STEPS = 200, 20_000
+#: the confirmation perturbation, along the map's most unstable eigenvector [tangent-space units]
+CONFIRM_SIZE = 1e-6
+
+
+@dataclasses.dataclass
+class Limit:
+    """One integrator's stability limit.
+
+    Attributes
+    ----------
+    integrator
+        name.
+    predicted_s
+        closed-form limit from the modes [s] (None: no closed form, or no limit).
+    measured_s
+        from the measured one-step map [s] (None: stable over the whole scan).
+    confirmed
+        runs of the nonlinear model at CONFIRM_BELOW x stay bounded and at CONFIRM_ABOVE x
+        grow (None: nothing to confirm).
+    growth_per_step_above
+        rho(Phi) / max(1, exp(sigma dt)) just above the limit [-].
+    detail
+        how the confirmation came out, for people.
+    """
+
+    integrator: str
+    predicted_s: float | None
+    measured_s: float | None
+    confirmed: bool | None = None
+    growth_per_step_above: float | None = None
+    detail: str = ""
+
+    def margin(self, dt: float) -> float | None:
+        """measured limit / dt [-] (None: no limit)."""
+        return None if self.measured_s is None else self.measured_s / dt
+
+    def as_json(self, own_dt: float) -> dict[str, Any]:
+        """{"limit_dt_predicted_s", "limit_dt_measured_s", "confirmed", "margin", "detail"}."""
+        return {
+            "limit_dt_predicted_s": self.predicted_s,
+            "limit_dt_measured_s": self.measured_s,
+            "confirmed": self.confirmed,
+            "margin": self.margin(own_dt),
+            "detail": self.detail,
+        }
+
+
+def _rk4_limit(eigenvalue: complex) -> float:
+    """Largest h |lambda| [-] with |R(h lambda)| <= 1 for a stable eigenvalue (2.828 on the imaginary axis)."""
+    unit = eigenvalue / abs(eigenvalue)
+    unit = complex(min(unit.real, 0.0), unit.imag)  # a stable mode's round-off growth is no growth
+    return rk4_limit(np.array([unit]))
+
+
+#: implicit damping integrators (the velocity update with M + dt D; `implicit_damping`)
+IMPLICIT_DAMPING_INTEGRATORS = ("euler", "implicit", "implicitfast")
+#: an explicit share of a mode's damping below this is finite-difference noise in C [-]: C is good to
+#: ~1e-8 relative (centred differences at FD_STEP), so 1e-6 leaves two decades
+EXPLICIT_SHARE_NOISE = 1e-6
+#: D keeps a mode to itself when |D phi - c_i M phi| <= this x |D phi| (D is MuJoCo's analytic qDeriv)
+COUPLING_NOISE = 1e-9
+#: the coupled trace condition is bracketed around the closed form by at most this many halvings/doublings
+BRACKET_DOUBLINGS = 60
+
+
+def implicit_damping(model: mujoco.MjModel, point: OperatingPoint, integrator: str) -> np.ndarray:
+    """The damping matrix D [N s/m, N m s/rad] (nv, nv) `integrator` treats implicitly at `point`.
+
+    euler: diag(dof_damping) (zero with the eulerdamp flag disabled); implicit / implicitfast: -qDeriv,
+    MuJoCo's own analytic velocity derivative restricted to the sparsity of M (and symmetrised for
+    implicitfast), read after one mj_step from `point`; any other integrator: zero.
+    """
+    nv = model.nv
+    if integrator == "euler":
+        if model.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_EULERDAMP):
+            return np.zeros((nv, nv))
+        return np.diag(np.asarray(model.dof_damping, float))
+    if integrator not in ("implicit", "implicitfast"):
+        return np.zeros((nv, nv))
+    work = copy.copy(model)
+    work.opt.integrator = integrator_id(integrator)
+    data = mujoco.MjData(work)
+    point.load(work, data)
+    with quiet_mujoco():
+        mujoco.mj_step(work, data)  # qDeriv is taken at the step's start state
+    dense = np.zeros((nv, nv))
+    for row in range(nv):
+        start, count = work.D_rowadr[row], work.D_rownnz[row]
+        dense[row, work.D_colind[start : start + count]] = -data.qDeriv[start : start + count]
+    # implicitfast factorises a symmetrised D (MuJoCo's computation chapter); symmetric already in
+    # every model seen here, so this only guards the documented contract
+    return 0.5 * (dense + dense.T) if integrator == "implicitfast" else dense
+
+
+def _closed_form_omega_dt(zeta_implicit: float, zeta_explicit: float) -> float:
+    """omega dt [-] at which x' = x + dt v', v' = v + dt (-omega^2 x - 2 zeta omega v) / (1 + 2 zeta_i omega dt)
+    leaves the unit disc: 2 s + 2 sqrt(s^2 + 1), s = zeta_i - zeta_e (module docstring)."""
+    s = zeta_implicit - zeta_explicit
+    root = math.hypot(s, 1.0)
+    return 2 * (s + root) if s >= 0 else 2 / (root - s)  # no cancellation for a mostly explicit damping
+
+
+def _mode_shape(linear: Linearization, eigenvalue: complex) -> np.ndarray:
+    """The real, M-normalised position part phi (nv,) of `eigenvalue`'s eigenvector of A [1/sqrt(kg)]."""
+    nv = linear.M.shape[0]
+    values, vectors = np.linalg.eig(linear.A)
+    psi = vectors[:nv, int(np.argmin(np.abs(values - eigenvalue)))]
+    phi = np.real(psi * np.exp(-1j * np.angle(psi[int(np.argmax(np.abs(psi)))])))  # a damped mode's phase
+    return phi / math.sqrt(float(phi @ linear.M @ phi))
+
+
+def _implicit_limit(linear: Linearization, mode: Mode, damping: np.ndarray) -> float:
+    """The euler / implicit / implicitfast limit [s] of one stable oscillatory mode with implicit damping
+    `damping` (D, (nv, nv)): the trace condition of the module docstring."""
+    assert mode.damping_ratio is not None  # an oscillatory mode always has one
+    omega, zeta = mode.rate_rad_s, float(mode.damping_ratio)
+    if not np.any(damping) or zeta <= 0:
+        # nothing implicit, or nothing to split: the classic bound with all of zeta explicit or implicit
+        return stability_limit("euler", zeta) / omega if zeta <= 0 else _closed_form_omega_dt(0.0, zeta) / omega
+    phi = _mode_shape(linear, mode.eigenvalue)
+    mass_phi = linear.M @ phi
+    c_total, c_implicit = float(phi @ linear.C @ phi), float(phi @ damping @ phi)  # [1/s]
+    explicit_share = (c_total - c_implicit) / c_total if c_total > 0 else 0.0
+    if abs(explicit_share) < EXPLICIT_SHARE_NOISE:
+        explicit_share = 0.0
+    zeta_explicit = zeta * explicit_share
+    closed = _closed_form_omega_dt(zeta - zeta_explicit, zeta_explicit) / omega
+    pushed = damping @ phi
+    if np.linalg.norm(pushed - c_implicit * mass_phi) <= COUPLING_NOISE * np.linalg.norm(pushed):
+        return closed
+    # D couples the mode to others (the implicit solve spreads its force): g(dt) from the solve itself
+
+    def trace_excess(dt: float) -> float:
+        g = float(mass_phi @ np.linalg.solve(linear.M + dt * damping, mass_phi))
+        return dt * dt * g * omega**2 + 2 * dt * g * 2 * zeta * omega - 4
+
+    low, high = closed, closed
+    try:
+        for _ in range(BRACKET_DOUBLINGS):
+            if trace_excess(low) <= 0:
+                break
+            low /= 2
+        for _ in range(BRACKET_DOUBLINGS):
+            if trace_excess(high) >= 0:
+                break
+            high *= 2
+    except np.linalg.LinAlgError:  # M + dt D singular: D is not dissipative there, no closed form
+        return closed
+    if not (trace_excess(low) <= 0 <= trace_excess(high)):
+        return closed  # a D that feeds energy in (an actuator's positive velocity gain): no bracket
+    for _ in range(100):  # bisection to round-off: each evaluation is one nv x nv solve
+        mid = 0.5 * (low + high)
+        if mid in (low, high):
+            break
+        low, high = (low, mid) if trace_excess(mid) > 0 else (mid, high)
+    return low
+
+
+def predicted_limit(linear: Linearization, integrator: str, damping: np.ndarray | None = None) -> float | None:
+    """The closed-form stability limit [s] of `integrator` from the stable modes (module docstring), or None.
+
+    `damping`: the (nv, nv) damping `integrator` treats implicitly (`implicit_damping`) [N s/m, N m s/rad];
+    None: all of C (joint damping, as `simulate.stability_limit` assumes).
+    """
+    stable = [m for m in linear.modes if m.kind != "rigid" and not m.physically_unstable]
+    if integrator == "discrete":
+        return None
+    if integrator == "rk4":
+        limits = [_rk4_limit(m.eigenvalue) / m.rate_rad_s for m in stable]
+    else:
+        limits = []
+        for m in stable:
+            if m.kind == "oscillatory":
+                assert m.damping_ratio is not None, "an oscillatory mode has a damping ratio"
+                if damping is None:
+                    limits.append(stability_limit(integrator, m.damping_ratio) / m.rate_rad_s)
+                else:
+                    limits.append(_implicit_limit(linear, m, damping))
+    finite = [limit for limit in limits if math.isfinite(limit)]
+    return min(finite) if finite else None
+
+
+class _MapProbe:
+    """rho(Phi(dt)) relative to the exact flow's growth, per dt [s], for one integrator.
+
+    For a physically stable model the exact flow grows nowhere, so the excess is rho(Phi) itself.
+    With a physically unstable mode each eigenvalue mu of Phi is compared with exp(lambda dt) of the
+    continuous mode its eigenvector lies along (largest coefficient in A's eigenvector basis), so an
+    upright pole's fall does not hide a fast mode's numerical growth.
+    """
+
+    def __init__(self, model: mujoco.MjModel, linear: Linearization, integrator: str):
+        self.model, self.linear, self.integrator = copy.copy(model), linear, integrator
+        self.sigma = linear.max_growth_rate
+        self.data = mujoco.MjData(self.model)
+        self.basis = None
+        if linear.physically_unstable:
+            values, vectors = np.linalg.eig(linear.A)
+            self.rates = np.maximum(values.real, 0.0)
+            self.basis = np.linalg.pinv(vectors)
+
+    def map(self, dt: float) -> np.ndarray:
+        return one_step_map(self.model, self.integrator, dt, self.linear.point, data=self.data, copy_model=False)
+
+    def excess(self, dt: float, phi: np.ndarray | None = None) -> tuple[float, np.ndarray | None, float]:
+        """(max |mu| / exact growth of its mode [-], that mu's eigenvector, that |mu| [-]); the first > 1 +
+        MAP_MARGIN is numerical growth."""
+        phi = self.map(dt) if phi is None else phi
+        if not np.isfinite(phi).all():
+            return math.inf, None, math.inf
+        if not phi.size:
+            return 0.0, None, 0.0
+        values, vectors = np.linalg.eig(phi)
+        if self.basis is None:
+            ratios = np.abs(values)
+        else:
+            modes = np.argmax(np.abs(self.basis @ vectors), axis=0)
+            ratios = np.abs(values) * np.exp(-self.rates[modes] * dt)  # no overflow for fast physical growth
+        worst = int(np.argmax(ratios))
+        return float(ratios[worst]), vectors[:, worst], float(np.abs(values[worst]))
+
+    def unstable(self, dt: float) -> bool:
+        return self.excess(dt)[0] > 1 + MAP_MARGIN
+
+
+def measured_limit(
+    model: mujoco.MjModel,
+    linear: Linearization,
+    integrator: str,
+    scale_s: float,
+    stop_s: float,
+    guess_s: float | None = None,
+) -> float | None:
+    """The smallest dt [s] at which `integrator`'s measured one-step map grows (module docstring), or None.
+
+    scale_s: the model's fastest time scale 1/|lambda|_max [s] (or its own timestep without a mode);
+    stop_s: the largest dt worth scanning [s] (a run's duration); guess_s: a predicted limit [s], tried
+    first as a bracket [guess / GUESS_BRACKET, guess * GUESS_BRACKET] (it only saves map evaluations: a
+    wrong guess falls back to the doubling scan from its stable side).
+    """
+    probe = _MapProbe(model, linear, integrator)
+    stop = min(SCAN_STOP * scale_s, stop_s)
+    low, high = 0.0, None
+    if guess_s is not None and GUESS_BRACKET * guess_s < stop:
+        # a good prediction brackets the limit in two maps; a wrong one only costs those two
+        below, above = guess_s / GUESS_BRACKET, min(guess_s * GUESS_BRACKET, stop)
+        if probe.unstable(below):
+            high = below
+        elif probe.unstable(above):
+            low, high = below, above
+        else:
+            low = above
+    if high is None:
+        dt = min(2 * low if low else SCAN_START * scale_s, stop)
+        while not probe.unstable(dt):
+            if dt >= stop:
+                return None
+            low, dt = dt, min(2 * dt, stop)
+        high = dt
+    if low == 0.0:  # unstable at the first probe: go down
+        floor = 1e-6 * high
+        while high > floor and probe.unstable(high / 2):
+            high /= 2
+        low = high / 2
+    while high / low > 1 + LIMIT_PRECISION:
+        mid = math.sqrt(low * high)
+        low, high = (low, mid) if probe.unstable(mid) else (mid, high)
+    return math.sqrt(low * high)
+
+
+def _deviation(model: mujoco.MjModel, run_a, run_b) -> float:
+    """||x_a - x_b||_inf at the end of two runs, in the tangent space."""
+    dq = np.zeros(model.nv)
+    mujoco.mj_differentiatePos(model, dq, 1.0, run_b.qpos[-1], run_a.qpos[-1])
+    return float(max(np.max(np.abs(dq), initial=0.0), np.max(np.abs(run_a.qvel[-1] - run_b.qvel[-1]), initial=0.0)))
+
+
+def confirm(
+    model: mujoco.MjModel,
+    linear: Linearization,
+    limits: Iterable[Limit],
+    *,
+    nthread: int = 0,
+    run: Callable[[Sequence[Job]], list] | None = None,
+) -> None:
+    """Run the nonlinear model just below and just above each measured limit and set `confirmed`.
+
+    Per limit four runs, batched: the operating point as it is and perturbed by CONFIRM_SIZE along the
+    most unstable eigenvector of Phi(CONFIRM_ABOVE x limit), at CONFIRM_BELOW and CONFIRM_ABOVE x the
+    limit. Confirmed: above, the deviation grows beyond GROWTH_SEEN x the exact flow's growth (or the
+    run blows up); below, it does not. `run` runs the jobs (default: one batch.run_batched call on
+    `nthread` threads; the audit passes audit_ship.Runner, which may send them to dask workers).
+    """
+    point = linear.point
+    jobs, plan = [], []
+    data = mujoco.MjData(model)
+    for limit in limits:
+        if limit.measured_s is None:
+            limit.detail = "no limit found: nothing to confirm"
+            if linear.fastest is None:
+                # no stiffness, no damping at the point: the map is a shear of the free flow at any dt
+                limit.detail = (
+                    "no limit: every mode is rigid (no stiffness or damping at the operating point),"
+                    " so no timestep makes the map grow; nothing to confirm"
+                )
+            continue
+        probe = _MapProbe(model, linear, limit.integrator)
+        above = CONFIRM_ABOVE * limit.measured_s
+        growth, vector, size = probe.excess(above)
+        limit.growth_per_step_above = growth
+        physical = math.exp(min(probe.sigma * above, 700.0))
+        if vector is None or CONFIRM_MAX_STEPS * math.log(max(size / physical, 1e-300)) < math.log(GROWTH_SEEN):
+            # the model's own growth per step outruns the numerical one: a run cannot tell them apart
+            limit.detail = (
+                f"not confirmable by a run: the physically unstable mode grows {physical:.3g}x per step,"
+                f" the numerical one {size:.3g}x"
+            )
+            continue
+        steps = math.ceil(math.log(GROWTH_TARGET) / math.log(size / physical)) if size > physical else CONFIRM_MAX_STEPS
+        steps = int(min(max(steps, CONFIRM_MIN_STEPS), CONFIRM_MAX_STEPS))
+        direction = np.real(vector)
+        if not np.any(direction):
+            direction = np.imag(vector)
+        direction = CONFIRM_SIZE * direction / np.max(np.abs(direction))
+        start = _perturbed(model, point, direction, data)
+        base = Setup(point.qpos, point.qvel, point.act, point.ctrl)
+        for fraction in (CONFIRM_BELOW, CONFIRM_ABOVE):
+            dt = fraction * limit.measured_s
+            for setup in (base, start):
+                jobs.append(Job(model, limit.integrator, dt, steps, setup))
+            plan.append((limit, fraction, steps, dt))
+    outcomes = run(jobs) if run is not None else run_batched(jobs, nthread=nthread)
+    verdicts: dict[int, dict[float, bool]] = {}
+    for index, (limit, fraction, steps, dt) in enumerate(plan):
+        plain, pushed = outcomes[2 * index], outcomes[2 * index + 1]
+        if isinstance(plain, DivergedError) or isinstance(pushed, DivergedError):
+            grew = True
+        else:
+            allowed = math.exp(linear.max_growth_rate * dt * steps)
+            grew = _deviation(model, pushed, plain) > GROWTH_SEEN * allowed * CONFIRM_SIZE
+        verdicts.setdefault(id(limit), {})[fraction] = grew
+        if fraction == CONFIRM_ABOVE:
+            below = verdicts[id(limit)][CONFIRM_BELOW]
+            limit.confirmed = (not below) and grew
+            limit.detail = (
+                f"{steps} steps at {CONFIRM_BELOW:g}x: {'grew' if below else 'bounded'};"
+                f" at {CONFIRM_ABOVE:g}x: {'grew' if grew else 'bounded'}"
+            )
+
+
+def _perturbed(model: mujoco.MjModel, point: OperatingPoint, direction: np.ndarray, data: mujoco.MjData) -> Setup:
+    """The operating point moved by `direction` = (dq, dv, dact) in the tangent space."""
+    nv = model.nv
+    qpos = point.qpos.copy()
+    mujoco.mj_integratePos(model, qpos, direction[:nv], 1.0)
+    return Setup(qpos, point.qvel + direction[nv : 2 * nv], point.act + direction[2 * nv :], point.ctrl)
+
+
+def stability_limits(
+    model: mujoco.MjModel,
+    linear: Linearization,
+    integrators: Iterable[str],
+    stop_s: float,
+    *,
+    nthread: int = 0,
+    run: Callable[[Sequence[Job]], list] | None = None,
+) -> dict[str, Limit]:
+    """Predicted, measured (scanned up to `stop_s` [s]) and confirmed limits per integrator name (the
+    confirmation runs through `run`, see `confirm`)."""
+    fastest = linear.fastest
+    scale = 1.0 / fastest.rate_rad_s if fastest is not None else model.opt.timestep
+    out = {}
+    for name in integrators:
+        damping = implicit_damping(model, linear.point, name) if name in IMPLICIT_DAMPING_INTEGRATORS else None
+        predicted = predicted_limit(linear, name, damping)
+        out[name] = Limit(name, predicted, measured_limit(model, linear, name, scale, stop_s, predicted))
+    confirm(model, linear, out.values(), nthread=nthread, run=run)
+    return out
+
+
+def constraint_flags(model: mujoco.MjModel, dt: float) -> list[dict[str, Any]]:
+    """Constraint settings whose solref time constant is shorter than 2 dt [s] (MuJoCo then stiffens nothing:
+    with refsafe on it clamps the time constant to 2 dt, so the constraint is softer than written; off, the
+    integrator can go unstable). One row per element: {"element", "timeconst_s", "dt_limit_s"} (dt_limit_s
+    = timeconst / 2, the largest timestep that keeps it as written)."""
+    rows = []
+
+    def check(kind: str, count: int, solref: np.ndarray, name_of) -> None:
+        for i in range(count):
+            timeconst = float(solref[i][0])
+            if timeconst > 0 and timeconst < 2 * dt:
+                rows.append(
+                    {"element": f"{kind} {name_of(i)!r}", "timeconst_s": timeconst, "dt_limit_s": timeconst / 2}
+                )
+
+    def name(obj):
+        return lambda i: obj(i).name or str(i)
+
+    check("geom", model.ngeom, model.geom_solref, name(model.geom))
+    check("joint limit", model.njnt, model.jnt_solref, name(model.joint))
+    check("equality", model.neq, model.eq_solref, name(model.eq))
+    check("tendon limit", model.ntendon, model.tendon_solref_lim, name(model.tendon))
+    check("contact pair", model.npair, model.pair_solref, name(model.pair))
+    if model.opt.enableflags & int(mujoco.mjtEnableBit.mjENBL_OVERRIDE):
+        check("option o_solref", 1, model.opt.o_solref[None], lambda i: "override")
+    return rows
+
+
+def copy_for(model: mujoco.MjModel) -> mujoco.MjModel:
+    """A copy of `model` the audit may set integrators and timesteps on."""
+    return copy.copy(model)

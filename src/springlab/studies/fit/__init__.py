@@ -1,0 +1,3 @@
+"""Fitting a scene to a measurement (`springlab fit`): the record (`data`), what a scene can identify
+(`models`), the optimization (`engine`), multi-starts (`starts`), the result (`results`) and the entry point (`fit`).
+"""

@@ -1,0 +1,469 @@
+"""From measurements to a model: identify a scene's parameters from a recorded signal.
+
+`fit(scene, data)` reads a record (springlab.studies.fit.data), decides what may be
+fitted (springlab.studies.fit.models), and identifies it with MuJoCo in the loop using
+MuJoCo's own system-identification toolbox, `mujoco.sysid`: parameters with
+bounds, residuals from MuJoCo rollouts of the scene, `sysid.optimize`
+(springlab.studies.fit.engine), then `sysid.calculate_intervals` for the covariance and
+95 % intervals (Student t on n - p degrees of freedom, noise variance from the
+residual). Derived quantities (omega_n, zeta from k, d, m, or k, d from
+omega_n, zeta given m) carry intervals by the delta method. Every estimate is cross-checked
+against the closed form (springlab.analytic) fitted independently with scipy.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from springlab import scenes
+from springlab.errors import BadInputError, ParameterError, SpringlabError
+from springlab.runs.run import run_scenario
+from springlab.scenes.car.scene import Car
+from springlab.studies.executor import Executor
+from springlab.studies.fit import data as fit_data
+from springlab.studies.fit import results as fit_results
+from springlab.studies.fit import starts as fit_starts
+
+from .engine import OMEGA_DT, Problem, check_identifiable, solve
+from .models import ALIASES, FITS, MODAL, SceneFit
+
+
+@dataclasses.dataclass
+class FitResult:
+    """An identified scene.
+
+    Attributes
+    ----------
+    scene, scenario
+        What was fitted.
+    record
+        The cleaned record (springlab.studies.fit.data.Record).
+    free
+        Fitted names, in order.
+    estimates
+        Name -> {'value', 'ci95' [low, high], 'unit'}.
+    derived
+        The same for quantities computed from the estimates.
+    correlation
+        (p, p) correlation matrix of the estimates.
+    covariance
+        (p, p) covariance [units of the names].
+    residual_rms
+        RMS of measured - fitted [signal unit].
+    dof
+        Degrees of freedom n - p.
+    parameters
+        The scene's parameters at the estimate (SI).
+    fitted
+        (n,) the fitted signal at the recorded times.
+    cross_check
+        The closed form fitted independently, and how far it is.
+    optimizer
+        Status, iterations, rollouts, times.
+    verdict
+        The one-line answer.
+    converged
+        Whether the optimizer stopped on a tolerance.
+    run
+        The identified scene's own run (Result) or None, and `run_note`.
+    starts
+        The multi-start record (springlab.studies.fit.starts.summary): count, best, at_best_minimum, spread.
+    """
+
+    scene: str
+    scenario: str
+    record: fit_data.Record
+    free: list[str]
+    estimates: dict[str, dict[str, Any]]
+    derived: dict[str, dict[str, Any]]
+    correlation: np.ndarray
+    covariance: np.ndarray
+    residual_rms: float
+    dof: int
+    parameters: dict[str, float]
+    fitted: np.ndarray
+    cross_check: dict[str, Any]
+    optimizer: dict[str, Any]
+    verdict: str = ""
+    converged: bool = True
+    run: Any = None
+    run_note: str = ""
+    curves: dict[str, Any] = dataclasses.field(default_factory=dict)
+    amplitude: float = 0.0
+    starts: dict[str, Any] = dataclasses.field(default_factory=dict)
+
+    def as_dict(self) -> dict[str, Any]:
+        """fit.json's content (docs/json.md, `fit`)."""
+        r = self.record
+        return {
+            "scene": self.scene,
+            "scenario": self.scenario,
+            "signal": r.name,
+            "signal_unit": r.unit,
+            "column": r.column,
+            "free": self.free,
+            "estimates": self.estimates,
+            "derived": self.derived,
+            "correlation": {a: dict(zip(self.free, row)) for a, row in zip(self.free, self.correlation.tolist())},
+            "residual_rms": self.residual_rms,
+            "degrees_of_freedom": self.dof,
+            "samples": int(r.time.size),
+            "rows": r.rows,
+            "skipped_nan_rows": r.skipped_nan,
+            "dropped_before_start": r.dropped_before_start,
+            "time_origin_s": r.origin,
+            "time_span_s": [float(r.time[0]), float(r.time[-1])],
+            "data_notes": r.notes,
+            "parameters": self.parameters,
+            "curves": self.curves,
+            "cross_check": self.cross_check,
+            "optimizer": self.optimizer,
+            "starts": self.starts,
+            "converged": self.converged,
+            "run_note": self.run_note,
+            "verdict": self.verdict,
+        }
+
+
+def _canonical(name: str) -> str:
+    return ALIASES.get(name, name)
+
+
+def fit(
+    scene: str,
+    data: str | os.PathLike,
+    scenario: str | None = None,
+    *,
+    map: Mapping[str, str] | Sequence[str] | None = None,  # noqa: A002 - the CLI's --map
+    free: Sequence[str] | None = None,
+    scale: float = 1.0,
+    start: float | None = None,
+    degree: int | None = None,
+    run_scene: bool = True,
+    starts: int = 1,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    executor: Executor | None = None,
+    **parameters: Any,
+) -> FitResult:
+    """Identify `scene` from the record in `data` (a CSV file).
+
+    Parameters
+    ----------
+    scene
+        'slider', 'car', 'printer_head' or 'kinematics'.
+    data
+        CSV with a header: `time` [s] and one signal `<joint>_pos` [m],
+        `<joint>_vel` [m/s] or `<joint>_acc` [m/s^2] (see springlab.studies.fit.data).
+    scenario
+        The scene's scenario the record shows (None: the fit's default for the scene).
+    map
+        File column -> springlab name, e.g. {'t': 'time', 'x_mm': 'slider_pos'}.
+    free
+        Names to fit (None: the scene's default; see springlab.studies.fit.models).
+    scale
+        Factor [SI per file unit] applied to the signal, e.g. 0.001 for mm.
+    start
+        Release time [s]: the record before it is dropped (None: detected).
+    degree
+        Kinematics only: the polynomial's degree 0-3 (frees x0, v0, a0, jerk in order);
+        None: chosen, from 3 down while the highest coefficient's 95 % interval contains 0.
+    run_scene
+        Also run the identified scene (FitResult.run) for trajectory.csv.
+    starts
+        Independent optimizations (springlab.studies.fit.starts): 1 is the linear-algebra start alone;
+        N > 1 adds N - 1 starts spread over the nonlinear free names' bounds and keeps the lowest cost.
+    workers, scheduler, executor
+        Where the starts run (springlab.studies.executor): a LocalCluster of `workers`
+        processes, a running dask scheduler's address, or an Executor; none: in this process. Same numbers
+        either way. A single start always runs in this process.
+    **parameters
+        Fixed values: scene parameters (e.g. mass=2.0 [kg]) and
+        x0 [m], v0 [m/s], offset [signal unit], delay [s].
+
+    Returns
+    -------
+    FitResult
+        Estimates with 95 % intervals, derived quantities, verdict.
+
+    Raises
+    ------
+    BadInputError
+        Bad file or names, or a free set the record cannot identify.
+    """
+    starts = fit_starts.check_count(starts)
+    if executor is not None and (workers is not None or scheduler is not None):
+        raise BadInputError("give an executor or workers/scheduler, not both")
+    if scene not in FITS:
+        raise BadInputError(
+            f"scene {scene!r} cannot be fitted; valid: {', '.join(FITS)} (nonlinear has no identification yet)"
+        )
+    how = FITS[scene]
+    scene_obj = scenes.get(scene)
+    scenario = how.scenarios[0] if scenario is None else scenario
+    if scenario not in how.scenarios:
+        valid = ", ".join(how.scenarios)
+        if scenario not in scene_obj.scenarios:
+            raise BadInputError(f"unknown scenario {scenario!r} of {scene}; a fit takes one of: {valid}")
+        raise BadInputError(f"{scene} {scenario} cannot be fitted from a record; a fit takes one of: {valid}")
+    chosen = scene_obj.scenario(scenario)
+    nuisance = {}
+    for name, value in parameters.items():
+        if name in ("x0", "v0", "offset", "delay") and name not in scene_obj.parameters:
+            try:
+                nuisance[name] = float(value)
+            except (TypeError, ValueError):
+                nuisance[name] = math.nan
+            if not math.isfinite(nuisance[name]):
+                raise ParameterError(f"{name} must be a finite number, got {value!r}")
+    scene_values = {k: v for k, v in parameters.items() if k not in nuisance}
+    base = scene_obj.resolve(chosen, scene_values)
+    # a fitted delay models the held part before a release itself: keep it in the record
+    wants_delay = any("delay" in str(item) for item in (free or ()))
+    record = fit_data.load(
+        data,
+        (how.joint,),
+        mapping=fit_data.parse_map(map),
+        scale=scale,
+        start=start,
+        detect_release=not wants_delay,
+        signals=how.signals,
+    )
+    free_given = bool(free)
+    free = _free_names(how, free, degree, record)
+    forced = scenario == "step" and base.get("force_amplitude", 0.0) != 0.0
+    force = base.get("force_amplitude", 0.0) if forced else 0.0
+    how.check_free(free, nuisance, base, forced, record.signal)
+    fit_starts.check_spreadable(free, starts)
+    if len(free) + 2 > record.time.size:
+        raise BadInputError(
+            f"{record.time.size} samples cannot fit {len(free)} parameters; a fit needs at least {len(free) + 2}"
+        )
+    modal = bool(set(free) & set(MODAL)) or scene == "kinematics"
+    fixed = dict(nuisance) | {k: base[k] for k in ("x0", "v0") if k in parameters and k in base}
+    if scene != "kinematics":
+        # an initial state neither fitted nor given: the first sample, at rest
+        if "x0" not in free and "x0" not in fixed:
+            fixed["x0"] = float(record.values[0]) if record.signal == "pos" else how.equilibrium(base)
+        if "v0" not in free and "v0" not in fixed:
+            fixed["v0"] = 0.0
+    if starts > 1 and executor is None:
+        with Executor(workers=workers, scheduler=scheduler, progress=False) as own:
+            problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force, starts, own)
+    else:
+        problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force, starts, executor)
+    if scene == "kinematics" and not free_given and degree is None:
+        # the degree is chosen: drop the highest coefficient while its 95 % interval contains 0
+        result = _finish(problem, solved, run_scene=False)
+        while len(free) > 1:
+            low, high = result.estimates[free[-1]]["ci95"]
+            if not low <= 0.0 <= high:
+                break
+            record.notes.append(f"degree chosen: {free[-1]}'s 95 % interval [{low:.3g}, {high:.3g}] contains 0")
+            free = free[:-1]
+            problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force)
+            result = _finish(problem, solved, run_scene=False)
+    result = _finish(problem, solved, run_scene)
+    result.starts = fit_starts.summary(runs, result.free, result.covariance, record.unit)
+    return result
+
+
+def _identify(
+    how, chosen, base, record, free, fixed, modal, force, starts=1, executor=None
+) -> tuple[Problem, dict[str, Any], dict[str, Any] | None]:
+    """The start(s), the problem and sysid's solution (the best start's, and the starts' record or None);
+    the grid refined once if the estimate is faster than the start."""
+    start_values = _start(how, record, base, fixed, free, force)
+    problem = Problem(how, chosen, base, record, free, start_values, modal, force)
+    runs = None
+    if starts == 1:
+        solved = solve(problem, record)
+    else:
+        solved, runs = fit_starts.run(problem, starts, executor)
+    estimate = problem.values(solved["x"])
+    if problem.fastest_rate(estimate) * problem.dt > 1.5 * OMEGA_DT:
+        problem.start = dict(estimate)
+        problem.set_grid(estimate)
+        solved = solve(problem, record)
+    return problem, solved, runs
+
+
+def _start(how: SceneFit, record, base, fixed, free, force) -> dict[str, float]:
+    """Start values; with a free delay, from the part after the detected release, shifted to it."""
+    if "delay" not in free:
+        return how.start(record, base, fixed, free, force)
+    release = fit_data.find_release(record.time, record.values)
+    delay = 0.0 if release is None else release - record.origin
+    after = record.time >= record.origin + delay
+    shifted = dataclasses.replace(
+        record, time=record.time[after], values=record.values[after], origin=record.origin + delay
+    )
+    values = how.start(shifted, base, fixed, free, force)
+    values["delay"] = delay
+    return values
+
+
+def _free_names(how: SceneFit, free, degree, record) -> list[str]:
+    if degree is not None:
+        if how.scene != "kinematics":
+            raise BadInputError("--degree applies to kinematics only (its polynomial); other scenes take --free")
+        if not isinstance(degree, int) or not 0 <= degree <= 3:
+            raise BadInputError(
+                f"--degree must be 0, 1, 2 or 3 (the scene drives up to a constant jerk), got {degree!r}"
+            )
+        names = ["x0", "v0", "a0", "jerk"][: degree + 1]
+        lost = {"vel": 1, "acc": 2}.get(record.signal, 0)
+        return names[lost:] if len(names) > lost else names
+    if free is None or len(free) == 0:
+        names = list(how.default_free)
+        if how.scene == "kinematics":
+            names = names[{"vel": 1, "acc": 2}.get(record.signal, 0) :]
+        return names
+    names = []
+    for item in free:
+        for name in str(item).split(","):
+            name = _canonical(name.strip())
+            if name and name not in names:
+                names.append(name)
+    if not names:
+        raise BadInputError("--free needs at least one name")
+    return names
+
+
+def _finish(problem: Problem, solved: dict[str, Any], run_scene: bool) -> FitResult:
+    """Intervals, derived quantities, cross-check, verdict and the identified scene's run."""
+    from mujoco import sysid
+
+    how, record, free = problem.how, problem.record, problem.free
+    x, jacobian = solved["x"], solved["jacobian"]
+    check_identifiable(problem, jacobian)
+    # in parameters scaled to O(1): sysid's zero-eigenvalue threshold is relative, and k ~ 1e6 N/m beside
+    # an offset ~ 1e-3 m would otherwise look singular
+    scale = np.array(solved["scale"])
+    covariance, half = sysid.calculate_intervals(solved["residuals"], jacobian * scale)
+    covariance = np.asarray(covariance, float) * np.outer(scale, scale)
+    half = np.asarray(half, float) * scale
+    n, p = record.time.size, len(free)
+    dof = n - p
+    residual = np.concatenate(solved["residuals"]) * problem.scale
+    fitted = record.values + residual
+    values = problem.values(x)
+    units = how.units()
+    estimates: dict[str, dict[str, Any]] = {}
+    for i, name in enumerate(free):
+        unit = record.unit if name == "offset" else units[name]
+        estimates[name] = {
+            "value": float(x[i]),
+            "ci95": fit_results.interval(float(x[i]), float(half[i])),
+            "unit": unit,
+        }
+    sd = np.sqrt(np.clip(np.diag(covariance), 1e-300, None))
+    correlation = covariance / np.outer(sd, sd)
+    quantile = fit_results.t_quantile(dof)
+    derived = fit_results.delta_intervals(
+        lambda v: fit_results.derived_quantities(how, problem, problem.values(v)), x, covariance, quantile
+    )
+    same = {"omega_n_rad_s": "omega_n", "damping_ratio": "zeta"}
+    derived = {k: v for k, v in derived.items() if k not in free and same.get(k) not in free}
+    params = how.scene_params(values, problem.base, problem.modal)
+    curves = _curves(problem, x, covariance, quantile) if how.scene == "kinematics" else {}
+    cross = fit_results.cross_check(problem, x, half, fitted)
+    converged = solved["status"] in ("norm(dx) < tol", "norm(gradient) < tol")
+    level = values["offset"] + (how.equilibrium(params) if record.signal == "pos" else 0.0)
+    amplitude = float(np.ptp(fitted)) if how.scene == "kinematics" else float(np.max(np.abs(fitted - level)))
+    result = FitResult(
+        scene=how.scene,
+        scenario=problem.scenario.name,
+        record=record,
+        free=list(free),
+        estimates=estimates,
+        derived=derived,
+        correlation=correlation,
+        covariance=covariance,
+        residual_rms=float(np.sqrt(np.mean(residual**2))),
+        dof=dof,
+        parameters=params,
+        fitted=fitted,
+        cross_check=cross,
+        optimizer={
+            "method": "mujoco.sysid.optimize (mujoco.minimize Levenberg-Marquardt), MuJoCo RK4 rollouts",
+            "status": solved["status"],
+            "iterations": solved["iterations"],
+            "rollouts": problem.rollouts,
+            "rollout_time_s": problem.rollout_time,
+            "time_per_rollout_s": problem.rollout_time / max(problem.rollouts, 1),
+            "wall_time_s": solved["wall_time_s"],
+            "dt": problem.dt,
+            "steps": problem.steps,
+            "integrator": "rk4",
+        },
+        converged=converged,
+        curves=curves,
+        amplitude=amplitude,
+    )
+    result.verdict = fit_results.verdict(result)
+    if run_scene:
+        v0 = estimates.get("v0")
+        moving = v0 is not None and not v0["ci95"][0] <= 0.0 <= v0["ci95"][1]  # v0 = 0 is not plausible
+        result.run, result.run_note = _scene_run(problem, values, params, moving)
+    return result
+
+
+def _curves(problem: Problem, x, covariance, quantile) -> dict[str, Any]:
+    """Kinematics: x(t), v(t), a(t) with 95 % bands on 41 times over the record."""
+    t = np.linspace(0.0, float(problem.t[-1]), 41)
+    out: dict[str, Any] = {"time_s": (t + problem.record.origin).tolist()}
+    for signal in ("pos", "vel", "acc"):
+
+        def curve(vector, signal=signal):
+            values = problem.values(vector)
+            y = problem.how.closed_form(t, problem.base, values, signal)
+            return {str(i): float(v) for i, v in enumerate(y)}
+
+        bands = fit_results.delta_intervals(curve, x, covariance, quantile)
+        key = {"pos": "x_m", "vel": "v_m_s", "acc": "a_m_s2"}[signal]
+        out[key] = [bands[str(i)]["value"] for i in range(t.size)]
+        out[key + "_ci95_halfwidth"] = [bands[str(i)]["ci95"][1] - bands[str(i)]["value"] for i in range(t.size)]
+    return out
+
+
+def _scene_run(problem: Problem, values: dict[str, float], params: dict[str, float], moving: bool):
+    """The identified scene's own run over the record's span, or (None, why not)."""
+    how, scene = problem.how, problem.scene
+    chosen = problem.scenario
+    overrides: dict[str, Any] = {k: v for k, v in params.items() if k in scene.parameters}
+    note = ""
+    if how.scene == "car":
+        assert isinstance(scene, Car)  # scenes.get("car") is the Car scene
+        g = scene.gravity()
+        overrides["push_mass"] = (params["clearance"] - values["x0"]) * params["stiffness"] / g
+        overrides.pop("damping_ratio", None)
+        if moving:
+            note = f"the car scene starts at rest; the fitted v0 = {values['v0']:.3g} m/s is not in its run"
+    elif how.scene == "printer_head":
+        total = params["carriage_mass"] + params["motor_mass"]
+        overrides["deflection"] = -values["x0"] * total / params["motor_mass"]
+        if moving:
+            note = f"the printer_head scene starts at rest; the fitted v0 = {values['v0']:.3g} m/s is not in its run"
+    try:
+        run = run_scenario(how.scene, chosen.name, duration=float(problem.t[-1]), **overrides)
+    except SpringlabError as error:
+        return None, f"the identified scene could not be run: {error}"
+    return run, note
+
+
+def write(result: FitResult, directory: str | os.PathLike) -> list:
+    """Write fit.json and the identified scene's trajectory.csv / summary.json into `directory` (all or none)."""
+    from springlab import files
+
+    texts = {"fit.json": files.dumps(result.as_dict()) + "\n"}
+    if result.run is not None:
+        texts["trajectory.csv"] = files.csv_text(result.run.columns())
+        texts["summary.json"] = files.dumps(result.run.summary) + "\n"
+    return files.write_text_files(directory, texts)

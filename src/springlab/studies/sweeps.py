@@ -1,0 +1,435 @@
+"""A parameter sweep of any scene: a grid (or random samples) of parameters, every configuration one run.
+
+`springlab sweep car road_bump --vary damping=1000:8000:8 --vary speed=2:20:10`
+runs every combination, batched, and reports per configuration its
+parameters, the scenario's quantities (what `springlab run` puts in
+summary.json), the errors against the exact solution where there is one, and
+whether it passed. A configuration that blows up is a row marked `diverged`,
+not a failed sweep.
+
+How it runs: the configurations are cut into chunks of `CHUNK_CONFIGURATIONS`;
+each chunk is one threaded `mujoco.rollout` call (`batch.run_rollout`,
+bit-identical per run to `springlab run`, which steps with the same function) on the executor (springlab.studies.executor:
+locally, or on dask workers that rebuild each model from the scene's MJCF and
+the row's parameters). Rows come back in configuration order, so the sweep is
+the same bit for bit wherever it ran.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time as _time
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from springlab import scenes
+from springlab.errors import BadInputError, DivergedError, UnknownNameError
+from springlab.runs.run import evaluate, prepare
+from springlab.sim.batch import Job, run_rollout
+from springlab.sim.simulate import check_timing, integrator_id
+
+from .executor import Executor, chunked, resolve
+
+#: configurations per chunk (one batched MuJoCo call each): seconds of work, not milliseconds
+CHUNK_CONFIGURATIONS = 64
+#: most configurations one sweep may hold
+MAX_CONFIGURATIONS = 10_000_000
+
+
+@dataclasses.dataclass(frozen=True)
+class Axis:
+    """One varied parameter: `count` values from `low` to `high` [parameter's unit], even or log-spaced."""
+
+    name: str
+    low: float
+    high: float
+    count: int | None
+    log: bool = False
+
+    def values(self) -> np.ndarray:
+        """The grid values (count of them), ends included."""
+        assert self.count is not None, "only an axis with N (NAME=LOW:HIGH:N) has grid values"
+        if self.count == 1:
+            return np.array([self.low])
+        if self.log:
+            return np.geomspace(self.low, self.high, self.count)
+        return np.linspace(self.low, self.high, self.count)
+
+    def sample(self, unit: np.ndarray) -> np.ndarray:
+        """Map uniform [0, 1) numbers onto the range (log-uniform for a log axis)."""
+        if self.log:
+            return np.exp(math.log(self.low) + unit * (math.log(self.high) - math.log(self.low)))
+        return self.low + unit * (self.high - self.low)
+
+
+def parse_axis(text: str) -> Axis:
+    """'NAME=LOW:HIGH:N[:log]' (N may be left out for --samples) -> Axis.
+
+    Raises
+    ------
+    BadInputError
+        the text does not have that form, or the numbers make no range.
+    """
+    name, sep, spec = str(text).partition("=")
+    form = "--vary takes NAME=LOW:HIGH:N[:log], e.g. damping=0.5:40:30:log"
+    if not sep or not name.strip():
+        raise BadInputError(f"{form}; got {text!r}")
+    parts = spec.split(":")
+    log = bool(parts) and parts[-1].strip().lower() == "log"
+    if log:
+        parts = parts[:-1]
+    if len(parts) not in (2, 3):
+        raise BadInputError(f"{form}; got {text!r}")
+    try:
+        low, high = float(parts[0]), float(parts[1])
+        count = int(parts[2]) if len(parts) == 3 else None
+    except ValueError:
+        raise BadInputError(f"{form} (LOW, HIGH numbers, N an integer); got {text!r}") from None
+    return make_axis(name.strip(), low, high, count, log)
+
+
+def make_axis(name: str, low: float, high: float, count: int | None, log: bool = False) -> Axis:
+    """A checked Axis (see parse_axis)."""
+    if not (math.isfinite(low) and math.isfinite(high)):
+        raise BadInputError(f"--vary {name}: LOW and HIGH must be finite numbers, got {low!r}, {high!r}")
+    if count is not None and (isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1):
+        raise BadInputError(f"--vary {name}: N must be an integer >= 1, got {count!r}")
+    if log and (low <= 0 or high <= 0):
+        raise BadInputError(f"--vary {name}: a log range needs LOW > 0 and HIGH > 0, got {low:g}:{high:g}")
+    if count is not None and count > 1 and low == high:
+        raise BadInputError(f"--vary {name}: LOW equals HIGH; use N = 1 or --set {name}={low:g}")
+    return Axis(name, float(low), float(high), None if count is None else int(count), log)
+
+
+@dataclasses.dataclass
+class Sweep:
+    """A finished sweep; one row per configuration, in order (the last axis fastest on a grid).
+
+    Attributes
+    ----------
+    scene, scenario, integrator
+        names run.
+    dt
+        timestep [s].
+    duration
+        simulated time [s].
+    axes
+        the varied parameters.
+    samples
+        random points drawn (None: the full grid).
+    values
+        varied parameter -> (n,) values [its unit].
+    rows
+        per configuration: "parameters" (all, SI), "quantities", "errors" (column -> max_rel [-]),
+        "passed" (bool or None: no reference), "diverged" (bool), "detail" (why it diverged, or
+        "invalid: ..." for a configuration the scenario cannot start from, e.g. a bump that lifts the car).
+    wall_time_s
+        wall time of the whole sweep [s].
+    executor
+        where it ran ('local', '2 local dask workers', ...).
+    chunks
+        batched calls made.
+    """
+
+    scene: str
+    scenario: str
+    integrator: str
+    dt: float
+    duration: float
+    axes: list[Axis]
+    samples: int | None
+    values: dict[str, np.ndarray]
+    rows: list[dict[str, Any]]
+    wall_time_s: float
+    executor: str
+    chunks: int
+
+    @property
+    def size(self) -> int:
+        """Number of configurations."""
+        return len(self.rows)
+
+    def quantity_names(self) -> list[str]:
+        """Scalar numeric quantities of the scenario, in summary.json order."""
+        names: list[str] = []
+        for row in self.rows:
+            for name, value in row["quantities"].items():
+                if name not in names and _is_number(value):
+                    names.append(name)
+        return names
+
+    def column(self, name: str) -> np.ndarray:
+        """(n,) values of a varied parameter, a quantity, or an error column ('<col>_max_rel') [their units]."""
+        if name in self.values:
+            return self.values[name]
+        out = np.full(self.size, np.nan)
+        for i, row in enumerate(self.rows):
+            if name.endswith("_max_rel") and name[: -len("_max_rel")] in row["errors"]:
+                out[i] = row["errors"][name[: -len("_max_rel")]]
+            elif _is_number(row["quantities"].get(name)):
+                out[i] = float(row["quantities"][name])
+        return out
+
+    def table(self) -> tuple[list[str], list[list[Any]]]:
+        """sweep.csv's header and rows: varied parameters, quantities, errors, passed, diverged."""
+        quantities = []
+        for row in self.rows:
+            for name, value in row["quantities"].items():
+                if name not in quantities and (_is_number(value) or isinstance(value, str)):
+                    quantities.append(name)
+        errors: list[str] = []
+        for row in self.rows:
+            errors.extend(c for c in row["errors"] if c not in errors)
+        header = list(self.values) + quantities + [f"{c}_max_rel" for c in errors] + ["passed", "diverged", "detail"]
+        body = []
+        for i, row in enumerate(self.rows):
+            line: list[Any] = [self.values[name][i] for name in self.values]
+            line += [row["quantities"].get(name, "") for name in quantities]
+            line += [row["errors"].get(c, "") for c in errors]
+            line += ["" if row["passed"] is None else row["passed"], row["diverged"], row["detail"]]
+            body.append(line)
+        return header, body
+
+    def summary(self) -> dict[str, Any]:
+        """The JSON form (`springlab sweep --json`): setting, axes, counts, timings and every row."""
+        passed = [r["passed"] for r in self.rows]
+        return {
+            "scene": self.scene,
+            "scenario": self.scenario,
+            "integrator": self.integrator,
+            "dt": self.dt,
+            "duration": self.duration,
+            "vary": [dataclasses.asdict(a) for a in self.axes],
+            "samples": self.samples,
+            "configurations": self.size,
+            "diverged": sum(bool(r["diverged"]) for r in self.rows),
+            "invalid": sum(r["detail"].startswith("invalid") for r in self.rows),
+            "passed": sum(p is True for p in passed),
+            "failed": sum(p is False for p in passed),
+            "chunks": self.chunks,
+            "executor": self.executor,
+            "wall_time_s": self.wall_time_s,
+            "configurations_per_s": self.size / self.wall_time_s if self.wall_time_s > 0 else None,
+            "rows": [
+                {"values": {name: float(self.values[name][i]) for name in self.values}, **row}
+                for i, row in enumerate(self.rows)
+            ],
+        }
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
+
+
+def configurations(axes: Sequence[Axis], samples: int | None = None, seed: int = 0) -> dict[str, np.ndarray]:
+    """Varied parameter -> (n,) values: the full grid (last axis fastest), or `samples` random points.
+
+    Random points are uniform in each range (log-uniform on a log axis) from numpy's
+    PCG64 seeded with `seed`, so a sampled sweep is reproducible.
+    """
+    if samples is not None:
+        if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 1:
+            raise BadInputError(f"--samples must be an integer >= 1, got {samples!r}")
+        unit = np.random.default_rng(seed).random((int(samples), len(axes)))
+        return {axis.name: axis.sample(unit[:, j]) for j, axis in enumerate(axes)}
+    missing = [a.name for a in axes if a.count is None]
+    if missing:
+        raise BadInputError(f"--vary {missing[0]} needs N (NAME=LOW:HIGH:N) unless --samples is given")
+    counts = [a.count for a in axes if a.count is not None]  # all of them: checked just above
+    total = math.prod(counts)
+    if total > MAX_CONFIGURATIONS:
+        raise BadInputError(f"the grid has {total} configurations, more than {MAX_CONFIGURATIONS}; use --samples")
+    mesh = np.meshgrid(*[a.values() for a in axes], indexing="ij")
+    return {a.name: m.ravel() for a, m in zip(axes, mesh)}
+
+
+def run_chunk(payload: Mapping[str, Any], nthread: int = 0) -> list[dict[str, Any]]:
+    """Run one chunk of a sweep as one batched MuJoCo call; the sweep's rows for it.
+
+    A module-level function of plain data, so dask ships it to workers: the
+    payload names the scene, scenario and setting and lists each configuration's
+    parameter overrides; every model is rebuilt here from the scene's MJCF.
+
+    Parameters
+    ----------
+    payload
+        {"scene", "scenario", "integrator", "dt" [s], "duration" [s], "configurations": [overrides]}.
+    nthread
+        batch threads (0: one per CPU).
+    """
+    scene = scenes.get(payload["scene"])
+    chosen = scene.scenario(payload["scenario"])
+    dt, duration, integrator = payload["dt"], payload["duration"], payload["integrator"]
+    steps = check_timing(dt, duration)
+    prepared, jobs, rows = [], [], []
+    for overrides in payload["configurations"]:
+        params = scene.resolve(chosen, overrides)
+        row: dict[str, Any] = {
+            "parameters": params,
+            "quantities": {},
+            "errors": {},
+            "passed": None,
+            "diverged": False,
+            "detail": "",
+        }
+        rows.append(row)
+        model = scene.build(params, chosen)
+        try:
+            setup = scene.setup(model, params, chosen, steps, dt)
+        except BadInputError as error:  # e.g. a bump that lifts the car off its springs: a row, not a failed sweep
+            row.update(passed=False, detail=f"invalid: {error}")
+            continue
+        prepared.append((row, params, model))
+        jobs.append(Job(model, integrator, dt, steps, setup, scene.stop_condition(model, params, chosen)))
+    for (row, params, model), outcome in zip(prepared, run_rollout(jobs, nthread=nthread, private_models=True)):
+        try:
+            if isinstance(outcome, DivergedError):
+                raise outcome
+            result = evaluate(scene, chosen, params, model, outcome)
+        except DivergedError as error:
+            row.update(passed=False, diverged=True, detail=str(error))
+        else:
+            summary = result.summary
+            row["quantities"] = _scalars(summary["quantities"])
+            row["errors"] = {column: e["max_rel"] for column, e in summary["errors"].items()}
+            row["passed"] = summary["passed"]
+    return rows
+
+
+def _scalars(quantities: Mapping[str, Any]) -> dict[str, Any]:
+    """The scalar quantities (numbers, bools, strings) as plain Python values."""
+    out: dict[str, bool | float | str] = {}
+    for name, value in quantities.items():
+        if isinstance(value, (bool, np.bool_)):
+            out[name] = bool(value)
+        elif _is_number(value):
+            out[name] = float(value)
+        elif isinstance(value, str):
+            out[name] = value
+    return out
+
+
+def sweep(
+    scene: str,
+    scenario: str | None = None,
+    *,
+    vary: Mapping[str, Any] | Sequence[str],
+    samples: int | None = None,
+    seed: int = 0,
+    integrator: str | None = None,
+    dt: float | None = None,
+    duration: float | None = None,
+    chunk_size: int = CHUNK_CONFIGURATIONS,
+    executor: Executor | None = None,
+    **parameters: Any,
+) -> Sweep:
+    """Run a scenario over a grid (or random samples) of parameters, batched; one row per configuration.
+
+    Parameters
+    ----------
+    scene
+        scene name (see `springlab list`).
+    scenario
+        scenario name (None: the scene's default).
+    vary
+        parameter -> (low, high, n) or (low, high, n, "log") [parameter's unit], or a list of
+        'NAME=LOW:HIGH:N[:log]' strings. n may be None when `samples` is given.
+    samples
+        draw this many random points in the box instead of the full grid.
+    seed
+        seed of the random points.
+    integrator, dt, duration
+        the setting (None: the scene's validated one, as `springlab run`).
+    chunk_size
+        configurations per batched call.
+    executor
+        where the chunks run (None: locally, in this process).
+    **parameters
+        fixed parameter values (SI), like `--set`.
+
+    Returns
+    -------
+        The Sweep; rows equal single `springlab.run` calls at the same parameters.
+
+    Raises
+    ------
+    BadInputError
+        unknown names, bad ranges, a configuration with non-physical values.
+    """
+    started = _time.perf_counter()
+    scene_obj, chosen, _ = prepare(scene, scenario, parameters)
+    axes = _axes(vary)
+    for axis in axes:
+        if axis.name not in scene_obj.parameters:
+            raise UnknownNameError(f"parameter of {scene_obj.name}", axis.name, scene_obj.parameters)
+        if axis.name in parameters:
+            raise BadInputError(f"{axis.name} is both varied (--vary) and fixed (--set); choose one")
+    if integrator == "auto":
+        raise BadInputError("a sweep runs one setting for every configuration; name an integrator, not 'auto'")
+    integrator = scene_obj.integrator if integrator is None else integrator
+    integrator_id(integrator)
+    dt = (chosen.dt or scene_obj.dt) if dt is None else dt
+    duration = chosen.duration if duration is None else duration
+    check_timing(dt, duration)
+    values = configurations(axes, samples, seed)
+    count = len(next(iter(values.values())))
+    overrides = []
+    for i in range(count):
+        config = dict(parameters)
+        config.update({name: float(values[name][i]) for name in values})
+        try:
+            scene_obj.resolve(chosen, config)  # bad input is found here, before anything runs
+        except BadInputError as error:
+            where = ", ".join(f"{name}={values[name][i]:g}" for name in values)
+            raise BadInputError(f"configuration {i} ({where}): {error}") from None
+        overrides.append(config)
+    runner = resolve(executor)
+    pieces = chunked(count, chunk_size)
+    payloads = [
+        {
+            "scene": scene_obj.name,
+            "scenario": chosen.name,
+            "integrator": integrator,
+            "dt": float(dt),
+            "duration": float(duration),
+            "configurations": [overrides[i] for i in piece],
+        }
+        for piece in pieces
+    ]
+    results = runner.map(run_chunk, payloads, description="sweep", sizes=[len(p) for p in pieces], unit="run")
+    rows = [row for chunk in results for row in chunk]
+    return Sweep(
+        scene=scene_obj.name,
+        scenario=chosen.name,
+        integrator=integrator,
+        dt=float(dt),
+        duration=float(duration),
+        axes=axes,
+        samples=samples,
+        values=values,
+        rows=rows,
+        wall_time_s=_time.perf_counter() - started,
+        executor=runner.describe(),
+        chunks=len(pieces),
+    )
+
+
+def _axes(vary: Mapping[str, Any] | Sequence[str]) -> list[Axis]:
+    if isinstance(vary, Mapping):
+        axes = []
+        for name, spec in vary.items():
+            spec = tuple(spec)
+            if len(spec) not in (3, 4) or (len(spec) == 4 and spec[3] != "log"):
+                raise BadInputError(f"vary[{name!r}] takes (low, high, n) or (low, high, n, 'log'), got {spec!r}")
+            axes.append(make_axis(name, float(spec[0]), float(spec[1]), spec[2], len(spec) == 4))
+    else:
+        axes = [parse_axis(text) for text in vary]
+    if not axes:
+        raise BadInputError("a sweep needs at least one --vary NAME=LOW:HIGH:N[:log]")
+    names = [a.name for a in axes]
+    if len(set(names)) != len(names):
+        raise BadInputError(f"a parameter is varied twice: {', '.join(names)}")
+    return axes

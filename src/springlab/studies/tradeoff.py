@@ -1,0 +1,457 @@
+"""What accuracy each integrator buys for how much compute: the speed-accuracy sweep.
+
+Every integrator x a log-spaced range of timesteps on one scenario, run
+batched (`batch.run_batched`, one simulation per (integrator, dt),
+bit-identical to a plain loop). For every run: the max relative error against
+the scene's exact reference (computed exactly as `springlab run` computes it),
+the steps and the wall time (`batch.time_run`: the run alone, see
+springlab.sim.batch); per integrator the observed order of accuracy (the fitted
+slope of log error vs log dt over the asymptotic range); the Pareto front of
+error vs cost; and for a tolerance the cheapest (integrator, dt) that meets
+it, verified by running it (`recommend`; springlab.studies.auto builds
+`integrator='auto'` on it).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time as _time
+from collections.abc import Callable, Iterable, Sequence
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from springlab import scenes
+from springlab.errors import BadInputError, DivergedError
+from springlab.runs import compare
+from springlab.runs.run import evaluate, prepare, run_scenario
+from springlab.scenes.base import Scenario, Scene
+from springlab.sim.batch import TIMING_STEPS, Job, run_batched, time_run
+from springlab.sim.simulate import INTEGRATORS, ORDERS, Setup, check_timing, integrator_id
+
+from .convergence import Run, observed_order, pareto_front
+from .executor import Executor, chunked
+
+#: the sweep spans omega_max*dt from SWEEP_TOP down by SWEEP_DECADES decades
+SWEEP_TOP = 1.0
+SWEEP_DECADES = 3.0
+#: timesteps in the default sweep (>= 12 by contract)
+SWEEP_POINTS = 13
+#: (integrator, dt) runs per chunk of the grid (one batched call each)
+CHUNK_RUNS = 16
+#: most steps one sweep run may take; the smallest dt is raised to respect it
+MAX_SWEEP_STEPS = 200_000
+#: a refined timestep for a tolerance is predicted with this margin, then verified by running it
+REFINE_SAFETY = 0.9
+
+WALL_TIME_BASIS = (
+    "each configuration run alone on one thread as `springlab run` steps it (one mujoco.rollout call),"
+    f" best of 3; runs over {TIMING_STEPS} steps timed on their first {TIMING_STEPS} steps and scaled by steps"
+)
+
+
+# -- the sweep -----------------------------------------------------------------
+
+
+@dataclasses.dataclass
+class Tradeoff:
+    """A speed-accuracy sweep of one scenario.
+
+    Attributes
+    ----------
+    scene, scenario
+        names.
+    parameters
+        the parameter values used (SI).
+    overrides
+        the parameters the caller set (re-applied when verifying a recommendation).
+    duration
+        simulated time of every run [s].
+    runs
+        every (integrator, dt), grouped by integrator, dt descending.
+    orders
+        integrator -> observed order of accuracy (None: too few asymptotic points).
+    pareto
+        the runs no other run beats in both error and wall time, cheapest first.
+    recommendation
+        for a tolerance, the verified cheapest setting (see `recommend`).
+    sweep_wall_time_s
+        wall time of the whole sweep, timing pass included [s].
+    """
+
+    scene: str
+    scenario: str
+    parameters: dict[str, float]
+    overrides: dict[str, Any]
+    duration: float
+    runs: list[Run]
+    orders: dict[str, float | None]
+    pareto: list[Run]
+    recommendation: dict[str, Any] | None = None
+    sweep_wall_time_s: float = 0.0
+
+    def as_json(self) -> dict[str, Any]:
+        """{"runs", "orders", "pareto", "recommendation"} plus the scene, scenario, duration and basis."""
+        return {
+            "scene": self.scene,
+            "scenario": self.scenario,
+            "duration": self.duration,
+            "parameters": dict(self.parameters),
+            "runs": [r.row() for r in self.runs],
+            "orders": dict(self.orders),
+            "pareto": [r.row() for r in self.pareto],
+            "recommendation": self.recommendation,
+            "wall_time_basis": WALL_TIME_BASIS,
+            "sweep_wall_time_s": self.sweep_wall_time_s,
+        }
+
+
+def fastest_rate(scene: Scene, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> float | None:
+    """The largest |eigenvalue| [1/s] of the scenario's motion, or None if the scene knows none.
+
+    From the scene's modes (an overdamped mode's fast root omega (zeta + sqrt(zeta^2 - 1))),
+    else from the spectral radius of the exact reference's system matrix.
+    """
+    rates = []
+    for omega, zeta in scene.modes(model, params, scenario):
+        rates.append(omega * (zeta + math.sqrt(zeta * zeta - 1)) if zeta > 1 else omega)
+    if rates:
+        return max(rates)
+    if scenario.exact:
+        reference = scene.reference(model, params, scenario, np.array([0.0]), dt=scenario.dt or scene.dt)
+        if reference is not None and reference.system is not None:
+            radius = float(np.max(np.abs(np.linalg.eigvals(reference.system))))
+            return radius if radius > 0 else None
+    return None
+
+
+def _round_sig(value: float, digits: int = 3) -> float:
+    return float(f"{value:.{digits - 1}e}")
+
+
+def round_down(value: float, digits: int = 2) -> float:
+    """`value` > 0 rounded down to `digits` significant digits (a timestep must not grow by rounding)."""
+    unit = 10.0 ** (math.floor(math.log10(value)) - digits + 1)
+    mantissa = math.floor(value / unit * (1 + 1e-12))
+    out = float(f"{mantissa * unit:.{digits - 1}e}")
+    return out if out <= value else float(f"{(mantissa - 1) * unit:.{digits - 1}e}")
+
+
+def timestep_grid(
+    rate: float | None,
+    duration: float,
+    *,
+    points: int = SWEEP_POINTS,
+    top: float = SWEEP_TOP,
+    decades: float = SWEEP_DECADES,
+) -> list[float]:
+    """Log-spaced timesteps [s], largest first, rounded to 3 significant digits.
+
+    From omega*dt = `top` down `decades` decades for the fastest rate omega [1/s]
+    (without a rate: from duration/20), the smallest raised to keep every run
+    within MAX_SWEEP_STEPS steps.
+    """
+    high = top / rate if rate else duration / 20
+    high = min(high, duration / 4)
+    low = max(high * 10.0**-decades, duration / MAX_SWEEP_STEPS)
+    if low >= high:
+        raise BadInputError(
+            f"duration {duration:g} s is too long to sweep {points} timesteps within"
+            f" {MAX_SWEEP_STEPS} steps per run; use a shorter --duration"
+        )
+    grid = [_round_sig(high * (low / high) ** (j / (points - 1))) for j in range(points)]
+    return sorted(set(grid), reverse=True)
+
+
+def sweep(
+    scene: str | Scene,
+    scenario: str | None = None,
+    *,
+    integrators: Iterable[str] = tuple(INTEGRATORS),
+    dts: Sequence[float] | None = None,
+    duration: float | None = None,
+    timing_repeats: int = 3,
+    nthread: int = 0,
+    executor: Executor | None = None,
+    **parameters: Any,
+) -> Tradeoff:
+    """Run every integrator at every timestep on one scenario, batched, and measure the trade.
+
+    Parameters
+    ----------
+    scene
+        scene name or object.
+    scenario
+        scenario name (None: the scene's default); it needs an exact reference.
+    integrators
+        integrator names (default: all five).
+    dts
+        timesteps [s] (default: `timestep_grid` from the scenario's fastest rate).
+    duration
+        simulated time [s] (None: the scenario's).
+    timing_repeats
+        timed repetitions per configuration (best is kept).
+    nthread
+        threads of the batch (0: one per CPU) when no executor is given.
+    executor
+        where the grid's chunks run (None: locally); errors and steps are the same whichever
+        runs them. Wall times are always measured here, each run alone (batch.time_run).
+    **parameters
+        scene parameters in SI units.
+
+    Returns
+    -------
+    Tradeoff
+        The Tradeoff (runs, orders, Pareto front; no recommendation).
+
+    Raises
+    ------
+    BadInputError
+        unknown names, non-physical values, a scenario without exact reference.
+    """
+    started = _time.perf_counter()
+    scene_obj, chosen, params = prepare(scene, scenario, parameters)
+    model = scene_obj.build(params, chosen)
+    if not sweepable(scene_obj, chosen, params, model):
+        valid = [s.name for s in scene_obj.scenarios.values() if sweepable(scene_obj, s, None)]
+        raise BadInputError(
+            f"scenario {chosen.name!r} of {scene_obj.name} has no exact reference trajectory to"
+            f" measure errors against; valid: {', '.join(valid) or 'none in this scene'}"
+        )
+    integrators = list(integrators)
+    for name in integrators:
+        integrator_id(name)
+    duration = chosen.duration if duration is None else duration
+    check_timing(duration / 2, duration)
+    if dts is None:
+        dts = timestep_grid(fastest_rate(scene_obj, model, params, chosen), duration)
+        dts = _accepted_grid(dts, lambda dt: _setup_or_none(scene_obj, model, params, chosen, dt, duration))
+    pairs = [(name, float(dt)) for dt in dts for name in integrators]
+    # a catalogue scene travels by name (workers rebuild it); another Scene object only runs locally
+    reference = scene_obj.name if scenes.SCENES.get(scene_obj.name) is scene_obj else scene_obj
+    runner = Executor(nthread=nthread, progress=False) if executor is None else executor
+    pieces = chunked(len(pairs), CHUNK_RUNS)
+    payloads = [
+        {
+            "scene": reference,
+            "scenario": chosen.name,
+            "parameters": dict(parameters),
+            "duration": duration,
+            "pairs": pairs[p.start : p.stop],
+        }
+        for p in pieces
+    ]
+    outcomes = [o for part in runner.map(grid_chunk, payloads, description="tradeoff") for o in part]
+    stop = scene_obj.stop_condition(model, params, chosen)
+    runs = []
+    for (name, dt), (error, detail, steps, verdict) in zip(pairs, outcomes):
+        full = check_timing(dt, duration)
+        job = Job(model, name, dt, full, scene_obj.setup(model, params, chosen, full, dt), stop)
+        wall = time_run(job, repeats=timing_repeats)
+        runs.append(Run(name, dt, steps, error, wall, diverged=error is None, detail=detail, verdict=verdict))
+    runs.sort(key=lambda r: (integrators.index(r.integrator), -r.dt))
+    orders = {name: observed_order([r for r in runs if r.integrator == name]) for name in integrators}
+    return Tradeoff(
+        scene=scene_obj.name,
+        scenario=chosen.name,
+        parameters=params,
+        overrides=dict(parameters),
+        duration=duration,
+        runs=runs,
+        orders=orders,
+        pareto=pareto_front(runs),
+        sweep_wall_time_s=_time.perf_counter() - started,
+    )
+
+
+def grid_chunk(payload: dict[str, Any], nthread: int = 0) -> list[tuple[float | None, str, int, Any]]:
+    """One chunk of the grid as one batched call: per (integrator, dt) of payload["pairs"],
+    (max relative error [-] or None if it diverged, why it diverged, steps taken, the run's verdict).
+
+    A module-level function of plain data for dask workers: the model is rebuilt here from the
+    scene's MJCF and payload["parameters"], exactly as the caller built it.
+    """
+    scene_obj, chosen, params = prepare(payload["scene"], payload["scenario"], payload["parameters"])
+    model = scene_obj.build(params, chosen)
+    stop = scene_obj.stop_condition(model, params, chosen)
+    duration = payload["duration"]
+    jobs = []
+    for name, dt in payload["pairs"]:
+        steps = check_timing(dt, duration)
+        jobs.append(Job(model, name, dt, steps, scene_obj.setup(model, params, chosen, steps, dt), stop))
+    out: list[tuple[float | None, str, int, Any]] = []
+    for job, outcome in zip(jobs, run_batched(jobs, nthread=nthread)):
+        if isinstance(outcome, DivergedError):
+            out.append((None, str(outcome), job.steps, None))
+            continue
+        try:
+            # judged exactly as `springlab run` judges it: the reference is built for this run's own dt
+            result = evaluate(scene_obj, chosen, params, model, outcome)
+        except DivergedError as blown:
+            out.append((None, str(blown), outcome.steps, None))
+            continue
+        # a stop condition may end a run early, as in `springlab run`
+        error = max(e["max_rel"] for e in result.summary["errors"].values())
+        out.append((error, "", outcome.steps, result.summary["verdict"]))
+    return out
+
+
+def sweepable(
+    scene: Scene, scenario: Scenario, params: dict[str, float] | None, model: mujoco.MjModel | None = None
+) -> bool:
+    """Whether the scenario has an exact reference trajectory to sweep errors against (scenarios
+    validated by scalar checks alone, like the non-linear ones, have none)."""
+    if not scenario.exact:
+        return False
+    if params is None:
+        params = scene.resolve(scenario, {})
+    model = scene.build(params, scenario) if model is None else model
+    return scene.reference(model, params, scenario, np.zeros(1), dt=scenario.dt or scene.dt) is not None
+
+
+def _setup_or_none(scene: Scene, model, params, scenario, dt: float, duration: float) -> Setup | None:
+    """The scenario's setup at dt [s], or None when the scene rejects that dt."""
+    try:
+        return scene.setup(model, params, scenario, check_timing(dt, duration), dt)
+    except BadInputError:
+        return None
+
+
+def _accepted_grid(dts: Sequence[float], setup: Callable[[float], Setup | None]) -> list[float]:
+    """The grid with every dt the scene rejects (e.g. a dt that must divide an input's switching times)
+    replaced by the nearest accepted value 2^a 5^b within a factor 2, or dropped."""
+    grid = []
+    for dt in dts:
+        if setup(dt) is not None:
+            grid.append(dt)
+            continue
+        decade = 10.0 ** math.floor(math.log10(dt))
+        nice = [m * decade * f for m in (1, 1.25, 1.6, 2, 2.5, 3.2, 4, 5, 6.25, 8) for f in (0.1, 1, 10)]
+        nice = sorted((c for c in nice if dt / 2 <= c <= dt * 2), key=lambda c: abs(math.log(c / dt)))
+        grid.extend(
+            next(
+                (
+                    [_round_sig(c)]
+                    for c in nice
+                    if _round_sig(c) not in grid and _round_sig(c) not in dts and setup(_round_sig(c)) is not None
+                ),
+                [],
+            )
+        )
+    if len(grid) < 3:
+        raise BadInputError(
+            f"the scene accepts too few of the timesteps {', '.join(f'{d:g}' for d in dts)} s"
+            " to sweep; pass dts the scene accepts"
+        )
+    return sorted(set(grid), reverse=True)
+
+
+# -- the recommendation ------------------------------------------------------------
+
+
+def _candidates(result: Tradeoff, tol: float) -> list[tuple[float, str, float, bool]]:
+    """(predicted wall time [s], integrator, dt [s], refined) settings expected to meet tol.
+
+    Per integrator: its cheapest grid run within tol, and a larger dt predicted
+    from that run's error and the integrator's order, err ~ dt^p, with margin
+    REFINE_SAFETY, kept below the next larger grid dt (which failed). The
+    cheapest run is the one with the fewest steps: an integrator's cost per
+    step does not depend on dt, while the measured wall times of two short
+    runs can swap order on a loaded machine.
+    """
+    out = []
+    for name in dict.fromkeys(r.integrator for r in result.runs):
+        runs = sorted((r for r in result.runs if r.integrator == name), key=lambda r: r.dt)
+        passing = [r for r in runs if not r.diverged and r.error <= tol]
+        if not passing:
+            continue
+        grid = min(passing, key=lambda r: (r.steps, -r.dt))
+        out.append((grid.wall_time_s, name, grid.dt, False))
+        larger = [r for r in runs if r.dt > grid.dt]
+        order = result.orders.get(name)
+        order = order if order is not None and abs(order - ORDERS[name]) <= 0.5 else ORDERS[name]
+        if grid.error > 0:
+            predicted = grid.dt * (REFINE_SAFETY * tol / grid.error) ** (1.0 / order)
+        else:
+            predicted = grid.dt
+        ceiling = larger[0].dt if larger else 2 * grid.dt
+        refined = round_down(min(predicted, ceiling * REFINE_SAFETY))
+        if refined > grid.dt:
+            steps = check_timing(refined, result.duration)
+            out.append((grid.wall_time_s * steps / grid.steps, name, refined, True))
+    return sorted(out)
+
+
+def recommend(result: Tradeoff, tol: float, *, timing_repeats: int = 3) -> dict[str, Any]:
+    """The cheapest (integrator, dt) meeting `tol`, verified by running it with `runs.run`.
+
+    Candidates come from the sweep (`_candidates`), cheapest predicted first;
+    the first one whose verification run meets tol wins, and its error and
+    wall time (measured as the sweep's) are reported.
+
+    Parameters
+    ----------
+    result
+        a sweep of the scenario.
+    tol
+        relative tolerance [-] on every compared column.
+
+    Returns
+    -------
+    dict[str, Any]
+        {"tol", "integrator", "dt", "max_rel_error", "wall_time_s"}; integrator,
+        dt, max_rel_error and wall_time_s are None when no setting of the sweep
+        meets tol.
+    """
+    tol = compare.check_tolerance(tol)
+    for _, name, dt, _refined in _candidates(result, tol):
+        try:
+            run = run_scenario(
+                result.scene,
+                result.scenario,
+                integrator=name,
+                dt=dt,
+                duration=result.duration,
+                tol=tol,
+                **result.overrides,
+            )
+        except DivergedError:
+            continue
+        if not run.summary["passed"]:
+            continue
+        scene_obj = scenes.get(result.scene)
+        chosen = scene_obj.scenario(result.scenario)
+        steps = run.trajectory.steps
+        job = Job(run.model, name, dt, steps, scene_obj.setup(run.model, run.parameters, chosen, steps, dt))
+        error = max(e["max_rel"] for e in run.summary["errors"].values())
+        return {
+            "tol": tol,
+            "integrator": name,
+            "dt": dt,
+            "max_rel_error": error,
+            "wall_time_s": time_run(job, repeats=timing_repeats),
+        }
+    return {"tol": tol, "integrator": None, "dt": None, "max_rel_error": None, "wall_time_s": None}
+
+
+def tradeoff(
+    scene: str | Scene,
+    scenario: str | None = None,
+    *,
+    tol: float | None = None,
+    duration: float | None = None,
+    executor: Executor | None = None,
+    **parameters: Any,
+) -> Tradeoff:
+    """`sweep` (its grid on `executor`, None: locally) plus, with `tol` [-], the verified cheapest
+    setting that meets it (`recommend`)."""
+    if tol is not None:
+        tol = compare.check_tolerance(tol)
+    started = _time.perf_counter()
+    result = sweep(scene, scenario, duration=duration, executor=executor, **parameters)
+    if tol is not None:
+        result.recommendation = recommend(result, tol)
+    result.sweep_wall_time_s = _time.perf_counter() - started
+    return result
