@@ -1,6 +1,6 @@
 """fit.png: the record, the fitted response, the residuals over time and a phase-plane view.
 
-Reads a springlab.fit.FitResult (never re-simulates): the fitted signal at the
+Reads a springlab.studies.fit.fit.FitResult (never re-simulates): the fitted signal at the
 recorded times and, for the phase plane, the identified scene's own run.
 """
 

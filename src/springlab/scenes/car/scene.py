@@ -68,8 +68,8 @@ matrix with the bump generator's states (road_bump).
 
 Code layout: this module is the scene (parameters, scenarios, the shared MjSpec
 edits); each scenario carries its variant (`Scenario.variant`), which holds
-what differs: _car_release.py (push_release, damped_release),
-_car_pitch_heave.py, _car_road_bump.py, with shared pieces in _car_parts.py.
+what differs: release.py (push_release, damped_release),
+pitch_heave.py, road_bump.py, with shared pieces in parts.py (all in this folder).
 
 Sources for the realistic defaults: Gillespie, Fundamentals of Vehicle
 Dynamics (SAE, 1992), ch. 5 "Ride": passenger cars have suspension damping

@@ -47,7 +47,7 @@ analytic.piecewise_linear_velocity (tachograph).
 
 Code layout: each scenario carries its variant (`Scenario.variant`), as the car's
 do: `Polynomial` here for the three polynomial scenarios, `Tachograph` in
-_kinematics_tachograph.py (which draws the vehicle as a bus, _kinematics_bus.py).
+tachograph.py (which draws the vehicle as a bus, bus.py).
 """
 
 from __future__ import annotations

@@ -77,7 +77,7 @@ divergence advice is right for every integrator.
 
 Code layout: this module is the scene; each scenario carries its variant
 (`Scenario.variant`: `Move`, `StepForce`, `Settle`), which gives its force
-segments and its own quantities, in _printer_head_moves.py with the formulas
+segments and its own quantities, in moves.py with the formulas
 of the move and the settling that the design study shares.
 """
 
@@ -274,7 +274,7 @@ class PrinterHead(Scene):
 
     # -- the force profile (each scenario's variant gives its segments) -----------
 
-    #: (steps per half-move n, force [N]) of the bang-bang move on a grid of dt [s] (_printer_head_moves)
+    #: (steps per half-move n, force [N]) of the bang-bang move on a grid of dt [s] (moves.py)
     move_profile = staticmethod(move_profile)
 
     def _initial(self, params) -> tuple[np.ndarray, np.ndarray]:
