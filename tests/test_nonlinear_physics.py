@@ -451,20 +451,22 @@ def test_a_failed_check_flags_the_run_and_the_cli_exits_1(capsys):
 
 
 def test_validation_row_of_a_checked_scenario_shows_its_tightest_check():
-    from springlab.runs.run import validation_row
+    from springlab.runs.run import ValidationRow
 
     result = springlab.run("nonlinear", "double_well")
-    row = validation_row(result)
-    checks = result.summary["checks"]
-    assert {c["name"] for c in checks} >= {
+    row = ValidationRow.of(result)
+    checks = result.checks
+    assert {c.name for c in checks} >= {
         "energy_drift_relative",
         "period_s",
         "omega_at_+0.1_m_rad_s",
         "saddle_rate_at_0_m_per_s",
     }
-    tightest = max(checks, key=lambda c: c["error"] / c["tolerance"])
-    assert (row["max_rel_error"], row["tolerance"]) == (tightest["error"], tightest["tolerance"])
-    assert row["passed"] is True and row["checks"] == checks
+    tightest = max(checks, key=lambda c: c.error / c.tolerance)
+    assert (row.max_rel_error, row.tolerance) == (tightest.error, tightest.tolerance)
+    assert row.measure == f"{tightest.name} rel"
+    assert row.passed is True and row.checks == checks
+    assert row.to_dict()["checks"] == result.to_dict()["checks"]
 
 
 def test_a_stop_condition_cuts_a_run_at_its_event():

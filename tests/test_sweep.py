@@ -52,10 +52,11 @@ def test_every_row_equals_a_single_run_at_its_parameters(scene, scenario, vary):
     assert result.size == math.prod(spec[2] for spec in vary.values())
     for i, row in enumerate(result.rows):
         values = {name: float(result.values[name][i]) for name in result.values}
-        single = springlab.run(scene, scenario, **values).summary
-        assert row["quantities"] == {k: v for k, v in single["quantities"].items() if not isinstance(v, list)}
-        assert row["errors"] == {c: e["max_rel"] for c, e in single["errors"].items()}
-        assert row["passed"] == single["passed"] and not row["diverged"]
+        assert row.values == values
+        single = springlab.run(scene, scenario, **values)
+        assert row.quantities == {k: v for k, v in single.quantities.items() if not isinstance(v, list)}
+        assert row.errors == {c: e.max_rel for c, e in single.errors.items()}
+        assert row.passed == single.passed and not row.diverged
 
 
 def test_a_diverged_configuration_is_a_marked_row_and_run_refuses_it():
@@ -64,15 +65,16 @@ def test_a_diverged_configuration_is_a_marked_row_and_run_refuses_it():
         "slider", "free", vary=["stiffness=10:100000:3:log"], integrator="rk4", dt=0.05, duration=2.0, mass=1.0
     )
     for row in result.rows:
-        params = row["parameters"]
+        params = row.parameters
         omega = math.sqrt(params["stiffness"] / params["mass"])
         zeta = params["damping"] / (2 * math.sqrt(params["stiffness"] * params["mass"]))
-        assert row["diverged"] == (omega * 0.05 > stability_limit("rk4", zeta))
-        if row["diverged"]:
-            assert row["passed"] is False and "diverged" in row["detail"]
+        assert row.diverged == (omega * 0.05 > stability_limit("rk4", zeta))
+        if row.diverged:
+            assert row.passed is False and "diverged" in row.detail
             with pytest.raises(DivergedError):
                 springlab.run("slider", "free", integrator="rk4", dt=0.05, duration=2.0, **params)
-    assert [row["diverged"] for row in result.rows] == [False, False, True]
+    assert [row.diverged for row in result.rows] == [False, False, True]
+    assert result.diverged == 1 and result.passed + result.failed == result.size == 3
 
 
 @pytest.mark.parametrize(

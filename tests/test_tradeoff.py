@@ -105,7 +105,8 @@ def test_observed_order_matches_the_integrators_theoretical_order(slider_free_sw
 def test_sweep_errors_are_exactly_what_springlab_run_reports(slider_free_sweep):
     for run in slider_free_sweep.runs[::9]:
         result = springlab.run("slider", "free", integrator=run.integrator, dt=run.dt)
-        assert run.max_rel_error == max(e["max_rel"] for e in result.summary["errors"].values())
+        assert run.max_rel_error == result.max_rel_error == max(e.max_rel for e in result.errors.values())
+        assert run.verdict is result.verdict
 
 
 def test_order_fit_ignores_round_off_and_pre_asymptotic_points():
@@ -154,33 +155,33 @@ def test_pareto_front_is_exactly_the_non_dominated_runs(slider_free_sweep):
 
 def test_recommendation_for_1e_6_is_rk4_verified_and_at_least_as_coarse_as_any_passing_grid_run(slider_free_sweep):
     pick = tradeoff.recommend(slider_free_sweep, 1e-6, timing_repeats=1)
-    assert set(pick) == {"tol", "integrator", "dt", "max_rel_error", "wall_time_s"}
-    assert pick["integrator"] == "rk4"
+    assert set(pick.to_dict()) == {"tol", "integrator", "dt", "max_rel_error", "wall_time_s"}
+    assert pick.found and pick.integrator == "rk4" and pick.tol == 1e-6
+    assert pick.dt is not None and pick.max_rel_error is not None
     # verified: an independent run at that setting meets the tolerance
-    again = springlab.run("slider", "free", integrator="rk4", dt=pick["dt"], tol=1e-6)
-    assert again.summary["passed"] and pick["max_rel_error"] <= 1e-6
+    again = springlab.run("slider", "free", integrator="rk4", dt=pick.dt, tol=1e-6)
+    assert again.passed and pick.max_rel_error <= 1e-6
     # cheapest in steps: no rk4 grid run with fewer steps meets 1e-6, and the pick is not finer than the grid's best
     rk4 = [r for r in slider_free_sweep.runs if r.integrator == "rk4"]
     passing = [r for r in rk4 if r.max_rel_error <= 1e-6]
-    assert pick["dt"] >= max(r.dt for r in passing)
-    assert all(r.max_rel_error > 1e-6 for r in rk4 if r.dt > pick["dt"])
+    assert pick.dt >= max(r.dt for r in passing)
+    assert all(r.max_rel_error > 1e-6 for r in rk4 if r.dt > pick.dt)
     # by hand: RK4's global error omega t (omega dt)^4 / 120 on an amplitude x0 exp(-zeta omega t) peaks at
     # t = 1/(zeta omega) as x0 (omega dt)^4 / (120 e zeta); omega = 10 rad/s, zeta = 0.05
     limit = (1e-6 * 120 * math.e * 0.05) ** 0.25 / 10
-    assert 0.85 * limit < pick["dt"] <= limit
+    assert 0.85 * limit < pick.dt <= limit
 
 
 def test_a_tolerance_below_round_off_has_no_recommendation(slider_free_sweep):
     pick = tradeoff.recommend(slider_free_sweep, 1e-16, timing_repeats=1)
-    assert pick["integrator"] is None and pick["dt"] is None
+    assert not pick.found and pick.integrator is None and pick.dt is None
 
 
 def test_run_auto_meets_the_tolerance_with_the_recommended_setting():
     result = springlab.run("slider", "exercise", integrator="auto", tol=1e-5)
-    summary = result.summary
-    assert summary["passed"] and summary["tolerance"] == 1e-5
-    assert summary["integrator"] == "rk4"
-    assert max(e["max_rel"] for e in summary["errors"].values()) <= 1e-5
+    assert result.passed and result.tolerance == 1e-5
+    assert result.integrator == "rk4"
+    assert result.max_rel_error is not None and result.max_rel_error <= 1e-5
 
 
 @pytest.mark.parametrize(
