@@ -1,5 +1,6 @@
 """The speed-accuracy trade: batched runs equal single runs, orders match theory, the advice is verified."""
 
+import dataclasses
 import json
 import math
 
@@ -197,7 +198,10 @@ def test_auto_rejects_incomplete_requests_with_one_clear_line(kwargs, match):
         springlab.run("slider", "exercise", integrator="auto", **kwargs)
 
 
-def test_tradeoff_cli_json_and_outputs_follow_the_contract(tmp_path, capsys):
+def test_tradeoff_cli_json_and_outputs_follow_the_contract(tmp_path, capsys, monkeypatch):
+    computed = []
+    original = tradeoff.tradeoff
+    monkeypatch.setattr(tradeoff, "tradeoff", lambda *a, **k: computed.append(original(*a, **k)) or computed[-1])
     code = main(
         [
             "tradeoff",
@@ -223,6 +227,20 @@ def test_tradeoff_cli_json_and_outputs_follow_the_contract(tmp_path, capsys):
     assert data["recommendation"]["max_rel_error"] <= 1e-4
     assert json.loads((tmp_path / "t" / "tradeoff.json").read_text())["runs"] == data["runs"]
     assert (tmp_path / "t" / "tradeoff.png").read_bytes()[:8] == PNG_SIGNATURE
+    # the JSON is the trade-off's to_dict(): its attributes, serialised
+    (result,) = computed
+    assert data == result.to_dict()
+    pick = result.recommendation
+    assert pick is not None and pick.to_dict() == data["recommendation"] and pick.tol == 1e-4
+    assert data["recommendation"]["integrator"] == pick.integrator and data["recommendation"]["dt"] == pick.dt
+    # one row per run: the JSON's run rows, plus whether the run is on the Pareto front
+    frame = result.to_pandas()
+    assert frame.drop(columns="pareto").to_dict("records") == data["runs"]
+    assert int(frame["pareto"].sum()) == len(result.pareto) == len(data["pareto"])
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        result.recommendation = None
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        result.runs[0].dt = 1.0
 
 
 def test_tradeoff_cli_rejects_a_scenario_without_exact_reference_or_unknown_names(capsys, monkeypatch):
