@@ -450,6 +450,20 @@ def test_a_failed_check_flags_the_run_and_the_cli_exits_1(capsys):
     assert "check energy_drift_relative" in out and "FAIL" in out
 
 
+def test_a_plot_of_a_run_that_fails_its_checks_says_which_and_exits_1(tmp_path, capsys):
+    # held to its checks alone, the run has no tolerance of compared columns: the note names the failed checks
+    # (this raised TypeError formatting the absent tolerance before results were objects)
+    from springlab.cli.main import main
+
+    argv = ["plot", "nonlinear", "softening", "--integrator", "euler", "--duration", "2"]
+    code = main([*argv, "--output", str(tmp_path / "time.png")])
+    err = capsys.readouterr().err
+    assert code == 1 and (tmp_path / "time.png").is_file()
+    (line,) = err.strip().splitlines()
+    assert line.startswith("note: nonlinear/softening is outside its tolerance (check energy_drift_relative: error")
+    assert line.endswith("; see 'springlab run'") and "Traceback" not in err
+
+
 def test_validation_row_of_a_checked_scenario_shows_its_tightest_check():
     from springlab.runs.run import ValidationRow
 
