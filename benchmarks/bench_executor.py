@@ -118,7 +118,7 @@ def slider_sweep() -> None:
     print(f"   springlab batched chunks:             {ours:.3f} s   raw / springlab = {raw / ours:.2f} (target >= 0.9)")
     print(f"   whole sweep (build, run, evaluate):   {whole:.3f} s   ({n / whole:.0f} configurations/s)")
     result = sweeps.sweep("slider", "free", vary=vary)
-    target = np.array([max(row["errors"].values()) for row in result.rows])
+    target = np.array([max(row.errors.values()) for row in result.rows])
     scipy_time, worst = _solve_ivp_loop(params, dt, steps, target)
     print(
         f"   scipy solve_ivp loop (DOP853, rtol = each row's springlab error / 1000; worst row's error over"

@@ -62,20 +62,20 @@ def default_setting_vs_scipy() -> None:
     result = springlab.run("slider", "free")
     m, k, d = (result.parameters[n] for n in ("mass", "stiffness", "damping"))
     x0, v0 = result.parameters["x0"], result.parameters["v0"]
-    duration = result.summary["duration"]
+    duration = result.duration
     t_eval = result.time
     x_exact, _ = analytic.free_response(t_eval, m, k, d, x0, v0)
     scale = np.max(np.abs(x_exact))
 
-    springlab_error = result.summary["errors"]["slider_pos"]["max_rel"]
+    springlab_error = result.errors["slider_pos"].max_rel
     whole_time = best_of(lambda: springlab.run("slider", "free"), repeat=15)
     # the simulate path on the compiled model: the counterpart of solve_ivp given its right-hand side
     scene = scenes.get("slider")
     scenario = scene.scenario("free")
     params = scene.resolve(scenario, {})
     model = scene.build(params, scenario)
-    dt = result.summary["dt"]
-    setup = scene.setup(model, params, scenario, result.summary["steps"], dt)
+    dt = result.dt
+    setup = scene.setup(model, params, scenario, result.steps, dt)
     path_time = best_of(
         lambda: simulate(
             model, integrator="rk4", dt=dt, duration=duration, qpos=setup.qpos, qvel=setup.qvel, control=setup.control

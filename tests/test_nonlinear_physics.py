@@ -450,21 +450,37 @@ def test_a_failed_check_flags_the_run_and_the_cli_exits_1(capsys):
     assert "check energy_drift_relative" in out and "FAIL" in out
 
 
+def test_a_plot_of_a_run_that_fails_its_checks_says_which_and_exits_1(tmp_path, capsys):
+    # held to its checks alone, the run has no tolerance of compared columns: the note names the failed checks
+    # (this raised TypeError formatting the absent tolerance before results were objects)
+    from springlab.cli.main import main
+
+    argv = ["plot", "nonlinear", "softening", "--integrator", "euler", "--duration", "2"]
+    code = main([*argv, "--output", str(tmp_path / "time.png")])
+    err = capsys.readouterr().err
+    assert code == 1 and (tmp_path / "time.png").is_file()
+    (line,) = err.strip().splitlines()
+    assert line.startswith("note: nonlinear/softening is outside its tolerance (check energy_drift_relative: error")
+    assert line.endswith("; see 'springlab run'") and "Traceback" not in err
+
+
 def test_validation_row_of_a_checked_scenario_shows_its_tightest_check():
-    from springlab.runs.run import validation_row
+    from springlab.runs.run import ValidationRow
 
     result = springlab.run("nonlinear", "double_well")
-    row = validation_row(result)
-    checks = result.summary["checks"]
-    assert {c["name"] for c in checks} >= {
+    row = ValidationRow.of(result)
+    checks = result.checks
+    assert {c.name for c in checks} >= {
         "energy_drift_relative",
         "period_s",
         "omega_at_+0.1_m_rad_s",
         "saddle_rate_at_0_m_per_s",
     }
-    tightest = max(checks, key=lambda c: c["error"] / c["tolerance"])
-    assert (row["max_rel_error"], row["tolerance"]) == (tightest["error"], tightest["tolerance"])
-    assert row["passed"] is True and row["checks"] == checks
+    tightest = max(checks, key=lambda c: c.error / c.tolerance)
+    assert (row.max_rel_error, row.tolerance) == (tightest.error, tightest.tolerance)
+    assert row.measure == f"{tightest.name} rel"
+    assert row.passed is True and row.checks == checks
+    assert row.to_dict()["checks"] == result.to_dict()["checks"]
 
 
 def test_a_stop_condition_cuts_a_run_at_its_event():

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from springlab.demo import steps as demo
-from springlab.runs.run import run_scenario, validation_row
+from springlab.runs.run import ValidationRow, run_scenario
 
 CHROMIUM_FLAGS = [
     "--headless",
@@ -81,7 +81,7 @@ def demo_out(tmp_path_factory):
     for scene, scenario in SCENARIOS:
         result = run_scenario(scene, scenario)
         state.results[(scene, scenario)] = result
-        state.validation.append(validation_row(result))
+        state.validation.append(ValidationRow.of(result))
     saved = demo.DEMO_CLIP_SECONDS
     demo.DEMO_CLIP_SECONDS = CLIP_SECONDS  # short clips keep the test quick; the page is the same
     try:
@@ -132,7 +132,7 @@ def test_report_links_every_artifact_and_nothing_outside_the_folder(demo_out):
     assert len(videos) == len(SCENARIOS) and page.count("<video") == len(videos)
     # the validation table: one row per validated run with its error, tolerance and verdict
     for row in state.validation:
-        assert f"{row['max_rel_error']:.2e}" in page and f"{row['tolerance']:.2e}" in page
+        assert f"{row.max_rel_error:.2e}" in page and f"{row.tolerance:.2e}" in page
     assert page.count('class="pass"') + page.count("class='pass'") >= len(state.validation)
 
 
@@ -226,7 +226,7 @@ def test_report_reads_like_the_chapter(demo_out):
     page = (out / "index.html").read_text()
     for (scene_name, scenario), result in state.results.items():
         scene = scenes.get(scene_name)
-        question, answer = scene.question_and_answer(scenario, result.summary["quantities"], result.parameters)
+        question, answer = scene.question_and_answer(scenario, result.quantities, result.parameters)
         assert question and answer, f"{scene_name}/{scenario} states its question and answer"
         assert html_module.escape(question) in page and html_module.escape(answer) in page
         for name in result.parameters:  # every parameter listed, with its value
@@ -246,6 +246,6 @@ def test_every_scenario_states_its_question_and_an_answer_from_its_own_run():
     for scene in scenes.SCENES.values():
         for scenario in scene.scenarios:
             result = run_scenario(scene.name, scenario)
-            qa = scene.question_and_answer(scenario, result.summary["quantities"], result.parameters)
+            qa = scene.question_and_answer(scenario, result.quantities, result.parameters)
             assert qa is not None and qa[0].strip() and qa[1].strip(), f"{scene.name}/{scenario}"
             assert "{" not in qa[1], f"{scene.name}/{scenario}: unfilled template {qa[1]!r}"

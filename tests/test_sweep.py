@@ -4,10 +4,12 @@ are rows (not a failed sweep), and bad ranges are one-line errors (exit 2) that 
 from __future__ import annotations
 
 import csv
+import dataclasses
 import json
 import math
 
 import numpy as np
+import pandas
 import pytest
 
 import springlab
@@ -15,6 +17,7 @@ from springlab.cli.main import main
 from springlab.errors import BadInputError, DivergedError
 from springlab.exact.limits import stability_limit
 from springlab.plots import sweep as sweep_plot
+from springlab.studies import sweeps
 from springlab.studies.sweeps import configurations, parse_axis
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -52,10 +55,11 @@ def test_every_row_equals_a_single_run_at_its_parameters(scene, scenario, vary):
     assert result.size == math.prod(spec[2] for spec in vary.values())
     for i, row in enumerate(result.rows):
         values = {name: float(result.values[name][i]) for name in result.values}
-        single = springlab.run(scene, scenario, **values).summary
-        assert row["quantities"] == {k: v for k, v in single["quantities"].items() if not isinstance(v, list)}
-        assert row["errors"] == {c: e["max_rel"] for c, e in single["errors"].items()}
-        assert row["passed"] == single["passed"] and not row["diverged"]
+        assert row.values == values
+        single = springlab.run(scene, scenario, **values)
+        assert row.quantities == {k: v for k, v in single.quantities.items() if not isinstance(v, list)}
+        assert row.errors == {c: e.max_rel for c, e in single.errors.items()}
+        assert row.passed == single.passed and not row.diverged
 
 
 def test_a_diverged_configuration_is_a_marked_row_and_run_refuses_it():
@@ -64,15 +68,16 @@ def test_a_diverged_configuration_is_a_marked_row_and_run_refuses_it():
         "slider", "free", vary=["stiffness=10:100000:3:log"], integrator="rk4", dt=0.05, duration=2.0, mass=1.0
     )
     for row in result.rows:
-        params = row["parameters"]
+        params = row.parameters
         omega = math.sqrt(params["stiffness"] / params["mass"])
         zeta = params["damping"] / (2 * math.sqrt(params["stiffness"] * params["mass"]))
-        assert row["diverged"] == (omega * 0.05 > stability_limit("rk4", zeta))
-        if row["diverged"]:
-            assert row["passed"] is False and "diverged" in row["detail"]
+        assert row.diverged == (omega * 0.05 > stability_limit("rk4", zeta))
+        if row.diverged:
+            assert row.passed is False and "diverged" in row.detail
             with pytest.raises(DivergedError):
                 springlab.run("slider", "free", integrator="rk4", dt=0.05, duration=2.0, **params)
-    assert [row["diverged"] for row in result.rows] == [False, False, True]
+    assert [row.diverged for row in result.rows] == [False, False, True]
+    assert result.diverged == 1 and result.passed + result.failed == result.size == 3
 
 
 @pytest.mark.parametrize(
@@ -98,7 +103,10 @@ def test_varied_and_fixed_at_once_is_refused():
         springlab.sweep("slider", vary=["mass=1:2:2"], mass=3.0)
 
 
-def test_cli_writes_the_csv_and_the_plot_and_json_is_silent_on_stderr(tmp_path, capsys):
+def test_cli_writes_the_csv_and_the_plot_and_json_is_silent_on_stderr(tmp_path, capsys, monkeypatch):
+    computed = []
+    original = sweeps.sweep
+    monkeypatch.setattr(sweeps, "sweep", lambda *a, **k: computed.append(original(*a, **k)) or computed[-1])
     out = tmp_path / "sweep"
     code = main(
         [
@@ -127,6 +135,22 @@ def test_cli_writes_the_csv_and_the_plot_and_json_is_silent_on_stderr(tmp_path, 
         assert float(row["slider_pos_max_rel"]) == record["errors"]["slider_pos"]
         assert math.isclose(float(row["damping"]), record["values"]["damping"], rel_tol=0, abs_tol=0)
     assert (out / "sweep.png").read_bytes()[:8] == PNG_SIGNATURE
+    # the JSON is the sweep's to_dict(), sweep.csv its to_pandas()
+    (result,) = computed
+    assert data == result.to_dict()
+    assert (result.size, result.diverged, result.passed + result.failed) == (6, 0, 6)
+    assert [row.to_dict() for row in result.rows] == data["rows"]
+    frame = result.to_pandas()
+    written = pandas.read_csv(out / "sweep.csv")  # empty cells (overdamped rows have no period_s) read as NaN
+    assert list(frame.columns) == list(written.columns)
+    pandas.testing.assert_frame_equal(frame.drop(columns="detail"), written.drop(columns="detail"), check_exact=True)
+    assert list(frame["detail"]) == [""] * 6 and written["detail"].isna().all()  # nothing diverged
+    np.testing.assert_array_equal(frame["damping"], result.values["damping"])
+    # immutable: frozen rows, read-only value columns
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        result.rows[0].passed = False
+    with pytest.raises(ValueError, match="read-only"):
+        result.values["mass"][0] = 3.0
 
 
 def test_plot_rejects_an_unknown_quantity_and_leaves_no_file(tmp_path):

@@ -1,5 +1,6 @@
 """The speed-accuracy trade: batched runs equal single runs, orders match theory, the advice is verified."""
 
+import dataclasses
 import json
 import math
 
@@ -105,7 +106,8 @@ def test_observed_order_matches_the_integrators_theoretical_order(slider_free_sw
 def test_sweep_errors_are_exactly_what_springlab_run_reports(slider_free_sweep):
     for run in slider_free_sweep.runs[::9]:
         result = springlab.run("slider", "free", integrator=run.integrator, dt=run.dt)
-        assert run.max_rel_error == max(e["max_rel"] for e in result.summary["errors"].values())
+        assert run.max_rel_error == result.max_rel_error == max(e.max_rel for e in result.errors.values())
+        assert run.verdict is result.verdict
 
 
 def test_order_fit_ignores_round_off_and_pre_asymptotic_points():
@@ -154,33 +156,33 @@ def test_pareto_front_is_exactly_the_non_dominated_runs(slider_free_sweep):
 
 def test_recommendation_for_1e_6_is_rk4_verified_and_at_least_as_coarse_as_any_passing_grid_run(slider_free_sweep):
     pick = tradeoff.recommend(slider_free_sweep, 1e-6, timing_repeats=1)
-    assert set(pick) == {"tol", "integrator", "dt", "max_rel_error", "wall_time_s"}
-    assert pick["integrator"] == "rk4"
+    assert set(pick.to_dict()) == {"tol", "integrator", "dt", "max_rel_error", "wall_time_s"}
+    assert pick.found and pick.integrator == "rk4" and pick.tol == 1e-6
+    assert pick.dt is not None and pick.max_rel_error is not None
     # verified: an independent run at that setting meets the tolerance
-    again = springlab.run("slider", "free", integrator="rk4", dt=pick["dt"], tol=1e-6)
-    assert again.summary["passed"] and pick["max_rel_error"] <= 1e-6
+    again = springlab.run("slider", "free", integrator="rk4", dt=pick.dt, tol=1e-6)
+    assert again.passed and pick.max_rel_error <= 1e-6
     # cheapest in steps: no rk4 grid run with fewer steps meets 1e-6, and the pick is not finer than the grid's best
     rk4 = [r for r in slider_free_sweep.runs if r.integrator == "rk4"]
     passing = [r for r in rk4 if r.max_rel_error <= 1e-6]
-    assert pick["dt"] >= max(r.dt for r in passing)
-    assert all(r.max_rel_error > 1e-6 for r in rk4 if r.dt > pick["dt"])
+    assert pick.dt >= max(r.dt for r in passing)
+    assert all(r.max_rel_error > 1e-6 for r in rk4 if r.dt > pick.dt)
     # by hand: RK4's global error omega t (omega dt)^4 / 120 on an amplitude x0 exp(-zeta omega t) peaks at
     # t = 1/(zeta omega) as x0 (omega dt)^4 / (120 e zeta); omega = 10 rad/s, zeta = 0.05
     limit = (1e-6 * 120 * math.e * 0.05) ** 0.25 / 10
-    assert 0.85 * limit < pick["dt"] <= limit
+    assert 0.85 * limit < pick.dt <= limit
 
 
 def test_a_tolerance_below_round_off_has_no_recommendation(slider_free_sweep):
     pick = tradeoff.recommend(slider_free_sweep, 1e-16, timing_repeats=1)
-    assert pick["integrator"] is None and pick["dt"] is None
+    assert not pick.found and pick.integrator is None and pick.dt is None
 
 
 def test_run_auto_meets_the_tolerance_with_the_recommended_setting():
     result = springlab.run("slider", "exercise", integrator="auto", tol=1e-5)
-    summary = result.summary
-    assert summary["passed"] and summary["tolerance"] == 1e-5
-    assert summary["integrator"] == "rk4"
-    assert max(e["max_rel"] for e in summary["errors"].values()) <= 1e-5
+    assert result.passed and result.tolerance == 1e-5
+    assert result.integrator == "rk4"
+    assert result.max_rel_error is not None and result.max_rel_error <= 1e-5
 
 
 @pytest.mark.parametrize(
@@ -196,7 +198,10 @@ def test_auto_rejects_incomplete_requests_with_one_clear_line(kwargs, match):
         springlab.run("slider", "exercise", integrator="auto", **kwargs)
 
 
-def test_tradeoff_cli_json_and_outputs_follow_the_contract(tmp_path, capsys):
+def test_tradeoff_cli_json_and_outputs_follow_the_contract(tmp_path, capsys, monkeypatch):
+    computed = []
+    original = tradeoff.tradeoff
+    monkeypatch.setattr(tradeoff, "tradeoff", lambda *a, **k: computed.append(original(*a, **k)) or computed[-1])
     code = main(
         [
             "tradeoff",
@@ -222,6 +227,20 @@ def test_tradeoff_cli_json_and_outputs_follow_the_contract(tmp_path, capsys):
     assert data["recommendation"]["max_rel_error"] <= 1e-4
     assert json.loads((tmp_path / "t" / "tradeoff.json").read_text())["runs"] == data["runs"]
     assert (tmp_path / "t" / "tradeoff.png").read_bytes()[:8] == PNG_SIGNATURE
+    # the JSON is the trade-off's to_dict(): its attributes, serialised
+    (result,) = computed
+    assert data == result.to_dict()
+    pick = result.recommendation
+    assert pick is not None and pick.to_dict() == data["recommendation"] and pick.tol == 1e-4
+    assert data["recommendation"]["integrator"] == pick.integrator and data["recommendation"]["dt"] == pick.dt
+    # one row per run: the JSON's run rows, plus whether the run is on the Pareto front
+    frame = result.to_pandas()
+    assert frame.drop(columns="pareto").to_dict("records") == data["runs"]
+    assert int(frame["pareto"].sum()) == len(result.pareto) == len(data["pareto"])
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        result.recommendation = None
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        result.runs[0].dt = 1.0
 
 
 def test_tradeoff_cli_rejects_a_scenario_without_exact_reference_or_unknown_names(capsys, monkeypatch):

@@ -14,6 +14,7 @@ import pytest
 import springlab
 from springlab.errors import BadInputError, DivergedError
 from springlab.runs import compare
+from springlab.runs.compare import Verdict
 from springlab.runs.run import exact_scenarios
 from springlab.sim.simulate import INTEGRATORS
 from springlab.studies import tradeoff
@@ -95,22 +96,29 @@ def test_runs_far_outside_the_estimates_range_are_not_validated_and_exit_1(argv,
 
 def test_a_not_validated_run_says_why_and_which_dt_is_inside_and_that_dt_is():
     result = springlab.run("slider", "undamped", integrator="euler", dt=0.05, duration=20.0)
-    summary = result.summary
-    assert summary["passed"] is False
-    assert summary["verdict"] == compare.NOT_VALIDATED
-    assert summary["estimate_range"]["inside"] is False
-    largest = summary["estimate_range"]["largest_dt_inside_s"]
-    assert f"dt <= {largest:.2g} s is inside" in summary["estimate_range"]["reason"]
+    assert result.passed is False
+    assert result.verdict is Verdict.NOT_VALIDATED and not result.verdict.validated
+    assert result.estimate_range is not None and result.estimate_range.inside is False
+    largest = result.estimate_range.largest_dt
+    assert f"dt <= {largest:.2g} s is inside" in result.estimate_range.reason()
+    assert result.message.endswith(result.estimate_range.reason())
+    # summary.json carries the same facts
+    summary = result.to_dict()
+    assert summary["verdict"] == "not validated: outside the range of the error estimate"
+    assert summary["estimate_range"]["largest_dt_inside_s"] == largest
     inside = springlab.run("slider", "undamped", integrator="euler", dt=largest, duration=20.0)
-    assert inside.summary["estimate_range"]["inside"] is True
+    assert inside.estimate_range is not None and inside.estimate_range.inside is True
 
 
 def test_a_requested_tolerance_is_a_measurement_and_holds_at_any_dt():
     # with --tol the run is held to the exact reference directly: no estimate, no range
     loose = springlab.run("slider", "undamped", integrator="euler", dt=0.05, duration=20.0, tol=2.0)
-    assert loose.summary["passed"] is True and loose.summary["estimate_range"] is None
+    assert loose.passed is True and loose.estimate_range is None and loose.verdict is Verdict.PASS
     tight = springlab.run("slider", "undamped", integrator="euler", dt=0.05, duration=20.0, tol=1.0)
-    assert tight.summary["passed"] is False and tight.summary["verdict"] == compare.FAIL
+    assert tight.passed is False and tight.verdict is Verdict.FAIL
+    # the message names a column over its tolerance, with its error
+    worst = max(tight.errors, key=lambda c: tight.errors[c].max_rel)
+    assert tight.message.startswith(f"{worst}: max relative error {tight.errors[worst].max_rel:.3g} > tolerance 1")
 
 
 def _exact_scenarios():
@@ -146,14 +154,13 @@ def test_a_pass_never_certifies_more_than_the_cap_up_to_the_stability_limit(inte
                 result = springlab.run(scene.name, scenario.name, integrator=integrator, dt=dt)
             except (DivergedError, BadInputError):
                 continue  # a blow-up is never a result; a dt the scene rejects is bad input
-            summary = result.summary
-            worst = max(e["max_rel"] for e in summary["errors"].values())
-            if summary["passed"]:
+            worst = max(e.max_rel for e in result.errors.values())
+            if result.passed:
                 passes += 1
                 assert worst <= compare.CERTIFIED_CAP, (scene.name, scenario.name, dt, worst)
-                assert worst <= summary["tolerance"]
-                assert summary["verdict"] == compare.PASS
-            elif summary["verdict"] == compare.NOT_VALIDATED:
+                assert result.tolerance is not None and worst <= result.tolerance
+                assert result.verdict is Verdict.PASS
+            elif result.verdict is Verdict.NOT_VALIDATED:
                 not_validated += 1
     assert passes >= 5 and not_validated >= 5
 
@@ -184,18 +191,18 @@ def test_every_sweep_row_is_what_springlab_run_reports_at_the_same_setting(scene
         except DivergedError:
             assert row.diverged, (row.integrator, row.dt)
             continue
-        errors = single.summary["errors"]
-        assert row.max_rel_error == max(e["max_rel"] for e in errors.values()), (row.integrator, row.dt)
-        assert row.verdict == single.summary["verdict"], (row.integrator, row.dt)
+        assert row.max_rel_error == single.max_rel_error, (row.integrator, row.dt)
+        assert row.verdict is single.verdict, (row.integrator, row.dt)
 
 
 def test_a_check_of_a_physical_result_is_capped_like_the_compared_columns():
     # rk4 at dt = 0.05 s: the period from Richardson-extrapolated runs is 1.4 % off the energy integral
     result = springlab.run("nonlinear", "softening", integrator="rk4", dt=0.05)
-    period = next(c for c in result.summary["checks"] if c["name"] == "period_s")
-    assert period["error"] > compare.CERTIFIED_CAP
-    assert period["tolerance"] == compare.CERTIFIED_CAP and period["passed"] is False
-    assert result.summary["passed"] is False
-    for check in result.summary["checks"]:
-        if check["passed"] and check["reference"] != 0:
-            assert check["error"] <= compare.CERTIFIED_CAP
+    period = next(c for c in result.checks if c.name == "period_s")
+    assert period.error > compare.CERTIFIED_CAP
+    assert period.tolerance == compare.CERTIFIED_CAP and period.passed is False
+    assert result.passed is False and result.verdict is Verdict.FAIL
+    assert f"check period_s: error {period.error:.3g} > tolerance {compare.CERTIFIED_CAP:.3g}" in result.message
+    for check in result.checks:
+        if check.passed and check.reference != 0:
+            assert check.error <= compare.CERTIFIED_CAP

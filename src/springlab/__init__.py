@@ -4,12 +4,13 @@
 >>> result = springlab.run(
 ...     "slider", "free", integrator="rk4", dt=1e-3, duration=5.0, mass=2.0, stiffness=800.0, damping=4.0, x0=0.05
 ... )
->>> result.summary["passed"]
-True
+>>> result.passed, result.verdict
+(True, <Verdict.PASS: 'PASS'>)
 """
 
 from springlab.exact import analytic
-from springlab.runs.run import Result
+from springlab.runs.compare import Verdict
+from springlab.runs.run import Result, ValidationRow
 from springlab.studies.audit.audit import Audit, audit
 from springlab.studies.auto import run, validate
 from springlab.studies.fit.fit import fit
@@ -29,6 +30,8 @@ __all__ = [
     "Audit",
     "fit",
     "Result",
+    "Verdict",
+    "ValidationRow",
     "SCENES",
     "SpringlabError",
     "BadInputError",

@@ -25,7 +25,7 @@ from springlab.demo import steps as demo
 from springlab.errors import BadInputError, SpringlabError
 from springlab.plots import audit as charts_audit
 from springlab.plots import charts
-from springlab.runs import compare
+from springlab.runs.compare import Verdict
 from springlab.runs.run import Result, write_run
 from springlab.sim.simulate import INTEGRATORS
 from springlab.studies import auto, stability, tradeoff
@@ -153,8 +153,8 @@ def cmd_list(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _run_scenario(args: argparse.Namespace) -> Result:
-    """runs.run from the scene, timing and --set arguments that run, render and plot share."""
+def _run(args: argparse.Namespace) -> Result:
+    """springlab.run from the scene, timing and --set arguments that run, render and plot share."""
     return auto.run(
         args.scene,
         args.scenario,
@@ -169,26 +169,25 @@ def _run_scenario(args: argparse.Namespace) -> Result:
 def cmd_run(args: argparse.Namespace) -> int:
     if args.record_every < 1:
         raise BadInputError(f"--record-every must be an integer >= 1, got {args.record_every}")
-    result = _run_scenario(args)
+    result = _run(args)
     if args.output:
         write_run(args.output, result, every=args.record_every)
-    summary = result.summary
     if args.json:
-        _print_json(summary)
+        _print_json(result.to_dict())
     else:
-        cli_text.print_run(summary, args.output)
-    for limit in summary.get("model_limits", []):
-        print(f"springlab: {summary['scene']} {summary['scenario']} is not validated: {limit}", file=sys.stderr)
-    return EXIT_FAILED if summary["passed"] is False else EXIT_OK
+        cli_text.print_run(result, args.output)
+    for limit in result.model_limits:
+        print(f"springlab: {result.scene} {result.scenario} is not validated: {limit}", file=sys.stderr)
+    return EXIT_FAILED if result.passed is False else EXIT_OK
 
 
 def cmd_validate(args: argparse.Namespace) -> int:
     rows = auto.validate(args.scenes, integrator=args.integrator, dt=args.dt, tol=args.tol)
     if args.json:
-        _print_json(rows)
+        _print_json([row.to_dict() for row in rows])
     else:
         cli_text.print_validate(rows)
-    return EXIT_FAILED if any(not r["passed"] for r in rows) else EXIT_OK
+    return EXIT_FAILED if any(not r.passed for r in rows) else EXIT_OK
 
 
 def cmd_render(args: argparse.Namespace) -> int:
@@ -200,7 +199,7 @@ def cmd_render(args: argparse.Namespace) -> int:
     for name, value in (("--slow-motion", args.slow_motion), ("--exaggerate", args.exaggerate)):
         if value is not None:
             render.render_scale.check_factor(name, value)
-    result = _run_scenario(args)
+    result = _run(args)
     files.prepare_directory(pathlib.Path(args.output).parent)
     info = media.render_run(
         result,
@@ -214,7 +213,7 @@ def cmd_render(args: argparse.Namespace) -> int:
         antialias=args.antialias,
     )
     cli_text.print_render(info)
-    return _verdict(result.summary)
+    return _verdict(result)
 
 
 def cmd_plot(args: argparse.Namespace) -> int:
@@ -236,30 +235,31 @@ def cmd_plot(args: argparse.Namespace) -> int:
         )
         verdict = EXIT_OK
     else:
-        result = _run_scenario(args)
+        result = _run(args)
         if args.kind == "family":
             figure = plots.phase_family(families.run_phase_family(result))
             verdict = EXIT_OK  # a family is a picture of many runs; the verdict belongs to single runs
         else:
             figure = plots.time_series(result) if args.kind == "time" else plots.phase_plane(result)
-            verdict = _verdict(result.summary)
+            verdict = _verdict(result)
     print(f"wrote {plots.save(figure, args.output)}")
     return verdict
 
 
-def _verdict(summary: dict) -> int:
+def _verdict(result: Result) -> int:
     """Exit code of a run whose outputs were written: 1 when outside its tolerance or its model's range."""
-    for limit in summary.get("model_limits", []):
-        print(f"springlab: {summary['scene']} {summary['scenario']} is not validated: {limit}", file=sys.stderr)
-    if summary.get("model_limits"):
+    for limit in result.model_limits:
+        print(f"springlab: {result.scene} {result.scenario} is not validated: {limit}", file=sys.stderr)
+    if result.model_limits:
         return EXIT_FAILED
-    if summary["passed"] is False:
-        why = (
-            f"not validated ({summary['estimate_range']['reason']})"
-            if summary.get("verdict") == compare.NOT_VALIDATED
-            else f"outside its tolerance (max error above {summary['tolerance']:.2e})"
-        )
-        print(f"  note: {summary['scene']}/{summary['scenario']} is {why}; see 'springlab run'", file=sys.stderr)
+    if result.passed is False:
+        if result.verdict is Verdict.NOT_VALIDATED and result.estimate_range is not None:
+            why = f"not validated ({result.estimate_range.reason()})"
+        elif result.tolerance is not None:
+            why = f"outside its tolerance (max error above {result.tolerance:.2e})"
+        else:  # held to its checks alone
+            why = f"outside its tolerance ({result.message})"
+        print(f"  note: {result.scene}/{result.scenario} is {why}; see 'springlab run'", file=sys.stderr)
         return EXIT_FAILED
     return EXIT_OK
 
@@ -274,11 +274,11 @@ def cmd_tradeoff(args: argparse.Namespace) -> int:
     if args.output:
         charts.write_tradeoff(result, args.output)
     if args.json:
-        _print_json(result.as_json())
+        _print_json(result.to_dict())
     else:
         cli_text.print_tradeoff(result, args.output)
     pick = result.recommendation
-    return EXIT_FAILED if pick is not None and pick["integrator"] is None else EXIT_OK
+    return EXIT_FAILED if pick is not None and not pick.found else EXIT_OK
 
 
 def cmd_audit(args: argparse.Namespace) -> int:
@@ -385,7 +385,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     if args.output:
         sweep_plot.write(result, args.output, args.quantity)
     if args.json:
-        _print_json(result.summary())
+        _print_json(result.to_dict())
         return EXIT_OK
     cli_text.print_sweep(result, args.quantity, args.output)
     return EXIT_OK
@@ -434,7 +434,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
             stop.add_note(f"; {args.output}/ is incomplete (see {marker})")  # main() prints it
         raise
     cli_text.print_demo(state.validation, len(state.artifacts), state.out, time.perf_counter() - start)
-    return EXIT_FAILED if any(not r["passed"] for r in state.validation) else EXIT_OK
+    return EXIT_FAILED if any(not r.passed for r in state.validation) else EXIT_OK
 
 
 # -- parser --------------------------------------------------------------------

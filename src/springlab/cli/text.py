@@ -8,13 +8,16 @@ printed in seconds [s] or milliseconds [ms] as each header says; errors are rela
 from __future__ import annotations
 
 import pathlib
+from collections.abc import Sequence
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from springlab.render import scale as render_scale
-from springlab.runs import compare
+from springlab.runs.compare import Verdict
+from springlab.runs.run import Result, ValidationRow
+from springlab.scenes.base import Check
 from springlab.studies import tradeoff
 
 if TYPE_CHECKING:  # annotations only: these load mujoco.batch, scipy or sysid, which the commands import lazily
@@ -24,12 +27,12 @@ if TYPE_CHECKING:  # annotations only: these load mujoco.batch, scipy or sysid, 
     from springlab.studies.sweeps import Sweep
 
 
-def check_line(check: dict) -> str:
-    """'period_s  value 1.234  ref 1.234  error 1.0e-09 <= 1.0e-06 pass' for a Check dict."""
+def check_line(check: Check) -> str:
+    """'period_s  value 1.234  ref 1.234  error 1.0e-09 <= 1.0e-06 pass' for a Check."""
     return (
-        f"{check['name']:<30} value {check['value']:<14.10g} ref {check['reference']:<14.10g}"
-        f" error {check['error']:.2e} {'<=' if check['passed'] else '>'} {check['tolerance']:.2e}"
-        f"  {'pass' if check['passed'] else 'FAIL'}"
+        f"{check.name:<30} value {float(check.value):<14.10g} ref {float(check.reference):<14.10g}"
+        f" error {check.error:.2e} {'<=' if check.passed else '>'} {float(check.tolerance):.2e}"
+        f"  {'pass' if check.passed else 'FAIL'}"
     )
 
 
@@ -49,38 +52,36 @@ def print_list(catalogue: list[dict[str, Any]]) -> None:
             print(f"    {name:<16} [{p['unit']}] {p['description']} ({p['valid']})")
 
 
-def print_run(summary: dict, output: str | None) -> None:
+def print_run(result: Result, output: str | None) -> None:
     """`springlab run`: setting, quantities, errors against the exact solution, checks and the verdict."""
     print(
-        f"{summary['scene']} / {summary['scenario']}: {summary['integrator']}, dt = {summary['dt']:g} s,"
-        f" {summary['steps']} steps in {summary['wall_time_s'] * 1e3:.1f} ms"
+        f"{result.scene} / {result.scenario}: {result.integrator}, dt = {result.dt:g} s,"
+        f" {result.steps} steps in {result.wall_time_s * 1e3:.1f} ms"
     )
-    for name, value in summary["quantities"].items():
+    for name, value in result.quantities.items():
         print(f"  {name:<26} {value:.10g}" if isinstance(value, float) else f"  {name:<26} {value}")
-    for column, error in summary["errors"].items():
-        print(f"  error {column:<20} max_abs {error['max_abs']:.3e}  max_rel {error['max_rel']:.3e}")
-    for check in summary.get("checks", []):
+    for column, error in result.errors.items():
+        print(f"  error {column:<20} max_abs {error.max_abs:.3e}  max_rel {error.max_rel:.3e}")
+    for check in result.checks:
         print(f"  check {check_line(check)}")
-    if summary["tolerance"] is not None or summary.get("checks"):
-        verdict = summary["verdict"] if summary["verdict"] != "FAIL" else "FAIL (outside tolerance)"
+    if result.tolerance is not None or result.checks:
+        verdict = "FAIL (outside tolerance)" if result.verdict is Verdict.FAIL else str(result.verdict)
         print(
-            f"  tolerance {summary['tolerance']:.3e}: {verdict}"
-            if summary["tolerance"] is not None
-            else f"  checks: {verdict}"
+            f"  tolerance {result.tolerance:.3e}: {verdict}" if result.tolerance is not None else f"  checks: {verdict}"
         )
-        validity = summary.get("estimate_range")
-        if validity is not None and not validity["inside"]:
-            print(f"  basis: {validity['reason']}")
+        validity = result.estimate_range
+        if validity is not None and not validity.inside:
+            print(f"  basis: {validity.reason()}")
     if output:
         print(f"  wrote {pathlib.Path(output) / 'trajectory.csv'} and summary.json")
 
 
-def validation_table(rows: list[dict]) -> str:
+def validation_table(rows: Sequence[ValidationRow]) -> str:
     """The validate/demo table: one column says what each row's error measures (trajectory or a check)."""
     # columns as wide as their longest name, so long scenario names stay readable
-    scene_width = max([12] + [len(r["scene"]) for r in rows]) + 1
-    scenario_width = max([13] + [len(r["scenario"]) for r in rows]) + 1
-    measures = [r.get("measure", "trajectory max_rel") for r in rows]
+    scene_width = max([12] + [len(r.scene) for r in rows]) + 1
+    scenario_width = max([13] + [len(r.scenario) for r in rows]) + 1
+    measures = [r.measure for r in rows]
     measure_width = max([len("error of")] + [len(m) for m in measures]) + 2
     lines = [
         f"{'scene':<{scene_width}}{'scenario':<{scenario_width}}{'integrator':<11}{'dt [s]':>9}"
@@ -88,30 +89,30 @@ def validation_table(rows: list[dict]) -> str:
     ]
     for r, measure in zip(rows, measures):
         lines.append(
-            f"{r['scene']:<{scene_width}}{r['scenario']:<{scenario_width}}{r['integrator']:<11}{r['dt']:>9.2g}"
-            f"  {measure:<{measure_width}}{r['max_rel_error']:>9.2e}{r['tolerance']:>11.2e}  {_row_result(r)}"
+            f"{r.scene:<{scene_width}}{r.scenario:<{scenario_width}}{r.integrator:<11}{r.dt:>9.2g}"
+            f"  {measure:<{measure_width}}{r.max_rel_error:>9.2e}{r.tolerance:>11.2e}  {_row_result(r)}"
         )
-        lines.extend(f"    check {check_line(c)}" for c in r.get("checks", []))
+        lines.extend(f"    check {check_line(c)}" for c in r.checks)
     return "\n".join(lines)
 
 
-def _row_result(row: dict) -> str:
+def _row_result(row: ValidationRow) -> str:
     """'pass', 'FAIL' or 'not validated' (outside the range of the error estimate) for a validate row."""
-    if row["passed"]:
+    if row.passed:
         return "pass"
-    return "not validated" if row.get("verdict") == compare.NOT_VALIDATED else "FAIL"
+    return "not validated" if row.verdict is Verdict.NOT_VALIDATED else "FAIL"
 
 
-def print_validate(rows: list[dict]) -> None:
+def print_validate(rows: Sequence[ValidationRow]) -> None:
     """`springlab validate`: the table, the tolerance bases, the scenarios' notes and the count."""
     print(validation_table(rows))
-    for basis in dict.fromkeys(r["tolerance_basis"] for r in rows):
+    for basis in dict.fromkeys(r.tolerance_basis for r in rows):
         print(f"tolerance = {basis}")
     for r in rows:
-        if r.get("note"):
-            print(f"{r['scene']} {r['scenario']}: {r['note']}")
-    failed = sum(not r["passed"] for r in rows)
-    unvalidated = sum(r.get("verdict") == compare.NOT_VALIDATED for r in rows)
+        if r.note:
+            print(f"{r.scene} {r.scenario}: {r.note}")
+    failed = sum(not r.passed for r in rows)
+    unvalidated = sum(r.verdict is Verdict.NOT_VALIDATED for r in rows)
     outside = f" ({unvalidated} not validated: outside the range of the error estimate)" if unvalidated else ""
     print(f"{len(rows) - failed} passed, {failed} failed{outside}")
 
@@ -130,7 +131,7 @@ def _run_verdict(run: tradeoff.Run) -> str:
     """A sweep row's verdict in a word or two: pass, FAIL, not validated, or blank when diverged."""
     if run.verdict is None:
         return ""
-    return {compare.PASS: "pass", compare.FAIL: "FAIL"}.get(run.verdict, "not validated")
+    return {Verdict.PASS: "pass", Verdict.FAIL: "FAIL"}.get(run.verdict, "not validated")
 
 
 def print_tradeoff(result: tradeoff.Tradeoff, output: str | None) -> None:
@@ -154,12 +155,12 @@ def print_tradeoff(result: tradeoff.Tradeoff, output: str | None) -> None:
     print(f"  observed order: {orders}")
     pick = result.recommendation
     if pick is not None:
-        if pick["integrator"] is None:
-            print(f"  tol {pick['tol']:g}: no setting of the sweep meets it")
+        if pick.integrator is None or pick.dt is None or pick.max_rel_error is None or pick.wall_time_s is None:
+            print(f"  tol {pick.tol:g}: no setting of the sweep meets it")
         else:
             print(
-                f"  tol {pick['tol']:g}: use {pick['integrator']} at dt = {pick['dt']:g} s (verified: error"
-                f" {pick['max_rel_error']:.3e}, {pick['wall_time_s'] * 1e3:.3f} ms)"
+                f"  tol {pick.tol:g}: use {pick.integrator} at dt = {pick.dt:g} s (verified: error"
+                f" {pick.max_rel_error:.3e}, {pick.wall_time_s * 1e3:.3f} ms)"
             )
     print(f"  wall time: {tradeoff.WALL_TIME_BASIS}")
     if output:
@@ -260,14 +261,13 @@ def print_sweep(result: Sweep, quantity: str | None, output: str | None) -> None
     """`springlab sweep`: counts by outcome and the range of `quantity` (default: the scenario's headline)."""
     from springlab.plots import sweep as sweep_plot  # mujoco.batch only for the command that sweeps
 
-    s = result.summary()
     print(
-        f"{s['scene']} / {s['scenario']}: {s['configurations']} configurations ({s['integrator']}, dt = {s['dt']:g} s,"
-        f" {s['duration']:g} s each) in {s['wall_time_s']:.2f} s on {s['executor']}"
-        f" ({s['configurations_per_s']:.0f}/s, {s['chunks']} chunks)"
+        f"{result.scene} / {result.scenario}: {result.size} configurations ({result.integrator},"
+        f" dt = {result.dt:g} s, {result.duration:g} s each) in {result.wall_time_s:.2f} s on {result.executor}"
+        f" ({result.configurations_per_s:.0f}/s, {result.chunks} chunks)"
     )
-    print(f"  passed {s['passed']}, failed {s['failed']}, diverged {s['diverged']}, invalid {s['invalid']}")
-    quantity = quantity or (sweep_plot.default_quantity(result) if s["diverged"] < s["configurations"] else None)
+    print(f"  passed {result.passed}, failed {result.failed}, diverged {result.diverged}, invalid {result.invalid}")
+    quantity = quantity or (sweep_plot.default_quantity(result) if result.diverged < result.size else None)
     if quantity:
         values = result.column(quantity)
         finite = values[np.isfinite(values)]
@@ -316,8 +316,8 @@ def print_fit(result: FitResult, output: str | None) -> None:
         print(f"  wrote {wrote} under {output}")
 
 
-def print_demo(rows: list[dict], artifacts: int, out: pathlib.Path | str, seconds: float) -> None:
+def print_demo(rows: Sequence[ValidationRow], artifacts: int, out: pathlib.Path | str, seconds: float) -> None:
     """`springlab demo`: the validation table and what was written where, in how many seconds [s]."""
     print(validation_table(rows))
-    failed = sum(not r["passed"] for r in rows)
+    failed = sum(not r.passed for r in rows)
     print(f"{len(rows) - failed} passed, {failed} failed; wrote {artifacts} files under {out}/ in {seconds:.1f} s")

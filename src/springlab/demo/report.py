@@ -29,7 +29,8 @@ from collections.abc import Iterable
 from typing import Any
 
 from springlab import files, scenes
-from springlab.runs import compare
+from springlab.runs.compare import Verdict
+from springlab.runs.run import ValidationRow
 
 from .state import DemoState
 
@@ -101,10 +102,10 @@ def _number(value: Any, spec: str = ".2e") -> str:
     return _e(value)
 
 
-def _verdict(passed: Any, verdict: str | None = None) -> str:
+def _verdict(passed: bool | None, verdict: Verdict | None = None) -> str:
     if passed is None:
         return '<span class="muted">n/a</span>'
-    if not passed and verdict == compare.NOT_VALIDATED:
+    if not passed and verdict is Verdict.NOT_VALIDATED:
         return '<span class="fail">not validated</span>'
     return '<span class="pass">pass</span>' if passed else '<span class="fail">FAIL</span>'
 
@@ -121,7 +122,7 @@ def _href(path: str) -> str:
     return _e(pathlib.PurePath(path).as_posix())
 
 
-def _validation_table(rows: list[dict]) -> str:
+def _validation_table(rows: list[ValidationRow]) -> str:
     if not rows:
         return "<p class='muted'>No validated scenarios.</p>"
     notes: dict[str, int] = {}  # tolerance basis -> footnote number (most rows share one)
@@ -137,28 +138,28 @@ def _validation_table(rows: list[dict]) -> str:
         "<th>error of</th><th>error</th><th>tolerance</th><th>result</th><th>basis</th></tr>"
     ]
     for r in rows:
-        checks = {c["name"] for c in r.get("checks", [])}
-        basis = r.get("note") or r.get("tolerance_basis", "")
+        checks = {c.name for c in r.checks}
+        basis = r.note or r.tolerance_basis
         head, _, tail = basis.partition(": ")
         if head in checks and tail:  # "period_s: <the check's basis>": one footnote, not two
             basis = tail
         out.append(
-            f"<tr><td>{_e(r['scene'])}</td><td><a href='#{_e(r['scene'])}-{_e(r['scenario'])}'>"
-            f"{_e(r['scenario'])}</a></td><td>{_e(r['integrator'])}</td><td class='num'>{_number(r['dt'], 'g')}</td>"
-            f"<td class='num'>{_e(r.get('steps', ''))}</td><td>{_e(r.get('measure', 'trajectory max_rel'))}</td>"
-            f"<td class='num'>{_number(r['max_rel_error'])}</td>"
-            f"<td class='num'>{_number(r['tolerance'])}</td><td>{_verdict(r['passed'], r.get('verdict'))}</td>"
+            f"<tr><td>{_e(r.scene)}</td><td><a href='#{_e(r.scene)}-{_e(r.scenario)}'>"
+            f"{_e(r.scenario)}</a></td><td>{_e(r.integrator)}</td><td class='num'>{_number(r.dt, 'g')}</td>"
+            f"<td class='num'>{_e(r.steps)}</td><td>{_e(r.measure)}</td>"
+            f"<td class='num'>{_number(r.max_rel_error)}</td>"
+            f"<td class='num'>{_number(r.tolerance)}</td><td>{_verdict(r.passed, r.verdict)}</td>"
             f"<td>{note(basis)}</td></tr>"
         )
-        for c in r.get("checks", []):
+        for c in r.checks:
             out.append(
-                f"<tr class='check'><td></td><td colspan='5'>check <code>{_e(c['name'])}</code>: "
-                f"{_number(c['value'], '.10g')} against {_number(c['reference'], '.10g')}</td>"
-                f"<td class='num'>{_number(c['error'])}</td><td class='num'>{_number(c['tolerance'])}</td>"
-                f"<td>{_verdict(c['passed'])}</td><td>{note(c.get('basis', ''))}</td></tr>"
+                f"<tr class='check'><td></td><td colspan='5'>check <code>{_e(c.name)}</code>: "
+                f"{_number(float(c.value), '.10g')} against {_number(float(c.reference), '.10g')}</td>"
+                f"<td class='num'>{_number(c.error)}</td><td class='num'>{_number(float(c.tolerance))}</td>"
+                f"<td>{_verdict(c.passed)}</td><td>{note(c.basis)}</td></tr>"
             )
     out.append("</table>")
-    failed = sum(not r["passed"] for r in rows)
+    failed = sum(not r.passed for r in rows)
     out.append(
         f"<p>{len(rows) - failed} passed, {failed} failed. Errors are max |MuJoCo - exact| / max |exact|"
         f" over the run (for checks: relative error of the value, absolute where the reference is 0).</p>"
@@ -215,8 +216,7 @@ def _links(artifacts: list) -> str:
     return f"<ul>{items}</ul>"
 
 
-def _quantities(summary: dict) -> str:
-    quantities = summary.get("quantities") or {}
+def _quantities(quantities: dict[str, Any]) -> str:
     if not quantities:
         return ""
     rows = "".join(
@@ -232,7 +232,7 @@ def _question(scene, scenario_name: str, result) -> str:
     """The scenario's textbook question and its answer sentence, from the scene's own metadata."""
     if scene is None or result is None or not hasattr(scene, "question_and_answer"):
         return ""
-    qa = scene.question_and_answer(scenario_name, result.summary.get("quantities") or {}, result.parameters)
+    qa = scene.question_and_answer(scenario_name, result.quantities, result.parameters)
     if qa is None:
         return ""
     question, answer = qa
@@ -302,8 +302,8 @@ def build_html(state: DemoState, *, wall_time_s: float | None = None) -> str:
                 description = scene.scenarios[scenario_name].description
             result = state.results.get((name, scenario_name))
             verdict = ""
-            if result is not None and result.summary.get("passed") is not None:
-                verdict = " " + _verdict(result.summary["passed"], result.summary.get("verdict"))
+            if result is not None and result.passed is not None:
+                verdict = " " + _verdict(result.passed, result.verdict)
             body.append(
                 f"<h3 id='{_e(name)}-{_e(scenario_name)}'>{_e(name)} / {_e(scenario_name)}{verdict}</h3>"
                 f"<p class='muted'>{_e(description)}</p>"
@@ -314,7 +314,7 @@ def build_html(state: DemoState, *, wall_time_s: float | None = None) -> str:
             media, rest = _media(sorted(items, key=_kind_rank), ids)
             body.append(media)
             if result is not None:
-                body.append(_quantities(result.summary))
+                body.append(_quantities(result.quantities))
             body.append(_links(rest))
         general = [a for a in own if not a.scenario]
         if general:

@@ -6,7 +6,7 @@ import dataclasses
 import pathlib
 import time
 
-from springlab.runs.run import Result
+from springlab.runs.run import Result, ValidationRow
 
 
 @dataclasses.dataclass
@@ -37,7 +37,7 @@ class DemoState:
     """What the steps share: the output folder, the validation rows and every run's Result."""
 
     out: pathlib.Path
-    validation: list[dict] = dataclasses.field(default_factory=list)
+    validation: list[ValidationRow] = dataclasses.field(default_factory=list)
     results: dict[tuple[str, str], Result] = dataclasses.field(default_factory=dict)
     artifacts: list[Artifact] = dataclasses.field(default_factory=list)
     #: (what, wall time [s]) of each step (and of finer parts a step wants to report)

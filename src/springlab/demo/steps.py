@@ -19,8 +19,8 @@ from collections.abc import Callable
 
 from springlab import files, progress, scenes
 from springlab.errors import BadInputError
-from springlab.runs.run import run_scenario, validation_row, write_run
-from springlab.studies import families
+from springlab.runs.run import ValidationRow, write_run
+from springlab.studies import auto, families
 from springlab.studies.families import PhaseFamily
 
 from .state import Artifact, DemoState
@@ -31,15 +31,17 @@ def core_step(state: DemoState) -> list[Artifact]:
     written = []
     for scene in scenes.SCENES.values():
         for scenario in scene.scenarios.values():
-            result = run_scenario(scene.name, scenario.name)
+            result = auto.run(scene.name, scenario.name)
             state.results[(scene.name, scenario.name)] = result
             if scenario.exact:
-                state.validation.append(validation_row(result))
+                state.validation.append(ValidationRow.of(result))
             folder = pathlib.Path(scene.name) / scenario.name
             write_run(state.out / folder, result)
             written.append(Artifact(str(folder / "trajectory.csv"), "data", "trajectory", scene.name, scenario.name))
             written.append(Artifact(str(folder / "summary.json"), "data", "summary", scene.name, scenario.name))
-    files.write_text_files(state.out, {"validation.json": files.dumps(state.validation) + "\n"})
+    files.write_text_files(
+        state.out, {"validation.json": files.dumps([row.to_dict() for row in state.validation]) + "\n"}
+    )
     written.append(Artifact("validation.json", "data", "validation table"))
     return written
 

@@ -78,16 +78,16 @@ def plot_tradeoff(result: Tradeoff, path: str | pathlib.Path) -> pathlib.Path:
         label="Pareto front",
     )
     pick = result.recommendation
-    if pick and pick.get("integrator"):
-        right.axhline(pick["tol"], color="gray", lw=0.8, ls="--")
+    if pick is not None and pick.integrator and pick.dt is not None and pick.max_rel_error is not None:
+        right.axhline(pick.tol, color="gray", lw=0.8, ls="--")
         right.plot(
-            [pick["wall_time_s"]],
-            [max(pick["max_rel_error"], floor)],
+            [pick.wall_time_s],
+            [max(pick.max_rel_error, floor)],
             "*",
             ms=14,
             color="gold",
             markeredgecolor="black",
-            label=f"tol {pick['tol']:g}: {pick['integrator']}, dt = {pick['dt']:g} s",
+            label=f"tol {pick.tol:g}: {pick.integrator}, dt = {pick.dt:g} s",
         )
     left.set_xlabel("timestep dt [s]")
     left.set_ylabel("max relative error [-]")
@@ -230,7 +230,7 @@ def plot_energy(series: dict[str, Any], path: str | pathlib.Path) -> pathlib.Pat
 
 def write_tradeoff(result: Tradeoff, directory: str | pathlib.Path) -> list[pathlib.Path]:
     """Write DIR/tradeoff.json and DIR/tradeoff.png."""
-    written = files.write_text_files(directory, {"tradeoff.json": files.dumps(result.as_json()) + "\n"})
+    written = files.write_text_files(directory, {"tradeoff.json": files.dumps(result.to_dict()) + "\n"})
     written.append(plot_tradeoff(result, pathlib.Path(directory) / "tradeoff.png"))
     return written
 

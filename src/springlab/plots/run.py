@@ -108,7 +108,7 @@ def time_series(result: Result) -> Figure:
     rows = 3 if has_error else 2
     figure = new_figure(4.2 * len(joints) + 1.2, 2.0 * rows + 0.6)
     axes = np.atleast_2d(figure.subplots(rows, len(joints), sharex=True, squeeze=False))
-    tolerance = result.summary.get("tolerance")
+    tolerance = result.tolerance
     for column, joint in enumerate(joints):
         pos_unit, vel_unit = units(result.model, joint)
         ax_x, ax_v = axes[0, column], axes[1, column]
@@ -146,10 +146,8 @@ def time_series(result: Result) -> Figure:
         legend_outside(axes[row, -1])
     if has_error and axes[2, -1].get_legend_handles_labels()[0]:
         legend_outside(axes[2, -1])
-    verdict = ""
-    if result.summary.get("passed") is not None:
-        verdict = f", {result.summary.get('verdict') or ('PASS' if result.summary['passed'] else 'FAIL')}"
-    figure.suptitle(f"{title(result)}: {result.summary['integrator']}, dt = {result.summary['dt']:g} s{verdict}")
+    verdict = f", {result.verdict}" if result.verdict is not None else ""
+    figure.suptitle(f"{title(result)}: {result.integrator}, dt = {result.dt:g} s{verdict}")
     return figure
 
 
@@ -234,7 +232,7 @@ def zeta_family(family: ZetaFamily) -> Figure:
     # solution is a thin white dash inside each coloured curve: it shows agreement without hiding the colour
     colors = [matplotlib.colormaps["tab10"](i) for i in range(len(runs))]
     for (zeta, run), color in zip(runs, colors):
-        regime = run.summary["quantities"].get("regime", "")
+        regime = run.quantities.get("regime", "")
         label = f"ζ = {zeta:g}" + (f" ({regime})" if regime else "")
         ax_t.plot(run.time, run.pos[joint], color=color, lw=2.4, label=label)
         ax_t.plot(run.time, run.ref_pos[joint], **ZETA_EXACT)

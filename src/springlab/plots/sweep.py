@@ -24,11 +24,11 @@ if TYPE_CHECKING:  # matplotlib is imported only when a figure is drawn
 def default_quantity(sweep: Sweep) -> str:
     """The quantity sweep.png shows by default: the scenario's last numeric quantity that every
     configuration that ran has (its headline result, e.g. max_displacement_m), else the first error column."""
-    ran = [row for row in sweep.rows if row["quantities"]]
-    names = [n for n in sweep.quantity_names() if all(n in row["quantities"] for row in ran)]
+    ran = [row for row in sweep.rows if row.quantities]
+    names = [n for n in sweep.quantity_names() if all(n in row.quantities for row in ran)]
     if names:
         return names[-1]
-    errors = [c for row in sweep.rows for c in row["errors"]]
+    errors = [c for row in sweep.rows for c in row.errors]
     if errors:
         return f"{errors[0]}_max_rel"
     raise BadInputError("the sweep has no numeric quantity to plot (every configuration diverged?)")
@@ -63,11 +63,11 @@ def plot(sweep: Sweep, path: str | pathlib.Path, quantity: str | None = None) ->
     from matplotlib.figure import Figure
 
     quantity = default_quantity(sweep) if quantity is None else quantity
-    known = list(sweep.values) + sweep.quantity_names() + [f"{c}_max_rel" for row in sweep.rows for c in row["errors"]]
+    known = list(sweep.values) + sweep.quantity_names() + [f"{c}_max_rel" for row in sweep.rows for c in row.errors]
     if quantity not in known:
         raise BadInputError(f"unknown quantity {quantity!r} of this sweep; valid: {', '.join(dict.fromkeys(known))}")
     z = sweep.column(quantity)
-    diverged = np.array([bool(r["diverged"]) for r in sweep.rows])
+    diverged = np.array([bool(r.diverged) for r in sweep.rows])
     axes = sweep.axes
     fig = Figure(figsize=(7.5, 5.0), layout="constrained")
     ax = fig.subplots()

@@ -62,11 +62,16 @@ F grows with h, so the largest dt inside is found by bisection and reported.
 
 A PASS without --tol never certifies more than CERTIFIED_CAP: the tolerance
 of a compared column is min(2 x prediction + round-off, CERTIFIED_CAP).
+
+What a run is, judged by these rules, is a `Verdict`; it lives here, in the
+run layer, so the run, the studies that sweep runs and everything that shows
+them (plots, the command line, the demo) name the same four values.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import enum
 import math
 from collections.abc import Iterable
 from typing import Any
@@ -86,8 +91,47 @@ ERROR_CONSTANTS = {name: (1.0 / 120.0 if order == 4 else 0.5) for name, order in
 ROUNDOFF_PER_STEP = 100 * np.finfo(float).eps
 #: the most relative error [-] a PASS certifies without a requested tolerance
 CERTIFIED_CAP = 1e-2
-#: the verdicts of a run held to a tolerance
-PASS, FAIL, NOT_VALIDATED = "PASS", "FAIL", "not validated: outside the range of the error estimate"
+
+
+class Verdict(enum.StrEnum):
+    """What a run held to a tolerance is; each value is the string summary.json's `verdict` holds.
+
+    A `StrEnum`: `Verdict.PASS == "PASS"`, and `str()`, f-strings and JSON give the value.
+    """
+
+    #: every compared column (and check) within its tolerance, inside the range of the error estimate
+    PASS = "PASS"
+    #: a compared column or a check outside its tolerance
+    FAIL = "FAIL"
+    #: the run is outside the range of its error estimate: the tolerance certifies nothing there
+    NOT_VALIDATED = "not validated: outside the range of the error estimate"
+    #: the run left the equations its scene models (Scene.model_limits), whatever its errors
+    OUTSIDE_MODEL = "not validated: outside the scene's model"
+
+    @property
+    def validated(self) -> bool:
+        """Whether the tolerance means something for the run (PASS or FAIL)."""
+        return self in (Verdict.PASS, Verdict.FAIL)
+
+
+@dataclasses.dataclass(frozen=True)
+class ColumnError:
+    """The error of one compared column (`<joint>_pos` or `<joint>_vel`) against its exact reference.
+
+    Attributes
+    ----------
+    max_abs
+        max |sim - ref| over the run [m or m/s; rad or rad/s for hinges].
+    max_rel
+        max_abs / max |ref| [-] (max_abs where the reference is 0 throughout).
+    """
+
+    max_abs: float
+    max_rel: float
+
+    def to_dict(self) -> dict[str, float]:
+        """summary.json's form: {"max_abs", "max_rel"}."""
+        return {"max_abs": self.max_abs, "max_rel": self.max_rel}
 
 
 def check_tolerance(tol: Any) -> float:
@@ -97,7 +141,7 @@ def check_tolerance(tol: Any) -> float:
     return float(tol)
 
 
-def column_errors(simulated: dict[str, np.ndarray], reference: dict[str, np.ndarray]) -> dict[str, dict]:
+def column_errors(simulated: dict[str, np.ndarray], reference: dict[str, np.ndarray]) -> dict[str, ColumnError]:
     """Per column: max_abs = max |sim - ref| and max_rel = max_abs / max |ref|.
 
     Parameters
@@ -109,7 +153,7 @@ def column_errors(simulated: dict[str, np.ndarray], reference: dict[str, np.ndar
     for name, ref in reference.items():
         max_abs = float(np.max(np.abs(simulated[name] - ref)))
         scale = float(np.max(np.abs(ref)))
-        errors[name] = {"max_abs": max_abs, "max_rel": max_abs / scale if scale > 0 else max_abs}
+        errors[name] = ColumnError(max_abs, max_abs / scale if scale > 0 else max_abs)
     return errors
 
 
@@ -219,6 +263,19 @@ class EstimateRange:
             f" estimate, over the safety factor {SAFETY:g}"
         )
         return f"{line}; dt <= {self.largest_dt:.2g} s is inside" if math.isfinite(self.largest_dt) else line
+
+    def to_dict(self) -> dict[str, Any]:
+        """summary.json's `estimate_range`: inside, error_bound_factor, largest_dt_inside_s [s], reason.
+
+        null, never a string, for what does not exist: an infinite factor (a diverging tail) and no
+        largest dt (every dt is inside).
+        """
+        return {
+            "inside": self.inside,
+            "error_bound_factor": self.factor if math.isfinite(self.factor) else None,
+            "largest_dt_inside_s": self.largest_dt if math.isfinite(self.largest_dt) else None,
+            "reason": self.reason(),
+        }
 
 
 def _round_down(value: float, digits: int = 2) -> float:

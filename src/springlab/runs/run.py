@@ -1,30 +1,42 @@
-"""springlab's single-run API: run a scene's scenario at an explicit setting, validate scenes.
+"""One run: a scene's scenario at an explicit setting, compared with its exact solution -> `Result`.
 
-`integrator='auto'` is a study built on top of this layer (springlab.studies.auto,
-which is what springlab.run and springlab.validate are).
+`run_scenario` is the run at a setting you name (integrator and dt, or the scene's validated
+default). It lives here, below the studies, because studies are built from it: the trade-off
+verifies its recommendation with it, the families run their members with it, the fit runs the
+identified scene with it. `springlab.run` and `springlab.validate`, the public API, are in
+springlab.studies.auto: they add `integrator='auto'`, which picks the setting by a trade-off
+study (springlab.studies.tradeoff), so it cannot live in the layer that study is built on.
+`run_scenario` therefore refuses 'auto' and says where it is.
+
+`Result` holds the run's facts as attributes (`passed`, `verdict`, `message`, `errors`,
+`tolerance`, `quantities`, `checks`, the series), `to_dict()` (summary.json) and `to_pandas()`
+(trajectory.csv); `ValidationRow` is one row of `springlab validate`'s table.
 
 >>> import springlab
 >>> result = springlab.run("slider", "exercise")
->>> result.summary["quantities"]["regime"]
+>>> result.quantities["regime"]
 'overdamped'
+>>> result.verdict
+<Verdict.PASS: 'PASS'>
 """
 
 from __future__ import annotations
 
 import contextlib
+import copy
 import dataclasses
 import math
 import os
 import pathlib
 from collections.abc import Iterator
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import mujoco
 import numpy as np
 
-from springlab import scenes
+from springlab import scenes, tables
 from springlab.errors import BadInputError, DivergedError, ParameterError, SpringlabError
-from springlab.files import csv_text, dumps, write_text_files
+from springlab.files import csv_text, dumps, json_ready, write_text_files
 from springlab.scenes.base import Check, Scenario, Scene
 from springlab.sim.simulate import (
     INTEGRATORS,
@@ -38,9 +50,11 @@ from springlab.sim.simulate import (
 )
 
 from . import compare
+from .compare import ColumnError, EstimateRange, Verdict
 
-#: the verdict of a run that left its scene's equations (Scene.model_limits), whatever its errors
-OUTSIDE_MODEL = "not validated: outside the scene's model"
+if TYPE_CHECKING:
+    import pandas
+
 #: a run whose error exceeds this many times its signal has blown up, flagged or not
 BLOWUP_RATIO = 1e3
 #: integrator 'auto' is a study above this layer
@@ -50,24 +64,67 @@ _AUTO_ELSEWHERE = (
 )
 
 
-@dataclasses.dataclass
+def _read_only(values: np.ndarray) -> np.ndarray:
+    """A read-only view of `values` (the array it views stays writable)."""
+    view = np.asarray(values).view()
+    view.setflags(write=False)
+    return view
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
 class Result:
-    """One run of a scenario: the trajectory, its reference, errors and summary.
+    """One run of a scenario: its setting, its trajectory, the exact reference, errors and verdict.
+
+    Immutable: the attributes cannot be rebound and the series are read-only arrays.
+    `to_dict()` is summary.json (what `springlab run --json` prints), `to_pandas()` is
+    trajectory.csv as a DataFrame, and `summary` is the same facts as a dict of Python
+    values (inf stays inf where summary.json writes null).
 
     Attributes
     ----------
     scene, scenario
         the names run.
+    integrator
+        the integrator that ran.
+    dt
+        timestep [s].
+    duration
+        simulated time [s] (steps x dt; shorter than asked where a stop condition ended the run).
+    steps
+        physics steps taken.
+    wall_time_s
+        wall time of the simulation [s].
     parameters
         parameter name -> value used (SI).
+    quantities
+        named results of the scenario (SI; the name ends in its unit), as summary.json's `quantities`.
+    errors
+        compared column (`<joint>_pos`, `<joint>_vel`) -> its ColumnError (max_abs, max_rel);
+        empty without an exact trajectory.
+    tolerance
+        the largest tolerance [-] a compared column is held to (None: no compared column).
+    tolerance_basis
+        why the tolerance is what it is (one line).
+    column_tolerances
+        compared column -> the tolerance [-] it is held to (not in summary.json).
+    passed
+        every compared column and check within its tolerance, inside the range of the error
+        estimate and of the scene's model (None: nothing to validate against).
+    verdict
+        what the run is (Verdict: PASS, FAIL, NOT_VALIDATED, OUTSIDE_MODEL), None with `passed`.
+    estimate_range
+        whether the run is inside the range of its error estimate (None with a requested
+        tolerance or without a linear reference).
+    checks
+        the scenario's scalar claims (scenes.base.Check), tolerances capped as summary.json shows them.
+    model_limits
+        why the run left its scene's model (empty: it did not).
     time
-        (n,) [s], one row per physics step, t = 0 included.
+        (n,) [s], one row per physics step, t = 0 included (MuJoCo's clock).
     pos, vel
-        joint -> simulated position [m] / velocity [m/s] series.
+        joint -> simulated position [m] / velocity [m/s] series (hinges [rad], [rad/s]).
     ref_pos, ref_vel
         joint -> exact series (empty where no reference exists).
-    summary
-        the summary.json dict (see README).
     model
         the compiled MjModel that ran.
     trajectory
@@ -76,18 +133,108 @@ class Result:
 
     scene: str
     scenario: str
+    integrator: str
+    dt: float
+    duration: float
+    steps: int
+    wall_time_s: float
     parameters: dict[str, float]
-    time: np.ndarray
-    pos: dict[str, np.ndarray]
-    vel: dict[str, np.ndarray]
-    ref_pos: dict[str, np.ndarray]
-    ref_vel: dict[str, np.ndarray]
-    summary: dict[str, Any]
-    model: mujoco.MjModel
-    trajectory: Trajectory
+    quantities: dict[str, Any] = dataclasses.field(repr=False)
+    errors: dict[str, ColumnError]
+    tolerance: float | None
+    tolerance_basis: str = dataclasses.field(repr=False)
+    passed: bool | None
+    verdict: Verdict | None
+    estimate_range: EstimateRange | None = dataclasses.field(repr=False)
+    checks: tuple[Check, ...] = dataclasses.field(repr=False)
+    model_limits: tuple[str, ...]
+    time: np.ndarray = dataclasses.field(repr=False)
+    pos: dict[str, np.ndarray] = dataclasses.field(repr=False)
+    vel: dict[str, np.ndarray] = dataclasses.field(repr=False)
+    ref_pos: dict[str, np.ndarray] = dataclasses.field(repr=False)
+    ref_vel: dict[str, np.ndarray] = dataclasses.field(repr=False)
+    model: mujoco.MjModel = dataclasses.field(repr=False)
+    trajectory: Trajectory = dataclasses.field(repr=False)
+    column_tolerances: dict[str, float] = dataclasses.field(default_factory=dict, repr=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "time", _read_only(self.time))
+        for name in ("pos", "vel", "ref_pos", "ref_vel"):
+            object.__setattr__(self, name, {joint: _read_only(v) for joint, v in getattr(self, name).items()})
+
+    @property
+    def max_rel_error(self) -> float | None:
+        """The largest max_rel [-] over the compared columns (None: no compared column)."""
+        return max((e.max_rel for e in self.errors.values()), default=None)
+
+    @property
+    def message(self) -> str:
+        """Why the run has its verdict, in one line (like scipy's `OptimizeResult.message`)."""
+        if self.verdict is Verdict.OUTSIDE_MODEL:
+            return "outside the scene's model: " + "; ".join(self.model_limits)
+        if self.verdict is Verdict.NOT_VALIDATED and self.estimate_range is not None:
+            return f"outside the range of the error estimate: {self.estimate_range.reason()}"
+        if self.passed is None:
+            return "no exact reference to compare with: nothing validated"
+        over = [
+            f"{column}: max relative error {e.max_rel:.3g} > tolerance {self.column_tolerances[column]:.3g}"
+            for column, e in self.errors.items()
+            if column in self.column_tolerances and not e.max_rel <= self.column_tolerances[column]
+        ]
+        over += [
+            f"check {c.name}: error {c.error:.3g} > tolerance {c.tolerance:.3g}" for c in self.checks if not c.passed
+        ]
+        if over:
+            return "; ".join(over)
+        within = []
+        if self.errors and self.column_tolerances:
+            # the column closest to its own tolerance
+            column = max(self.column_tolerances, key=lambda c: self.errors[c].max_rel / self.column_tolerances[c])
+            within.append(
+                f"every compared column within its tolerance, closest {column}: max relative error"
+                f" {self.errors[column].max_rel:.3g} <= {self.column_tolerances[column]:.3g}"
+            )
+        if self.checks:
+            within.append(f"{len(self.checks)} check{'s' if len(self.checks) > 1 else ''} within tolerance")
+        return "; ".join(within)
+
+    @property
+    def summary(self) -> dict[str, Any]:
+        """The facts as summary.json's dict, in Python values (inf where summary.json has null).
+
+        Kept for scripts written against it; `to_dict()` is summary.json itself.
+        """
+        return {
+            "scene": self.scene,
+            "scenario": self.scenario,
+            "integrator": self.integrator,
+            "dt": self.dt,
+            "duration": self.duration,
+            "steps": self.steps,
+            "wall_time_s": self.wall_time_s,
+            "parameters": dict(self.parameters),
+            "quantities": copy.deepcopy(self.quantities),
+            "errors": {column: e.to_dict() for column, e in self.errors.items()},
+            "tolerance": self.tolerance,
+            "tolerance_basis": self.tolerance_basis,
+            "passed": self.passed,
+            "verdict": None if self.verdict is None else self.verdict.value,
+            "estimate_range": None if self.estimate_range is None else self.estimate_range.to_dict(),
+            "checks": [check.to_dict() for check in self.checks],
+            "model_limits": list(self.model_limits),
+        }
+
+    def to_dict(self) -> dict[str, Any]:
+        """summary.json, exactly what `springlab run --json` prints (plain JSON values: inf and nan are None).
+
+        Keys: scene, scenario, integrator, dt [s], duration [s], steps, wall_time_s [s], parameters,
+        quantities, errors, tolerance, tolerance_basis, passed, verdict, estimate_range, checks,
+        model_limits (see docs/runs.md).
+        """
+        return json_ready(self.summary)
 
     def columns(self) -> dict[str, np.ndarray]:
-        """trajectory.csv's columns in order: time, <joint>_pos/_vel, then the references."""
+        """The series in trajectory.csv's order: time (MuJoCo's clock), <joint>_pos/_vel, then the references."""
         out = {"time": self.time}
         for joint in self.pos:
             out[f"{joint}_pos"] = self.pos[joint]
@@ -96,6 +243,134 @@ class Result:
             out[f"{joint}_pos_ref"] = self.ref_pos[joint]
             out[f"{joint}_vel_ref"] = self.ref_vel[joint]
         return out
+
+    def _csv_columns(self) -> dict[str, np.ndarray]:
+        """trajectory.csv's columns: `columns()` with time = k dt for step k, exactly."""
+        columns = self.columns()
+        columns["time"] = np.arange(len(columns["time"])) * float(self.dt)
+        return columns
+
+    def to_pandas(self) -> pandas.DataFrame:
+        """trajectory.csv as a DataFrame: one row per physics step, its columns and numbers (needs pandas).
+
+        Columns: time [s] (k dt for step k), `<joint>_pos`, `<joint>_vel`, then `<joint>_pos_ref`,
+        `<joint>_vel_ref` where an exact reference exists (SI units).
+        """
+        return tables.to_pandas({name: np.array(values, float) for name, values in self._csv_columns().items()})
+
+
+@dataclasses.dataclass(frozen=True)
+class ValidationRow:
+    """One row of the validation table (`springlab validate`, the demo's validation.json) for one run.
+
+    A scenario without compared columns shows its tightest check in `max_rel_error` and
+    `tolerance`, and `measure` says which: 'trajectory max_rel', or '<check name> rel' /
+    '<check name> abs'.
+
+    Attributes
+    ----------
+    scene, scenario, integrator
+        the names run.
+    dt
+        timestep [s].
+    steps
+        physics steps taken.
+    max_rel_error
+        the largest error [-] of what `measure` names.
+    measure
+        what max_rel_error and tolerance measure.
+    tolerance
+        its tolerance [-].
+    tolerance_basis
+        why the tolerance is what it is.
+    passed
+        the run's `passed`.
+    verdict
+        the run's Verdict (None with passed None).
+    wall_time_s
+        wall time of the simulation [s].
+    checks
+        the scenario's checks.
+    note
+        why a run is not validated (its verdict and reason), or what a study noted (None: nothing).
+    """
+
+    scene: str
+    scenario: str
+    integrator: str
+    dt: float
+    steps: int
+    max_rel_error: float
+    measure: str
+    tolerance: float
+    tolerance_basis: str
+    passed: bool | None
+    verdict: Verdict | None
+    wall_time_s: float
+    checks: tuple[Check, ...]
+    note: str | None = None
+
+    @classmethod
+    def of(cls, result: Result) -> ValidationRow:
+        """The row of a run that has an exact reference (compared columns or checks).
+
+        Parameters
+        ----------
+        result
+            the run.
+        """
+        if result.errors:
+            worst = max(e.max_rel for e in result.errors.values())
+            assert result.tolerance is not None, "compared columns always have a tolerance"
+            tolerance, basis, measure = result.tolerance, result.tolerance_basis, "trajectory max_rel"
+        else:
+            # no compared columns: the row shows the check closest to (or furthest past) its tolerance
+            tightest = max(result.checks, key=lambda c: c.error / c.tolerance if c.tolerance > 0 else math.inf)
+            worst, tolerance = tightest.error, float(tightest.tolerance)
+            basis = f"{tightest.name}: {tightest.basis}"
+            measure = f"{tightest.name} {'rel' if tightest.reference != 0 else 'abs'}"
+        note = None
+        if result.model_limits:
+            note = f"{result.verdict}: " + "; ".join(result.model_limits)
+        elif result.estimate_range is not None and not result.estimate_range.inside:
+            note = f"{result.verdict}: {result.estimate_range.reason()}"
+        return cls(
+            scene=result.scene,
+            scenario=result.scenario,
+            integrator=result.integrator,
+            dt=result.dt,
+            steps=result.steps,
+            max_rel_error=worst,
+            measure=measure,
+            tolerance=tolerance,
+            tolerance_basis=basis,
+            passed=result.passed,
+            verdict=result.verdict,
+            wall_time_s=result.wall_time_s,
+            checks=result.checks,
+            note=note,
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """The row as `springlab validate --json` prints it; `note` only where there is one."""
+        row = {
+            "scene": self.scene,
+            "scenario": self.scenario,
+            "integrator": self.integrator,
+            "dt": self.dt,
+            "steps": self.steps,
+            "max_rel_error": self.max_rel_error,
+            "measure": self.measure,
+            "tolerance": self.tolerance,
+            "tolerance_basis": self.tolerance_basis,
+            "passed": self.passed,
+            "verdict": None if self.verdict is None else self.verdict.value,
+            "wall_time_s": self.wall_time_s,
+            "checks": [check.to_dict() for check in self.checks],
+        }
+        if self.note is not None:
+            row["note"] = self.note
+        return json_ready(row)
 
 
 def prepare(
@@ -128,7 +403,7 @@ def run_scenario(
     integrator
         one of 'euler', 'implicit', 'implicitfast', 'rk4', 'discrete'
         (None: the scene's validated default). 'auto' is springlab.run's
-        (springlab.studies.auto.run), not this function's.
+        (springlab.studies.auto.run), not this function's (see the module docstring).
     dt
         timestep [s] (None: the scene's validated default).
     duration
@@ -142,10 +417,9 @@ def run_scenario(
     Returns
     -------
     Result
-        The Result; `result.summary["passed"]` says whether every compared column
-        is within its tolerance and, without `tol`, the run is inside the range of
-        its error estimate; `result.summary["verdict"]` says which ('PASS', 'FAIL',
-        or springlab.runs.compare.NOT_VALIDATED, with `estimate_range["reason"]`).
+        The Result; `result.passed` says whether every compared column is within
+        its tolerance and, without `tol`, the run is inside the range of its error
+        estimate; `result.verdict` says which (a Verdict) and `result.message` why.
 
     Raises
     ------
@@ -216,7 +490,7 @@ def evaluate(
     trajectory: Trajectory,
     tol: float | None = None,
 ) -> Result:
-    """Compare a finished run with its reference: errors, tolerance, checks, summary -> Result.
+    """Compare a finished run with its reference: errors, tolerance, checks, verdict -> Result.
 
     Shared by `run` and the batched studies (springlab.studies.tradeoff, springlab.studies.extremes), so every path judges a run
     the same way. Raises DivergedError for a run whose error dwarfs its signal.
@@ -225,7 +499,9 @@ def evaluate(
     pos = {j: c[0] for j, c in columns.items()}
     vel = {j: c[1] for j, c in columns.items()}
     reference = scene.reference(model, params, scenario, trajectory.time, dt=trajectory.dt) if scenario.exact else None
-    errors, tolerance, basis, passed, validity = {}, None, "", None, None
+    errors: dict[str, ColumnError] = {}
+    per_column: dict[str, float] = {}
+    tolerance, basis, passed, validity = None, "", None, None
     if reference is not None and not all(
         np.isfinite(v).all() for v in (*reference.pos.values(), *reference.vel.values())
     ):
@@ -242,7 +518,7 @@ def evaluate(
             for k in ("pos", "vel")
         }
         errors = compare.column_errors(simulated, exact)
-        worst = max(e["max_rel"] for e in errors.values())
+        worst = max(e.max_rel for e in errors.values())
         if not math.isfinite(worst) or worst > BLOWUP_RATIO:
             advice = _stability_advice(
                 scene, model, params, scenario, trajectory.integrator, trajectory.dt, trajectory.time[-1]
@@ -269,67 +545,55 @@ def evaluate(
             assert reference.tolerance is not None, "a reference without `system` states its tolerance"
             per_column = {column: min(reference.tolerance, compare.CERTIFIED_CAP) for column in errors}
             basis = reference.tolerance_basis
+        per_column = {column: float(value) for column, value in per_column.items()}
         tolerance = max(per_column.values())
-        passed = all(errors[c]["max_rel"] <= per_column[c] for c in errors)
+        passed = all(errors[c].max_rel <= per_column[c] for c in errors)
         if validity is not None and not validity.inside:
             passed = False  # the tolerance is no tolerance here: nothing is certified
-    checks = [
-        _capped(check, tol).as_dict()
-        for check in (scene.checks(model, params, scenario, trajectory) if scenario.exact else [])
-    ]
+    checks = tuple(
+        _capped(check, tol) for check in (scene.checks(model, params, scenario, trajectory) if scenario.exact else [])
+    )
     if checks:
         # a scenario without compared columns is held to its checks alone
-        passed = all(c["passed"] for c in checks) and passed is not False
-    limits = scene.model_limits(model, params, scenario, trajectory)
+        passed = all(c.passed for c in checks) and passed is not False
+    limits = tuple(scene.model_limits(model, params, scenario, trajectory))
     if limits:
         passed = False  # matching the reference proves nothing once the equations no longer hold
+    verdict: Verdict | None
     if limits:
-        verdict = OUTSIDE_MODEL
+        verdict = Verdict.OUTSIDE_MODEL
     elif passed is None:
         verdict = None
     elif validity is not None and not validity.inside:
-        verdict = compare.NOT_VALIDATED
+        verdict = Verdict.NOT_VALIDATED
     else:
-        verdict = compare.PASS if passed else compare.FAIL
-    summary = {
-        "scene": scene.name,
-        "scenario": scenario.name,
-        "integrator": trajectory.integrator,
-        "dt": trajectory.dt,
-        "duration": trajectory.steps * trajectory.dt,  # MuJoCo's time accumulates dt: rounding
-        "steps": trajectory.steps,
-        "wall_time_s": trajectory.wall_time_s,
-        "parameters": dict(params),
-        "quantities": scene.quantities(model, params, scenario, trajectory),
-        "errors": errors,
-        "tolerance": tolerance,
-        "tolerance_basis": basis,
-        "passed": passed,
-        "verdict": verdict,
-        "estimate_range": None
-        if validity is None
-        else {
-            "inside": validity.inside,
-            # null, never a string: inf factor = a diverging tail, no largest dt = every dt is inside
-            "error_bound_factor": validity.factor if math.isfinite(validity.factor) else None,
-            "largest_dt_inside_s": validity.largest_dt if math.isfinite(validity.largest_dt) else None,
-            "reason": validity.reason(),
-        },
-        "checks": checks,
-        "model_limits": limits,
-    }
+        verdict = Verdict.PASS if passed else Verdict.FAIL
     return Result(
         scene=scene.name,
         scenario=scenario.name,
+        integrator=trajectory.integrator,
+        dt=trajectory.dt,
+        duration=trajectory.steps * trajectory.dt,  # MuJoCo's time accumulates dt: rounding
+        steps=trajectory.steps,
+        wall_time_s=trajectory.wall_time_s,
         parameters=dict(params),
+        quantities=scene.quantities(model, params, scenario, trajectory),
+        errors=errors,
+        tolerance=tolerance,
+        tolerance_basis=basis,
+        passed=passed,
+        verdict=verdict,
+        estimate_range=validity,
+        checks=checks,
+        model_limits=limits,
         time=trajectory.time,
         pos=pos,
         vel=vel,
         ref_pos=dict(reference.pos) if reference else {},
         ref_vel=dict(reference.vel) if reference else {},
-        summary=summary,
         model=model,
         trajectory=trajectory,
+        column_tolerances=per_column,
     )
 
 
@@ -403,43 +667,6 @@ def _stability_advice(
     return f"{exceeds}; use dt < {smaller:.3g} s or {others}"
 
 
-def validate_scenarios(
-    scene_names: list[str] | None = None,
-    *,
-    integrator: str | None = None,
-    dt: float | None = None,
-    tol: float | None = None,
-) -> list[dict[str, Any]]:
-    """Run every scenario that has an exact reference at the scene's validated setting.
-
-    Parameters
-    ----------
-    scene_names
-        scenes to validate (None: all).
-    integrator, dt
-        override the scenes' default setting ('auto' is
-        springlab.validate's, see springlab.studies.auto.validate).
-    tol
-        relative tolerance [-] to hold every run to (None: the predicted error).
-
-    Returns
-    -------
-    list[dict[str, Any]]
-        One row per scenario: scene, scenario, integrator, dt, steps, max_rel_error,
-        measure, tolerance, tolerance_basis, passed, verdict, wall_time_s, note (only
-        for a run that is not validated: why, and the largest dt inside), and checks
-        (the scenario's Check dicts; a scenario without compared columns shows its
-        tightest check in max_rel_error/tolerance, and `measure` says which:
-        'trajectory max_rel', or '<check name> rel' / '<check name> abs').
-    """
-    if integrator == "auto":
-        raise BadInputError(_AUTO_ELSEWHERE)
-    return [
-        validation_row(run_scenario(scene.name, scenario.name, integrator=integrator, dt=dt, tol=tol))
-        for scene, scenario in exact_scenarios(scene_names)
-    ]
-
-
 def exact_scenarios(scene_names: list[str] | None = None) -> list[tuple[Scene, Scenario]]:
     """(scene, scenario) of every scenario with an exact solution, in catalogue order.
 
@@ -461,55 +688,17 @@ def exact_scenarios(scene_names: list[str] | None = None) -> list[tuple[Scene, S
     return pairs
 
 
-def validation_row(result: Result) -> dict[str, Any]:
-    """The `validate` table row of a run that has an exact reference."""
-    s = result.summary
-    checks = s.get("checks", [])
-    if s["errors"]:
-        worst, tolerance, basis = max(e["max_rel"] for e in s["errors"].values()), s["tolerance"], s["tolerance_basis"]
-        measure = "trajectory max_rel"
-    else:
-        # no compared columns: the row shows the check closest to (or furthest past) its tolerance
-        tightest = max(checks, key=lambda c: c["error"] / c["tolerance"] if c["tolerance"] > 0 else math.inf)
-        worst, tolerance = tightest["error"], tightest["tolerance"]
-        basis = f"{tightest['name']}: {tightest['basis']}"
-        measure = f"{tightest['name']} {'rel' if tightest['reference'] != 0 else 'abs'}"
-    row = {
-        "scene": s["scene"],
-        "scenario": s["scenario"],
-        "integrator": s["integrator"],
-        "dt": s["dt"],
-        "steps": s["steps"],
-        "max_rel_error": worst,
-        "measure": measure,
-        "tolerance": tolerance,
-        "tolerance_basis": basis,
-        "passed": s["passed"],
-        "verdict": s.get("verdict"),
-        "wall_time_s": s["wall_time_s"],
-        "checks": checks,
-    }
-    validity = s.get("estimate_range")
-    if s.get("model_limits"):
-        row["note"] = f"{s['verdict']}: " + "; ".join(s["model_limits"])
-    elif validity is not None and not validity["inside"]:
-        row["note"] = f"{s['verdict']}: {validity['reason']}"
-    return row
-
-
 def write_run(directory: str | os.PathLike, result: Result, every: int = 1) -> list[pathlib.Path]:
     """Write a Result's trajectory.csv and summary.json into `directory`.
 
     The time column is k dt [s] for step k, exactly: the state after k steps is
     the state at k dt (MuJoCo's data.time accumulates dt and drifts by rounding).
     """
-    columns = result.columns()
-    columns["time"] = np.arange(len(columns["time"])) * float(result.summary["dt"])
     return write_text_files(
         directory,
         {
-            "trajectory.csv": csv_text(columns, every),
-            "summary.json": dumps(result.summary) + "\n",
+            "trajectory.csv": csv_text(result._csv_columns(), every),
+            "summary.json": dumps(result.to_dict()) + "\n",
         },
     )
 

@@ -229,7 +229,7 @@ class Check:
         """Whether the error is within the tolerance (False for a non-finite value)."""
         return bool(math.isfinite(self.error) and self.error <= self.tolerance)
 
-    def as_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, Any]:
         """The summary.json form: name, value, reference, error, tolerance, basis, passed."""
         return {
             "name": self.name,

@@ -1,18 +1,22 @@
-"""`integrator='auto'`: the cheapest setting that meets a tolerance, chosen by the sweep, then run.
+"""The public run: `springlab.run` and `springlab.validate` are `run` and `validate` here, and nowhere else.
 
-`run` and `validate` are `runs.run` and `runs.validate` plus `integrator='auto'`
-(springlab.run and springlab.validate are these): the single-run API knows
-only explicit settings, and the automatic one is a study (springlab.studies.tradeoff:
-a sweep of every integrator and timestep, then the verified cheapest setting
-meeting `tol`) composed on top of it.
+They are the explicit-setting run (springlab.runs.run.run_scenario) plus `integrator='auto'`:
+the cheapest setting that meets a tolerance, chosen by a study (springlab.studies.tradeoff: a
+sweep of every integrator and timestep, then the verified cheapest setting meeting `tol`) and
+then run. That is why the public run lives in the studies layer while the explicit-setting run
+lives below it, in springlab.runs: the trade-off study (and the families, the fit) are built
+from the explicit-setting run, and the public one is built from the trade-off. Code inside the
+package calls `run_scenario` when it names its setting and could not import this module without
+a cycle (the studies); the command line, the demo and users call `run` and `validate`.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 from springlab.errors import BadInputError
-from springlab.runs.run import Result, exact_scenarios, run_scenario, validate_scenarios, validation_row
+from springlab.runs.run import Result, ValidationRow, exact_scenarios, run_scenario
 from springlab.scenes.base import Scene
 
 from .tradeoff import sweepable, tradeoff
@@ -44,14 +48,14 @@ def auto_setting(
     result = tradeoff(scene, scenario, tol=tol, duration=duration, **parameters)
     pick = result.recommendation
     assert pick is not None, "a sweep with tol always answers, if only with integrator None"
-    if pick["integrator"] is None:
+    if pick.integrator is None or pick.dt is None:
         best = min((r for r in result.runs if not r.diverged), key=lambda r: r.error, default=None)
         reach = f"; the best reached is {best.error:.2g} ({best.integrator}, dt = {best.dt:g} s)" if best else ""
         raise BadInputError(
             f"no integrator and timestep of the sweep meets tol = {tol:g} on {result.scene}"
             f" {result.scenario}{reach}; valid: a tol it can reach"
         )
-    return pick["integrator"], pick["dt"]
+    return pick.integrator, pick.dt
 
 
 def run(
@@ -64,7 +68,10 @@ def run(
     tol: float | None = None,
     **parameters: Any,
 ) -> Result:
-    """`runs.run`, where `integrator='auto'` first picks the cheapest setting meeting `tol` (`auto_setting`).
+    """Simulate a scenario headless in MuJoCo and compare it with its exact solution (`springlab.run`).
+
+    The explicit-setting run (springlab.runs.run.run_scenario), where `integrator='auto'` first
+    picks the cheapest setting meeting `tol` (`auto_setting`).
 
     Parameters
     ----------
@@ -89,7 +96,8 @@ def run(
     Returns
     -------
     Result
-        The Result (see `runs.run`).
+        The Result: `passed`, `verdict` and `message` say how the run compares with its exact
+        solution; `to_dict()` is summary.json, `to_pandas()` trajectory.csv.
 
     Raises
     ------
@@ -110,8 +118,11 @@ def validate(
     integrator: str | None = None,
     dt: float | None = None,
     tol: float | None = None,
-) -> list[dict[str, Any]]:
-    """`runs.validate`, where `integrator='auto'` picks per scenario the cheapest setting meeting `tol`.
+) -> list[ValidationRow]:
+    """Run every scenario that has an exact reference and tabulate it (`springlab.validate`).
+
+    Each scenario runs at the scene's validated setting, or at `integrator` / `dt`, or with
+    `integrator='auto'` at the cheapest setting that meets `tol`, chosen per scenario.
 
     Parameters
     ----------
@@ -126,19 +137,25 @@ def validate(
 
     Returns
     -------
-    list[dict[str, Any]]
-        The rows of `runs.validate`; a scenario validated by scalar checks alone
-        (nothing for 'auto' to sweep) runs at the scene's validated setting and
-        its row carries a "note" saying so.
+    list[ValidationRow]
+        One row per scenario, in catalogue order (`row.to_dict()` is a row of `springlab validate
+        --json`). With 'auto', a scenario validated by scalar checks alone (nothing for 'auto' to
+        sweep) runs at the scene's validated setting and its row's `note` says so.
+
+    Raises
+    ------
+    UnknownNameError
+        a scene name springlab does not have.
+    BadInputError
+        bad integrator, dt or tol; for 'auto' no tol, a dt given, or no setting meeting tol.
+    DivergedError
+        a run blew up.
     """
-    if integrator != "auto":
-        return validate_scenarios(scene_names, integrator=integrator, dt=dt, tol=tol)
     rows = []
     for scene, scenario in exact_scenarios(scene_names):
-        if not sweepable(scene, scenario, None):
-            row = validation_row(run_scenario(scene.name, scenario.name))
-            row["note"] = NO_SWEEP_NOTE
-            rows.append(row)
+        if integrator == "auto" and not sweepable(scene, scenario, None):
+            row = ValidationRow.of(run_scenario(scene.name, scenario.name))
+            rows.append(dataclasses.replace(row, note=NO_SWEEP_NOTE))
             continue
-        rows.append(validation_row(run(scene.name, scenario.name, integrator="auto", dt=dt, tol=tol)))
+        rows.append(ValidationRow.of(run(scene.name, scenario.name, integrator=integrator, dt=dt, tol=tol)))
     return rows

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from springlab.runs import compare
+from springlab.runs.compare import Verdict
 
 #: the order fit keeps errors below this (beyond it the leading term no longer dominates) ...
 FIT_MAX_ERROR = 0.1
@@ -32,7 +33,7 @@ FIT_POINTS = 4
 FIT_MAX_SCATTER = 1.5
 
 
-@dataclasses.dataclass
+@dataclasses.dataclass(frozen=True)
 class Run:
     """One (integrator, dt) of a sweep.
 
@@ -53,8 +54,8 @@ class Run:
     detail
         how it diverged, for people.
     verdict
-        what `springlab run` says of the same setting: 'PASS', 'FAIL' or 'not validated:
-        outside the range of the error estimate' (springlab.runs.compare); None if diverged.
+        what `springlab run` says of the same setting (a springlab.runs.compare.Verdict: PASS,
+        FAIL or NOT_VALIDATED); None if diverged.
     """
 
     integrator: str
@@ -64,12 +65,12 @@ class Run:
     wall_time_s: float
     diverged: bool = False
     detail: str = ""
-    verdict: str | None = None
+    verdict: Verdict | None = None
 
     @property
     def validated(self) -> bool:
         """Whether the run is inside the range of its error estimate (its verdict means something)."""
-        return self.verdict in (compare.PASS, compare.FAIL)
+        return self.verdict in (Verdict.PASS, Verdict.FAIL)
 
     @property
     def error(self) -> float:
@@ -78,8 +79,8 @@ class Run:
             raise ValueError(f"{self.integrator} at dt = {self.dt:g} s diverged: it has no error")
         return self.max_rel_error
 
-    def row(self) -> dict[str, Any]:
-        """The JSON row: integrator, dt, max_rel_error, steps, wall_time_s, diverged, verdict."""
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON row: integrator, dt [s], max_rel_error [-], steps, wall_time_s [s], diverged, verdict."""
         return {
             "integrator": self.integrator,
             "dt": self.dt,
@@ -87,7 +88,7 @@ class Run:
             "steps": self.steps,
             "wall_time_s": self.wall_time_s,
             "diverged": self.diverged,
-            "verdict": self.verdict,
+            "verdict": None if self.verdict is None else str(self.verdict),
         }
 
 

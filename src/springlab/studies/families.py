@@ -17,12 +17,13 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from springlab import scenes
+from springlab import scenes, tables
 from springlab.errors import BadInputError, DivergedError
+from springlab.files import json_ready
 from springlab.runs.run import Result, prepare, run_scenario, scene_and_scenario
 from springlab.sim.simulate import simulate
 
@@ -34,6 +35,18 @@ FAMILY_SEPARATRIX_FRACTIONS = (0.3, 0.6, 0.9, 1.1, 1.3)
 
 #: separatrix branches as (x [m], v [m/s]) arrays
 Curves = list[tuple[np.ndarray, np.ndarray]]
+
+if TYPE_CHECKING:
+    import pandas
+
+
+def _read_only(values: np.ndarray | None) -> np.ndarray | None:
+    """A read-only view of `values` (None stays None)."""
+    if values is None:
+        return None
+    view = np.asarray(values).view()
+    view.setflags(write=False)
+    return view
 
 
 @dataclasses.dataclass(frozen=True)
@@ -58,10 +71,18 @@ class Member:
     stopped: bool
     fraction: float
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "x", _read_only(self.x))
+        object.__setattr__(self, "v", _read_only(self.v))
+
     @property
     def diverged(self) -> bool:
         """Whether the member blew up (it has no series)."""
         return self.x is None or self.v is None
+
+    def to_dict(self) -> dict[str, Any]:
+        """start [m], fraction [-], stopped, diverged (the series are in PhaseFamily.to_pandas())."""
+        return {"start": self.start, "fraction": self.fraction, "stopped": self.stopped, "diverged": self.diverged}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -92,6 +113,35 @@ class PhaseFamily:
     straddles: bool
     members: tuple[Member, ...]
 
+    def to_dict(self) -> dict[str, Any]:
+        """The family's facts (plain JSON values): scene, scenario, integrator, dt [s], joint, center [m],
+        straddles, equilibria, members (see Member.to_dict); the series are in `to_pandas()`."""
+        return json_ready(
+            {
+                "scene": self.result.scene,
+                "scenario": self.result.scenario,
+                "integrator": self.result.integrator,
+                "dt": self.result.dt,
+                "joint": self.joint,
+                "center": self.center,
+                "straddles": self.straddles,
+                "equilibria": self.equilibria,
+                "members": [m.to_dict() for m in self.members],
+            }
+        )
+
+    def to_pandas(self) -> pandas.DataFrame:
+        """The members' phase trajectories in long form, one row per member and step: member (its
+        index), start [m], x [m], v [m/s] (hinges [rad], [rad/s]); diverged members have no rows (needs pandas)."""
+        return tables.to_pandas(
+            {
+                "member": np.concatenate([np.full(len(m.x), i) for i, m in enumerate(self.members) if m.x is not None]),
+                "start": np.concatenate([np.full(len(m.x), m.start) for m in self.members if m.x is not None]),
+                "x": np.concatenate([m.x for m in self.members if m.x is not None]),
+                "v": np.concatenate([m.v for m in self.members if m.v is not None]),
+            }
+        )
+
 
 @dataclasses.dataclass(frozen=True)
 class ZetaFamily:
@@ -116,6 +166,27 @@ class ZetaFamily:
     def joint(self) -> str:
         """The one reported joint."""
         return next(iter(self.runs[0][1].pos))
+
+    def to_dict(self) -> dict[str, Any]:
+        """scene, scenario, damping_per_ratio [N s/m], runs: [{"zeta", "run": summary.json of that run}]."""
+        return json_ready(
+            {
+                "scene": self.scene,
+                "scenario": self.scenario,
+                "damping_per_ratio": self.damping_per_ratio,
+                "runs": [{"zeta": zeta, "run": run.to_dict()} for zeta, run in self.runs],
+            }
+        )
+
+    def to_pandas(self) -> pandas.DataFrame:
+        """The runs in long form, one row per ratio and step: zeta [-], then each run's trajectory.csv
+        columns (time [s] = k dt, `<joint>_pos`, `<joint>_vel`, `<joint>_pos_ref`, `<joint>_vel_ref`) (needs pandas)."""
+        parts = []
+        for zeta, run in self.runs:
+            columns = run.columns()
+            steps = len(columns["time"])
+            parts.append({"zeta": np.full(steps, zeta), **columns, "time": np.arange(steps) * float(run.dt)})
+        return tables.to_pandas({name: np.concatenate([part[name] for part in parts]) for name in parts[0]})
 
 
 def separatrix_crossings(curves: Curves) -> list[float]:
@@ -164,7 +235,7 @@ def _family_members(result: Result, starts: Sequence[float], fractions: Sequence
     """
     scene, scenario = scene_and_scenario(result)
     joint = next(iter(result.pos))
-    integrator, dt = result.summary["integrator"], result.summary["dt"]
+    integrator, dt = result.integrator, result.dt
     steps = result.trajectory.steps
     if result.trajectory.stopped:  # the scenario's own length: bounded members run it all
         steps = max(steps, int(round(scenario.duration / dt)))

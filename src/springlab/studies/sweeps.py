@@ -21,17 +21,21 @@ import dataclasses
 import math
 import time as _time
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from springlab import scenes
+from springlab import scenes, tables
 from springlab.errors import BadInputError, DivergedError, UnknownNameError
+from springlab.files import json_ready
 from springlab.runs.run import evaluate, prepare
 from springlab.sim.batch import Job, run_rollout
 from springlab.sim.simulate import check_timing, integrator_id
 
 from .executor import Executor, chunked, resolve
+
+if TYPE_CHECKING:
+    import pandas
 
 #: configurations per chunk (one batched MuJoCo call each): seconds of work, not milliseconds
 CHUNK_CONFIGURATIONS = 64
@@ -63,6 +67,10 @@ class Axis:
         if self.log:
             return np.exp(math.log(self.low) + unit * (math.log(self.high) - math.log(self.low)))
         return self.low + unit * (self.high - self.low)
+
+    def to_dict(self) -> dict[str, Any]:
+        """sweep --json's `vary` entry: name, low, high, count (None with --samples), log."""
+        return {"name": self.name, "low": self.low, "high": self.high, "count": self.count, "log": self.log}
 
 
 def parse_axis(text: str) -> Axis:
@@ -104,9 +112,60 @@ def make_axis(name: str, low: float, high: float, count: int | None, log: bool =
     return Axis(name, float(low), float(high), None if count is None else int(count), log)
 
 
-@dataclasses.dataclass
+@dataclasses.dataclass(frozen=True)
+class SweepRow:
+    """One configuration of a sweep and what its run gave.
+
+    Attributes
+    ----------
+    values
+        varied parameter -> its value here [its unit].
+    parameters
+        every parameter of the run (SI).
+    quantities
+        the scenario's scalar quantities (numbers, bools, strings; what `springlab run` reports).
+    errors
+        compared column -> max_rel [-] against the exact solution (empty without one).
+    passed
+        the run's `passed` (None: no reference; False for a diverged or invalid configuration).
+    diverged
+        the run blew up.
+    detail
+        why it diverged, or "invalid: ..." for a configuration the scenario cannot start from
+        (e.g. a bump that lifts the car); "" otherwise.
+    """
+
+    values: dict[str, float]
+    parameters: dict[str, float]
+    quantities: dict[str, Any]
+    errors: dict[str, float]
+    passed: bool | None
+    diverged: bool
+    detail: str
+
+    @property
+    def invalid(self) -> bool:
+        """Whether the scenario could not start from this configuration."""
+        return self.detail.startswith("invalid")
+
+    def to_dict(self) -> dict[str, Any]:
+        """sweep --json's row: values, parameters, quantities, errors, passed, diverged, detail."""
+        return {
+            "values": dict(self.values),
+            "parameters": dict(self.parameters),
+            "quantities": dict(self.quantities),
+            "errors": dict(self.errors),
+            "passed": self.passed,
+            "diverged": self.diverged,
+            "detail": self.detail,
+        }
+
+
+@dataclasses.dataclass(frozen=True)
 class Sweep:
     """A finished sweep; one row per configuration, in order (the last axis fastest on a grid).
+
+    `to_dict()` is what `springlab sweep --json` prints, `to_pandas()` is sweep.csv as a DataFrame.
 
     Attributes
     ----------
@@ -121,11 +180,9 @@ class Sweep:
     samples
         random points drawn (None: the full grid).
     values
-        varied parameter -> (n,) values [its unit].
+        varied parameter -> (n,) values [its unit] (read-only arrays).
     rows
-        per configuration: "parameters" (all, SI), "quantities", "errors" (column -> max_rel [-]),
-        "passed" (bool or None: no reference), "diverged" (bool), "detail" (why it diverged, or
-        "invalid: ..." for a configuration the scenario cannot start from, e.g. a bump that lifts the car).
+        one SweepRow per configuration.
     wall_time_s
         wall time of the whole sweep [s].
     executor
@@ -139,24 +196,57 @@ class Sweep:
     integrator: str
     dt: float
     duration: float
-    axes: list[Axis]
+    axes: tuple[Axis, ...]
     samples: int | None
-    values: dict[str, np.ndarray]
-    rows: list[dict[str, Any]]
+    values: dict[str, np.ndarray] = dataclasses.field(repr=False)
+    rows: tuple[SweepRow, ...] = dataclasses.field(repr=False)
     wall_time_s: float
     executor: str
     chunks: int
+
+    def __post_init__(self) -> None:
+        values = {}
+        for name, column in self.values.items():
+            column = np.asarray(column).view()
+            column.setflags(write=False)
+            values[name] = column
+        object.__setattr__(self, "values", values)
 
     @property
     def size(self) -> int:
         """Number of configurations."""
         return len(self.rows)
 
+    @property
+    def diverged(self) -> int:
+        """Number of configurations whose run blew up."""
+        return sum(bool(r.diverged) for r in self.rows)
+
+    @property
+    def invalid(self) -> int:
+        """Number of configurations the scenario cannot start from."""
+        return sum(r.invalid for r in self.rows)
+
+    @property
+    def passed(self) -> int:
+        """Number of configurations whose run passed."""
+        return sum(r.passed is True for r in self.rows)
+
+    @property
+    def failed(self) -> int:
+        """Number of configurations whose run failed (diverged and invalid ones included)."""
+        return sum(r.passed is False for r in self.rows)
+
+    @property
+    def configurations_per_s(self) -> float | None:
+        """Configurations run per second of wall time [1/s] (None: no time measured)."""
+        return self.size / self.wall_time_s if self.wall_time_s > 0 else None
+
     def quantity_names(self) -> list[str]:
         """Scalar numeric quantities of the scenario, in summary.json order."""
         names: list[str] = []
         for row in self.rows:
-            for name, value in row["quantities"].items():
+            for name, value in row.quantities.items():
                 if name not in names and _is_number(value):
                     names.append(name)
         return names
@@ -167,57 +257,68 @@ class Sweep:
             return self.values[name]
         out = np.full(self.size, np.nan)
         for i, row in enumerate(self.rows):
-            if name.endswith("_max_rel") and name[: -len("_max_rel")] in row["errors"]:
-                out[i] = row["errors"][name[: -len("_max_rel")]]
-            elif _is_number(row["quantities"].get(name)):
-                out[i] = float(row["quantities"][name])
+            if name.endswith("_max_rel") and name[: -len("_max_rel")] in row.errors:
+                out[i] = row.errors[name[: -len("_max_rel")]]
+            elif _is_number(row.quantities.get(name)):
+                out[i] = float(row.quantities[name])
         return out
 
-    def table(self) -> tuple[list[str], list[list[Any]]]:
-        """sweep.csv's header and rows: varied parameters, quantities, errors, passed, diverged."""
+    def _records(self) -> tuple[list[str], list[list[Any]]]:
+        """sweep.csv's header and rows, None where a configuration has no value."""
         quantities = []
         for row in self.rows:
-            for name, value in row["quantities"].items():
+            for name, value in row.quantities.items():
                 if name not in quantities and (_is_number(value) or isinstance(value, str)):
                     quantities.append(name)
         errors: list[str] = []
         for row in self.rows:
-            errors.extend(c for c in row["errors"] if c not in errors)
+            errors.extend(c for c in row.errors if c not in errors)
         header = list(self.values) + quantities + [f"{c}_max_rel" for c in errors] + ["passed", "diverged", "detail"]
         body = []
         for i, row in enumerate(self.rows):
             line: list[Any] = [self.values[name][i] for name in self.values]
-            line += [row["quantities"].get(name, "") for name in quantities]
-            line += [row["errors"].get(c, "") for c in errors]
-            line += ["" if row["passed"] is None else row["passed"], row["diverged"], row["detail"]]
+            line += [row.quantities.get(name) for name in quantities]
+            line += [row.errors.get(c) for c in errors]
+            line += [row.passed, row.diverged, row.detail]
             body.append(line)
         return header, body
 
-    def summary(self) -> dict[str, Any]:
-        """The JSON form (`springlab sweep --json`): setting, axes, counts, timings and every row."""
-        passed = [r["passed"] for r in self.rows]
-        return {
-            "scene": self.scene,
-            "scenario": self.scenario,
-            "integrator": self.integrator,
-            "dt": self.dt,
-            "duration": self.duration,
-            "vary": [dataclasses.asdict(a) for a in self.axes],
-            "samples": self.samples,
-            "configurations": self.size,
-            "diverged": sum(bool(r["diverged"]) for r in self.rows),
-            "invalid": sum(r["detail"].startswith("invalid") for r in self.rows),
-            "passed": sum(p is True for p in passed),
-            "failed": sum(p is False for p in passed),
-            "chunks": self.chunks,
-            "executor": self.executor,
-            "wall_time_s": self.wall_time_s,
-            "configurations_per_s": self.size / self.wall_time_s if self.wall_time_s > 0 else None,
-            "rows": [
-                {"values": {name: float(self.values[name][i]) for name in self.values}, **row}
-                for i, row in enumerate(self.rows)
-            ],
-        }
+    def table(self) -> tuple[list[str], list[list[Any]]]:
+        """sweep.csv's header and rows: varied parameters, quantities, errors, passed, diverged, detail
+        ("" where a configuration has no value)."""
+        header, body = self._records()
+        return header, [["" if value is None else value for value in line] for line in body]
+
+    def to_dict(self) -> dict[str, Any]:
+        """What `springlab sweep --json` prints: setting, axes, counts, timings and every row (plain JSON values)."""
+        return json_ready(
+            {
+                "scene": self.scene,
+                "scenario": self.scenario,
+                "integrator": self.integrator,
+                "dt": self.dt,
+                "duration": self.duration,
+                "vary": [a.to_dict() for a in self.axes],
+                "samples": self.samples,
+                "configurations": self.size,
+                "diverged": self.diverged,
+                "invalid": self.invalid,
+                "passed": self.passed,
+                "failed": self.failed,
+                "chunks": self.chunks,
+                "executor": self.executor,
+                "wall_time_s": self.wall_time_s,
+                "configurations_per_s": self.configurations_per_s,
+                "rows": [row.to_dict() for row in self.rows],
+            }
+        )
+
+    def to_pandas(self) -> pandas.DataFrame:
+        """sweep.csv as a DataFrame, one row per configuration: varied parameters, quantities,
+        `<column>_max_rel` errors, passed, diverged, detail (None/NaN where a configuration has no value;
+        needs pandas)."""
+        header, body = self._records()
+        return tables.to_pandas([dict(zip(header, line)) for line in body])
 
 
 def _is_number(value: Any) -> bool:
@@ -292,10 +393,9 @@ def run_chunk(payload: Mapping[str, Any], nthread: int = 0) -> list[dict[str, An
         except DivergedError as error:
             row.update(passed=False, diverged=True, detail=str(error))
         else:
-            summary = result.summary
-            row["quantities"] = _scalars(summary["quantities"])
-            row["errors"] = {column: e["max_rel"] for column, e in summary["errors"].items()}
-            row["passed"] = summary["passed"]
+            row["quantities"] = _scalars(result.quantities)
+            row["errors"] = {column: e.max_rel for column, e in result.errors.items()}
+            row["passed"] = result.passed
     return rows
 
 
@@ -352,6 +452,7 @@ def sweep(
 
     Returns
     -------
+    Sweep
         The Sweep; rows equal single `springlab.run` calls at the same parameters.
 
     Raises
@@ -400,14 +501,17 @@ def sweep(
         for piece in pieces
     ]
     results = runner.map(run_chunk, payloads, description="sweep", sizes=[len(p) for p in pieces], unit="run")
-    rows = [row for chunk in results for row in chunk]
+    rows = tuple(
+        SweepRow(values={name: float(values[name][i]) for name in values}, **row)
+        for i, row in enumerate(r for chunk in results for r in chunk)
+    )
     return Sweep(
         scene=scene_obj.name,
         scenario=chosen.name,
         integrator=integrator,
         dt=float(dt),
         duration=float(duration),
-        axes=axes,
+        axes=tuple(axes),
         samples=samples,
         values=values,
         rows=rows,

@@ -18,14 +18,16 @@ import dataclasses
 import math
 import time as _time
 from collections.abc import Callable, Iterable, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import mujoco
 import numpy as np
 
-from springlab import scenes
+from springlab import scenes, tables
 from springlab.errors import BadInputError, DivergedError
+from springlab.files import json_ready
 from springlab.runs import compare
+from springlab.runs.compare import Verdict
 from springlab.runs.run import evaluate, prepare, run_scenario
 from springlab.scenes.base import Scenario, Scene
 from springlab.sim.batch import TIMING_STEPS, Job, run_batched, time_run
@@ -33,6 +35,9 @@ from springlab.sim.simulate import INTEGRATORS, ORDERS, Setup, check_timing, int
 
 from .convergence import Run, observed_order, pareto_front
 from .executor import Executor, chunked
+
+if TYPE_CHECKING:
+    import pandas
 
 #: the sweep spans omega_max*dt from SWEEP_TOP down by SWEEP_DECADES decades
 SWEEP_TOP = 1.0
@@ -55,9 +60,52 @@ WALL_TIME_BASIS = (
 # -- the sweep -----------------------------------------------------------------
 
 
-@dataclasses.dataclass
+@dataclasses.dataclass(frozen=True)
+class Recommendation:
+    """The cheapest (integrator, dt) of a sweep that meets a tolerance, verified by running it (`recommend`).
+
+    Attributes
+    ----------
+    tol
+        the relative tolerance [-] asked for.
+    integrator
+        the integrator to use (None: no setting of the sweep meets tol).
+    dt
+        the timestep to use [s] (None with integrator).
+    max_rel_error
+        the verification run's largest max_rel [-] (None with integrator).
+    wall_time_s
+        the verification run's wall time, measured as the sweep's [s] (None with integrator).
+    """
+
+    tol: float
+    integrator: str | None
+    dt: float | None
+    max_rel_error: float | None
+    wall_time_s: float | None
+
+    @property
+    def found(self) -> bool:
+        """Whether a setting of the sweep meets tol."""
+        return self.integrator is not None
+
+    def to_dict(self) -> dict[str, Any]:
+        """tradeoff.json's `recommendation`: tol, integrator, dt, max_rel_error, wall_time_s."""
+        return {
+            "tol": self.tol,
+            "integrator": self.integrator,
+            "dt": self.dt,
+            "max_rel_error": self.max_rel_error,
+            "wall_time_s": self.wall_time_s,
+        }
+
+
+@dataclasses.dataclass(frozen=True)
 class Tradeoff:
     """A speed-accuracy sweep of one scenario.
+
+    `to_dict()` is tradeoff.json (what `springlab tradeoff --json` prints), `to_pandas()` one
+    row per run.
 
     Attributes
     ----------
@@ -76,7 +124,7 @@ class Tradeoff:
     pareto
         the runs no other run beats in both error and wall time, cheapest first.
     recommendation
-        for a tolerance, the verified cheapest setting (see `recommend`).
+        for a tolerance, the verified cheapest setting (see `recommend`); None without one.
     sweep_wall_time_s
         wall time of the whole sweep, timing pass included [s].
     """
@@ -86,26 +134,34 @@ class Tradeoff:
     parameters: dict[str, float]
     overrides: dict[str, Any]
     duration: float
-    runs: list[Run]
+    runs: tuple[Run, ...] = dataclasses.field(repr=False)
     orders: dict[str, float | None]
-    pareto: list[Run]
-    recommendation: dict[str, Any] | None = None
+    pareto: tuple[Run, ...] = dataclasses.field(repr=False)
+    recommendation: Recommendation | None = None
     sweep_wall_time_s: float = 0.0
 
-    def as_json(self) -> dict[str, Any]:
-        """{"runs", "orders", "pareto", "recommendation"} plus the scene, scenario, duration and basis."""
-        return {
-            "scene": self.scene,
-            "scenario": self.scenario,
-            "duration": self.duration,
-            "parameters": dict(self.parameters),
-            "runs": [r.row() for r in self.runs],
-            "orders": dict(self.orders),
-            "pareto": [r.row() for r in self.pareto],
-            "recommendation": self.recommendation,
-            "wall_time_basis": WALL_TIME_BASIS,
-            "sweep_wall_time_s": self.sweep_wall_time_s,
-        }
+    def to_dict(self) -> dict[str, Any]:
+        """tradeoff.json: scene, scenario, duration, parameters, runs, orders, pareto, recommendation,
+        wall_time_basis, sweep_wall_time_s (plain JSON values)."""
+        return json_ready(
+            {
+                "scene": self.scene,
+                "scenario": self.scenario,
+                "duration": self.duration,
+                "parameters": dict(self.parameters),
+                "runs": [r.to_dict() for r in self.runs],
+                "orders": dict(self.orders),
+                "pareto": [r.to_dict() for r in self.pareto],
+                "recommendation": None if self.recommendation is None else self.recommendation.to_dict(),
+                "wall_time_basis": WALL_TIME_BASIS,
+                "sweep_wall_time_s": self.sweep_wall_time_s,
+            }
+        )
+
+    def to_pandas(self) -> pandas.DataFrame:
+        """One row per run: tradeoff.json's `runs` columns plus `pareto` (on the Pareto front) (needs pandas)."""
+        front = {id(r) for r in self.pareto}
+        return tables.to_pandas([{**r.to_dict(), "pareto": id(r) in front} for r in self.runs])
 
 
 def fastest_rate(scene: Scene, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> float | None:
@@ -259,14 +315,14 @@ def sweep(
         parameters=params,
         overrides=dict(parameters),
         duration=duration,
-        runs=runs,
+        runs=tuple(runs),
         orders=orders,
-        pareto=pareto_front(runs),
+        pareto=tuple(pareto_front(runs)),
         sweep_wall_time_s=_time.perf_counter() - started,
     )
 
 
-def grid_chunk(payload: dict[str, Any], nthread: int = 0) -> list[tuple[float | None, str, int, Any]]:
+def grid_chunk(payload: dict[str, Any], nthread: int = 0) -> list[tuple[float | None, str, int, Verdict | None]]:
     """One chunk of the grid as one batched call: per (integrator, dt) of payload["pairs"],
     (max relative error [-] or None if it diverged, why it diverged, steps taken, the run's verdict).
 
@@ -281,7 +337,7 @@ def grid_chunk(payload: dict[str, Any], nthread: int = 0) -> list[tuple[float | 
     for name, dt in payload["pairs"]:
         steps = check_timing(dt, duration)
         jobs.append(Job(model, name, dt, steps, scene_obj.setup(model, params, chosen, steps, dt), stop))
-    out: list[tuple[float | None, str, int, Any]] = []
+    out: list[tuple[float | None, str, int, Verdict | None]] = []
     for job, outcome in zip(jobs, run_batched(jobs, nthread=nthread)):
         if isinstance(outcome, DivergedError):
             out.append((None, str(outcome), job.steps, None))
@@ -293,8 +349,7 @@ def grid_chunk(payload: dict[str, Any], nthread: int = 0) -> list[tuple[float | 
             out.append((None, str(blown), outcome.steps, None))
             continue
         # a stop condition may end a run early, as in `springlab run`
-        error = max(e["max_rel"] for e in result.summary["errors"].values())
-        out.append((error, "", outcome.steps, result.summary["verdict"]))
+        out.append((result.max_rel_error, "", outcome.steps, result.verdict))
     return out
 
 
@@ -384,8 +439,8 @@ def _candidates(result: Tradeoff, tol: float) -> list[tuple[float, str, float, b
     return sorted(out)
 
 
-def recommend(result: Tradeoff, tol: float, *, timing_repeats: int = 3) -> dict[str, Any]:
-    """The cheapest (integrator, dt) meeting `tol`, verified by running it with `runs.run`.
+def recommend(result: Tradeoff, tol: float, *, timing_repeats: int = 3) -> Recommendation:
+    """The cheapest (integrator, dt) meeting `tol`, verified by running it with `runs.run.run_scenario`.
 
     Candidates come from the sweep (`_candidates`), cheapest predicted first;
     the first one whose verification run meets tol wins, and its error and
@@ -397,12 +452,13 @@ def recommend(result: Tradeoff, tol: float, *, timing_repeats: int = 3) -> dict[
         a sweep of the scenario.
     tol
         relative tolerance [-] on every compared column.
+    timing_repeats
+        timed repetitions of the verified setting (best is kept).
 
     Returns
     -------
-    dict[str, Any]
-        {"tol", "integrator", "dt", "max_rel_error", "wall_time_s"}; integrator,
-        dt, max_rel_error and wall_time_s are None when no setting of the sweep
+    Recommendation
+        integrator, dt, max_rel_error and wall_time_s are None when no setting of the sweep
         meets tol.
     """
     tol = compare.check_tolerance(tol)
@@ -419,21 +475,19 @@ def recommend(result: Tradeoff, tol: float, *, timing_repeats: int = 3) -> dict[
             )
         except DivergedError:
             continue
-        if not run.summary["passed"]:
+        if not run.passed:
             continue
         scene_obj = scenes.get(result.scene)
         chosen = scene_obj.scenario(result.scenario)
-        steps = run.trajectory.steps
-        job = Job(run.model, name, dt, steps, scene_obj.setup(run.model, run.parameters, chosen, steps, dt))
-        error = max(e["max_rel"] for e in run.summary["errors"].values())
-        return {
-            "tol": tol,
-            "integrator": name,
-            "dt": dt,
-            "max_rel_error": error,
-            "wall_time_s": time_run(job, repeats=timing_repeats),
-        }
-    return {"tol": tol, "integrator": None, "dt": None, "max_rel_error": None, "wall_time_s": None}
+        job = Job(run.model, name, dt, run.steps, scene_obj.setup(run.model, run.parameters, chosen, run.steps, dt))
+        return Recommendation(
+            tol=tol,
+            integrator=name,
+            dt=dt,
+            max_rel_error=run.max_rel_error,
+            wall_time_s=time_run(job, repeats=timing_repeats),
+        )
+    return Recommendation(tol=tol, integrator=None, dt=None, max_rel_error=None, wall_time_s=None)
 
 
 def tradeoff(
@@ -451,7 +505,5 @@ def tradeoff(
         tol = compare.check_tolerance(tol)
     started = _time.perf_counter()
     result = sweep(scene, scenario, duration=duration, executor=executor, **parameters)
-    if tol is not None:
-        result.recommendation = recommend(result, tol)
-    result.sweep_wall_time_s = _time.perf_counter() - started
-    return result
+    recommendation = recommend(result, tol) if tol is not None else None
+    return dataclasses.replace(result, recommendation=recommendation, sweep_wall_time_s=_time.perf_counter() - started)
