@@ -30,7 +30,9 @@ def checkout(tmp_path_factory):
     shutil.copytree(ROOT / "models", root / "models")
     shutil.copy(ROOT / "models" / "slider.xml", root / "models" / f"{NAME}.xml")
     folder = root / "src" / "springlab" / "scenes" / NAME
-    shutil.copytree(ROOT / "src" / "springlab" / "scenes" / "slider", folder, ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copytree(
+        ROOT / "src" / "springlab" / "scenes" / "slider", folder, ignore=shutil.ignore_patterns("__pycache__")
+    )
     scene = folder / "scene.py"
     text = scene.read_text()
     assert text.count('name = "slider"') == 1, "the slider names itself once; the copy renames that line only"
