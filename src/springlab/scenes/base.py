@@ -30,6 +30,8 @@ from springlab.exact.limits import stability_limit
 from springlab.sim import model_files
 from springlab.sim.simulate import Setup, Trajectory, quiet_mujoco
 
+from .capabilities import OscillatorSpec
+
 #: smallest body mass [kg] and principal inertia [kg m^2] MuJoCo compiles: its mjMINVAL
 #: (1e-15); a moving body below it fails `MjSpec.compile` ("must be larger than mjMINVAL")
 MIN_MASS = float(mujoco.mjMINVAL)
@@ -275,6 +277,9 @@ class Scene:
        ends a run early as a result), `stability_limit` (damping MuJoCo treats differently from
        joint damping), `phase_field`/`equilibria`/`separatrices` (one-joint phase planes),
        `joint_columns` (joints that only some scenarios have).
+    10. Optionally, capabilities the studies read (types in springlab.scenes.capabilities):
+       `oscillator` (the scene is the textbook's one-mode mass-spring-damper, the unit oscillator
+       of `springlab stability`).
 
     The module exposes the instance as `SCENE`; springlab.scenes discovers it. Tests check each
     claim against a reference built in the test (closed form, expm, scipy's DOP853 at tight
@@ -298,6 +303,9 @@ class Scene:
     #: scenario -> (the textbook question it answers, the answer as one sentence): the answer is a
     #: str.format template over the run's quantities and parameters, e.g. "... {period_s:.3g} s ..."
     questions: dict[str, tuple[str, str]] = {}
+    #: the scene is the textbook's one-mode mass-spring-damper: its parameter, scenario and joint names
+    #: (None: it is not one)
+    oscillator: OscillatorSpec | None = None
 
     def question_and_answer(self, scenario: str, quantities: dict, parameters: dict) -> tuple[str, str] | None:
         """(question, answer sentence) of a scenario's run, or None where the scene states none."""
