@@ -46,7 +46,7 @@ def plot_fit(result: FitResult, path: str | os.PathLike) -> pathlib.Path:
     bottom.set_xlabel("time [s]")
     bottom.set_ylabel(f"data - fit [{record.unit}]")
     bottom.set_title(f"residuals: RMS {result.residual_rms:.3g} {record.unit} (dashed: ±2 RMS)")
-    if result.scene == "kinematics" and result.curves:
+    if result.curves:  # only a fit of a polynomial motion derives v(t), a(t) curves
         _kinematics_panel(phase, result)
     else:
         _phase_panel(phase, result)
