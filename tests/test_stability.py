@@ -435,9 +435,10 @@ def test_the_declared_oscillator_is_the_textbook_mass_spring_damper():
         model, integrator="rk4", dt=dt, duration=steps * dt, qpos=setup.qpos, qvel=setup.qvel, control=setup.control
     )
     system = np.array([[0.0, 1.0], [-stiffness / mass, -damping / mass]])
-    exact = np.array([expm(system * t) @ [x0, v0] for t in run.time])
+    every = slice(None, None, 50)  # 101 of the 5001 states
+    exact = np.array([expm(system * t) @ [x0, v0] for t in run.time[every]])
     # RK4 at omega dt = 2e-3: its error, ~(omega dt)^4 omega t / 120 of the amplitude, is far below 1e-9
-    np.testing.assert_allclose(run.qpos[:, 0], exact[:, 0], rtol=0, atol=1e-9 * x0)
-    np.testing.assert_allclose(run.qvel[:, 0], exact[:, 1], rtol=0, atol=1e-9 * 20 * x0)
-    reference = scene.reference(model, params, chosen, run.time, dt=dt)
+    np.testing.assert_allclose(run.qpos[every, 0], exact[:, 0], rtol=0, atol=1e-9 * x0)
+    np.testing.assert_allclose(run.qvel[every, 0], exact[:, 1], rtol=0, atol=1e-9 * 20 * x0)
+    reference = scene.reference(model, params, chosen, run.time[every], dt=dt)
     np.testing.assert_allclose(reference.pos[oscillator.spec.joint], exact[:, 0], rtol=0, atol=1e-12)
