@@ -21,7 +21,7 @@ if TYPE_CHECKING:  # annotations only: these load mujoco.batch, scipy or sysid, 
     from springlab.studies.audit.audit import Audit
     from springlab.studies.design.sobol import SobolStudy
     from springlab.studies.design.study import Study
-    from springlab.studies.fit.fit import FitResult
+    from springlab.studies.fit.results import FitResult
     from springlab.studies.stability import StabilityReport
     from springlab.studies.sweeps import Sweep
 
