@@ -3,7 +3,7 @@
 On m x'' + d x' + k x = 0 (the scene that declares itself the textbook's one-mode
 mass-spring-damper, `Scene.oscillator`, as a unit oscillator; springlab.studies.extremes
 .build_oscillator): the measured omega*dt at which each integrator's response starts to grow,
-per damping ratio, against the theory in `simulate.stability_limit`
+per damping ratio, against the theory in `exact.limits.stability_limit`
 (`measure_boundaries`: `Boundary` rows); the per-step amplification factor of MuJoCo's
 one-step map over a (zeta, omega*dt) grid (`amplification_map`: an `AmplificationMap`); and the
 undamped energy of every integrator against its exact discrete-map formula
@@ -94,7 +94,7 @@ class Boundary:
     measured_omega_dt
         omega*dt [-] at which the response starts to grow (inf: nothing grew up to SEARCH_STOP).
     theory_omega_dt
-        `simulate.stability_limit`'s [-] (inf: no limit).
+        `exact.limits.stability_limit`'s [-] (inf: no limit).
     relative_difference
         |measured - theory| / theory [-] (0 when both are inf).
     within_tolerance
@@ -152,7 +152,7 @@ def measure_boundaries(
     steps: int = GROWTH_STEPS,
     nthread: int = 0,
 ) -> list[Boundary]:
-    """Measured stability boundary omega*dt [-] per (integrator, zeta) against `simulate.stability_limit`.
+    """Measured stability boundary omega*dt [-] per (integrator, zeta) against `exact.limits.stability_limit`.
 
     On the oscillator scene as a unit oscillator: starting at omega*dt =
     SEARCH_START, doubling until the response grows (GROWTH_FACTOR over

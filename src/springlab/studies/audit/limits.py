@@ -23,7 +23,7 @@ with g(dt) = phi' M (M + dt D)^-1 M phi; its trace condition is the limit,
 dt^2 g omega^2 + 2 dt g (2 zeta omega) < 4. When D phi = c_i M phi (D keeps the mode to itself) g is
 1 / (1 + dt c_i), and with zeta_i = c_i / (2 omega) the implicit and zeta_e = zeta - zeta_i the explicit
 damping ratio: omega dt < 2 s + 2 sqrt(s^2 + 1), s = zeta_i - zeta_e (all implicit: the classic
-2 zeta + 2 sqrt(zeta^2 + 1) of `simulate.stability_limit`; all explicit: -2 zeta + 2 sqrt(zeta^2 + 1)).
+2 zeta + 2 sqrt(zeta^2 + 1) of `exact.limits.stability_limit`; all explicit: -2 zeta + 2 sqrt(zeta^2 + 1)).
 Otherwise (printer_head: the belt's implicit diagonal also pushes the rigid mode) the trace condition is
 solved for dt. rk4 is R(dt A) on a linear model, R(z) = 1 + z + z^2/2 + z^3/6 + z^4/24, so its limit is
 the first dt at which |R(dt lambda)| > 1 for a stable lambda (2.83/omega undamped); discrete has none.
@@ -249,7 +249,7 @@ def predicted_limit(linear: Linearization, integrator: str, damping: np.ndarray 
     """The closed-form stability limit [s] of `integrator` from the stable modes (module docstring), or None.
 
     `damping`: the (nv, nv) damping `integrator` treats implicitly (`implicit_damping`) [N s/m, N m s/rad];
-    None: all of C (joint damping, as `simulate.stability_limit` assumes).
+    None: all of C (joint damping, as `exact.limits.stability_limit` assumes).
     """
     stable = [m for m in linear.modes if m.kind != "rigid" and not m.physically_unstable]
     if integrator == "discrete":
@@ -379,7 +379,7 @@ def confirm(
     most unstable eigenvector of Phi(CONFIRM_ABOVE x limit), at CONFIRM_BELOW and CONFIRM_ABOVE x the
     limit. Confirmed: above, the deviation grows beyond GROWTH_SEEN x the exact flow's growth (or the
     run blows up); below, it does not. `run` runs the jobs (default: one batch.run_batched call on
-    `nthread` threads; the audit passes audit_ship.Runner, which may send them to dask workers).
+    `nthread` threads; the audit passes springlab.studies.audit.ship.Runner, which may send them to dask workers).
     """
     point = linear.point
     given = list(limits)

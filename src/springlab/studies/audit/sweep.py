@@ -51,7 +51,7 @@ REFERENCE_FRACTION = 0.01
 REFERENCE_MAX_STEPS = 50_000
 #: states along the motion where the linearization is re-taken to test linearity
 LINEARITY_PROBES = 4
-#: runs a list of jobs, as batch.run_batched (audit_ship.Runner: locally or on dask workers)
+#: runs a list of jobs, as batch.run_batched (springlab.studies.audit.ship.Runner: locally or on dask workers)
 RunJobs = Callable[[Sequence[Job]], list[Trajectory | DivergedError]]
 
 #: steps of the timing run behind each integrator's cost per step
