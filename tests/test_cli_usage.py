@@ -146,7 +146,15 @@ def test_the_rk4_limit_costs_a_vectorised_scan_not_thousands_of_calls(monkeypatc
     assert len(calls) <= 5 * (1 + 60)
 
 
-def test_stability_output_writes_its_three_files(tmp_path, capsys):
+def test_stability_output_writes_its_three_files(tmp_path, capsys, monkeypatch, stability_report):
+    import numpy as np
+
+    from springlab.studies import stability
+
+    # what the command writes, not the study (tests/test_stability.py): the session's report, a small map
+    small = stability.amplification_map(zetas=[0.0, 1.0], omega_dts=np.geomspace(1e-2, 1e3, 8))
+    monkeypatch.setattr(stability, "stability_report", lambda **options: stability_report)
+    monkeypatch.setattr(stability, "amplification_map", lambda **options: small)
     code, _, err = _run(capsys, "stability", "--output", str(tmp_path))
     assert code == 0, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["energy.png", "stability.json", "stability.png"]

@@ -298,12 +298,9 @@ def cmd_audit(args: argparse.Namespace) -> int:
     if args.output:
         charts_audit.write_audit(result, args.output)
     if args.json:
-        _print_json(result.as_json())
+        _print_json(result.to_dict())
     else:
-        for line in result.verdict():
-            print(line)
-        if args.output:
-            print(f"wrote {pathlib.Path(args.output) / 'audit.json'} and audit.png")
+        cli_text.print_audit(result, args.output)
     return EXIT_OK if result.own_ok else EXIT_FAILED
 
 
@@ -317,10 +314,10 @@ def cmd_stability(args: argparse.Namespace) -> int:
         assert amplification is not None  # computed above whenever there is an output folder
         charts.write_stability(report, amplification, args.output)
     if args.json:
-        _print_json(stability.report_json(report))
+        _print_json(report.to_dict())
     else:
         cli_text.print_stability(report, args.output)
-    return EXIT_OK if all(r["within_tolerance"] for r in report["boundaries"]) else EXIT_FAILED
+    return EXIT_OK if report.passed else EXIT_FAILED
 
 
 def cmd_design(args: argparse.Namespace) -> int:

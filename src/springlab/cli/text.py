@@ -21,9 +21,11 @@ from springlab.scenes.base import Check
 from springlab.studies import tradeoff
 
 if TYPE_CHECKING:  # annotations only: these load mujoco.batch, scipy or sysid, which the commands import lazily
+    from springlab.studies.audit.audit import Audit
     from springlab.studies.design.sobol import SobolStudy
     from springlab.studies.design.study import Study
     from springlab.studies.fit.results import FitResult
+    from springlab.studies.stability import StabilityReport
     from springlab.studies.sweeps import Sweep
 
 
@@ -167,39 +169,47 @@ def print_tradeoff(result: tradeoff.Tradeoff, output: str | None) -> None:
         print(f"  wrote {pathlib.Path(output) / 'tradeoff.json'} and tradeoff.png")
 
 
-def print_stability(report: dict, output: str | None) -> None:
+def print_audit(result: Audit, output: str | None) -> None:
+    """`springlab audit`: the audit's message (modes, your setting's margin and error, the cheapest setting
+    meeting tol) and what was written."""
+    print(result.message)
+    if output:
+        print(f"wrote {pathlib.Path(output) / 'audit.json'} and audit.png")
+
+
+def print_stability(report: StabilityReport, output: str | None) -> None:
     """`springlab stability`: boundaries omega*dt [-] against theory, the extremes table, undamped energy."""
     print("stability boundary omega*dt (measured by a growth test vs theory)")
     print(f"  {'integrator':<13}{'zeta':>7}{'measured':>12}{'theory':>12}{'rel diff':>10}")
-    for r in report["boundaries"]:
+    for b in report.boundaries:
         print(
-            f"  {r['integrator']:<13}{r['zeta']:>7g}{r['measured_omega_dt']:>12.5g}{r['theory_omega_dt']:>12.5g}"
-            f"{r['relative_difference']:>10.1e}"
+            f"  {b.integrator:<13}{b.zeta:>7g}{b.measured_omega_dt:>12.5g}{b.theory_omega_dt:>12.5g}"
+            f"{b.relative_difference:>10.1e}"
         )
-    print(f"extremes (accurate: max rel error <= {report['accuracy_threshold']:g})")
+    print(f"extremes (accurate: max rel error <= {report.accuracy_threshold:g})")
     print(
         f"  {'case':<15}{'integrator':<13}{'x limit':>8}{'omega*dt':>10}{'steps':>8}  {'outcome':<11}"
         f"{'error':>9}  advice"
     )
-    for r in report["extremes"]:
-        error = "-" if r["max_rel_error"] is None else f"{r['max_rel_error']:.1e}"
-        if r["fraction"] is None:
+    for r in report.extremes:
+        error = "-" if r.max_rel_error is None else f"{r.max_rel_error:.1e}"
+        if r.fraction is None:
             fraction = "advised"
         else:
-            fraction = f"{r['fraction']:g}" + ("*" if r["limit_of"] != r["integrator"] else "")
+            fraction = f"{r.fraction:g}" + ("*" if r.limit_of != r.integrator else "")
         print(
-            f"  {r['case']:<15}{r['integrator']:<13}{fraction:>8}{r['omega_dt']:>10.4g}{r['steps']:>8}"
-            f"  {r['outcome']:<11}{error:>9}  {r['advice']}"
+            f"  {r.case:<15}{r.integrator:<13}{fraction:>8}{r.omega_dt:>10.4g}{r.steps:>8}"
+            f"  {r.outcome:<11}{error:>9}  {r.advice}"
         )
     print("  * discrete has no stability limit: fractions of the euler limit")
     print("undamped energy E/E0 vs the exact step-map formulas")
-    for r in report["energy"]:
+    for e in report.energy:
         print(
-            f"  {r['integrator']:<13} omega*dt {r['omega_dt']:g}, {r['steps']} steps: E/E0 in"
-            f" [{r['min_ratio']:.6g}, {r['max_ratio']:.6g}], final {r['final_ratio']:.6g};"
-            f" {r['formula']}: max deviation {r['max_relative_deviation']:.1e}"
+            f"  {e.integrator:<13} omega*dt {e.omega_dt:g}, {e.steps} steps: E/E0 in"
+            f" [{e.min_ratio:.6g}, {e.max_ratio:.6g}], final {e.final_ratio:.6g};"
+            f" {e.formula}: max deviation {e.max_relative_deviation:.1e}"
         )
-    print(f"done in {report['wall_time_s']:.1f} s")
+    print(f"done in {report.wall_time_s:.1f} s")
     if output:
         print(f"  wrote {pathlib.Path(output) / 'stability.json'}, stability.png and energy.png")
 

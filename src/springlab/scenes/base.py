@@ -30,7 +30,7 @@ from springlab.exact.limits import stability_limit
 from springlab.sim import model_files
 from springlab.sim.simulate import Setup, Trajectory, quiet_mujoco
 
-from .capabilities import FitSpec
+from .capabilities import FitSpec, OscillatorSpec
 
 #: smallest body mass [kg] and principal inertia [kg m^2] MuJoCo compiles: its mjMINVAL
 #: (1e-15); a moving body below it fails `MjSpec.compile` ("must be larger than mjMINVAL")
@@ -279,6 +279,8 @@ class Scene:
        `joint_columns` (joints that only some scenarios have).
     10. Capabilities the studies read (springlab.scenes.capabilities): `fit`, how `springlab fit`
        identifies the scene from a record (an `OscillatorFit` or a `PolynomialFit`; None: it cannot).
+    11. Optionally, `oscillator` (springlab.scenes.capabilities.OscillatorSpec): the scene is the
+       textbook's one-mode mass-spring-damper, the unit oscillator of `springlab stability`.
 
     The module exposes the instance as `SCENE`; springlab.scenes discovers it. Tests check each
     claim against a reference built in the test (closed form, expm, scipy's DOP853 at tight
@@ -304,6 +306,9 @@ class Scene:
     questions: dict[str, tuple[str, str]] = {}
     #: how `springlab fit` identifies the scene from a recorded signal (None: it cannot be fitted)
     fit: FitSpec | None = None
+    #: the scene is the textbook's one-mode mass-spring-damper: its parameter, scenario and joint names
+    #: (None: it is not one)
+    oscillator: OscillatorSpec | None = None
 
     def question_and_answer(self, scenario: str, quantities: dict, parameters: dict) -> tuple[str, str] | None:
         """(question, answer sentence) of a scenario's run, or None where the scene states none."""
