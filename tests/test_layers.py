@@ -157,9 +157,58 @@ def test_no_study_package_imports_another():
 def _scene_names() -> set[str]:
     scenes = PACKAGE / "scenes"
     found = {p.stem for p in scenes.glob("*.py")} | {p.name for p in scenes.iterdir() if (p / "__init__.py").exists()}
-    return found - {"__init__", "base", "checks"}
+    return found - {"__init__", "base", "capabilities", "checks"}
 
 
 def test_the_scene_names_this_test_knows_are_the_shipped_models():
     models = PACKAGE.parents[1] / "models"
     assert _scene_names() == {p.stem for p in models.glob("*.xml")}
+
+
+#: where a string constant names something: compared, passed, stored, keyed, defaulted or returned
+NAMING_PARENTS = (
+    ast.Compare,
+    ast.Call,
+    ast.Dict,
+    ast.Subscript,
+    ast.arguments,
+    ast.Tuple,
+    ast.List,
+    ast.Set,
+    ast.Assign,
+    ast.AnnAssign,
+    ast.Return,
+    ast.BoolOp,
+)
+
+
+def test_nothing_outside_the_scenes_names_a_scene():
+    """No import of a particular scene and no scene name as a string outside scenes/: a study reads what a
+    scene declares. The command line's argument defaults and help are the one exception (front layer)."""
+    names = _scene_names()
+    found = []
+    for module, path in modules().items():
+        if layer_of(module) in ("scenes", "front"):
+            continue
+        tree = ast.parse(path.read_text(), str(path))
+        docstrings = {
+            id(node.body[0].value)
+            for node in ast.walk(tree)
+            if isinstance(node, ast.Module | ast.ClassDef | ast.FunctionDef | ast.AsyncFunctionDef)
+            and node.body
+            and isinstance(node.body[0], ast.Expr)
+            and isinstance(node.body[0].value, ast.Constant)
+        }
+        for parent in ast.walk(tree):
+            if not isinstance(parent, NAMING_PARENTS):
+                continue  # e.g. the word 'nonlinear' chosen by a conditional expression for a message
+            for node in ast.iter_child_nodes(parent):
+                if isinstance(node, ast.keyword):
+                    node = node.value
+                if isinstance(node, ast.Constant) and node.value in names and id(node) not in docstrings:
+                    found.append(f"{module}:{node.lineno} names scene {node.value!r}")
+        for target in imports(module, path, set(modules())):
+            parts = target.split(".")
+            if parts[0] == "scenes" and len(parts) > 1 and parts[1] in names:
+                found.append(f"{module} imports springlab.{target}")
+    assert not found, "\n".join(found)

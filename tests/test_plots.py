@@ -183,7 +183,7 @@ def test_tradeoff_stability_and_design_charts_leave_the_callers_backend_alone(tm
         "from springlab.studies import tradeoff\n"
         "from springlab.studies.design import study as design\n"
         f"charts.plot_tradeoff(tradeoff.sweep('slider', 'free', duration=0.5), {str(tmp_path / 't.png')!r})\n"
-        f"design_chart.plot(design.run_study(levels=3), {str(tmp_path / 'd.png')!r})\n"
+        f"design_chart.plot(design.run_study('printer_head', levels=3, plane_levels=5), {str(tmp_path / 'd.png')!r})\n"
         "assert matplotlib.get_backend() == 'svg', matplotlib.get_backend()\n"
         "assert 'matplotlib.pyplot' not in sys.modules, 'pyplot imported'\n"
     )

@@ -2,8 +2,9 @@
 
 Scenes are discovered, so a new scene is a new module (`scenes/<name>.py`) or folder
 (`scenes/<name>/`, its `__init__` handing on `SCENE`) with a module-level `SCENE` and a
-models/<name>.xml; nothing else needs editing. `base` (what every scene provides) and
-`checks` (scalar claims) are the scenes' shared machinery, not scenes.
+models/<name>.xml; nothing else needs editing. `base` (what every scene provides),
+`capabilities` (what a scene may declare for the studies) and `checks` (scalar claims) are the
+scenes' shared machinery, not scenes.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from springlab.errors import UnknownNameError
 from .base import Scene
 
 #: modules of this package that serve the scenes and are none
-MACHINERY = ("base", "checks")
+MACHINERY = ("base", "capabilities", "checks")
 #: the chapter's order; discovered scenes not listed here follow alphabetically
 CATALOGUE_ORDER = ("slider", "car", "printer_head", "kinematics", "nonlinear")
 

@@ -27,6 +27,7 @@ import numpy as np
 
 from springlab.errors import ParameterError, UnknownNameError
 from springlab.exact.limits import stability_limit
+from springlab.scenes.capabilities import DesignSpec
 from springlab.sim import model_files
 from springlab.sim.simulate import Setup, Trajectory, quiet_mujoco
 
@@ -275,6 +276,9 @@ class Scene:
        ends a run early as a result), `stability_limit` (damping MuJoCo treats differently from
        joint damping), `phase_field`/`equilibria`/`separatrices` (one-joint phase planes),
        `joint_columns` (joints that only some scenarios have).
+    10. Optionally, capabilities the studies read (types in springlab.scenes.capabilities):
+       `design`, the design question the scene answers (`DesignSpec`: swept properties, fixed ones,
+       the figure of merit and the hooks that simulate and estimate it; springlab.studies.design).
 
     The module exposes the instance as `SCENE`; springlab.scenes discovers it. Tests check each
     claim against a reference built in the test (closed form, expm, scipy's DOP853 at tight
@@ -298,6 +302,8 @@ class Scene:
     #: scenario -> (the textbook question it answers, the answer as one sentence): the answer is a
     #: str.format template over the run's quantities and parameters, e.g. "... {period_s:.3g} s ..."
     questions: dict[str, tuple[str, str]] = {}
+    #: the design question the scene answers (None: none; springlab.studies.design reads it)
+    design: DesignSpec | None = None
 
     def question_and_answer(self, scenario: str, quantities: dict, parameters: dict) -> tuple[str, str] | None:
         """(question, answer sentence) of a scenario's run, or None where the scene states none."""

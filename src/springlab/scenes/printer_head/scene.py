@@ -77,8 +77,9 @@ divergence advice is right for every integrator.
 
 Code layout: this module is the scene; each scenario carries its variant
 (`Scenario.variant`: `Move`, `StepForce`, `Settle`), which gives its force
-segments and its own quantities, in _printer_head_moves.py with the formulas
-of the move and the settling that the design study shares.
+segments and its own quantities, in moves.py with the formulas of the move and
+the settling; design.py declares the design question (`design`) and implements
+the hooks the design study calls (the batched moves, the analytic estimates).
 """
 
 from __future__ import annotations
@@ -94,43 +95,10 @@ from springlab.exact.linearize import one_step_map, operating_point
 from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene
 from springlab.sim.simulate import Setup, Trajectory, integrator_id
 
-from .moves import (
-    BeltRun,
-    Move,
-    Settle,
-    StepForce,
-    after_force_bound,
-    belt_damping_for,
-    belt_damping_ratio,
-    belt_omega,
-    minimum_move_time,
-    move_profile,
-    move_residual_stretch,
-    reduced_mass,
-    residual_envelope,
-    settling_estimate,
-    settling_time,
-    worst_case_envelope,
-)
+from .design import DESIGN
+from .moves import BeltRun, Move, Settle, StepForce, move_profile
 
-#: the formulas the design study shares live in _printer_head_moves; named here, where it imports them
-__all__ = [
-    "SCENE",
-    "PrinterHead",
-    "after_force_bound",
-    "belt_damping_for",
-    "belt_damping_ratio",
-    "belt_omega",
-    "linearized_mode",
-    "minimum_move_time",
-    "move_residual_stretch",
-    "reduced_mass",
-    "residual_envelope",
-    "settling_estimate",
-    "settling_time",
-    "step_matrix",
-    "worst_case_envelope",
-]
+__all__ = ["SCENE", "PrinterHead", "linearized_mode", "step_matrix"]
 
 #: relative round-off allowed in the centre-of-mass target (the bang-bang stops it at D exactly)
 _TARGET_ROUNDOFF = 1e-12
@@ -153,6 +121,8 @@ class PrinterHead(Scene):
     integrator = "rk4"
     dt = 1e-4
     default_scenario = "move"
+    #: the design question it answers, read by springlab.studies.design (design.py)
+    design = DESIGN
     #: the textbook question each scenario answers, and its answer as a sentence (Scene.questions)
     questions = {
         "move": (
@@ -274,7 +244,7 @@ class PrinterHead(Scene):
 
     # -- the force profile (each scenario's variant gives its segments) -----------
 
-    #: (steps per half-move n, force [N]) of the bang-bang move on a grid of dt [s] (_printer_head_moves)
+    #: (steps per half-move n, force [N]) of the bang-bang move on a grid of dt [s] (moves.py)
     move_profile = staticmethod(move_profile)
 
     def _initial(self, params) -> tuple[np.ndarray, np.ndarray]:
