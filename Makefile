@@ -6,7 +6,7 @@ STAMP := $(VENV)/.installed
 BIN := $(VENV)/bin
 OUT ?= out
 
-.PHONY: demo test lint bench clean
+.PHONY: demo test test-fast lint bench clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -18,10 +18,15 @@ demo: $(STAMP)
 	$(BIN)/springlab demo --output $(OUT)
 
 # random order (pytest-randomly): the header prints the seed, replay an order with ARGS=--randomly-seed=N;
-# a quick loop without the slow tests: make test ARGS='-m "not slow"'
+# on every core (pytest-xdist, one worker per core; every test is independent and seeded): JOBS=1 for one process
 ARGS ?=
+JOBS ?= auto
 test: $(STAMP)
-	$(BIN)/python -m pytest $(ARGS)
+	$(BIN)/python -m pytest -n $(JOBS) $(ARGS)
+
+# the quick loop: everything but the tests marked slow (> ~5 s on one core)
+test-fast: $(STAMP)
+	$(BIN)/python -m pytest -n $(JOBS) -m "not slow" $(ARGS)
 
 # ruff (lint and format) over the whole tree, mypy over src/ (config in pyproject.toml)
 lint: $(STAMP)

@@ -129,7 +129,7 @@ def test_car_stiffness_and_damping_from_a_recorded_heave(tmp_path):
     x, _, _ = free_decay(t, math.sqrt(k / m), d / (2 * math.sqrt(k * m)), -0.004, 0.0)
     data = write(tmp_path / "d.csv", {"time": t, "heave_pos": x + p["clearance"]})
     result = fit("car", data, "damped_release", run_scene=False)
-    assert result.free[:2] == ["stiffness", "damping"]
+    assert result.free[:2] == ("stiffness", "damping")
     assert rel(result.estimates["stiffness"]["value"], k) < EXACT
     assert rel(result.estimates["damping"]["value"], d) < EXACT
     assert rel(result.derived["damping_ratio"]["value"], p["damping_ratio"]) < EXACT
@@ -301,7 +301,7 @@ def test_kinematics_degree_two_and_velocity_data(tmp_path):
     t = np.linspace(0, 5, 51)
     v = 15.0 + 3.0 * t  # v(t) of uniformly accelerated motion
     result = fit("kinematics", write(tmp_path / "d.csv", {"time": t, "vehicle_vel": v}), degree=2, run_scene=False)
-    assert result.free == ["v0", "a0"]
+    assert result.free == ("v0", "a0")
     assert rel(result.estimates["a0"]["value"], 3.0) < 1e-9
 
 
@@ -310,7 +310,7 @@ def test_kinematics_chooses_the_degree_of_uniformly_accelerated_motion(tmp_path)
     t = np.linspace(0, 5, 101)
     x = 10.0 * t + t**2 + rng.normal(0, 0.01, t.size)  # eq. 5.5: a = 2 m/s^2 from 10 m/s, no jerk
     result = fit("kinematics", write(tmp_path / "d.csv", {"time": t, "vehicle_pos": x}), run_scene=False)
-    assert result.free == ["x0", "v0", "a0"]
+    assert result.free == ("x0", "v0", "a0")
     assert any("degree chosen" in note for note in result.record.notes)
     low, high = result.estimates["a0"]["ci95"]
     assert low <= 2.0 <= high

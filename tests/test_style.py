@@ -15,12 +15,6 @@ PACKAGE = pathlib.Path(__file__).resolve().parents[1] / "src" / "springlab"
 #: modules other branches are writing or rewriting (issue 11), by file-name prefix; each leaves this list
 #: when it lands in the house style
 PENDING: tuple[str, ...] = ()
-#: public functions whose argument is a FitResult, whose module fit.py imports fit_results (a cycle, even
-#: under TYPE_CHECKING: tests/test_layers.py reads every import); named here so the list can only shrink
-UNTYPED = {
-    "studies/fit/results.py:verdict",
-}
-
 GOOGLE_SECTION = re.compile(r"^\s*(Args|Arguments|Returns|Yields|Raises|Attributes|Keyword Args):\s*$", re.M)
 
 
@@ -64,8 +58,6 @@ def test_public_functions_have_type_hints():
     missing = []
     for name, tree in _sources():
         for node in _public_functions(tree.body):
-            if f"{name}:{node.name}" in UNTYPED:
-                continue
             args = node.args
             params = [a for a in [*args.posonlyargs, *args.args, *args.kwonlyargs] if a.arg not in ("self", "cls")]
             params += [a for a in (args.vararg, args.kwarg) if a is not None]

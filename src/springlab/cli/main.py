@@ -416,7 +416,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
         write(result, args.output)
         plot_fit(result, pathlib.Path(args.output) / "fit.png")
     if args.json:
-        _print_json(result.as_dict())
+        _print_json(result.to_dict())
     else:
         cli_text.print_fit(result, args.output)
     return EXIT_OK if result.converged else EXIT_FAILED
@@ -631,7 +631,10 @@ def build_parser() -> argparse.ArgumentParser:
     COMMANDS["sweep"] = cmd_sweep
 
     p = sub.add_parser("fit", help="identify a scene's parameters from a recorded signal (CSV)")
-    p.add_argument("scene", help="slider, car, printer_head or kinematics")
+    # the scenes that declare a fit (Scene.fit), e.g. "slider, car, printer_head or kinematics"
+    fittable = [name for name, scene in scenes.SCENES.items() if scene.fit is not None]
+    listed = ", ".join(fittable[:-1]) + " or " + fittable[-1] if len(fittable) > 1 else "".join(fittable)
+    p.add_argument("scene", help=listed)
     p.add_argument("data", metavar="DATA.csv", help="header row; time [s] and <joint>_pos, _vel or _acc")
     p.add_argument("--scenario", metavar="S", help="the scenario the record shows (default: the scene's fit default)")
     p.add_argument(

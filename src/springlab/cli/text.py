@@ -19,7 +19,7 @@ from springlab.studies import tradeoff
 if TYPE_CHECKING:  # annotations only: these load mujoco.batch, scipy or sysid, which the commands import lazily
     from springlab.studies.design.sobol import SobolStudy
     from springlab.studies.design.study import Study
-    from springlab.studies.fit.fit import FitResult
+    from springlab.studies.fit.results import FitResult
     from springlab.studies.sweeps import Sweep
 
 

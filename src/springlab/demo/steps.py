@@ -121,7 +121,7 @@ def media_step(state: DemoState) -> list[Artifact]:
 
 
 def report_step(state: DemoState) -> list[Artifact]:
-    """out/index.html: validation table, plots, videos and a link to every artifact (springlab.demo.steps.report)."""
+    """out/index.html: validation table, plots, videos and a link to every artifact (springlab.demo.report)."""
     from . import report
 
     path = report.write_report(state, wall_time_s=time.perf_counter() - state.started)

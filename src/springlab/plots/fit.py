@@ -1,6 +1,6 @@
 """fit.png: the record, the fitted response, the residuals over time and a phase-plane view.
 
-Reads a springlab.fit.FitResult (never re-simulates): the fitted signal at the
+Reads a springlab.studies.fit.results.FitResult (never re-simulates): the fitted signal at the
 recorded times and, for the phase plane, the identified scene's own run.
 """
 
@@ -16,14 +16,16 @@ import numpy as np
 from . import charts
 
 if TYPE_CHECKING:  # annotations only: the fit machinery is not needed to draw
-    from springlab.studies.fit.fit import FitResult
+    from matplotlib.axes import Axes
+
+    from springlab.studies.fit.results import FitResult
 
 _DATA, _FIT, _BAND = "#7f7f7f", "#d62728", "#f4a6a6"
 _SIGNAL = {"pos": "position", "vel": "velocity", "acc": "acceleration"}
 
 
 def plot_fit(result: FitResult, path: str | os.PathLike) -> pathlib.Path:
-    """Write fit.png for a FitResult: data and fit, residuals, and the phase plane (or v(t), a(t) for kinematics)."""
+    """Write fit.png for a FitResult: data and fit, residuals, and the phase plane (or v(t), a(t) for a polynomial)."""
     record = result.record
     from matplotlib.figure import Figure  # a bare Figure: the caller's pyplot state stays untouched
 
@@ -46,8 +48,8 @@ def plot_fit(result: FitResult, path: str | os.PathLike) -> pathlib.Path:
     bottom.set_xlabel("time [s]")
     bottom.set_ylabel(f"data - fit [{record.unit}]")
     bottom.set_title(f"residuals: RMS {result.residual_rms:.3g} {record.unit} (dashed: ±2 RMS)")
-    if result.scene == "kinematics" and result.curves:
-        _kinematics_panel(phase, result)
+    if result.kind == "polynomial" and result.curves:
+        _polynomial_panel(phase, result)
     else:
         _phase_panel(phase, result)
     fig.suptitle(textwrap.fill(result.verdict, 140), fontsize=9)
@@ -55,7 +57,7 @@ def plot_fit(result: FitResult, path: str | os.PathLike) -> pathlib.Path:
     return charts._save(fig, pathlib.Path(path))
 
 
-def _phase_panel(ax, result) -> None:
+def _phase_panel(ax: Axes, result: FitResult) -> None:
     """Velocity vs position of the identified scene's run, with the data's positions on it when it has them."""
     run = result.run
     if run is None:
@@ -78,7 +80,7 @@ def _phase_panel(ax, result) -> None:
     ax.legend(loc="best", fontsize=8)
 
 
-def _kinematics_panel(ax, result) -> None:
+def _polynomial_panel(ax: Axes, result: FitResult) -> None:
     """v(t) and a(t) of the fitted polynomial with their 95 % bands."""
     c = result.curves
     t = np.array(c["time_s"])

@@ -1,6 +1,6 @@
 """The look every springlab plot shares: matplotlib style, line styles, figures and axis labels.
 
-One home for what the static figures (`plots`) and the composite video's panel (`plots_panel`)
+One home for what the static figures (`plots.run`) and the composite video's panel (`plots.panel`)
 both use. Matplotlib through `matplotlib.figure.Figure` and the Agg canvas only: nothing touches
 pyplot's global state, and the style is applied with `matplotlib.rc_context` around each figure,
 never to the caller's global rcParams. Units follow the joint type: slide joints in [m] and

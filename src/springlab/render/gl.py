@@ -140,7 +140,7 @@ class OffscreenScene:
             self.camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
             self.camera.fixedcamid = camera_id
 
-        self._drawings = drawings  # render_drawings.Drawings or None: springs, dampers, belt, road
+        self._drawings = drawings  # drawings.Drawings or None: springs, dampers, belt, road
         self._rect = mujoco.MjrRect(0, 0, width, height)
         self._pixels = np.empty((height, width, 3), dtype=np.uint8)
         self._eye = np.eye(3)

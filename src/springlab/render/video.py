@@ -324,7 +324,7 @@ def render_video(
         passed in is not changed. ``None``: :func:`render_scale.default_exaggeration`
         of the filmed motion.
     road_bump:
-        Optional :class:`render_drawings.RoadBump`: the road profile drawn under
+        Optional :class:`drawings.RoadBump`: the road profile drawn under
         a quarter car (its height follows the exaggeration).
     antialias:
         Smooth the edges with the model's multisampling

@@ -3,7 +3,7 @@
 Scenes are discovered, so a new scene is a new module (`scenes/<name>.py`) or folder
 (`scenes/<name>/`, its `__init__` handing on `SCENE`) with a module-level `SCENE` and a
 models/<name>.xml; nothing else needs editing. `base` (what every scene provides),
-`capabilities` (what a scene may declare for the studies) and `checks` (scalar claims) are the
+`capabilities` (what a scene declares for the studies) and `checks` (scalar claims) are the
 scenes' shared machinery, not scenes.
 """
 

@@ -27,9 +27,10 @@ import numpy as np
 
 from springlab.errors import ParameterError, UnknownNameError
 from springlab.exact.limits import stability_limit
-from springlab.scenes.capabilities import DesignSpec
 from springlab.sim import model_files
 from springlab.sim.simulate import Setup, Trajectory, quiet_mujoco
+
+from .capabilities import DesignSpec, FitSpec
 
 #: smallest body mass [kg] and principal inertia [kg m^2] MuJoCo compiles: its mjMINVAL
 #: (1e-15); a moving body below it fails `MjSpec.compile` ("must be larger than mjMINVAL")
@@ -276,7 +277,8 @@ class Scene:
        ends a run early as a result), `stability_limit` (damping MuJoCo treats differently from
        joint damping), `phase_field`/`equilibria`/`separatrices` (one-joint phase planes),
        `joint_columns` (joints that only some scenarios have).
-    10. Optionally, capabilities the studies read (types in springlab.scenes.capabilities):
+    10. Capabilities the studies read (springlab.scenes.capabilities): `fit`, how `springlab fit`
+       identifies the scene from a record (an `OscillatorFit` or a `PolynomialFit`; None: it cannot);
        `design`, the design question the scene answers (`DesignSpec`: swept properties, fixed ones,
        the figure of merit and the hooks that simulate and estimate it; springlab.studies.design).
 
@@ -302,6 +304,8 @@ class Scene:
     #: scenario -> (the textbook question it answers, the answer as one sentence): the answer is a
     #: str.format template over the run's quantities and parameters, e.g. "... {period_s:.3g} s ..."
     questions: dict[str, tuple[str, str]] = {}
+    #: how `springlab fit` identifies the scene from a recorded signal (None: it cannot be fitted)
+    fit: FitSpec | None = None
     #: the design question the scene answers (None: none; springlab.studies.design reads it)
     design: DesignSpec | None = None
 

@@ -68,8 +68,8 @@ matrix with the bump generator's states (road_bump).
 
 Code layout: this module is the scene (parameters, scenarios, the shared MjSpec
 edits); each scenario carries its variant (`Scenario.variant`), which holds
-what differs: _car_release.py (push_release, damped_release),
-_car_pitch_heave.py, _car_road_bump.py, with shared pieces in _car_parts.py.
+what differs: release.py (push_release, damped_release),
+pitch_heave.py, road_bump.py, with shared pieces in parts.py (all in this folder).
 
 Sources for the realistic defaults: Gillespie, Fundamentals of Vehicle
 Dynamics (SAE, 1992), ch. 5 "Ride": passenger cars have suspension damping
@@ -90,6 +90,7 @@ import numpy as np
 
 from springlab.errors import ParameterError
 from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene
+from springlab.scenes.capabilities import OscillatorFit
 from springlab.sim.simulate import Setup, Trajectory, quiet_mujoco
 
 from .parts import gravity
@@ -98,6 +99,17 @@ from .release import Release, damping_from_ratio
 from .road_bump import COMFORT_STIFFNESS, RoadBump
 
 __all__ = ["SCENE", "Car", "linearize", "FRONT_STIFFNESS_SHARE", "COMFORT_STIFFNESS"]
+
+
+def _released_at(params: Mapping[str, float], x0: float) -> dict[str, float]:
+    """The fit's release hook (OscillatorFit.release): run parameters that start the car at rest at height x0 [m].
+
+    The passers-by's push_mass [kg] holds it there, (clearance - x0) k / g; the damping is given, not its ratio.
+    """
+    overrides = dict(params)
+    overrides["push_mass"] = (params["clearance"] - x0) * params["stiffness"] / SCENE.gravity()
+    overrides.pop("damping_ratio", None)
+    return overrides
 
 
 class Car(Scene):
@@ -212,6 +224,14 @@ class Car(Scene):
             Parameter("speed", "m/s", "driving speed", minimum=0.0, minimum_inclusive=False, default=8.0),
         )
     }
+    #: `springlab fit`: the car bottom's height rings about the clearance; a run starts at rest, pushed down
+    fit = OscillatorFit(
+        "heave",
+        ("damped_release", "push_release"),
+        default_free=("stiffness", "damping", "x0", "v0", "offset"),
+        rest="clearance",
+        release=_released_at,
+    )
     scenarios = {
         s.name: s
         for s in (

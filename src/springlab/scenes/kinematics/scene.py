@@ -47,7 +47,7 @@ analytic.piecewise_linear_velocity (tachograph).
 
 Code layout: each scenario carries its variant (`Scenario.variant`), as the car's
 do: `Polynomial` here for the three polynomial scenarios, `Tachograph` in
-_kinematics_tachograph.py (which draws the vehicle as a bus, _kinematics_bus.py).
+tachograph.py (which draws the vehicle as a bus, bus.py).
 """
 
 from __future__ import annotations
@@ -59,6 +59,7 @@ import numpy as np
 
 from springlab.exact import analytic
 from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene
+from springlab.scenes.capabilities import PolynomialFit
 from springlab.sim.simulate import Setup, Trajectory
 
 from .tachograph import TACHOGRAPH_TIMES, TACHOGRAPH_VELOCITIES, Tachograph, reject_profile_parameters
@@ -201,6 +202,8 @@ class Kinematics(Scene):
             Parameter("jerk", "m/s^3", "rate of change of the acceleration da/dt (constant)", default=0.0),
         )
     }
+    #: `springlab fit`: the chapter's polynomial x0 + v0 t + a0 t^2 / 2 + jerk t^3 / 6 (section 5.2)
+    fit = PolynomialFit("vehicle", ("polynomial_position",), ("x0", "v0", "a0", "jerk"))
     scenarios = {
         s.name: s
         for s in (

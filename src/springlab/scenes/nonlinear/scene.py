@@ -74,7 +74,7 @@ Phase plane: `phase_field` (unforced), `equilibria` (with stability from the
 Jacobian) and `separatrices` (the energy level of every saddle) for plots.
 
 Code layout: the conservative part and its quadratures live in
-_nonlinear_orbits.py, the chaos measurements in _nonlinear_chaos.py, and the
+orbits.py, the chaos measurements in chaos.py, and the
 check builders (for any joint) in springlab.scenes.checks; this module is the scene.
 """
 
@@ -96,10 +96,10 @@ from springlab.scenes.checks import (
     observed_order_check,
     richardson_check,
 )
-from springlab.scenes.nonlinear import chaos as _nonlinear_chaos
 from springlab.sim import exciter
 from springlab.sim.simulate import ORDERS, Setup, Trajectory, simulate
 
+from . import chaos
 from .chaos import (
     ACCURACY_FRACTION,
     LYAPUNOV_INTERVAL,
@@ -578,7 +578,7 @@ class Nonlinear(Scene):
 
     def _chaos(self, model, params, scenario, trajectory: Trajectory) -> dict:
         """Sensitivity to initial conditions (springlab.scenes.nonlinear.chaos.chaos)."""
-        return _nonlinear_chaos.chaos(self, model, params, scenario, trajectory)
+        return chaos.chaos(self, model, params, scenario, trajectory)
 
     def lyapunov_exponent(
         self,
@@ -592,7 +592,7 @@ class Nonlinear(Scene):
     ) -> tuple[float, float]:
         """Largest Lyapunov exponent [1/s] and its standard error [1/s], an estimate by Benettin's
         renormalization (springlab.scenes.nonlinear.chaos.lyapunov_exponent)."""
-        return _nonlinear_chaos.lyapunov_exponent(self, params, scenario, integrator, dt, transient, total, interval)
+        return chaos.lyapunov_exponent(self, params, scenario, integrator, dt, transient, total, interval)
 
     # -- validation ------------------------------------------------------------------
 

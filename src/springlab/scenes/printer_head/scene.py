@@ -85,6 +85,7 @@ the hooks the design study calls (the batched moves, the analytic estimates).
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 import mujoco
 import numpy as np
@@ -93,6 +94,7 @@ from springlab.exact import analytic
 from springlab.exact.limits import stability_limit as joint_damping_stability_limit
 from springlab.exact.linearize import one_step_map, operating_point
 from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene
+from springlab.scenes.capabilities import OscillatorFit
 from springlab.sim.simulate import Setup, Trajectory, integrator_id
 
 from .design import DESIGN
@@ -108,6 +110,35 @@ def _quasi_static_deflection(params: dict[str, float], explicit: set[str]) -> di
     """Scenario preset: the belt stretch [m] while the motor accelerates at full force."""
     m_c, m_m, k = params["carriage_mass"], params["motor_mass"], params["belt_stiffness"]
     return {"deflection": params["drive_force"] * m_c / ((m_c + m_m) * k)}
+
+
+# -- what `springlab fit` asks of the scene (OscillatorFit hooks) ------------------------------------------------
+
+
+def _belt_mode_mass(params: Mapping[str, float]) -> float:
+    """The belt mode's mass mu = m_c m_m / (m_c + m_m) [kg]."""
+    m_c, m_m = params["carriage_mass"], params["motor_mass"]
+    return m_c * m_m / (m_c + m_m)
+
+
+def _carriage_at(
+    model: mujoco.MjModel, params: Mapping[str, float], x0: float, v0: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """(qpos, qvel) with the carriage at x0 [m], v0 [m/s] about the centre of mass at rest at 0.
+
+    The carriage moves as -(m_m / M) of the belt's stretch, so the motor is at -(m_c / m_m) x0.
+    """
+    qpos, qvel = model.qpos0.copy(), np.zeros(model.nv)
+    ratio = params["carriage_mass"] / params["motor_mass"]
+    for joint, q, v in (("carriage", x0, v0), ("motor", -ratio * x0, -ratio * v0)):
+        qpos[model.joint(joint).qposadr[0]], qvel[model.joint(joint).dofadr[0]] = q, v
+    return qpos, qvel
+
+
+def _released_at(params: Mapping[str, float], x0: float) -> dict[str, float]:
+    """Run parameters that start the carriage at rest at x0 [m]: the belt's deflection -x0 M / m_m."""
+    total = params["carriage_mass"] + params["motor_mass"]
+    return dict(params) | {"deflection": -x0 * total / params["motor_mass"]}
 
 
 class PrinterHead(Scene):
@@ -175,6 +206,18 @@ class PrinterHead(Scene):
             Parameter("deflection", "m", "belt stretch at t = 0 (centre of mass at rest at 0)", default=0.0),
         )
     }
+    #: `springlab fit`: the carriage rings with the belt mode of mass mu about the resting centre of mass (x_eq = 0)
+    fit = OscillatorFit(
+        "carriage",
+        ("settle",),
+        mass=None,
+        stiffness="belt_stiffness",
+        damping="belt_damping",
+        default_free=("belt_stiffness", "belt_damping", "x0", "v0", "offset"),
+        mode_mass=_belt_mode_mass,
+        initial_state=_carriage_at,
+        release=_released_at,
+    )
     scenarios = {
         s.name: s
         for s in (

@@ -37,6 +37,7 @@ import numpy as np
 from springlab.exact import analytic
 from springlab.exact.linear import generator_system, state_matrix
 from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene
+from springlab.scenes.capabilities import OscillatorFit
 from springlab.sim import exciter
 from springlab.sim.simulate import Setup, Trajectory
 
@@ -126,6 +127,12 @@ class Slider(Scene):
             Parameter("force_frequency", "Hz", "frequency of the harmonic force", minimum=0.0, default=2.0),
         )
     }
+    #: `springlab fit`: the block rings as the mode itself; x0, v0 are parameters; `step` adds a known force
+    fit = OscillatorFit(
+        "slider",
+        ("free", "underdamped", "undamped", "critical", "overdamped", "exercise", "step"),
+        step_forces={"step": "force_amplitude"},
+    )
     scenarios = {
         s.name: s
         for s in (

@@ -38,9 +38,9 @@ _PREFERENCE = ("pos", "acc", "vel")
 MIN_SAMPLES = 10
 
 
-@dataclasses.dataclass
+@dataclasses.dataclass(frozen=True, eq=False)  # arrays: compare fields, not results
 class Record:
-    """A measured signal of one joint, cleaned.
+    """A measured signal of one joint, cleaned (immutable: its arrays are read-only views).
 
     Attributes
     ----------
@@ -78,7 +78,14 @@ class Record:
     skipped_nan: int = 0
     dropped_before_start: int = 0
     release_detected: bool = False
-    notes: list[str] = dataclasses.field(default_factory=list)
+    notes: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        for name in ("time", "values"):
+            view = np.asarray(getattr(self, name), float).view()
+            view.flags.writeable = False
+            object.__setattr__(self, name, view)
+        object.__setattr__(self, "notes", tuple(self.notes))
 
     @property
     def name(self) -> str:
@@ -220,52 +227,55 @@ def load(
     if not (np.all(np.isfinite(time[np.isfinite(time)])) and np.all(np.isfinite(values[np.isfinite(values)]))):
         raise BadInputError(f"{str(path)!r} holds an infinite value; valid: finite numbers")
     keep = np.isfinite(time) & np.isfinite(values)
-    record = Record(
-        time=time[keep],
-        values=values[keep],
-        joint=joint,
-        signal=signal,
-        column=column,
-        origin=0.0,
-        rows=len(rows),
-        skipped_nan=int(np.count_nonzero(~keep)),
-    )
-    if record.skipped_nan:
-        record.notes.append(f"skipped {record.skipped_nan} row(s) with a missing or NaN value")
+    time, values = time[keep], values[keep]
+    skipped = int(np.count_nonzero(~keep))
+    notes = []
+    if skipped:
+        notes.append(f"skipped {skipped} row(s) with a missing or NaN value")
     if scale != 1.0:
-        record.notes.append(f"signal scaled by {scale:g} into {record.unit}")
-    _check_enough(record, path)
-    steps = np.diff(record.time)
+        notes.append(f"signal scaled by {scale:g} into {SIGNALS[signal]}")
+    _check_enough(time.size, column, skipped, path)
+    steps = np.diff(time)
     if np.any(steps <= 0):
         bad = int(np.flatnonzero(steps <= 0)[0])
         raise BadInputError(
-            f"{str(path)!r}: time must increase strictly, but t = {record.time[bad + 1]:g} s follows"
-            f" t = {record.time[bad]:g} s; valid: one row per sample, in time order"
+            f"{str(path)!r}: time must increase strictly, but t = {time[bad + 1]:g} s follows"
+            f" t = {time[bad]:g} s; valid: one row per sample, in time order"
         )
     if not np.allclose(steps, steps[0], rtol=1e-6, atol=0):
-        record.notes.append(
+        notes.append(
             f"uneven sampling: intervals {steps.min():.3g} to {steps.max():.3g} s (model interpolated at each sample)"
         )
-    record.origin = float(record.time[0])
+    record = Record(
+        time=time,
+        values=values,
+        joint=joint,
+        signal=signal,
+        column=column,
+        origin=float(time[0]),
+        rows=len(rows),
+        skipped_nan=skipped,
+        notes=tuple(notes),
+    )
     if start is not None:
-        _cut(record, start, path, detected=False)
-    elif detect_release:
+        return _cut(record, start, path, detected=False)
+    if detect_release:
         release = find_release(record.time, record.values)
         if release is not None:
-            _cut(record, release, path, detected=True)
+            return _cut(record, release, path, detected=True)
     return record
 
 
-def _check_enough(record: Record, path) -> None:
-    if record.time.size < MIN_SAMPLES:
+def _check_enough(samples: int, column: str, skipped: int, path: str | os.PathLike) -> None:
+    if samples < MIN_SAMPLES:
         raise BadInputError(
-            f"{str(path)!r} has {record.time.size} usable sample(s) of {record.column!r}"
-            f" ({record.skipped_nan} skipped as missing/NaN); a fit needs at least {MIN_SAMPLES}"
+            f"{str(path)!r} has {samples} usable sample(s) of {column!r}"
+            f" ({skipped} skipped as missing/NaN); a fit needs at least {MIN_SAMPLES}"
         )
 
 
-def _cut(record: Record, start: float, path, *, detected: bool) -> None:
-    """Drop the samples before `start` [s] and put the model's t = 0 there."""
+def _cut(record: Record, start: float, path: str | os.PathLike, *, detected: bool) -> Record:
+    """The record without the samples before `start` [s], the model's t = 0 there."""
     if not isinstance(start, (int, float)) or not math.isfinite(start):
         raise BadInputError(f"--start must be a finite time in seconds, got {start!r}")
     if start >= record.time[-1]:
@@ -275,13 +285,18 @@ def _cut(record: Record, start: float, path, *, detected: bool) -> None:
         )
     keep = record.time >= start
     dropped = int(np.count_nonzero(~keep))
-    record.time, record.values = record.time[keep], record.values[keep]
-    record.origin = float(start)
-    record.dropped_before_start = dropped
-    record.release_detected = detected
     how = "release detected" if detected else "start given"
-    record.notes.append(f"{how} at t = {start:.6g} s: {dropped} earlier sample(s) left out")
-    _check_enough(record, path)
+    cut = dataclasses.replace(
+        record,
+        time=record.time[keep],
+        values=record.values[keep],
+        origin=float(start),
+        dropped_before_start=dropped,
+        release_detected=detected,
+        notes=(*record.notes, f"{how} at t = {start:.6g} s: {dropped} earlier sample(s) left out"),
+    )
+    _check_enough(cut.time.size, cut.column, cut.skipped_nan, path)
+    return cut
 
 
 def noise_level(values: np.ndarray) -> float:

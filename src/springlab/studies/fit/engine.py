@@ -30,12 +30,12 @@ from typing import TYPE_CHECKING, Any
 import mujoco
 import numpy as np
 
-from springlab import scenes
 from springlab.errors import BadInputError
+from springlab.scenes.base import Scenario
 from springlab.sim.simulate import quiet_mujoco
 
 from .data import Record
-from .models import SceneFit
+from .models import FitModel
 
 if TYPE_CHECKING:  # annotations only: mujoco.sysid is imported when a fit runs
     from mujoco import sysid
@@ -72,8 +72,18 @@ def _quiet_sysid():
 class Problem:
     """One record against one scene: parameters, the sysid residual, predictions."""
 
-    def __init__(self, how: SceneFit, scenario, base: dict[str, float], record, free, start, modal, force):
-        self.how, self.scene, self.scenario = how, scenes.get(how.scene), scenario
+    def __init__(
+        self,
+        how: FitModel,
+        scenario: Scenario,
+        base: dict[str, float],
+        record: Record,
+        free: list[str],
+        start: dict[str, float],
+        modal: bool,
+        force: float,
+    ):
+        self.how, self.scene, self.scenario = how, how.scene, scenario
         self.base, self.record, self.free, self.modal, self.force = base, record, free, modal, force
         self.start = dict(start)
         self.t = record.model_time
@@ -90,14 +100,8 @@ class Problem:
     # -- grid ------------------------------------------------------------------
 
     def fastest_rate(self, values: dict[str, float]) -> float:
-        """Fastest pole |s| [1/s] of the mode at these values (0 for kinematics)."""
-        if "omega_n" not in values:
-            return 0.0
-        params = self.how.scene_params(values, self.base, self.modal)
-        m = self.how.mode_mass(params)
-        k, d = params[self.how.stiffness], params[self.how.damping]
-        omega, zeta = math.sqrt(k / m), d / (2 * math.sqrt(k * m))
-        return omega * (zeta + math.sqrt(max(zeta * zeta - 1.0, 0.0))) if zeta > 1 else omega
+        """Fastest pole |s| [1/s] of the motion at these values (0 for a polynomial)."""
+        return self.how.fastest_rate(values, self.base, self.modal)
 
     def set_grid(self, values: dict[str, float], rate: float | None = None) -> None:
         """dt [s] and steps of the simulation grid covering the record (and a delay's reach).

@@ -16,6 +16,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import pathlib
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -23,112 +24,16 @@ import numpy as np
 
 from springlab import scenes
 from springlab.errors import BadInputError, ParameterError, SpringlabError
-from springlab.runs.run import run_scenario
-from springlab.scenes.car.scene import Car
+from springlab.runs.run import Result, run_scenario
+from springlab.scenes.base import Scenario
 from springlab.studies.executor import Executor
 from springlab.studies.fit import data as fit_data
 from springlab.studies.fit import results as fit_results
 from springlab.studies.fit import starts as fit_starts
 
 from .engine import OMEGA_DT, Problem, check_identifiable, solve
-from .models import ALIASES, FITS, MODAL, SceneFit
-
-
-@dataclasses.dataclass
-class FitResult:
-    """An identified scene.
-
-    Attributes
-    ----------
-    scene, scenario
-        What was fitted.
-    record
-        The cleaned record (springlab.studies.fit.data.Record).
-    free
-        Fitted names, in order.
-    estimates
-        Name -> {'value', 'ci95' [low, high], 'unit'}.
-    derived
-        The same for quantities computed from the estimates.
-    correlation
-        (p, p) correlation matrix of the estimates.
-    covariance
-        (p, p) covariance [units of the names].
-    residual_rms
-        RMS of measured - fitted [signal unit].
-    dof
-        Degrees of freedom n - p.
-    parameters
-        The scene's parameters at the estimate (SI).
-    fitted
-        (n,) the fitted signal at the recorded times.
-    cross_check
-        The closed form fitted independently, and how far it is.
-    optimizer
-        Status, iterations, rollouts, times.
-    verdict
-        The one-line answer.
-    converged
-        Whether the optimizer stopped on a tolerance.
-    run
-        The identified scene's own run (Result) or None, and `run_note`.
-    starts
-        The multi-start record (springlab.studies.fit.starts.summary): count, best, at_best_minimum, spread.
-    """
-
-    scene: str
-    scenario: str
-    record: fit_data.Record
-    free: list[str]
-    estimates: dict[str, dict[str, Any]]
-    derived: dict[str, dict[str, Any]]
-    correlation: np.ndarray
-    covariance: np.ndarray
-    residual_rms: float
-    dof: int
-    parameters: dict[str, float]
-    fitted: np.ndarray
-    cross_check: dict[str, Any]
-    optimizer: dict[str, Any]
-    verdict: str = ""
-    converged: bool = True
-    run: Any = None
-    run_note: str = ""
-    curves: dict[str, Any] = dataclasses.field(default_factory=dict)
-    amplitude: float = 0.0
-    starts: dict[str, Any] = dataclasses.field(default_factory=dict)
-
-    def as_dict(self) -> dict[str, Any]:
-        """fit.json's content (docs/json.md, `fit`)."""
-        r = self.record
-        return {
-            "scene": self.scene,
-            "scenario": self.scenario,
-            "signal": r.name,
-            "signal_unit": r.unit,
-            "column": r.column,
-            "free": self.free,
-            "estimates": self.estimates,
-            "derived": self.derived,
-            "correlation": {a: dict(zip(self.free, row)) for a, row in zip(self.free, self.correlation.tolist())},
-            "residual_rms": self.residual_rms,
-            "degrees_of_freedom": self.dof,
-            "samples": int(r.time.size),
-            "rows": r.rows,
-            "skipped_nan_rows": r.skipped_nan,
-            "dropped_before_start": r.dropped_before_start,
-            "time_origin_s": r.origin,
-            "time_span_s": [float(r.time[0]), float(r.time[-1])],
-            "data_notes": r.notes,
-            "parameters": self.parameters,
-            "curves": self.curves,
-            "cross_check": self.cross_check,
-            "optimizer": self.optimizer,
-            "starts": self.starts,
-            "converged": self.converged,
-            "run_note": self.run_note,
-            "verdict": self.verdict,
-        }
+from .models import ALIASES, FitModel, PolynomialModel, model_of, not_fittable
+from .results import FitResult
 
 
 def _canonical(name: str) -> str:
@@ -157,7 +62,7 @@ def fit(
     Parameters
     ----------
     scene
-        'slider', 'car', 'printer_head' or 'kinematics'.
+        A scene that declares a fit (`Scene.fit`; `fittable()` lists them).
     data
         CSV with a header: `time` [s] and one signal `<joint>_pos` [m],
         `<joint>_vel` [m/s] or `<joint>_acc` [m/s^2] (see springlab.studies.fit.data).
@@ -166,14 +71,14 @@ def fit(
     map
         File column -> springlab name, e.g. {'t': 'time', 'x_mm': 'slider_pos'}.
     free
-        Names to fit (None: the scene's default; see springlab.studies.fit.models).
+        Names to fit (None: the scene's declared default; see springlab.studies.fit.models).
     scale
         Factor [SI per file unit] applied to the signal, e.g. 0.001 for mm.
     start
         Release time [s]: the record before it is dropped (None: detected).
     degree
-        Kinematics only: the polynomial's degree 0-3 (frees x0, v0, a0, jerk in order);
-        None: chosen, from 3 down while the highest coefficient's 95 % interval contains 0.
+        A polynomial fit only: its degree, 0 to the highest it declares (frees its coefficients x0, v0, ...
+        in order); None: chosen, from the highest down while the highest coefficient's 95 % interval contains 0.
     run_scene
         Also run the identified scene (FitResult.run) for trajectory.csv.
     starts
@@ -200,12 +105,10 @@ def fit(
     starts = fit_starts.check_count(starts)
     if executor is not None and (workers is not None or scheduler is not None):
         raise BadInputError("give an executor or workers/scheduler, not both")
-    if scene not in FITS:
-        raise BadInputError(
-            f"scene {scene!r} cannot be fitted; valid: {', '.join(FITS)} (nonlinear has no identification yet)"
-        )
-    how = FITS[scene]
+    if scene not in scenes.SCENES:
+        raise not_fittable(scene)
     scene_obj = scenes.get(scene)
+    how = model_of(scene_obj)
     scenario = how.scenarios[0] if scenario is None else scenario
     if scenario not in how.scenarios:
         valid = ", ".join(how.scenarios)
@@ -237,17 +140,18 @@ def fit(
     )
     free_given = bool(free)
     free = _free_names(how, free, degree, record)
-    forced = scenario == "step" and base.get("force_amplitude", 0.0) != 0.0
-    force = base.get("force_amplitude", 0.0) if forced else 0.0
+    force_name = how.step_force(scenario)
+    forced = force_name is not None and base.get(force_name, 0.0) != 0.0
+    force = base.get(force_name, 0.0) if force_name is not None and forced else 0.0
     how.check_free(free, nuisance, base, forced, record.signal)
     fit_starts.check_spreadable(free, starts)
     if len(free) + 2 > record.time.size:
         raise BadInputError(
             f"{record.time.size} samples cannot fit {len(free)} parameters; a fit needs at least {len(free) + 2}"
         )
-    modal = bool(set(free) & set(MODAL)) or scene == "kinematics"
+    modal = how.modal(free)
     fixed = dict(nuisance) | {k: base[k] for k in ("x0", "v0") if k in parameters and k in base}
-    if scene != "kinematics":
+    if not isinstance(how, PolynomialModel):
         # an initial state neither fitted nor given: the first sample, at rest
         if "x0" not in free and "x0" not in fixed:
             fixed["x0"] = float(record.values[0]) if record.signal == "pos" else how.equilibrium(base)
@@ -258,24 +162,32 @@ def fit(
             problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force, starts, own)
     else:
         problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force, starts, executor)
-    if scene == "kinematics" and not free_given and degree is None:
+    if isinstance(how, PolynomialModel) and not free_given and degree is None:
         # the degree is chosen: drop the highest coefficient while its 95 % interval contains 0
-        result = _finish(problem, solved, run_scene=False)
+        result = _finish(problem, solved, None, run_scene=False)
         while len(free) > 1:
             low, high = result.estimates[free[-1]]["ci95"]
             if not low <= 0.0 <= high:
                 break
-            record.notes.append(f"degree chosen: {free[-1]}'s 95 % interval [{low:.3g}, {high:.3g}] contains 0")
+            note = f"degree chosen: {free[-1]}'s 95 % interval [{low:.3g}, {high:.3g}] contains 0"
+            record = dataclasses.replace(record, notes=(*record.notes, note))
             free = free[:-1]
             problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force)
-            result = _finish(problem, solved, run_scene=False)
-    result = _finish(problem, solved, run_scene)
-    result.starts = fit_starts.summary(runs, result.free, result.covariance, record.unit)
-    return result
+            result = _finish(problem, solved, None, run_scene=False)
+    return _finish(problem, solved, runs, run_scene)
 
 
 def _identify(
-    how, chosen, base, record, free, fixed, modal, force, starts=1, executor=None
+    how: FitModel,
+    chosen: Scenario,
+    base: dict[str, float],
+    record: fit_data.Record,
+    free: list[str],
+    fixed: dict[str, float],
+    modal: bool,
+    force: float,
+    starts: int = 1,
+    executor: Executor | None = None,
 ) -> tuple[Problem, dict[str, Any], dict[str, Any] | None]:
     """The start(s), the problem and sysid's solution (the best start's, and the starts' record or None);
     the grid refined once if the estimate is faster than the start."""
@@ -294,7 +206,14 @@ def _identify(
     return problem, solved, runs
 
 
-def _start(how: SceneFit, record, base, fixed, free, force) -> dict[str, float]:
+def _start(
+    how: FitModel,
+    record: fit_data.Record,
+    base: dict[str, float],
+    fixed: dict[str, float],
+    free: list[str],
+    force: float,
+) -> dict[str, float]:
     """Start values; with a free delay, from the part after the detected release, shifted to it."""
     if "delay" not in free:
         return how.start(record, base, fixed, free, force)
@@ -309,22 +228,11 @@ def _start(how: SceneFit, record, base, fixed, free, force) -> dict[str, float]:
     return values
 
 
-def _free_names(how: SceneFit, free, degree, record) -> list[str]:
+def _free_names(how: FitModel, free: Sequence[str] | None, degree: int | None, record: fit_data.Record) -> list[str]:
     if degree is not None:
-        if how.scene != "kinematics":
-            raise BadInputError("--degree applies to kinematics only (its polynomial); other scenes take --free")
-        if not isinstance(degree, int) or not 0 <= degree <= 3:
-            raise BadInputError(
-                f"--degree must be 0, 1, 2 or 3 (the scene drives up to a constant jerk), got {degree!r}"
-            )
-        names = ["x0", "v0", "a0", "jerk"][: degree + 1]
-        lost = {"vel": 1, "acc": 2}.get(record.signal, 0)
-        return names[lost:] if len(names) > lost else names
+        return how.free_of_degree(degree, record.signal)
     if free is None or len(free) == 0:
-        names = list(how.default_free)
-        if how.scene == "kinematics":
-            names = names[{"vel": 1, "acc": 2}.get(record.signal, 0) :]
-        return names
+        return how.free_by_default(record.signal)
     names = []
     for item in free:
         for name in str(item).split(","):
@@ -336,8 +244,9 @@ def _free_names(how: SceneFit, free, degree, record) -> list[str]:
     return names
 
 
-def _finish(problem: Problem, solved: dict[str, Any], run_scene: bool) -> FitResult:
-    """Intervals, derived quantities, cross-check, verdict and the identified scene's run."""
+def _finish(problem: Problem, solved: dict[str, Any], runs: dict[str, Any] | None, run_scene: bool) -> FitResult:
+    """The FitResult: intervals, derived quantities, cross-check, the starts' record (`runs`: None for a single
+    start) and the identified scene's run."""
     from mujoco import sysid
 
     how, record, free = problem.how, problem.record, problem.free
@@ -367,21 +276,30 @@ def _finish(problem: Problem, solved: dict[str, Any], run_scene: bool) -> FitRes
     correlation = covariance / np.outer(sd, sd)
     quantile = fit_results.t_quantile(dof)
     derived = fit_results.delta_intervals(
-        lambda v: fit_results.derived_quantities(how, problem, problem.values(v)), x, covariance, quantile
+        lambda v: how.derived(problem.values(v), problem.base, problem.modal),
+        x,
+        covariance,
+        quantile,
+        how.derived_units(),
     )
     same = {"omega_n_rad_s": "omega_n", "damping_ratio": "zeta"}
     derived = {k: v for k, v in derived.items() if k not in free and same.get(k) not in free}
     params = how.scene_params(values, problem.base, problem.modal)
-    curves = _curves(problem, x, covariance, quantile) if how.scene == "kinematics" else {}
+    curves = _curves(problem, x, covariance, quantile) if isinstance(how, PolynomialModel) else {}
     cross = fit_results.cross_check(problem, x, half, fitted)
     converged = solved["status"] in ("norm(dx) < tol", "norm(gradient) < tol")
     level = values["offset"] + (how.equilibrium(params) if record.signal == "pos" else 0.0)
-    amplitude = float(np.ptp(fitted)) if how.scene == "kinematics" else float(np.max(np.abs(fitted - level)))
-    result = FitResult(
-        scene=how.scene,
+    run, run_note = None, ""
+    if run_scene:
+        v0 = estimates.get("v0")
+        moving = v0 is not None and not v0["ci95"][0] <= 0.0 <= v0["ci95"][1]  # v0 = 0 is not plausible
+        run, run_note = _scene_run(problem, values, params, moving)
+    return FitResult(
+        scene=how.name,
         scenario=problem.scenario.name,
+        kind=how.kind,
         record=record,
-        free=list(free),
+        free=tuple(free),
         estimates=estimates,
         derived=derived,
         correlation=correlation,
@@ -404,24 +322,21 @@ def _finish(problem: Problem, solved: dict[str, Any], run_scene: bool) -> FitRes
             "integrator": "rk4",
         },
         converged=converged,
+        run=run,
+        run_note=run_note,
         curves=curves,
-        amplitude=amplitude,
+        amplitude=how.amplitude(fitted, level),
+        starts=fit_starts.summary(runs, list(free), covariance, record.unit),
     )
-    result.verdict = fit_results.verdict(result)
-    if run_scene:
-        v0 = estimates.get("v0")
-        moving = v0 is not None and not v0["ci95"][0] <= 0.0 <= v0["ci95"][1]  # v0 = 0 is not plausible
-        result.run, result.run_note = _scene_run(problem, values, params, moving)
-    return result
 
 
-def _curves(problem: Problem, x, covariance, quantile) -> dict[str, Any]:
-    """Kinematics: x(t), v(t), a(t) with 95 % bands on 41 times over the record."""
+def _curves(problem: Problem, x: np.ndarray, covariance: np.ndarray, quantile: float) -> dict[str, Any]:
+    """A polynomial's x(t), v(t), a(t) with 95 % bands on 41 times over the record."""
     t = np.linspace(0.0, float(problem.t[-1]), 41)
     out: dict[str, Any] = {"time_s": (t + problem.record.origin).tolist()}
     for signal in ("pos", "vel", "acc"):
 
-        def curve(vector, signal=signal):
+        def curve(vector: np.ndarray, signal: str = signal) -> dict[str, float]:
             values = problem.values(vector)
             y = problem.how.closed_form(t, problem.base, values, signal)
             return {str(i): float(v) for i, v in enumerate(y)}
@@ -433,36 +348,23 @@ def _curves(problem: Problem, x, covariance, quantile) -> dict[str, Any]:
     return out
 
 
-def _scene_run(problem: Problem, values: dict[str, float], params: dict[str, float], moving: bool):
+def _scene_run(
+    problem: Problem, values: dict[str, float], params: dict[str, float], moving: bool
+) -> tuple[Result | None, str]:
     """The identified scene's own run over the record's span, or (None, why not)."""
-    how, scene = problem.how, problem.scene
-    chosen = problem.scenario
-    overrides: dict[str, Any] = {k: v for k, v in params.items() if k in scene.parameters}
-    note = ""
-    if how.scene == "car":
-        assert isinstance(scene, Car)  # scenes.get("car") is the Car scene
-        g = scene.gravity()
-        overrides["push_mass"] = (params["clearance"] - values["x0"]) * params["stiffness"] / g
-        overrides.pop("damping_ratio", None)
-        if moving:
-            note = f"the car scene starts at rest; the fitted v0 = {values['v0']:.3g} m/s is not in its run"
-    elif how.scene == "printer_head":
-        total = params["carriage_mass"] + params["motor_mass"]
-        overrides["deflection"] = -values["x0"] * total / params["motor_mass"]
-        if moving:
-            note = f"the printer_head scene starts at rest; the fitted v0 = {values['v0']:.3g} m/s is not in its run"
+    overrides, note = problem.how.run_parameters(params, values, moving)
     try:
-        run = run_scenario(how.scene, chosen.name, duration=float(problem.t[-1]), **overrides)
+        run = run_scenario(problem.how.name, problem.scenario.name, duration=float(problem.t[-1]), **overrides)
     except SpringlabError as error:
         return None, f"the identified scene could not be run: {error}"
     return run, note
 
 
-def write(result: FitResult, directory: str | os.PathLike) -> list:
+def write(result: FitResult, directory: str | os.PathLike) -> list[pathlib.Path]:
     """Write fit.json and the identified scene's trajectory.csv / summary.json into `directory` (all or none)."""
     from springlab import files
 
-    texts = {"fit.json": files.dumps(result.as_dict()) + "\n"}
+    texts = {"fit.json": files.dumps(result.to_dict()) + "\n"}
     if result.run is not None:
         texts["trajectory.csv"] = files.csv_text(result.run.columns())
         texts["summary.json"] = files.dumps(result.run.summary) + "\n"

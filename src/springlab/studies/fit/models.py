@@ -1,19 +1,15 @@
-"""What `springlab fit` can identify in each scene, from which signal, and what it refuses.
+"""What `springlab fit` can identify in a scene, from which signal, and what it refuses: the machinery behind
+each kind of fit a scene declares (`Scene.fit`, springlab.scenes.capabilities).
 
-Each fittable scene has a `SceneFit`: the names a fit may free (with units),
-the default free set, the identifiability rules, how fitted values become the
-scene's parameters and initial state, a start from the data by linear algebra
-(no optimizer), and the closed form the MuJoCo fit is cross-checked against.
+`model_of(scene)` reads the declaration and gives its `FitModel`: the names a fit may free (with
+units), the default free set, the identifiability rules, how fitted values become the scene's
+parameters and initial state, a start from the data by linear algebra (no optimizer), and the closed
+form the MuJoCo fit is cross-checked against. The study never names a scene: two kinds of declaration,
+two models.
 
-Oscillators (slider, car push_release/damped_release, printer_head settle)
-observe one coordinate x of a mode m x'' + d x' + k (x - x_eq) = F:
-
-* slider: x = the spring's stretch, m, k, d = mass, stiffness, damping;
-* car: x = the car bottom's height (x_eq = clearance), m, k, d = mass, stiffness, damping;
-* printer_head: x = the carriage, ringing with the belt about the resting centre
-  of mass (x_eq = 0): m = the belt mode's mass mu = m_c m_m / (m_c + m_m),
-  k, d = belt_stiffness, belt_damping; the carriage moves as -(m_m / M) of the
-  belt's stretch, so its ring-down is the mode's free response itself.
+An `OscillatorFit` observes one coordinate x of a mode m x'' + d x' + k (x - x_eq) = F: m, k, d are
+the scene's parameters the declaration names (or m is the mode's mass its `mode_mass` hook derives,
+then fixed), x_eq its `rest` parameter (or 0), F a step force of the scenarios it lists (or 0).
 
 A free decay depends on k/m and d/m only, so of mass, stiffness and damping at
 most two can be fitted, and then only while the third is not zero; omega_n and
@@ -23,21 +19,25 @@ a sensor delay (or the moment of a release from rest) is identifiable only
 when the initial velocity is known, because shifting a free response in time is
 the same as changing its initial state.
 
-kinematics observes x(t) = x0 + v0 t + a0 t^2 / 2 + jerk t^3 / 6 (section 5.2):
-the polynomial of degree <= 3 the scene drives; velocity data cannot give x0,
+A `PolynomialFit` observes x(t) = x0 + v0 t + a0 t^2 / 2 + jerk t^3 / 6 (its coefficients c_n, the
+n-th derivatives at t = 0, up to the degree it declares): velocity data cannot give x0,
 acceleration data neither x0 nor v0.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
+from collections.abc import Mapping
+from typing import Any
 
 import mujoco
 import numpy as np
 
+from springlab import scenes
 from springlab.errors import BadInputError, UnknownNameError
 from springlab.exact import analytic
+from springlab.scenes.base import Scene
+from springlab.scenes.capabilities import OscillatorFit, PolynomialFit
 
 from .data import Record
 
@@ -46,36 +46,183 @@ MODAL = {"omega_n": "rad/s", "zeta": "-"}
 NUISANCE = {"x0": "m", "v0": "m/s", "offset": "(signal)", "delay": "s"}
 #: accepted spellings of the modal names
 ALIASES = {"damping_ratio": "zeta", "omega": "omega_n"}
+#: units of an oscillator's derived quantities
+DERIVED_UNITS = {
+    "omega_n_rad_s": "rad/s",
+    "damping_ratio": "-",
+    "natural_frequency_hz": "Hz",
+    "damped_frequency_rad_s": "rad/s",
+    "damped_period_s": "s",
+}
+#: a polynomial's coefficient c_n of t^n / n!: its unit, and the name and unit of t^n's coefficient c_n / n!
+POWER_UNITS = ("m", "m/s", "m/s^2", "m/s^3")
+POWER_TERMS = ("constant_m", "linear_coefficient_m_s", "quadratic_coefficient_m_s2", "cubic_coefficient_m_s3")
+#: signal -> how many of a polynomial's lowest coefficients differentiation loses
+LOST = {"vel": 1, "acc": 2}
 
 
-@dataclasses.dataclass
-class SceneFit:
-    """A scene's fit description (see the module docstring). Oscillators use this class directly.
+def fittable() -> list[str]:
+    """The scenes that declare a fit (`Scene.fit`), in catalogue order."""
+    return [name for name, scene in scenes.SCENES.items() if scene.fit is not None]
+
+
+def model_of(scene: Scene) -> FitModel:
+    """The fit machinery for what `scene` declares (BadInputError naming the fittable scenes if nothing)."""
+    declared = scene.fit
+    if isinstance(declared, OscillatorFit):
+        return OscillatorModel(scene, declared)
+    if isinstance(declared, PolynomialFit):
+        return PolynomialModel(scene, declared)
+    raise not_fittable(scene.name)
+
+
+def not_fittable(name: str) -> BadInputError:
+    """The error for a scene `name` that declares no fit (or does not exist): the fittable ones and the others."""
+    others = [other for other, scene in scenes.SCENES.items() if scene.fit is None]
+    why = f" ({', '.join(others)} {'has' if len(others) == 1 else 'have'} no identification yet)" if others else ""
+    return BadInputError(f"scene {name!r} cannot be fitted; valid: {', '.join(fittable())}{why}")
+
+
+class FitModel:
+    """A scene's fit (see the module docstring): the common face of the two kinds.
 
     Attributes
     ----------
     scene
-        Scene name.
+        The scene (springlab.scenes.base.Scene).
+    name
+        Its name.
+    kind
+        'oscillator' or 'polynomial', the kind of its declaration.
     joint
         The measured joint.
     scenarios
         Scenarios a record can be fitted with; the first is the default.
-    mass, stiffness, damping
-        The scene's parameter names of m, k, d (mass None: derived, fixed).
     default_free
-        Free names when the user names none.
+        Free names when the user names none (before the signal drops any).
     signals
         Signal kinds it fits.
     """
 
-    scene: str
-    joint: str
-    scenarios: tuple[str, ...]
-    mass: str | None = "mass"
-    stiffness: str = "stiffness"
-    damping: str = "damping"
-    default_free: tuple[str, ...] = ("omega_n", "zeta", "x0", "v0", "offset")
-    signals: tuple[str, ...] = ("pos", "vel", "acc")
+    kind = ""
+
+    def __init__(self, scene: Scene, joint: str, scenarios: tuple[str, ...], default_free: tuple[str, ...]):
+        self.scene, self.name = scene, scene.name
+        self.joint, self.scenarios, self.default_free = joint, scenarios, default_free
+        self.signals: tuple[str, ...] = ("pos", "vel", "acc")
+
+    # -- names and rules (override) ---------------------------------------------
+
+    def units(self) -> dict[str, str]:
+        """Every name a fit may free -> its unit."""
+        raise NotImplementedError
+
+    def check_free(
+        self, free: list[str], fixed: dict[str, float], params: dict[str, float], forced: bool, signal: str
+    ) -> None:
+        """Raise BadInputError for an unknown or unidentifiable free set."""
+        raise NotImplementedError
+
+    def modal(self, free: list[str]) -> bool:
+        """Whether fitted values are read in modal form (omega_n, zeta with the mass given)."""
+        return False
+
+    def free_by_default(self, signal: str) -> list[str]:
+        """The free names when the user names none, for a record of `signal`."""
+        return list(self.default_free)
+
+    def free_of_degree(self, degree: int, signal: str) -> list[str]:
+        """The free names of `--degree` (BadInputError where the fit has no degree)."""
+        polynomial = [name for name, s in scenes.SCENES.items() if isinstance(s.fit, PolynomialFit)]
+        raise BadInputError(
+            f"--degree applies to {' and '.join(polynomial)} only"
+            f" ({'its polynomial' if len(polynomial) == 1 else 'their polynomials'}); other scenes take --free"
+        )
+
+    def step_force(self, scenario: str) -> str | None:
+        """The scene parameter holding the constant force [N] `scenario` applies from t = 0, or None (free motion)."""
+        return None
+
+    # -- values <-> scene ---------------------------------------------------------
+
+    def equilibrium(self, params: Mapping[str, float]) -> float:
+        """Rest position x_eq [m] of the observed coordinate (unforced)."""
+        return 0.0
+
+    def values_from_params(self, params: dict[str, float]) -> dict[str, float]:
+        """All fit names' values implied by scene parameters."""
+        raise NotImplementedError
+
+    def scene_params(self, values: dict[str, float], base: dict[str, float], modal: bool) -> dict[str, float]:
+        """Scene parameters for fit values."""
+        raise NotImplementedError
+
+    def initial(
+        self, model: mujoco.MjModel, params: dict[str, float], x0: float, v0: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(qpos, qvel) with the observed coordinate at x0 [m], v0 [m/s] (the rest of the scene at rest)."""
+        qpos, qvel = model.qpos0.copy(), np.zeros(model.nv)
+        qpos[model.joint(self.joint).qposadr[0]] = x0
+        qvel[model.joint(self.joint).dofadr[0]] = v0
+        return qpos, qvel
+
+    def run_parameters(
+        self, params: dict[str, float], values: dict[str, float], moving: bool
+    ) -> tuple[dict[str, Any], str]:
+        """(the identified scene's run parameters, a note on what its run leaves out, or '')."""
+        return {k: v for k, v in params.items() if k in self.scene.parameters}, ""
+
+    # -- the closed form, a start, bounds (override) -----------------------------------
+
+    def closed_form(
+        self, t: np.ndarray, params: dict[str, float], values: dict[str, float], signal: str, force: float = 0.0
+    ) -> np.ndarray:
+        """The exact signal at times since the origin t [s]."""
+        raise NotImplementedError
+
+    def start(
+        self, record: Record, params: dict[str, float], fixed: dict[str, float], free: list[str], force: float = 0.0
+    ) -> dict[str, float]:
+        """Start values of every fit name, by linear algebra on the data (no optimizer involved)."""
+        raise NotImplementedError
+
+    def bounds(self, name: str, start: float, record: Record) -> tuple[float, float]:
+        """Box bounds of a free name around its start value (wide: they only keep the model physical)."""
+        raise NotImplementedError
+
+    def fastest_rate(self, values: dict[str, float], base: dict[str, float], modal: bool) -> float:
+        """Fastest pole |s| [1/s] of the motion at these values (0: none, a polynomial)."""
+        return 0.0
+
+    def derived(self, values: dict[str, float], base: dict[str, float], modal: bool) -> dict[str, float]:
+        """Named results computed from the fitted values (SI)."""
+        raise NotImplementedError
+
+    def derived_units(self) -> dict[str, str]:
+        """Unit of each name `derived` returns."""
+        raise NotImplementedError
+
+    def amplitude(self, fitted: np.ndarray, level: float) -> float:
+        """The motion's size in the fitted signal [signal unit], about `level` (the rest level) where it has one."""
+        return float(np.max(np.abs(fitted - level)))
+
+
+class OscillatorModel(FitModel):
+    """An `OscillatorFit`: one mode m x'' + d x' + k (x - x_eq) = F (see the module docstring).
+
+    Attributes
+    ----------
+    mass, stiffness, damping
+        The scene's parameter names of m, k, d (mass None: derived by the declaration's `mode_mass`, fixed).
+    """
+
+    kind = "oscillator"
+
+    def __init__(self, scene: Scene, declared: OscillatorFit):
+        super().__init__(scene, declared.joint, declared.scenarios, declared.default_free)
+        self.declared = declared
+        self.signals = declared.signals
+        self.mass, self.stiffness, self.damping = declared.mass, declared.stiffness, declared.damping
 
     # -- names and rules -------------------------------------------------------
 
@@ -98,10 +245,10 @@ class SceneFit:
             if name not in valid:
                 if name in params:
                     raise BadInputError(
-                        f"{name} cannot be fitted in {self.scene}: a ring-down depends on the mode's k/m and d/m"
+                        f"{name} cannot be fitted in {self.name}: a ring-down depends on the mode's k/m and d/m"
                         f" only; give it with --set {name}=VALUE and free one of {', '.join(valid)}"
                     )
-                raise UnknownNameError(f"fit parameter of {self.scene}", name, valid)
+                raise UnknownNameError(f"fit parameter of {self.name}", name, valid)
         modal = [n for n in free if n in MODAL]
         physical = [n for n in free if n in self.physical()]
         if modal and physical:
@@ -132,18 +279,26 @@ class SceneFit:
                 " initial state; fix v0 (e.g. --set v0=0 for a release from rest)"
             )
 
+    def modal(self, free: list[str]) -> bool:
+        """Whether fitted values are read in modal form: omega_n or zeta is free."""
+        return bool(set(free) & set(MODAL))
+
+    def step_force(self, scenario: str) -> str | None:
+        """The scene parameter holding the constant force [N] `scenario` applies from t = 0, or None (a free decay)."""
+        return self.declared.step_forces.get(scenario)
+
     # -- values <-> scene ------------------------------------------------------
 
-    def mode_mass(self, params: dict[str, float]) -> float:
+    def mode_mass(self, params: Mapping[str, float]) -> float:
         """The mode's mass m [kg] in these scene parameters."""
-        if self.mass is not None:
-            return params[self.mass]
-        m_c, m_m = params["carriage_mass"], params["motor_mass"]
-        return m_c * m_m / (m_c + m_m)
+        if self.declared.mode_mass is not None:
+            return self.declared.mode_mass(params)
+        assert self.mass is not None, "OscillatorFit requires a mass parameter or a mode_mass hook"
+        return params[self.mass]
 
-    def equilibrium(self, params: dict[str, float]) -> float:
-        """Rest position x_eq [m] of the observed coordinate (unforced)."""
-        return params.get("clearance", 0.0) if self.scene == "car" else 0.0
+    def equilibrium(self, params: Mapping[str, float]) -> float:
+        """Rest position x_eq [m] of the observed coordinate (unforced): the declared `rest` parameter, or 0."""
+        return params.get(self.declared.rest, 0.0) if self.declared.rest is not None else 0.0
 
     def values_from_params(self, params: dict[str, float]) -> dict[str, float]:
         """All fit names' values implied by scene parameters (x0, v0 from the scene where it has them)."""
@@ -172,17 +327,25 @@ class SceneFit:
     def initial(
         self, model: mujoco.MjModel, params: dict[str, float], x0: float, v0: float
     ) -> tuple[np.ndarray, np.ndarray]:
-        """(qpos, qvel) with the observed coordinate at x0 [m], v0 [m/s] (the rest of the scene at rest)."""
-        qpos, qvel = model.qpos0.copy(), np.zeros(model.nv)
-        if self.scene == "printer_head":
-            # carriage at x0 about the centre of mass at rest at 0: motor at -(m_c / m_m) x0
-            ratio = params["carriage_mass"] / params["motor_mass"]
-            for joint, q, v in (("carriage", x0, v0), ("motor", -ratio * x0, -ratio * v0)):
-                qpos[model.joint(joint).qposadr[0]], qvel[model.joint(joint).dofadr[0]] = q, v
-            return qpos, qvel
-        qpos[model.joint(self.joint).qposadr[0]] = x0
-        qvel[model.joint(self.joint).dofadr[0]] = v0
-        return qpos, qvel
+        """(qpos, qvel) with the observed coordinate at x0 [m], v0 [m/s]: the declaration's hook, or the joint set."""
+        if self.declared.initial_state is not None:
+            return self.declared.initial_state(model, params, x0, v0)
+        return super().initial(model, params, x0, v0)
+
+    def run_parameters(
+        self, params: dict[str, float], values: dict[str, float], moving: bool
+    ) -> tuple[dict[str, Any], str]:
+        """(the identified scene's run parameters, a note on what its run leaves out, or '').
+
+        A scene whose runs start at rest (the declaration's `release` hook) starts at the fitted x0; a fitted
+        v0 that is not plausibly 0 (`moving`) is not in its run, and the note says so.
+        """
+        overrides, note = super().run_parameters(params, values, moving)
+        if self.declared.release is not None:
+            overrides = self.declared.release(overrides, values["x0"])
+            if moving:
+                note = f"the {self.name} scene starts at rest; the fitted v0 = {values['v0']:.3g} m/s is not in its run"
+        return overrides, note
 
     # -- the closed form ---------------------------------------------------------
 
@@ -282,29 +445,77 @@ class SceneFit:
             return start - 1e3 * scale, start + 1e3 * scale
         return start - 1e3 * scale, start + 1e3 * scale
 
+    # -- what the fit reports ------------------------------------------------------
 
-@dataclasses.dataclass
-class KinematicsFit(SceneFit):
-    """The vehicle's polynomial x0 + v0 t + a0 t^2/2 + jerk t^3/6 (scene kinematics)."""
+    def fastest_rate(self, values: dict[str, float], base: dict[str, float], modal: bool) -> float:
+        """Fastest pole |s| [1/s] of the mode at these values."""
+        params = self.scene_params(values, base, modal)
+        m = self.mode_mass(params)
+        k, d = params[self.stiffness], params[self.damping]
+        omega, zeta = math.sqrt(k / m), d / (2 * math.sqrt(k * m))
+        return omega * (zeta + math.sqrt(max(zeta * zeta - 1.0, 0.0))) if zeta > 1 else omega
 
-    default_free: tuple[str, ...] = ("x0", "v0", "a0", "jerk")
+    def derived(self, values: dict[str, float], base: dict[str, float], modal: bool) -> dict[str, float]:
+        """omega_n, zeta, the natural frequency, m, k, d and, underdamped, the damped frequency and period (SI)."""
+        params = self.scene_params(values, base, modal)
+        m, k, d = self.mode_mass(params), params[self.stiffness], params[self.damping]
+        out = {
+            "omega_n_rad_s": math.sqrt(k / m),
+            "damping_ratio": d / (2 * math.sqrt(k * m)),
+            "natural_frequency_hz": math.sqrt(k / m) / (2 * math.pi),
+            self.stiffness: k,
+            self.damping: d,
+        }
+        if self.mass:
+            out[self.mass] = m
+        if out["damping_ratio"] < 1:
+            omega_d = out["omega_n_rad_s"] * math.sqrt(1 - out["damping_ratio"] ** 2)
+            out["damped_frequency_rad_s"] = omega_d
+            out["damped_period_s"] = 2 * math.pi / omega_d
+        return out
+
+    def derived_units(self) -> dict[str, str]:
+        """Unit of each name `derived` returns."""
+        named = ((self.mass, "kg"), (self.stiffness, "N/m"), (self.damping, "N s/m"))
+        return {**DERIVED_UNITS, **{name: unit for name, unit in named if name is not None}}
+
+
+class PolynomialModel(FitModel):
+    """A `PolynomialFit`: x(t) = sum_n c_n t^n / n! with the scene's coefficients c_n (see the module docstring).
+
+    Attributes
+    ----------
+    coefficients
+        The scene's parameter names of c_0, c_1, ... (x0, v0, ...), ascending power.
+    """
+
+    kind = "polynomial"
+
+    def __init__(self, scene: Scene, declared: PolynomialFit):
+        super().__init__(scene, declared.joint, declared.scenarios, declared.coefficients)
+        self.declared = declared
+        self.signals = declared.signals
+        self.coefficients = declared.coefficients
 
     def units(self) -> dict[str, str]:
-        return {"x0": "m", "v0": "m/s", "a0": "m/s^2", "jerk": "m/s^3"}
+        """Every name a fit may free -> its unit (c_n [m/s^n])."""
+        return dict(zip(self.coefficients, POWER_UNITS))
 
     def check_free(
         self, free: list[str], fixed: dict[str, float], params: dict[str, float], forced: bool, signal: str
     ) -> None:
+        """Raise BadInputError for an unknown name, an offset or delay, or a coefficient the signal lost."""
         valid = self.units()
         for name in free:
             if name in ("offset", "delay"):
                 raise BadInputError(
                     f"{name} cannot be fitted with a polynomial: it is indistinguishable from"
-                    f" {'x0' if name == 'offset' else 'the coefficients'}; free x0, v0, a0, jerk"
+                    f" {self.coefficients[0] if name == 'offset' else 'the coefficients'};"
+                    f" free {', '.join(self.coefficients)}"
                 )
             if name not in valid:
-                raise UnknownNameError("fit parameter of kinematics", name, valid)
-        lost = {"vel": ("x0",), "acc": ("x0", "v0")}.get(signal, ())
+                raise UnknownNameError(f"fit parameter of {self.name}", name, valid)
+        lost = self.coefficients[: LOST.get(signal, 0)]
         for name in free:
             if name in lost:
                 raise BadInputError(
@@ -312,25 +523,42 @@ class KinematicsFit(SceneFit):
                     f" {name}=VALUE and free only {', '.join(n for n in valid if n not in lost)}"
                 )
 
+    def modal(self, free: list[str]) -> bool:
+        """True: a polynomial has no modal form to choose (the flag is unused)."""
+        return True
+
+    def free_by_default(self, signal: str) -> list[str]:
+        """Every coefficient the signal keeps."""
+        return list(self.coefficients)[LOST.get(signal, 0) :]
+
+    def free_of_degree(self, degree: int, signal: str) -> list[str]:
+        """The coefficients of a polynomial of `degree` the signal keeps (BadInputError outside 0 to the highest)."""
+        highest = len(self.coefficients) - 1
+        if not isinstance(degree, int) or not 0 <= degree <= highest:
+            choices = [str(n) for n in range(highest + 1)]
+            raise BadInputError(
+                f"--degree must be {', '.join(choices[:-1])} or {choices[-1]} (the scene drives up to a constant"
+                f" {self.coefficients[-1]}), got {degree!r}"
+            )
+        names = list(self.coefficients)[: degree + 1]
+        lost = LOST.get(signal, 0)
+        return names[lost:] if len(names) > lost else names
+
     def values_from_params(self, params: dict[str, float]) -> dict[str, float]:
-        return {n: params[n] for n in ("x0", "v0", "a0", "jerk")} | {"offset": 0.0, "delay": 0.0}
+        """The coefficients' values in the scene parameters, no offset, no delay."""
+        return {n: params[n] for n in self.coefficients} | {"offset": 0.0, "delay": 0.0}
 
     def scene_params(self, values: dict[str, float], base: dict[str, float], modal: bool) -> dict[str, float]:
-        return dict(base) | {n: values[n] for n in ("x0", "v0", "a0", "jerk")}
-
-    def initial(
-        self, model: mujoco.MjModel, params: dict[str, float], x0: float, v0: float
-    ) -> tuple[np.ndarray, np.ndarray]:
-        qpos, qvel = model.qpos0.copy(), np.zeros(model.nv)
-        qpos[model.joint(self.joint).qposadr[0]] = x0
-        qvel[model.joint(self.joint).dofadr[0]] = v0
-        return qpos, qvel
+        """Scene parameters with the fitted coefficients."""
+        return dict(base) | {n: values[n] for n in self.coefficients}
 
     def closed_form(
         self, t: np.ndarray, params: dict[str, float], values: dict[str, float], signal: str, force: float = 0.0
     ) -> np.ndarray:
+        """The polynomial (pos), or its first or second derivative (vel, acc), at times t [s]."""
         t = np.asarray(t, float)
-        x0, v0, a0, j = (values[n] for n in ("x0", "v0", "a0", "jerk"))
+        c = [values[n] for n in self.coefficients] + [0.0] * (4 - len(self.coefficients))
+        x0, v0, a0, j = c
         return {
             "pos": x0 + v0 * t + a0 * t**2 / 2 + j * t**3 / 6,
             "vel": v0 + a0 * t + j * t**2 / 2,
@@ -341,16 +569,17 @@ class KinematicsFit(SceneFit):
         self, record: Record, params: dict[str, float], fixed: dict[str, float], free: list[str], force: float = 0.0
     ) -> dict[str, float]:
         """Linear least squares on the monomials: exact for a polynomial (the MuJoCo fit then confirms it)."""
-        values = self.values_from_params(params) | {n: 0.0 for n in ("x0", "v0", "a0", "jerk")}
+        values = self.values_from_params(params) | {n: 0.0 for n in self.coefficients}
         values.update({k: v for k, v in fixed.items() if k in values})
         t = record.model_time
-        basis = {
-            "x0": {"pos": np.ones_like(t)},
-            "v0": {"pos": t, "vel": np.ones_like(t)},
-            "a0": {"pos": t**2 / 2, "vel": t, "acc": np.ones_like(t)},
-            "jerk": {"pos": t**3 / 6, "vel": t**2 / 2, "acc": t},
-        }
-        names = [n for n in ("x0", "v0", "a0", "jerk") if n in free]
+        monomials = (
+            {"pos": np.ones_like(t)},
+            {"pos": t, "vel": np.ones_like(t)},
+            {"pos": t**2 / 2, "vel": t, "acc": np.ones_like(t)},
+            {"pos": t**3 / 6, "vel": t**2 / 2, "acc": t},
+        )
+        basis = dict(zip(self.coefficients, monomials))
+        names = [n for n in self.coefficients if n in free]
         known = self.closed_form(t, params, {**values, **{n: 0.0 for n in names}}, record.signal)
         if names:
             matrix = np.column_stack([basis[n][record.signal] for n in names])
@@ -359,30 +588,25 @@ class KinematicsFit(SceneFit):
         return values
 
     def bounds(self, name: str, start: float, record: Record) -> tuple[float, float]:
+        """Box bounds of a coefficient: wide (a polynomial is linear in them)."""
         scale = float(np.max(np.abs(record.values))) + 1.0
         width = 1e3 * scale * (1.0 + float(record.model_time[-1])) ** 3
         return start - width, start + width
 
+    def derived(self, values: dict[str, float], base: dict[str, float], modal: bool) -> dict[str, float]:
+        """The coefficient of each power t^n, c_n / n!, highest power first (SI)."""
+        return {
+            POWER_TERMS[n]: values[name] / math.factorial(n) if n > 1 else values[name]
+            for n, name in reversed(list(enumerate(self.coefficients)))
+        }
 
-#: scene name -> its fit description
-FITS: dict[str, SceneFit] = {
-    "slider": SceneFit(
-        "slider", "slider", ("free", "underdamped", "undamped", "critical", "overdamped", "exercise", "step")
-    ),
-    "car": SceneFit(
-        "car", "heave", ("damped_release", "push_release"), default_free=("stiffness", "damping", "x0", "v0", "offset")
-    ),
-    "printer_head": SceneFit(
-        "printer_head",
-        "carriage",
-        ("settle",),
-        mass=None,
-        stiffness="belt_stiffness",
-        damping="belt_damping",
-        default_free=("belt_stiffness", "belt_damping", "x0", "v0", "offset"),
-    ),
-    "kinematics": KinematicsFit("kinematics", "vehicle", ("polynomial_position",), mass=None),
-}
+    def derived_units(self) -> dict[str, str]:
+        """Unit of each name `derived` returns."""
+        return dict(zip(POWER_TERMS, POWER_UNITS))
+
+    def amplitude(self, fitted: np.ndarray, level: float) -> float:
+        """The range of the fitted signal (a polynomial has no rest level)."""
+        return float(np.ptp(fitted))
 
 
 def modal_estimate(t: np.ndarray, y: np.ndarray) -> tuple[float, float]:

@@ -1,4 +1,5 @@
-"""What a fit reports: intervals, derived quantities, the closed-form cross-check, the verdict, fit.json.
+"""What a fit reports: the result (`FitResult`), intervals, derived quantities, the closed-form cross-check,
+the verdict.
 
 Intervals are `mujoco.sysid.calculate_intervals`' (linearized, Student t on
 n - p degrees of freedom, noise variance from the residual). Derived
@@ -9,63 +10,171 @@ step 1e-6: error ~1e-12 on these smooth closed forms).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from springlab import files, tables
 from springlab.exact import analytic
 
-if TYPE_CHECKING:  # annotations only
-    from .engine import Problem
-    from .models import SceneFit
+from .data import Record
+from .models import POWER_TERMS
 
-#: units of derived quantities
-DERIVED_UNITS = {
-    "omega_n_rad_s": "rad/s",
-    "damping_ratio": "-",
-    "natural_frequency_hz": "Hz",
-    "damped_frequency_rad_s": "rad/s",
-    "damped_period_s": "s",
-    "stiffness": "N/m",
-    "damping": "N s/m",
-    "mass": "kg",
-    "belt_stiffness": "N/m",
-    "belt_damping": "N s/m",
-}
+if TYPE_CHECKING:  # annotations only
+    import pandas
+
+    from springlab.runs.run import Result
+
+    from .engine import Problem
+
+#: t^n as the verdict writes it
+POWERS = ("", "t", "t²", "t³")
+
+
+@dataclasses.dataclass(frozen=True, eq=False)  # arrays: compare fields, not results
+class FitResult:
+    """An identified scene, built once and immutable (its arrays are read-only).
+
+    Attributes
+    ----------
+    scene, scenario
+        What was fitted.
+    kind
+        The kind of fit the scene declares: 'oscillator' or 'polynomial' (springlab.scenes.capabilities).
+    record
+        The cleaned record (springlab.studies.fit.data.Record).
+    free
+        Fitted names, in order.
+    estimates
+        Name -> {'value', 'ci95' [low, high], 'unit'}.
+    derived
+        The same for quantities computed from the estimates.
+    correlation
+        (p, p) correlation matrix of the estimates.
+    covariance
+        (p, p) covariance [units of the names].
+    residual_rms
+        RMS of measured - fitted [signal unit].
+    dof
+        Degrees of freedom n - p.
+    parameters
+        The scene's parameters at the estimate (SI).
+    fitted
+        (n,) the fitted signal at the recorded times.
+    cross_check
+        The closed form fitted independently, and how far it is.
+    optimizer
+        Status, iterations, rollouts, times.
+    converged
+        Whether the optimizer stopped on a tolerance (`success`, as scipy calls it).
+    run
+        The identified scene's own run (springlab.runs.run.Result), or None.
+    run_note
+        What the run leaves out, or why there is none ('' if nothing).
+    curves
+        A polynomial's x(t), v(t), a(t) with 95 % half-widths over the record (empty for an oscillator).
+    amplitude
+        The motion's size in the fitted signal [signal unit] (about its rest level, or its range).
+    starts
+        The multi-start record (springlab.studies.fit.starts.summary): count, best, at_best_minimum, spread.
+    """
+
+    scene: str
+    scenario: str
+    kind: str
+    record: Record
+    free: tuple[str, ...]
+    estimates: dict[str, dict[str, Any]]
+    derived: dict[str, dict[str, Any]]
+    correlation: np.ndarray
+    covariance: np.ndarray
+    residual_rms: float
+    dof: int
+    parameters: dict[str, float]
+    fitted: np.ndarray
+    cross_check: dict[str, Any]
+    optimizer: dict[str, Any]
+    converged: bool
+    run: Result | None = None
+    run_note: str = ""
+    curves: dict[str, Any] = dataclasses.field(default_factory=dict)
+    amplitude: float = 0.0
+    starts: dict[str, Any] = dataclasses.field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "free", tuple(self.free))
+        for name in ("correlation", "covariance", "fitted"):
+            view = np.asarray(getattr(self, name), float).view()
+            view.flags.writeable = False
+            object.__setattr__(self, name, view)
+
+    @property
+    def success(self) -> bool:
+        """Whether the optimizer stopped on a tolerance (scipy's name for `converged`)."""
+        return self.converged
+
+    @property
+    def message(self) -> str:
+        """Why the optimizer stopped, e.g. 'norm(dx) < tol' (scipy's `message`)."""
+        return str(self.optimizer["status"])
+
+    @property
+    def verdict(self) -> str:
+        """The one-line answer (see `verdict`)."""
+        return verdict(self)
+
+    def to_dict(self) -> dict[str, Any]:
+        """fit.json's content, exactly what `springlab fit --json` prints (docs/fit.md, "fit.json").
+
+        Plain JSON types: lists for arrays and tuples, None for a non-finite number.
+        """
+        r = self.record
+        return files.json_ready(
+            {
+                "scene": self.scene,
+                "scenario": self.scenario,
+                "signal": r.name,
+                "signal_unit": r.unit,
+                "column": r.column,
+                "free": list(self.free),
+                "estimates": self.estimates,
+                "derived": self.derived,
+                "correlation": {a: dict(zip(self.free, row)) for a, row in zip(self.free, self.correlation.tolist())},
+                "residual_rms": self.residual_rms,
+                "degrees_of_freedom": self.dof,
+                "samples": int(r.time.size),
+                "rows": r.rows,
+                "skipped_nan_rows": r.skipped_nan,
+                "dropped_before_start": r.dropped_before_start,
+                "time_origin_s": r.origin,
+                "time_span_s": [float(r.time[0]), float(r.time[-1])],
+                "data_notes": list(r.notes),
+                "parameters": self.parameters,
+                "curves": self.curves,
+                "cross_check": self.cross_check,
+                "optimizer": self.optimizer,
+                "starts": self.starts,
+                "converged": self.converged,
+                "run_note": self.run_note,
+                "verdict": self.verdict,
+            }
+        )
+
+    def to_pandas(self) -> pandas.DataFrame:
+        """The estimates, one row per fitted name: `name`, `value`, `ci95_low`, `ci95_high`, `unit` (pandas optional)."""
+        rows = [
+            {"name": name, "value": q["value"], "ci95_low": q["ci95"][0], "ci95_high": q["ci95"][1], "unit": q["unit"]}
+            for name, q in self.estimates.items()
+        ]
+        return tables.to_pandas(rows)
 
 
 def interval(value: float, half: float) -> list[float]:
     """[low, high] of value +- half."""
     return [value - half, value + half]
-
-
-def derived_quantities(how: SceneFit, problem: Problem, values: dict[str, float]) -> dict[str, float]:
-    """Named results computed from the fitted values (SI)."""
-    params = how.scene_params(values, problem.base, problem.modal)
-    if how.scene == "kinematics":
-        return {
-            "cubic_coefficient_m_s3": values["jerk"] / 6,
-            "quadratic_coefficient_m_s2": values["a0"] / 2,
-            "linear_coefficient_m_s": values["v0"],
-            "constant_m": values["x0"],
-        }
-    m, k, d = how.mode_mass(params), params[how.stiffness], params[how.damping]
-    out = {
-        "omega_n_rad_s": math.sqrt(k / m),
-        "damping_ratio": d / (2 * math.sqrt(k * m)),
-        "natural_frequency_hz": math.sqrt(k / m) / (2 * math.pi),
-        how.stiffness: k,
-        how.damping: d,
-    }
-    if how.mass:
-        out[how.mass] = m
-    if out["damping_ratio"] < 1:
-        omega_d = out["omega_n_rad_s"] * math.sqrt(1 - out["damping_ratio"] ** 2)
-        out["damped_frequency_rad_s"] = omega_d
-        out["damped_period_s"] = 2 * math.pi / omega_d
-    return out
 
 
 def gradient(function: Callable[[np.ndarray], Mapping[str, float]], x: np.ndarray) -> dict[str, np.ndarray]:
@@ -82,24 +191,22 @@ def gradient(function: Callable[[np.ndarray], Mapping[str, float]], x: np.ndarra
 
 
 def delta_intervals(
-    function: Callable[[np.ndarray], Mapping[str, float]], x: np.ndarray, covariance: np.ndarray, t_quantile: float
+    function: Callable[[np.ndarray], Mapping[str, float]],
+    x: np.ndarray,
+    covariance: np.ndarray,
+    t_quantile: float,
+    units: Mapping[str, str] | None = None,
 ) -> dict[str, dict[str, Any]]:
-    """name -> {'value', 'ci95', 'unit'} of derived quantities by the delta method."""
+    """name -> {'value', 'ci95', 'unit'} of derived quantities by the delta method (unit from `units`, else '-')."""
+    units = units or {}
     center = function(x)
     grads = gradient(function, x)
     out = {}
     for name, value in center.items():
         g = grads[name]
         half = float(t_quantile * math.sqrt(max(g @ covariance @ g, 0.0)))
-        out[name] = {"value": value, "ci95": interval(value, half), "unit": DERIVED_UNITS.get(name, _poly_unit(name))}
+        out[name] = {"value": value, "ci95": interval(value, half), "unit": units.get(name, "-")}
     return out
-
-
-def _poly_unit(name: str) -> str:
-    for suffix, unit in (("_m_s3", "m/s^3"), ("_m_s2", "m/s^2"), ("_m_s", "m/s"), ("_m", "m")):
-        if name.endswith(suffix):
-            return unit
-    return "-"
 
 
 def cross_check(problem: Problem, x: np.ndarray, half_widths: np.ndarray, fitted: np.ndarray) -> dict[str, Any]:
@@ -167,24 +274,24 @@ def length(value: float) -> str:
     return f"{value * 1e6:.3g} µm"
 
 
-def verdict(result) -> str:
-    """The one-line answer, e.g. 'ω_n = 18.40 ± 0.05 rad/s, ζ = 0.156 ± 0.004: underdamped; residual RMS ...'."""
+def verdict(result: FitResult) -> str:
+    """The one-line answer, e.g. 'ω_n = 18.40 ± 0.05 rad/s, ζ = 0.156 ± 0.004: underdamped; residual RMS ...'.
+
+    A polynomial's: 'x(t) = (c3 ± h3) t³ + ... + (c0 ± h0) m; residual RMS ...'.
+    """
     est, der, record = result.estimates, result.derived, result.record
     rms = result.residual_rms
     signal_unit = record.unit
     rms_text = length(rms) if signal_unit == "m" else f"{rms:.3g} {signal_unit}"
     amplitude = result.amplitude
     share = f" ({100 * rms / amplitude:.2g} % of the initial amplitude)" if amplitude > 0 else ""
-    if result.scene == "kinematics":
-        coefficients = [
-            der[n]
-            for n in ("cubic_coefficient_m_s3", "quadratic_coefficient_m_s2", "linear_coefficient_m_s", "constant_m")
-        ]
-        powers = ["t³", "t²", "t", ""]
-        terms = [
-            f"({plus_minus(c['value'], c['ci95'][1] - c['value'])}){(' ' + p) if p else ''}"
-            for c, p in zip(coefficients, powers)
-        ]
+    if result.kind == "polynomial":
+        terms = []
+        for n in reversed(range(len(POWER_TERMS))):
+            c = der.get(POWER_TERMS[n])
+            if c is not None:
+                power = POWERS[n]
+                terms.append(f"({plus_minus(c['value'], c['ci95'][1] - c['value'])}){(' ' + power) if power else ''}")
         text = "x(t) = " + " + ".join(terms) + " m"
     else:
         parts = []

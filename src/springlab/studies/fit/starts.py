@@ -53,7 +53,7 @@ from springlab.studies.executor import Executor, resolve
 from springlab.studies.fit import data as fit_data
 
 from .engine import OMEGA_DT, Problem, solve
-from .models import FITS
+from .models import model_of
 
 #: free names that enter the response linearly: they keep start 1's values in every start
 LINEAR = ("x0", "v0", "offset", "a0", "jerk")
@@ -163,8 +163,8 @@ def run_start(payload: dict[str, Any], nthread: int = 0) -> dict[str, Any]:
         `status`, `iterations`, `scale`, `cost` (half the sum of squared scaled residuals, inf if not finite),
         `residual_rms` [signal unit], `rollouts`, `rollout_time_s`, `wall_time_s` [s].
     """
-    how = FITS[payload["scene"]]
-    chosen = scenes.get(payload["scene"]).scenario(payload["scenario"])
+    how = model_of(scenes.get(payload["scene"]))
+    chosen = how.scene.scenario(payload["scenario"])
     record = fit_data.Record(**payload["record"])
     free = list(payload["free"])
     problem = Problem(
@@ -233,7 +233,7 @@ def run(problem: Problem, count: int, executor: Executor | None = None) -> tuple
     free, record = problem.free, problem.record
     bounds = {name: problem.how.bounds(name, problem.start[name], record) for name in free}
     common = {
-        "scene": problem.how.scene,
+        "scene": problem.how.name,
         "scenario": problem.scenario.name,
         "base": dict(problem.base),
         "record": {f.name: getattr(record, f.name) for f in dataclasses.fields(record)},
