@@ -101,10 +101,10 @@ def test_list_dt_is_the_dt_run_uses(capsys):
 
 def test_design_accepts_the_damping_ratio_its_table_shows():
     # zeta = c / (2 sqrt(k m_r)), m_r = m_c m_m / (m_c + m_m): the design table's definition, inverted
-    base = design.base_parameters({"damping_ratio": 0.1})
+    base = design.base_parameters("printer_head", {"damping_ratio": 0.1})
     reduced = base["carriage_mass"] * base["motor_mass"] / (base["carriage_mass"] + base["motor_mass"])
     assert base["belt_damping"] == pytest.approx(2 * 0.1 * (base["belt_stiffness"] * reduced) ** 0.5, rel=1e-15)
-    assert design.default_properties(base)["damping_ratio"] == pytest.approx(0.1, rel=1e-14)
+    assert scenes.get("printer_head").design.hooks.defaults(base)["damping_ratio"] == pytest.approx(0.1, rel=1e-14)
 
 
 def test_design_refuses_both_names_for_the_damping(capsys):

@@ -185,7 +185,7 @@ def test_tradeoff_stability_and_design_charts_leave_the_callers_backend_alone(tm
         "from springlab.studies import stability, tradeoff\n"
         "from springlab.studies.design import study as design\n"
         f"charts.plot_tradeoff(tradeoff.sweep('slider', 'free', duration=0.5), {str(tmp_path / 't.png')!r})\n"
-        f"design_chart.plot(design.run_study(levels=3, plane_levels=3), {str(tmp_path / 'd.png')!r})\n"
+        f"design_chart.plot(design.run_study('printer_head', levels=3, plane_levels=5), {str(tmp_path / 'd.png')!r})\n"
         "n = np.arange(4)\n"
         "series = stability.EnergyHistories('oscillator', 0.2, 1.0, n / 3, {'euler': 1 + 0.01 * np.sin(n),"
         " 'rk4': 0.99**n, 'discrete': 0.9**n}, {'rk4': 0.99**n, 'discrete': 0.9**n}, {'euler': (0.9, 1.1)}, ())\n"

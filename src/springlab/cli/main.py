@@ -332,7 +332,8 @@ def cmd_design(args: argparse.Namespace) -> int:
     if args.sobol is not None:
         from springlab.studies.design import sobol
 
-        sobol.check_base_samples(args.sobol)  # bad input before minutes of simulation
+        _, spec = design.declaration(args.scene)
+        sobol.check_base_samples(args.sobol, len(spec.sobol))  # bad input before minutes of simulation
     with _executor(args, nthread=args.threads) as executor:
         study = design.run_study(
             args.scene,
@@ -340,23 +341,21 @@ def cmd_design(args: argparse.Namespace) -> int:
             plane_levels=args.plane,
             executor=executor,
             omega_dt=design.OMEGA_DT,
+            sobol=args.sobol,
+            seed=args.seed,
             **overrides,
         )
-        indices = None
-        if args.sobol is not None:
-            indices = sobol.printer_head(args.sobol, seed=args.seed, executor=executor, **overrides)
-    extra = {} if indices is None else {"sobol": indices.summary()}
     if args.output:
-        design.write(study, args.output, extra)
+        design.write(study, args.output)
         design_chart.plot(study, pathlib.Path(args.output) / "design.png")
-        if indices is not None:
-            charts.plot_sobol(indices, pathlib.Path(args.output) / "sobol.png")
+        if study.sobol is not None:
+            design_chart.plot_sobol(study.sobol, pathlib.Path(args.output) / "sobol.png")
     if args.json:
-        _print_json({**design.summary(study), **extra})
+        _print_json(study.to_dict())
     else:
-        cli_text.print_design(design, study, args.output)
-        if indices is not None:
-            cli_text.print_sobol(sobol, indices, args.output)
+        cli_text.print_design(study, args.output)
+        if study.sobol is not None:
+            cli_text.print_sobol(study.sobol, args.output)
     return EXIT_OK
 
 
@@ -563,7 +562,8 @@ def build_parser() -> argparse.ArgumentParser:
     COMMANDS["audit"] = cmd_audit
 
     p = sub.add_parser("design", help="design study: positioning time over a property sweep, ranked sensitivities")
-    p.add_argument("scene", help="scene with a design study: printer_head")
+    declared = ", ".join(name for name, scene in scenes.SCENES.items() if scene.design is not None)
+    p.add_argument("scene", help=f"scene with a design study: {declared}")
     p.add_argument(
         "--levels",
         type=int,

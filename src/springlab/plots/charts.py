@@ -9,7 +9,6 @@ from __future__ import annotations
 import math
 import pathlib
 from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
 
@@ -257,46 +256,3 @@ def write_stability(
     written.append(plot_stability(report, amplification, pathlib.Path(directory) / "stability.png"))
     written.append(plot_energy(report.energy_histories, pathlib.Path(directory) / "energy.png"))
     return written
-
-
-def plot_sobol(study: Any, path: str | pathlib.Path) -> pathlib.Path:
-    """Two panels of a springlab.studies.design.sobol.SobolStudy: first-order and total Sobol indices with their
-    confidence intervals per property (total minus first-order is the interactions' share), and the
-    elasticities |d ln T / d ln p| from the same runs, for the ranking they would give."""
-    fig, (left, right) = _figure(2, (12, 4.8), layout="constrained")
-    names = study.ranking()
-    x = np.arange(len(names))
-    s1, st = study.indices["S1"], study.indices["ST"]
-    left.bar(
-        x - 0.2,
-        [s1[n] for n in names],
-        0.4,
-        yerr=[study.indices["S1_conf"][n] for n in names],
-        capsize=3,
-        label="first order S1 (alone)",
-        color="#1f77b4",
-    )
-    left.bar(
-        x + 0.2,
-        [st[n] for n in names],
-        0.4,
-        yerr=[study.indices["ST_conf"][n] for n in names],
-        capsize=3,
-        label="total ST (alone + interactions)",
-        color="#d62728",
-    )
-    left.axhline(0.0, color="k", linewidth=0.6)
-    left.set_xticks(x, [n.replace("_", "\n") for n in names])
-    left.set_ylabel("share of Var(positioning time) [-]")
-    left.set_title(
-        f"Sobol indices, {study.runs} runs ({study.base_samples} x 7), {int(round(100 * 0.95))}% bootstrap intervals;"
-        f"\nsum S1 = {sum(s1.values()):.2f}",
-        fontsize=10,
-    )
-    left.legend(fontsize=8)
-    elastic = [abs(study.elasticities[n]) for n in names]
-    right.bar(x, elastic, 0.5, color="#7f7f7f")
-    right.set_xticks(x, [n.replace("_", "\n") for n in names])
-    right.set_ylabel("|elasticity d ln T / d ln p| [-]")
-    right.set_title(f"elasticities from the same runs (log-log fit, R^2 = {study.regression_r2:.2f})", fontsize=10)
-    return _save(fig, path)

@@ -2,9 +2,9 @@
 
 Scenes are discovered, so a new scene is a new module (`scenes/<name>.py`) or folder
 (`scenes/<name>/`, its `__init__` handing on `SCENE`) with a module-level `SCENE` and a
-models/<name>.xml; nothing else needs editing. `base` (what every scene provides), `checks`
-(scalar claims) and `capabilities` (what a scene declares for the studies) are the scenes'
-shared machinery, not scenes.
+models/<name>.xml; nothing else needs editing. `base` (what every scene provides),
+`capabilities` (what a scene declares for the studies) and `checks` (scalar claims) are the
+scenes' shared machinery, not scenes.
 """
 
 from __future__ import annotations
