@@ -18,6 +18,7 @@ import pytest
 from scipy.linalg import expm
 from scipy.optimize import brentq
 
+from contract import plain_json
 from springlab import files, scenes
 from springlab.cli.main import main
 from springlab.errors import BadInputError
@@ -350,19 +351,10 @@ EXTREME_KEYS = [
 ENERGY_KEYS = ["integrator", "omega_dt", "steps", "final_ratio", "min_ratio", "max_ratio", "formula"]
 
 
-def _plain(value):
-    """Whether `value` is made of JSON's types only (what `to_dict()` promises)."""
-    if isinstance(value, dict):
-        return all(isinstance(k, str) and _plain(v) for k, v in value.items())
-    if isinstance(value, list):
-        return all(_plain(v) for v in value)
-    return value is None or type(value) in (str, int, float, bool)
-
-
 @pytest.mark.slow
 def test_the_report_is_an_object_whose_to_dict_keeps_every_key_of_stability_json(report):
     data = report.to_dict()
-    assert list(data) == REPORT_KEYS and _plain(data)
+    assert list(data) == REPORT_KEYS and plain_json(data)
     assert all(list(row) == BOUNDARY_KEYS for row in data["boundaries"])
     assert all(list(row) == EXTREME_KEYS for row in data["extremes"])
     for row in data["energy"]:
