@@ -328,11 +328,11 @@ class CaseStudy:
         return " ".join(parts)
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON: scenario, friction, question, measures, default, model_errors, pareto, pick, runs."""
+        """JSON: scenario, friction_model, question, measures, default, model_errors, pareto, pick, answer, runs."""
         return json_ready(
             {
                 "scenario": self.scenario,
-                "friction": self.friction,
+                "friction_model": self.friction,
                 "question": self.question,
                 "measures": [{"quantity": m.quantity, "label": m.label, "scale": m.scale} for m in self.measures],
                 "default": None if self.default is None else self.default.to_dict(),

@@ -42,12 +42,11 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
+from typing import Any
 
 import mujoco
 import numpy as np
-from scipy import optimize
-
 from springlab.errors import ParameterError
 from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Check, Parameter, Reference, Scenario, Scene
 from springlab.scenes.capabilities import (
@@ -370,7 +369,7 @@ class Friction(Scene):
             "noslip_iterations": float(model.opt.noslip_iterations),
         }
 
-    def resolve(self, scenario: Scenario, overrides) -> dict[str, float]:
+    def resolve(self, scenario: Scenario, overrides: Mapping[str, Any]) -> dict[str, float]:
         variant: Variant = scenario.variant
         # a setting that does not exist for this scenario's friction is a contradiction, not a no-op
         foreign = ("mu", *CONTACT_ONLY) if variant.friction == JOINT_FRICTION else ("friction_force",)
@@ -660,6 +659,8 @@ def resting_height(model: mujoco.MjModel, qpos: np.ndarray, qvel: np.ndarray) ->
     Starting there, the run has no settling transient of the normal contact that the exact motion
     (a rigid surface) does not have.
     """
+    from scipy import optimize  # here: the command line starts without scipy (tests/test_cli_usage.py)
+
     data = mujoco.MjData(model)
     adr, dof = model.joint(NORMAL).qposadr[0], model.joint(NORMAL).dofadr[0]
 
