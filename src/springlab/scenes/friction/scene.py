@@ -47,6 +47,7 @@ from typing import Any
 
 import mujoco
 import numpy as np
+
 from springlab.errors import ParameterError
 from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Check, Parameter, Reference, Scenario, Scene
 from springlab.scenes.capabilities import (
