@@ -71,7 +71,7 @@ def test_chain_is_linear_and_its_recommendation_meets_tol_against_the_exact_solu
     ]
     model.opt.timestep = pick.dt
     data = mujoco.MjData(model)
-    data.qpos[:] = result.start.qpos
+    data.qpos[:], data.qvel[:] = result.start.qpos, result.start.qvel  # the start moves positions and velocities
     x0 = np.concatenate([result.start.qpos, result.start.qvel])
     steps = round(result.duration / pick.dt)
     sim, ref = [x0], [x0]
@@ -228,7 +228,7 @@ def _final_state(model, integrator, dt, result):
     work.opt.integrator = INTEGRATORS[integrator]
     work.opt.timestep = dt
     data = mujoco.MjData(work)
-    data.qpos[:] = result.start.qpos
+    data.qpos[:], data.qvel[:] = result.start.qpos, result.start.qvel
     for _ in range(round(result.duration / dt)):
         mujoco.mj_step(work, data)
     return np.concatenate([data.qpos, data.qvel])
