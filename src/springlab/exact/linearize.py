@@ -526,7 +526,9 @@ class ConstraintState:
         """'3 contacts, 4 joint limits (with dry friction)' or 'nothing active', for people."""
         if not self.elements:
             return "no constraint, contact or dry friction active"
-        parts = [f"{n} {kind}{'s' if n != 1 else ''}" for kind, n in self.counts.items() if kind != "dry friction"]
+        plural = {"contact": "contacts", "joint limit": "joint limits", "tendon limit": "tendon limits"}
+        plural["equality"] = "equality constraints"
+        parts = [f"{n} {kind if n == 1 else plural[kind]}" for kind, n in self.counts.items() if kind != "dry friction"]
         if self.dry_friction:
             parts.append(f"dry friction ({len(self.dry_friction)})")
         return ", ".join(parts)
@@ -628,5 +630,9 @@ def settle(model: mujoco.MjModel, point: OperatingPoint, seconds: float) -> Oper
             f"the model blew up while settling for {seconds:g} s at its own setting; settle for less or fix the model"
         )
     return OperatingPoint(
-        data.qpos.copy(), data.qvel.copy(), data.act.copy(), data.ctrl.copy(), f"{point.label} settled for {seconds:g} s"
+        data.qpos.copy(),
+        data.qvel.copy(),
+        data.act.copy(),
+        data.ctrl.copy(),
+        f"{point.label} settled for {seconds:g} s",
     )

@@ -399,6 +399,13 @@ class Audit:
         return bool(self.own.stable) and self.own.error is not None and self.own.error <= self.tol
 
     @property
+    def mode_count(self) -> str:
+        """'6 modes (2 rigid)': how the text and audit.png count the modes (a complex pair is one mode)."""
+        modes = self.linear.modes
+        rigid = sum(m.kind == "rigid" for m in modes)
+        return f"{len(modes)} mode{'s' if len(modes) != 1 else ''}" + (f" ({rigid} rigid)" if rigid else "")
+
+    @property
     def message(self) -> str:
         """A few lines for people (what `springlab audit` prints): modes, what holds the operating point,
         the own setting's margin and error, the recommendation, warnings (not at rest, no motion, broken
@@ -407,7 +414,7 @@ class Audit:
         fastest = self.linear.fastest
         unstable = sum(m.physically_unstable for m in self.linear.modes)
         motion = "linear" if self.is_linear else "nonlinear"
-        head = f"{self.model}: {len(self.linear.modes)} modes"
+        head = f"{self.model}: {self.mode_count}"
         if fastest is not None:
             zeta = "" if fastest.damping_ratio is None else f", zeta {fastest.damping_ratio + 0.0:.3g}"  # no -0
             head += f", fastest {fastest.frequency_hz:.4g} Hz ({fastest.kind}{zeta})"
@@ -465,7 +472,11 @@ class Audit:
             lines.append("no motion: nothing was verified (the fine run from the start barely moves)")
         elif excitation.still:
             names = ", ".join(excitation.still[:3]) + (" ..." if len(excitation.still) > 3 else "")
-            lines.append(f"note: {len(excitation.still)} degrees of freedom barely moved ({names}): no error covers them")
+            count = len(excitation.still)
+            lines.append(
+                f"note: {count} degree{'s' if count != 1 else ''} of freedom barely moved ({names}): no error covers"
+                f" {'them' if count != 1 else 'it'}"
+            )
         pick = self.recommendation
         if not excitation.any_motion:
             pass
@@ -809,7 +820,13 @@ def audit(
     stamps["limits"] = _time.perf_counter()
 
     if dts is None:
+        # confirmed limits, and the largest timestep brute force found bounded where nothing blew up
         confirmed = [lim.confirmed_limit_s for lim in limits.values() if lim.confirmed_limit_s is not None]
+        confirmed += [
+            lim.runs_bounded_dt_s
+            for lim in limits.values()
+            if lim.limit_dt_s is None and lim.runs_blew_up_dt_s is None and lim.runs_bounded_dt_s is not None
+        ]
         ceiling = min(GRID_TOP_OVER_LIMIT * max(confirmed), duration / 10) if confirmed else duration / 10
         ceiling = max(ceiling, 10 * duration / GRID_MAX_STEPS)  # never a grid too fine to run
         top = _grid_top(duration, ceiling, own_dt)

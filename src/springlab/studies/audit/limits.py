@@ -318,7 +318,9 @@ def _keeps(matrix: np.ndarray, mass_phi: np.ndarray, phi: np.ndarray) -> bool:
     if size == 0.0:
         return True
     scale = float(phi @ pushed)
-    return float(np.linalg.norm(pushed - scale * mass_phi)) <= MODAL_NOISE * max(size, float(np.linalg.norm(mass_phi)) * abs(scale))
+    return float(np.linalg.norm(pushed - scale * mass_phi)) <= MODAL_NOISE * max(
+        size, float(np.linalg.norm(mass_phi)) * abs(scale)
+    )
 
 
 #: a matrix keeps a mode to itself when |X phi - (phi' X phi) M phi| <= this x |X phi| (finite differences
@@ -764,7 +766,9 @@ def stability_limits(
         kind = "exact" if prediction.exact and smooth else "estimate"
         measured = measured_limit(model, linear, name, scale, stop_s, prediction.limit_s) if smooth else None
         limits.append(
-            Limit(name, prediction.limit_s, measured, limit_dt_s=measured, prediction=kind if prediction.limit_s else None)
+            Limit(
+                name, prediction.limit_s, measured, limit_dt_s=measured, prediction=kind if prediction.limit_s else None
+            )
         )
     if smooth:
         limits = confirm(model, linear, limits, run=run)
@@ -776,7 +780,9 @@ def stability_limits(
             for lim in limits
         ]
     elif not smooth:
-        limits = [dataclasses.replace(lim, method="none", detail="constraints active: no limit measured") for lim in limits]
+        limits = [
+            dataclasses.replace(lim, method="none", detail="constraints active: no limit measured") for lim in limits
+        ]
     return {
         lim.integrator: dataclasses.replace(lim, margin=None if lim.limit_dt_s is None else lim.limit_dt_s / own_dt)
         for lim in limits
