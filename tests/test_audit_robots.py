@@ -169,17 +169,38 @@ def _check_limits_honest(result, model):
         if limit.method == "nonlinear runs" and limit.confirmed:
             steps = lambda dt: max(2000, math.ceil(result.duration / dt))  # noqa: E731 - the audit's run length
             start = result.start
-            below = _rollout(model, name, limit.runs_bounded_dt_s, steps(limit.runs_bounded_dt_s), start.qpos,
-                             start.qvel, start.control)
-            above = _rollout(model, name, limit.runs_blew_up_dt_s, steps(limit.runs_blew_up_dt_s), start.qpos,
-                             start.qvel, start.control)
+            below = _rollout(
+                model,
+                name,
+                limit.runs_bounded_dt_s,
+                steps(limit.runs_bounded_dt_s),
+                start.qpos,
+                start.qvel,
+                start.control,
+            )
+            above = _rollout(
+                model,
+                name,
+                limit.runs_blew_up_dt_s,
+                steps(limit.runs_blew_up_dt_s),
+                start.qpos,
+                start.qvel,
+                start.control,
+            )
             assert np.isfinite(below[1]).all(), name
             bounded_speed = np.max(np.abs(below[1]))
             assert not np.isfinite(above[1]).all() or np.max(np.abs(above[1])) > 10 * bounded_speed, name
     own = result.own
     if not own.stable:
-        run = _rollout(model, own.integrator, own.dt, max(2000, math.ceil(result.duration / own.dt)),
-                       result.start.qpos, result.start.qvel, result.start.control)
+        run = _rollout(
+            model,
+            own.integrator,
+            own.dt,
+            max(2000, math.ceil(result.duration / own.dt)),
+            result.start.qpos,
+            result.start.qvel,
+            result.start.control,
+        )
         assert not np.isfinite(run[1]).all(), "called unstable, but a run of it stays finite"
 
 
@@ -263,8 +284,9 @@ def test_a_model_with_no_position_dependent_force_is_excited_and_its_recommendat
     every = round(pick.dt / fine)
     reference = _rollout(model, "rk4", fine, round(result.duration / fine), start.qpos, start.qvel, start.control)
     reference = (reference[0][::every], reference[1][::every])
-    chosen = _rollout(model, pick.integrator, pick.dt, round(result.duration / pick.dt), start.qpos, start.qvel,
-                      start.control)
+    chosen = _rollout(
+        model, pick.integrator, pick.dt, round(result.duration / pick.dt), start.qpos, start.qvel, start.control
+    )
     assert _error(model, chosen, reference, result.linear.point.qpos) <= tol
 
 
