@@ -83,9 +83,9 @@ KINDS = {
     "decimal comma, semicolons": (text("time;slider_pos", ";", comma=True), {}, (1, 1), "decimal comma"),
     "decimal comma, tabs": (text("time\tslider_pos", "\t", comma=True), {}, (1, 1), "decimal comma"),
     "comment lines": (
-        text("time,slider_pos", head="# logger 2.1\n#  rate: 500 Hz, unit: m\n\n").replace(
-            f"\n{float(T[500])!r},", f"\n# a marker, in the middle\n{float(T[500])!r},"
-        ),
+        text("time,slider_pos", head="# logger 2.1\n#  rate: 500 Hz, unit: m\n\n")
+        .replace(f"\n{float(T[500])!r},", f"\n# a marker, in the middle\n{float(T[500])!r},")
+        .replace(f"{float(X[600])!r}\n", f"{float(X[600])!r}  # a bump, noted\n"),
         {},
         (1, 1),
         "skipped 3 comment line(s)",
@@ -129,6 +129,14 @@ def test_an_untidy_file_gives_the_tidy_fit_and_says_what_it_read(tmp_path, kind)
     assert result.estimates == tidy.estimates
     assert any(said in note for note in result.record.notes), result.record.notes
     assert not any(note.startswith("warning") for note in result.record.notes)
+
+
+def test_a_windows_export_with_latin_1_units_in_its_names(tmp_path):
+    path = tmp_path / "d.csv"
+    path.write_bytes(text("t (s);x (µm)", ";", (1, 1e-6), comma=True, end="\r\n").encode("cp1252"))
+    record = fit_data.load(path, ("slider",), mapping={"t": "time", "x": "slider_pos"})
+    assert np.array_equal(record.values, tidy_fit(1, 1e-6).record.values)
+    assert "signal in µm ('x (µm)'): scaled by 1e-06 into m" in record.notes[1]
 
 
 @pytest.mark.parametrize("block", [7, 100, 4096])

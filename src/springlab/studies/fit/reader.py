@@ -352,7 +352,12 @@ def _block(
     if b'"' in block:  # a separator inside quotes is not one
         quotes = np.flatnonzero(b == ord('"'))
         separators = separators[np.searchsorted(quotes, separators) % 2 == 0]
-    per_line = np.searchsorted(separators, ends) - np.searchsorted(separators, starts)
+    hashes = np.flatnonzero(b == ord("#"))  # a comment after a row's numbers holds no fields
+    stops = ends
+    if hashes.size:
+        after = np.searchsorted(hashes, starts)
+        stops = np.minimum(ends, np.where(after < hashes.size, hashes[np.minimum(after, hashes.size - 1)], b.size))
+    per_line = np.searchsorted(separators, stops) - np.searchsorted(separators, starts)
     # blank and comment lines: decided by the first byte, and by the line's text where that is white space
     first = np.append(b, np.uint8(ord("\n")))[starts]
     blank = first == ord("\n")
