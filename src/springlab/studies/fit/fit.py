@@ -336,7 +336,7 @@ def _finish(problem: Problem, solved: dict[str, Any], runs: dict[str, Any] | Non
         run_note=run_note,
         curves=curves,
         amplitude=how.amplitude(fitted, level),
-        starts=fit_starts.summary(runs, list(free), covariance, record.unit),
+        starts=fit_starts.starts_entry(runs, list(free), covariance, record.unit),
     )
 
 
