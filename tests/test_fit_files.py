@@ -258,7 +258,6 @@ def test_time_scale_turns_a_millisecond_record_into_the_tidy_fit(tmp_path, capsy
 # -- a big file: streamed in bounded memory, with progress on a terminal ---------------------------------
 
 
-@pytest.mark.slow
 def test_a_200k_row_file_is_streamed_and_fitted(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(reader, "BLOCK", 1 << 20)  # 1 MiB: several blocks
     n, dt, sigma = 200_000, 1e-5, 2e-4  # 2 s at 100 kHz
