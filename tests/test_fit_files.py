@@ -108,6 +108,12 @@ KINDS = {
         (1, 1e-3),
         "signal in mm ('x (mm)')",
     ),
+    "numpy.savetxt's header": (
+        text("# time,slider_pos", head="# written by numpy\n"),
+        {},
+        (1, 1),
+        "header read from comment line 2 (as numpy.savetxt writes it)",
+    ),
     "a spreadsheet's export": (
         text('"Zeit (s)";"Weg (mm)"', ";", (1, 1e-3), comma=True, head="\ufeff", end="\r\n"),
         {"Zeit": "time", "Weg": "slider_pos"},

@@ -192,20 +192,20 @@ def sniff(path: str | os.PathLike) -> Layout:
     except UnicodeDecodeError:
         encoding = "latin-1"  # a Windows export's 'µm' or '°C': numbers are ASCII either way
     header_text: str | None = None
-    header_line = 0
-    comments: list[int] = []
+    header_line = header_start = header_end = 0
+    comments: list[tuple[int, str]] = []  # (line number, text)
     rows: list[tuple[int, str, int]] = []  # (line number, text, offset after it)
     for number, raw in enumerate(raw_lines, start=1):
-        after = offset + len(raw) + 1
+        start, after = offset, offset + len(raw) + 1
         text = raw.decode(encoding).rstrip("\r")
         offset = after
         if not text.strip():
             continue
         if text.lstrip().startswith("#"):
-            comments.append(number)
+            comments.append((number, text))
             continue
         if header_text is None:
-            header_text, header_line, header_end = text, number, after
+            header_text, header_line, header_start, header_end = text, number, start, after
             continue
         rows.append((number, text, after))
         if len(rows) >= SAMPLE_ROWS:
@@ -217,14 +217,23 @@ def sniff(path: str | os.PathLike) -> Layout:
     decimal_comma = separator != "," and any(
         _DECIMAL_COMMA.match(cell) for _, text, _ in rows for cell in _split(text, separator)
     )
-    if all(_is_number(cell, decimal_comma) for cell in header):
-        raise BadInputError(f"{source} has no header row; its first line must name the columns, e.g. time,slider_pos")
     notes = []
     if separator != ",":
         notes.append(f"{SEPARATORS[separator]}-separated" + (", decimal comma" if decimal_comma else ""))
     units_row = None
     data_offset, data_line = header_end, header_line + 1
-    if rows:
+    if all(_is_number(cell, decimal_comma) for cell in header):
+        # numbers first: the header may be the comment line right above them, as numpy.savetxt writes it
+        number, text = comments[-1] if comments else (0, "")
+        named = _split(text.lstrip()[1:], separator)
+        if not comments or len(named) != len(header) or all(_is_number(cell, decimal_comma) for cell in named):
+            raise BadInputError(
+                f"{source} has no header row; its first line must name the columns, e.g. time,slider_pos"
+            )
+        header, data_offset, data_line = named, header_start, header_line
+        comments = comments[:-1]
+        notes.append(f"header read from comment line {number} (as numpy.savetxt writes it)")
+    elif rows:
         number, text, after = rows[0]
         cells = _split(text, separator)
         named = [cell for cell in cells if cell.lower() not in MISSING]
@@ -237,7 +246,7 @@ def sniff(path: str | os.PathLike) -> Layout:
             units_row = cells
             data_offset, data_line = after, number + 1
             notes.append(f"units row under the header (line {number}): {', '.join(cells)}")
-    skipped = sum(1 for number in comments if number < data_line)
+    skipped = sum(1 for number, _ in comments if number < data_line)
     return Layout(
         columns=Columns(header=header, units_row=units_row, source=source, notes=tuple(notes)),
         separator=separator,
