@@ -329,6 +329,7 @@ def stream(
                 cut = buffer.rfind(b"\n") + 1
                 if cut == 0:  # one line longer than a block: read on
                     carry = buffer
+                    bar.update(len(chunk))
                     continue
                 block, carry = buffer[:cut], buffer[cut:]
             else:
