@@ -430,7 +430,12 @@ class Audit:
             lines.append(
                 f"warning: the operating point is not at rest (it drifts {state.drift_m:.2g} m or rad over"
                 f" {self.duration:g} s, more than --perturb {self.perturb:g}): the modes are those of the motion"
-                " through it, not of an equilibrium; --settle SECONDS lets it come to rest first"
+                " through it, not of an equilibrium; "
+                + (
+                    "settling longer may bring it to rest"
+                    if state.settle_s
+                    else "--settle SECONDS lets it come to rest first"
+                )
             )
         if not state.linear_map:
             lines.append(

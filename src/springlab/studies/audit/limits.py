@@ -697,6 +697,7 @@ def run_limits(
     integrators: Sequence[str],
     own_dt: float,
     run: Callable[[Sequence[Job]], list],
+    ceilings: dict[str, float] | None = None,
 ) -> dict[str, tuple[float | None, float | None]]:
     """Brute force: per integrator (largest bounded dt, smallest blown-up dt) [s] (None: none).
 
@@ -718,8 +719,9 @@ def run_limits(
             state[name] = [low, high]
             if high is None:
                 assert low is not None  # this run was bounded
-                if low < probe.ceiling_s:
-                    following[name] = min(2 * low, probe.ceiling_s)
+                ceiling = max(probe.ceiling_s, (ceilings or {}).get(name, 0.0))
+                if low < ceiling:
+                    following[name] = min(2 * low, ceiling)
             elif low is None:
                 if high > floor * (1 + 1e-9):
                     following[name] = max(high / 2, floor)
@@ -774,7 +776,9 @@ def stability_limits(
         limits = confirm(model, linear, limits, run=run)
     fallback = [lim for lim in limits if not smooth or (lim.limit_dt_measured_s is not None and not lim.confirmed)]
     if probe is not None and fallback:
-        brackets = run_limits(model, probe, [lim.integrator for lim in fallback], own_dt, run)
+        # an unconfirmed map limit is bracketed too (runs of RUN_MIN_STEPS cost the same at any timestep)
+        above = {lim.integrator: 2 * lim.limit_dt_measured_s for lim in fallback if lim.limit_dt_measured_s}
+        brackets = run_limits(model, probe, [lim.integrator for lim in fallback], own_dt, run, above)
         limits = [
             _from_runs(lim, *brackets[lim.integrator], probe, own_dt, smooth) if lim.integrator in brackets else lim
             for lim in limits
