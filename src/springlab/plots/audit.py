@@ -108,6 +108,7 @@ def _limits_panel(result: Audit, ax) -> None:
     ax.set_yscale("log")
     ax.set_ylim(min(values) / 3, max(values) * 6)
     ax.set_xticks(range(len(names)), names, rotation=20)
+    ax.set_xlim(-0.6, len(names) - 0.4)
     ax.set_ylabel("largest stable dt [s]")
     ax.set_title(
         "stability limit (bar: margin; map or runs) and prediction (tick; dashed: estimate)\n"
@@ -142,6 +143,10 @@ def _cost_panel(result: Audit, ax) -> None:
     if front:
         ax.loglog([wall for wall, _ in front], [max(error, floor) for _, error in front], "k-", lw=2, alpha=0.4)
     ax.axhline(result.tol, color="k", ls=":", lw=1, label=f"tol {result.tol:g}")
+    low, high = ax.get_ylim()
+    if high > 1e3:  # a run that left the physics (error 1e30) would flatten every other curve
+        ax.set_ylim(low, 1e3)
+        ax.annotate("errors above 1e3 off the top", (0.02, 0.97), xycoords="axes fraction", fontsize=7, va="top")
     own = result.own
     if own.error is not None:
         where = (own.wall_time_s, max(own.error, floor))
