@@ -673,13 +673,12 @@ def watch(model: mujoco.MjModel, start: Setup, duration: float) -> Watch:
             if start.control is not None and work.nu:
                 data.ctrl[:] = np.atleast_2d(start.control)[0]
             for _ in range(max(1, round(duration / dt))):
-                mujoco.mj_forward(work, data)
+                mujoco.mj_step(work, data)  # leaves the constraints and qacc of the state it started from
                 if data.nefc:
                     found, friction = active_constraints(work, data)
                     elements |= found
                     dry |= friction
                 peak_a = max(peak_a, float(np.max(np.abs(data.qacc), initial=0.0)))
-                mujoco.mj_step(work, data)
                 speed = float(np.max(np.abs(data.qvel), initial=0.0))
                 if not math.isfinite(speed) or any(data.warning[w].number for w in BAD_WARNINGS):
                     diverged = True
