@@ -403,10 +403,12 @@ def cmd_fit(args: argparse.Namespace) -> int:
             map=args.map,
             free=args.free or None,
             scale=args.scale,
+            time_scale=args.time_scale,
             start=args.start,
             degree=args.degree,
             starts=args.starts,
             executor=executor,
+            show_progress=False if args.json else None,
             **_parse_sets(args.set),
         )
     if args.output:
@@ -632,7 +634,9 @@ def build_parser() -> argparse.ArgumentParser:
     fittable = [name for name, scene in scenes.SCENES.items() if scene.fit is not None]
     listed = ", ".join(fittable[:-1]) + " or " + fittable[-1] if len(fittable) > 1 else "".join(fittable)
     p.add_argument("scene", help=listed)
-    p.add_argument("data", metavar="DATA.csv", help="header row; time [s] and <joint>_pos, _vel or _acc")
+    p.add_argument(
+        "data", metavar="DATA.csv", help="header row (',', ';' or tab); time [s] and <joint>_pos, _vel or _acc [SI]"
+    )
     p.add_argument("--scenario", metavar="S", help="the scenario the record shows (default: the scene's fit default)")
     p.add_argument(
         "--map", action="append", default=[], metavar="COLUMN=NAME", help="rename a file column (t=time, x=slider_pos)"
@@ -644,7 +648,18 @@ def build_parser() -> argparse.ArgumentParser:
         "--set", action="append", default=[], metavar="NAME=VALUE", help="fix a parameter, SI units (repeatable)"
     )
     p.add_argument("--start", type=float, metavar="S", help="release time [s]: drop the record before it")
-    p.add_argument("--scale", type=float, default=1.0, metavar="FACTOR", help="SI units per file unit (mm: 0.001)")
+    p.add_argument(
+        "--scale",
+        type=float,
+        metavar="FACTOR",
+        help="SI units per unit of the signal column (mm: 0.001); default: the unit its name states (x_mm, x [mm]), else SI",
+    )
+    p.add_argument(
+        "--time-scale",
+        type=float,
+        metavar="FACTOR",
+        help="seconds per unit of the time column (ms: 0.001); default: the unit its name states (t_ms, t (ms)), else s",
+    )
     p.add_argument("--degree", type=int, metavar="N", help="kinematics: degree 0-3 of the polynomial")
     p.add_argument(
         "--starts",

@@ -291,7 +291,7 @@ def print_fit(result: FitResult, output: str | None) -> None:
         f" {record.time[0]:g} to {record.time[-1]:g} s): fitted {', '.join(result.free)}"
     )
     for note in record.notes:
-        print(f"  data: {note}")
+        print(f"  {note}" if note.startswith("warning: ") else f"  data: {note}")
     for name, q in {**result.estimates, **result.derived}.items():
         low, high = q["ci95"]
         unit = "" if q["unit"] == "-" else q["unit"]
