@@ -288,6 +288,7 @@ def cmd_audit(args: argparse.Namespace) -> int:
         result = run_audit(
             args.model,
             keyframe=args.keyframe,
+            settle_s=args.settle,
             tol=args.tol,
             integrators=args.integrators,
             dt=args.dt,
@@ -547,7 +548,16 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("audit", help="any MJCF: modes, stability limits, error vs cost, the cheapest setting for --tol")
     p.add_argument("model", help="path to an MJCF (or URDF) file, or a scene name")
     p.add_argument("--keyframe", metavar="NAME|INDEX", help="operating point (default: first keyframe, else qpos0)")
-    p.add_argument("--tol", type=float, default=DEFAULT_TOL, metavar="TOL", help="error tolerance (default 1e-3)")
+    p.add_argument(
+        "--settle",
+        type=float,
+        metavar="SECONDS",
+        help="let the model move this long at its own setting first and audit it where it comes to rest"
+        " (a robot standing or lying on the floor; default: audit the keyframe as it is)",
+    )
+    p.add_argument(
+        "--tol", type=float, default=DEFAULT_TOL, metavar="TOL", help="error tolerance in (0, 1) (default 1e-3)"
+    )
     p.add_argument("--integrators", metavar="A,B", help=f"integrators to sweep (default: {','.join(INTEGRATORS)})")
     p.add_argument("--dt", metavar="LIST|RANGE", help="timesteps 'a,b,c' or 'LOW:HIGH:N' [s] (default: automatic)")
     p.add_argument("--duration", type=float, metavar="SECONDS", help="simulated time [s] (default 1; a scene's own)")
