@@ -288,6 +288,8 @@ def print_fit(result: FitResult, output: str | None) -> None:
     )
     for note in record.notes:
         print(f"  data: {note}")
+    if result.release:
+        print(f"  release: {result.release['reason']}")
     for name, q in {**result.estimates, **result.derived}.items():
         low, high = q["ci95"]
         unit = "" if q["unit"] == "-" else q["unit"]

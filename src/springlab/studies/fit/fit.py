@@ -28,6 +28,7 @@ from springlab.runs.run import Result, run_scenario
 from springlab.scenes.base import Scenario
 from springlab.studies.executor import Executor
 from springlab.studies.fit import data as fit_data
+from springlab.studies.fit import release as fit_release
 from springlab.studies.fit import results as fit_results
 from springlab.studies.fit import starts as fit_starts
 
@@ -135,7 +136,6 @@ def fit(
         mapping=fit_data.parse_map(map),
         scale=scale,
         start=start,
-        detect_release=not wants_delay,
         signals=how.signals,
     )
     free_given = bool(free)
@@ -151,6 +151,8 @@ def fit(
         )
     modal = how.modal(free)
     fixed = dict(nuisance) | {k: base[k] for k in ("x0", "v0") if k in parameters and k in base}
+    # a held start is dropped only when the data show it beyond their noise (springlab.studies.fit.release)
+    record, release = fit_release.decide(how, record, base, fixed, free, force, given=start, delay=wants_delay)
     if not isinstance(how, PolynomialModel):
         # an initial state neither fitted nor given: the first sample, at rest
         if "x0" not in free and "x0" not in fixed:
@@ -174,7 +176,7 @@ def fit(
             free = free[:-1]
             problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force)
             result = _finish(problem, solved, None, run_scene=False)
-    return _finish(problem, solved, runs, run_scene)
+    return _finish(problem, solved, runs, run_scene, release)
 
 
 def _identify(
@@ -217,8 +219,8 @@ def _start(
     """Start values; with a free delay, from the part after the detected release, shifted to it."""
     if "delay" not in free:
         return how.start(record, base, fixed, free, force)
-    release = fit_data.find_release(record.time, record.values)
-    delay = 0.0 if release is None else release - record.origin
+    found = fit_release.held_start(how, record, base, fixed, [n for n in free if n != "delay"], force)
+    delay = found.start_s - record.origin if found.decision == "held" else 0.0
     after = record.time >= record.origin + delay
     shifted = dataclasses.replace(
         record, time=record.time[after], values=record.values[after], origin=record.origin + delay
@@ -244,9 +246,15 @@ def _free_names(how: FitModel, free: Sequence[str] | None, degree: int | None, r
     return names
 
 
-def _finish(problem: Problem, solved: dict[str, Any], runs: dict[str, Any] | None, run_scene: bool) -> FitResult:
+def _finish(
+    problem: Problem,
+    solved: dict[str, Any],
+    runs: dict[str, Any] | None,
+    run_scene: bool,
+    release: fit_release.Release | None = None,
+) -> FitResult:
     """The FitResult: intervals, derived quantities, cross-check, the starts' record (`runs`: None for a single
-    start) and the identified scene's run."""
+    start), the decision on where the motion starts (`release`) and the identified scene's run."""
     from mujoco import sysid
 
     how, record, free = problem.how, problem.record, problem.free
@@ -327,6 +335,7 @@ def _finish(problem: Problem, solved: dict[str, Any], runs: dict[str, Any] | Non
         curves=curves,
         amplitude=how.amplitude(fitted, level),
         starts=fit_starts.summary(runs, list(free), covariance, record.unit),
+        release=release.to_dict() if release is not None else {},
     )
 
 

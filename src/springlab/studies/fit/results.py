@@ -80,6 +80,9 @@ class FitResult:
         The motion's size in the fitted signal [signal unit] (about its rest level, or its range).
     starts
         The multi-start record (springlab.studies.fit.starts.summary): count, best, at_best_minimum, spread.
+    release
+        Where the motion starts and why (springlab.studies.fit.release.Release.to_dict): decision, start_s,
+        release_s, statistic, threshold, false_alarm, noise, held_samples, reason.
     """
 
     scene: str
@@ -103,6 +106,7 @@ class FitResult:
     curves: dict[str, Any] = dataclasses.field(default_factory=dict)
     amplitude: float = 0.0
     starts: dict[str, Any] = dataclasses.field(default_factory=dict)
+    release: dict[str, Any] = dataclasses.field(default_factory=dict)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "free", tuple(self.free))
@@ -157,6 +161,7 @@ class FitResult:
                 "cross_check": self.cross_check,
                 "optimizer": self.optimizer,
                 "starts": self.starts,
+                "release": self.release,
                 "converged": self.converged,
                 "run_note": self.run_note,
                 "verdict": self.verdict,
