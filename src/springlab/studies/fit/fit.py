@@ -32,9 +32,12 @@ from springlab.studies.fit import release as fit_release
 from springlab.studies.fit import results as fit_results
 from springlab.studies.fit import starts as fit_starts
 
-from .engine import OMEGA_DT, Problem, check_identifiable, solve
+from .engine import Problem, accuracy, check_identifiable, choose_dt, solve
 from .models import ALIASES, FitModel, PolynomialModel, model_of, not_fittable
 from .results import FitResult
+
+#: samples per simulation step from which the record is called denser than the model needs
+DENSE = 4.0
 
 
 def _canonical(name: str) -> str:
@@ -200,10 +203,22 @@ def _identify(
         solved = solve(problem, record)
     else:
         solved, runs = fit_starts.run(problem, starts, executor)
+    # the grid was chosen at the start: refine it once where the estimate needs a finer one, or where the
+    # simulation, measured against the closed form at the estimate, moves it more than the fit allows
     estimate = problem.values(solved["x"])
-    if problem.fastest_rate(estimate) * problem.dt > 1.5 * OMEGA_DT:
+    needed, facts = choose_dt(problem, estimate)
+    ratio = accuracy(problem, solved)["ratio"]
+    if ratio > 1.0 or problem.dt > 1.5 * needed:
         problem.start = dict(estimate)
-        problem.set_grid(estimate)
+        if ratio > 1.0 and problem.dt * (0.8 / ratio) ** 0.25 < needed:
+            # the error grows as dt^4: 0.8 of what the fit allows
+            needed = problem.dt * (0.8 / ratio) ** 0.25
+            why = f"the simulation moved an estimate by {ratio:.3g} x what the fit allows at dt = {problem.dt:.4g} s"
+            facts["rule"] = f"{why}; refined as dt^4"
+        else:
+            facts["rule"] = f"{facts['rule']}, at the estimate"
+        problem.grid = facts
+        problem.set_grid(estimate, dt=needed)
         solved = solve(problem, record)
     return problem, solved, runs
 
@@ -258,6 +273,13 @@ def _finish(
     from mujoco import sysid
 
     how, record, free = problem.how, problem.record, problem.free
+    spacing = problem.grid.get("median_sample_spacing_s") or 0.0
+    if spacing > 0 and problem.dt >= DENSE * spacing:
+        note = (
+            f"data denser than the model needs: {problem.dt / spacing:.3g} samples per simulation step of"
+            f" {problem.dt:.3g} s (the model runs at the step its accuracy needs and is read at every sample)"
+        )
+        record = dataclasses.replace(record, notes=(*record.notes, note))
     x, jacobian = solved["x"], solved["jacobian"]
     check_identifiable(problem, jacobian)
     # in parameters scaled to O(1): sysid's zero-eigenvalue threshold is relative, and k ~ 1e6 N/m beside
@@ -294,8 +316,9 @@ def _finish(
     derived = {k: v for k, v in derived.items() if k not in free and same.get(k) not in free}
     params = how.scene_params(values, problem.base, problem.modal)
     curves = _curves(problem, x, covariance, quantile) if isinstance(how, PolynomialModel) else {}
-    cross = fit_results.cross_check(problem, x, half, fitted)
-    converged = solved["status"] in ("norm(dx) < tol", "norm(gradient) < tol")
+    numerics = accuracy(problem, solved)
+    cross = fit_results.cross_check(problem, x, half, fitted, numerics["effect"], scale)
+    judged = fit_results.convergence(problem, solved, covariance, numerics, cross)
     level = values["offset"] + (how.equilibrium(params) if record.signal == "pos" else 0.0)
     run, run_note = None, ""
     if run_scene:
@@ -329,7 +352,9 @@ def _finish(
             "steps": problem.steps,
             "integrator": "rk4",
         },
-        converged=converged,
+        converged=judged["converged"],
+        convergence=judged,
+        timestep=fit_results.timestep(problem.grid, numerics),
         run=run,
         run_note=run_note,
         curves=curves,

@@ -164,10 +164,13 @@ def held_start(
     level = float(np.median(y[:5]))
     off = np.flatnonzero(np.abs(y - level) > BAND * sigma)
     if not off.size or off[0] < MIN_HELD:
-        within = "never" if not off.size else f"within {int(off[0])} sample(s)"
-        return Release(
-            "moving", t0, noise=sigma, reason=f"{first}: it leaves its first level by {BAND:g} noise levels {within}"
+        band = f"the band of {BAND:g} noise levels around its first level"
+        why = (
+            f"{first}: it leaves {band} within {int(off[0]) + 1} sample(s)"
+            if off.size
+            else f"{first}: it never leaves {band}"
         )
+        return Release("moving", t0, noise=sigma, reason=why)
     exit_ = int(off[0])
     names = [n for n in free if n != "delay"]
     for name in ("x0", "v0"):  # the test needs the motion's own state at the start, unless the user gave it
@@ -259,9 +262,12 @@ def _change_point(
             lambda v: (signal(v, release) - y) / sigma, np.clip(vector, *inside), bounds=inside, x_scale="jac"
         ).x
 
-    def residual_sums(x: np.ndarray, release: float, h0: np.ndarray | None = None) -> tuple[float, np.ndarray]:
-        """RSS / sigma^2 of H1(release) linearised at x: of the data and (given H0's signal h0) of h0 plus each
-        noise draw."""
+    def residual_sums(
+        x: np.ndarray, release: float, h0: np.ndarray | None = None, spread: float = 1.0
+    ) -> tuple[float, np.ndarray, int]:
+        """H1(release) linearised at x: RSS / sigma^2 of the data, of H0's signal h0 plus each noise draw of
+        standard deviation `spread` sigma (in spread^2 sigma^2; empty without h0), and the residual's degrees of
+        freedom."""
         steps = np.array([max(abs(v), 1e-3 * _typical(n, y, t)) for n, v in zip(names, x)])
         steps *= np.array([1.0 if n in LINEAR else 1e-6 for n in names])
         base_signal = signal(x, release)
@@ -272,26 +278,32 @@ def _change_point(
         basis = u[:, s > 1e-10 * s[0]] if s.size and s[0] > 0 else u[:, :0]
         data = (y - base_signal) / sigma
         explained = basis.T @ data
+        rss, dof = float(data @ data - explained @ explained), t.size - basis.shape[1]
         if h0 is None:
-            return float(data @ data - explained @ explained), np.empty(0)
+            return rss, np.empty(0), dof
         # |d + e|^2 - |B^T (d + e)|^2 for each draw e, with d the gap between H0's signal and this model's base
-        gap = (h0 - base_signal) / sigma
+        gap = (h0 - base_signal) / (sigma * spread)
         # einsum, not BLAS: a threaded BLAS on a busy machine takes 10-40 ms for this 5 x n x DRAWS product
         projected = np.einsum("ij,ik->jk", basis, noise) + (basis.T @ gap)[:, None]
         sums = noise_sums + 2.0 * np.einsum("i,ik->k", gap, noise) + gap @ gap - np.sum(projected**2, axis=0)
-        return float(data @ data - explained @ explained), sums
+        return rss, sums, dof
 
     x0 = fitted(np.array([start[n] for n in names], float), 0.0)
     noise = np.random.default_rng(SEED).standard_normal((t.size, DRAWS))
     noise_sums = np.sum(noise * noise, axis=0)
     h0 = signal(x0, 0.0)
-    rss0, noise0 = residual_sums(x0, 0.0, h0)
+    rss0, _, dof0 = residual_sums(x0, 0.0)
+    # the draws' noise: H0's own residual (studentised below, so the record's noise level cancels)
+    spread = math.sqrt(max(rss0, 1e-300) / max(dof0, 1))
+    _, noise0, _ = residual_sums(x0, 0.0, h0, spread)
     best, best_noise, best_j = -math.inf, np.full(DRAWS, -math.inf), candidates[0]
     for j in candidates:
-        rss, noise_rss = residual_sums(x0, float(t[j]), h0)
-        if rss0 - rss > best:
-            best, best_j = rss0 - rss, j
-        best_noise = np.maximum(best_noise, noise0 - noise_rss)
+        rss, noise_rss, dof = residual_sums(x0, float(t[j]), h0, spread)
+        # F = (RSS_H0 - RSS_H1) / (RSS_H1 / dof): the drop in units of H1's own noise estimate
+        statistic = (rss0 - rss) / max(rss / dof, 1e-300)
+        if statistic > best:
+            best, best_j = statistic, j
+        best_noise = np.maximum(best_noise, (noise0 - noise_rss) / np.maximum(noise_rss / dof, 1e-300))
     threshold = float(np.quantile(best_noise, 1.0 - FALSE_ALARM))
     if best > threshold:
         # H0's estimate is a poor centre for a held record: locate the release with H1 refitted, twice
