@@ -34,6 +34,7 @@ refines its grid once where that is not met.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import io
 import logging
 import math
@@ -59,6 +60,8 @@ if TYPE_CHECKING:  # annotations only: mujoco.sysid is imported when a fit runs
 #: growth of the Levenberg-Marquardt regularizer per rejected step: mujoco.minimize's 10^0.1 spends ~70 rollouts
 #: climbing from 1e-6 to 10 once the objective sits on its round-off floor at the optimum
 MU_FACTOR = 10**0.5
+#: Levenberg-Marquardt iterations at most per optimization
+MAX_ITERATIONS = 100
 #: |lambda| dt [-] of the exact-record grid on the fastest mode (frequency bias (|lambda| dt)^4 / 120 = 5e-8)
 OMEGA_DT = 0.05
 #: the simulation may move an estimate by at most this many of its standard errors [-]
@@ -357,9 +360,10 @@ def solve(problem: Problem, record: Record) -> dict[str, Any]:
             verbose=False,
             x_scale=scale,
             output=log,
-            max_iters=100,
+            max_iters=MAX_ITERATIONS,
             gtol=1e-12,
             mu_factor=MU_FACTOR,
+            iter_callback=_keep_last_jacobian,
         )
         x = optimum.as_vector()
         residuals, _, _ = residual_fn(x, optimum)
@@ -378,6 +382,13 @@ def solve(problem: Problem, record: Record) -> dict[str, Any]:
         "residual_fn": residual_fn,
         "scale": scale,
     }
+
+
+def _keep_last_jacobian(trace: list) -> None:
+    """mujoco.minimize's log keeps every iteration's residual and Jacobian (n x p floats each, ~500 B per sample
+    over a fit); only the last one is read: drop the earlier ones as the optimization goes."""
+    if len(trace) > 1 and trace[-2].jacobian is not None:
+        trace[-2] = dataclasses.replace(trace[-2], residual=None, jacobian=None)
 
 
 def _typical(problem: Problem, name: str) -> float:

@@ -307,9 +307,16 @@ def _change_point(
     threshold = float(np.quantile(best_noise, 1.0 - FALSE_ALARM))
     if best > threshold:
         # H0's estimate is a poor centre for a held record: locate the release with H1 refitted, twice
+        coarse = max(1, len(candidates) // 24)
         for _ in range(2):
             x1 = fitted(x0, float(t[best_j]))
-            best_j = min(candidates, key=lambda j: residual_sums(x1, float(t[j]))[0])
+
+            def rss(j: int, x1: np.ndarray = x1) -> float:
+                return residual_sums(x1, float(t[j]))[0]
+
+            best_j = min(candidates[::coarse], key=rss)  # every coarse-th candidate, then its neighbours
+            near = candidates.index(best_j)
+            best_j = min(candidates[max(near - coarse, 0) : near + coarse + 1], key=rss)
     return best, threshold, int(rows[best_j])
 
 
