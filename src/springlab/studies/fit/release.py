@@ -14,12 +14,13 @@ closed form (springlab.studies.fit.models), fitted by least squares:
   or zero velocity and acceleration plus the sensor offset), the closed form from tau on.
 
 H1(tau) with tau at the first sample is H0. The statistic is the largest drop of the residual sum of squares
-over the candidate release times, in units of the noise variance (estimated from the record by
-`data.noise_level`): Lambda = max_tau (RSS_H0 - RSS_H1(tau)) / sigma^2, both models linearised about the
-H0 estimate (exact in x0, v0 and the offset, which enter linearly). Its false-alarm threshold is the
-(1 - FALSE_ALARM) quantile of the same statistic for pure noise on the same times (DRAWS draws of a
-generator with a fixed seed): a motion that is truly moving from the start fits H0 and fits H1 worse than
-noise alone would, so the rate of false holds is at most FALSE_ALARM. The candidates tau run from the
+a hold gives over the candidate release times, in units of H1's own noise estimate:
+F = max_tau (RSS_H0 - RSS_H1(tau)) / (RSS_H1(tau) / dof), both models linearised about the H0 estimate
+(exactly so in x0, v0 and the offset, which enter linearly). Its false-alarm threshold is the
+(1 - FALSE_ALARM) quantile of the same statistic on H0's fitted signal plus noise of H0's residual level
+(a parametric bootstrap: DRAWS draws of a generator with a fixed seed, the same linearised models): a
+record moving from its first sample is called held at the rate FALSE_ALARM (measured: 1 to 3 false holds in
+200 records of each kind in docs/fit.md, p-values uniform within their scatter). The candidates tau run from the
 MIN_HELD-th sample to the first sample BAND noise levels off the first samples' level (the motion is
 surely under way there); the test looks at the record up to WINDOW_PERIODS periods of the motion's fastest
 mode after that point (the whole record for a polynomial), every k-th sample of it when it is longer than
@@ -76,9 +77,9 @@ class Release:
     release_s
         The estimated moment of the release [s] (held only; None otherwise).
     statistic
-        Lambda, the largest drop of the residual sum of squares a hold gives, in noise variances [-] (None untested).
+        F, the largest drop of the residual sum of squares a hold gives, in H1's noise variances [-] (None untested).
     threshold
-        Lambda's (1 - false_alarm) quantile for pure noise on the same times [-].
+        F's (1 - false_alarm) quantile for records moving from the first sample like this one [-].
     false_alarm
         The test's rate of false holds [-].
     noise
@@ -217,7 +218,7 @@ def _change_point(
     sigma: float,
     exit_: int,
 ) -> tuple[float, float, int]:
-    """(Lambda, its false-alarm threshold, the index of the estimated release) on the record's beginning."""
+    """(F, its false-alarm threshold, the index of the estimated release) on the record's beginning."""
     import scipy.optimize  # here: scipy.optimize costs start-up time to every command
 
     modal = how.modal(names)
@@ -311,12 +312,12 @@ def _change_point(
         for _ in range(2):
             x1 = fitted(x0, float(t[best_j]))
 
-            def rss(j: int, x1: np.ndarray = x1) -> float:
+            def misfit(j: int, x1: np.ndarray = x1) -> float:
                 return residual_sums(x1, float(t[j]))[0]
 
-            best_j = min(candidates[::coarse], key=rss)  # every coarse-th candidate, then its neighbours
+            best_j = min(candidates[::coarse], key=misfit)  # every coarse-th candidate, then its neighbours
             near = candidates.index(best_j)
-            best_j = min(candidates[max(near - coarse, 0) : near + coarse + 1], key=rss)
+            best_j = min(candidates[max(near - coarse, 0) : near + coarse + 1], key=misfit)
     return best, threshold, int(rows[best_j])
 
 
