@@ -72,9 +72,9 @@ def main() -> None:
     total = time.perf_counter() - start
     dts = sorted({r.dt for r in result.runs}, reverse=True)
     batched_vs_loop(model, dts[:10])
-    stages = ", ".join(f"{k.removesuffix('_s')} {v:.1f} s" for k, v in result.timings.items())
+    stages = ", ".join(f"{k.removesuffix('_s')} {v:.1f} s" for k, v in result.timings.to_dict().items())
     print(f"3. whole audit, {len(result.runs)} runs over {result.duration:g} s: {total:.1f} s (budget 60 s); {stages}")
-    for line in result.verdict():
+    for line in result.message.splitlines():
         print(f"   {line}")
     print(f"load average after: {os.getloadavg()[0]:.1f}")
 

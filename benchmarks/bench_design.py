@@ -1,6 +1,7 @@
 """Speed of the printer-head design sweep, side by side in one run.
 
-The batched sweep (springlab.studies.design.moves.simulate_moves: one mujoco.batch.Batch, every
+The batched sweep (the printer head's design hook, springlab.scenes.printer_head.design.simulate_moves,
+through springlab.studies.design.moves.simulate: one mujoco.batch.Batch, every
 configuration its own simulation with its own timestep, settling certified and
 stopped per simulation) against a plain Python loop over mujoco.mj_step that
 integrates the same configurations for the same number of steps (taken from the
@@ -22,6 +23,7 @@ import mujoco
 import numpy as np
 
 from springlab import scenes
+from springlab.scenes.printer_head import design as printer_design
 from springlab.sim.simulate import quiet_mujoco
 from springlab.studies.design import moves as design_moves
 from springlab.studies.design import study as design
@@ -31,18 +33,18 @@ def loop_configurations(base, values, runs, indices) -> float:
     """Wall time [s] of a plain mj_step loop over configurations `indices` (same steps as the batch)."""
     scene = scenes.get("printer_head")
     scenario = scene.scenario("move")
-    dt_all = runs["dt_s"]
-    half_steps, force = design_moves.move_profiles(base, values, dt_all)
+    dt_all = runs.dt_s
+    half_steps, force = printer_design.move_profiles(base, values, dt_all)
     start = time.perf_counter()
     with quiet_mujoco():
         for i in indices:
-            params = design_moves.config_parameters(base, values, int(i))
+            params = printer_design.config_parameters(base, values, int(i))
             model = scene.build(params, scenario)  # per-configuration model, as a user's loop would
             model.opt.integrator = mujoco.mjtIntegrator.mjINT_RK4
             model.opt.timestep = float(dt_all[i])
             data = mujoco.MjData(model)
             half, f = int(half_steps[i]), float(force[i])
-            for step in range(int(runs["steps"][i])):
+            for step in range(int(runs.steps[i])):
                 data.ctrl[0] = f if step < half else (-f if step < 2 * half else 0.0)
                 mujoco.mj_step(model, data)
     return time.perf_counter() - start
@@ -51,31 +53,35 @@ def loop_configurations(base, values, runs, indices) -> float:
 def main() -> None:
     levels = int(sys.argv[1]) if len(sys.argv) > 1 else design.DEFAULT_LEVELS
     subset = int(sys.argv[2]) if len(sys.argv) > 2 else 40
-    base = design.base_parameters()
-    values = design.configurations(design.make_grids(base, levels))
+    base = design.base_parameters("printer_head")
+    values = design.configurations(design.make_grids("printer_head", base, levels))
     n = len(values["belt_stiffness"])
     print(f"printer_head design sweep: {n} configurations ({levels}^4), {os.cpu_count()} CPUs")
 
-    runs = design_moves.simulate_moves(base, values)  # all threads
-    single = design_moves.simulate_moves(base, values, nthread=1)
-    steps = runs["steps_total"]
+    start = time.perf_counter()
+    runs = design_moves.simulate("printer_head", base, values)  # all threads
+    wall = time.perf_counter() - start
+    start = time.perf_counter()
+    design_moves.simulate("printer_head", base, values, nthread=1)
+    single_wall = time.perf_counter() - start
+    steps = int(runs.steps.sum())
     indices = np.linspace(0, n - 1, min(subset, n)).astype(int)
     loop_wall = loop_configurations(base, values, runs, indices)
-    loop_steps = int(runs["steps"][indices].sum())
+    loop_steps = int(runs.steps[indices].sum())
     # scale the loop to the whole sweep by its steps (configurations differ in length)
     loop_full = loop_wall * steps / loop_steps
 
-    batched_rate = n / runs["wall_time_s"]
-    single_rate = n / single["wall_time_s"]
+    batched_rate = n / wall
+    single_rate = n / single_wall
     loop_rate = n / loop_full
     print(f"  {'runner':<34}{'wall [s]':>10}{'config/s':>11}{'Msteps/s':>10}{'x loop':>8}")
     print(
-        f"  {'batch, ' + str(runs['nthread']) + ' threads':<34}{runs['wall_time_s']:>10.2f}{batched_rate:>11.1f}"
-        f"{steps / runs['wall_time_s'] / 1e6:>10.2f}{batched_rate / loop_rate:>8.1f}"
+        f"  {'batch, ' + str(runs.nthread) + ' threads':<34}{wall:>10.2f}{batched_rate:>11.1f}"
+        f"{steps / wall / 1e6:>10.2f}{batched_rate / loop_rate:>8.1f}"
     )
     print(
-        f"  {'batch, 1 thread':<34}{single['wall_time_s']:>10.2f}{single_rate:>11.1f}"
-        f"{steps / single['wall_time_s'] / 1e6:>10.2f}{single_rate / loop_rate:>8.1f}"
+        f"  {'batch, 1 thread':<34}{single_wall:>10.2f}{single_rate:>11.1f}"
+        f"{steps / single_wall / 1e6:>10.2f}{single_rate / loop_rate:>8.1f}"
     )
     print(
         f"  {'python mj_step loop (scaled)':<34}{loop_full:>10.2f}{loop_rate:>11.1f}"

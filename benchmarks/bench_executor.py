@@ -43,16 +43,18 @@ from timing import best_of
 
 
 def design_throughput() -> dict[str, float]:
-    base = design.base_parameters()
-    values = design.configurations(design.make_grids(base, 5))  # 625 configurations, 10 chunks of 64
+    base = design.base_parameters("printer_head")
+    values = design.configurations(design.make_grids("printer_head", base, 5))  # 625 configurations, 10 chunks of 64
     n = len(values["belt_stiffness"])
     cores = os.cpu_count() or 1
 
     def rate(executor: Executor, workers: int = 1) -> float:
         # warm up every worker (imports and the cached spec on its first task), not just the first one
         warm = {k: v[: 64 * workers] for k, v in values.items()}
-        design_moves.run_moves(base, warm, executor=executor, chunk_size=64)
-        return n / best_of(lambda: design_moves.run_moves(base, values, executor=executor, chunk_size=64), repeat=3)
+        design_moves.run_moves("printer_head", base, warm, executor=executor, chunk_size=64)
+        return n / best_of(
+            lambda: design_moves.run_moves("printer_head", base, values, executor=executor, chunk_size=64), repeat=3
+        )
 
     print(f"1) printer-head design run, {n} configurations in chunks of 64, {cores} cores")
     rates = {"local threads": rate(Executor(progress=False))}
@@ -75,7 +77,7 @@ def design_throughput() -> dict[str, float]:
 
 
 def sobol_projection(measured: dict[str, float]) -> None:
-    runs = sobol.DEFAULT_BASE_SAMPLES * (len(sobol.PARAMETERS) + 2)
+    runs = sobol.DEFAULT_BASE_SAMPLES * (len(scenes.get("printer_head").design.sobol) + 2)
     chunks = math.ceil(runs / sobol.CHUNK_CONFIGURATIONS)
     here = runs / measured["two_core"]
     cluster = runs / (64 * measured["per_core"]) + chunks / 64 * measured["task_s"]

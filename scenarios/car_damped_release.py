@@ -10,8 +10,8 @@ Run: python scenarios/car_damped_release.py
 import springlab
 
 result = springlab.run("car", "damped_release")
-q = result.summary["quantities"]
-worst = max(e["max_rel"] for e in result.summary["errors"].values())
+q = result.quantities
+worst = result.max_rel_error
 print(
     f"damping ratio zeta = {q['damping_ratio']:.3f}"
     f" (damping {result.parameters['damping']:.1f} N s/m for the four dampers)"
@@ -31,5 +31,5 @@ print(
 )
 print(
     f"max relative error vs the damped closed form: {worst:.1e}"
-    f" (tolerance {result.summary['tolerance']:.1e}, passed: {result.summary['passed']})"
+    f" (tolerance {result.tolerance:.1e}, passed: {result.passed})"
 )

@@ -13,7 +13,7 @@ import math
 import springlab
 
 result = springlab.run("car", "pitch_heave")
-q = result.summary["quantities"]
+q = result.quantities
 p = result.parameters
 print(
     f"a = {p['front_axle_distance']} m, b = {p['rear_axle_distance']} m, I = {p['pitch_inertia']} kg m^2,"
@@ -35,7 +35,4 @@ print(
     f"push over the front axle: heave {q['initial_heave_offset_m'] * 1e3:+.4f} mm,"
     f" pitch {q['initial_pitch_rad'] * 1e3:+.4f} mrad (nose down)"
 )
-print(
-    f"max relative error vs the exact linear motion:"
-    f" {max(e['max_rel'] for e in result.summary['errors'].values()):.1e} (passed: {result.summary['passed']})"
-)
+print(f"max relative error vs the exact linear motion: {result.max_rel_error:.1e} (passed: {result.passed})")

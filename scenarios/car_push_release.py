@@ -13,7 +13,7 @@ Run: python scenarios/car_push_release.py
 import springlab
 
 result = springlab.run("car", "push_release")
-q = result.summary["quantities"]
+q = result.quantities
 mm = 1e3
 
 print(
@@ -38,6 +38,6 @@ ellipse = ((x - q["equilibrium_height_m"]) / q["phase_ellipse_height_semi_axis_m
 ) ** 2
 print(
     f"MuJoCo's run stays on that ellipse to {abs(ellipse - 1).max():.1e};"
-    f" max |x - x_s - A cos(omega t)| = {result.summary['errors']['heave_pos']['max_abs']:.1e} m"
-    f" (tolerance met: {result.summary['passed']})."
+    f" max |x - x_s - A cos(omega t)| = {result.errors['heave_pos'].max_abs:.1e} m"
+    f" (tolerance met: {result.passed})."
 )

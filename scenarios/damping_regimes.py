@@ -7,8 +7,8 @@ import springlab
 
 for scenario in ("undamped", "underdamped", "critical", "overdamped"):
     result = springlab.run("slider", scenario)
-    q = result.summary["quantities"]
-    error = max(e["max_rel"] for e in result.summary["errors"].values())
+    q = result.quantities
+    error = result.max_rel_error
     print(
         f"{scenario:<12} zeta = {q['damping_ratio']:<6.3g} regime = {q['regime']:<12}"
         f" x(end) = {result.pos['slider'][-1]: .3e} m   max rel error {error:.1e}"

@@ -8,7 +8,7 @@ derivatives. Run: python scenarios/kinematics_polynomial_position.py
 import springlab
 
 result = springlab.run("kinematics", "polynomial_position")
-q = result.summary["quantities"]
+q = result.quantities
 print(q["position_expression"])
 print(q["velocity_expression"], " (dx/dt)")
 print(q["acceleration_expression"], " (dv/dt)")
@@ -20,5 +20,5 @@ print(
     f"MuJoCo:            x = {q['x_end_simulated_m']:.6g} m, v = {q['v_end_simulated_m_s']:.6g} m/s,"
     f" a = {q['a_end_simulated_m_s2']:.6g} m/s^2"
 )
-worst = max(e["max_rel"] for e in result.summary["errors"].values())
-print(f"max relative error of the simulated x(t), v(t): {worst:.1e} (tolerance {result.summary['tolerance']:.1e})")
+worst = result.max_rel_error
+print(f"max relative error of the simulated x(t), v(t): {worst:.1e} (tolerance {result.tolerance:.1e})")

@@ -9,7 +9,7 @@ Run: python scenarios/kinematics_tachograph.py
 import springlab
 
 result = springlab.run("kinematics", "tachograph")
-q = result.summary["quantities"]
+q = result.quantities
 print(q["velocity_profile"])
 print(q["acceleration_profile"])
 times = q["knot_times_s"]

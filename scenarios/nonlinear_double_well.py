@@ -9,7 +9,7 @@ import math
 import springlab
 
 result = springlab.run("nonlinear", "double_well")
-q = result.summary["quantities"]
+q = result.quantities
 p = result.parameters
 print(f"k1 = {p['k1']:g} N/m, k3 = {p['k3']:g} N/m^3, m = {p['mass']:g} kg")
 print(f"equilibria_m = {q['equilibria_m']}  ({', '.join(q['equilibrium_kinds'])})")
@@ -23,8 +23,7 @@ print(
     f" period {q['period_simulated_s']:.10g} s (energy integral {q['period_quadrature_s']:.10g} s,"
     f" linear theory {2 * math.pi / q['omega_at_+0.1_m_rad_s']:.6g} s)"
 )
-for check in result.summary["checks"]:
+for check in result.checks:
     print(
-        f"  check {check['name']}: error {check['error']:.1e} <= {check['tolerance']:.1e}"
-        f" {'pass' if check['passed'] else 'FAIL'}"
+        f"  check {check.name}: error {check.error:.1e} <= {check.tolerance:.1e} {'pass' if check.passed else 'FAIL'}"
     )

@@ -8,7 +8,7 @@ Run: python scenarios/nonlinear_forced_duffing.py
 import springlab
 
 result = springlab.run("nonlinear", "forced_duffing")
-q = result.summary["quantities"]
+q = result.quantities
 p = result.parameters
 print(
     f"m x'' + {p['damping']:g} x' + ({p['k1']:g}) x + {p['k3']:g} x^3 = {p['force_amplitude']:g} N"
@@ -28,5 +28,5 @@ print(
     f"the trajectory itself stays within 1 % of the well distance of the exact one until"
     f" t = {q['accurate_until_s']:.4g} s (Richardson estimate)"
 )
-check = next(c for c in result.summary["checks"] if c["name"] == "observed_order")
-print(f"self-convergence: observed order {check['value']:.3f} (RK4: 4)")
+check = next(c for c in result.checks if c.name == "observed_order")
+print(f"self-convergence: observed order {check.value:.3f} (RK4: 4)")

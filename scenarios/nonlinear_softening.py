@@ -8,7 +8,7 @@ Run: python scenarios/nonlinear_softening.py
 import springlab
 
 inside = springlab.run("nonlinear", "softening")
-q = inside.summary["quantities"]
+q = inside.quantities
 p = inside.parameters
 print(
     f"spring: k1 = {p['k1']:g} N/m, k3 = {p['k3']:g} N/m^3, m = {p['mass']:g} kg;"
@@ -27,10 +27,10 @@ print(
 print(f"  energy drift {q['energy_drift_relative']:.1e} of the kinetic energy")
 
 outside = springlab.run("nonlinear", "softening_escape")
-q = outside.summary["quantities"]
+q = outside.quantities
 print(
     f"launched at v0 = {outside.parameters['v0']:g} m/s: E = {q['energy_J']:.6g} J > separatrix -> escapes;"
     f" |x| reaches {q['escape_radius_m']:g} m (3 saddle distances) after {q['escape_time_s']:.10g} s"
     f" (energy integral: {q['escape_time_quadrature_s']:.10g} s); the run stops there"
 )
-print("validated:", inside.summary["passed"] and outside.summary["passed"])
+print("validated:", inside.passed and outside.passed)

@@ -13,11 +13,11 @@ import math
 import springlab
 
 result = springlab.run("printer_head", "move")
-p, q = result.parameters, result.summary["quantities"]
+p, q = result.parameters, result.quantities
 print(
     f"belt mode {q['natural_frequency_hz']:.1f} Hz, zeta {q['damping_ratio']:.3f} (MuJoCo's linearization"
     f" {q['linearized_natural_frequency_hz']:.1f} Hz, {q['linearized_damping_ratio']:.3f});"
-    f" exact-solution check passed: {result.summary['passed']}"
+    f" exact-solution check passed: {result.passed}"
 )
 print(
     f"{q['move_distance_m'] * 1e3:.1f} mm in {q['move_time_s'] * 1e3:.1f} ms of bang-bang move"

@@ -1,8 +1,11 @@
-"""Shared test settings: off-screen GL for any test that renders, no stray MuJoCo logs."""
+"""Shared test settings: off-screen GL for any test that renders, no stray MuJoCo logs; studies that several
+tests read are computed once per test session (session-scoped fixtures; their results are immutable, so
+sharing them cannot couple the tests)."""
 
 import os
 
 import mujoco
+import pytest
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
@@ -14,3 +17,37 @@ def _ignore_warning(message: str) -> None:
 
 
 mujoco.set_mju_user_warning(_ignore_warning)
+
+
+@pytest.fixture(scope="session")
+def stability_report():
+    """`springlab stability`'s default report (a springlab.studies.stability.StabilityReport), computed once."""
+    from springlab.studies import stability
+
+    return stability.stability_report()
+
+
+@pytest.fixture(scope="session")
+def shipped_audit():
+    """`audit(scene, tol=1e-3)` of a shipped scene (the demo's and the command's default tol), computed once per
+    scene: call the fixture with the scene's name."""
+    from springlab.studies.audit.audit import audit
+
+    done = {}
+
+    def get(scene):
+        if scene not in done:
+            done[scene] = audit(scene, tol=1e-3)
+        return done[scene]
+
+    return get
+
+
+@pytest.fixture(scope="session")
+def small_design_study():
+    """The printer head's design study on 3^4 = 81 configurations (the grid's corners and centre), with a
+    9 x 9 plane and Sobol indices from N = 8 base samples: computed once per test run (per xdist worker)
+    and read by tests/test_design.py, test_sobol.py and test_executor.py."""
+    from springlab.studies.design import run_study
+
+    return run_study("printer_head", levels=3, plane_levels=9, sobol=8)

@@ -12,6 +12,8 @@ stability/tradeoff within 0.5 % (limits) and 0.1 (orders).
 
 from __future__ import annotations
 
+import dataclasses
+import json
 import math
 
 import mujoco
@@ -20,6 +22,7 @@ import pytest
 from scipy.linalg import expm
 from scipy.optimize import brentq
 
+from contract import plain_json
 from springlab.errors import BadInputError, UnknownNameError
 from springlab.exact.limits import stability_limit
 from springlab.exact.linearize import linearize
@@ -39,12 +42,12 @@ def chain_audit():
 
 def test_chain_limits_are_two_and_2_83_over_the_highest_frequency(chain_audit):
     omega_max = chain_frequencies(4, 100.0, 1.0).max()
-    limits = chain_audit.limits
+    limits = chain_audit.stability
     for name in ("euler", "implicit", "implicitfast"):
-        assert limits[name].measured_s * omega_max == pytest.approx(2.0, rel=LIMIT_RELATIVE)
-        assert limits[name].predicted_s * omega_max == pytest.approx(2.0, rel=LIMIT_RELATIVE)
-    assert limits["rk4"].measured_s * omega_max == pytest.approx(2 * math.sqrt(2), rel=LIMIT_RELATIVE)
-    assert limits["discrete"].measured_s is None  # implicit in springs: no limit
+        assert limits[name].limit_dt_measured_s * omega_max == pytest.approx(2.0, rel=LIMIT_RELATIVE)
+        assert limits[name].limit_dt_predicted_s * omega_max == pytest.approx(2.0, rel=LIMIT_RELATIVE)
+    assert limits["rk4"].limit_dt_measured_s * omega_max == pytest.approx(2 * math.sqrt(2), rel=LIMIT_RELATIVE)
+    assert limits["discrete"].limit_dt_measured_s is None  # implicit in springs: no limit
     assert all(limits[name].confirmed for name in ("euler", "implicit", "implicitfast", "rk4"))
 
 
@@ -54,7 +57,7 @@ def test_chain_is_linear_and_its_recommendation_meets_tol_against_the_exact_solu
     assert result.orders["rk4"] == pytest.approx(4.0, abs=0.1)
     assert result.orders["euler"] == pytest.approx(1.0, abs=0.1)
     pick = result.recommendation
-    assert pick["verified"] and pick["error"] <= result.tol
+    assert pick.verified and pick.error <= result.tol
     # independent reference: the closed-form chain (M from the relative coordinates, K = k I), expm
     n, k, m = 4, 100.0, 1.0
     i = np.arange(n)
@@ -63,19 +66,19 @@ def test_chain_is_linear_and_its_recommendation_meets_tol_against_the_exact_solu
     model = mujoco.MjModel.from_xml_string(chain_xml(n, k, m, 0.0))
     model.opt.integrator = mujoco.mjtIntegrator.__members__[
         {"euler": "mjINT_EULER", "implicit": "mjINT_IMPLICIT", "implicitfast": "mjINT_IMPLICITFAST"}.get(
-            pick["integrator"], f"mjINT_{pick['integrator'].upper()}"
+            pick.integrator, f"mjINT_{pick.integrator.upper()}"
         )
     ]
-    model.opt.timestep = pick["dt"]
+    model.opt.timestep = pick.dt
     data = mujoco.MjData(model)
     data.qpos[:] = result.start.qpos
     x0 = np.concatenate([result.start.qpos, result.start.qvel])
-    steps = round(result.duration / pick["dt"])
+    steps = round(result.duration / pick.dt)
     sim, ref = [x0], [x0]
     for s in range(1, steps + 1):
         mujoco.mj_step(model, data)
         sim.append(np.concatenate([data.qpos, data.qvel]))
-        ref.append(expm(system * s * pick["dt"]) @ x0)
+        ref.append(expm(system * s * pick.dt) @ x0)
     sim, ref = np.array(sim), np.array(ref)
     error = max(
         np.max(np.abs(sim[:, :n] - ref[:, :n])) / np.max(np.abs(ref[:, :n])),
@@ -84,23 +87,118 @@ def test_chain_is_linear_and_its_recommendation_meets_tol_against_the_exact_solu
     assert error <= result.tol
 
 
+#: audit.json's keys, in order: the object's `to_dict()` keeps every one
+AUDIT_KEYS = [
+    "model",
+    "operating_point",
+    "perturb",
+    "duration_s",
+    "linear",
+    "linearity",
+    "modes",
+    "fastest_mode",
+    "stability",
+    "stability_criterion",
+    "own_setting",
+    "constraints_broken",
+    "reference",
+    "sweep",
+    "orders",
+    "pareto",
+    "recommendation",
+    "timings_s",
+]
+
+
+def test_the_audit_json_is_the_objects_to_dict_and_its_facts_are_attributes(chain_audit, capsys, monkeypatch):
+    from springlab import files
+    from springlab.cli import main as cli_main
+
+    result = chain_audit
+    data = result.to_dict()
+    assert list(data) == AUDIT_KEYS and plain_json(data)
+    assert list(data["own_setting"]) == ["integrator", "dt", "stable", "error", "margin", "wall_time_s"]
+    assert list(data["recommendation"]) == ["integrator", "dt", "error", "tolerance", "verified", "wall_time_s"]
+    assert list(data["linearity"]) == ["change", "tolerance"]
+    assert list(data["stability"]["rk4"]) == [
+        "limit_dt_predicted_s",
+        "limit_dt_measured_s",
+        "confirmed",
+        "margin",
+        "detail",
+    ]
+    assert list(data["sweep"][0]) == ["integrator", "dt", "steps", "error", "wall_time_s", "diverged"]
+    # the attributes are the JSON's facts, and they hang together: the margin is the limit over the own dt
+    pick, own = result.recommendation, result.own
+    assert (pick.integrator, pick.dt, pick.error, pick.verified) == tuple(
+        data["recommendation"][k] for k in ("integrator", "dt", "error", "verified")
+    )
+    assert pick.verified and pick.error <= pick.tolerance == result.tol
+    assert own.integrator == "euler" and own.dt == 0.002  # MuJoCo's defaults, which the chain keeps
+    assert own.margin == result.stability[own.integrator].margin
+    assert own.margin == result.stability["euler"].limit_dt_measured_s / own.dt
+    assert result.stability["rk4"].limit_dt_measured_s == data["stability"]["rk4"]["limit_dt_measured_s"]
+    assert result.own_ok == (own.stable and own.error <= result.tol)
+    # `springlab audit --json` prints exactly to_dict() (inf and nan as null), and the text is `message`
+    monkeypatch.setattr(cli_main, "run_audit", lambda *args, **options: result)
+    code = cli_main.main(["audit", "chain.xml", "--json"])
+    assert code == (0 if result.own_ok else 1)
+    assert json.loads(capsys.readouterr().out) == files.json_ready(data)
+    cli_main.main(["audit", "chain.xml"])
+    assert capsys.readouterr().out == result.message + "\n"
+
+
+def test_the_audit_cannot_be_changed_once_returned(chain_audit):
+    result = chain_audit
+    for target, name, value in (
+        (result, "tol", 1.0),
+        (result, "recommendation", None),
+        (result.recommendation, "dt", 1.0),
+        (result.own, "stable", False),
+        (result.stability["rk4"], "confirmed", False),
+        (result.runs[0], "error", 0.0),
+        (result.reference, "converged", False),
+        (result.timings, "total_s", 0.0),
+    ):
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            setattr(target, name, value)
+    with pytest.raises(TypeError):
+        result.stability["rk4"] = result.stability["euler"]
+    with pytest.raises(TypeError):
+        result.orders["rk4"] = 1.0
+    with pytest.raises(AttributeError):
+        result.runs.append(result.runs[0])
+
+
+def test_the_audit_to_pandas_is_its_sweep_one_row_per_setting(chain_audit):
+    frame = chain_audit.to_pandas()
+    rows = chain_audit.to_dict()["sweep"]
+    assert list(frame.columns) == list(rows[0]) and len(frame) == len(rows) == len(chain_audit.runs)
+    for record, row in zip(frame.to_dict("records"), rows):
+        for key, value in row.items():
+            assert record[key] == value or (value is None and record[key] != record[key]), (key, row)
+    # every integrator x timestep once: the sweep's grid
+    assert len(set(zip(frame["integrator"], frame["dt"]))) == len(frame)
+    assert set(frame["integrator"]) == set(INTEGRATORS)
+
+
 def test_pendulum_is_linear_for_a_small_swing_and_nonlinear_for_a_large_one():
     model = mujoco.MjModel.from_xml_string(pendulum_xml())
     small = audit(model, keyframe="bottom", perturb=1e-4, integrators="rk4,euler", duration=1.0)
     large = audit(model, keyframe="bottom", perturb=1.0, integrators="rk4,euler", duration=1.0)
     assert small.is_linear and not large.is_linear
-    assert large.reference["converged"]
+    assert large.reference.converged
 
 
 def test_an_upright_pendulum_is_reported_physically_unstable_not_numerically():
     model = mujoco.MjModel.from_xml_string(pendulum_xml())
     result = audit(model, keyframe="top", perturb=1e-3, integrators="rk4", duration=1.0)
-    modes = result.as_json()["modes"]
+    modes = result.to_dict()["modes"]
     assert any(m["physically_unstable"] for m in modes)
     rate = math.sqrt(9.81 / 0.5)
     # RK4 is R(dt A) on the linearization: its limit is set by the decaying root -rate (2.785/rate)
-    assert result.limits["rk4"].measured_s * rate == pytest.approx(2.7853, rel=LIMIT_RELATIVE)
-    assert result.own["stable"]
+    assert result.stability["rk4"].limit_dt_measured_s * rate == pytest.approx(2.7853, rel=LIMIT_RELATIVE)
+    assert result.own.stable
 
 
 @pytest.mark.slow
@@ -115,11 +213,11 @@ def test_a_sphere_bouncing_on_a_soft_contact_audits_and_its_recommendation_meets
     result = audit(model, tol=tol, duration=0.5, integrators="euler,rk4,implicitfast")
     assert not result.is_linear  # free fall, then contact
     pick = result.recommendation
-    assert pick["verified"]
+    assert pick.verified
     # independent reference: RK4 at 1e-5 s, itself converged (its difference to 2e-5 s is tol/100 or less)
     reference = _final_state(model, "rk4", 1e-5, result)
     coarser = _final_state(model, "rk4", 2e-5, result)
-    chosen = _final_state(model, pick["integrator"], pick["dt"], result)
+    chosen = _final_state(model, pick.integrator, pick.dt, result)
     motion = abs(reference[0] - result.start.qpos[0])
     assert abs(coarser[0] - reference[0]) <= tol / 100 * motion
     assert abs(chosen[0] - reference[0]) <= tol * motion
@@ -138,16 +236,18 @@ def _final_state(model, integrator, dt, result):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("scene", ["slider", "car"])
-def test_a_shipped_scene_audit_agrees_with_stability_and_tradeoff(scene):
+def test_a_shipped_scene_audit_agrees_with_stability_and_tradeoff(scene, shipped_audit):
     # the contract: limits within 0.5 %, orders within 0.1 wherever both measure one (the audit's grid
     # stops at 1e-3 of its largest dt, so discrete on the car stays above the fit's 0.1 error cap)
-    result = audit(scene, tol=1e-3)
+    result = shipped_audit(scene)
     (mode,) = result.linear.modes
     omega, zeta = mode.frequency_hz * 2 * math.pi, mode.damping_ratio
     boundaries = stability.measure_boundaries(("euler", "implicitfast", "rk4"), (abs(zeta),))
     for row in boundaries:
-        assert result.limits[row["integrator"]].measured_s * omega == pytest.approx(row["measured_omega_dt"], rel=5e-3)
-        assert row["theory_omega_dt"] == pytest.approx(stability_limit(row["integrator"], abs(zeta)))
+        assert result.stability[row.integrator].limit_dt_measured_s * omega == pytest.approx(
+            row.measured_omega_dt, rel=5e-3
+        )
+        assert row.theory_omega_dt == pytest.approx(stability_limit(row.integrator, abs(zeta)))
     sweep = tradeoff.sweep(scene, result.model.split("'")[3])
     compared = [name for name, order in sweep.orders.items() if order is not None and result.orders[name] is not None]
     assert {"euler", "rk4"} <= set(compared)
@@ -177,8 +277,8 @@ def test_limits_split_joint_and_tendon_damping_as_each_integrator_does():
     expected = {"euler": bound(zeta_joint - zeta_tendon), "implicit": bound(zeta_joint + zeta_tendon)}
     expected["implicitfast"] = expected["implicit"]
     for name, omega_dt in expected.items():
-        assert limits[name].predicted_s * omega == pytest.approx(omega_dt, rel=LIMIT_RELATIVE), name
-        assert limits[name].measured_s * omega == pytest.approx(omega_dt, rel=LIMIT_RELATIVE), name
+        assert limits[name].limit_dt_predicted_s * omega == pytest.approx(omega_dt, rel=LIMIT_RELATIVE), name
+        assert limits[name].limit_dt_measured_s * omega == pytest.approx(omega_dt, rel=LIMIT_RELATIVE), name
         assert limits[name].confirmed, name
 
 
@@ -190,13 +290,13 @@ def _belt(model):
 
 
 @pytest.mark.slow
-def test_printer_head_audit_places_the_belt_damping_where_each_integrator_does():
+def test_printer_head_audit_places_the_belt_damping_where_each_integrator_does(shipped_audit):
     # the belt is a fixed tendon between two slides on separate branches: euler integrates its damping
     # explicitly (only dof_damping is implicit), implicit/implicitfast only its diagonal (D keeps the
     # sparsity of M). Closed forms in the relative coordinate e = q_m - q_c, u = e':
     # u' = u + h g (-k e - c u), e' = e + h u', stable while h^2 g k + 2 h g c < 4, with
     # g = 1/m_c + 1/m_m (euler) or 1/(m_c + h c) + 1/(m_m + h c) (the implicit solve with D = c I)
-    result = audit("printer_head", tol=1e-3)
+    result = shipped_audit("printer_head")  # audit("printer_head", tol=1e-3), shared with the demo's audit test
     m_c, m_m, k, c = _belt(mujoco.MjModel.from_xml_path(str(model_files.path("printer_head"))))
     reduced = m_c * m_m / (m_c + m_m)
     omega, zeta = math.sqrt(k / reduced), c / (2 * math.sqrt(k * reduced))
@@ -215,12 +315,12 @@ def test_printer_head_audit_places_the_belt_damping_where_each_integrator_does()
     expected["implicitfast"] = expected["implicit"]
     assert expected["euler"] * omega == pytest.approx(-2 * zeta + 2 * math.hypot(zeta, 1))  # all explicit
     for name, dt in expected.items():
-        assert result.limits[name].measured_s == pytest.approx(dt, rel=LIMIT_RELATIVE), name
-        assert result.limits[name].predicted_s == pytest.approx(dt, rel=LIMIT_RELATIVE), name
+        assert result.stability[name].limit_dt_measured_s == pytest.approx(dt, rel=LIMIT_RELATIVE), name
+        assert result.stability[name].limit_dt_predicted_s == pytest.approx(dt, rel=LIMIT_RELATIVE), name
     # rk4 is explicit in everything: where the damping lives does not matter, the slider's boundary holds
     (row,) = stability.measure_boundaries(("rk4",), (zeta,))
-    assert result.limits["rk4"].measured_s * omega == pytest.approx(row["measured_omega_dt"], rel=5e-3)
-    assert all(result.limits[name].confirmed for name in ("euler", "implicit", "implicitfast", "rk4"))
+    assert result.stability["rk4"].limit_dt_measured_s * omega == pytest.approx(row.measured_omega_dt, rel=5e-3)
+    assert all(result.stability[name].confirmed for name in ("euler", "implicit", "implicitfast", "rk4"))
     sweep = tradeoff.sweep("printer_head", result.model.split("'")[3])
     compared = [name for name, order in sweep.orders.items() if order is not None and result.orders[name] is not None]
     assert {"euler", "implicit", "implicitfast", "rk4"} <= set(compared)
@@ -237,11 +337,13 @@ def test_nonlinear_audit_limits_are_the_undamped_oscillators_and_euler_is_first_
     (mode,) = result.linear.modes
     assert mode.kind == "oscillatory" and mode.rate_rad_s == pytest.approx(omega, rel=1e-6)
     for row in stability.measure_boundaries(("euler", "implicitfast", "rk4"), (0.0,)):
-        assert result.limits[row["integrator"]].measured_s * omega == pytest.approx(row["measured_omega_dt"], rel=5e-3)
+        assert result.stability[row.integrator].limit_dt_measured_s * omega == pytest.approx(
+            row.measured_omega_dt, rel=5e-3
+        )
     for name, omega_dt in {"euler": 2.0, "implicit": 2.0, "implicitfast": 2.0, "rk4": 2 * math.sqrt(2)}.items():
-        assert result.limits[name].measured_s * omega == pytest.approx(omega_dt, rel=LIMIT_RELATIVE), name
-        assert result.limits[name].confirmed, name
-    assert not result.is_linear and result.reference["converged"]
+        assert result.stability[name].limit_dt_measured_s * omega == pytest.approx(omega_dt, rel=LIMIT_RELATIVE), name
+        assert result.stability[name].confirmed, name
+    assert not result.is_linear and result.reference.converged
     for name in ("euler", "implicit", "implicitfast"):
         assert result.orders[name] == pytest.approx(1.0, abs=0.1), name
 
@@ -253,14 +355,14 @@ def test_kinematics_audit_has_no_limit_because_every_mode_is_rigid():
     assert not np.any(model.jnt_stiffness) and not np.any(model.dof_damping)
     assert result.linear.modes and all(m.kind == "rigid" for m in result.linear.modes)
     assert result.linear.fastest is None
-    for limit in result.limits.values():
-        assert limit.predicted_s is None and limit.measured_s is None and limit.confirmed is None
+    for limit in result.stability.values():
+        assert limit.limit_dt_predicted_s is None and limit.limit_dt_measured_s is None and limit.confirmed is None
         assert "every mode is rigid" in limit.detail
-    assert "every mode is rigid" in "\n".join(result.verdict())
+    assert "every mode is rigid" in result.message
     # nothing pushes the slides in the audit's (unforced) runs: q = q0 + v0 t, which every integrator
     # steps exactly, so each error is round-off, eps per step at most
     eps = np.finfo(float).eps
-    for row in result.as_json()["sweep"]:
+    for row in result.to_dict()["sweep"]:
         assert row["error"] <= 10 * eps * row["steps"], row
 
 

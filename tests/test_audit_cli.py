@@ -65,10 +65,18 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys, args,
     assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
 
 
-def test_the_demo_report_gains_an_audit_section(tmp_path):
+def test_the_demo_report_gains_an_audit_section(tmp_path, monkeypatch, shipped_audit):
+    import importlib
+
     from springlab.demo import report
     from springlab.demo import steps as demo
 
+    # the step audits the car as `springlab audit car` does (default tol 1e-3): the session's car audit, once
+    def shared(model, **options):
+        assert not options, options  # the fixture's audit is the default one
+        return shipped_audit(model)
+
+    monkeypatch.setattr(importlib.import_module("springlab.studies.audit.audit"), "audit", shared)
     state = demo.DemoState(out=tmp_path)
     state.artifacts.extend(demo.audit_step(state))
     page = report.write_report(state).read_text()

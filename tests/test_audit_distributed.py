@@ -49,7 +49,7 @@ def fixed_costs(monkeypatch):
 
 
 def _json_without_timings(result) -> str:
-    data = result.as_json()
+    data = result.to_dict()
     data.pop("timings_s")
     return files.dumps(data)
 
@@ -72,7 +72,7 @@ def test_slider_audit_on_two_workers_equals_the_local_audit(cluster, fixed_costs
     assert ran  # the confirmation runs and the sweep went to the workers
     assert _json_without_timings(remote) == _json_without_timings(local)
     assert [r.error for r in remote.runs] == [r.error for r in local.runs]
-    assert remote.recommendation == local.recommendation and remote.recommendation["verified"]
+    assert remote.recommendation == local.recommendation and remote.recommendation.verified
 
 
 @pytest.mark.slow
@@ -81,11 +81,11 @@ def test_dm_control_cartpole_with_its_included_files_audits_identically_on_two_w
     # a large push makes it nonlinear, so the converged RK4 reference's levels run on the workers too
     path = str(SUITE / "cartpole.xml")
     local, remote, ran = _twice(cluster, path, duration=0.5, dt="0.01,0.005,0.0025", perturb=0.3, tol=1e-2)
-    assert not local.is_linear and local.reference["kind"].startswith("RK4")
+    assert not local.is_linear and local.reference.kind.startswith("RK4")
     assert ran
     assert _json_without_timings(remote) == _json_without_timings(local)
-    for name in local.limits:
-        assert remote.limits[name] == local.limits[name]
+    for name in local.stability:
+        assert remote.stability[name] == local.stability[name]
 
 
 MESH_OBJ = "v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0 0 0.1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"

@@ -75,14 +75,14 @@ def test_dm_control_model_audits_and_its_recommendation_meets_tol(name):
     path = SUITE / f"{name}.xml"
     result = audit(str(path), tol=tol, duration=duration)
     pick = result.recommendation
-    assert pick["verified"], result.verdict()
+    assert pick.verified, result.message
     model = mujoco.MjModel.from_xml_path(str(path))
-    steps = round(result.duration / pick["dt"])
-    times = np.arange(0, steps + 1, max(1, steps // 500)) * pick["dt"]  # the recommended run's steps
-    fine = pick["dt"] / round(pick["dt"] / 1e-5)  # RK4 at ~10 us, dividing the recommended dt
+    steps = round(result.duration / pick.dt)
+    times = np.arange(0, steps + 1, max(1, steps // 500)) * pick.dt  # the recommended run's steps
+    fine = pick.dt / round(pick.dt / 1e-5)  # RK4 at ~10 us, dividing the recommended dt
     reference = _states(model, "rk4", fine, result.duration, result.start, times)
     coarser = _states(model, "rk4", 2 * fine, result.duration, result.start, times)
     origin = result.linear.point.qpos
     assert _error(model, *coarser, *reference, origin) <= tol / 10  # the reference itself has converged
-    chosen = _states(model, pick["integrator"], pick["dt"], result.duration, result.start, times)
+    chosen = _states(model, pick.integrator, pick.dt, result.duration, result.start, times)
     assert _error(model, *chosen, *reference, origin) <= tol

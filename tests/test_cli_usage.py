@@ -101,10 +101,10 @@ def test_list_dt_is_the_dt_run_uses(capsys):
 
 def test_design_accepts_the_damping_ratio_its_table_shows():
     # zeta = c / (2 sqrt(k m_r)), m_r = m_c m_m / (m_c + m_m): the design table's definition, inverted
-    base = design.base_parameters({"damping_ratio": 0.1})
+    base = design.base_parameters("printer_head", {"damping_ratio": 0.1})
     reduced = base["carriage_mass"] * base["motor_mass"] / (base["carriage_mass"] + base["motor_mass"])
     assert base["belt_damping"] == pytest.approx(2 * 0.1 * (base["belt_stiffness"] * reduced) ** 0.5, rel=1e-15)
-    assert design.default_properties(base)["damping_ratio"] == pytest.approx(0.1, rel=1e-14)
+    assert scenes.get("printer_head").design.hooks.defaults(base)["damping_ratio"] == pytest.approx(0.1, rel=1e-14)
 
 
 def test_design_refuses_both_names_for_the_damping(capsys):
@@ -146,7 +146,15 @@ def test_the_rk4_limit_costs_a_vectorised_scan_not_thousands_of_calls(monkeypatc
     assert len(calls) <= 5 * (1 + 60)
 
 
-def test_stability_output_writes_its_three_files(tmp_path, capsys):
+def test_stability_output_writes_its_three_files(tmp_path, capsys, monkeypatch, stability_report):
+    import numpy as np
+
+    from springlab.studies import stability
+
+    # what the command writes, not the study (tests/test_stability.py): the session's report, a small map
+    small = stability.amplification_map(zetas=[0.0, 1.0], omega_dts=np.geomspace(1e-2, 1e3, 8))
+    monkeypatch.setattr(stability, "stability_report", lambda **options: stability_report)
+    monkeypatch.setattr(stability, "amplification_map", lambda **options: small)
     code, _, err = _run(capsys, "stability", "--output", str(tmp_path))
     assert code == 0, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["energy.png", "stability.json", "stability.png"]

@@ -1,11 +1,14 @@
 """The printer-head design study: every configuration obeys the physics, the ranking and its signs
-are physical, the analytic estimate agrees, and `springlab design` keeps its contract.
+are physical, the analytic estimate agrees, and `springlab design` keeps its contract; the study is
+read from the scene's declaration (`Scene.design`), and its result is an immutable object whose
+`to_dict()` is what `design --json` prints.
 
 Independent references: the bang-bang minimum 2 sqrt(D M / F) by hand, and for the default
 configuration the exact 2-DOF trajectory (scipy expm, on the study's own step grid) from which the
 settling time is read off in the test.
 """
 
+import dataclasses
 import json
 import math
 
@@ -13,31 +16,48 @@ import numpy as np
 import pytest
 import scipy.linalg
 
+from springlab import scenes
 from springlab.cli.main import main
+from springlab.errors import UnknownNameError
+from springlab.scenes.capabilities import DesignSpec
 from springlab.studies.design import study as design
+
+#: the printer head's swept properties, in grid order
+PROPERTIES = ("belt_stiffness", "carriage_mass", "damping_ratio", "drive_force")
 
 
 @pytest.fixture(scope="module")
-def small_study():
-    """3^4 = 81 configurations: the grid's corners and centre, and a 9 x 9 plane."""
-    return design.run_study(levels=3, plane_levels=9)
+def small_study(small_design_study):
+    """3^4 = 81 configurations: the grid's corners and centre, and a 9 x 9 plane (tests/conftest.py)."""
+    return small_design_study
 
 
 @pytest.fixture(scope="module")
 def default_study():
     """5^4 = 625 configurations over the default spans (the default 7^4 takes 10-20 s on 2 shared
     cores: it runs in the demo and `springlab design`, not here)."""
-    return design.run_study(levels=5, plane_levels=0)
+    return design.run_study("printer_head", levels=5, plane_levels=0)
 
 
 def test_default_sweep_has_at_least_1000_configurations():
-    grids = design.make_grids(design.base_parameters(), design.DEFAULT_LEVELS)
+    grids = design.make_grids("printer_head", design.base_parameters("printer_head"), design.DEFAULT_LEVELS)
     values = design.configurations(grids)
-    assert len(values["belt_stiffness"]) == design.DEFAULT_LEVELS ** len(design.PROPERTIES) >= 1000
+    assert tuple(grids) == PROPERTIES
+    assert len(values["belt_stiffness"]) == design.DEFAULT_LEVELS ** len(PROPERTIES) >= 1000
     # a full factorial: every combination once
-    assert len({tuple(values[p][i] for p in design.PROPERTIES) for i in range(len(values["drive_force"]))}) == len(
+    assert len({tuple(values[p][i] for p in PROPERTIES) for i in range(len(values["drive_force"]))}) == len(
         values["drive_force"]
     )
+
+
+def test_the_scenes_that_declare_a_design_question_are_the_design_studies():
+    declared = [name for name, scene in scenes.SCENES.items() if isinstance(scene.design, DesignSpec)]
+    assert design.design_scenes() == declared == ["printer_head"]
+    spec = scenes.get("printer_head").design
+    assert spec.names == PROPERTIES and spec.scenario in scenes.get("printer_head").scenarios
+    assert set(spec.sobol) <= {p.name for p in (*spec.properties, *spec.extra)}
+    with pytest.raises(UnknownNameError, match="valid: printer_head"):
+        design.run_study("slider")
 
 
 @pytest.mark.slow
@@ -58,17 +78,17 @@ def test_no_configuration_beats_its_bang_bang_minimum(default_study):
 
 @pytest.mark.slow
 def test_ranking_is_sorted_by_absolute_elasticity(default_study):
-    elasticity = default_study.elasticities()
-    magnitudes = [abs(elasticity[name]) for name in default_study.ranking()]
+    elasticity = default_study.elasticities
+    magnitudes = [abs(elasticity[name]) for name in default_study.ranking]
     assert magnitudes == sorted(magnitudes, reverse=True)
-    assert set(default_study.ranking()) == set(design.PROPERTIES)
+    assert set(default_study.ranking) == set(PROPERTIES)
 
 
 @pytest.mark.slow
 def test_elasticity_signs_are_physical(default_study):
     # stiffer belt (faster, smaller residual), more force (shorter move), more damping (faster decay)
     # all shorten the positioning; a heavier carriage lengthens it
-    elasticity = default_study.elasticities()
+    elasticity = default_study.elasticities
     assert elasticity["belt_stiffness"] < 0
     assert elasticity["drive_force"] < 0
     assert elasticity["damping_ratio"] < 0
@@ -83,7 +103,7 @@ def test_analytic_estimate_agrees_with_simulation(default_study):
     period = 1 / s.natural_frequency_hz
     assert np.all(s.estimate_s >= s.positioning_time_s - 2 * s.dt_s)
     assert np.all(s.estimate_s <= s.positioning_time_s + period + 2 * s.dt_s)
-    i = s.default_index()
+    i = s.default_index
     assert s.estimate_s[i] / s.positioning_time_s[i] == pytest.approx(1.0, abs=0.05)
 
 
@@ -91,7 +111,7 @@ def test_analytic_estimate_agrees_with_simulation(default_study):
 def test_default_configuration_settles_as_the_exact_trajectory_says(small_study):
     # one configuration (the default) through the batch, vs expm on its own step grid
     study = small_study
-    i = study.default_index()
+    i = study.default_index
     base = study.base
     m_c, m_m = study.values["carriage_mass"][i], base["motor_mass"]
     k, zeta, limit = (study.values[name][i] for name in ("belt_stiffness", "damping_ratio", "drive_force"))
@@ -126,7 +146,9 @@ def test_default_configuration_settles_as_the_exact_trajectory_says(small_study)
 
 @pytest.mark.slow
 def test_design_json_has_the_documented_shape(capsys, tmp_path):
-    code = main(["design", "printer_head", "--levels", "3", "--plane", "5", "--json", "--output", str(tmp_path / "d")])
+    # end to end: the command line's arguments reach the study (levels, plane, Sobol samples)
+    argv = ["design", "printer_head", "--levels", "3", "--plane", "5", "--sobol", "8", "--json"]
+    code = main([*argv, "--output", str(tmp_path / "d")])
     out, err = capsys.readouterr()
     assert code == 0, err
     summary = json.loads(out)
@@ -145,22 +167,91 @@ def test_design_json_has_the_documented_shape(capsys, tmp_path):
         "estimate_over_simulation",
         "wall_time_s",
         "configurations_per_s",
+        "plane",
+        "sobol",
     ):
         assert key in summary
-    assert summary["configurations"] == 81 and summary["levels"] == 3
-    assert set(summary["elasticities"]) == set(design.PROPERTIES)
+    assert summary["configurations"] == 81 and summary["levels"] == 3 and summary["plane"]["levels"] == 5
+    assert set(summary["elasticities"]) == set(PROPERTIES)
+    assert summary["sobol"]["runs"] == 8 * 7
     default = summary["default"]
     assert default["positioning_time_s"] == pytest.approx(default["move_time_s"] + default["settling_time_s"])
-    assert sorted(p.name for p in (tmp_path / "d").iterdir()) == ["configurations.csv", "design.json", "design.png"]
+    assert sorted(p.name for p in (tmp_path / "d").iterdir()) == [
+        "configurations.csv",
+        "design.json",
+        "design.png",
+        "sobol.png",
+    ]
     assert json.loads((tmp_path / "d" / "design.json").read_text())["configurations"] == 81
 
 
-@pytest.mark.slow
-def test_design_text_answers_both_questions(capsys):
-    code = main(["design", "printer_head", "--levels", "3", "--plane", "0"])
-    out, _ = capsys.readouterr()
-    assert code == 0
+def _cli_with(study, monkeypatch, capsys, *argv):
+    """`springlab design printer_head ARGV` with the study it computes replaced by `study`: (code, out)."""
+    monkeypatch.setattr(design, "run_study", lambda *args, **kwargs: study)
+    code = main(["design", "printer_head", *argv])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    return code, out
+
+
+def test_to_dict_is_what_design_json_prints_and_design_json_holds(small_study, monkeypatch, capsys, tmp_path):
+    _, out = _cli_with(small_study, monkeypatch, capsys, "--json", "--output", str(tmp_path / "d"))
+    assert json.loads(out) == small_study.to_dict()
+    assert json.loads((tmp_path / "d" / "design.json").read_text()) == small_study.to_dict()
+    # JSON-ready already: a round trip through json changes nothing, the sobol entry included
+    assert json.loads(json.dumps(small_study.to_dict())) == small_study.to_dict()
+    assert small_study.to_dict()["sobol"] == small_study.sobol.to_dict()
+
+
+def test_to_dict_carries_the_attributes(small_study):
+    s, summary = small_study, small_study.to_dict()
+    i = s.default_index
+    assert summary["scene"] == s.scene == "printer_head"
+    assert summary["configurations"] == s.size == 81 and summary["levels"] == s.levels == 3
+    assert summary["ranking"] == list(s.ranking) and summary["elasticities"] == dict(s.elasticities)
+    assert summary["regression_r2"] == s.regression_r2
+    assert summary["local_elasticities"] == dict(s.local_elasticities)
+    assert summary["default"]["positioning_time_s"] == s.positioning_time_s[i]
+    assert summary["default"]["properties"] == {name: s.values[name][i] for name in PROPERTIES}
+    assert summary["fixed"] == {name: s.base[name] for name in ("motor_mass", "move_distance", "positioning_band")}
+    assert summary["plane"]["configurations"] == s.plane.positioning_time_s.size == 81
+
+
+def test_to_pandas_has_a_row_per_configuration_as_configurations_csv(small_study, tmp_path):
+    frame = small_study.to_pandas()
+    design.write(small_study, tmp_path / "d")
+    lines = (tmp_path / "d" / "configurations.csv").read_text().splitlines()
+    assert lines[0].split(",") == list(frame.columns)
+    assert len(frame) == small_study.size == len(lines) - 1
+    np.testing.assert_array_equal(frame["positioning_time_s"].to_numpy(), small_study.positioning_time_s)
+    np.testing.assert_array_equal(frame["belt_stiffness"].to_numpy(), small_study.values["belt_stiffness"])
+    # the CSV's last row is the to_pandas last row, at full precision
+    assert [float(v) for v in lines[-1].split(",")] == frame.iloc[-1].tolist()
+
+
+def test_a_study_cannot_be_changed_once_returned(small_study):
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        small_study.steps = 0
+    with pytest.raises(ValueError, match="read-only"):
+        small_study.positioning_time_s[0] = 0.0
+    with pytest.raises(ValueError, match="read-only"):
+        small_study.values["drive_force"][0] = 0.0
+    with pytest.raises(TypeError):
+        small_study.base["drive_force"] = 1.0
+    with pytest.raises(ValueError, match="read-only"):
+        small_study.plane.positioning_time_s[0, 0] = 0.0
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        small_study.sobol.runs = 0
+
+
+def test_design_text_answers_both_questions(small_study, monkeypatch, capsys):
+    _, out = _cli_with(small_study, monkeypatch, capsys, "--plane", "0")
     assert "How fast?" in out and "Which properties?" in out
+    assert small_study.answer in out and small_study.sobol.answer in out
+    # the design table lists every property once, in the ranking's order (the Sobol table follows it)
+    table = out.split("log-log fit")[0]
+    rows = [words[0] for words in map(str.split, table.splitlines()) if words and words[0] in PROPERTIES]
+    assert rows == list(small_study.ranking)
 
 
 @pytest.mark.parametrize(
@@ -185,7 +276,7 @@ def test_design_bad_input_exits_2_with_one_line(argv, needle, capsys):
 @pytest.mark.slow
 def test_plane_spans_the_two_most_influential_properties_around_the_default(small_study):
     plane = small_study.plane
-    assert (plane.y_name, plane.x_name) == tuple(small_study.ranking()[:2])
+    assert (plane.y_name, plane.x_name) == small_study.ranking[:2]
     assert plane.positioning_time_s.shape == (9, 9) == plane.estimate_s.shape
     # its axes cover the study's grid ranges, with the default in the middle
     np.testing.assert_allclose(plane.y[[0, 4, 8]], small_study.grids[plane.y_name], rtol=1e-12)

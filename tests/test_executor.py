@@ -66,17 +66,19 @@ def test_tradeoff_grid_on_two_workers_equals_the_local_grid(cluster):
     assert grid(cluster) == grid(None)
 
 
-def test_design_study_on_two_workers_equals_the_local_study(cluster):
-    local = design.run_study(levels=3, plane_levels=0)
-    remote = design.run_study(levels=3, plane_levels=0, executor=cluster)
+def test_design_study_on_two_workers_equals_the_local_study(cluster, small_design_study):
+    local = small_design_study  # 3^4, computed locally (tests/conftest.py); its plane is not compared
+    remote = design.run_study("printer_head", levels=3, plane_levels=0, executor=cluster)
+    assert local.executor == "local" and remote.executor == "2 local dask workers"
     for field in ("positioning_time_s", "settling_time_s", "residual_amplitude_m", "dt_s", "estimate_s"):
         assert np.array_equal(getattr(local, field), getattr(remote, field)), field
     assert local.steps == remote.steps
 
 
-def test_sobol_indices_on_two_workers_equal_the_local_ones(cluster):
-    local = sobol.printer_head(8)
-    remote = sobol.printer_head(8, executor=cluster)
+def test_sobol_indices_on_two_workers_equal_the_local_ones(cluster, small_design_study):
+    local = small_design_study.sobol  # N = 8, seed 0, computed locally
+    remote = sobol.run_sobol("printer_head", 8, executor=cluster)
+    assert local.executor == "local" and remote.executor == "2 local dask workers"
     assert np.array_equal(local.positioning_time_s, remote.positioning_time_s)
     assert local.indices == remote.indices  # the bootstrap is seeded: intervals too
 

@@ -175,20 +175,32 @@ def test_plotting_never_touches_pyplot_global_state():
 
 @pytest.mark.slow
 def test_tradeoff_stability_and_design_charts_leave_the_callers_backend_alone(tmp_path):
-    # a library must not switch a notebook's backend (matplotlib.use) or import pyplot
+    # a library must not switch a notebook's backend (matplotlib.use) or import pyplot; the charts only need
+    # results to draw: small studies, and a hand-built stability report (tests/test_stability.py checks the real one)
     code = (
         "import sys, matplotlib\n"
         "matplotlib.use('svg')\n"
+        "import numpy as np\n"
         "from springlab.plots import charts, design as design_chart\n"
-        "from springlab.studies import tradeoff\n"
+        "from springlab.studies import stability, tradeoff\n"
         "from springlab.studies.design import study as design\n"
         f"charts.plot_tradeoff(tradeoff.sweep('slider', 'free', duration=0.5), {str(tmp_path / 't.png')!r})\n"
-        f"design_chart.plot(design.run_study(levels=3), {str(tmp_path / 'd.png')!r})\n"
+        f"design_chart.plot(design.run_study('printer_head', levels=3, plane_levels=5), {str(tmp_path / 'd.png')!r})\n"
+        "n = np.arange(4)\n"
+        "series = stability.EnergyHistories('oscillator', 0.2, 1.0, n / 3, {'euler': 1 + 0.01 * np.sin(n),"
+        " 'rk4': 0.99**n, 'discrete': 0.9**n}, {'rk4': 0.99**n, 'discrete': 0.9**n}, {'euler': (0.9, 1.1)}, ())\n"
+        "report = stability.StabilityReport((stability.Boundary('rk4', 0.0, 2.83, 2.83, 0.0, True),), (), series,"
+        " 'grows', 0.01, 0.0)\n"
+        "amplification = stability.AmplificationMap(np.array([0.0, 1.0]), np.geomspace(0.01, 1e3, 4),"
+        " {'rk4': np.full((2, 4), 0.5)})\n"
+        f"charts.write_stability(report, amplification, {str(tmp_path / 's')!r})\n"
         "assert matplotlib.get_backend() == 'svg', matplotlib.get_backend()\n"
         "assert 'matplotlib.pyplot' not in sys.modules, 'pyplot imported'\n"
     )
     subprocess.run([sys.executable, "-c", code], check=True, timeout=300)
     assert (tmp_path / "t.png").stat().st_size > 0 and (tmp_path / "d.png").stat().st_size > 0
+    for name in ("stability.png", "energy.png"):
+        assert (tmp_path / "s" / name).stat().st_size > 0
 
 
 def test_plotting_leaves_the_callers_rcparams_alone_and_still_uses_its_own_style(tmp_path):

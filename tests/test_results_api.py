@@ -17,32 +17,12 @@ import pandas
 import pytest
 
 import springlab
+from contract import SUMMARY_KEYS
 from springlab.cli.main import main
 from springlab.runs.compare import ColumnError, Verdict
 from springlab.runs.run import Result, ValidationRow, run_scenario
 from springlab.studies import auto, families
 from springlab.studies.auto import NO_SWEEP_NOTE
-
-#: summary.json's keys, in order (docs/runs.md, DESIGN.md's contract plus what the docs list)
-SUMMARY_KEYS = [
-    "scene",
-    "scenario",
-    "integrator",
-    "dt",
-    "duration",
-    "steps",
-    "wall_time_s",
-    "parameters",
-    "quantities",
-    "errors",
-    "tolerance",
-    "tolerance_basis",
-    "passed",
-    "verdict",
-    "estimate_range",
-    "checks",
-    "model_limits",
-]
 
 
 def _capture(monkeypatch, module, name: str) -> list:

@@ -298,12 +298,9 @@ def cmd_audit(args: argparse.Namespace) -> int:
     if args.output:
         charts_audit.write_audit(result, args.output)
     if args.json:
-        _print_json(result.as_json())
+        _print_json(result.to_dict())
     else:
-        for line in result.verdict():
-            print(line)
-        if args.output:
-            print(f"wrote {pathlib.Path(args.output) / 'audit.json'} and audit.png")
+        cli_text.print_audit(result, args.output)
     return EXIT_OK if result.own_ok else EXIT_FAILED
 
 
@@ -317,10 +314,10 @@ def cmd_stability(args: argparse.Namespace) -> int:
         assert amplification is not None  # computed above whenever there is an output folder
         charts.write_stability(report, amplification, args.output)
     if args.json:
-        _print_json(stability.report_json(report))
+        _print_json(report.to_dict())
     else:
         cli_text.print_stability(report, args.output)
-    return EXIT_OK if all(r["within_tolerance"] for r in report["boundaries"]) else EXIT_FAILED
+    return EXIT_OK if report.passed else EXIT_FAILED
 
 
 def cmd_design(args: argparse.Namespace) -> int:
@@ -335,7 +332,8 @@ def cmd_design(args: argparse.Namespace) -> int:
     if args.sobol is not None:
         from springlab.studies.design import sobol
 
-        sobol.check_base_samples(args.sobol)  # bad input before minutes of simulation
+        _, spec = design.declaration(args.scene)
+        sobol.check_base_samples(args.sobol, len(spec.sobol))  # bad input before minutes of simulation
     with _executor(args, nthread=args.threads) as executor:
         study = design.run_study(
             args.scene,
@@ -343,23 +341,21 @@ def cmd_design(args: argparse.Namespace) -> int:
             plane_levels=args.plane,
             executor=executor,
             omega_dt=design.OMEGA_DT,
+            sobol=args.sobol,
+            seed=args.seed,
             **overrides,
         )
-        indices = None
-        if args.sobol is not None:
-            indices = sobol.printer_head(args.sobol, seed=args.seed, executor=executor, **overrides)
-    extra = {} if indices is None else {"sobol": indices.summary()}
     if args.output:
-        design.write(study, args.output, extra)
+        design.write(study, args.output)
         design_chart.plot(study, pathlib.Path(args.output) / "design.png")
-        if indices is not None:
-            charts.plot_sobol(indices, pathlib.Path(args.output) / "sobol.png")
+        if study.sobol is not None:
+            design_chart.plot_sobol(study.sobol, pathlib.Path(args.output) / "sobol.png")
     if args.json:
-        _print_json({**design.summary(study), **extra})
+        _print_json(study.to_dict())
     else:
-        cli_text.print_design(design, study, args.output)
-        if indices is not None:
-            cli_text.print_sobol(sobol, indices, args.output)
+        cli_text.print_design(study, args.output)
+        if study.sobol is not None:
+            cli_text.print_sobol(study.sobol, args.output)
     return EXIT_OK
 
 
@@ -407,10 +403,12 @@ def cmd_fit(args: argparse.Namespace) -> int:
             map=args.map,
             free=args.free or None,
             scale=args.scale,
+            time_scale=args.time_scale,
             start=args.start,
             degree=args.degree,
             starts=args.starts,
             executor=executor,
+            show_progress=False if args.json else None,
             **_parse_sets(args.set),
         )
     if args.output:
@@ -566,7 +564,8 @@ def build_parser() -> argparse.ArgumentParser:
     COMMANDS["audit"] = cmd_audit
 
     p = sub.add_parser("design", help="design study: positioning time over a property sweep, ranked sensitivities")
-    p.add_argument("scene", help="scene with a design study: printer_head")
+    declared = ", ".join(name for name, scene in scenes.SCENES.items() if scene.design is not None)
+    p.add_argument("scene", help=f"scene with a design study: {declared}")
     p.add_argument(
         "--levels",
         type=int,
@@ -635,7 +634,9 @@ def build_parser() -> argparse.ArgumentParser:
     fittable = [name for name, scene in scenes.SCENES.items() if scene.fit is not None]
     listed = ", ".join(fittable[:-1]) + " or " + fittable[-1] if len(fittable) > 1 else "".join(fittable)
     p.add_argument("scene", help=listed)
-    p.add_argument("data", metavar="DATA.csv", help="header row; time [s] and <joint>_pos, _vel or _acc")
+    p.add_argument(
+        "data", metavar="DATA.csv", help="header row (',', ';' or tab); time [s] and <joint>_pos, _vel or _acc [SI]"
+    )
     p.add_argument("--scenario", metavar="S", help="the scenario the record shows (default: the scene's fit default)")
     p.add_argument(
         "--map", action="append", default=[], metavar="COLUMN=NAME", help="rename a file column (t=time, x=slider_pos)"
@@ -647,7 +648,18 @@ def build_parser() -> argparse.ArgumentParser:
         "--set", action="append", default=[], metavar="NAME=VALUE", help="fix a parameter, SI units (repeatable)"
     )
     p.add_argument("--start", type=float, metavar="S", help="release time [s]: drop the record before it")
-    p.add_argument("--scale", type=float, default=1.0, metavar="FACTOR", help="SI units per file unit (mm: 0.001)")
+    p.add_argument(
+        "--scale",
+        type=float,
+        metavar="FACTOR",
+        help="SI units per unit of the signal column (mm: 0.001); default: the unit its name states (x_mm, x [mm]), else SI",
+    )
+    p.add_argument(
+        "--time-scale",
+        type=float,
+        metavar="FACTOR",
+        help="seconds per unit of the time column (ms: 0.001); default: the unit its name states (t_ms, t (ms)), else s",
+    )
     p.add_argument("--degree", type=int, metavar="N", help="kinematics: degree 0-3 of the polynomial")
     p.add_argument(
         "--starts",

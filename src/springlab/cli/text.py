@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import pathlib
 from collections.abc import Sequence
-from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -21,9 +20,11 @@ from springlab.scenes.base import Check
 from springlab.studies import tradeoff
 
 if TYPE_CHECKING:  # annotations only: these load mujoco.batch, scipy or sysid, which the commands import lazily
+    from springlab.studies.audit.audit import Audit
     from springlab.studies.design.sobol import SobolStudy
     from springlab.studies.design.study import Study
     from springlab.studies.fit.results import FitResult
+    from springlab.studies.stability import StabilityReport
     from springlab.studies.sweeps import Sweep
 
 
@@ -167,92 +168,95 @@ def print_tradeoff(result: tradeoff.Tradeoff, output: str | None) -> None:
         print(f"  wrote {pathlib.Path(output) / 'tradeoff.json'} and tradeoff.png")
 
 
-def print_stability(report: dict, output: str | None) -> None:
+def print_audit(result: Audit, output: str | None) -> None:
+    """`springlab audit`: the audit's message (modes, your setting's margin and error, the cheapest setting
+    meeting tol) and what was written."""
+    print(result.message)
+    if output:
+        print(f"wrote {pathlib.Path(output) / 'audit.json'} and audit.png")
+
+
+def print_stability(report: StabilityReport, output: str | None) -> None:
     """`springlab stability`: boundaries omega*dt [-] against theory, the extremes table, undamped energy."""
     print("stability boundary omega*dt (measured by a growth test vs theory)")
     print(f"  {'integrator':<13}{'zeta':>7}{'measured':>12}{'theory':>12}{'rel diff':>10}")
-    for r in report["boundaries"]:
+    for b in report.boundaries:
         print(
-            f"  {r['integrator']:<13}{r['zeta']:>7g}{r['measured_omega_dt']:>12.5g}{r['theory_omega_dt']:>12.5g}"
-            f"{r['relative_difference']:>10.1e}"
+            f"  {b.integrator:<13}{b.zeta:>7g}{b.measured_omega_dt:>12.5g}{b.theory_omega_dt:>12.5g}"
+            f"{b.relative_difference:>10.1e}"
         )
-    print(f"extremes (accurate: max rel error <= {report['accuracy_threshold']:g})")
+    print(f"extremes (accurate: max rel error <= {report.accuracy_threshold:g})")
     print(
         f"  {'case':<15}{'integrator':<13}{'x limit':>8}{'omega*dt':>10}{'steps':>8}  {'outcome':<11}"
         f"{'error':>9}  advice"
     )
-    for r in report["extremes"]:
-        error = "-" if r["max_rel_error"] is None else f"{r['max_rel_error']:.1e}"
-        if r["fraction"] is None:
+    for r in report.extremes:
+        error = "-" if r.max_rel_error is None else f"{r.max_rel_error:.1e}"
+        if r.fraction is None:
             fraction = "advised"
         else:
-            fraction = f"{r['fraction']:g}" + ("*" if r["limit_of"] != r["integrator"] else "")
+            fraction = f"{r.fraction:g}" + ("*" if r.limit_of != r.integrator else "")
         print(
-            f"  {r['case']:<15}{r['integrator']:<13}{fraction:>8}{r['omega_dt']:>10.4g}{r['steps']:>8}"
-            f"  {r['outcome']:<11}{error:>9}  {r['advice']}"
+            f"  {r.case:<15}{r.integrator:<13}{fraction:>8}{r.omega_dt:>10.4g}{r.steps:>8}"
+            f"  {r.outcome:<11}{error:>9}  {r.advice}"
         )
     print("  * discrete has no stability limit: fractions of the euler limit")
     print("undamped energy E/E0 vs the exact step-map formulas")
-    for r in report["energy"]:
+    for e in report.energy:
         print(
-            f"  {r['integrator']:<13} omega*dt {r['omega_dt']:g}, {r['steps']} steps: E/E0 in"
-            f" [{r['min_ratio']:.6g}, {r['max_ratio']:.6g}], final {r['final_ratio']:.6g};"
-            f" {r['formula']}: max deviation {r['max_relative_deviation']:.1e}"
+            f"  {e.integrator:<13} omega*dt {e.omega_dt:g}, {e.steps} steps: E/E0 in"
+            f" [{e.min_ratio:.6g}, {e.max_ratio:.6g}], final {e.final_ratio:.6g};"
+            f" {e.formula}: max deviation {e.max_relative_deviation:.1e}"
         )
-    print(f"done in {report['wall_time_s']:.1f} s")
+    print(f"done in {report.wall_time_s:.1f} s")
     if output:
         print(f"  wrote {pathlib.Path(output) / 'stability.json'}, stability.png and energy.png")
 
 
-def print_design(design: ModuleType, study: Study, output: str | None) -> None:
-    """`springlab design`: the study's size and speed, ranked elasticities [-] and the answer.
-
-    `design` is the springlab.studies.design.study module, passed in because the command imports it lazily.
-    """
-    s = design.summary(study)
+def print_design(study: Study, output: str | None) -> None:
+    """`springlab design`: the study's size and speed, ranked elasticities [-] and the answer."""
+    where = f" on {study.nthread} threads" if study.executor == "local" else f" on {study.executor}"
     print(
-        f"{s['scene']} design study: {s['configurations']} configurations ({s['levels']} levels of "
-        f"{', '.join(design.PROPERTIES)}) in {s['wall_time_s']:.1f} s, {s['configurations_per_s']:.0f}/s"
-        + (f" on {s['nthread']} threads" if s["executor"] == "local" else f" on {s['executor']}")
+        f"{study.scene} design study: {study.size} configurations ({study.levels} levels of "
+        f"{', '.join(study.design.names)}) in {study.wall_time_s:.1f} s, {study.size / study.wall_time_s:.0f}/s" + where
     )
     print(f"  {'property':<16}{'default':>11}{'range':>22}{'elasticity':>12}{'local':>9}")
-    for name in s["ranking"]:
-        grid = s["properties"][name]["grid"]
-        unit = design.PROPERTIES[name]
+    for name in study.ranking:
+        grid = study.grids[name]
+        unit = study.design.get(name).unit
+        default = float(study.values[name][study.default_index])
         print(
-            f"  {name:<16}{s['default']['properties'][name]:>11.4g}{f'{grid[0]:.3g}..{grid[-1]:.3g} {unit}':>22}"
-            f"{s['elasticities'][name]:>+12.3f}{s['local_elasticities'][name]:>+9.3f}"
+            f"  {name:<16}{default:>11.4g}{f'{grid[0]:.3g}..{grid[-1]:.3g} {unit}':>22}"
+            f"{study.elasticities[name]:>+12.3f}{study.local_elasticities[name]:>+9.3f}"
         )
-    ratio = s["estimate_over_simulation"]
+    finite = np.isfinite(study.positioning_time_s)
+    ratio = study.estimate_s[finite] / study.positioning_time_s[finite]
     print(
-        f"  log-log fit R^2 {s['regression_r2']:.3f}; analytic estimate / simulation: median"
-        f" {ratio['median']:.3f}, 5-95% {ratio['p05']:.3f}-{ratio['p95']:.3f}"
+        f"  log-log fit R^2 {study.regression_r2:.3f}; analytic estimate / simulation: median"
+        f" {float(np.median(ratio)):.3f}, 5-95% {float(np.percentile(ratio, 5)):.3f}-{float(np.percentile(ratio, 95)):.3f}"
     )
-    print(design.answer(study))
+    print(study.answer)
     if output:
         print(f"  wrote {pathlib.Path(output) / 'design.json'}, configurations.csv and design.png")
 
 
-def print_sobol(sobol: ModuleType, indices: SobolStudy, output: str | None) -> None:
-    """`springlab design --sobol`: first-order and total Sobol indices [-] with their 95% half-widths.
-
-    `sobol` is the springlab.studies.design.sobol module, passed in because the command imports it lazily.
-    """
-    s = indices.summary()
+def print_sobol(indices: SobolStudy, output: str | None) -> None:
+    """`springlab design --sobol`: first-order and total Sobol indices [-] with their 95% half-widths."""
     print(
-        f"Sobol indices of positioning time: {s['runs']} runs in {s['wall_time_s']:.1f} s on {s['executor']}"
-        f" ({s['runs_per_s']:.0f}/s), {s['unsettled']} unsettled"
+        f"Sobol indices of {indices.merit}: {indices.runs} runs in {indices.wall_time_s:.1f} s on {indices.executor}"
+        f" ({indices.runs / indices.wall_time_s:.0f}/s), {indices.unsettled} unsettled"
     )
     print(f"  {'property':<16}{'range':>24}{'S1':>14}{'ST':>14}{'ST-S1':>8}{'elasticity':>12}")
-    for name in s["ranking"]:
-        low, high = s["parameters"][name]["range"]
-        unit = sobol.PARAMETERS[name]
+    s1, s1_conf, st, st_conf = (indices.indices[key] for key in ("S1", "S1_conf", "ST", "ST_conf"))
+    for name in indices.ranking:
+        low, high = indices.ranges[name]
+        unit = indices.units[name]
         print(
-            f"  {name:<16}{f'{low:.3g}..{high:.3g} {unit}':>24}{s['S1'][name]:>8.3f}+-{s['S1_conf'][name]:<4.2f}"
-            f"{s['ST'][name]:>8.3f}+-{s['ST_conf'][name]:<4.2f}{s['interactions'][name]:>8.3f}"
-            f"{s['elasticities'][name]:>+12.3f}"
+            f"  {name:<16}{f'{low:.3g}..{high:.3g} {unit}':>24}{s1[name]:>8.3f}+-{s1_conf[name]:<4.2f}"
+            f"{st[name]:>8.3f}+-{st_conf[name]:<4.2f}{indices.interactions[name]:>8.3f}"
+            f"{indices.elasticities[name]:>+12.3f}"
         )
-    print(sobol.answer(indices))
+    print(indices.answer)
     if output:
         print(f"  wrote {pathlib.Path(output) / 'sobol.png'} and the sobol entry of design.json")
 
@@ -287,7 +291,7 @@ def print_fit(result: FitResult, output: str | None) -> None:
         f" {record.time[0]:g} to {record.time[-1]:g} s): fitted {', '.join(result.free)}"
     )
     for note in record.notes:
-        print(f"  data: {note}")
+        print(f"  {note}" if note.startswith("warning: ") else f"  data: {note}")
     if result.release:
         print(f"  release: {result.release['reason']}")
     for name, q in {**result.estimates, **result.derived}.items():

@@ -247,7 +247,7 @@ def audit_step(state: DemoState) -> list[Artifact]:
 
     result = audit("car")
     charts_audit.write_audit(result, state.out / "audit")
-    state.timings.append(("audit of the car model (springlab audit)", result.timings["total_s"]))
+    state.timings.append(("audit of the car model (springlab audit)", result.timings.total_s))
     return [
         Artifact(
             "audit/audit.png",

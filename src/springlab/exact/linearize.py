@@ -81,7 +81,7 @@ class OperatingPoint:
             label,
         )
 
-    def as_json(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, Any]:
         """{"label", "qpos", "qvel", "act", "ctrl"} as plain lists."""
         return {
             "label": self.label,
@@ -166,14 +166,14 @@ class Mode:
         """|lambda| [rad/s]: what a timestep must resolve."""
         return abs(self.eigenvalue)
 
-    def as_json(self) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, Any]:
         """{"frequency_hz", "damping_ratio", "physically_unstable", "kind", "eigenvalue": [re, im] [1/s]}."""
         return {
-            "frequency_hz": self.frequency_hz,
-            "damping_ratio": self.damping_ratio,
-            "physically_unstable": self.physically_unstable,
+            "frequency_hz": float(self.frequency_hz),
+            "damping_ratio": None if self.damping_ratio is None else float(self.damping_ratio),
+            "physically_unstable": bool(self.physically_unstable),
             "kind": self.kind,
-            "eigenvalue": [self.eigenvalue.real, self.eigenvalue.imag],
+            "eigenvalue": [float(self.eigenvalue.real), float(self.eigenvalue.imag)],
         }
 
 

@@ -27,7 +27,7 @@ def plot_audit(result: Audit, path: str | pathlib.Path) -> pathlib.Path:
     _cost_panel(result, cost_ax)
     own = result.own
     name = pathlib.Path(result.model).name if result.model.endswith((".xml", ".urdf")) else result.model
-    fig.suptitle(f"audit of {name}: own setting {own['integrator']} at {own['dt']:g} s, tol {result.tol:g}")
+    fig.suptitle(f"audit of {name}: own setting {own.integrator} at {own.dt:g} s, tol {result.tol:g}")
     return _save(fig, path)
 
 
@@ -48,20 +48,20 @@ def _modes_panel(result: Audit, ax) -> None:
 
 
 def _limits_panel(result: Audit, ax) -> None:
-    names = list(result.limits)
-    own_dt = result.own["dt"]
+    names = list(result.stability)
+    own_dt = result.own.dt
     values = []
     for index, name in enumerate(names):
-        limit = result.limits[name]
-        measured = limit.measured_s
+        limit = result.stability[name]
+        measured = limit.limit_dt_measured_s
         if measured is None:
             ax.annotate("no limit", (index, own_dt), ha="center", va="bottom", fontsize=8)
             values.append(own_dt)
             continue
         values.append(measured)
         ax.bar(index, measured, color=_COLORS.get(name, "grey"), hatch=None if limit.confirmed else "//", alpha=0.8)
-        if limit.predicted_s is not None:
-            ax.plot([index - 0.35, index + 0.35], [limit.predicted_s] * 2, "k-", lw=2)
+        if limit.limit_dt_predicted_s is not None:
+            ax.plot([index - 0.35, index + 0.35], [limit.limit_dt_predicted_s] * 2, "k-", lw=2)
         ax.annotate(f"{measured / own_dt:.3g}x", (index, measured), ha="center", va="bottom", fontsize=8)
     ax.axhline(own_dt, color="k", ls="--", lw=1, label=f"own dt = {own_dt:g} s")
     ax.set_yscale("log")
@@ -98,18 +98,16 @@ def _cost_panel(result: Audit, ax) -> None:
         ax.loglog([wall for wall, _ in front], [max(error, floor) for _, error in front], "k-", lw=2, alpha=0.4)
     ax.axhline(result.tol, color="k", ls=":", lw=1, label=f"tol {result.tol:g}")
     own = result.own
-    if own["error"] is not None:
-        where = (own["wall_time_s"], max(own["error"], floor))
+    if own.error is not None:
+        where = (own.wall_time_s, max(own.error, floor))
         ax.scatter(*where, marker="*", s=200, color="gold", edgecolors="k", zorder=5)
         ax.annotate(" own setting", where, fontsize=8)
     pick = result.recommendation
-    if pick["integrator"] is not None:
-        ax.scatter(pick["wall_time_s"], max(pick["error"], floor), s=200, facecolors="none", edgecolors="k", zorder=5)
-        ax.annotate(
-            f" {pick['integrator']} {pick['dt']:.3g} s", (pick["wall_time_s"], max(pick["error"], floor)), fontsize=8
-        )
+    if pick.integrator is not None and pick.dt is not None and pick.error is not None:
+        ax.scatter(pick.wall_time_s, max(pick.error, floor), s=200, facecolors="none", edgecolors="k", zorder=5)
+        ax.annotate(f" {pick.integrator} {pick.dt:.3g} s", (pick.wall_time_s, max(pick.error, floor)), fontsize=8)
     ax.set_xlabel("wall time [s] (steps x measured cost per step, one thread)")
-    ax.set_ylabel(f"error vs {result.reference['kind']} [-]")
+    ax.set_ylabel(f"error vs {result.reference.kind} [-]")
     ax.set_title(f"error vs cost over {result.duration:g} s\nblack: Pareto front", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
@@ -117,7 +115,7 @@ def _cost_panel(result: Audit, ax) -> None:
 
 def write_audit(result: Audit, directory: str | pathlib.Path) -> list[pathlib.Path]:
     """Write DIR/audit.json and DIR/audit.png; both appear, or neither does."""
-    written = files.write_text_files(directory, {"audit.json": files.dumps(result.as_json()) + "\n"})
+    written = files.write_text_files(directory, {"audit.json": files.dumps(result.to_dict()) + "\n"})
     try:
         written.append(plot_audit(result, pathlib.Path(directory) / "audit.png"))
     except BaseException:

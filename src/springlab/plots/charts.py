@@ -1,7 +1,7 @@
 """Charts of the studies: the speed-accuracy trade, the stability map and the energy of each integrator.
 
-They read results (springlab.studies.tradeoff, springlab.studies.stability) and never
-simulate; each figure is a bare matplotlib Figure (no pyplot), saved atomically.
+They read results (springlab.studies.tradeoff's Tradeoff, springlab.studies.stability's
+StabilityReport, AmplificationMap and EnergyHistories) and never simulate; each figure is a bare matplotlib Figure (no pyplot), saved atomically.
 """
 
 from __future__ import annotations
@@ -9,14 +9,13 @@ from __future__ import annotations
 import math
 import pathlib
 from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
 
 from springlab import files
 from springlab.exact.limits import stability_limit
 from springlab.runs import compare
-from springlab.studies.stability import EULER_FAMILY, energy_formula, report_json
+from springlab.studies.stability import AmplificationMap, EnergyHistories, StabilityReport
 from springlab.studies.tradeoff import Tradeoff
 
 _COLORS = {
@@ -125,7 +124,7 @@ def estimate_range_line(integrator: str, zetas: Sequence[float] | np.ndarray) ->
     return out
 
 
-def plot_stability(report: dict[str, Any], amplification: dict[str, Any], path: str | pathlib.Path) -> pathlib.Path:
+def plot_stability(report: StabilityReport, amplification: AmplificationMap, path: str | pathlib.Path) -> pathlib.Path:
     """Per integrator: measured per-step amplification over (zeta, omega*dt), theory boundary, measured boundary.
 
     Parameters
@@ -139,15 +138,15 @@ def plot_stability(report: dict[str, Any], amplification: dict[str, Any], path: 
     """
     from matplotlib.colors import TwoSlopeNorm
 
-    zetas, omega_dts = amplification["zetas"], amplification["omega_dts"]
-    names = list(amplification["radius"])
+    zetas, omega_dts = amplification.zetas, amplification.omega_dts
+    names = list(amplification.radius)
     fig, axes = _figure(len(names), (3.4 * len(names) + 1.5, 4.4), sharey=True, layout="constrained")
     axes = np.atleast_1d(axes)
     norm = TwoSlopeNorm(vmin=-3.0, vcenter=0.0, vmax=3.0)
     theory_zetas = np.concatenate([[0.0], np.geomspace(1e-2, 100.0, 200)])
     image = None
     for axis, name in zip(axes, names):
-        log_radius = np.log10(np.clip(amplification["radius"][name], 1e-300, None))
+        log_radius = np.log10(np.clip(amplification.radius[name], 1e-300, None))
         image = axis.pcolormesh(
             zetas, omega_dts, np.clip(log_radius, -3, 3).T, cmap="RdBu_r", norm=norm, shading="nearest"
         )
@@ -159,10 +158,10 @@ def plot_stability(report: dict[str, Any], amplification: dict[str, Any], path: 
         # below this line a run of RANGE_PERIODS periods is inside the range of its error estimate (springlab.runs.compare)
         range_zetas = theory_zetas[::5]
         axis.plot(range_zetas, estimate_range_line(name, range_zetas), color="black", lw=1.0, ls="--", label=_RANGE)
-        rows = [r for r in report["boundaries"] if r["integrator"] == name and math.isfinite(r["measured_omega_dt"])]
+        rows = [r for r in report.boundaries if r.integrator == name and math.isfinite(r.measured_omega_dt)]
         axis.plot(
-            [r["zeta"] for r in rows],
-            [r["measured_omega_dt"] for r in rows],
+            [r.zeta for r in rows],
+            [r.measured_omega_dt for r in rows],
             "o",
             mfc="none",
             color="gold",
@@ -181,23 +180,27 @@ def plot_stability(report: dict[str, Any], amplification: dict[str, Any], path: 
     return _save(fig, path)
 
 
-def plot_energy(series: dict[str, Any], path: str | pathlib.Path) -> pathlib.Path:
-    """E/E0 over time of every integrator on the undamped slider, each against its exact formula."""
+def plot_energy(series: EnergyHistories, path: str | pathlib.Path) -> pathlib.Path:
+    """E/E0 over time of every integrator on the undamped oscillator, each against its exact formula.
+
+    Three panels: the integrators that keep an invariant (`series.bounds`, the euler family) between
+    their bounds, and rk4 and discrete against their per-step formulas (`series.exact`).
+    """
     fig, (euler, rk4, discrete) = _figure(3, (15, 4.4))
-    t = series["time_periods"]
-    y = series["omega_dt"]
-    n = np.arange(len(t))
+    t = series.time_periods
+    y = series.omega_dt
     first = t <= 3.0
-    for name in EULER_FAMILY:
-        euler.plot(t[first], series["ratio"][name][first] - 1, _STYLES[name], color=_COLORS[name], lw=1.2, label=name)
-    euler.axhline(1 / (1 - y / 2) - 1, color="black", lw=0.8, ls="--", label="1/(1 - y/2) - 1 (sharp bound)")
-    euler.axhline(1 / (1 + y / 2) - 1, color="black", lw=0.8, ls=":", label="1/(1 + y/2) - 1")
+    for name in series.bounds:
+        euler.plot(t[first], series.ratio[name][first] - 1, _STYLES[name], color=_COLORS[name], lw=1.2, label=name)
+    low, high = next(iter(series.bounds.values()))  # one map, one pair of bounds
+    euler.axhline(high - 1, color="black", lw=0.8, ls="--", label="1/(1 - y/2) - 1 (sharp bound)")
+    euler.axhline(low - 1, color="black", lw=0.8, ls=":", label="1/(1 + y/2) - 1")
     euler.set_title("euler family: bounded oscillation (first 3 periods)")
     stride = max(1, len(t) // 4000)
-    rk4.plot(t[::stride], series["ratio"]["rk4"][::stride] - 1, color=_COLORS["rk4"], lw=2.5, alpha=0.6, label="rk4")
+    rk4.plot(t[::stride], series.ratio["rk4"][::stride] - 1, color=_COLORS["rk4"], lw=2.5, alpha=0.6, label="rk4")
     rk4.plot(
         t,
-        energy_formula("rk4", y, n)["ratio"] - 1,
+        series.exact["rk4"] - 1,
         color="black",
         lw=0.8,
         ls="--",
@@ -206,15 +209,13 @@ def plot_energy(series: dict[str, Any], path: str | pathlib.Path) -> pathlib.Pat
     rk4.set_title("rk4: slow decay")
     discrete.semilogy(
         t[::stride],
-        series["ratio"]["discrete"][::stride],
+        series.ratio["discrete"][::stride],
         color=_COLORS["discrete"],
         lw=2.5,
         alpha=0.6,
         label="discrete",
     )
-    discrete.semilogy(
-        t, energy_formula("discrete", y, n)["ratio"], color="black", lw=0.8, ls="--", label="(1 + y^2)^-n"
-    )
+    discrete.semilogy(t, series.exact["discrete"], color="black", lw=0.8, ls="--", label="(1 + y^2)^-n")
     discrete.set_title("discrete: decay by 1/(1 + y^2) per step")
     euler.set_ylabel("E/E0 - 1 [-]")
     rk4.set_ylabel("E/E0 - 1 [-]")
@@ -223,7 +224,9 @@ def plot_energy(series: dict[str, Any], path: str | pathlib.Path) -> pathlib.Pat
         axis.set_xlabel("time [periods]")
         axis.grid(True, alpha=0.3)
         axis.legend(fontsize=8)
-    fig.suptitle(f"undamped slider, omega*dt = y = {y:g}: energy from qpos/qvel vs each step map's exact formula")
+    fig.suptitle(
+        f"undamped {series.scene}, omega*dt = y = {y:g}: energy from qpos/qvel vs each step map's exact formula"
+    )
     fig.tight_layout()
     return _save(fig, path)
 
@@ -236,7 +239,7 @@ def write_tradeoff(result: Tradeoff, directory: str | pathlib.Path) -> list[path
 
 
 def write_stability(
-    report: dict[str, Any], amplification: dict[str, Any], directory: str | pathlib.Path
+    report: StabilityReport, amplification: AmplificationMap, directory: str | pathlib.Path
 ) -> list[pathlib.Path]:
     """Write DIR/stability.json, DIR/stability.png (map) and DIR/energy.png.
 
@@ -249,50 +252,7 @@ def write_stability(
     directory
         the output folder.
     """
-    written = files.write_text_files(directory, {"stability.json": files.dumps(report_json(report)) + "\n"})
+    written = files.write_text_files(directory, {"stability.json": files.dumps(report.to_dict()) + "\n"})
     written.append(plot_stability(report, amplification, pathlib.Path(directory) / "stability.png"))
-    written.append(plot_energy(report["_energy_series"], pathlib.Path(directory) / "energy.png"))
+    written.append(plot_energy(report.energy_histories, pathlib.Path(directory) / "energy.png"))
     return written
-
-
-def plot_sobol(study: Any, path: str | pathlib.Path) -> pathlib.Path:
-    """Two panels of a springlab.studies.design.sobol.SobolStudy: first-order and total Sobol indices with their
-    confidence intervals per property (total minus first-order is the interactions' share), and the
-    elasticities |d ln T / d ln p| from the same runs, for the ranking they would give."""
-    fig, (left, right) = _figure(2, (12, 4.8), layout="constrained")
-    names = study.ranking()
-    x = np.arange(len(names))
-    s1, st = study.indices["S1"], study.indices["ST"]
-    left.bar(
-        x - 0.2,
-        [s1[n] for n in names],
-        0.4,
-        yerr=[study.indices["S1_conf"][n] for n in names],
-        capsize=3,
-        label="first order S1 (alone)",
-        color="#1f77b4",
-    )
-    left.bar(
-        x + 0.2,
-        [st[n] for n in names],
-        0.4,
-        yerr=[study.indices["ST_conf"][n] for n in names],
-        capsize=3,
-        label="total ST (alone + interactions)",
-        color="#d62728",
-    )
-    left.axhline(0.0, color="k", linewidth=0.6)
-    left.set_xticks(x, [n.replace("_", "\n") for n in names])
-    left.set_ylabel("share of Var(positioning time) [-]")
-    left.set_title(
-        f"Sobol indices, {study.runs} runs ({study.base_samples} x 7), {int(round(100 * 0.95))}% bootstrap intervals;"
-        f"\nsum S1 = {sum(s1.values()):.2f}",
-        fontsize=10,
-    )
-    left.legend(fontsize=8)
-    elastic = [abs(study.elasticities[n]) for n in names]
-    right.bar(x, elastic, 0.5, color="#7f7f7f")
-    right.set_xticks(x, [n.replace("_", "\n") for n in names])
-    right.set_ylabel("|elasticity d ln T / d ln p| [-]")
-    right.set_title(f"elasticities from the same runs (log-log fit, R^2 = {study.regression_r2:.2f})", fontsize=10)
-    return _save(fig, path)

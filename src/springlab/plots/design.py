@@ -1,7 +1,8 @@
-"""design.png: the printer-head design study's chart (positioning time over the two most
-influential properties, and the analytic estimates against every simulated time).
+"""The design study's charts: design.png (positioning time over the two most influential properties,
+and the analytic estimates against every simulated time) and sobol.png (the Sobol indices).
 
-Reads a springlab.studies.design.study.Study (never re-simulates).  Times are drawn in [ms].
+Reads a springlab.studies.design.Study or SobolStudy (never re-simulates); the axis labels are the
+scene's declared ones. Times are drawn in [ms].
 """
 
 from __future__ import annotations
@@ -11,14 +12,8 @@ import pathlib
 import numpy as np
 
 from springlab import files
-from springlab.studies.design.study import Study, default_properties
-
-_LABELS = {
-    "belt_stiffness": "belt stiffness k [N/m]",
-    "carriage_mass": "carriage mass m_c [kg]",
-    "damping_ratio": "belt damping ratio zeta [-]",
-    "drive_force": "drive force F [N]",
-}
+from springlab.studies.design.sobol import CONFIDENCE, SobolStudy
+from springlab.studies.design.study import Study
 
 
 def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
@@ -29,7 +24,7 @@ def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
     import matplotlib.ticker
     from matplotlib.figure import Figure  # no pyplot: a caller's backend and figures stay untouched
 
-    first, second = study.ranking()[:2]
+    first, second = study.ranking[:2]
     axes_order = list(study.grids)
     centre = study.levels // 2
     estimate_plane = None
@@ -58,7 +53,7 @@ def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
         left.clabel(contours, fmt="%.0f ms", fontsize=8)
         if estimate_plane is not None:
             left.contour(x, y, estimate_plane, levels=levels, colors="white", linewidths=0.6, linestyles="dashed")
-    default = default_properties(study.base)
+    default = study.defaults
     left.plot(default[second], default[first], "w*", markersize=14, markeredgecolor="k", label="default")
     if estimate_plane is not None:
         left.plot([], [], "w--", linewidth=0.6, label="analytic estimate (contours)")
@@ -68,18 +63,17 @@ def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
         axis.set_major_locator(matplotlib.ticker.LogLocator(subs=(1.0, 2.0, 5.0)))
         axis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda value, _: f"{value:g}"))
         axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
-    left.set_xlabel(_LABELS[second])
-    left.set_ylabel(_LABELS[first])
-    elasticity = study.elasticities()
+    left.set_xlabel(study.design.get(second).label)
+    left.set_ylabel(study.design.get(first).label)
+    elasticity = study.elasticities
     others = [p for p in axes_order if p not in (first, second)]
     left.set_title(
-        f"positioning time [ms], {study.base['move_distance'] * 1e3:.4g} mm to "
-        f"+-{study.base['positioning_band'] * 1e6:.3g} um\n" + ", ".join(f"{p} = {default[p]:.3g}" for p in others),
+        f"{study.design.merit} [ms], {study.setting}\n" + ", ".join(f"{p} = {default[p]:.3g}" for p in others),
         fontsize=10,
     )
     legend = left.legend(loc="upper right", fontsize=8, facecolor="0.3", labelcolor="white")
     legend.get_frame().set_alpha(0.6)
-    bar = fig.colorbar(mesh, ax=left, label="positioning time [ms]")
+    bar = fig.colorbar(mesh, ax=left, label=f"{study.design.merit} [ms]")
     bar.ax.yaxis.set_major_formatter(matplotlib.ticker.FormatStrFormatter("%.0f"))
     bar.ax.yaxis.set_minor_formatter(matplotlib.ticker.FormatStrFormatter("%.0f"))
 
@@ -91,19 +85,69 @@ def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
     )
     span = [min(sim.min(), est.min()) * 0.9, max(sim.max(), est.max()) * 1.1]
     right.plot(span, span, "k-", linewidth=0.8, label="equal")
-    right.set_xlabel("simulated positioning time [ms] (MuJoCo, batched)")
-    right.set_ylabel("estimated positioning time [ms]")
+    right.set_xlabel(f"simulated {study.design.merit} [ms] (MuJoCo, batched)")
+    right.set_ylabel(f"estimated {study.design.merit} [ms]")
     for axis in (right.xaxis, right.yaxis):  # plain numbers at 1, 2, 5 x 10^n
         axis.set_major_locator(matplotlib.ticker.LogLocator(subs=(1.0, 2.0, 5.0)))
         axis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda value, _: f"{value:g}"))
         axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     right.set_title(
         f"{study.size} configurations; elasticities d ln T / d ln p:\n"
-        + ", ".join(f"{p.split('_')[0]} {elasticity[p]:+.2f}" for p in study.ranking()),
+        + ", ".join(f"{p.split('_')[0]} {elasticity[p]:+.2f}" for p in study.ranking),
         fontsize=10,
     )
     right.legend(fontsize=8)
     path = pathlib.Path(path)
+    with files.atomic_path(path) as temporary:
+        fig.savefig(temporary, dpi=110, format="png")
+    return path
+
+
+def plot_sobol(study: SobolStudy, path: str | pathlib.Path) -> pathlib.Path:
+    """PNG, two panels: first-order and total Sobol indices with their confidence intervals per property
+    (total minus first-order is the interactions' share), and the elasticities |d ln T / d ln p| from the
+    same runs, for the ranking they would give."""
+    from matplotlib.figure import Figure  # no pyplot: a caller's backend and figures stay untouched
+
+    fig = Figure(figsize=(12, 4.8), layout="constrained")
+    left, right = fig.subplots(1, 2)
+    names = list(study.ranking)
+    x = np.arange(len(names))
+    s1, st = study.indices["S1"], study.indices["ST"]
+    left.bar(
+        x - 0.2,
+        [s1[n] for n in names],
+        0.4,
+        yerr=[study.indices["S1_conf"][n] for n in names],
+        capsize=3,
+        label="first order S1 (alone)",
+        color="#1f77b4",
+    )
+    left.bar(
+        x + 0.2,
+        [st[n] for n in names],
+        0.4,
+        yerr=[study.indices["ST_conf"][n] for n in names],
+        capsize=3,
+        label="total ST (alone + interactions)",
+        color="#d62728",
+    )
+    left.axhline(0.0, color="k", linewidth=0.6)
+    left.set_xticks(x, [n.replace("_", "\n") for n in names])
+    left.set_ylabel(f"share of Var({study.merit}) [-]")
+    left.set_title(
+        f"Sobol indices, {study.runs} runs ({study.base_samples} x {len(names) + 2}),"
+        f" {int(round(100 * CONFIDENCE))}% bootstrap intervals;\nsum S1 = {sum(s1.values()):.2f}",
+        fontsize=10,
+    )
+    left.legend(fontsize=8)
+    elastic = [abs(study.elasticities[n]) for n in names]
+    right.bar(x, elastic, 0.5, color="#7f7f7f")
+    right.set_xticks(x, [n.replace("_", "\n") for n in names])
+    right.set_ylabel("|elasticity d ln T / d ln p| [-]")
+    right.set_title(f"elasticities from the same runs (log-log fit, R^2 = {study.regression_r2:.2f})", fontsize=10)
+    path = pathlib.Path(path)
+    files.prepare_directory(path.parent)
     with files.atomic_path(path) as temporary:
         fig.savefig(temporary, dpi=110, format="png")
     return path

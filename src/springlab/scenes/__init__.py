@@ -2,8 +2,8 @@
 
 Scenes are discovered, so a new scene is a new module (`scenes/<name>.py`) or folder
 (`scenes/<name>/`, its `__init__` handing on `SCENE`) with a module-level `SCENE` and a
-models/<name>.xml; nothing else needs editing. `base` (what every scene provides) and
-`checks` (scalar claims) and `capabilities` (what a scene declares for the studies) are the
+models/<name>.xml; nothing else needs editing. `base` (what every scene provides),
+`capabilities` (what a scene declares for the studies) and `checks` (scalar claims) are the
 scenes' shared machinery, not scenes.
 """
 

@@ -30,7 +30,7 @@ from springlab.exact.limits import stability_limit
 from springlab.sim import model_files
 from springlab.sim.simulate import Setup, Trajectory, quiet_mujoco
 
-from .capabilities import FitSpec
+from .capabilities import DesignSpec, FitSpec, OscillatorSpec
 
 #: smallest body mass [kg] and principal inertia [kg m^2] MuJoCo compiles: its mjMINVAL
 #: (1e-15); a moving body below it fails `MjSpec.compile` ("must be larger than mjMINVAL")
@@ -278,7 +278,11 @@ class Scene:
        joint damping), `phase_field`/`equilibria`/`separatrices` (one-joint phase planes),
        `joint_columns` (joints that only some scenarios have).
     10. Capabilities the studies read (springlab.scenes.capabilities): `fit`, how `springlab fit`
-       identifies the scene from a record (an `OscillatorFit` or a `PolynomialFit`; None: it cannot).
+       identifies the scene from a record (an `OscillatorFit` or a `PolynomialFit`; None: it cannot);
+       `design`, the design question the scene answers (`DesignSpec`: swept properties, fixed ones,
+       the figure of merit and the hooks that simulate and estimate it; springlab.studies.design).
+    11. Optionally, `oscillator` (springlab.scenes.capabilities.OscillatorSpec): the scene is the
+       textbook's one-mode mass-spring-damper, the unit oscillator of `springlab stability`.
 
     The module exposes the instance as `SCENE`; springlab.scenes discovers it. Tests check each
     claim against a reference built in the test (closed form, expm, scipy's DOP853 at tight
@@ -304,6 +308,11 @@ class Scene:
     questions: dict[str, tuple[str, str]] = {}
     #: how `springlab fit` identifies the scene from a recorded signal (None: it cannot be fitted)
     fit: FitSpec | None = None
+    #: the scene is the textbook's one-mode mass-spring-damper: its parameter, scenario and joint names
+    #: (None: it is not one)
+    oscillator: OscillatorSpec | None = None
+    #: the design question the scene answers (None: none; springlab.studies.design reads it)
+    design: DesignSpec | None = None
 
     def question_and_answer(self, scenario: str, quantities: dict, parameters: dict) -> tuple[str, str] | None:
         """(question, answer sentence) of a scenario's run, or None where the scene states none."""

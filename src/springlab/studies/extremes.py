@@ -1,9 +1,14 @@
-"""Sliders at the extremes: stiff, light, undamped-long and hugely overdamped, near each stability limit.
+"""The one-mode oscillator at the extremes: stiff, light, undamped-long and hugely overdamped, near each stability limit.
+
+The oscillator is the scene that declares itself the textbook's mass-spring-damper
+(`Scene.oscillator`, springlab.scenes.capabilities.OscillatorSpec; `oscillator_scene`): the
+studies set its parameters by the names it declares and never name it.
 
 `extremes_table` runs every case x integrator at 0.5x, 0.99x and 1.01x its
 stability limit, classifies each run accurate / inaccurate / diverged, and
 says what to use instead: the cheapest setting predicted (from MuJoCo's
 measured one-step map) to hold the accuracy threshold, run in full to verify.
+Each row is an `ExtremeRun`.
 """
 
 from __future__ import annotations
@@ -19,12 +24,13 @@ import mujoco
 import numpy as np
 
 from springlab import scenes
-from springlab.errors import DivergedError
+from springlab.errors import DivergedError, SpringlabError
 from springlab.exact.limits import stability_limit
 from springlab.runs.run import evaluate
 from springlab.scenes.base import Scenario, Scene
+from springlab.scenes.capabilities import OscillatorSpec
 from springlab.sim.batch import Job, run_batched, time_run
-from springlab.sim.simulate import INTEGRATORS, quiet_mujoco
+from springlab.sim.simulate import INTEGRATORS, Trajectory, quiet_mujoco
 
 from .tradeoff import round_down
 
@@ -50,7 +56,7 @@ _CALIBRATION_STEPS = 2000
 
 @dataclasses.dataclass(frozen=True)
 class ExtremeCase:
-    """A slider at an extreme: mass [kg], stiffness [N/m], damping ratio [-], released from x0 [m] at rest.
+    """The oscillator at an extreme: mass [kg], stiffness [N/m], damping ratio [-], released from x0 [m] at rest.
 
     duration_periods: simulated time in natural periods 2 pi / omega, or None to use
     `slow_time_constants` time constants of the slow root (overdamped cases). The
@@ -168,13 +174,76 @@ FULL_EXTREME_CASES = EXTREME_CASES + (
 )
 
 
-def _case_model(case: ExtremeCase) -> tuple[mujoco.MjModel, Scene, Scenario, dict[str, float]]:
-    scene = scenes.get("slider")
-    chosen = scene.scenario("free")
-    params = scene.resolve(
-        chosen, {"mass": case.mass, "stiffness": case.stiffness, "damping": case.damping, "x0": case.x0, "v0": 0.0}
-    )
-    return scene.build(params, chosen), scene, chosen, params
+def oscillator_scene() -> tuple[Scene, OscillatorSpec]:
+    """The scene that declares itself the textbook's one-mode mass-spring-damper, and its declaration.
+
+    Returns
+    -------
+    tuple[Scene, OscillatorSpec]
+        the first scene of the catalogue whose `Scene.oscillator` is set, and that declaration.
+
+    Raises
+    ------
+    SpringlabError
+        no scene declares one.
+    """
+    for scene in scenes.SCENES.values():
+        if scene.oscillator is not None:
+            return scene, scene.oscillator
+    raise SpringlabError("no scene declares itself a one-mode oscillator (Scene.oscillator)")
+
+
+@dataclasses.dataclass(frozen=True)
+class Oscillator:
+    """The oscillator scene built at one set of values: what a run of its free scenario needs.
+
+    Attributes
+    ----------
+    model
+        the compiled model (one degree of freedom).
+    scene, scenario
+        the declaring scene and its free scenario.
+    params
+        the resolved parameters (SI), by the scene's names.
+    spec
+        the scene's declaration (its parameter and joint names).
+    """
+
+    model: mujoco.MjModel
+    scene: Scene
+    scenario: Scenario
+    params: dict[str, float]
+    spec: OscillatorSpec
+
+
+def build_oscillator(
+    *,
+    mass: float | None = None,
+    stiffness: float | None = None,
+    damping: float | None = None,
+    x0: float | None = None,
+    v0: float | None = None,
+) -> Oscillator:
+    """The oscillator scene's free scenario at m [kg], k [N/m], d [N s/m], x0 [m], v0 [m/s] (None: its default).
+
+    Raises
+    ------
+    SpringlabError
+        the declaring scene's free scenario has more than one degree of freedom.
+    """
+    scene, spec = oscillator_scene()
+    chosen = scene.scenario(spec.free)
+    params = scene.resolve(chosen, spec.parameters(mass=mass, stiffness=stiffness, damping=damping, x0=x0, v0=v0))
+    model = scene.build(params, chosen)
+    if model.nv != 1:
+        raise SpringlabError(
+            f"{scene.name}'s scenario {chosen.name!r} declares a one-mode oscillator but has {model.nv} degrees of freedom"
+        )
+    return Oscillator(model, scene, chosen, params, spec)
+
+
+def _case_model(case: ExtremeCase) -> Oscillator:
+    return build_oscillator(mass=case.mass, stiffness=case.stiffness, damping=case.damping, x0=case.x0, v0=0.0)
 
 
 def _sample_steps(steps: int, count: int = 2000) -> np.ndarray:
@@ -190,16 +259,17 @@ def predicted_error(
     case: ExtremeCase,
     integrator: str,
     dt: float,
-    context: tuple[mujoco.MjModel, Scene, Scenario, dict[str, float]],
+    context: Oscillator,
 ) -> float:
     """Max relative error [-] of a run of `case`, from MuJoCo's measured one-step map.
 
-    The slider is linear, so a run is z_n = M^n z_0 exactly, with M measured
-    by stepping the case's own model once from two independent states. The
-    error against the exact reference is taken over `_sample_steps` of the run,
-    as max |sim - ref| / max |ref| per column (pos, vel); cheap for any length.
+    The oscillator is linear, so a run is z_n = M^n z_0 exactly, with M measured
+    by stepping the case's own model (`context`, `build_oscillator`) once from two
+    independent states. The error against the exact reference is taken over
+    `_sample_steps` of the run, as max |sim - ref| / max |ref| per column (pos,
+    vel); cheap for any length.
     """
-    model, scene, chosen, params = context
+    model, scene, chosen, params = context.model, context.scene, context.scenario, context.params
     steps = max(1, round(case.duration / dt))
     work = copy.copy(model)
     work.opt.integrator = INTEGRATORS[integrator]
@@ -223,15 +293,16 @@ def predicted_error(
     if not np.isfinite(states).all():
         return math.inf
     reference = scene.reference(model, params, chosen, n * dt, dt=dt)
-    assert reference is not None, "the slider's free scenario has an exact reference"
+    assert reference is not None, "the oscillator's free scenario has an exact reference"
+    joint = context.spec.joint
     errors = []
-    for k, series in ((0, reference.pos["slider"]), (1, reference.vel["slider"])):
+    for k, series in ((0, reference.pos[joint]), (1, reference.vel[joint])):
         peak = float(np.max(np.abs(series)))
         errors.append(float(np.max(np.abs(states[:, k] - series))) / peak if peak > 0 else 0.0)
     return max(errors)
 
 
-def _advice(case: ExtremeCase, context, costs: dict[str, float]) -> dict[str, Any]:
+def _advice(case: ExtremeCase, context: Oscillator, costs: dict[str, float]) -> dict[str, Any]:
     """The cheapest setting predicted (`predicted_error`) to hold ACCURACY/2 over the case's duration.
 
     Per integrator of ADVICE_INTEGRATORS: the largest dt (bisection in log dt,
@@ -284,9 +355,62 @@ def _advice(case: ExtremeCase, context, costs: dict[str, float]) -> dict[str, An
     return best
 
 
+@dataclasses.dataclass(frozen=True)
+class ExtremeRun:
+    """One run of the extremes table (`extremes_table`); `to_dict()` is its row in stability.json.
+
+    Attributes
+    ----------
+    kind
+        'limit' (at a fraction of a stability limit) or 'advised' (the advice, run over the whole case).
+    case, description
+        the `ExtremeCase`'s name and description.
+    integrator
+        the run's integrator.
+    fraction
+        of `limit_of`'s stability limit [-] (None for an advised run).
+    limit_of
+        the integrator whose limit the fraction is of (discrete, which has none: euler).
+    omega_dt, limit_omega_dt
+        the run's omega*dt and that limit's [-] (inf: no limit).
+    dt, duration
+        timestep and simulated time [s].
+    steps
+        number of steps.
+    outcome
+        'accurate' | 'inaccurate' | 'diverged'.
+    max_rel_error
+        max relative error against the exact solution [-] (None if diverged).
+    detail
+        how it diverged ('' otherwise).
+    advice
+        one phrase: which integrator and dt to use instead.
+    """
+
+    kind: str
+    case: str
+    description: str
+    integrator: str
+    fraction: float | None
+    limit_of: str
+    omega_dt: float
+    limit_omega_dt: float
+    dt: float
+    duration: float
+    steps: int
+    outcome: str
+    max_rel_error: float | None
+    detail: str
+    advice: str
+
+    def to_dict(self) -> dict[str, Any]:
+        """The row of stability.json's "extremes": every attribute, in this order."""
+        return dataclasses.asdict(self)
+
+
 def extremes_table(
     cases: Sequence[ExtremeCase] = EXTREME_CASES, *, verify_steps: int = VERIFY_STEPS, nthread: int = 0
-) -> list[dict[str, Any]]:
+) -> tuple[ExtremeRun, ...]:
     """Run every case x integrator at LIMIT_FRACTIONS of its stability limit; classify each run.
 
     discrete has no limit: its rows use the euler limit's fractions, to show it
@@ -297,20 +421,15 @@ def extremes_table(
 
     Returns
     -------
-    list[dict[str, Any]]
-        One row per run: kind ('limit' or 'advised'), case, description,
-        integrator, fraction (of limit_of's stability limit; None for advised
-        rows), limit_of, omega_dt, limit_omega_dt, dt, duration, steps, outcome
-        ('accurate' | 'inaccurate' | 'diverged'), max_rel_error (None if
-        diverged), detail (how it diverged), advice (one phrase: which
-        integrator and dt to use instead).
+    tuple[ExtremeRun, ...]
+        One per run: the limit runs case by case, integrator by integrator, then the advised runs.
     """
     jobs: list[Job] = []
     meta: list[tuple[str, ExtremeCase, str, float | None, float, str]] = []
-    contexts = {}
+    contexts: dict[str, Oscillator] = {}
     for case in cases:
         context = _case_model(case)
-        model, scene, chosen, params = context
+        model, scene, chosen, params = context.model, context.scene, context.scenario, context.params
         contexts[case.name] = context
         for name in INTEGRATORS:
             limit_name = "euler" if name == "discrete" else name
@@ -322,7 +441,8 @@ def extremes_table(
                 jobs.append(Job(model, name, dt, steps, setup))
                 meta.append(("limit", case, name, fraction, limit, limit_name))
     costs = {}
-    model, scene, chosen, params = contexts[cases[0].name]
+    first = contexts[cases[0].name]
+    model, scene, chosen, params = first.model, first.scene, first.scenario, first.params
     for name in ADVICE_INTEGRATORS:  # cost per step: the same for every case (one model structure)
         setup = scene.setup(model, params, chosen, _CALIBRATION_STEPS, 1e-3)
         calm = copy.copy(model)  # a calm model for timing: unit oscillator values, no MuJoCo resets
@@ -335,7 +455,8 @@ def extremes_table(
         pick = advice[case.name]
         if pick["integrator"] is None or pick["steps"] > verify_steps:
             continue
-        model, scene, chosen, params = contexts[case.name]
+        context = contexts[case.name]
+        model, scene, chosen, params = context.model, context.scene, context.scenario, context.params
         setup = scene.setup(model, params, chosen, pick["steps"], pick["dt"])
         jobs.append(Job(model, pick["integrator"], pick["dt"], pick["steps"], setup))
         meta.append(
@@ -344,40 +465,40 @@ def extremes_table(
     outcomes = run_batched(jobs, nthread=nthread)
     rows = []
     for job, outcome, (kind, case, name, of_limit, limit, limit_name) in zip(jobs, outcomes, meta):
-        outcome_name, max_error, detail = _classify(*contexts[case.name], outcome)
+        outcome_name, max_error, detail = _classify(contexts[case.name], outcome)
         pick = advice[case.name]
         if kind == "advised":
             phrase = f"the advice, run over the whole {case.duration:.3g} s"
         else:
             phrase = _advice_phrase(outcome_name, name, job.dt, limit, pick)
         rows.append(
-            {
-                "kind": kind,
-                "case": case.name,
-                "description": case.description,
-                "integrator": name,
-                "fraction": of_limit,
-                "limit_of": limit_name,
-                "omega_dt": job.dt * case.omega,
-                "limit_omega_dt": limit,
-                "dt": job.dt,
-                "duration": job.dt * job.steps,
-                "steps": job.steps,
-                "outcome": outcome_name,
-                "max_rel_error": max_error,
-                "detail": detail,
-                "advice": phrase,
-            }
+            ExtremeRun(
+                kind=kind,
+                case=case.name,
+                description=case.description,
+                integrator=name,
+                fraction=of_limit,
+                limit_of=limit_name,
+                omega_dt=job.dt * case.omega,
+                limit_omega_dt=limit,
+                dt=job.dt,
+                duration=job.dt * job.steps,
+                steps=job.steps,
+                outcome=outcome_name,
+                max_rel_error=max_error,
+                detail=detail,
+                advice=phrase,
+            )
         )
-    return rows
+    return tuple(rows)
 
 
-def _classify(model, scene, chosen, params, outcome) -> tuple[str, float | None, str]:
+def _classify(context: Oscillator, outcome: Trajectory | DivergedError) -> tuple[str, float | None, str]:
     """('accurate' | 'inaccurate' | 'diverged', max relative error or None, divergence detail)."""
     if isinstance(outcome, DivergedError):
         return "diverged", None, str(outcome)
     try:
-        result = evaluate(scene, chosen, params, model, outcome)
+        result = evaluate(context.scene, context.scenario, context.params, context.model, outcome)
     except DivergedError as error:
         return "diverged", None, str(error)
     worst = max(e["max_rel"] for e in result.summary["errors"].values())

@@ -1,15 +1,17 @@
 """Where each integrator stops being trustworthy: stability boundaries, step maps and energy.
 
-On m x'' + d x' + k x = 0 (the slider scene's model as a unit oscillator):
-the measured omega*dt at which each integrator's response starts to grow, per
-damping ratio, against the theory in `simulate.stability_limit`
-(`measure_boundaries`); the per-step amplification factor of MuJoCo's
-one-step map over a (zeta, omega*dt) grid (`amplification_map`); and the
+On m x'' + d x' + k x = 0 (the scene that declares itself the textbook's one-mode
+mass-spring-damper, `Scene.oscillator`, as a unit oscillator; springlab.studies.extremes
+.build_oscillator): the measured omega*dt at which each integrator's response starts to grow,
+per damping ratio, against the theory in `exact.limits.stability_limit`
+(`measure_boundaries`: `Boundary` rows); the per-step amplification factor of MuJoCo's
+one-step map over a (zeta, omega*dt) grid (`amplification_map`: an `AmplificationMap`); and the
 undamped energy of every integrator against its exact discrete-map formula
-(`energy_histories`). `stability_report` adds the extremes table
-(springlab.studies.extremes) and is `springlab stability`'s JSON.
+(`energy_histories`: `EnergyHistories`). `stability_report` adds the extremes table
+(springlab.studies.extremes) and returns a `StabilityReport`, whose `to_dict()` is
+`springlab stability`'s JSON.
 
-The MuJoCo step maps on the 1-DOF slider (omega = sqrt(k/m), zeta =
+The MuJoCo step maps on the 1-DOF oscillator (omega = sqrt(k/m), zeta =
 d/(2 sqrt(k m)), y = omega*dt, measured in tests/test_stability.py):
 
 * euler, implicit, implicitfast: identical; semi-implicit (symplectic) Euler
@@ -27,25 +29,35 @@ d/(2 sqrt(k m)), y = omega*dt, measured in tests/test_stability.py):
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time as _time
-from collections.abc import Iterable, Sequence
-from typing import Any
+from collections.abc import Iterable, Mapping, Sequence
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any, Literal
 
-import mujoco
 import numpy as np
 from mujoco import batch as _mjbatch
 
-from springlab import scenes
+from springlab import tables
 from springlab.errors import BadInputError, DivergedError
 from springlab.exact.limits import stability_limit
-from springlab.scenes.base import Scenario, Scene
-from springlab.scenes.slider import Slider
 from springlab.sim.batch import RECORD_SPEC, Job, run_batched
 from springlab.sim.simulate import BAD_WARNINGS, INTEGRATORS, integrator_id, quiet_mujoco
 
 from .executor import Executor, resolve
-from .extremes import ACCURACY, EXTREME_CASES, FULL_EXTREME_CASES, VERIFY_STEPS, extremes_table
+from .extremes import (
+    ACCURACY,
+    EXTREME_CASES,
+    FULL_EXTREME_CASES,
+    VERIFY_STEPS,
+    ExtremeRun,
+    build_oscillator,
+    extremes_table,
+)
+
+if TYPE_CHECKING:
+    import pandas
 
 #: damping ratios of the default boundary measurement (the contract needs 0, 0.1, 1, 10)
 STABILITY_ZETAS = (0.0, 0.1, 0.5, 1.0, 2.0, 10.0)
@@ -62,12 +74,43 @@ SEARCH_PRECISION = 1.0e-4
 BOUNDARY_TOLERANCE = 0.02
 
 
-def _oscillator(damping: float = 0.0) -> tuple[mujoco.MjModel, Scene, Scenario, dict[str, float]]:
-    """The slider scene's model as a unit oscillator: m = 1 kg, k = 1 N/m (omega = 1 rad/s, omega*dt = dt)."""
-    scene = scenes.get("slider")
-    chosen = scene.scenario("free")
-    params = scene.resolve(chosen, {"mass": 1.0, "stiffness": 1.0, "damping": damping, "x0": 1.0, "v0": 0.0})
-    return scene.build(params, chosen), scene, chosen, params
+def _read_only(array: np.ndarray) -> np.ndarray:
+    """`array` as a float array that cannot be written through (results are immutable)."""
+    out = np.array(array, float)
+    out.flags.writeable = False
+    return out
+
+
+@dataclasses.dataclass(frozen=True)
+class Boundary:
+    """The measured stability boundary of one integrator at one damping ratio (`measure_boundaries`).
+
+    Attributes
+    ----------
+    integrator
+        MuJoCo's integrator name.
+    zeta
+        damping ratio [-].
+    measured_omega_dt
+        omega*dt [-] at which the response starts to grow (inf: nothing grew up to SEARCH_STOP).
+    theory_omega_dt
+        `exact.limits.stability_limit`'s [-] (inf: no limit).
+    relative_difference
+        |measured - theory| / theory [-] (0 when both are inf).
+    within_tolerance
+        relative_difference <= BOUNDARY_TOLERANCE.
+    """
+
+    integrator: str
+    zeta: float
+    measured_omega_dt: float
+    theory_omega_dt: float
+    relative_difference: float
+    within_tolerance: bool
+
+    def to_dict(self) -> dict[str, Any]:
+        """The row of stability.json's "boundaries": every attribute, in this order."""
+        return dataclasses.asdict(self)
 
 
 class _GrowthTester:
@@ -75,7 +118,7 @@ class _GrowthTester:
     and says whether its response grows (GROWTH_FACTOR over GROWTH_STEPS, or MuJoCo flags a blow-up)."""
 
     def __init__(self, pairs: Sequence[tuple[str, float]], steps: int, nthread: int = 0):
-        self.model, *_ = _oscillator()
+        self.model = build_oscillator(mass=1.0, stiffness=1.0, damping=0.0, x0=1.0, v0=0.0).model
         self.steps = steps
         with quiet_mujoco():
             self.batch = _mjbatch.Batch(self.model, nsim=len(pairs), nthread=nthread)
@@ -108,10 +151,10 @@ def measure_boundaries(
     *,
     steps: int = GROWTH_STEPS,
     nthread: int = 0,
-) -> list[dict[str, Any]]:
-    """Measured stability boundary omega*dt [-] per (integrator, zeta) against `simulate.stability_limit`.
+) -> list[Boundary]:
+    """Measured stability boundary omega*dt [-] per (integrator, zeta) against `exact.limits.stability_limit`.
 
-    On the slider scene's model as a unit oscillator: starting at omega*dt =
+    On the oscillator scene as a unit oscillator: starting at omega*dt =
     SEARCH_START, doubling until the response grows (GROWTH_FACTOR over
     `steps` steps, or MuJoCo flags a blow-up), then bisecting (geometrically)
     between the last stable and the first growing omega*dt down to a ratio of
@@ -119,10 +162,9 @@ def measure_boundaries(
 
     Returns
     -------
-    list[dict[str, Any]]
-        Rows {"integrator", "zeta", "measured_omega_dt", "theory_omega_dt",
-        "relative_difference", "within_tolerance"}; measured is inf when nothing
-        grew up to SEARCH_STOP.
+    list[Boundary]
+        One per (integrator, zeta), integrators outermost; measured is inf when
+        nothing grew up to SEARCH_STOP.
     """
     pairs = [(name, float(z)) for name in integrators for z in zetas]
     for name, zeta in pairs:
@@ -162,21 +204,12 @@ def measure_boundaries(
             difference = math.inf
         else:
             difference = abs(measured - theory) / theory
-        rows.append(
-            {
-                "integrator": name,
-                "zeta": zeta,
-                "measured_omega_dt": measured,
-                "theory_omega_dt": theory,
-                "relative_difference": difference,
-                "within_tolerance": difference <= BOUNDARY_TOLERANCE,
-            }
-        )
+        rows.append(Boundary(name, zeta, measured, theory, difference, difference <= BOUNDARY_TOLERANCE))
     return rows
 
 
-def boundaries_chunk(payload: dict[str, Any], nthread: int = 0) -> list[dict[str, Any]]:
-    """measure_boundaries for one integrator (a chunk of the map; plain data in and out, for dask workers)."""
+def boundaries_chunk(payload: dict[str, Any], nthread: int = 0) -> list[Boundary]:
+    """measure_boundaries for one integrator (a chunk of the map; plain data in, frozen rows out, for dask workers)."""
     return measure_boundaries([payload["integrator"]], payload["zetas"], steps=payload["steps"], nthread=nthread)
 
 
@@ -186,7 +219,7 @@ def map_boundaries(
     *,
     steps: int = GROWTH_STEPS,
     executor: Executor | None = None,
-) -> list[dict[str, Any]]:
+) -> list[Boundary]:
     """measure_boundaries with one chunk per integrator on `executor` (None: locally); the same rows
     in the same order (each pair's search is independent of the others)."""
     zetas = [float(z) for z in zetas]
@@ -200,7 +233,7 @@ def one_step_maps(integrator: str, zetas: np.ndarray, omega_dts: np.ndarray, *, 
     Column j is the state after one step from the unit state e_j = (x, v), so
     z_{n+1} = M z_n exactly for this linear system.
     """
-    model, *_ = _oscillator()
+    model = build_oscillator(mass=1.0, stiffness=1.0, damping=0.0, x0=1.0, v0=0.0).model
     zz, hh = np.meshgrid(np.asarray(zetas, float), np.asarray(omega_dts, float), indexing="ij")
     cells = zz.size
     with quiet_mujoco():
@@ -215,25 +248,55 @@ def one_step_maps(integrator: str, zetas: np.ndarray, omega_dts: np.ndarray, *, 
     return after.transpose(0, 2, 1).reshape(*zz.shape, 2, 2)
 
 
+@dataclasses.dataclass(frozen=True)
+class AmplificationMap:
+    """The per-step amplification of MuJoCo's measured one-step map over a (zeta, omega*dt) grid (`amplification_map`).
+
+    Attributes
+    ----------
+    zetas
+        damping ratios [-] (n,), read-only.
+    omega_dts
+        omega*dt [-] (m,), read-only.
+    radius
+        integrator -> spectral radius [-] (n, m), read-only; > 1: the response grows by that factor per step.
+    """
+
+    zetas: np.ndarray
+    omega_dts: np.ndarray
+    radius: Mapping[str, np.ndarray]
+
+    def to_dict(self) -> dict[str, Any]:
+        """{"zetas", "omega_dts", "radius": integrator -> rows} as plain lists (not part of stability.json)."""
+        return {
+            "zetas": self.zetas.tolist(),
+            "omega_dts": self.omega_dts.tolist(),
+            "radius": {name: radius.tolist() for name, radius in self.radius.items()},
+        }
+
+
 def amplification_map(
     integrators: Iterable[str] = tuple(INTEGRATORS),
     zetas: np.ndarray | None = None,
     omega_dts: np.ndarray | None = None,
     *,
     executor: Executor | None = None,
-) -> dict[str, Any]:
+) -> AmplificationMap:
     """Spectral radius [-] of MuJoCo's measured one-step map over a (zeta, omega*dt) grid, per integrator.
 
     > 1 means the response grows by that factor per step (unstable). One chunk per integrator on
-    `executor` (None: locally). Returns {"zetas", "omega_dts", "radius": integrator -> (len(zetas),
-    len(omega_dts))}.
+    `executor` (None: locally).
     """
     zetas = np.concatenate([[0.0], np.geomspace(1e-2, 100.0, 40)]) if zetas is None else np.asarray(zetas)
     omega_dts = np.geomspace(1e-2, 1e3, 120) if omega_dts is None else np.asarray(omega_dts)
     integrators = list(integrators)
     payloads = [{"integrator": name, "zetas": zetas, "omega_dts": omega_dts} for name in integrators]
     radii = resolve(executor).map(radius_chunk, payloads, description="stability map")
-    return {"zetas": zetas, "omega_dts": omega_dts, "radius": dict(zip(integrators, radii))}
+    return AmplificationMap(
+        _read_only(zetas),
+        _read_only(omega_dts),
+        MappingProxyType({name: _read_only(radius) for name, radius in zip(integrators, radii)}),
+    )
 
 
 def radius_chunk(payload: dict[str, Any], nthread: int = 0) -> np.ndarray:
@@ -275,71 +338,254 @@ def energy_formula(
     raise BadInputError(f"unknown integrator {integrator!r}; valid: {', '.join(INTEGRATORS)}")
 
 
+@dataclasses.dataclass(frozen=True)
+class EnergyCheck:
+    """One integrator's undamped energy against its exact step-map formula (`energy_histories`).
+
+    Attributes
+    ----------
+    integrator
+        MuJoCo's integrator name.
+    omega_dt
+        y = omega*dt of the run [-].
+    steps
+        number of steps.
+    final_ratio, min_ratio, max_ratio
+        E/E0 at the end, its minimum and maximum over the run [-].
+    formula
+        the exact formula, as text.
+    formula_final_ratio
+        its E_n/E0 at the end [-] (integrators whose energy changes by a fixed factor per step; else None).
+    formula_low, formula_high
+        the bounds of E/E0 [-] (the euler family, which keeps an invariant; else None).
+    max_relative_deviation
+        largest relative deviation from the formula over the run [-] (the euler family: of its invariant).
+    """
+
+    integrator: str
+    omega_dt: float
+    steps: int
+    final_ratio: float
+    min_ratio: float
+    max_ratio: float
+    formula: str
+    formula_final_ratio: float | None
+    formula_low: float | None
+    formula_high: float | None
+    max_relative_deviation: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """The row of stability.json's "energy": the attributes in this order, without the formula's
+        values that do not apply (None)."""
+        optional = ("formula_final_ratio", "formula_low", "formula_high")
+        return {k: v for k, v in dataclasses.asdict(self).items() if not (k in optional and v is None)}
+
+
+@dataclasses.dataclass(frozen=True)
+class EnergyHistories:
+    """Energy of every integrator on the undamped oscillator, with each one's exact formula (`energy_histories`).
+
+    Attributes
+    ----------
+    scene
+        the oscillator scene's name (the scene that declares `Scene.oscillator`).
+    omega_dt
+        y = omega*dt of every run [-].
+    periods
+        simulated time in natural periods [-].
+    time_periods
+        time of each step in natural periods [-] (n,), read-only.
+    ratio
+        integrator -> E_n/E0 [-] (n,), read-only.
+    exact
+        integrator -> the formula's E_n/E0 [-] (n,), read-only, for the integrators whose energy changes
+        by a fixed factor per step (rk4, discrete).
+    bounds
+        integrator -> (low, high) bounds of E/E0 [-] for those that keep an invariant (the euler family).
+    checks
+        one `EnergyCheck` per integrator, in MuJoCo's order.
+    """
+
+    scene: str
+    omega_dt: float
+    periods: float
+    time_periods: np.ndarray
+    ratio: Mapping[str, np.ndarray]
+    exact: Mapping[str, np.ndarray]
+    bounds: Mapping[str, tuple[float, float]]
+    checks: tuple[EnergyCheck, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        """{"scene", "omega_dt", "periods", "time_periods", "ratio", "exact", "bounds", "checks"} as plain
+        lists (not part of stability.json, which holds the checks)."""
+        return {
+            "scene": self.scene,
+            "omega_dt": self.omega_dt,
+            "periods": self.periods,
+            "time_periods": self.time_periods.tolist(),
+            "ratio": {name: series.tolist() for name, series in self.ratio.items()},
+            "exact": {name: series.tolist() for name, series in self.exact.items()},
+            "bounds": {name: list(pair) for name, pair in self.bounds.items()},
+            "checks": [check.to_dict() for check in self.checks],
+        }
+
+
 def energy_histories(
     omega_dt: float = ENERGY_OMEGA_DT, periods: float = ENERGY_PERIODS, *, nthread: int = 0
-) -> dict[str, Any]:
-    """Energy of every integrator on the undamped slider (scenario `undamped`) against its formula.
+) -> EnergyHistories:
+    """Energy of every integrator on the undamped oscillator against its formula.
 
-    The energy E = m v^2/2 + k x^2/2 [J] is computed from qpos and qvel
-    (MuJoCo's data.energy lags a step). Returns {"omega_dt", "periods",
-    "time_periods": (n,), "ratio": integrator -> E_n/E_0 (n,), "rows": per
-    integrator a summary with the formula and its largest deviation}.
+    The oscillator scene's free scenario with its damping set to 0 and its other values at their
+    defaults. The energy E = m v^2/2 + k x^2/2 [J] is computed from qpos and qvel (MuJoCo's
+    data.energy lags a step), with m and k read back from the compiled model.
     """
-    scene = scenes.get("slider")
-    assert isinstance(scene, Slider)
-    chosen = scene.scenario("undamped")
-    params = scene.resolve(chosen, {})
-    model = scene.build(params, chosen)
-    m, k, _ = scene.physical(model)
+    oscillator = build_oscillator(damping=0.0)
+    model, scene, chosen, params, spec = (
+        oscillator.model,
+        oscillator.scene,
+        oscillator.scenario,
+        oscillator.params,
+        oscillator.spec,
+    )
+    m, k, _ = spec.constants(model)
     omega = math.sqrt(k / m)
     dt = omega_dt / omega
     steps = round(periods * 2 * math.pi / omega_dt)
     setup = scene.setup(model, params, chosen, steps, dt)
     jobs = [Job(model, name, dt, steps, setup) for name in INTEGRATORS]
     outcomes = run_batched(jobs, nthread=nthread)
-    x0, v0 = params["x0"], params["v0"]
+    x0, v0 = params[spec.x0], params[spec.v0]
     energy0 = 0.5 * m * v0**2 + 0.5 * k * x0**2
     n = np.arange(steps + 1)
-    ratio, rows = {}, []
+    ratio, exact, bounds, checks = {}, {}, {}, []
     for name, trajectory in zip(INTEGRATORS, outcomes):
         if isinstance(trajectory, DivergedError):
             raise trajectory
         x, v = trajectory.qpos[:, 0], trajectory.qvel[:, 0]
         energy = 0.5 * m * v**2 + 0.5 * k * x**2
-        ratio[name] = energy / energy0
+        ratio[name] = _read_only(energy / energy0)
         formula = energy_formula(name, omega_dt, n, x0, v0, omega)
-        row = {
-            "integrator": name,
-            "omega_dt": omega_dt,
-            "steps": steps,
-            "final_ratio": float(ratio[name][-1]),
-            "min_ratio": float(ratio[name].min()),
-            "max_ratio": float(ratio[name].max()),
-        }
+        row: dict[str, Any] = {"formula_final_ratio": None, "formula_low": None, "formula_high": None}
         if "ratio" in formula:
             row["formula"] = "(1 - y^6/72 + y^8/576)^n" if name == "rk4" else "(1 + y^2)^-n"
-            exact = np.asarray(formula["ratio"])
-            row["formula_final_ratio"] = float(exact[-1])
-            row["max_relative_deviation"] = float(np.max(np.abs(ratio[name] / exact - 1)))
+            exact[name] = _read_only(np.asarray(formula["ratio"]))
+            row["formula_final_ratio"] = float(exact[name][-1])
+            row["max_relative_deviation"] = float(np.max(np.abs(ratio[name] / exact[name] - 1)))
         else:
             invariant = (v**2 + omega**2 * x**2 - dt * omega**2 * x * v) / (
                 v0**2 + omega**2 * x0**2 - dt * omega**2 * x0 * v0
             )
             row["formula"] = "E/E0 in [1/(1 + y/2), 1/(1 - y/2)] (invariant v^2 + w^2 x^2 - dt w^2 x v)"
             row["formula_low"], row["formula_high"] = float(formula["low"]), float(formula["high"])
+            bounds[name] = (row["formula_low"], row["formula_high"])
             row["max_relative_deviation"] = float(np.max(np.abs(invariant - 1)))
-        rows.append(row)
-    return {
-        "omega_dt": omega_dt,
-        "periods": periods,
-        "time_periods": n * omega_dt / (2 * math.pi),
-        "ratio": ratio,
-        "rows": rows,
-    }
+        checks.append(
+            EnergyCheck(
+                integrator=name,
+                omega_dt=omega_dt,
+                steps=steps,
+                final_ratio=float(ratio[name][-1]),
+                min_ratio=float(ratio[name].min()),
+                max_ratio=float(ratio[name].max()),
+                **row,
+            )
+        )
+    return EnergyHistories(
+        scene=scene.name,
+        omega_dt=omega_dt,
+        periods=periods,
+        time_periods=_read_only(n * omega_dt / (2 * math.pi)),
+        ratio=MappingProxyType(ratio),
+        exact=MappingProxyType(exact),
+        bounds=MappingProxyType(bounds),
+        checks=tuple(checks),
+    )
 
 
-def stability_report(*, full: bool = False, nthread: int = 0, executor: Executor | None = None) -> dict[str, Any]:
-    """Boundaries, extremes and energy: `springlab stability`'s JSON (plus the map and energy series).
+# -- the report ----------------------------------------------------------------
+
+#: the tables of a StabilityReport that `to_pandas` gives
+StabilityTable = Literal["boundaries", "extremes", "energy"]
+
+
+@dataclasses.dataclass(frozen=True)
+class StabilityReport:
+    """`springlab stability`: boundaries, extremes and energy (`stability_report`); `to_dict()` is its JSON.
+
+    Attributes
+    ----------
+    boundaries
+        the measured boundary per integrator and damping ratio (`boundary(integrator, zeta)` finds one).
+    extremes
+        the extremes table, one `ExtremeRun` per run (springlab.studies.extremes).
+    energy_histories
+        the undamped energy runs and their formulas (`energy` holds their checks).
+    growth_test
+        what counts as growing, for people.
+    accuracy_threshold
+        the extremes table's accurate / inaccurate line [-] (max relative error).
+    wall_time_s
+        wall time of the report [s].
+    """
+
+    boundaries: tuple[Boundary, ...]
+    extremes: tuple[ExtremeRun, ...]
+    energy_histories: EnergyHistories
+    growth_test: str
+    accuracy_threshold: float
+    wall_time_s: float
+
+    @property
+    def energy(self) -> tuple[EnergyCheck, ...]:
+        """Each integrator's energy against its exact formula (stability.json's "energy")."""
+        return self.energy_histories.checks
+
+    @property
+    def passed(self) -> bool:
+        """Every measured boundary within BOUNDARY_TOLERANCE of its theory (exit 0 of the command; else 1)."""
+        return all(b.within_tolerance for b in self.boundaries)
+
+    def boundary(self, integrator: str, zeta: float) -> Boundary:
+        """The measured boundary of `integrator` at damping ratio `zeta` [-].
+
+        Raises
+        ------
+        KeyError
+            no boundary was measured there.
+        """
+        for row in self.boundaries:
+            if row.integrator == integrator and row.zeta == zeta:
+                return row
+        raise KeyError(f"no boundary measured for {integrator!r} at zeta = {zeta:g}")
+
+    def to_dict(self) -> dict[str, Any]:
+        """stability.json and `springlab stability --json`: {"boundaries", "extremes", "energy", "growth_test",
+        "accuracy_threshold", "wall_time_s"} (the energy series and the map are drawn, not stored)."""
+        return {
+            "boundaries": [row.to_dict() for row in self.boundaries],
+            "extremes": [row.to_dict() for row in self.extremes],
+            "energy": [row.to_dict() for row in self.energy],
+            "growth_test": self.growth_test,
+            "accuracy_threshold": self.accuracy_threshold,
+            "wall_time_s": self.wall_time_s,
+        }
+
+    def to_pandas(self, table: StabilityTable = "boundaries") -> pandas.DataFrame:
+        """One of the report's tables as a DataFrame, a row per entry of `to_dict()[table]` (pandas is optional).
+
+        Parameters
+        ----------
+        table
+            "boundaries" (default: integrator, zeta, measured and theory omega*dt [-], ...), "extremes"
+            or "energy".
+        """
+        if table not in ("boundaries", "extremes", "energy"):
+            raise BadInputError(f"unknown table {table!r}; valid: boundaries, extremes, energy")
+        return tables.to_pandas(self.to_dict()[table])
+
+
+def stability_report(*, full: bool = False, nthread: int = 0, executor: Executor | None = None) -> StabilityReport:
+    """Boundaries, extremes and energy: `springlab stability` (its JSON is the report's `to_dict()`).
 
     full: more damping ratios, more extreme cases, and the advice of every
     extremes case run in full, however many steps it takes (slower: tens of seconds).
@@ -352,21 +598,15 @@ def stability_report(*, full: bool = False, nthread: int = 0, executor: Executor
         FULL_EXTREME_CASES if full else EXTREME_CASES, verify_steps=10**9 if full else VERIFY_STEPS, nthread=nthread
     )
     energy = energy_histories(nthread=nthread)
-    return {
-        "boundaries": boundaries,
-        "extremes": extremes,
-        "energy": energy["rows"],
-        "growth_test": (
+    return StabilityReport(
+        boundaries=tuple(boundaries),
+        extremes=tuple(extremes),
+        energy_histories=energy,
+        growth_test=(
             f"response |(omega x, v)| over steps {GROWTH_STEPS // 2}..{GROWTH_STEPS} exceeds"
             f" {GROWTH_FACTOR:g}x its maximum over the first {GROWTH_STEPS // 2}, or MuJoCo flags"
             " a blow-up"
         ),
-        "accuracy_threshold": ACCURACY,
-        "wall_time_s": _time.perf_counter() - started,
-        "_energy_series": energy,
-    }
-
-
-def report_json(report: dict[str, Any]) -> dict[str, Any]:
-    """The report without its plot-only series."""
-    return {k: v for k, v in report.items() if not k.startswith("_")}
+        accuracy_threshold=ACCURACY,
+        wall_time_s=_time.perf_counter() - started,
+    )

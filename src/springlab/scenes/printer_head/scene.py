@@ -77,8 +77,9 @@ divergence advice is right for every integrator.
 
 Code layout: this module is the scene; each scenario carries its variant
 (`Scenario.variant`: `Move`, `StepForce`, `Settle`), which gives its force
-segments and its own quantities, in moves.py with the formulas
-of the move and the settling that the design study shares.
+segments and its own quantities, in moves.py with the formulas of the move and
+the settling; design.py declares the design question (`design`) and implements
+the hooks the design study calls (the batched moves, the analytic estimates).
 """
 
 from __future__ import annotations
@@ -96,43 +97,10 @@ from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Parameter, Referenc
 from springlab.scenes.capabilities import OscillatorFit
 from springlab.sim.simulate import Setup, Trajectory, integrator_id
 
-from .moves import (
-    BeltRun,
-    Move,
-    Settle,
-    StepForce,
-    after_force_bound,
-    belt_damping_for,
-    belt_damping_ratio,
-    belt_omega,
-    minimum_move_time,
-    move_profile,
-    move_residual_stretch,
-    reduced_mass,
-    residual_envelope,
-    settling_estimate,
-    settling_time,
-    worst_case_envelope,
-)
+from .design import DESIGN
+from .moves import BeltRun, Move, Settle, StepForce, move_profile
 
-#: the formulas the design study shares live in _printer_head_moves; named here, where it imports them
-__all__ = [
-    "SCENE",
-    "PrinterHead",
-    "after_force_bound",
-    "belt_damping_for",
-    "belt_damping_ratio",
-    "belt_omega",
-    "linearized_mode",
-    "minimum_move_time",
-    "move_residual_stretch",
-    "reduced_mass",
-    "residual_envelope",
-    "settling_estimate",
-    "settling_time",
-    "step_matrix",
-    "worst_case_envelope",
-]
+__all__ = ["SCENE", "PrinterHead", "linearized_mode", "step_matrix"]
 
 #: relative round-off allowed in the centre-of-mass target (the bang-bang stops it at D exactly)
 _TARGET_ROUNDOFF = 1e-12
@@ -184,6 +152,8 @@ class PrinterHead(Scene):
     integrator = "rk4"
     dt = 1e-4
     default_scenario = "move"
+    #: the design question it answers, read by springlab.studies.design (design.py)
+    design = DESIGN
     #: the textbook question each scenario answers, and its answer as a sentence (Scene.questions)
     questions = {
         "move": (

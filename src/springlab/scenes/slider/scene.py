@@ -37,7 +37,7 @@ import numpy as np
 from springlab.exact import analytic
 from springlab.exact.linear import generator_system, state_matrix
 from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene
-from springlab.scenes.capabilities import OscillatorFit
+from springlab.scenes.capabilities import OscillatorFit, OscillatorSpec
 from springlab.sim import exciter
 from springlab.sim.simulate import Setup, Trajectory
 
@@ -76,6 +76,10 @@ class Slider(Scene):
     integrator = "rk4"
     dt = 2e-3
     default_scenario = "free"
+    #: the textbook's unit oscillator (springlab.studies.stability, springlab.studies.extremes)
+    oscillator = OscillatorSpec(
+        mass="mass", stiffness="stiffness", damping="damping", x0="x0", v0="v0", free="free", joint="slider"
+    )
     #: the textbook question each scenario answers, and its answer as a sentence (Scene.questions)
     questions = {
         "free": (

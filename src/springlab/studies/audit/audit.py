@@ -11,7 +11,9 @@ it is, and what accuracy each setting buys for its compute.
    converged RK4 reference; observed orders, the Pareto front, and the cheapest setting meeting tol,
    verified by a run of its own.
 
-`audit(model_or_path, ...)` returns an `Audit`; `Audit.as_json()` is audit.json.
+`audit(model_or_path, ...)` returns an `Audit`: its facts as attributes (`audit.recommendation.dt`,
+`audit.own.stable`, `audit.stability["rk4"].limit_dt_measured_s`, ...), immutable; `Audit.to_dict()` is
+audit.json and `Audit.to_pandas()` the sweep's table.
 """
 
 from __future__ import annotations
@@ -21,13 +23,14 @@ import math
 import os
 import pathlib
 import time as _time
-from collections.abc import Sequence
-from typing import Any
+from collections.abc import Mapping, Sequence
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any
 
 import mujoco
 import numpy as np
 
-from springlab import scenes
+from springlab import scenes, tables
 from springlab.errors import BadInputError, DivergedError
 from springlab.exact.linearize import Linearization, OperatingPoint, linearize, operating_point
 from springlab.runs import compare
@@ -36,7 +39,7 @@ from springlab.sim.simulate import INTEGRATORS, Setup, Trajectory, integrator_id
 from springlab.studies.convergence import Run, observed_order, pareto_front
 from springlab.studies.executor import Executor
 
-from .limits import Limit, constraint_flags, stability_limits
+from .limits import ConstraintFlag, Limit, constraint_flags, stability_limits
 from .ship import Runner, ship
 from .sweep import (
     MAX_SAMPLES,
@@ -65,43 +68,186 @@ RECOMMEND_LIMIT_FRACTION = 0.9
 GRID_TOP_OVER_LIMIT = 1.2
 _NAMES = {value: name for name, value in INTEGRATORS.items()}
 
+if TYPE_CHECKING:
+    import pandas
 
-@dataclasses.dataclass
+
+@dataclasses.dataclass(frozen=True)
+class OwnSetting:
+    """The model's own setting (its integrator and timestep) as the audit found it.
+
+    Attributes
+    ----------
+    integrator
+        the model's integrator.
+    dt
+        its timestep [s].
+    stable
+        below its integrator's measured limit, and its run did not diverge.
+    error
+        its run's error [-] (None: it diverged).
+    margin
+        measured limit / dt [-] (None: no limit).
+    wall_time_s
+        steps x its integrator's measured cost per step [s].
+    """
+
+    integrator: str
+    dt: float
+    stable: bool
+    error: float | None
+    margin: float | None
+    wall_time_s: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """audit.json's "own_setting": {"integrator", "dt", "stable", "error", "margin", "wall_time_s"}."""
+        return dataclasses.asdict(self)
+
+
+@dataclasses.dataclass(frozen=True)
+class Recommendation:
+    """The cheapest swept setting meeting the tolerance, verified by a run of its own (all None but
+    `tolerance` and `verified` = False where none does).
+
+    Attributes
+    ----------
+    integrator
+        its integrator (None: no swept setting meets the tolerance).
+    dt
+        its timestep [s].
+    error
+        the verification run's error [-].
+    tolerance
+        the tolerance it meets [-].
+    verified
+        whether a run of its own met the tolerance.
+    wall_time_s
+        steps x its integrator's measured cost per step [s].
+    """
+
+    integrator: str | None
+    dt: float | None
+    error: float | None
+    tolerance: float
+    verified: bool
+    wall_time_s: float | None
+
+    def to_dict(self) -> dict[str, Any]:
+        """audit.json's "recommendation": {"integrator", "dt", "error", "tolerance", "verified", "wall_time_s"}."""
+        return dataclasses.asdict(self)
+
+
+@dataclasses.dataclass(frozen=True)
+class Linearity:
+    """How far the linearization moves along the motion: the linear-or-not verdict's measure.
+
+    Attributes
+    ----------
+    change
+        max relative change of A over states of the motion [-] (inf: the probe run diverged).
+    tolerance
+        the largest change for which the linearization's exact solution is the reference [-].
+    """
+
+    change: float
+    tolerance: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """audit.json's "linearity": {"change", "tolerance"}."""
+        return dataclasses.asdict(self)
+
+
+@dataclasses.dataclass(frozen=True)
+class ReferenceUsed:
+    """The reference the sweep's errors are measured against.
+
+    Attributes
+    ----------
+    kind
+        what it is, for people.
+    error_estimate
+        its own estimated error [-] (0 for the exact solution).
+    dt
+        its timestep [s] (None for the exact solution).
+    converged
+        error_estimate within REFERENCE_FRACTION x tol.
+    compared_at
+        where the runs are compared with it, for people.
+    common_time_spacing_s
+        the common multiple of the swept timesteps [s]: every run has a step there.
+    """
+
+    kind: str
+    error_estimate: float
+    dt: float | None
+    converged: bool
+    compared_at: str
+    common_time_spacing_s: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """audit.json's "reference"."""
+        return dataclasses.asdict(self)
+
+
+@dataclasses.dataclass(frozen=True)
+class Timings:
+    """Wall time of each stage of the audit [s]."""
+
+    linearization_and_limits_s: float
+    sweep_s: float
+    reference_s: float
+    total_s: float
+
+    def to_dict(self) -> dict[str, float]:
+        """audit.json's "timings_s"."""
+        return dataclasses.asdict(self)
+
+
+#: what audit.json says counts as numerically unstable
+STABILITY_CRITERION = (
+    "numerically unstable: the measured one-step map amplifies a mode more than the exact flow"
+    " exp(lambda dt) does, by more than 1e-4 per step"
+)
+
+
+@dataclasses.dataclass(frozen=True)
 class Audit:
-    """An audit of one model (see the module docstring); `as_json()` is audit.json.
+    """An audit of one model (see the module docstring); `to_dict()` is audit.json and `audit --json`.
 
     Attributes
     ----------
     model
         where the model came from (path, scene name or "<MjModel>").
     linear
-        the linearization at the operating point.
+        the linearization at the operating point (its `point`, `modes`, `fastest`).
     start
         the perturbed start of the sweep runs.
     duration
         simulated time of every run [s].
     tol
         tolerance of the recommendation [-].
-    limits
-        integrator -> Limit (predicted / measured / confirmed stability limit [s]).
+    perturb
+        size of the initial perturbation [m or rad].
+    stability
+        integrator -> `Limit` (predicted / measured / confirmed stability limit [s], margin [-]).
     own
-        the model's own setting: {"integrator", "dt", "stable", "error", "margin"}.
+        the model's own setting (`OwnSetting`).
     constraints
         constraint settings the own timestep breaks (solref timeconst < 2 dt).
     is_linear, linearity
-        the linearity verdict and its measure {"change", "tolerance"}.
+        the linearity verdict and its measure (`Linearity`).
     reference
-        {"kind", "error_estimate", "dt"}.
+        the reference of the sweep (`ReferenceUsed`).
     runs
-        the sweep, per integrator, largest dt first.
+        the sweep, per integrator, largest dt first (`SweepRun`; `to_pandas()` is their table).
     orders
         integrator -> observed order (None: no clean power law, e.g. contacts).
     pareto
         runs no other beats in both error and wall time.
     recommendation
-        {"integrator", "dt", "error", "tolerance", "verified", "wall_time_s"}.
+        the cheapest setting meeting tol, verified (`Recommendation`).
     timings
-        wall time of each stage [s].
+        wall time of each stage [s] (`Timings`).
     """
 
     model: str
@@ -110,25 +256,27 @@ class Audit:
     duration: float
     tol: float
     perturb: float
-    limits: dict[str, Limit]
-    own: dict[str, Any]
-    constraints: list[dict[str, Any]]
+    stability: Mapping[str, Limit]
+    own: OwnSetting
+    constraints: tuple[ConstraintFlag, ...]
     is_linear: bool
-    linearity: dict[str, float]
-    reference: dict[str, Any]
-    runs: list[SweepRun]
-    orders: dict[str, float | None]
-    pareto: list[SweepRun]
-    recommendation: dict[str, Any]
-    timings: dict[str, float]
+    linearity: Linearity
+    reference: ReferenceUsed
+    runs: tuple[SweepRun, ...]
+    orders: Mapping[str, float | None]
+    pareto: tuple[SweepRun, ...]
+    recommendation: Recommendation
+    timings: Timings
 
     @property
     def own_ok(self) -> bool:
         """The model's own setting is stable and meets tol (exit 0 of the CLI; otherwise 1)."""
-        return bool(self.own["stable"]) and self.own["error"] is not None and self.own["error"] <= self.tol
+        return bool(self.own.stable) and self.own.error is not None and self.own.error <= self.tol
 
-    def verdict(self) -> list[str]:
-        """A few lines for the terminal: modes, the own setting's margin and error, the recommendation."""
+    @property
+    def message(self) -> str:
+        """A few lines for people (what `springlab audit` prints): modes, the own setting's margin and
+        error, the recommendation, broken constraints, an unconverged reference."""
         lines = []
         fastest = self.linear.fastest
         unstable = sum(m.physically_unstable for m in self.linear.modes)
@@ -142,68 +290,70 @@ class Audit:
         if unstable:
             head += f"; {unstable} physically unstable (the model's own dynamics, not the integrator)"
         lines.append(f"{head}; {motion} along the motion")
-        own, limit = self.own, self.limits[self.own["integrator"]]
-        if limit.measured_s is None:
+        own, limit = self.own, self.stability[self.own.integrator].limit_dt_measured_s
+        if limit is None:
             stable = "has no stability limit up to the duration"
             if fastest is None:
                 stable += " (every mode is rigid: no time scale for a timestep to miss)"
-        elif own["stable"]:
-            stable = f"is stable with margin {limit.measured_s / own['dt']:.3g}x (limit {limit.measured_s:.3g} s)"
+        elif own.stable:
+            stable = f"is stable with margin {limit / own.dt:.3g}x (limit {limit:.3g} s)"
         else:
-            stable = f"is UNSTABLE: its limit is {limit.measured_s:.3g} s"
-        error = "not compared" if own["error"] is None else f"{own['error']:.2g}"
-        meets = "" if own["error"] is None else (" (meets tol)" if own["error"] <= self.tol else " (misses tol)")
+            stable = f"is UNSTABLE: its limit is {limit:.3g} s"
+        error = "not compared" if own.error is None else f"{own.error:.2g}"
+        meets = "" if own.error is None else (" (meets tol)" if own.error <= self.tol else " (misses tol)")
         lines.append(
-            f"your setting, {own['integrator']} at {own['dt'] * 1e3:.3g} ms, {stable};"
+            f"your setting, {own.integrator} at {own.dt * 1e3:.3g} ms, {stable};"
             f" its error over {self.duration:g} s is {error}{meets}"
         )
         pick = self.recommendation
-        if pick["integrator"] is None:
+        if pick.integrator is None or pick.dt is None or pick.error is None or pick.wall_time_s is None:
             lines.append(f"no swept setting meets tol {self.tol:g} (verified runs); try --dt lower or a longer grid")
         else:
-            own_cost = own.get("wall_time_s")
-            ratio = f" at {pick['wall_time_s'] / own_cost:.2g}x the cost of yours" if own_cost else ""
+            ratio = f" at {pick.wall_time_s / own.wall_time_s:.2g}x the cost of yours" if own.wall_time_s else ""
             lines.append(
-                f"cheapest meeting tol {self.tol:g}: {pick['integrator']} at {pick['dt'] * 1e3:.3g} ms, error"
-                f" {pick['error']:.2g}{ratio} (verified by a run)"
+                f"cheapest meeting tol {self.tol:g}: {pick.integrator} at {pick.dt * 1e3:.3g} ms, error"
+                f" {pick.error:.2g}{ratio} (verified by a run)"
             )
         if self.constraints:
-            names = ", ".join(f"{c['element']} ({c['timeconst_s']:g} s)" for c in self.constraints[:3])
+            names = ", ".join(f"{c.element} ({c.timeconst_s:g} s)" for c in self.constraints[:3])
             more = f" and {len(self.constraints) - 3} more" if len(self.constraints) > 3 else ""
             lines.append(f"solref time constants shorter than 2 dt (MuJoCo stiffens nothing, it clamps): {names}{more}")
-        if not self.reference["converged"]:
+        if not self.reference.converged:
             lines.append(
-                f"note: the RK4 reference did not converge to 1% of tol (estimate {self.reference['error_estimate']:.2g});"
+                f"note: the RK4 reference did not converge to 1% of tol (estimate {self.reference.error_estimate:.2g});"
                 " errors below that are not resolved"
             )
-        return lines
+        return "\n".join(lines)
 
-    def as_json(self) -> dict[str, Any]:
-        """audit.json (docs/json.md's contract, plus orders, pareto, reference, constraints and timings)."""
+    def to_dict(self) -> dict[str, Any]:
+        """audit.json and `springlab audit --json`: the model, its operating point, modes, stability limits,
+        own setting, sweep and recommendation, plus linearity, orders, pareto, reference, constraints and timings."""
         fastest = self.linear.fastest
         return {
             "model": self.model,
-            "operating_point": self.linear.point.as_json(),
+            "operating_point": self.linear.point.to_dict(),
             "perturb": self.perturb,
             "duration_s": self.duration,
             "linear": self.is_linear,
-            "linearity": self.linearity,
-            "modes": [m.as_json() for m in self.linear.modes],
-            "fastest_mode": fastest.as_json() if fastest else None,
-            "stability": {name: limit.as_json(self.own["dt"]) for name, limit in self.limits.items()},
-            "stability_criterion": (
-                "numerically unstable: the measured one-step map amplifies a mode more than the exact flow"
-                " exp(lambda dt) does, by more than 1e-4 per step"
-            ),
-            "own_setting": self.own,
-            "constraints_broken": self.constraints,
-            "reference": self.reference,
-            "sweep": [r.row() for r in self.runs],
-            "orders": self.orders,
-            "pareto": [r.row() for r in self.pareto],
-            "recommendation": self.recommendation,
-            "timings_s": self.timings,
+            "linearity": self.linearity.to_dict(),
+            "modes": [m.to_dict() for m in self.linear.modes],
+            "fastest_mode": fastest.to_dict() if fastest else None,
+            "stability": {name: limit.to_dict() for name, limit in self.stability.items()},
+            "stability_criterion": STABILITY_CRITERION,
+            "own_setting": self.own.to_dict(),
+            "constraints_broken": [c.to_dict() for c in self.constraints],
+            "reference": self.reference.to_dict(),
+            "sweep": [r.to_dict() for r in self.runs],
+            "orders": dict(self.orders),
+            "pareto": [r.to_dict() for r in self.pareto],
+            "recommendation": self.recommendation.to_dict(),
+            "timings_s": self.timings.to_dict(),
         }
+
+    def to_pandas(self) -> pandas.DataFrame:
+        """The sweep as a DataFrame, one row per (integrator, dt): the rows of `to_dict()["sweep"]`
+        (integrator, dt [s], steps, error [-], wall_time_s [s], diverged); pandas is optional."""
+        return tables.to_pandas([r.to_dict() for r in self.runs])
 
 
 # -- the model -----------------------------------------------------------------
@@ -387,7 +537,7 @@ def audit(
     stamps["limits"] = _time.perf_counter()
 
     if dts is None:
-        finite = [lim.measured_s for lim in limits.values() if lim.measured_s is not None]
+        finite = [lim.limit_dt_measured_s for lim in limits.values() if lim.limit_dt_measured_s is not None]
         ceiling = min(GRID_TOP_OVER_LIMIT * max(finite), duration / 10) if finite else duration / 10
         top = _grid_top(duration, ceiling, own_dt)
         dts = default_grid(top)
@@ -421,8 +571,15 @@ def audit(
             steps = round(run_duration / dt_run)
             runs.append(SweepRun(name, dt_run, steps, error, costs[name] * steps, error is None))
     orders = {name: _order([r for r in runs if r.integrator == name], reference.error_estimate) for name in names}
-    own = _own_setting(model, point, outcomes[(own_name, own_dt)], own_name, own_dt, limits, reference)
-    own["wall_time_s"] = costs[own_name] * round(run_duration / own_dt)
+    own_error = run_error(model, point, outcomes[(own_name, own_dt)], reference)
+    own = OwnSetting(
+        integrator=own_name,
+        dt=own_dt,
+        stable=_stable_at(limits, own_name, own_dt) and not isinstance(outcomes[(own_name, own_dt)], DivergedError),
+        error=own_error,
+        margin=limits[own_name].margin,
+        wall_time_s=costs[own_name] * round(run_duration / own_dt),
+    )
     recommendation = _recommend(model, point, start, runs, limits, tol, run_duration, reference)
     stamps["end"] = _time.perf_counter()
     return Audit(
@@ -432,29 +589,29 @@ def audit(
         duration=run_duration,
         tol=tol,
         perturb=perturb,
-        limits=limits,
+        stability=MappingProxyType(limits),
         own=own,
-        constraints=constraint_flags(model, own_dt),
+        constraints=tuple(constraint_flags(model, own_dt)),
         is_linear=is_linear,
-        linearity={"change": change, "tolerance": threshold},
-        reference={
-            "kind": reference.kind,
-            "error_estimate": reference.error_estimate,
-            "dt": reference.dt,
-            "converged": reference.error_estimate <= REFERENCE_FRACTION * tol,
-            "compared_at": f"every step of each run (every k-th for at most {MAX_SAMPLES})",
-            "common_time_spacing_s": spacing,
-        },
-        runs=runs,
-        orders=orders,
-        pareto=_pareto(runs),
+        linearity=Linearity(change, threshold),
+        reference=ReferenceUsed(
+            kind=reference.kind,
+            error_estimate=reference.error_estimate,
+            dt=reference.dt,
+            converged=reference.error_estimate <= REFERENCE_FRACTION * tol,
+            compared_at=f"every step of each run (every k-th for at most {MAX_SAMPLES})",
+            common_time_spacing_s=spacing,
+        ),
+        runs=tuple(runs),
+        orders=MappingProxyType(orders),
+        pareto=tuple(_pareto(runs)),
         recommendation=recommendation,
-        timings={
-            "linearization_and_limits_s": stamps["limits"] - stamps["start"],
-            "sweep_s": stamps["sweep"] - stamps["limits"],
-            "reference_s": stamps["reference"] - stamps["sweep"],
-            "total_s": stamps["end"] - stamps["start"],
-        },
+        timings=Timings(
+            linearization_and_limits_s=stamps["limits"] - stamps["start"],
+            sweep_s=stamps["sweep"] - stamps["limits"],
+            reference_s=stamps["reference"] - stamps["sweep"],
+            total_s=stamps["end"] - stamps["start"],
+        ),
     )
 
 
@@ -499,23 +656,21 @@ def _pareto(runs: list[SweepRun]) -> list[SweepRun]:
     return sorted(chosen, key=lambda r: r.wall_time_s)
 
 
-def _stable_at(limits: dict[str, Limit], name: str, dt: float) -> bool:
-    limit = limits[name].measured_s
+def _stable_at(limits: Mapping[str, Limit], name: str, dt: float) -> bool:
+    limit = limits[name].limit_dt_measured_s
     return limit is None or dt < limit
 
 
-def _own_setting(model, point, outcome, name, dt, limits, reference) -> dict[str, Any]:
-    error = run_error(model, point, outcome, reference)
-    return {
-        "integrator": name,
-        "dt": dt,
-        "stable": _stable_at(limits, name, dt) and not isinstance(outcome, DivergedError),
-        "error": error,
-        "margin": limits[name].margin(dt),
-    }
-
-
-def _recommend(model, point, start, runs, limits, tol, duration, reference) -> dict[str, Any]:
+def _recommend(
+    model: mujoco.MjModel,
+    point: OperatingPoint,
+    start: Setup,
+    runs: list[SweepRun],
+    limits: Mapping[str, Limit],
+    tol: float,
+    duration: float,
+    reference: Reference,
+) -> Recommendation:
     """The cheapest swept setting meeting tol within RECOMMEND_LIMIT_FRACTION of its stability limit,
     verified by a run of its own (springlab.sim.simulate, not the batch). Meeting tol means error + the
     reference's own error estimate <= tol, so a reference that did not fully converge cannot pass a
@@ -528,8 +683,7 @@ def _recommend(model, point, start, runs, limits, tol, duration, reference) -> d
             if r.error is not None
             and r.error <= budget
             and (
-                limits[r.integrator].measured_s is None
-                or r.dt <= RECOMMEND_LIMIT_FRACTION * limits[r.integrator].measured_s
+                (limit := limits[r.integrator].limit_dt_measured_s) is None or r.dt <= RECOMMEND_LIMIT_FRACTION * limit
             )
         ),
         key=lambda r: r.wall_time_s,
@@ -550,12 +704,5 @@ def _recommend(model, point, start, runs, limits, tol, duration, reference) -> d
             continue
         error = run_error(model, point, trajectory, reference)
         if error is not None and error <= budget:
-            return {
-                "integrator": run.integrator,
-                "dt": run.dt,
-                "error": error,
-                "tolerance": tol,
-                "verified": True,
-                "wall_time_s": run.wall_time_s,
-            }
-    return {"integrator": None, "dt": None, "error": None, "tolerance": tol, "verified": False, "wall_time_s": None}
+            return Recommendation(run.integrator, run.dt, error, tol, True, run.wall_time_s)
+    return Recommendation(None, None, None, tol, False, None)

@@ -23,7 +23,7 @@ with g(dt) = phi' M (M + dt D)^-1 M phi; its trace condition is the limit,
 dt^2 g omega^2 + 2 dt g (2 zeta omega) < 4. When D phi = c_i M phi (D keeps the mode to itself) g is
 1 / (1 + dt c_i), and with zeta_i = c_i / (2 omega) the implicit and zeta_e = zeta - zeta_i the explicit
 damping ratio: omega dt < 2 s + 2 sqrt(s^2 + 1), s = zeta_i - zeta_e (all implicit: the classic
-2 zeta + 2 sqrt(zeta^2 + 1) of `simulate.stability_limit`; all explicit: -2 zeta + 2 sqrt(zeta^2 + 1)).
+2 zeta + 2 sqrt(zeta^2 + 1) of `exact.limits.stability_limit`; all explicit: -2 zeta + 2 sqrt(zeta^2 + 1)).
 Otherwise (printer_head: the belt's implicit diagonal also pushes the rigid mode) the trace condition is
 solved for dt. rk4 is R(dt A) on a linear model, R(z) = 1 + z + z^2/2 + z^3/6 + z^4/24, so its limit is
 the first dt at which |R(dt lambda)| > 1 for a stable lambda (2.83/omega undamped); discrete has none.
@@ -69,47 +69,69 @@ CONFIRM_MIN_STEPS, CONFIRM_MAX_STEPS = 200, 20_000
 CONFIRM_SIZE = 1e-6
 
 
-@dataclasses.dataclass
+@dataclasses.dataclass(frozen=True)
 class Limit:
-    """One integrator's stability limit.
+    """One integrator's stability limit; `to_dict()` is its entry in audit.json's "stability".
 
     Attributes
     ----------
     integrator
         name.
-    predicted_s
+    limit_dt_predicted_s
         closed-form limit from the modes [s] (None: no closed form, or no limit).
-    measured_s
+    limit_dt_measured_s
         from the measured one-step map [s] (None: stable over the whole scan).
     confirmed
         runs of the nonlinear model at CONFIRM_BELOW x stay bounded and at CONFIRM_ABOVE x
         grow (None: nothing to confirm).
-    growth_per_step_above
-        rho(Phi) / max(1, exp(sigma dt)) just above the limit [-].
+    margin
+        measured limit / the model's own timestep [-] (None: no limit).
     detail
         how the confirmation came out, for people.
+    growth_per_step_above
+        rho(Phi) / max(1, exp(sigma dt)) just above the limit [-] (None: not probed).
     """
 
     integrator: str
-    predicted_s: float | None
-    measured_s: float | None
+    limit_dt_predicted_s: float | None
+    limit_dt_measured_s: float | None
     confirmed: bool | None = None
-    growth_per_step_above: float | None = None
+    margin: float | None = None
     detail: str = ""
+    growth_per_step_above: float | None = None
 
-    def margin(self, dt: float) -> float | None:
-        """measured limit / dt [-] (None: no limit)."""
-        return None if self.measured_s is None else self.measured_s / dt
-
-    def as_json(self, own_dt: float) -> dict[str, Any]:
+    def to_dict(self) -> dict[str, Any]:
         """{"limit_dt_predicted_s", "limit_dt_measured_s", "confirmed", "margin", "detail"}."""
         return {
-            "limit_dt_predicted_s": self.predicted_s,
-            "limit_dt_measured_s": self.measured_s,
+            "limit_dt_predicted_s": self.limit_dt_predicted_s,
+            "limit_dt_measured_s": self.limit_dt_measured_s,
             "confirmed": self.confirmed,
-            "margin": self.margin(own_dt),
+            "margin": self.margin,
             "detail": self.detail,
         }
+
+
+@dataclasses.dataclass(frozen=True)
+class ConstraintFlag:
+    """A constraint whose solref time constant is shorter than 2 dt (`constraint_flags`).
+
+    Attributes
+    ----------
+    element
+        what it is, e.g. "geom 'floor'".
+    timeconst_s
+        its time constant [s].
+    dt_limit_s
+        timeconst / 2, the largest timestep that keeps it as written [s].
+    """
+
+    element: str
+    timeconst_s: float
+    dt_limit_s: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """{"element", "timeconst_s", "dt_limit_s"}: its row in audit.json's "constraints_broken"."""
+        return dataclasses.asdict(self)
 
 
 def _rk4_limit(eigenvalue: complex) -> float:
@@ -227,7 +249,7 @@ def predicted_limit(linear: Linearization, integrator: str, damping: np.ndarray 
     """The closed-form stability limit [s] of `integrator` from the stable modes (module docstring), or None.
 
     `damping`: the (nv, nv) damping `integrator` treats implicitly (`implicit_damping`) [N s/m, N m s/rad];
-    None: all of C (joint damping, as `simulate.stability_limit` assumes).
+    None: all of C (joint damping, as `exact.limits.stability_limit` assumes).
     """
     stable = [m for m in linear.modes if m.kind != "rigid" and not m.physically_unstable]
     if integrator == "discrete":
@@ -349,36 +371,40 @@ def confirm(
     *,
     nthread: int = 0,
     run: Callable[[Sequence[Job]], list] | None = None,
-) -> None:
-    """Run the nonlinear model just below and just above each measured limit and set `confirmed`.
+) -> list[Limit]:
+    """Run the nonlinear model just below and just above each measured limit: the limits with `confirmed`,
+    `detail` and `growth_per_step_above` filled in (in the order given).
 
     Per limit four runs, batched: the operating point as it is and perturbed by CONFIRM_SIZE along the
     most unstable eigenvector of Phi(CONFIRM_ABOVE x limit), at CONFIRM_BELOW and CONFIRM_ABOVE x the
     limit. Confirmed: above, the deviation grows beyond GROWTH_SEEN x the exact flow's growth (or the
     run blows up); below, it does not. `run` runs the jobs (default: one batch.run_batched call on
-    `nthread` threads; the audit passes audit_ship.Runner, which may send them to dask workers).
+    `nthread` threads; the audit passes springlab.studies.audit.ship.Runner, which may send them to dask workers).
     """
     point = linear.point
+    given = list(limits)
+    found: list[dict[str, Any]] = [{} for _ in given]  # per limit: the fields the confirmation fills in
     jobs, plan = [], []
     data = mujoco.MjData(model)
-    for limit in limits:
-        if limit.measured_s is None:
-            limit.detail = "no limit found: nothing to confirm"
+    for index, limit in enumerate(given):
+        measured = limit.limit_dt_measured_s
+        if measured is None:
+            found[index]["detail"] = "no limit found: nothing to confirm"
             if linear.fastest is None:
                 # no stiffness, no damping at the point: the map is a shear of the free flow at any dt
-                limit.detail = (
+                found[index]["detail"] = (
                     "no limit: every mode is rigid (no stiffness or damping at the operating point),"
                     " so no timestep makes the map grow; nothing to confirm"
                 )
             continue
         probe = _MapProbe(model, linear, limit.integrator)
-        above = CONFIRM_ABOVE * limit.measured_s
+        above = CONFIRM_ABOVE * measured
         growth, vector, size = probe.excess(above)
-        limit.growth_per_step_above = growth
+        found[index]["growth_per_step_above"] = growth
         physical = math.exp(min(probe.sigma * above, 700.0))
         if vector is None or CONFIRM_MAX_STEPS * math.log(max(size / physical, 1e-300)) < math.log(GROWTH_SEEN):
             # the model's own growth per step outruns the numerical one: a run cannot tell them apart
-            limit.detail = (
+            found[index]["detail"] = (
                 f"not confirmable by a run: the physically unstable mode grows {physical:.3g}x per step,"
                 f" the numerical one {size:.3g}x"
             )
@@ -392,27 +418,28 @@ def confirm(
         start = _perturbed(model, point, direction, data)
         base = Setup(point.qpos, point.qvel, point.act, point.ctrl)
         for fraction in (CONFIRM_BELOW, CONFIRM_ABOVE):
-            dt = fraction * limit.measured_s
+            dt = fraction * measured
             for setup in (base, start):
                 jobs.append(Job(model, limit.integrator, dt, steps, setup))
-            plan.append((limit, fraction, steps, dt))
+            plan.append((index, fraction, steps, dt))
     outcomes = run(jobs) if run is not None else run_batched(jobs, nthread=nthread)
     verdicts: dict[int, dict[float, bool]] = {}
-    for index, (limit, fraction, steps, dt) in enumerate(plan):
-        plain, pushed = outcomes[2 * index], outcomes[2 * index + 1]
+    for position, (index, fraction, steps, dt) in enumerate(plan):
+        plain, pushed = outcomes[2 * position], outcomes[2 * position + 1]
         if isinstance(plain, DivergedError) or isinstance(pushed, DivergedError):
             grew = True
         else:
             allowed = math.exp(linear.max_growth_rate * dt * steps)
             grew = _deviation(model, pushed, plain) > GROWTH_SEEN * allowed * CONFIRM_SIZE
-        verdicts.setdefault(id(limit), {})[fraction] = grew
+        verdicts.setdefault(index, {})[fraction] = grew
         if fraction == CONFIRM_ABOVE:
-            below = verdicts[id(limit)][CONFIRM_BELOW]
-            limit.confirmed = (not below) and grew
-            limit.detail = (
+            below = verdicts[index][CONFIRM_BELOW]
+            found[index]["confirmed"] = (not below) and grew
+            found[index]["detail"] = (
                 f"{steps} steps at {CONFIRM_BELOW:g}x: {'grew' if below else 'bounded'};"
                 f" at {CONFIRM_ABOVE:g}x: {'grew' if grew else 'bounded'}"
             )
+    return [dataclasses.replace(limit, **fields) for limit, fields in zip(given, found)]
 
 
 def _perturbed(model: mujoco.MjModel, point: OperatingPoint, direction: np.ndarray, data: mujoco.MjData) -> Setup:
@@ -433,32 +460,32 @@ def stability_limits(
     run: Callable[[Sequence[Job]], list] | None = None,
 ) -> dict[str, Limit]:
     """Predicted, measured (scanned up to `stop_s` [s]) and confirmed limits per integrator name (the
-    confirmation runs through `run`, see `confirm`)."""
+    confirmation runs through `run`, see `confirm`); each margin is over the model's own timestep."""
     fastest = linear.fastest
     scale = 1.0 / fastest.rate_rad_s if fastest is not None else model.opt.timestep
-    out = {}
+    own_dt = float(model.opt.timestep)
+    limits = []
     for name in integrators:
         damping = implicit_damping(model, linear.point, name) if name in IMPLICIT_DAMPING_INTEGRATORS else None
         predicted = predicted_limit(linear, name, damping)
-        out[name] = Limit(name, predicted, measured_limit(model, linear, name, scale, stop_s, predicted))
-    confirm(model, linear, out.values(), nthread=nthread, run=run)
-    return out
+        measured = measured_limit(model, linear, name, scale, stop_s, predicted)
+        margin = None if measured is None else measured / own_dt
+        limits.append(Limit(name, predicted, measured, margin=margin))
+    return {limit.integrator: limit for limit in confirm(model, linear, limits, nthread=nthread, run=run)}
 
 
-def constraint_flags(model: mujoco.MjModel, dt: float) -> list[dict[str, Any]]:
+def constraint_flags(model: mujoco.MjModel, dt: float) -> list[ConstraintFlag]:
     """Constraint settings whose solref time constant is shorter than 2 dt [s] (MuJoCo then stiffens nothing:
     with refsafe on it clamps the time constant to 2 dt, so the constraint is softer than written; off, the
-    integrator can go unstable). One row per element: {"element", "timeconst_s", "dt_limit_s"} (dt_limit_s
-    = timeconst / 2, the largest timestep that keeps it as written)."""
+    integrator can go unstable). One `ConstraintFlag` per element (dt_limit_s = timeconst / 2, the largest
+    timestep that keeps it as written)."""
     rows = []
 
     def check(kind: str, count: int, solref: np.ndarray, name_of) -> None:
         for i in range(count):
             timeconst = float(solref[i][0])
             if timeconst > 0 and timeconst < 2 * dt:
-                rows.append(
-                    {"element": f"{kind} {name_of(i)!r}", "timeconst_s": timeconst, "dt_limit_s": timeconst / 2}
-                )
+                rows.append(ConstraintFlag(f"{kind} {name_of(i)!r}", timeconst, timeconst / 2))
 
     def name(obj):
         return lambda i: obj(i).name or str(i)

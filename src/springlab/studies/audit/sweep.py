@@ -51,7 +51,7 @@ REFERENCE_FRACTION = 0.01
 REFERENCE_MAX_STEPS = 50_000
 #: states along the motion where the linearization is re-taken to test linearity
 LINEARITY_PROBES = 4
-#: runs a list of jobs, as batch.run_batched (audit_ship.Runner: locally or on dask workers)
+#: runs a list of jobs, as batch.run_batched (springlab.studies.audit.ship.Runner: locally or on dask workers)
 RunJobs = Callable[[Sequence[Job]], list[Trajectory | DivergedError]]
 
 #: steps of the timing run behind each integrator's cost per step
@@ -60,9 +60,25 @@ TIMING_STEPS = 1000
 TIMING_MIN_S = 0.02
 
 
-@dataclasses.dataclass
+@dataclasses.dataclass(frozen=True)
 class SweepRun:
-    """One (integrator, dt) of the sweep: error [-] vs the reference (None if diverged), wall time [s]."""
+    """One (integrator, dt) of the sweep; `to_dict()` is its row in audit.json's "sweep".
+
+    Attributes
+    ----------
+    integrator
+        name.
+    dt
+        timestep [s].
+    steps
+        number of steps.
+    error
+        error [-] against the reference (module docstring; None if diverged).
+    wall_time_s
+        steps x the integrator's measured cost per step [s].
+    diverged
+        whether the run blew up.
+    """
 
     integrator: str
     dt: float
@@ -71,8 +87,8 @@ class SweepRun:
     wall_time_s: float
     diverged: bool = False
 
-    def row(self) -> dict[str, Any]:
-        """{"integrator", "dt", "steps", "wall_time_s", "error", "diverged"}."""
+    def to_dict(self) -> dict[str, Any]:
+        """{"integrator", "dt", "steps", "error", "wall_time_s", "diverged"}."""
         return dataclasses.asdict(self)
 
 

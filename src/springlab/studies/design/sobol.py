@@ -1,4 +1,5 @@
-"""Which printer-head properties matter, by variance: Sobol first-order and total indices (SALib).
+"""Which properties matter, by variance: Sobol first-order and total indices (SALib) of a scene's design
+question (`Scene.design`; the printer head's positioning time, for one).
 
 The design study's elasticities come from a log-log fit of positioning time
 on the properties (R^2 about 0.5: settling time jumps in half-period steps as
@@ -16,54 +17,63 @@ confidence intervals, `SALib.analyze.sobol`), not hand-written. With D inputs
 and N base samples the study runs N (D + 2) simulations (second-order indices
 off: they would need N (2 D + 2)).
 
-The inputs: carriage mass, belt stiffness, belt damping ratio, drive force and
-move length, each log-uniform over default x span^[-1, 1] (the design study's
-spans; the move from a quarter to four times the default inch). The sampled
-variables are the exponents u in [-1, 1], so each property is log-uniform;
-Sobol indices are properties of that input distribution, stated with them.
-The output is the positioning time T [s] of the bang-bang move plus settling
-(springlab.studies.design.study.simulate_moves, run in chunks on the executor, so a cluster
-gives the same indices bit for bit).
+The inputs are the ones the scene's declaration names for the Sobol study (`DesignSpec.sobol`; the
+printer head's: carriage mass, belt stiffness, belt damping ratio, drive force and move length), each
+log-uniform over default x span^[-1, 1] (the declared spans; the printer head's move from a quarter to
+four times the default inch). The sampled variables are the exponents u in [-1, 1], so each property
+is log-uniform; Sobol indices are properties of that input distribution, stated with them. The output
+is the positioning time T [s] of the move plus settling (the scene's simulation hook, run in chunks on
+the executor by springlab.studies.design.moves, so a cluster gives the same indices bit for bit).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time as _time
 from collections.abc import Callable, Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from springlab import files, tables
 from springlab.errors import BadInputError
-from springlab.studies.design import study as design
+from springlab.scenes.base import Scene
 from springlab.studies.executor import Executor, chunked, resolve
 
-#: the varied properties, in order, with units
-PARAMETERS: Mapping[str, str] = {
-    "carriage_mass": "kg",
-    "belt_stiffness": "N/m",
-    "damping_ratio": "-",
-    "drive_force": "N",
-    "move_distance": "m",
-}
-#: each spans default x span^[-1, 1] (the design study's spans; a quarter inch to four inches of move)
-SPANS: Mapping[str, float] = {**design.SPANS, "move_distance": 4.0}
-#: base samples N of the default study: N (D + 2) = 16384 x 7 = 114,688 simulations
+from . import moves
+
+if TYPE_CHECKING:
+    import pandas
+
+#: base samples N of the default study: N (D + 2) = 16384 x 7 = 114,688 simulations of the printer head
 DEFAULT_BASE_SAMPLES = 16384
 #: confidence level of the bootstrap intervals, and the resamples drawn
 CONFIDENCE = 0.95
 RESAMPLES = 100
 #: configurations per chunk (one batched MuJoCo call each)
-CHUNK_CONFIGURATIONS = design.CHUNK_CONFIGURATIONS
+CHUNK_CONFIGURATIONS = moves.CHUNK_CONFIGURATIONS
 
 
-def check_base_samples(n: Any) -> int:
-    """N as an int, or BadInputError: the Saltelli scheme needs a power of 2 (Sobol' sequence balance)."""
+def check_base_samples(n: Any, inputs: int) -> int:
+    """N as an int, or BadInputError: the Saltelli scheme needs a power of 2 (Sobol' sequence balance).
+
+    Parameters
+    ----------
+    n
+        the base samples asked for.
+    inputs
+        D, the varied inputs: the study runs N (D + 2) simulations (the message says how many).
+
+    Raises
+    ------
+    BadInputError
+        `n` is not a power of 2 >= 4.
+    """
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 4 or (int(n) & (int(n) - 1)):
         raise BadInputError(
-            f"--sobol N takes a power of 2 >= 4 (base samples of the Sobol' sequence; the study runs N x 7"
+            f"--sobol N takes a power of 2 >= 4 (base samples of the Sobol' sequence; the study runs N x {inputs + 2}"
             f" simulations), e.g. 1024 or {DEFAULT_BASE_SAMPLES}; got {n!r}"
         )
     return int(n)
@@ -78,7 +88,8 @@ def sample(spec: Mapping[str, Any], base_samples: int, seed: int = 0) -> np.ndar
     """(N (D + 2), D) Saltelli sample of `spec` (SALib, scrambled Sobol' sequence seeded with `seed`)."""
     from SALib.sample import sobol as saltelli
 
-    return saltelli.sample(dict(spec), check_base_samples(base_samples), calc_second_order=False, seed=seed)
+    n = check_base_samples(base_samples, spec["num_vars"])
+    return saltelli.sample(dict(spec), n, calc_second_order=False, seed=seed)
 
 
 def analyze(spec: Mapping[str, Any], output: np.ndarray, seed: int = 0) -> dict[str, dict[str, float]]:
@@ -137,43 +148,65 @@ def ishigami(
     return analyze(spec, output, seed)
 
 
-# -- the printer head ---------------------------------------------------------------------------
+# -- a scene's design question ------------------------------------------------------------------
 
 
-def printer_head_chunk(payload: Mapping[str, Any], nthread: int = 0) -> np.ndarray:
+def positioning_chunk(payload: Mapping[str, Any], nthread: int = 0) -> np.ndarray:
     """Positioning time [s] of each row of exponents u (n, D) in payload["rows"] (one batched call)."""
-    values = properties(payload["base"], payload["names"], payload["rows"])
-    runs = design.simulate_moves(payload["base"], values, omega_dt=payload["omega_dt"], nthread=nthread)
-    return runs["positioning_time_s"]
+    _, spec = moves.declaration(payload["scene"])
+    values = properties(spec.hooks.defaults(payload["base"]), payload["spans"], payload["names"], payload["rows"])
+    runs = moves.simulate(payload["scene"], payload["base"], values, omega_dt=payload["omega_dt"], nthread=nthread)
+    return runs.positioning_time_s
 
 
-def defaults(base: Mapping[str, float]) -> dict[str, float]:
-    """The properties' default values at `base` (damping ratio from the belt damping)."""
-    return {**design.default_properties(base), "move_distance": base["move_distance"]}
+def properties(
+    defaults: Mapping[str, float], spans: Mapping[str, float], names: list[str], exponents: np.ndarray
+) -> dict[str, np.ndarray]:
+    """Property -> (n,) values default x span^u for exponent rows u (n, D) of `names`; the others at default.
 
+    Parameters
+    ----------
+    defaults
+        every declared property's default [its unit] (the scene's `defaults` hook).
+    spans
+        property -> span [-] (the declared ones), for the swept properties and `names`.
+    names
+        the sampled properties, in column order.
+    exponents
+        (n, D) exponents u in [-1, 1].
 
-def properties(base: Mapping[str, float], names: list[str], exponents: np.ndarray) -> dict[str, np.ndarray]:
-    """Property -> (n,) values default x span^u for exponent rows u (n, D); unsampled ones at default."""
-    centre = defaults(base)
+    Returns
+    -------
+    dict[str, np.ndarray]
+        the swept properties at their defaults, then each sampled one, (n,) each.
+    """
     exponents = np.asarray(exponents, float)
-    values = {name: np.full(len(exponents), centre[name]) for name in design.PROPERTIES}
+    values = {name: np.full(len(exponents), defaults[name]) for name in spans}
     for j, name in enumerate(names):
-        values[name] = centre[name] * SPANS[name] ** exponents[:, j]
+        values[name] = defaults[name] * spans[name] ** exponents[:, j]
     return values
 
 
-@dataclasses.dataclass
+@dataclasses.dataclass(frozen=True, eq=False)
 class SobolStudy:
-    """Sobol indices of the printer head's positioning time.
+    """Sobol indices of a scene's figure of merit (the positioning time) over its declared inputs.
+
+    Immutable: mappings are read-only views, arrays read-only.
 
     Attributes
     ----------
+    scene
+        the scene studied.
+    merit
+        the figure of merit in words ('positioning time').
     base
         the scene parameters the ranges are centred on (SI).
     names
-        the varied properties.
+        the varied properties, in sampling order.
+    units
+        property -> its unit.
     ranges
-        name -> (low, high) [its unit], log-uniform.
+        property -> (low, high) [its unit], log-uniform.
     base_samples
         N.
     runs
@@ -181,11 +214,11 @@ class SobolStudy:
     seed
         seed of the sample and of the bootstrap.
     indices
-        SALib's S1, S1_conf, ST, ST_conf (name -> value [-]).
+        SALib's S1, S1_conf, ST, ST_conf (property -> value [-]).
     positioning_time_s
-        (runs,) output [s].
+        (runs,) output [s], censored at springlab.studies.design.moves.MAX_DURATION.
     unsettled
-        how many never settled within design.MAX_DURATION (counted there).
+        how many never settled within MAX_DURATION (counted there).
     elasticities
         d ln T / d ln p [-] by least squares over the same runs.
     regression_r2
@@ -196,105 +229,182 @@ class SobolStudy:
         where they ran.
     """
 
-    base: dict[str, float]
-    names: list[str]
-    ranges: dict[str, tuple[float, float]]
+    scene: str
+    merit: str
+    base: Mapping[str, float]
+    names: tuple[str, ...]
+    units: Mapping[str, str]
+    ranges: Mapping[str, tuple[float, float]]
     base_samples: int
     runs: int
     seed: int
-    indices: dict[str, dict[str, float]]
+    indices: Mapping[str, Mapping[str, float]]
     positioning_time_s: np.ndarray
     unsettled: int
-    elasticities: dict[str, float]
+    elasticities: Mapping[str, float]
     regression_r2: float
     wall_time_s: float
     executor: str
 
-    def interactions(self) -> dict[str, float]:
-        """ST - S1 [-]: the share of variance a property has only through interactions."""
-        return {n: self.indices["ST"][n] - self.indices["S1"][n] for n in self.names}
-
-    def ranking(self) -> list[str]:
-        """Properties by decreasing total index."""
-        return sorted(self.names, key=lambda n: -self.indices["ST"][n])
-
-    def summary(self) -> dict[str, Any]:
-        """The `sobol` entry of design.json: parameters, S1, S1_conf, ST, ST_conf, runs (docs/json.md), and more."""
-        s1 = self.indices["S1"]
-        return {
-            "parameters": {
-                n: {"unit": PARAMETERS[n], "range": list(self.ranges[n]), "log_uniform": True} for n in self.names
-            },
-            "S1": s1,
-            "S1_conf": self.indices["S1_conf"],
-            "ST": self.indices["ST"],
-            "ST_conf": self.indices["ST_conf"],
-            "runs": self.runs,
-            "base_samples": self.base_samples,
-            "confidence_level": CONFIDENCE,
-            "seed": self.seed,
-            "first_order_sum": float(sum(s1.values())),
-            "interactions": self.interactions(),
-            "ranking": self.ranking(),
-            "elasticities": self.elasticities,
-            "elasticity_ranking": sorted(self.names, key=lambda n: -abs(self.elasticities[n])),
-            "regression_r2": self.regression_r2,
-            "output": "positioning_time_s",
-            "positioning_time_s": {
-                "mean": float(np.mean(self.positioning_time_s)),
-                "std": float(np.std(self.positioning_time_s)),
-            },
-            "unsettled": self.unsettled,
-            "wall_time_s": self.wall_time_s,
-            "runs_per_s": self.runs / self.wall_time_s if self.wall_time_s > 0 else None,
-            "executor": self.executor,
+    def __post_init__(self) -> None:
+        frozen = {
+            "base": moves.frozen_mapping(self.base),
+            "names": tuple(self.names),
+            "units": moves.frozen_mapping(self.units),
+            "ranges": moves.frozen_mapping({n: tuple(r) for n, r in self.ranges.items()}),
+            "indices": moves.frozen_mapping({key: moves.frozen_mapping(value) for key, value in self.indices.items()}),
+            "elasticities": moves.frozen_mapping(self.elasticities),
+            "positioning_time_s": moves.frozen_array(self.positioning_time_s),
         }
+        for name, value in frozen.items():
+            object.__setattr__(self, name, value)
+
+    @functools.cached_property
+    def interactions(self) -> Mapping[str, float]:
+        """ST - S1 [-]: the share of variance a property has only through interactions."""
+        return moves.frozen_mapping({n: self.indices["ST"][n] - self.indices["S1"][n] for n in self.names})
+
+    @functools.cached_property
+    def ranking(self) -> tuple[str, ...]:
+        """Properties by decreasing total index."""
+        return tuple(sorted(self.names, key=lambda n: -self.indices["ST"][n]))
+
+    @functools.cached_property
+    def elasticity_ranking(self) -> tuple[str, ...]:
+        """Properties by decreasing |elasticity|: the ranking the design study's log-log fit would make."""
+        return tuple(sorted(self.names, key=lambda n: -abs(self.elasticities[n])))
+
+    @property
+    def first_order_sum(self) -> float:
+        """Sum of the first-order indices [-] (at most 1 up to sampling error; 1 - it: the interactions)."""
+        return float(sum(self.indices["S1"].values()))
+
+    @property
+    def answer(self) -> str:
+        """Which properties matter, in words, with the study's numbers."""
+        s1, st, conf = self.indices["S1"], self.indices["ST"], self.indices["ST_conf"]
+        alone = ", ".join(f"{n} {s1[n]:.2f}" for n in self.ranking)
+        total = ", ".join(f"{n} {st[n]:.2f}+-{conf[n]:.2f}" for n in self.ranking)
+        inter = self.interactions
+        through = [n for n in self.ranking if inter[n] > max(0.05, self.indices["ST_conf"][n])]
+        elastic = self.elasticity_ranking
+        return (
+            f"Sobol ({self.runs} runs, {CONFIDENCE:.0%} intervals): alone (S1) {alone}; in total (ST) {total}; "
+            f"first-order sum {sum(s1.values()):.2f}. "
+            + (
+                f"Through interactions (ST - S1 > 0.05): {', '.join(through)}. "
+                if through
+                else "Interactions are small. "
+            )
+            + f"Elasticity ranking from the same runs (R^2 = {self.regression_r2:.2f}): {', '.join(elastic)}"
+            + ("; the same order." if elastic == self.ranking else f"; by variance: {', '.join(self.ranking)}.")
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """The `sobol` entry of design.json and `design --sobol --json`: parameters, S1, S1_conf, ST, ST_conf,
+        runs (docs/sweeps.md), and more; JSON-ready (inf and nan as None)."""
+        return files.json_ready(
+            {
+                "parameters": {
+                    n: {"unit": self.units[n], "range": list(self.ranges[n]), "log_uniform": True} for n in self.names
+                },
+                "S1": dict(self.indices["S1"]),
+                "S1_conf": dict(self.indices["S1_conf"]),
+                "ST": dict(self.indices["ST"]),
+                "ST_conf": dict(self.indices["ST_conf"]),
+                "runs": self.runs,
+                "base_samples": self.base_samples,
+                "confidence_level": CONFIDENCE,
+                "seed": self.seed,
+                "first_order_sum": self.first_order_sum,
+                "interactions": dict(self.interactions),
+                "ranking": list(self.ranking),
+                "elasticities": dict(self.elasticities),
+                "elasticity_ranking": list(self.elasticity_ranking),
+                "regression_r2": self.regression_r2,
+                "output": "positioning_time_s",
+                "positioning_time_s": {
+                    "mean": float(np.mean(self.positioning_time_s)),
+                    "std": float(np.std(self.positioning_time_s)),
+                },
+                "unsettled": self.unsettled,
+                "wall_time_s": self.wall_time_s,
+                "runs_per_s": self.runs / self.wall_time_s if self.wall_time_s > 0 else None,
+                "executor": self.executor,
+            }
+        )
+
+    def to_pandas(self) -> pandas.DataFrame:
+        """One row per property, in sampling order, indexed by `property`: unit, low, high [its unit],
+        S1, S1_conf, ST, ST_conf, interactions, elasticity [-] (pandas needed)."""
+        return tables.to_pandas(
+            [
+                {
+                    "property": n,
+                    "unit": self.units[n],
+                    "low": self.ranges[n][0],
+                    "high": self.ranges[n][1],
+                    **{key: self.indices[key][n] for key in ("S1", "S1_conf", "ST", "ST_conf")},
+                    "interactions": self.interactions[n],
+                    "elasticity": self.elasticities[n],
+                }
+                for n in self.names
+            ],
+            index="property",
+        )
 
 
-def printer_head(
+def run_sobol(
+    scene: str | Scene,
     base_samples: int = DEFAULT_BASE_SAMPLES,
     *,
     seed: int = 0,
-    omega_dt: float = design.OMEGA_DT,
+    omega_dt: float = moves.OMEGA_DT,
     executor: Executor | None = None,
     chunk_size: int = CHUNK_CONFIGURATIONS,
     **overrides: Any,
 ) -> SobolStudy:
-    """Sobol indices of positioning time over carriage mass, belt stiffness, damping ratio, force and move length.
+    """Sobol indices of a scene's positioning time over the inputs its design declares (`DesignSpec.sobol`).
 
     Parameters
     ----------
+    scene
+        a scene that declares a design question, or its name.
     base_samples
-        N, a power of 2; the study runs N x 7 simulations (default 114,688).
+        N, a power of 2; the study runs N (D + 2) simulations (the printer head's default: 114,688).
     seed
         seed of the scrambled Sobol' sequence and of the bootstrap.
     omega_dt
-        omega_n dt [-] of every simulation (RK4), as the design study.
+        omega_n dt [-] of every simulation, as the design study.
     executor
         where the chunks run (None: locally); the indices are the same bit for bit.
     chunk_size
         simulations per batched call.
     **overrides
-        printer_head parameters the ranges are centred on (SI).
+        scene parameters the ranges are centred on (SI).
 
     Raises
     ------
+    UnknownNameError
+        the scene declares no design question, an unknown parameter.
     BadInputError
         N not a power of 2, bad parameter values.
     """
-    base_samples = check_base_samples(base_samples)
-    base = design.base_parameters(overrides)
-    names = list(PARAMETERS)
-    centre = defaults(base)
-    if centre["damping_ratio"] <= 0:
-        raise BadInputError("the Sobol study needs belt_damping > 0 (it varies the damping ratio around it)")
-    spec = problem(names)
-    rows = sample(spec, base_samples, seed)
+    found, spec = moves.declaration(scene)
+    names = list(spec.sobol)
+    base_samples = check_base_samples(base_samples, len(names))
+    base = moves.base_parameters(found, overrides)
+    centre = spec.hooks.defaults(base)
+    inputs = tuple(spec.get(n) for n in names)
+    moves.spanned(centre, inputs, np.zeros(1), study="Sobol", verb="varies")  # every default > 0
+    spans = {p.name: p.span for p in (*spec.properties, *inputs)}
+    space = problem(names)
+    rows = sample(space, base_samples, seed)
     start = _time.perf_counter()
     times = evaluate(
-        printer_head_chunk,
+        positioning_chunk,
         rows,
-        {"base": dict(base), "names": names, "omega_dt": omega_dt},
+        {"scene": found.name, "base": dict(base), "names": names, "spans": spans, "omega_dt": omega_dt},
         executor=executor,
         chunk_size=chunk_size,
         description="sobol",
@@ -302,17 +412,20 @@ def printer_head(
     wall = _time.perf_counter() - start
     unsettled = int(np.sum(~np.isfinite(times)))
     # a configuration still moving after MAX_DURATION is censored there: an infinite output has no variance
-    censored = np.where(np.isfinite(times), times, design.MAX_DURATION)
-    values = properties(base, names, rows)
+    censored = np.where(np.isfinite(times), times, moves.MAX_DURATION)
+    values = properties(centre, spans, names, rows)
     elasticities, r2 = _regression({n: values[n] for n in names}, censored)
     return SobolStudy(
+        scene=found.name,
+        merit=spec.merit,
         base=base,
-        names=names,
-        ranges={n: (centre[n] / SPANS[n], centre[n] * SPANS[n]) for n in names},
+        names=tuple(names),
+        units={p.name: p.unit for p in inputs},
+        ranges={n: (centre[n] / spans[n], centre[n] * spans[n]) for n in names},
         base_samples=base_samples,
         runs=len(rows),
         seed=seed,
-        indices=analyze(spec, censored, seed),
+        indices=analyze(space, censored, seed),
         positioning_time_s=censored,
         unsettled=unsettled,
         elasticities=elasticities,
@@ -331,20 +444,3 @@ def _regression(values: Mapping[str, np.ndarray], times: np.ndarray) -> tuple[di
     residual = target - design_matrix @ coefficients
     r2 = 1.0 - float(residual @ residual) / float(np.sum((target - target.mean()) ** 2))
     return {n: float(e) for n, e in zip(names, coefficients[1:])}, r2
-
-
-def answer(study: SobolStudy) -> str:
-    """Which properties matter, in words, with the study's numbers."""
-    s1, st, conf = study.indices["S1"], study.indices["ST"], study.indices["ST_conf"]
-    alone = ", ".join(f"{n} {s1[n]:.2f}" for n in study.ranking())
-    total = ", ".join(f"{n} {st[n]:.2f}+-{conf[n]:.2f}" for n in study.ranking())
-    inter = study.interactions()
-    through = [n for n in study.ranking() if inter[n] > max(0.05, study.indices["ST_conf"][n])]
-    elastic = sorted(study.names, key=lambda n: -abs(study.elasticities[n]))
-    return (
-        f"Sobol ({study.runs} runs, {CONFIDENCE:.0%} intervals): alone (S1) {alone}; in total (ST) {total}; "
-        f"first-order sum {sum(s1.values()):.2f}. "
-        + (f"Through interactions (ST - S1 > 0.05): {', '.join(through)}. " if through else "Interactions are small. ")
-        + f"Elasticity ranking from the same runs (R^2 = {study.regression_r2:.2f}): {', '.join(elastic)}"
-        + ("; the same order." if elastic == study.ranking() else f"; by variance: {', '.join(study.ranking())}.")
-    )

@@ -46,12 +46,13 @@ def _canonical(name: str) -> str:
 
 def fit(
     scene: str,
-    data: str | os.PathLike,
+    data: fit_data.DataSource,
     scenario: str | None = None,
     *,
     map: Mapping[str, str] | Sequence[str] | None = None,  # noqa: A002 - the CLI's --map
     free: Sequence[str] | None = None,
-    scale: float = 1.0,
+    scale: float | None = None,
+    time_scale: float | None = None,
     start: float | None = None,
     degree: int | None = None,
     run_scene: bool = True,
@@ -59,27 +60,32 @@ def fit(
     workers: int | None = None,
     scheduler: str | None = None,
     executor: Executor | None = None,
+    show_progress: bool | None = None,
     **parameters: Any,
 ) -> FitResult:
-    """Identify `scene` from the record in `data` (a CSV file).
+    """Identify `scene` from the record in `data` (a CSV file, a mapping of arrays or a DataFrame).
 
     Parameters
     ----------
     scene
         A scene that declares a fit (`Scene.fit`; `fittable()` lists them).
     data
-        CSV with a header: `time` [s] and one signal `<joint>_pos` [m],
-        `<joint>_vel` [m/s] or `<joint>_acc` [m/s^2] (see springlab.studies.fit.data).
+        A CSV file with a header, a mapping of column name -> array ({'time': t, 'slider_pos': x}) or a
+        pandas DataFrame: `time` [s] and one signal `<joint>_pos` [m], `<joint>_vel` [m/s] or
+        `<joint>_acc` [m/s^2] (see springlab.studies.fit.data; units the column names state are applied).
     scenario
         The scene's scenario the record shows (None: the fit's default for the scene).
     map
-        File column -> springlab name, e.g. {'t': 'time', 'x_mm': 'slider_pos'}.
+        Column -> springlab name, e.g. {'t': 'time', 'x_mm': 'slider_pos'}.
     free
         Names to fit (None: the scene's declared default; see springlab.studies.fit.models).
     scale
-        Factor [SI per file unit] applied to the signal, e.g. 0.001 for mm.
+        Factor [SI per unit of the data] applied to the signal, e.g. 0.001 for mm (None: the unit the
+        column states, else SI). Given, it wins over the column's unit.
+    time_scale
+        Factor [s per unit of the data] applied to the time, e.g. 0.001 for ms (None: as `scale`).
     start
-        Release time [s]: the record before it is dropped (None: detected).
+        Release time [s, after `time_scale`]: the record before it is dropped (None: detected).
     degree
         A polynomial fit only: its degree, 0 to the highest it declares (frees its coefficients x0, v0, ...
         in order); None: chosen, from the highest down while the highest coefficient's 95 % interval contains 0.
@@ -92,6 +98,8 @@ def fit(
         Where the starts run (springlab.studies.executor): a LocalCluster of `workers`
         processes, a running dask scheduler's address, or an Executor; none: in this process. Same numbers
         either way. A single start always runs in this process.
+    show_progress
+        A progress bar while a large file is read (None: on a terminal only; False: never).
     **parameters
         Fixed values: scene parameters (e.g. mass=2.0 [kg]) and
         x0 [m], v0 [m/s], offset [signal unit], delay [s].
@@ -138,8 +146,10 @@ def fit(
         (how.joint,),
         mapping=fit_data.parse_map(map),
         scale=scale,
+        time_scale=time_scale,
         start=start,
         signals=how.signals,
+        show_progress=show_progress,
     )
     free_given = bool(free)
     free = _free_names(how, free, degree, record)
@@ -359,7 +369,7 @@ def _finish(
         run_note=run_note,
         curves=curves,
         amplitude=how.amplitude(fitted, level),
-        starts=fit_starts.summary(runs, list(free), covariance, record.unit),
+        starts=fit_starts.starts_entry(runs, list(free), covariance, record.unit),
         release=release.to_dict() if release is not None else {},
     )
 

@@ -85,7 +85,7 @@ class FitResult:
     amplitude
         The motion's size in the fitted signal [signal unit] (about its rest level, or its range).
     starts
-        The multi-start record (springlab.studies.fit.starts.summary): count, best, at_best_minimum, spread.
+        The multi-start record (springlab.studies.fit.starts.starts_entry): count, best, at_best_minimum, spread.
     convergence
         Whether the solution converged, and why (`convergence`): the remaining Gauss-Newton step, the
         cross-check, the optimizer's message.

@@ -262,7 +262,7 @@ def run(problem: Problem, count: int, executor: Executor | None = None) -> tuple
     return solved, {"results": results, "best": best, "executor": runner.describe(), "bounds": bounds}
 
 
-def summary(runs: dict[str, Any] | None, free: list[str], covariance: np.ndarray, unit: str) -> dict[str, Any]:
+def starts_entry(runs: dict[str, Any] | None, free: list[str], covariance: np.ndarray, unit: str) -> dict[str, Any]:
     """fit.json's `starts` entry: count, how many reached the best minimum, the spread, the best start.
 
     Parameters
