@@ -146,12 +146,10 @@ class Problem:
         reach = 1.1 * span if "delay" in self.free else span
         if dt is None:
             dt, self.grid = choose_dt(self, values)
-        else:
-            self.grid = dict(self.grid, error_bound=error_bound(self, values, dt))
         if stable_rate is not None and stable_rate > 0 and dt > STABLE_RATE_DT / stable_rate:
             dt = STABLE_RATE_DT / stable_rate
             self.grid["rule"] = f"{self.grid['rule']}; stable at the fastest pole in the starts' box"
-            self.grid["error_bound"] = error_bound(self, values, dt)
+        self.grid.update(_described(self, values, dt))
         self.dt = dt
         self.steps = int(math.ceil(reach / self.dt)) + 3
         if self.steps > 5_000_000:
@@ -480,8 +478,9 @@ def choose_dt(problem: Problem, values: dict[str, float]) -> tuple[float, dict[s
     system = problem.how.system(values, problem.base, problem.modal, problem.force)
     rate = problem.fastest_rate(values)
     if system is None or rate <= 0:
-        facts.update(rule="span / 200: the model is a polynomial, which RK4 integrates exactly", error_bound=0.0)
-        return span / 200.0, facts
+        dt = span / 200.0
+        facts.update(rule="span / 200: the model is a polynomial, which RK4 integrates exactly")
+        return dt, facts | _described(problem, values, dt)
     eigenvalues = np.linalg.eigvals(system[0])
     exact = OMEGA_DT / rate
     # the bound grows as h^4 (leading order): scale it from the exact grid's
@@ -498,13 +497,24 @@ def choose_dt(problem: Problem, values: dict[str, float]) -> tuple[float, dict[s
     for limit, why in limits:
         if dt > limit:
             dt, rule = limit, why
-    facts.update(
-        rule=rule,
-        error_bound=error_bound(problem, values, dt),
-        rate_dt=rate * dt,
-        estimate_range=compare.estimate_range(eigenvalues, "rk4", dt, span).to_dict(),
-    )
-    return dt, facts
+    facts["rule"] = rule
+    return dt, facts | _described(problem, values, dt)
+
+
+def _described(problem: Problem, values: dict[str, float], dt: float) -> dict[str, Any]:
+    """A grid of `dt` [s] at `values` in fit.json's `timestep` terms: its error bound [signal unit] (round-off
+    alone for a model without a mode), |lambda| dt and compare's estimate range (None without a mode)."""
+    span = float(problem.t[-1])
+    system = problem.how.system(values, problem.base, problem.modal, problem.force)
+    if system is None:
+        size = float(np.max(np.abs(problem.record.values))) or 1.0
+        return {"error_bound": _roundoff(span, dt, size), "rate_dt": 0.0, "estimate_range": None}
+    eigenvalues = np.linalg.eigvals(system[0])
+    return {
+        "error_bound": error_bound(problem, values, dt),
+        "rate_dt": float(np.max(np.abs(eigenvalues))) * dt,
+        "estimate_range": compare.estimate_range(eigenvalues, "rk4", dt, span).to_dict(),
+    }
 
 
 def accuracy(problem: Problem, solved: dict[str, Any]) -> dict[str, Any]:

@@ -405,9 +405,7 @@ def timestep(grid: Mapping[str, Any], numerics: Mapping[str, Any]) -> dict[str, 
     spacing = float(out.get("median_sample_spacing_s") or 0.0)
     out["samples_per_step"] = out["dt_s"] / spacing if spacing > 0 else None
     out["measured_error"] = numerics["error"]
-    out["within_error_bound"] = bool(
-        numerics["error"] <= out.get("error_bound", math.inf) or out.get("error_bound") == 0
-    )
+    out["within_error_bound"] = bool(numerics["error"] <= out.get("error_bound", math.inf))
     out["effect"] = numerics["effect"].tolist()
     out["effect_in_standard_errors"] = numerics["in_standard_errors"]
     out["effect_in_allowances"] = numerics["ratio"]
