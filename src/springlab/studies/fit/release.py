@@ -178,7 +178,8 @@ def held_start(
         if name in how.units() and name not in names and name not in fixed:
             names.append(name)
     try:
-        statistic, threshold, release_index = _change_point(how, record, base, fixed, names, force, sigma, exit_)
+        with np.errstate(all="ignore"):  # trial parameters far off may overflow the closed form: rejected, not shown
+            statistic, threshold, release_index = _change_point(how, record, base, fixed, names, force, sigma, exit_)
     except (SpringlabError, ValueError, ArithmeticError, np.linalg.LinAlgError) as error:
         return Release("moving", t0, noise=sigma, reason=f"{first}: a held start could not be tested ({error})")
     held = statistic > threshold
