@@ -150,9 +150,9 @@ def test_blocks_of_any_size_read_the_same_record(tmp_path, monkeypatch, block):
     """The body is read in blocks: lines cut at a block's end (or longer than a block) are whole again."""
     path = tmp_path / "record.csv"
     path.write_text(KINDS["comment lines"][0])
-    whole = fit_data.load(path, ("slider",), detect_release=False)
+    whole = fit_data.load(path, ("slider",))
     monkeypatch.setattr(reader, "BLOCK", block)
-    pieces = fit_data.load(path, ("slider",), detect_release=False)
+    pieces = fit_data.load(path, ("slider",))
     assert np.array_equal(pieces.time, whole.time) and np.array_equal(pieces.values, whole.values)
     assert pieces.notes == whole.notes and pieces.rows == whole.rows == N
 
@@ -239,10 +239,10 @@ def test_an_explicit_factor_wins_over_the_columns_unit_and_says_so(tmp_path):
     path.write_text(text("elapsed_ms,disp_mm", factors=(1e-3, 1e-3)))
     raw_t, raw_x = in_units(1e-3, 1e-3)
     names = {"elapsed_ms": "time", "disp_mm": "slider_pos"}
-    agree = fit_data.load(path, ("slider",), mapping=names, scale=1e-3, time_scale=1e-3, detect_release=False)
+    agree = fit_data.load(path, ("slider",), mapping=names, scale=1e-3, time_scale=1e-3)
     assert np.array_equal(agree.values, raw_x * 1e-3) and np.array_equal(agree.time, raw_t * 1e-3)
     assert "(--scale agrees)" in agree.notes[0] and "(--time-scale agrees)" in agree.notes[0]
-    wins = fit_data.load(path, ("slider",), mapping=names, scale=1.0, time_scale=2e-3, detect_release=False)
+    wins = fit_data.load(path, ("slider",), mapping=names, scale=1.0, time_scale=2e-3)
     assert np.array_equal(wins.values, raw_x) and np.array_equal(wins.time, raw_t * 2e-3)
     assert "--scale wins over 'disp_mm''s mm" in wins.notes[0] and "--time-scale wins" in wins.notes[0]
 
@@ -324,7 +324,7 @@ def test_a_dataframe_of_times_and_missing_values_is_read_as_seconds():
     start = pd.Timestamp("2024-05-01 12:00", tz="Europe/Berlin")
     nullable = pd.array([*X[:-1], None], dtype="Float64")
     frame = pd.DataFrame({"slider_pos": nullable}, index=(start + pd.to_timedelta(T, unit="s")).rename("time"))
-    record = fit_data.load(frame, ("slider",), detect_release=False)
+    record = fit_data.load(frame, ("slider",))
     assert record.skipped_nan == 1 and record.time.size == N - 1
     assert np.allclose(record.time, T[:-1], rtol=0, atol=1e-9)  # datetimes hold whole nanoseconds
     assert "seconds since its first time, 2024-05-01T10:00:00.000 UTC" in record.notes[0]

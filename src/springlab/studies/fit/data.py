@@ -20,9 +20,9 @@ Untidy data is handled, and every step says what it did (`Record.notes`):
   at the recorded times, so any strictly increasing times work;
 * rows where the time or the signal is empty or NaN are skipped and counted;
 * a record that starts before the release (the signal held still, then let go):
-  `start` [s] drops everything before it; without it the held part is detected
-  (a leading run of samples within 5 noise levels of the first one, at least
-  10 samples and 1 % of the record) and dropped;
+  `start` [s] drops everything before it; without it the fit tests for a held
+  part and drops it only when the data show it beyond their noise
+  (springlab.studies.fit.release, `cut_at_release`);
 * a constant offset, noise and a sensor delay are parameters of the fit, not of the data.
 """
 
@@ -142,7 +142,6 @@ def load(
     scale: float | None = None,
     time_scale: float | None = None,
     start: float | None = None,
-    detect_release: bool = True,
     signals: Sequence[str] = tuple(SIGNALS),
     show_progress: bool | None = None,
 ) -> Record:
@@ -164,8 +163,6 @@ def load(
         Factor [s per unit of the data] applied to the time; None: from the column's stated unit, else 1.
     start
         Time [s] (after `time_scale`) of the release; samples before it are dropped and the model's t = 0 is there.
-    detect_release
-        Without `start`, find and drop a held part at the beginning.
     signals
         The signal kinds this scene can fit.
     show_progress
@@ -268,10 +265,6 @@ def load(
     )
     if start is not None:
         return _cut(record, start, source, detected=False)
-    if detect_release:
-        release = find_release(record.time, record.values)
-        if release is not None:
-            return _cut(record, release, source, detected=True)
     return record
 
 
@@ -309,6 +302,11 @@ def _check_enough(samples: int, column: str, skipped: int, source: str) -> None:
         )
 
 
+def cut_at_release(record: Record, start: float) -> Record:
+    """The record from a detected release on: samples before `start` [s] dropped (and noted), t = 0 there."""
+    return _cut(record, start, record.column, detected=True)
+
+
 def _cut(record: Record, start: float, path: str, *, detected: bool) -> Record:
     """The record without the samples before `start` [s], the model's t = 0 there."""
     if not isinstance(start, (int, float)) or not math.isfinite(start):
@@ -344,28 +342,3 @@ def noise_level(values: np.ndarray) -> float:
         return 0.0
     d3 = np.diff(values, 3)
     return float(1.4826 * np.median(np.abs(d3 - np.median(d3))) / math.sqrt(20.0))
-
-
-def find_release(time: np.ndarray, values: np.ndarray) -> float | None:
-    """Time [s] of the first sample after the release when the record starts still; None otherwise.
-
-    Held: within 5 noise levels (or 1e-9 of the signal's range, for noiseless
-    data) of the first samples' median, for at least 10 samples and 1 % of the
-    record. The fit starts at the first sample that left that band: it is
-    surely after the release, and the initial state there is fitted, so the
-    unknown moment of the release between the samples biases nothing.
-    """
-    n = values.size
-    head = values[: max(5, n // 100)]
-    level = float(np.median(head))
-    span = float(np.ptp(values))
-    threshold = max(5.0 * noise_level(values), 1e-9 * span)
-    if span == 0:
-        return None
-    outside = np.flatnonzero(np.abs(values - level) > threshold)
-    if not outside.size:
-        return None
-    first = int(outside[0])
-    if first < max(10, n // 100):
-        return None
-    return float(time[first])
