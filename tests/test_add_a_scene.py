@@ -40,17 +40,51 @@ def checkout(tmp_path_factory):
     return root
 
 
-def _springlab(checkout: pathlib.Path, *argv: str) -> subprocess.CompletedProcess:
+#: runs springlab's command line in this process once per command, in the copy's interpreter: one import
+#: of springlab for all the commands instead of one per command (each import costs about a second)
+DRIVER = """
+import contextlib, io, json, sys
+from springlab.cli.main import main
+outcomes = []
+for argv in json.loads(sys.stdin.read()):
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(argv)
+    outcomes.append([code, out.getvalue(), err.getvalue()])
+print(json.dumps(outcomes))
+"""
+
+
+def _springlab(checkout: pathlib.Path, *commands: list[str]) -> list[tuple[int, str, str]]:
+    """(exit code, stdout, stderr) of each command, run by the copy's springlab."""
     env = dict(os.environ, PYTHONPATH=str(checkout / "src"), MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
-    return subprocess.run(
-        [sys.executable, "-m", "springlab", *argv], cwd=checkout, env=env, capture_output=True, text=True, timeout=600
+    done = subprocess.run(
+        [sys.executable, "-c", DRIVER],
+        input=json.dumps([list(c) for c in commands]),
+        cwd=checkout,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=900,
     )
-
-
-def _json(checkout: pathlib.Path, *argv: str):
-    done = _springlab(checkout, *argv, "--json")
     assert done.returncode == 0, done.stderr
-    return json.loads(done.stdout)
+    assert json.loads(
+        subprocess.run(  # the copy's springlab is the one that ran, not the checkout's
+            [sys.executable, "-c", "import springlab, json; print(json.dumps(springlab.__file__))"],
+            cwd=checkout,
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=120,
+        ).stdout
+    ).startswith(str(checkout))
+    return [tuple(outcome) for outcome in json.loads(done.stdout)]
+
+
+def _json(outcome: tuple[int, str, str]):
+    code, out, err = outcome
+    assert code == 0, err
+    return json.loads(out)
 
 
 def _without_timing(value):
@@ -63,31 +97,38 @@ def _without_timing(value):
 
 @pytest.mark.slow
 def test_a_scene_added_as_a_model_and_a_folder_serves_every_command(checkout, tmp_path):
-    # it is this copy's springlab that runs, with the new scene in it
-    listed = _json(checkout, "list")
+    trajectory = tmp_path / "run"
+    listed, twin, slider, rows, plotted, tradeoff, audit, written = _springlab(
+        checkout,
+        ["list", "--json"],
+        ["run", NAME, "free", "--json"],
+        ["run", "slider", "free", "--json"],
+        ["validate", NAME, "--json"],
+        ["plot", NAME, "--kind", "zeta", "--output", str(tmp_path / "z.png")],
+        ["tradeoff", NAME, "free", "--tol", "1e-6", "--json"],
+        ["audit", str(checkout / "models" / f"{NAME}.xml"), "--json"],
+        ["run", NAME, "free", "--output", str(trajectory)],
+    )
+    listed = _json(listed)
     assert [entry["scene"] for entry in listed][-1] == NAME and "slider" in [entry["scene"] for entry in listed]
 
     # run and validate: the twin's numbers are the slider's, bit for bit
-    twin, slider = _json(checkout, "run", NAME, "free"), _json(checkout, "run", "slider", "free")
+    twin, slider = _json(twin), _json(slider)
     assert twin["scene"] == NAME and twin["passed"] is True
     assert _without_timing(twin) == _without_timing(slider)
-    rows = _json(checkout, "validate", NAME)
-    assert {row["scenario"] for row in rows} == {s for s in listed[-1]["scenarios"]}
+    rows = _json(rows)
+    assert {row["scenario"] for row in rows} == set(listed[-1]["scenarios"])
     assert all(row["passed"] for row in rows)
 
     # outputs and studies
-    assert _springlab(checkout, "plot", NAME, "--kind", "zeta", "--output", str(tmp_path / "z.png")).returncode == 0
-    assert (tmp_path / "z.png").stat().st_size > 0
-    tradeoff = _json(checkout, "tradeoff", NAME, "free", "--tol", "1e-6")
-    assert tradeoff["recommendation"]["integrator"] is not None
-    audit = _json(checkout, "audit", str(checkout / "models" / f"{NAME}.xml"))
-    assert audit["recommendation"]["verified"] is True
+    assert plotted[0] == 0 and (tmp_path / "z.png").stat().st_size > 0
+    assert _json(tradeoff)["recommendation"]["integrator"] is not None
+    assert _json(audit)["recommendation"]["verified"] is True
 
     # a declared capability is all a study needs: the twin can be fitted because the slider can
-    trajectory = tmp_path / "run"
-    assert _springlab(checkout, "run", NAME, "free", "--output", str(trajectory)).returncode == 0
-    fitted = _json(checkout, "fit", NAME, str(trajectory / "trajectory.csv"))
-    truth = twin["parameters"]
+    assert written[0] == 0
+    (fitted,) = _springlab(checkout, ["fit", NAME, str(trajectory / "trajectory.csv"), "--json"])
+    fitted, truth = _json(fitted), twin["parameters"]
     assert fitted["scene"] == NAME and fitted["converged"] is True
     # wiring, not accuracy (tests/test_fit.py holds the fit to its intervals): the record is a validated
     # run (error ~1e-6 of its amplitude), so the frequency comes back far inside 1e-3

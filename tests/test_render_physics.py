@@ -96,7 +96,9 @@ def test_the_road_bump_rises_and_falls_under_the_front_wheel_with_r_of_t(tmp_pat
 @pytest.mark.slow
 def test_the_printer_move_is_slowed_to_many_frames_and_the_carriage_follows_its_simulated_position(tmp_path):
     result = run_scenario("printer_head", "move")
-    info = media.render_run(result, tmp_path / "move.mp4", progress=False)
+    # a quarter of the default pixels: the carriage is still tens of pixels wide, and the frames, slow
+    # motion and exaggeration are the defaults under test
+    info = media.render_run(result, tmp_path / "move.mp4", width=320, height=240, progress=False)
     assert info["frames"] >= 90
     # the 195 Hz belt gets frames per period enough to be seen ringing, not aliased
     belt_hz = scenes.get("printer_head").modes(
