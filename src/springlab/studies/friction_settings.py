@@ -15,8 +15,9 @@ declaration (it never names a scene) and, per declared case (a scenario),
 * separates the two errors: the **model error** of a setting is the error left as dt -> 0, read
   from RK4 at the smallest timestep and shown to have converged (the next larger timestep gives
   the same error within `CONVERGED`); the rest of a run's error is integration error;
-* finds the Pareto front of error vs wall time, and for a tolerance the cheapest run within it,
-  verified by running that setting as `springlab run` does (with its convergence checks); where
+* finds the Pareto front of error vs CPU time, and for a tolerance the cheapest run within it (runs
+  within COST_BAND of each other count as equally cheap, the more accurate wins), verified by running
+  that setting as `springlab run` does (with its convergence checks); where
   no run meets the tolerance it says which floor stops it: MuJoCo's (the best setting's model
   error is above the tolerance: no integrator or timestep helps) or the integration's.
 
@@ -58,6 +59,9 @@ CHUNK_RUNS = 48
 CONVERGED = 0.1
 #: the integrator whose error at the smallest timestep is a setting's model error (the highest order)
 MODEL_INTEGRATOR = "rk4"
+#: runs whose CPU times are within this factor (the same band) count as equally cheap, and the more accurate
+#: is picked: one setting's CPU time scatters by about this much between runs on a shared machine
+COST_BAND = 1.25
 #: runs at the sweep's smallest dt (no run at dt/2 measured their integration error) the pick verifies at
 #: most, cheapest first, before the cheapest run the sweep measured within tol
 MAX_VERIFIED = 200
@@ -765,15 +769,15 @@ def _pick(scene: Scene, study: CaseStudy, tol: float, parameters: Mapping[str, A
     """The cheapest run within tol whose setting a full run verifies, or why there is none."""
     candidates = sorted(
         (r for r in study.runs if not r.diverged and r.error <= tol and math.isfinite(r.cpu_time_s)),
-        key=lambda r: (r.cpu_time_s, r.error),
+        key=lambda r: (_cost_band(r.cpu_time_s), r.error),
     )
     # the verification reruns at dt/2 and needs SAFETY max |x(dt) - x(dt/2)| / scale <= tol too: the sweep
     # measured that for every run but those at its smallest dt; a run it already failed is not tried
     # runs it measured within tol pass for certain: try them last, and before them only the unmeasured runs
     # that are cheaper than the cheapest of them
     measured = [r for r in candidates if r.integration_error is not None and r.integration_error <= tol]
-    cheapest = measured[0].cpu_time_s if measured else math.inf
-    unmeasured = [r for r in candidates if r.integration_error is None and r.cpu_time_s < cheapest]
+    cheapest = _cost_band(measured[0].cpu_time_s) if measured else math.inf
+    unmeasured = [r for r in candidates if r.integration_error is None and _cost_band(r.cpu_time_s) < cheapest]
     hopeful = unmeasured[:MAX_VERIFIED] + measured
     baseline = study.default.cpu_time_s if study.default is not None else None
     tried = 0
@@ -799,6 +803,11 @@ def _pick(scene: Scene, study: CaseStudy, tol: float, parameters: Mapping[str, A
             speedup=baseline / candidate.cpu_time_s if baseline else None,
         )
     return Pick(tol=tol, run=None, verified_error=None, speedup=None, floor=_floor(study, tol, len(candidates), tried))
+
+
+def _cost_band(seconds: float) -> int:
+    """The band of COST_BAND in which a CPU time falls: runs in one band count as equally cheap."""
+    return math.floor(math.log(max(seconds, 1e-12)) / math.log(COST_BAND))
 
 
 def _floor(study: CaseStudy, tol: float, within: int = 0, tried: int = 0) -> str:

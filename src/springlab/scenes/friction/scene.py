@@ -111,7 +111,7 @@ SETTINGS = (
         "solref time constant [s]",
         floor_in_dt=2.0,
     ),
-    SolverSetting("solimp_d0", (0.9, 0.95, 0.99), 0.9, (JOINT_FRICTION, CONTACT_FRICTION), "solimp d0 [-]"),
+    SolverSetting("solimp_d0", (0.9, 0.99), 0.9, (JOINT_FRICTION, CONTACT_FRICTION), "solimp d0 [-]"),
     SolverSetting("impratio", (1.0, 10.0, 100.0), 1.0, (CONTACT_FRICTION,), "impratio [-]"),
     SolverSetting(
         "elliptic_cone",
