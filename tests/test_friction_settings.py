@@ -168,3 +168,25 @@ def test_the_study_gives_the_same_errors_on_dask_workers(monkeypatch):
     assert len(local.cases[0].runs) == 16
     assert [r.max_rel_error for r in local.cases[0].runs] == [r.max_rel_error for r in remote.cases[0].runs]
     assert [r.values for r in local.cases[0].runs] == [r.values for r in remote.cases[0].runs]
+
+
+@pytest.mark.slow
+def test_the_demo_answers_how_much_mujocos_friction_drifts_and_what_stopping_it_costs(tmp_path):
+    from springlab.demo import report, steps
+    from springlab.demo.state import DemoState
+
+    state = DemoState(out=tmp_path)
+    written = steps.friction_step(state)
+    assert {a.path for a in written} == {
+        "friction/friction_settings/friction_settings.png",
+        "friction/friction_settings/friction_settings.json",
+        "friction/friction_settings/friction_settings.csv",
+    }
+    assert all((tmp_path / a.path).stat().st_size > 0 for a in written)
+    answer = next(a for a in written if a.answer)
+    assert answer.title == steps.FRICTION_QUESTION
+    lines = answer.answer.splitlines()
+    assert len(lines) == 4 and all("MuJoCo's defaults" in line for line in lines)
+    state.artifacts.extend(written)
+    page = report.build_html(state)
+    assert "How much does MuJoCo&#x27;s friction drift" in page and "MuJoCo&#x27;s model error" in page
