@@ -388,6 +388,41 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def cmd_friction_settings(args: argparse.Namespace) -> int:
+    from springlab.plots import friction_settings as friction_chart  # matplotlib only for this command
+    from springlab.studies import friction_settings
+
+    if args.output:
+        files.check_directory(args.output)  # before minutes of computing, not after
+    integrators = [name.strip() for name in args.integrators.split(",")] if args.integrators else None
+    dts = _numbers("--dt", args.dt) if args.dt else None
+    with _executor(args) as executor:
+        study = friction_settings.friction_settings(
+            args.scene,
+            args.scenarios or None,
+            tol=args.tol,
+            integrators=integrators,
+            dts=dts,
+            executor=executor,
+            **_parse_sets(args.set),
+        )
+    if args.output:
+        friction_chart.write(study, args.output)
+    if args.json:
+        _print_json(study.to_dict())
+    else:
+        cli_text.print_friction_settings(study, args.output)
+    return EXIT_FAILED if any(c.pick is not None and not c.pick.found for c in study.cases) else EXIT_OK
+
+
+def _numbers(option: str, text: str) -> list[float]:
+    """'a,b,c' -> [a, b, c] (floats), or BadInputError naming the option."""
+    try:
+        return [float(part) for part in text.split(",") if part.strip()]
+    except ValueError:
+        raise BadInputError(f"{option} takes numbers separated by commas, e.g. 0.002,0.001; got {text!r}") from None
+
+
 def cmd_fit(args: argparse.Namespace) -> int:
     # here, not at the top: mujoco.sysid and scipy load only for fits; `from .fit import`, because
     # springlab.fit (the attribute) is the function once springlab/__init__ has run
@@ -638,6 +673,26 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--output", metavar="DIR", help="write DIR/sweep.csv and DIR/sweep.png")
     p.add_argument("--json", action="store_true", help="print the sweep (setting, counts, every row) as JSON")
     COMMANDS["sweep"] = cmd_sweep
+
+    p = sub.add_parser(
+        "friction-settings",
+        help="MuJoCo's friction settings vs exact dry friction: model error, error vs cost, the cheapest for --tol",
+    )
+    frictional = ", ".join(name for name, scene in scenes.SCENES.items() if scene.dry_friction is not None)
+    p.add_argument("scene", help=f"a scene with exact dry-friction cases: {frictional}")
+    p.add_argument("scenarios", nargs="*", help="its cases to sweep (default: all)")
+    p.add_argument("--tol", type=float, metavar="TOL", help="pick the cheapest setting meeting this relative error")
+    p.add_argument("--integrators", metavar="A,B", help=f"integrators to sweep (default: {','.join(INTEGRATORS)})")
+    p.add_argument("--dt", metavar="LIST", help="timesteps to sweep, e.g. 0.002,0.001 [s] (default: the scene's)")
+    p.add_argument(
+        "--set", action="append", default=[], metavar="NAME=VALUE", help="a parameter that is not swept (repeatable)"
+    )
+    _executor_arguments(p)
+    p.add_argument(
+        "--output", metavar="DIR", help="write friction_settings.json, friction_settings.csv, friction_settings.png"
+    )
+    p.add_argument("--json", action="store_true", help="print friction_settings.json")
+    COMMANDS["friction-settings"] = cmd_friction_settings
 
     p = sub.add_parser("fit", help="identify a scene's parameters from a recorded signal (CSV)")
     # the scenes that declare a fit (Scene.fit), e.g. "slider, car, printer_head or kinematics"

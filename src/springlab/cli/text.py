@@ -24,6 +24,7 @@ if TYPE_CHECKING:  # annotations only: these load mujoco.batch, scipy or sysid, 
     from springlab.studies.design.sobol import SobolStudy
     from springlab.studies.design.study import Study
     from springlab.studies.fit.results import FitResult
+    from springlab.studies.friction_settings import FrictionSettings
     from springlab.studies.stability import StabilityReport
     from springlab.studies.sweeps import Sweep
 
@@ -281,6 +282,26 @@ def print_sweep(result: Sweep, quantity: str | None, output: str | None) -> None
             print(f"  {quantity}: min {finite.min():.4g} (at {where}), max {finite.max():.4g}")
     if output:
         print(f"  wrote {pathlib.Path(output) / 'sweep.csv'} and sweep.png")
+
+
+def print_friction_settings(study: FrictionSettings, output: str | None) -> None:
+    """`springlab friction-settings`: per case MuJoCo's default, the model errors, the Pareto front and the pick."""
+    integrator, dt = study.mujoco_default
+    print(
+        f"{study.scene}: {study.runs} runs in {study.wall_time_s:.1f} s ({', '.join(study.integrators)};"
+        f" dt = {', '.join(f'{d:g}' for d in study.dts)} s); baseline MuJoCo's defaults ({integrator}, dt = {dt:g} s)"
+    )
+    for case in study.cases:
+        print(f"\n{case.answer()}")
+        print(f"  {'Pareto front':<58}{'integrator':<13}{'dt [s]':>9}{'error':>10}{'cpu [ms]':>10}")
+        for r in case.pareto:
+            print(
+                f"  {case.describe(r.settings):<58}{r.integrator:<13}{r.dt:>9.3g}{r.error:>10.2e}{r.cpu_time_s * 1e3:>10.2f}"
+            )
+    if output:
+        print(
+            f"\nwrote {pathlib.Path(output) / 'friction_settings.json'}, friction_settings.csv and friction_settings.png"
+        )
 
 
 def print_fit(result: FitResult, output: str | None) -> None:

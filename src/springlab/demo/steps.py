@@ -259,6 +259,51 @@ def audit_step(state: DemoState) -> list[Artifact]:
     ]
 
 
+#: the friction-settings study the demo runs: each swept setting at MuJoCo's default and at its last
+#: declared value, MuJoCo's default integrator, implicitfast and rk4, the declared timesteps but the smallest
+DEMO_FRICTION_INTEGRATORS = ("implicitfast", "rk4")
+#: the question the demo's friction-settings section answers
+FRICTION_QUESTION = "How much does MuJoCo's friction drift, and what does it cost to make it stop?"
+
+
+def friction_step(state: DemoState) -> list[Artifact]:
+    """Every scene that declares dry friction (Scene.dry_friction): a smaller friction-settings study for 1e-2."""
+    from springlab.plots import friction_settings as chart  # here: matplotlib only when this step runs
+    from springlab.studies import friction_settings
+
+    written = []
+    default_integrator, _ = friction_settings.mujoco_defaults()
+    for scene in scenes.SCENES.values():
+        spec = scene.dry_friction
+        if spec is None:
+            continue
+        values = {s.name: tuple(dict.fromkeys((s.mujoco_default, s.values[-1]))) for s in spec.settings}
+        integrators = tuple(dict.fromkeys((default_integrator, *DEMO_FRICTION_INTEGRATORS)))
+        study = friction_settings.friction_settings(
+            scene.name,
+            tol=1e-2,
+            integrators=integrators,
+            dts=spec.dts[:-1] if len(spec.dts) > 2 else spec.dts,
+            values=values,
+        )
+        folder = pathlib.Path(scene.name) / "friction_settings"
+        chart.write(study, state.out / folder)
+        state.timings.append((f"friction settings of {scene.name} ({study.runs} runs)", study.wall_time_s))
+        written += [
+            Artifact(
+                str(folder / "friction_settings.png"), "plot", FRICTION_QUESTION, scene.name, answer=study.answer()
+            ),
+            Artifact(
+                str(folder / "friction_settings.json"),
+                "data",
+                f"{scene.name}: every run of MuJoCo's friction settings, the model errors and the picks for 1e-2",
+                scene.name,
+            ),
+            Artifact(str(folder / "friction_settings.csv"), "data", f"{scene.name}: one row per run", scene.name),
+        ]
+    return written
+
+
 #: the demo's steps, in order (defined once, here: nothing is added at import time)
 STEPS: tuple[Callable[[DemoState], list[Artifact]], ...] = (
     core_step,
@@ -266,6 +311,7 @@ STEPS: tuple[Callable[[DemoState], list[Artifact]], ...] = (
     tradeoff_step,
     design_step,
     audit_step,
+    friction_step,
 )
 #: steps that run after every step in STEPS (the report lists everything)
 FINAL_STEPS: tuple[Callable[[DemoState], list[Artifact]], ...] = (report_step,)
