@@ -240,7 +240,8 @@ def cmd_plot(args: argparse.Namespace) -> int:
             figure = plots.phase_family(families.run_phase_family(result))
             verdict = EXIT_OK  # a family is a picture of many runs; the verdict belongs to single runs
         else:
-            figure = plots.time_series(result) if args.kind == "time" else plots.phase_plane(result)
+            draw = {"time": plots.time_series, "phase": plots.phase_plane, "scene": plots.scene_figure}[args.kind]
+            figure = draw(result)
             verdict = _verdict(result)
     print(f"wrote {plots.save(figure, args.output)}")
     return verdict
@@ -512,9 +513,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--kind",
         default="time",
-        choices=("time", "phase", "family", "zeta"),
+        choices=("time", "phase", "family", "zeta", "scene"),
         help="time: x(t), v(t) with the exact solution and the error on a log axis (default); "
         "phase: phase plane with vector field, equilibria, separatrices; "
+        "scene: the panels the scene declares (e.g. the drill string's speeds, twist and mode shapes); "
         "family: phase trajectories from several initial displacements; "
         "zeta: responses for damping ratios 0 to 2",
     )

@@ -73,9 +73,9 @@ def generate(spec: mujoco.MjSpec, params: dict[str, float], *, encoding: str = "
     _numeric(spec, "top_speed_rpm", params["top_speed_rpm"])
     _numeric(spec, "spin_up_time", params["spin_up_time"])
     drawn = float(spec.numeric("drawn_length").data[0])
-    spec.text("note:length").data = (
-        f"length drawn 1:{length / drawn:.3g} ({length:g} m as {drawn:g} m), diameter {DRAWN_DIAMETER_FACTOR:g}x"
-    )
+    spec.text(
+        "note:length"
+    ).data = f"length drawn 1:{length / drawn:.3g} ({length:g} m as {drawn:g} m), diameter {DRAWN_DIAMETER_FACTOR:g}x"
 
     for tendon in list(spec.tendons):
         spec.delete(tendon)
@@ -114,9 +114,7 @@ def generate(spec: mujoco.MjSpec, params: dict[str, float], *, encoding: str = "
     bit_inertia = node / 2 + params["bit_inertia"]
     template_joint = spec.joint("bit")
     friction_settings = (list(template_joint.solref_friction), list(template_joint.solimp_friction))
-    drawn_geoms = [
-        (g.name, g.type, list(g.size), list(g.pos), g.material) for g in spec.body("bit").geoms
-    ]
+    drawn_geoms = [(g.name, g.type, list(g.size), list(g.pos), g.material) for g in spec.body("bit").geoms]
     spec.delete(spec.body("bit"))
 
     def make_bit(parent: mujoco.MjsBody, name: str, z: float, stiffness: float = 0.0) -> mujoco.MjsBody:

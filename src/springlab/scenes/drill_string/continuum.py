@@ -158,9 +158,10 @@ class Rod:
         """M_n = int rho J_p sin^2(beta x) dx + J_b sin^2(beta L) [kg m^2] of the shapes sin(beta_n x)."""
         b = np.asarray(betas, float)
         L = self.length
-        return self.density * self.polar_moment * (L / 2 - np.sin(2 * b * L) / (4 * b)) + self.bit_inertia * np.sin(
-            b * L
-        ) ** 2
+        return (
+            self.density * self.polar_moment * (L / 2 - np.sin(2 * b * L) / (4 * b))
+            + self.bit_inertia * np.sin(b * L) ** 2
+        )
 
     # -- the start-up, bit free -------------------------------------------------------
 

@@ -63,9 +63,12 @@ def panels(model: mujoco.MjModel, params: Mapping[str, float], scenario: str, tr
             exact *= math.copysign(1.0, float(exact[-1] * discrete[-1])) if exact[-1] * discrete[-1] != 0 else 1.0
             curves.append(Curve(f"mode {k + 1}: {lumped.size - 1} elements", depth, discrete, "exact"))
             curves.append(Curve(f"mode {k + 1}: continuum", depth, exact, "continuum"))
-        period = 1.0 / drill.SCENE.quantities(model, dict(params), string.scenario(scenario), trajectory)[
-            "mode_1_frequency_hz_exact"
-        ]
+        period = (
+            1.0
+            / drill.SCENE.quantities(model, dict(params), string.scenario(scenario), trajectory)[
+                "mode_1_frequency_hz_exact"
+            ]
+        )
         instants = [0.0, period / 8, period / 4 * 0.9, period / 2]
         return (
             Panel("mode shapes: N elements vs the continuum", "depth x [m]", "twist, scaled to 1 [-]", tuple(curves)),

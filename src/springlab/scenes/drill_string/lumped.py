@@ -209,9 +209,7 @@ class LumpedString:
 
     # -- stick and slip ------------------------------------------------------------
 
-    def stick_slip(
-        self, duration: float, control: float, ramp_time: float, *, restick_speed: float = 0.0
-    ) -> StickSlipSolution:
+    def stick_slip(self, duration: float, control: float, ramp_time: float) -> StickSlipSolution:
         """The exact motion from rest: the drive at `control` until `ramp_time` [s], then 0; bit under friction.
 
         Parameters
@@ -222,9 +220,6 @@ class LumpedString:
             the drive's control while it spins up (`drive_control`).
         ramp_time
             when the drive's torque ends [s] (on the run's step grid).
-        restick_speed
-            a slipping bit 'sticks' (the event's time) when its speed falls to this [rad/s] (> 0 makes the
-            exact event the one a regularized simulation can observe; the motion itself sticks at 0).
         """
         n = self.size
         full = ModalFlow.of(np.diag(self.mass), self.stiffness)
@@ -276,20 +271,60 @@ class LumpedString:
             if best > peak[1]:
                 peak = (best_t, best)
             qs, vs = full.state(np.array([stop - t]), q, v, slipping)
-            start, q, v, t = t, qs[0], vs[0], stop
+            q, v, t = qs[0], vs[0], stop
             if zero is None:
                 continue
             v[-1] = 0.0
             if abs(float(self.bit_torque(q))) <= self.friction:
                 stuck = True
-                seen = zero
-                if restick_speed > 0:  # when the speed fell to restick_speed, before it reached 0
-                    seen = _last_fall(lambda s: direction * bit_speed(s) - restick_speed, start, zero, spacing)
-                events.append((seen, "stick"))
+                events.append((t, "stick"))
             else:
                 direction = -direction
                 events.append((t, "reverse"))
         return StickSlipSolution(tuple(phases), tuple(events), peak[1], peak[0])
+
+    def slowdown_time(self, solution: StickSlipSolution, level: float, control: float, ramp_time: float) -> float:
+        """The first time [s] after the first breakaway that the bit's speed falls below `level` [rad/s] (nan: never).
+
+        What a simulation can observe of a re-stick (its friction is regularized, so a stuck bit creeps): the
+        bit slowing to nearly nothing, whether it then sticks or turns.
+        """
+        full = ModalFlow.of(np.diag(self.mass), self.stiffness)
+        spacing = 2 * math.pi / float(full.omega[-1]) / GRID_PER_PERIOD
+        above = False
+        for phase in solution.phases:
+            if phase.kind != "slip":
+                if above:
+                    return phase.start
+                continue
+            force = self.drive_torque(control if phase.start < ramp_time * (1 - 1e-14) else 0.0)
+            force[-1] -= phase.direction * self.friction
+
+            def speed(s: np.ndarray, phase: Phase = phase, force: np.ndarray = force) -> np.ndarray:
+                rows = np.array([self.size - 1])
+                return np.abs(full.state(np.atleast_1d(s) - phase.start, phase.q0, phase.v0, force, rows=rows)[1][:, 0])
+
+            count = max(int(math.ceil((phase.end - phase.start) / spacing)), 2)
+            grid = np.linspace(phase.start, phase.end, count + 1)
+            values = speed(grid) - level
+            for i in range(len(grid)):
+                if values[i] >= 0:
+                    above = True
+                elif above:
+                    return (
+                        float(
+                            scipy.optimize.brentq(
+                                lambda s: float(speed(np.array([s]))[0]) - level,
+                                grid[i - 1],
+                                grid[i],
+                                xtol=1e-15,
+                                rtol=1e-15,
+                            )
+                        )
+                        if i > 0
+                        else float(grid[0])
+                    )
+        return math.nan
 
     def solution_at(
         self, solution: StickSlipSolution, time: np.ndarray, control: float, ramp_time: float
@@ -331,25 +366,7 @@ def _first_root(function, start: float, end: float, spacing: float) -> float | N
     low, high = float(grid[i - 1]), float(grid[i])
     if function(np.array([low]))[0] >= 0:
         return low
-    return float(
-        scipy.optimize.brentq(lambda s: float(function(np.array([s]))[0]), low, high, xtol=1e-15, rtol=1e-15)
-    )
-
-
-def _last_fall(function, start: float, end: float, spacing: float) -> float:
-    """The last t in [start, end] where function (vectorized, < 0 at `end`) falls through 0 (start if never above)."""
-    count = max(int(math.ceil((end - start) / spacing)), 2)
-    grid = np.linspace(start, end, count + 1)
-    values = function(grid)
-    above = np.flatnonzero(values >= 0)
-    if not above.size:
-        return start
-    i = int(above[-1])
-    if i == count:
-        return end
-    return float(
-        scipy.optimize.brentq(lambda s: float(function(np.array([s]))[0]), grid[i], grid[i + 1], xtol=1e-15, rtol=1e-15)
-    )
+    return float(scipy.optimize.brentq(lambda s: float(function(np.array([s]))[0]), low, high, xtol=1e-15, rtol=1e-15))
 
 
 def _maximum(function, start: float, end: float, spacing: float) -> tuple[float, float]:
