@@ -499,6 +499,9 @@ class RefinableSpec:
         the questions, the first the default.
     order
         the expected order of the discretization error in the size (error ~ size^-order).
+    switch_time
+        a parameter [s] every timestep of the study divides (an input switched on the step grid at that
+        time, e.g. the end of a ramp), so all runs of a size solve the same problem; '' for none.
     """
 
     size: str
@@ -506,6 +509,7 @@ class RefinableSpec:
     sizes: tuple[int, ...]
     questions: tuple[RefinedQuestion, ...]
     order: float
+    switch_time: str = ""
 
     def question(self, name: str | None) -> RefinedQuestion:
         """The question measuring `name` (None: the first).
