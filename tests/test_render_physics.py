@@ -129,7 +129,15 @@ def _inside_masks():
         r, g, b = _rgb(f)
         return (b > 120) & (b > 1.5 * r) & (g > 70) & (g < 0.8 * b)
 
-    return {"slider": orange, "kinematics": orange, "nonlinear": green, "car": _paint, "printer_head": carriage}
+    # the drill string: the orange stripes along its rotors, which turn with them
+    return {
+        "slider": orange,
+        "kinematics": orange,
+        "nonlinear": green,
+        "car": _paint,
+        "printer_head": carriage,
+        "drill_string": orange,
+    }
 
 
 CASES = [(s.name, c) for s in scenes.SCENES.values() for c in s.scenarios]

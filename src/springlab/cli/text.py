@@ -23,8 +23,8 @@ if TYPE_CHECKING:  # annotations only: these load mujoco.batch, scipy or sysid, 
     from springlab.studies.audit.audit import Audit
     from springlab.studies.design.sobol import SobolStudy
     from springlab.studies.design.study import Study
-    from springlab.studies.refine import Refinement
     from springlab.studies.fit.results import FitResult
+    from springlab.studies.refine import Refinement
     from springlab.studies.stability import StabilityReport
     from springlab.studies.sweeps import Sweep
 

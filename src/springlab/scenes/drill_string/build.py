@@ -27,7 +27,7 @@ ENCODINGS = ("tendons", "chain")
 #: the top drive's inertia [kg m^2]: a flywheel this heavy holds its speed whatever the string does
 TOP_INERTIA = 1e12
 #: the pipe is drawn this many times its diameter (the length is drawn compressed, see the model's note)
-DRAWN_DIAMETER_FACTOR = 2.0
+DRAWN_DIAMETER_FACTOR = 3.0
 #: the drawn BHA's radius [m]
 DRAWN_BHA_RADIUS = 0.2
 #: MuJoCo refuses deeper body trees: the chain encoding stops below it (the tendon encoding has no such limit)
@@ -82,7 +82,6 @@ def generate(spec: mujoco.MjSpec, params: dict[str, float], *, encoding: str = "
     template = spec.body("e1")
     radius = DRAWN_DIAMETER_FACTOR * params["outer_diameter"] / 2.0
     spec.delete(template)
-    bit = spec.body("bit")
     top = spec.body("top_drive")
     dz = drawn / n
 
@@ -101,13 +100,14 @@ def generate(spec: mujoco.MjSpec, params: dict[str, float], *, encoding: str = "
             name=f"{name}_pipe", type=mujoco.mjtGeom.mjGEOM_CYLINDER, pos=[0, 0, dz / 2], size=[radius, dz / 2, 0]
         )
         pipe.material = "pipe"
-        stripe = body.add_geom(
-            name=f"{name}_stripe",
-            type=mujoco.mjtGeom.mjGEOM_BOX,
-            pos=[0.96 * radius, 0, dz / 2],
-            size=[0.12 * radius, 0.12 * radius, dz / 2],
-        )
-        stripe.material = "stripe"
+        for side, sign in (("stripe", 1.0), ("stripe_back", -1.0)):  # two, so one always faces the camera
+            stripe = body.add_geom(
+                name=f"{name}_{side}",
+                type=mujoco.mjtGeom.mjGEOM_BOX,
+                pos=[sign * radius, 0, dz / 2],
+                size=[0.3 * radius, 0.3 * radius, dz / 2],
+            )
+            stripe.material = "stripe"
 
     # the bit node carries half an element of pipe and the BHA; it is rebuilt after the rotors, so the
     # hinges' order (qpos, qvel, the mass matrix) runs from the top drive down to the bit

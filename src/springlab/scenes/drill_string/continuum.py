@@ -31,8 +31,21 @@ import dataclasses
 import math
 
 import numpy as np
-import scipy.integrate
-import scipy.optimize
+
+
+def _optimize():  # noqa: ANN202 - the module
+    """scipy.optimize, imported on first use: every command imports the scene registry, which must stay light."""
+    import scipy.optimize
+
+    return scipy.optimize
+
+
+def _integrate():  # noqa: ANN202 - the module
+    """scipy.integrate, imported on first use (see `_optimize`)."""
+    import scipy.integrate
+
+    return scipy.integrate
+
 
 #: the bound on the modal series uses M_n >= (1/2 - 1/(4 pi)) rho J_p L for n >= 2 (see `modal_tail_bound`)
 _MODAL_MASS_FLOOR = 0.5 - 1.0 / (4.0 * math.pi)
@@ -78,7 +91,7 @@ def roots(mu: float, count: int) -> np.ndarray:
         def df(x: float, scale: float = scale) -> float:
             return (math.sin(x) + x * math.cos(x) + mu * math.sin(x)) * scale
 
-        x = scipy.optimize.brentq(f, low, high, xtol=1e-300, rtol=4 * np.finfo(float).eps, maxiter=500)
+        x = _optimize().brentq(f, low, high, xtol=1e-300, rtol=4 * np.finfo(float).eps, maxiter=500)
         for _ in range(3):  # Newton polishes the last bits (brentq stops within a few ulp)
             step = f(x) / df(x)
             if not math.isfinite(step) or abs(step) > 1e-6 * max(x, 1.0):
@@ -264,7 +277,7 @@ def stuck_breakaway_time(rod: Rod, friction_torque: float, acceleration: float, 
     previous = 0.0
     for kink in kinks:
         if excess(kink) >= 0.0:
-            return float(scipy.optimize.brentq(excess, previous, kink, xtol=1e-15, rtol=4 * np.finfo(float).eps))
+            return float(_optimize().brentq(excess, previous, kink, xtol=1e-15, rtol=4 * np.finfo(float).eps))
         previous = kink
     return math.inf
 
@@ -372,7 +385,7 @@ class WaveSolution:
             following = [k for k in kinks if k > t * (1 + 1e-15) + 1e-15]
             end = min(min(following, default=duration), duration)
             if stuck:
-                drive = self._drive
+                drive = self._drive  # a bound method: nothing of the loop is captured
                 if abs(drive(end)) < Tf:
                     self._append(t, end, None)
                     t = end
@@ -384,7 +397,7 @@ class WaveSolution:
                 values = [abs(drive(s)) - Tf for s in grid]
                 j = next(i for i, v in enumerate(values) if v >= 0)
                 lo, hi = (grid[j - 1], grid[j]) if j > 0 else (t, t)
-                at = hi if lo == hi else scipy.optimize.brentq(lambda s: abs(drive(s)) - Tf, lo, hi, xtol=1e-15)
+                at = hi if lo == hi else _optimize().brentq(lambda s: abs(self._drive(s)) - Tf, lo, hi, xtol=1e-15)
                 if at > t:
                     self._append(t, at, None)
                     times.append(at)
@@ -405,7 +418,7 @@ class WaveSolution:
             stops.terminal = True  # type: ignore[attr-defined]
             stops.direction = -direction  # type: ignore[attr-defined]
             if Tf > 0 and direction != 0.0:
-                found = scipy.integrate.solve_ivp(
+                found = _integrate().solve_ivp(
                     rate,
                     (t, end),
                     [w],
@@ -416,7 +429,7 @@ class WaveSolution:
                     events=stops,
                 )
             else:
-                found = scipy.integrate.solve_ivp(
+                found = _integrate().solve_ivp(
                     rate, (t, end), [w], method="DOP853", rtol=WAVE_RTOL, atol=WAVE_ATOL * scale, dense_output=True
                 )
             stop = float(found.t[-1])
@@ -448,7 +461,7 @@ class WaveSolution:
         best_t, best = float(time[i]), float(speed[i])
         lo, hi = float(time[max(i - 1, 0)]), float(time[min(i + 1, len(time) - 1)])
         if hi > lo:
-            found = scipy.optimize.minimize_scalar(
+            found = _optimize().minimize_scalar(
                 lambda s: -self.speed(s), bounds=(lo, hi), method="bounded", options={"xatol": 1e-12}
             )
             if -found.fun > best:

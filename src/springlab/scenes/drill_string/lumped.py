@@ -22,7 +22,14 @@ import math
 import mujoco
 import numpy as np
 import scipy.linalg
-import scipy.optimize
+
+
+def _optimize():  # noqa: ANN202 - the module
+    """scipy.optimize, imported on first use: every command imports the scene registry, which must stay light."""
+    import scipy.optimize
+
+    return scipy.optimize
+
 
 #: joint names of the top drive and the bit; rotors in between are e1 ... e<N-1>
 TOP, BIT = "top", "bit"
@@ -259,15 +266,16 @@ class LumpedString:
             slipping = force.copy()
             slipping[-1] -= direction * self.friction
 
-            def bit_speed(s: np.ndarray, q=q, v=v, slipping=slipping, t0=t) -> np.ndarray:
-                return full.state(np.atleast_1d(s) - t0, q, v, slipping, rows=np.array([n - 1]))[1][:, 0]
+            def bit_speed(s: np.ndarray, q=q, v=v, slipping=slipping, t0=t, sign=direction) -> np.ndarray:
+                """The bit's speed along the slip direction [rad/s]."""
+                return sign * full.state(np.atleast_1d(s) - t0, q, v, slipping, rows=np.array([n - 1]))[1][:, 0]
 
             zero = None
             if self.friction > 0:  # a free bit (no friction) never sticks: it just turns with the string
-                zero = _first_root(lambda s: -direction * bit_speed(s), t, end, spacing)
+                zero = _first_root(lambda s: -bit_speed(s), t, end, spacing)
             stop = end if zero is None else zero
             phases.append(Phase(t, stop, "slip", direction, q.copy(), v.copy()))
-            best_t, best = _maximum(lambda s: direction * bit_speed(s), t, stop, spacing)
+            best_t, best = _maximum(bit_speed, t, stop, spacing)
             if best > peak[1]:
                 peak = (best_t, best)
             qs, vs = full.state(np.array([stop - t]), q, v, slipping)
@@ -313,7 +321,7 @@ class LumpedString:
                 elif above:
                     return (
                         float(
-                            scipy.optimize.brentq(
+                            _optimize().brentq(
                                 lambda s: float(speed(np.array([s]))[0]) - level,
                                 grid[i - 1],
                                 grid[i],
@@ -366,7 +374,7 @@ def _first_root(function, start: float, end: float, spacing: float) -> float | N
     low, high = float(grid[i - 1]), float(grid[i])
     if function(np.array([low]))[0] >= 0:
         return low
-    return float(scipy.optimize.brentq(lambda s: float(function(np.array([s]))[0]), low, high, xtol=1e-15, rtol=1e-15))
+    return float(_optimize().brentq(lambda s: float(function(np.array([s]))[0]), low, high, xtol=1e-15, rtol=1e-15))
 
 
 def _maximum(function, start: float, end: float, spacing: float) -> tuple[float, float]:
@@ -378,7 +386,7 @@ def _maximum(function, start: float, end: float, spacing: float) -> tuple[float,
     best_t, best = float(grid[i]), float(values[i])
     low, high = float(grid[max(i - 1, 0)]), float(grid[min(i + 1, count)])
     if high > low:
-        found = scipy.optimize.minimize_scalar(
+        found = _optimize().minimize_scalar(
             lambda s: -float(function(np.array([s]))[0]), bounds=(low, high), method="bounded", options={"xatol": 1e-13}
         )
         if -found.fun > best:

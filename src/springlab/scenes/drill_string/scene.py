@@ -41,7 +41,6 @@ from typing import Any
 import mujoco
 import numpy as np
 import scipy.linalg
-import scipy.optimize
 
 from springlab.errors import ParameterError
 from springlab.exact import analytic, events
@@ -53,6 +52,14 @@ from springlab.sim.simulate import ORDERS, Setup, Trajectory, simulate
 
 from . import build, continuum, figures
 from .lumped import BIT, TOP, LumpedString, ModalFlow
+
+
+def _optimize():  # noqa: ANN202 - the module
+    """scipy.optimize, imported on first use: every command imports the scene registry, which must stay light."""
+    import scipy.optimize
+
+    return scipy.optimize
+
 
 #: the most elements a string may have (the tendon encoding steps in O(N); see benchmarks/bench_drill_string.py)
 MAX_ELEMENTS = 4096
@@ -66,6 +73,8 @@ REPORTED_MODES = 5
 CONTINUUM_MODES = 4096
 #: the continuum's bit speed is compared at most at this many instants of a run
 CONTINUUM_SAMPLES = 1500
+#: the lightest bottom-hole assembly [kg m^2] (see the parameter's reason)
+MIN_BIT_INERTIA = 1.0
 #: a slipping bit counts as stuck again once its speed falls below this fraction of the top drive's speed
 RESTICK_FRACTION = 0.01
 #: reference errors of the exact event times [s] (brentq to 1e-15 s on functions exact to round-off)
@@ -134,8 +143,9 @@ class DrillString(Scene):
                 "bit_inertia",
                 "kg m^2",
                 "inertia J_b of the bottom-hole assembly and bit",
-                **_MINIMUM_POSITIVE,
-                reason="the BHA; J_b -> 0 is the fixed-free limit of the continuum's frequencies",
+                minimum=MIN_BIT_INERTIA,
+                reason="a BHA is tens to hundreds of kg m^2; below 1 kg m^2 the bit's time constant J_b / Z falls"
+                " under 3 ms and the exact travelling-wave solution would take millions of steps",
             ),
             Parameter("bit_friction_torque", "N m", "dry friction torque T_f at the bit", minimum=0.0),
             Parameter("top_speed_rpm", "rpm", "the top drive's speed after spin-up", **_MINIMUM_POSITIVE),
@@ -496,7 +506,7 @@ def _continuum_restick(solver: continuum.WaveSolution, solution: continuum.Stick
         return math.nan
     i = int(below[0])
     return float(
-        scipy.optimize.brentq(lambda t: abs(solver.speed(t)) - level, times[i - 1], times[i], xtol=1e-14, rtol=1e-15)
+        _optimize().brentq(lambda t: abs(solver.speed(t)) - level, times[i - 1], times[i], xtol=1e-14, rtol=1e-15)
     )
 
 
