@@ -350,6 +350,7 @@ def refine(
     sizes: Sequence[int] | None = None,
     integrators: Iterable[str] = tuple(INTEGRATORS),
     duration: float | None = None,
+    omega_dt: Sequence[float] = OMEGA_DT,
     executor: Executor | None = None,
     **parameters: Any,
 ) -> Refinement:
@@ -369,6 +370,8 @@ def refine(
         integrator names (default: all five).
     duration
         simulated time [s] (None: the question's scenario's).
+    omega_dt
+        the timestep grid of each size as w_max dt [-] (default OMEGA_DT).
     executor
         where the chunks run (None: locally).
     **parameters
@@ -424,7 +427,7 @@ def refine(
                 scene_obj.stability_limit(model, params, chosen, name, omega, zeta) / omega for omega, zeta in modes
             )
             limits[name] = ratio if math.isfinite(ratio) else None
-        dts = sorted({_on_grid(_round_sig(f / fastest), params.get(spec.switch_time)) for f in OMEGA_DT}, reverse=True)
+        dts = sorted({_on_grid(_round_sig(f / fastest), params.get(spec.switch_time)) for f in omega_dt}, reverse=True)
         dts = [dt for dt in dts if duration / dt <= min(MAX_REFINE_STEPS, MAX_STEPS) and dt <= duration / 4]
         plans.append((size, fastest, limits, dts))
     reference = scene_obj.name if scenes.SCENES.get(scene_obj.name) is scene_obj else scene_obj

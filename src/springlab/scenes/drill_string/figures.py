@@ -21,6 +21,9 @@ import numpy as np
 from springlab.scenes.capabilities import Curve, Panel
 from springlab.sim.simulate import Trajectory
 
+from . import answers
+from .lumped import LumpedString, ModalFlow
+
 #: mode shapes drawn by the `modes` panel
 SHAPES = 3
 #: the speed curves are drawn at most at this many instants
@@ -46,12 +49,9 @@ def panels(model: mujoco.MjModel, params: Mapping[str, float], scenario: str, tr
     tuple[Panel, ...]
         two panels.
     """
-    from . import scene as drill  # the scene module imports this one
-
     assert isinstance(trajectory, Trajectory)
-    string = drill.SCENE
-    rod = string.rod(model)
-    lumped = drill.LumpedString.of(model)
+    rod = answers.rod_of(model)
+    lumped = LumpedString.of(model)
     depth = np.linspace(0.0, rod.length, lumped.size)
     if scenario == "modes":
         _, shapes = lumped.modes()
@@ -63,12 +63,8 @@ def panels(model: mujoco.MjModel, params: Mapping[str, float], scenario: str, tr
             exact *= math.copysign(1.0, float(exact[-1] * discrete[-1])) if exact[-1] * discrete[-1] != 0 else 1.0
             curves.append(Curve(f"mode {k + 1}: {lumped.size - 1} elements", depth, discrete, "exact"))
             curves.append(Curve(f"mode {k + 1}: continuum", depth, exact, "continuum"))
-        period = (
-            1.0
-            / drill.SCENE.quantities(model, dict(params), string.scenario(scenario), trajectory)[
-                "mode_1_frequency_hz_exact"
-            ]
-        )
+        omega, _ = lumped.modes()
+        period = 2 * math.pi / float(omega[0])
         instants = [0.0, period / 8, period / 4 * 0.9, period / 2]
         return (
             Panel("mode shapes: N elements vs the continuum", "depth x [m]", "twist, scaled to 1 [-]", tuple(curves)),
@@ -79,29 +75,29 @@ def panels(model: mujoco.MjModel, params: Mapping[str, float], scenario: str, tr
     sample = time[::every]
     top_speed = trajectory.qvel[::every, 0]
     bit_speed = trajectory.qvel[::every, -1]
-    drive = string.drive(model, trajectory.dt)
+    drive = answers.drive_of(model, trajectory.dt)
     curves = [
-        Curve("top drive (MuJoCo)", sample, top_speed / drill.RPM),
-        Curve("bit (MuJoCo)", sample, bit_speed / drill.RPM),
+        Curve("top drive (MuJoCo)", sample, top_speed / answers.RPM),
+        Curve("bit (MuJoCo)", sample, bit_speed / answers.RPM),
     ]
     marks: list[tuple[float, str]] = []
     duration = float(time[-1])
     if scenario == "spin_up":
-        flow = drill.ModalFlow.of(np.diag(lumped.mass), lumped.stiffness)
-        _, exact_v = drill._linear_samples(lumped, flow, drive, sample)
+        flow = ModalFlow.of(np.diag(lumped.mass), lumped.stiffness)
+        _, exact_v = answers.linear_samples(lumped, flow, drive, sample)
         _, continuum_v = rod.modal_spin_up(
-            sample, rod.length, drive.acceleration, drive.ramp_time, drill.CONTINUUM_MODES
+            sample, rod.length, drive.acceleration, drive.ramp_time, answers.CONTINUUM_MODES
         )
-        curves.append(Curve(f"bit, {lumped.size - 1} elements exact", sample, exact_v[:, -1] / drill.RPM, "exact"))
-        curves.append(Curve("bit, continuum (modal series)", sample, continuum_v / drill.RPM, "continuum"))
+        curves.append(Curve(f"bit, {lumped.size - 1} elements exact", sample, exact_v[:, -1] / answers.RPM, "exact"))
+        curves.append(Curve("bit, continuum (modal series)", sample, continuum_v / answers.RPM, "continuum"))
         instants = [0.25 * drive.ramp_time, 0.5 * drive.ramp_time, drive.ramp_time, duration / 2, duration]
     else:
-        exact = drill._stick_slip(lumped, duration, drive)
+        exact = answers.stick_slip(lumped, duration, drive)
         _, exact_v = lumped.solution_at(exact, sample, lumped.drive_control(drive.acceleration), drive.ramp_time)
-        solver, wave = drill._wave_solution(rod, lumped.friction, drive.acceleration, drive.ramp_time, duration)
+        solver, wave = answers.wave_solution(rod, lumped.friction, drive.acceleration, drive.ramp_time, duration)
         continuum_v = np.array([solver.speed(t) for t in sample])
-        curves.append(Curve(f"bit, {lumped.size - 1} elements exact", sample, exact_v[:, -1] / drill.RPM, "exact"))
-        curves.append(Curve("bit, continuum (travelling waves)", sample, continuum_v / drill.RPM, "continuum"))
+        curves.append(Curve(f"bit, {lumped.size - 1} elements exact", sample, exact_v[:, -1] / answers.RPM, "exact"))
+        curves.append(Curve("bit, continuum (travelling waves)", sample, continuum_v / answers.RPM, "continuum"))
         breakaway = exact.first("slip")
         restick = next((t for t, kind in exact.events if kind == "stick" and t > breakaway), math.nan)
         marks.append((breakaway, f"breakaway (exact) {breakaway:.4g} s"))
