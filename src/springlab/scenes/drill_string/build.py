@@ -39,6 +39,16 @@ def polar_moment(outer_diameter: float, inner_diameter: float) -> float:
     return math.pi * (outer_diameter**4 - inner_diameter**4) / 32.0
 
 
+def _inertial(body: mujoco.MjsBody, mass: float, inertia: float) -> None:
+    """An explicit inertial [kg, kg m^2] at the body's origin (the geoms are pictures); setting its frame too
+    makes MjSpec.to_xml write it, so a saved generated model keeps its physics."""
+    body.explicitinertial = True
+    body.mass = mass
+    body.inertia = [inertia, inertia, inertia]
+    body.ipos = [0.0, 0.0, 0.0]
+    body.iquat = [1.0, 0.0, 0.0, 0.0]
+
+
 def _numeric(spec: mujoco.MjSpec, name: str, value: float) -> None:
     spec.numeric(name).data = [float(value)]
 
@@ -87,9 +97,7 @@ def generate(spec: mujoco.MjSpec, params: dict[str, float], *, encoding: str = "
 
     def rotor(parent: mujoco.MjsBody, i: int, z: float) -> mujoco.MjsBody:
         body = parent.add_body(name=f"e{i}", pos=[0.0, 0.0, z])
-        body.explicitinertial = True
-        body.mass = node_mass
-        body.inertia = [node, node, node]
+        _inertial(body, node_mass, node)
         body.add_joint(name=f"e{i}", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1])
         _pipe(body, f"e{i}")
         return body
@@ -119,9 +127,7 @@ def generate(spec: mujoco.MjSpec, params: dict[str, float], *, encoding: str = "
 
     def make_bit(parent: mujoco.MjsBody, name: str, z: float, stiffness: float = 0.0) -> mujoco.MjsBody:
         body = parent.add_body(name=name, pos=[0.0, 0.0, z])
-        body.explicitinertial = True
-        body.mass = node_mass / 2 + 1.0
-        body.inertia = [bit_inertia, bit_inertia, bit_inertia]
+        _inertial(body, node_mass / 2 + 1.0, bit_inertia)
         joint = body.add_joint(name=name, type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1])
         joint.frictionloss = params["bit_friction_torque"] if encoding == "tendons" else 0.0
         joint.solref_friction, joint.solimp_friction = friction_settings
