@@ -71,7 +71,7 @@ def test_chain_is_linear_and_its_recommendation_meets_tol_against_the_exact_solu
     ]
     model.opt.timestep = pick.dt
     data = mujoco.MjData(model)
-    data.qpos[:] = result.start.qpos
+    data.qpos[:], data.qvel[:] = result.start.qpos, result.start.qvel  # the start moves positions and velocities
     x0 = np.concatenate([result.start.qpos, result.start.qvel])
     steps = round(result.duration / pick.dt)
     sim, ref = [x0], [x0]
@@ -91,7 +91,9 @@ def test_chain_is_linear_and_its_recommendation_meets_tol_against_the_exact_solu
 AUDIT_KEYS = [
     "model",
     "operating_point",
+    "operating_point_state",
     "perturb",
+    "excitation",
     "duration_s",
     "linear",
     "linearity",
@@ -117,7 +119,31 @@ def test_the_audit_json_is_the_objects_to_dict_and_its_facts_are_attributes(chai
     result = chain_audit
     data = result.to_dict()
     assert list(data) == AUDIT_KEYS and plain_json(data)
-    assert list(data["own_setting"]) == ["integrator", "dt", "stable", "error", "margin", "wall_time_s"]
+    assert list(data["own_setting"]) == [
+        "integrator",
+        "dt",
+        "stable",
+        "error",
+        "margin",
+        "wall_time_s",
+        "margin_confirmed",
+    ]
+    assert list(data["operating_point_state"]) == [
+        "settle_s",
+        "at_point",
+        "along_motion",
+        "at_rest",
+        "drift_m",
+        "linear_map",
+    ]
+    assert list(data["operating_point_state"]["at_point"]) == [
+        "elements",
+        "counts",
+        "dry_friction",
+        "max_abs_qvel",
+        "max_abs_qacc",
+    ]
+    assert list(data["excitation"]) == ["qpos", "qvel", "ctrl", "moved", "still", "source"]
     assert list(data["recommendation"]) == ["integrator", "dt", "error", "tolerance", "verified", "wall_time_s"]
     assert list(data["linearity"]) == ["change", "tolerance"]
     assert list(data["stability"]["rk4"]) == [
@@ -126,6 +152,11 @@ def test_the_audit_json_is_the_objects_to_dict_and_its_facts_are_attributes(chai
         "confirmed",
         "margin",
         "detail",
+        "limit_dt_s",
+        "method",
+        "prediction",
+        "runs_bounded_dt_s",
+        "runs_blew_up_dt_s",
     ]
     assert list(data["sweep"][0]) == ["integrator", "dt", "steps", "error", "wall_time_s", "diverged"]
     # the attributes are the JSON's facts, and they hang together: the margin is the limit over the own dt
@@ -228,7 +259,7 @@ def _final_state(model, integrator, dt, result):
     work.opt.integrator = INTEGRATORS[integrator]
     work.opt.timestep = dt
     data = mujoco.MjData(work)
-    data.qpos[:] = result.start.qpos
+    data.qpos[:], data.qvel[:] = result.start.qpos, result.start.qvel
     for _ in range(round(result.duration / dt)):
         mujoco.mj_step(work, data)
     return np.concatenate([data.qpos, data.qvel])

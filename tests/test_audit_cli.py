@@ -48,6 +48,11 @@ def test_a_setting_that_misses_tol_is_a_finding_exit_1_with_outputs(tmp_path, ca
         (["PENDULUM", "--dt", "fast"], "--dt must be"),
         (["PENDULUM", "--duration", "-1"], "duration must be"),
         (["PENDULUM", "--perturb", "nan"], "perturb must be"),
+        (["PENDULUM", "--tol", "2"], "tol must be a relative error in (0, 1)"),
+        (["PENDULUM", "--tol", "1"], "tol must be a relative error in (0, 1)"),
+        (["PENDULUM", "--perturb", "1e9"], "--perturb 1e+09 rad turns a joint by half a revolution"),
+        (["LIMITED", "--perturb", "0.5"], "at least half the range of joint 'swing'"),
+        (["PENDULUM", "--settle", "-1"], "settle must be"),
     ],
 )
 def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys, args, message):
@@ -55,7 +60,9 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys, args,
     broken.write_text("<mujoco><worldbody><body><joint type='hinge'/></body></worldbody>")
     pendulum = tmp_path / "pendulum.xml"
     pendulum.write_text(pendulum_xml())
-    paths = {"BROKEN": str(broken), "PENDULUM": str(pendulum)}
+    limited = tmp_path / "limited.xml"  # the pendulum with a range of 40 degrees (0.70 rad: half is 0.35)
+    limited.write_text(pendulum_xml().replace('axis="0 1 0"', 'axis="0 1 0" range="-20 20"'))
+    paths = {"BROKEN": str(broken), "PENDULUM": str(pendulum), "LIMITED": str(limited)}
     out = tmp_path / "out"
     code = main(["audit", *[paths.get(a, a) for a in args], "--output", str(out)])
     err = capsys.readouterr().err

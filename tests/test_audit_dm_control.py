@@ -1,5 +1,11 @@
 """`springlab audit` on models nobody here wrote: the MJCF files shipped in dm_control's suite.
 
+Robots (`ROBOTS`): the audit reports the constraints, contacts and dry friction MuJoCo has at the operating
+point, every limit it reports is confirmed by runs made here or labelled unconfirmed, the own setting is
+called unstable only if a run of it blows up, every degree of freedom is moved, and the recommendation meets
+tol against an independent reference (with that reference's own error added: resting contacts cost RK4 its
+order).
+
 Each audits without error, and its recommended setting meets the tolerance against an independent
 reference computed here: MuJoCo's RK4 at a timestep far below the audit's, run with mujoco.rollout
 (not springlab's runner), itself checked converged (its distance to the run at twice its timestep is
@@ -79,10 +85,60 @@ def test_dm_control_model_audits_and_its_recommendation_meets_tol(name):
     model = mujoco.MjModel.from_xml_path(str(path))
     steps = round(result.duration / pick.dt)
     times = np.arange(0, steps + 1, max(1, steps // 500)) * pick.dt  # the recommended run's steps
-    fine = pick.dt / round(pick.dt / 1e-5)  # RK4 at ~10 us, dividing the recommended dt
+    fine = pick.dt / (2 * max(1, round(pick.dt / 2e-5)))  # RK4 at ~10 us; it and twice it divide the recommended dt
     reference = _states(model, "rk4", fine, result.duration, result.start, times)
     coarser = _states(model, "rk4", 2 * fine, result.duration, result.start, times)
     origin = result.linear.point.qpos
     assert _error(model, *coarser, *reference, origin) <= tol / 10  # the reference itself has converged
     chosen = _states(model, pick.integrator, pick.dt, result.duration, result.start, times)
     assert _error(model, *chosen, *reference, origin) <= tol
+
+
+#: robot models with contacts, joint limits, dry friction or no position-dependent force (the reacher, as the
+#: swimmer): name -> (settle [s], duration [s], tol [-]); the walker and the humanoid audited lying on the floor
+ROBOTS = {
+    "reacher": (None, 1.0, 1e-3),
+    "finger": (None, 0.5, 1e-3),
+    "walker": (4.0, 0.5, 1e-2),
+    "humanoid": (3.0, 0.2, 1e-2),
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(ROBOTS))
+def test_robot_audit_reports_its_constraints_and_claims_only_what_runs_confirm(name):
+    from test_audit_robots import _check_limits_honest
+
+    settle, duration, tol = ROBOTS[name]
+    path = SUITE / f"{name}.xml"
+    result = audit(str(path), settle_s=settle, tol=tol, duration=duration)
+    model = mujoco.MjModel.from_xml_path(str(path))
+    state = result.point_state
+    # constraints are reported where MuJoCo has them, and then the limits come from runs
+    data = mujoco.MjData(model)
+    data.qpos[:], data.qvel[:] = result.linear.point.qpos, result.linear.point.qvel
+    mujoco.mj_forward(model, data)
+    assert state.at_point.smooth == (data.nefc == 0)
+    if not state.linear_map:
+        assert all(limit.method == "nonlinear runs" for limit in result.stability.values())
+    if np.any(model.dof_frictionloss):
+        assert any("frictionloss" in element for element in state.at_point.dry_friction)
+    _check_limits_honest(result, model)
+    # every degree of freedom the model lets move is moved: nothing is "verified" by a model at rest
+    assert result.excitation.any_motion and result.excitation.qvel > 0
+    pick = result.recommendation
+    if pick.integrator is None:
+        assert "no swept setting meets tol" in result.message
+        return
+    steps = round(result.duration / pick.dt)
+    times = np.arange(0, steps + 1, max(1, steps // 500)) * pick.dt
+    fine = pick.dt / (2 * max(1, round(pick.dt / 2e-5)))  # it and twice it divide the recommended dt
+    reference = _states(model, "rk4", fine, result.duration, result.start, times)
+    coarser = _states(model, "rk4", 2 * fine, result.duration, result.start, times)
+    origin = result.linear.point.qpos
+    # on a robot resting in contact RK4 loses its order: the difference to twice the step bounds the
+    # reference's own error (order >= 1), and the recommendation must meet tol with that error added
+    reference_error = _error(model, *coarser, *reference, origin)
+    assert reference_error <= tol / 5
+    chosen = _states(model, pick.integrator, pick.dt, result.duration, result.start, times)
+    assert _error(model, *chosen, *reference, origin) + reference_error <= tol

@@ -39,6 +39,7 @@ def bar(
     *,
     description: str,
     unit: str = "it",
+    unit_scale: bool = False,
     enabled: bool | None = None,
     stream: IO[str] | None = None,
 ) -> Any:
@@ -53,6 +54,8 @@ def bar(
     unit:
         Name of one unit of work, e.g. ``"frame"`` or ``"run"``; the rate is
         shown in units per second.
+    unit_scale:
+        Show counts with SI prefixes (k, M, G): for bytes, ``unit="B"``.
     enabled:
         False: silent (``--json``, tests). True: draw on ``stream`` even if it
         is not a terminal. None (default): draw only when ``stream`` is a
@@ -73,6 +76,7 @@ def bar(
         total=total,
         desc=description,
         unit=unit,
+        unit_scale=unit_scale,
         file=stream,
         disable=not enabled,
         mininterval=0.1,  # [s] between redraws: cheap next to a frame or a run

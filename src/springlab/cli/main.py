@@ -324,6 +324,7 @@ def cmd_audit(args: argparse.Namespace) -> int:
         result = run_audit(
             args.model,
             keyframe=args.keyframe,
+            settle_s=args.settle,
             tol=args.tol,
             integrators=args.integrators,
             dt=args.dt,
@@ -439,10 +440,12 @@ def cmd_fit(args: argparse.Namespace) -> int:
             map=args.map,
             free=args.free or None,
             scale=args.scale,
+            time_scale=args.time_scale,
             start=args.start,
             degree=args.degree,
             starts=args.starts,
             executor=executor,
+            show_progress=False if args.json else None,
             **_parse_sets(args.set),
         )
     if args.output:
@@ -601,7 +604,16 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("audit", help="any MJCF: modes, stability limits, error vs cost, the cheapest setting for --tol")
     p.add_argument("model", help="path to an MJCF (or URDF) file, or a scene name")
     p.add_argument("--keyframe", metavar="NAME|INDEX", help="operating point (default: first keyframe, else qpos0)")
-    p.add_argument("--tol", type=float, default=DEFAULT_TOL, metavar="TOL", help="error tolerance (default 1e-3)")
+    p.add_argument(
+        "--settle",
+        type=float,
+        metavar="SECONDS",
+        help="let the model move this long at its own setting first and audit it where it comes to rest"
+        " (a robot standing or lying on the floor; default: audit the keyframe as it is)",
+    )
+    p.add_argument(
+        "--tol", type=float, default=DEFAULT_TOL, metavar="TOL", help="error tolerance in (0, 1) (default 1e-3)"
+    )
     p.add_argument("--integrators", metavar="A,B", help=f"integrators to sweep (default: {','.join(INTEGRATORS)})")
     p.add_argument("--dt", metavar="LIST|RANGE", help="timesteps 'a,b,c' or 'LOW:HIGH:N' [s] (default: automatic)")
     p.add_argument("--duration", type=float, metavar="SECONDS", help="simulated time [s] (default 1; a scene's own)")
@@ -688,7 +700,9 @@ def build_parser() -> argparse.ArgumentParser:
     fittable = [name for name, scene in scenes.SCENES.items() if scene.fit is not None]
     listed = ", ".join(fittable[:-1]) + " or " + fittable[-1] if len(fittable) > 1 else "".join(fittable)
     p.add_argument("scene", help=listed)
-    p.add_argument("data", metavar="DATA.csv", help="header row; time [s] and <joint>_pos, _vel or _acc")
+    p.add_argument(
+        "data", metavar="DATA.csv", help="header row (',', ';' or tab); time [s] and <joint>_pos, _vel or _acc [SI]"
+    )
     p.add_argument("--scenario", metavar="S", help="the scenario the record shows (default: the scene's fit default)")
     p.add_argument(
         "--map", action="append", default=[], metavar="COLUMN=NAME", help="rename a file column (t=time, x=slider_pos)"
@@ -700,7 +714,18 @@ def build_parser() -> argparse.ArgumentParser:
         "--set", action="append", default=[], metavar="NAME=VALUE", help="fix a parameter, SI units (repeatable)"
     )
     p.add_argument("--start", type=float, metavar="S", help="release time [s]: drop the record before it")
-    p.add_argument("--scale", type=float, default=1.0, metavar="FACTOR", help="SI units per file unit (mm: 0.001)")
+    p.add_argument(
+        "--scale",
+        type=float,
+        metavar="FACTOR",
+        help="SI units per unit of the signal column (mm: 0.001); default: the unit its name states (x_mm, x [mm]), else SI",
+    )
+    p.add_argument(
+        "--time-scale",
+        type=float,
+        metavar="FACTOR",
+        help="seconds per unit of the time column (ms: 0.001); default: the unit its name states (t_ms, t (ms)), else s",
+    )
     p.add_argument("--degree", type=int, metavar="N", help="kinematics: degree 0-3 of the polynomial")
     p.add_argument(
         "--starts",

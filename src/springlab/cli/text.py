@@ -292,15 +292,17 @@ def print_fit(result: FitResult, output: str | None) -> None:
         f" {record.time[0]:g} to {record.time[-1]:g} s): fitted {', '.join(result.free)}"
     )
     for note in record.notes:
-        print(f"  data: {note}")
+        print(f"  {note}" if note.startswith("warning: ") else f"  data: {note}")
+    if result.release:
+        print(f"  release: {result.release['reason']}")
     for name, q in {**result.estimates, **result.derived}.items():
         low, high = q["ci95"]
         unit = "" if q["unit"] == "-" else q["unit"]
         print(f"  {name:<26} {q['value']:<16.10g} 95% [{low:.8g}, {high:.8g}] {unit}")
     check = result.cross_check
     print(
-        f"  closed-form cross-check: max relative difference {check['max_relative_difference']:.1e}"
-        f" ({'agrees' if check['agrees'] else 'DISAGREES'})"
+        f"  closed-form cross-check: max relative difference {check['max_relative_difference']:.1e},"
+        f" {check['max_difference_in_tolerances']:.2g} of its tolerance ({'agrees' if check['agrees'] else 'DISAGREES'})"
     )
     o = result.optimizer
     print(
@@ -313,6 +315,9 @@ def print_fit(result: FitResult, output: str | None) -> None:
         )
 
         print(line(result.starts))
+    judged = result.convergence
+    if judged and (not judged["converged"] or not judged["optimizer_met_tolerance"]):
+        print(f"  convergence: {judged['reason']}")
     if result.run_note:
         print(f"  note: {result.run_note}")
     print(result.verdict)

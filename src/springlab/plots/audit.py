@@ -2,15 +2,19 @@
 
 audit.png has three panels:
   left:   the modes, frequency [Hz] vs damping ratio, physically unstable ones in red, the fastest ringed;
-  middle: per integrator, the measured stability limit [s] (bar; hatched when the nonlinear runs did not
-          confirm it), the closed-form prediction (black tick) and the model's own timestep (dashed line):
-          the bar's height over the line is the margin;
+          titled with the same count as the text (`Audit.mode_count`); readable at any number of modes
+          (a log axis padded to at least a decade, labels on major ticks only);
+  middle: per integrator, the audit's stability limit [s] (bar, labelled with its margin; hatched and
+          labelled UNCONFIRMED when runs did not confirm it; "map" or "runs" says which method gave it;
+          an arrow where no run blew up up to the largest tried), the closed-form prediction (black
+          tick; dashed when it is an estimate) and the model's own timestep (dashed line);
   right:  error vs wall time of every swept setting (log-log), the Pareto front (black), --tol (dotted),
           the model's own setting (star) and the verified recommendation (ringed).
 """
 
 from __future__ import annotations
 
+import math
 import pathlib
 
 from springlab import files
@@ -32,6 +36,8 @@ def plot_audit(result: Audit, path: str | pathlib.Path) -> pathlib.Path:
 
 
 def _modes_panel(result: Audit, ax) -> None:
+    from matplotlib.ticker import LogLocator, NullFormatter
+
     modes = [m for m in result.linear.modes if m.kind != "rigid"]
     fastest = result.linear.fastest
     for mode in modes:
@@ -39,36 +45,76 @@ def _modes_panel(result: Audit, ax) -> None:
         ax.scatter(mode.frequency_hz, mode.damping_ratio, s=20, color=color, zorder=3)
     if fastest is not None:
         ax.scatter(fastest.frequency_hz, fastest.damping_ratio, s=140, facecolors="none", edgecolors="k", zorder=4)
-    rigid = sum(m.kind == "rigid" for m in result.linear.modes)
-    ax.set_xscale("log") if modes else None
+    if modes:
+        low = min(m.frequency_hz for m in modes)
+        high = max(m.frequency_hz for m in modes)
+        pad = max(math.sqrt(10 * low / high), 1.0)  # at least a decade shown, centred on the modes
+        ax.set_xscale("log")
+        ax.set_xlim(low / pad / 1.5, high * pad * 1.5)
+        ax.xaxis.set_major_locator(LogLocator(base=10, numticks=6))
+        ax.xaxis.set_minor_formatter(NullFormatter())  # minor labels overlap on a narrow range
+    ax.set_ylim(-1.15, 1.15)
     ax.set_xlabel("natural frequency |lambda|/(2 pi) [Hz]")
     ax.set_ylabel("damping ratio [-] (real roots: +1 decaying, -1 growing)")
-    ax.set_title(f"{len(modes)} modes (+{rigid} rigid)\nred: physically unstable, ringed: fastest", fontsize=10)
+    ax.set_title(f"{result.mode_count}\nred: physically unstable, ringed: fastest", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
 
 
 def _limits_panel(result: Audit, ax) -> None:
     names = list(result.stability)
     own_dt = result.own.dt
-    values = []
+    values = [own_dt]
     for index, name in enumerate(names):
         limit = result.stability[name]
-        measured = limit.limit_dt_measured_s
-        if measured is None:
-            ax.annotate("no limit", (index, own_dt), ha="center", va="bottom", fontsize=8)
-            values.append(own_dt)
-            continue
-        values.append(measured)
-        ax.bar(index, measured, color=_COLORS.get(name, "grey"), hatch=None if limit.confirmed else "//", alpha=0.8)
+        figure = limit.limit_dt_s
+        method = {"linear map": "map", "nonlinear runs": "runs"}.get(limit.method, "")
         if limit.limit_dt_predicted_s is not None:
-            ax.plot([index - 0.35, index + 0.35], [limit.limit_dt_predicted_s] * 2, "k-", lw=2)
-        ax.annotate(f"{measured / own_dt:.3g}x", (index, measured), ha="center", va="bottom", fontsize=8)
+            values.append(limit.limit_dt_predicted_s)
+            style = "-" if limit.prediction == "exact" else "--"
+            ax.plot([index - 0.35, index + 0.35], [limit.limit_dt_predicted_s] * 2, "k", ls=style, lw=2)
+        if figure is None:
+            bounded = limit.runs_bounded_dt_s
+            if bounded is not None and limit.runs_blew_up_dt_s is None:
+                values.append(bounded)
+                ax.annotate(
+                    "", (index, bounded * 2), (index, bounded), arrowprops={"arrowstyle": "->", "color": "grey"}
+                )
+                ax.annotate(f"none up to\n{bounded:.3g} s", (index, bounded), ha="center", va="top", fontsize=7)
+            elif limit.runs_blew_up_dt_s is not None:
+                values.append(limit.runs_blew_up_dt_s)
+                ax.annotate(
+                    f"blew up\nat {limit.runs_blew_up_dt_s:.3g} s",
+                    (index, limit.runs_blew_up_dt_s),
+                    ha="center",
+                    va="top",
+                    fontsize=7,
+                    color="#d62728",
+                )
+            else:
+                ax.annotate("no limit", (index, own_dt), ha="center", va="bottom", fontsize=8)
+            continue
+        values.append(figure)
+        confirmed = bool(limit.confirmed)
+        ax.bar(
+            index,
+            figure,
+            color=_COLORS.get(name, "grey"),
+            hatch=None if confirmed else "//",
+            alpha=0.8 if confirmed else 0.35,
+        )
+        label = f"{figure / own_dt:.3g}x {method}" if confirmed else f"UNCONFIRMED\n{method}"
+        ax.annotate(label, (index, figure), ha="center", va="bottom", fontsize=7)
     ax.axhline(own_dt, color="k", ls="--", lw=1, label=f"own dt = {own_dt:g} s")
     ax.set_yscale("log")
-    ax.set_ylim(min(values + [own_dt]) / 3, max(values + [own_dt]) * 3)
-    ax.set_xticks(range(len(names)), names)
+    ax.set_ylim(min(values) / 3, max(values) * 6)
+    ax.set_xticks(range(len(names)), names, rotation=20)
+    ax.set_xlim(-0.6, len(names) - 0.4)
     ax.set_ylabel("largest stable dt [s]")
-    ax.set_title("stability limit: measured (bar), predicted (tick)\nhatched: not confirmed by runs", fontsize=10)
+    ax.set_title(
+        "stability limit (bar: margin; map or runs) and prediction (tick; dashed: estimate)\n"
+        "hatched: UNCONFIRMED, never used for a verdict",
+        fontsize=9,
+    )
     ax.legend(loc="lower right", fontsize=8)
 
 
@@ -97,6 +143,10 @@ def _cost_panel(result: Audit, ax) -> None:
     if front:
         ax.loglog([wall for wall, _ in front], [max(error, floor) for _, error in front], "k-", lw=2, alpha=0.4)
     ax.axhline(result.tol, color="k", ls=":", lw=1, label=f"tol {result.tol:g}")
+    low, high = ax.get_ylim()
+    if high > 1e3:  # a run that left the physics (error 1e30) would flatten every other curve
+        ax.set_ylim(low, 1e3)
+        ax.annotate("errors above 1e3 off the top", (0.02, 0.97), xycoords="axes fraction", fontsize=7, va="top")
     own = result.own
     if own.error is not None:
         where = (own.wall_time_s, max(own.error, floor))

@@ -52,7 +52,11 @@ run's integrator and dt (`linearized_*`: eigenvalues lambda of the one-step
 Jacobian, s = ln(lambda) / dt); `move_time_s`, `residual_amplitude_m` (largest
 carriage deviation from the target after the move), `settling_time_s` (time
 after the move ends, or after release, from which the carriage stays inside
-+-positioning_band for good), `positioning_time_s` = move + settling, and the
++-positioning_band for good); both read the motion between the samples too
+(the cubic Hermite interpolant of position and velocity, springlab.exact.events:
+read at the samples a peak reads low by (omega_n dt)^2 / 8 of the amplitude, and
+a peak that passes the band by less than that went unseen, the settling time
+early by half a belt period), `positioning_time_s` = move + settling, and the
 analytic estimates: `settling_time_estimate_s` = ln(A / band) / (zeta omega_n),
 A the envelope of the exact residual vibration after the move, and
 `positioning_time_estimate_s` = `move_time_s` (the move this run makes, on the

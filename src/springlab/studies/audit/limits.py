@@ -42,9 +42,18 @@ import numpy as np
 
 from springlab.errors import DivergedError
 from springlab.exact.limits import rk4_limit, stability_limit
-from springlab.exact.linearize import Linearization, Mode, OperatingPoint, one_step_map
+from springlab.exact.linearize import (
+    ConstraintState,
+    Linearization,
+    Mode,
+    OperatingPoint,
+    active_constraints,
+    linearize,
+    one_step_map,
+    summarize_constraints,
+)
 from springlab.sim.batch import Job, run_batched
-from springlab.sim.simulate import Setup, integrator_id, quiet_mujoco
+from springlab.sim.simulate import BAD_WARNINGS, Setup, Trajectory, integrator_id, quiet_mujoco
 
 #: growth of the one-step map beyond the exact flow's that counts as numerical instability [-]
 MAP_MARGIN = 1e-4
@@ -80,16 +89,29 @@ class Limit:
     limit_dt_predicted_s
         closed-form limit from the modes [s] (None: no closed form, or no limit).
     limit_dt_measured_s
-        from the measured one-step map [s] (None: stable over the whole scan).
+        from the measured one-step map [s] (None: stable over the whole scan, or the map was not used).
     confirmed
-        runs of the nonlinear model at CONFIRM_BELOW x stay bounded and at CONFIRM_ABOVE x
-        grow (None: nothing to confirm).
+        whether runs confirm `limit_dt_s`: the nonlinear model stays bounded just below it and grows just
+        above (None: no limit, nothing to confirm). An unconfirmed figure is never the reason a setting
+        is called unstable.
     margin
-        measured limit / the model's own timestep [-] (None: no limit).
+        `limit_dt_s` / the model's own timestep [-] (None: no limit).
     detail
-        how the confirmation came out, for people.
+        how the limit was found and confirmed, for people.
     growth_per_step_above
-        rho(Phi) / max(1, exp(sigma dt)) just above the limit [-] (None: not probed).
+        rho(Phi) / max(1, exp(sigma dt)) just above the map's limit [-] (None: not probed).
+    limit_dt_s
+        the audit's figure [s]: the map's when runs confirm it, else the brute-force one (`method`), else
+        the map's unconfirmed one (None: no limit found).
+    method
+        what gave `limit_dt_s`: "linear map" (MuJoCo's one-step map, bisected), "nonlinear runs" (bisection
+        of blow-up of runs from the audit's start, against a fine reference's speed) or "none".
+    prediction
+        "exact" (the closed form is the linearization's limit) or "estimate" (modes coupled, or the
+        linear map is not meaningful at the operating point); None without a prediction.
+    runs_bounded_dt_s, runs_blew_up_dt_s
+        the brute force's bracket [s]: the largest timestep whose run stayed bounded and the smallest
+        whose run blew up (None: not run, or none did).
     """
 
     integrator: str
@@ -99,15 +121,31 @@ class Limit:
     margin: float | None = None
     detail: str = ""
     growth_per_step_above: float | None = None
+    limit_dt_s: float | None = None
+    method: str = "linear map"
+    prediction: str | None = None
+    runs_bounded_dt_s: float | None = None
+    runs_blew_up_dt_s: float | None = None
+
+    @property
+    def confirmed_limit_s(self) -> float | None:
+        """`limit_dt_s` when runs confirm it, else None [s]: the only figure that may call a setting unstable."""
+        return self.limit_dt_s if self.confirmed else None
 
     def to_dict(self) -> dict[str, Any]:
-        """{"limit_dt_predicted_s", "limit_dt_measured_s", "confirmed", "margin", "detail"}."""
+        """{"limit_dt_predicted_s", "limit_dt_measured_s", "confirmed", "margin", "detail", "limit_dt_s",
+        "method", "prediction", "runs_bounded_dt_s", "runs_blew_up_dt_s"}."""
         return {
             "limit_dt_predicted_s": self.limit_dt_predicted_s,
             "limit_dt_measured_s": self.limit_dt_measured_s,
             "confirmed": self.confirmed,
             "margin": self.margin,
             "detail": self.detail,
+            "limit_dt_s": self.limit_dt_s,
+            "method": self.method,
+            "prediction": self.prediction,
+            "runs_bounded_dt_s": self.runs_bounded_dt_s,
+            "runs_blew_up_dt_s": self.runs_blew_up_dt_s,
         }
 
 
@@ -245,28 +283,117 @@ def _implicit_limit(linear: Linearization, mode: Mode, damping: np.ndarray) -> f
     return low
 
 
-def predicted_limit(linear: Linearization, integrator: str, damping: np.ndarray | None = None) -> float | None:
-    """The closed-form stability limit [s] of `integrator` from the stable modes (module docstring), or None.
+def explicit_stiffness(model: mujoco.MjModel, point: OperatingPoint) -> np.ndarray:
+    """K_e [N/m, N m/rad] (nv, nv): the stiffness left when passive springs and actuators are switched off
+    (gravity, and whatever else depends on position): what `discrete` integrates explicitly. Its metric
+    M + dt D + dt^2 K_i takes joint, tendon and actuator stiffness (K_i = K - K_e) implicitly."""
+    work = copy.copy(model)
+    work.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_SPRING) | int(mujoco.mjtDisableBit.mjDSBL_ACTUATION)
+    return linearize(work, point).K
+
+
+def _scalar_limit(k: float, c: float, d: float, k_implicit: float) -> float:
+    """The first dt [s] at which one mode's map leaves the unit disc, or inf (module docstring).
+
+    Per unit modal mass: stiffness k [1/s^2], damping c [1/s], its implicit part d [1/s] and implicit
+    stiffness k_implicit [1/s^2]. The update (1 + dt d + dt^2 k_i)(v' - v) = dt (-k x - (c + dt k_i) v),
+    x' = x + dt v' has det = 1 - b and trace = 2 - a - b (a = dt^2 k / m_h, b = dt (c + dt k_i) / m_h), so
+    (Jury, k >= 0) it is stable while a + 2 b < 4: dt^2 (k - 2 k_i) + 2 dt (c - 2 d) - 4 < 0.
+    """
+    quad, lin = k - 2 * k_implicit, 2 * (c - 2 * d)
+    if abs(quad) <= 1e-12 * max(abs(k), abs(k_implicit), 1e-300):
+        return 4 / lin if lin > 0 else math.inf
+    disc = lin * lin + 16 * quad
+    if quad > 0:
+        return (-lin + math.sqrt(disc)) / (2 * quad) if lin <= 0 else 8 / (lin + math.sqrt(disc))
+    if lin <= 0 or disc < 0:
+        return math.inf  # the parabola opens downward and never reaches 0
+    return (lin - math.sqrt(disc)) / (-2 * quad)
+
+
+def _keeps(matrix: np.ndarray, mass_phi: np.ndarray, phi: np.ndarray) -> bool:
+    """Whether `matrix` maps the mode shape onto itself (matrix phi = s M phi up to COUPLING_NOISE)."""
+    pushed = matrix @ phi
+    size = float(np.linalg.norm(pushed))
+    if size == 0.0:
+        return True
+    scale = float(phi @ pushed)
+    return float(np.linalg.norm(pushed - scale * mass_phi)) <= MODAL_NOISE * max(
+        size, float(np.linalg.norm(mass_phi)) * abs(scale)
+    )
+
+
+#: a matrix keeps a mode to itself when |X phi - (phi' X phi) M phi| <= this x |X phi| (finite differences
+#: give C and K to ~1e-8 relative)
+MODAL_NOISE = 1e-6
+
+
+@dataclasses.dataclass(frozen=True)
+class Prediction:
+    """The closed-form limit of one integrator from the linearization.
+
+    Attributes
+    ----------
+    limit_s
+        the smallest per-mode limit [s] (None: no mode limits the timestep).
+    exact
+        True when every mode keeps to itself under K, C and the integrator's implicit D and K_i (the
+        per-mode closed forms are then the linearization's exact limit; rk4 always); False: an
+        estimate (damping or implicit terms couple modes), which may lie on either side.
+    """
+
+    limit_s: float | None
+    exact: bool
+
+
+def predict(
+    linear: Linearization,
+    integrator: str,
+    damping: np.ndarray | None = None,
+    spring: np.ndarray | None = None,
+) -> Prediction:
+    """The closed-form stability limit of `integrator` from the stable modes (module docstring).
 
     `damping`: the (nv, nv) damping `integrator` treats implicitly (`implicit_damping`) [N s/m, N m s/rad];
-    None: all of C (joint damping, as `exact.limits.stability_limit` assumes).
+    None: all of C (joint damping, as `exact.limits.stability_limit` assumes). `spring`: the (nv, nv)
+    stiffness it treats implicitly [N/m, N m/rad] (discrete: K - `explicit_stiffness`; None: zero).
     """
     stable = [m for m in linear.modes if m.kind != "rigid" and not m.physically_unstable]
-    if integrator == "discrete":
-        return None
     if integrator == "rk4":
         limits = [_rk4_limit(m.eigenvalue) / m.rate_rad_s for m in stable]
-    else:
-        limits = []
-        for m in stable:
-            if m.kind == "oscillatory":
-                assert m.damping_ratio is not None, "an oscillatory mode has a damping ratio"
-                if damping is None:
-                    limits.append(stability_limit(integrator, m.damping_ratio) / m.rate_rad_s)
-                else:
-                    limits.append(_implicit_limit(linear, m, damping))
+        finite = [limit for limit in limits if math.isfinite(limit)]
+        return Prediction(min(finite) if finite else None, True)
+    nv = linear.M.shape[0]
+    implicit_d = linear.C if damping is None else damping
+    implicit_k = np.zeros((nv, nv)) if spring is None else spring
+    limits, exact = [], True
+    for mode in stable:
+        phi = _mode_shape(linear, mode.eigenvalue)
+        mass_phi = linear.M @ phi
+        exact = exact and all(_keeps(x, mass_phi, phi) for x in (linear.K, linear.C, implicit_d, implicit_k))
+        k_i = float(phi @ implicit_k @ phi)
+        if mode.kind == "oscillatory" and integrator != "discrete" and not np.any(implicit_k):
+            assert mode.damping_ratio is not None, "an oscillatory mode has a damping ratio"
+            if damping is None:
+                limits.append(stability_limit(integrator, mode.damping_ratio) / mode.rate_rad_s)
+            else:
+                limits.append(_implicit_limit(linear, mode, damping))
+            continue
+        if mode.kind == "oscillatory":
+            assert mode.damping_ratio is not None, "an oscillatory mode has a damping ratio"
+            k, c = mode.rate_rad_s**2, 2 * float(mode.damping_ratio) * mode.rate_rad_s
+        else:  # a real root: the mode shape's own stiffness and damping
+            k, c = float(phi @ linear.K @ phi), float(phi @ linear.C @ phi)
+        limits.append(_scalar_limit(max(k, 0.0), c, float(phi @ implicit_d @ phi), k_i))
     finite = [limit for limit in limits if math.isfinite(limit)]
-    return min(finite) if finite else None
+    return Prediction(min(finite) if finite else None, exact)
+
+
+def predicted_limit(
+    linear: Linearization, integrator: str, damping: np.ndarray | None = None, spring: np.ndarray | None = None
+) -> float | None:
+    """`predict(...).limit_s`: the closed-form stability limit [s] of `integrator`, or None."""
+    return predict(linear, integrator, damping, spring).limit_s
 
 
 class _MapProbe:
@@ -435,6 +562,7 @@ def confirm(
         if fraction == CONFIRM_ABOVE:
             below = verdicts[index][CONFIRM_BELOW]
             found[index]["confirmed"] = (not below) and grew
+            found[index]["method"] = "linear map"
             found[index]["detail"] = (
                 f"{steps} steps at {CONFIRM_BELOW:g}x: {'grew' if below else 'bounded'};"
                 f" at {CONFIRM_ABOVE:g}x: {'grew' if grew else 'bounded'}"
@@ -450,6 +578,158 @@ def _perturbed(model: mujoco.MjModel, point: OperatingPoint, direction: np.ndarr
     return Setup(qpos, point.qvel + direction[nv : 2 * nv], point.act + direction[2 * nv :], point.ctrl)
 
 
+#: brute force: every run takes at least this many steps (a growth of BLOWUP_FACTOR over them is 0.23 % a step)
+RUN_MIN_STEPS = 2000
+#: ... and blows up when MuJoCo flags it or its speed passes this multiple of the physical bound
+BLOWUP_FACTOR = 100.0
+#: ... bisected down to this ratio between the bounded and the blown-up timestep
+RUN_PRECISION = 0.02
+#: ... between the model's own timestep / RUN_FLOOR and the ceiling of `RunProbe`
+RUN_FLOOR = 64.0
+
+
+@dataclasses.dataclass(frozen=True)
+class RunProbe:
+    """How the brute-force runs start and when one counts as blown up.
+
+    Attributes
+    ----------
+    start
+        the audit's start (the perturbed operating point), every run's initial state.
+    horizon_s
+        the audit's duration [s]; a run lasts max(RUN_MIN_STEPS steps, this).
+    peak_speed
+        the fine reference's largest |qvel| from `start` over the duration [m/s or rad/s].
+    gravity
+        |g| [m/s^2]: a run of length T may reach peak_speed + |g| T by falling.
+    ceiling_s
+        the largest timestep tried [s].
+    """
+
+    start: Setup
+    horizon_s: float
+    peak_speed: float
+    gravity: float
+    ceiling_s: float
+
+    def steps(self, dt: float) -> int:
+        """Steps of a brute-force run at `dt` [s]."""
+        return max(RUN_MIN_STEPS, math.ceil(self.horizon_s / dt * (1 - 1e-12)))
+
+    def blew_up(self, outcome: Trajectory | DivergedError, dt: float) -> bool:
+        """MuJoCo flagged the run, or its speed passed BLOWUP_FACTOR x (peak_speed + |g| x its length)."""
+        if isinstance(outcome, DivergedError):
+            return True
+        bound = BLOWUP_FACTOR * (self.peak_speed + self.gravity * self.steps(dt) * dt)
+        return not float(np.max(np.abs(outcome.qvel), initial=0.0)) <= bound
+
+
+@dataclasses.dataclass(frozen=True)
+class Watch:
+    """A fine run from the audit's start: its peak speed and every constraint active along it.
+
+    Attributes
+    ----------
+    peak_speed
+        max |qvel| over the run [m/s or rad/s].
+    along
+        the union of the constraints active at its steps (`ConstraintState`).
+    dt
+        its timestep [s] (RK4).
+    diverged
+        whether it blew up (its figures then cover the steps before).
+    """
+
+    peak_speed: float
+    along: ConstraintState
+    dt: float
+    diverged: bool
+
+
+#: the fine watch run's timestep: the model's own / WATCH_REFINE (again, if that blows up)
+WATCH_REFINE = 4
+
+
+def watch(model: mujoco.MjModel, start: Setup, duration: float) -> Watch:
+    """RK4 at the model's own timestep / WATCH_REFINE from `start` for `duration` [s], stepped here to
+    read the constraints active at every step (contacts that begin, limits that engage)."""
+    work = copy.copy(model)
+    work.opt.integrator = integrator_id("rk4")
+    dt = float(model.opt.timestep) / WATCH_REFINE
+    for _ in range(2):
+        work.opt.timestep = dt
+        data = mujoco.MjData(work)
+        elements: set[str] = set()
+        dry: set[str] = set()
+        peak_v = peak_a = 0.0
+        diverged = False
+        with quiet_mujoco():
+            mujoco.mj_resetData(work, data)
+            data.qpos[:] = start.qpos if start.qpos is not None else work.qpos0
+            if start.qvel is not None:
+                data.qvel[:] = start.qvel
+            if start.act is not None and work.na:
+                data.act[:] = start.act
+            if start.control is not None and work.nu:
+                data.ctrl[:] = np.atleast_2d(start.control)[0]
+            for _ in range(max(1, round(duration / dt))):
+                mujoco.mj_step(work, data)  # leaves the constraints and qacc of the state it started from
+                if data.nefc:
+                    found, friction = active_constraints(work, data)
+                    elements |= found
+                    dry |= friction
+                peak_a = max(peak_a, float(np.max(np.abs(data.qacc), initial=0.0)))
+                speed = float(np.max(np.abs(data.qvel), initial=0.0))
+                if not math.isfinite(speed) or any(data.warning[w].number for w in BAD_WARNINGS):
+                    diverged = True
+                    break
+                peak_v = max(peak_v, speed)
+        if not diverged:
+            break
+        dt /= WATCH_REFINE
+    return Watch(peak_v, summarize_constraints(elements, dry, peak_v, peak_a), dt, diverged)
+
+
+def run_limits(
+    model: mujoco.MjModel,
+    probe: RunProbe,
+    integrators: Sequence[str],
+    own_dt: float,
+    run: Callable[[Sequence[Job]], list],
+    ceilings: dict[str, float] | None = None,
+) -> dict[str, tuple[float | None, float | None]]:
+    """Brute force: per integrator (largest bounded dt, smallest blown-up dt) [s] (None: none).
+
+    From the model's own timestep, doubling up to the probe's ceiling while runs stay bounded, halving
+    down to own / RUN_FLOOR while they blow up, then bisecting (geometrically) to a ratio of 1 +
+    RUN_PRECISION; every integrator's next run goes into one batch per round (`run`)."""
+    state: dict[str, list[float | None]] = {name: [None, None] for name in integrators}
+    pending = {name: own_dt for name in integrators}
+    floor = own_dt / RUN_FLOOR
+    while pending:
+        outcomes = run([Job(model, name, dt, probe.steps(dt), probe.start) for name, dt in pending.items()])
+        following: dict[str, float] = {}
+        for (name, dt), outcome in zip(pending.items(), outcomes):
+            low, high = state[name]
+            if probe.blew_up(outcome, dt):
+                high = dt if high is None else min(high, dt)
+            else:
+                low = dt if low is None else max(low, dt)
+            state[name] = [low, high]
+            if high is None:
+                assert low is not None  # this run was bounded
+                ceiling = max(probe.ceiling_s, (ceilings or {}).get(name, 0.0))
+                if low < ceiling:
+                    following[name] = min(2 * low, ceiling)
+            elif low is None:
+                if high > floor * (1 + 1e-9):
+                    following[name] = max(high / 2, floor)
+            elif high / low > 1 + RUN_PRECISION:
+                following[name] = math.sqrt(low * high)
+        pending = following
+    return {name: (low, high) for name, (low, high) in state.items()}
+
+
 def stability_limits(
     model: mujoco.MjModel,
     linear: Linearization,
@@ -458,20 +738,90 @@ def stability_limits(
     *,
     nthread: int = 0,
     run: Callable[[Sequence[Job]], list] | None = None,
+    smooth: bool = True,
+    probe: RunProbe | None = None,
 ) -> dict[str, Limit]:
-    """Predicted, measured (scanned up to `stop_s` [s]) and confirmed limits per integrator name (the
-    confirmation runs through `run`, see `confirm`); each margin is over the model's own timestep."""
+    """Predicted, measured and confirmed limits per integrator name; each margin over the model's own timestep.
+
+    `smooth`: nothing constrains the model at its operating point or along its motion, so MuJoCo's
+    one-step map there is the dynamics: its limit is measured (scanned up to `stop_s` [s]) and confirmed
+    by runs (`confirm`). Otherwise the map is not measured (contacts, limits, equality constraints and
+    dry friction make it a different function at every step) and, with a `probe`, every limit comes from
+    brute-force runs (`run_limits`); a map limit that runs do not confirm falls back to them as well.
+    Without a probe an unconfirmed map limit stays as measured, labelled unconfirmed.
+    """
+    run = run or (lambda jobs: run_batched(jobs, nthread=nthread))
     fastest = linear.fastest
     scale = 1.0 / fastest.rate_rad_s if fastest is not None else model.opt.timestep
     own_dt = float(model.opt.timestep)
+    names = list(integrators)
+    spring = None
+    if "discrete" in names:
+        spring = linear.K - explicit_stiffness(model, linear.point)
     limits = []
-    for name in integrators:
-        damping = implicit_damping(model, linear.point, name) if name in IMPLICIT_DAMPING_INTEGRATORS else None
-        predicted = predicted_limit(linear, name, damping)
-        measured = measured_limit(model, linear, name, scale, stop_s, predicted)
-        margin = None if measured is None else measured / own_dt
-        limits.append(Limit(name, predicted, measured, margin=margin))
-    return {limit.integrator: limit for limit in confirm(model, linear, limits, nthread=nthread, run=run)}
+    for name in names:
+        damping = None
+        if name in IMPLICIT_DAMPING_INTEGRATORS or name == "discrete":
+            damping = implicit_damping(model, linear.point, "implicitfast" if name == "discrete" else name)
+        prediction = predict(linear, name, damping, spring if name == "discrete" else None)
+        kind = "exact" if prediction.exact and smooth else "estimate"
+        measured = measured_limit(model, linear, name, scale, stop_s, prediction.limit_s) if smooth else None
+        limits.append(
+            Limit(
+                name, prediction.limit_s, measured, limit_dt_s=measured, prediction=kind if prediction.limit_s else None
+            )
+        )
+    if smooth:
+        limits = confirm(model, linear, limits, run=run)
+    fallback = [lim for lim in limits if not smooth or (lim.limit_dt_measured_s is not None and not lim.confirmed)]
+    if probe is not None and fallback:
+        # an unconfirmed map limit is bracketed too (runs of RUN_MIN_STEPS cost the same at any timestep)
+        above = {lim.integrator: 2 * lim.limit_dt_measured_s for lim in fallback if lim.limit_dt_measured_s}
+        brackets = run_limits(model, probe, [lim.integrator for lim in fallback], own_dt, run, above)
+        limits = [
+            _from_runs(lim, *brackets[lim.integrator], probe, own_dt, smooth) if lim.integrator in brackets else lim
+            for lim in limits
+        ]
+    elif not smooth:
+        limits = [
+            dataclasses.replace(lim, method="none", detail="constraints active: no limit measured") for lim in limits
+        ]
+    return {
+        lim.integrator: dataclasses.replace(lim, margin=None if lim.limit_dt_s is None else lim.limit_dt_s / own_dt)
+        for lim in limits
+    }
+
+
+def _from_runs(
+    limit: Limit, low: float | None, high: float | None, probe: RunProbe, own_dt: float, smooth: bool
+) -> Limit:
+    """`limit` with the brute force's bracket as its figure (`run_limits`)."""
+    why = (
+        f"the one-step map's limit {limit.limit_dt_measured_s:.4g} s was not confirmed ({limit.detail})"
+        if smooth
+        else "constraints, contacts or dry friction active: the linear map is not the dynamics"
+    )
+    runs = f"runs of max({RUN_MIN_STEPS} steps, {probe.horizon_s:g} s) from the audit's start"
+    if high is None:
+        detail = f"{why}; {runs}: none blew up up to {low:.4g} s"
+        return dataclasses.replace(
+            limit, limit_dt_s=None, confirmed=None, method="nonlinear runs", detail=detail, runs_bounded_dt_s=low
+        )
+    if low is None:
+        detail = f"{why}; {runs}: every one blew up, down to {high:.4g} s"
+        return dataclasses.replace(
+            limit, limit_dt_s=None, confirmed=None, method="nonlinear runs", detail=detail, runs_blew_up_dt_s=high
+        )
+    detail = f"{why}; {runs}: bounded at {low:.4g} s, blew up at {high:.4g} s"
+    return dataclasses.replace(
+        limit,
+        limit_dt_s=low,
+        confirmed=True,
+        method="nonlinear runs",
+        detail=detail,
+        runs_bounded_dt_s=low,
+        runs_blew_up_dt_s=high,
+    )
 
 
 def constraint_flags(model: mujoco.MjModel, dt: float) -> list[ConstraintFlag]:

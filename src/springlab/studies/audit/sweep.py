@@ -183,7 +183,8 @@ class TrajectoryReference(Reference):
 class ExactReference(Reference):
     """The exact solution of the affine linearization dx/dt = f0 + A (x - x_op), at any time.
 
-    f0 = (qvel, qacc, act_dot) at the operating point (zero at an equilibrium); x in the tangent space.
+    f0 = (qvel, qacc, act_dot) at the operating point with the start's held control (zero at an equilibrium
+    with no control offset); x in the tangent space. Exact for controls that enter affinely.
     """
 
     kind = "exact solution of the linearization"
@@ -196,6 +197,8 @@ class ExactReference(Reference):
         data = mujoco.MjData(self.work)
         with quiet_mujoco():
             point.load(self.work, data)
+            if start.control is not None and self.work.nu:
+                data.ctrl[:] = np.atleast_2d(start.control)[0]  # the start's held control: its force is in the drift
             mujoco.mj_forward(self.work, data)
         drift = np.concatenate([data.qvel, data.qacc, data.act_dot])
         x0 = np.zeros(n)

@@ -1,3 +1,4 @@
 """Fitting a scene to a measurement (`springlab fit`): the record (`data`), what a scene can identify
-(`models`), the optimization (`engine`), multi-starts (`starts`), the result (`results`) and the entry point (`fit`).
+(`models`), where the motion starts (`release`), the optimization (`engine`), multi-starts (`starts`), the result
+(`results`) and the entry point (`fit`).
 """

@@ -1,34 +1,50 @@
-"""Reading a measured record for `springlab fit`: the CSV, its untidy parts, and where the motion starts.
+"""Reading a measured record for `springlab fit`: the file or arrays, their untidy parts, and where the motion starts.
 
 A record is one time column and one signal of one joint: its position
 (`<joint>_pos` [m]), velocity (`<joint>_vel` [m/s]) or acceleration
 (`<joint>_acc` [m/s^2], an accelerometer). Column names follow trajectory.csv;
-`--map COLUMN=NAME` renames a column of the file to one of those names.
+`--map COLUMN=NAME` renames a column of the file to one of those names. It comes
+from a CSV file (read in bounded memory by springlab.studies.fit.reader), a
+mapping of arrays or a pandas DataFrame.
 
 Untidy data is handled, and every step says what it did (`Record.notes`):
 
+* the file's layout: comment lines (`#`), a comma, semicolon or tab between the
+  fields, a decimal comma, a units row under the header (springlab.studies.fit.reader);
+  a ragged row is refused with its line number;
+* units: `scale` and `time_scale` multiply the signal and the time into SI units;
+  without them a unit the column states (`elapsed_ms`, `disp_mm`, `x [mm]`,
+  `t (s)`, or the units row) is applied and said so, and one that cannot be is a
+  warning (a note starting 'warning: ');
 * uneven sampling: the model is simulated on its own fine grid and interpolated
   at the recorded times, so any strictly increasing times work;
 * rows where the time or the signal is empty or NaN are skipped and counted;
-* `scale` multiplies the signal into SI units (e.g. 0.001 for millimetres);
 * a record that starts before the release (the signal held still, then let go):
-  `start` [s] drops everything before it; without it the held part is detected
-  (a leading run of samples within 5 noise levels of the first one, at least
-  10 samples and 1 % of the record) and dropped;
+  `start` [s] drops everything before it; without it the fit tests for a held
+  part and drops it only when the data show it beyond their noise
+  (springlab.studies.fit.release, `cut_at_release`);
 * a constant offset, noise and a sensor delay are parameters of the fit, not of the data.
 """
 
 from __future__ import annotations
 
-import csv
 import dataclasses
 import math
 import os
 from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any, TypeAlias
 
 import numpy as np
 
 from springlab.errors import BadInputError
+
+from . import reader
+
+if TYPE_CHECKING:  # annotations only: a DataFrame is read without importing pandas
+    import pandas
+
+#: what a record is read from: a CSV file's path, a mapping of column name -> array, or a pandas DataFrame
+DataSource: TypeAlias = "str | os.PathLike[str] | Mapping[str, Any] | pandas.DataFrame"
 
 #: signal suffixes and the SI unit of each
 SIGNALS = {"pos": "m", "vel": "m/s", "acc": "m/s^2"}
@@ -118,128 +134,118 @@ def parse_map(items: Sequence[str] | Mapping[str, str] | None) -> dict[str, str]
     return mapping
 
 
-def _read_rows(path: str | os.PathLike) -> tuple[list[str], list[list[str]]]:
-    try:
-        with open(path, newline="", encoding="utf-8-sig") as handle:
-            rows = [row for row in csv.reader(handle) if row and any(cell.strip() for cell in row)]
-    except (OSError, UnicodeDecodeError) as error:
-        reason = getattr(error, "strerror", None) or str(error)
-        raise BadInputError(f"cannot read {str(path)!r}: {reason}") from None
-    except csv.Error as error:
-        raise BadInputError(f"{str(path)!r} is not a CSV file: {error}") from None
-    if not rows:
-        raise BadInputError(f"{str(path)!r} is empty; it needs a header row and data rows")
-    header = [cell.strip() for cell in rows[0]]
-    if all(_is_number(cell) for cell in header):
-        raise BadInputError(
-            f"{str(path)!r} has no header row; its first line must name the columns, e.g. time,slider_pos"
-        )
-    return header, rows[1:]
-
-
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
-
-def _number(text: str, row: int, column: str, path) -> float:
-    """A cell as a float; '' and 'nan' are NaN (missing), other text is bad input."""
-    text = text.strip()
-    if text == "" or text.lower() in ("nan", "na", "n/a", "null"):
-        return math.nan
-    try:
-        return float(text)
-    except ValueError:
-        raise BadInputError(
-            f"{str(path)!r} row {row}: column {column!r} holds {text!r}, not a number (empty or NaN marks a missing value)"
-        ) from None
-
-
 def load(
-    path: str | os.PathLike,
+    data: DataSource,
     joints: Sequence[str],
     *,
     mapping: Mapping[str, str] | None = None,
-    scale: float = 1.0,
+    scale: float | None = None,
+    time_scale: float | None = None,
     start: float | None = None,
-    detect_release: bool = True,
     signals: Sequence[str] = tuple(SIGNALS),
+    show_progress: bool | None = None,
 ) -> Record:
-    """Read DATA.csv into a Record of the first joint in `joints` that has a signal column.
+    """Read a record (a CSV file, a mapping of arrays or a DataFrame) of the first joint in `joints` with a signal.
 
     Parameters
     ----------
-    path
-        The CSV file (header row, then numbers).
+    data
+        A CSV file's path (header row, then numbers; springlab.studies.fit.reader reads it), a mapping
+        of column name -> array ({'time': t, 'slider_pos': x}) or a pandas DataFrame.
     joints
         The scene's joints that may be measured, most natural first.
     mapping
-        File column -> springlab name ('time', '<joint>_pos', ...).
+        Column -> springlab name ('time', '<joint>_pos', ...); a column is matched by its whole name or by
+        its name without the unit ('x [mm]' by 'x').
     scale
-        Factor [SI unit per file unit] applied to the signal (not the time).
+        Factor [SI unit per unit of the data] applied to the signal; None: from the column's stated unit, else 1.
+    time_scale
+        Factor [s per unit of the data] applied to the time; None: from the column's stated unit, else 1.
     start
-        Time [s] of the release; samples before it are dropped and the model's t = 0 is there.
-    detect_release
-        Without `start`, find and drop a held part at the beginning.
+        Time [s] (after `time_scale`) of the release; samples before it are dropped and the model's t = 0 is there.
     signals
         The signal kinds this scene can fit.
+    show_progress
+        A progress bar while a large file is read (None: on a terminal only).
 
     Raises
     ------
     BadInputError
-        No such file, no header, an unknown column, no time or signal column,
-        non-monotone time, text in a number cell, too few samples, a non-positive scale.
+        No such file, no header, a ragged row, an unknown column, no time or signal column,
+        non-monotone time, text in a number cell, too few samples, a zero or non-finite factor.
     """
-    if not isinstance(scale, (int, float)) or not math.isfinite(scale) or scale == 0:
-        raise BadInputError(f"--scale must be a finite non-zero factor (SI units per file unit), got {scale!r}")
-    header, rows = _read_rows(path)
-    mapping = dict(mapping or {})
-    for column in mapping:
-        if column not in header:
-            raise BadInputError(
-                f"--map names column {column!r}, which {str(path)!r} lacks; its columns: {', '.join(header)}"
-            )
-    names = [mapping.get(column, column) for column in header]
+    _check_factor(scale, "--scale", "SI units per unit of the data, e.g. 0.001 for mm", positive=False)
+    _check_factor(time_scale, "--time-scale", "seconds per unit of the data, e.g. 0.001 for ms", positive=True)
+    path = data if isinstance(data, (str, os.PathLike)) else None
+    if path is not None:
+        layout = reader.sniff(path)
+        columns = layout.columns
+    else:
+        columns, arrays = reader.in_memory(data)
+    header, source = columns.header, columns.source
+    names = _names(header, dict(mapping or {}), source)
     if "time" not in names:
         raise BadInputError(
-            f"{str(path)!r} has no 'time' column; its columns: {', '.join(header)} (rename one with --map COLUMN=time)"
+            f"{source} has no 'time' column; its columns: {', '.join(header)} (rename one with --map COLUMN=time)"
         )
     candidates = [f"{j}_{s}" for j in joints for s in _PREFERENCE if s in signals]
     chosen = next((name for name in candidates if name in names), None)
     if chosen is None:
         raise BadInputError(
-            f"{str(path)!r} has no signal column; expected one of {', '.join(candidates)}"
+            f"{source} has no signal column; expected one of {', '.join(candidates)}"
             f" (its columns: {', '.join(header)}; rename one with --map COLUMN=NAME)"
         )
     t_index, y_index = names.index("time"), names.index(chosen)
     joint, signal = chosen.rsplit("_", 1)
-    column = header[y_index]
-    time_cells: list[float] = []
-    value_cells: list[float] = []
-    for number, row in enumerate(rows, start=2):
-        cells = row + [""] * (len(header) - len(row))
-        time_cells.append(_number(cells[t_index], number, header[t_index], path))
-        value_cells.append(_number(cells[y_index], number, column, path))
-    time, values = np.array(time_cells, float), np.array(value_cells, float) * scale
-    if not (np.all(np.isfinite(time[np.isfinite(time)])) and np.all(np.isfinite(values[np.isfinite(values)]))):
-        raise BadInputError(f"{str(path)!r} holds an infinite value; valid: finite numbers")
+    t_column, column = header[t_index], header[y_index]
+    notes = list(columns.notes)
+    if path is not None:
+        time, values, rows, comments = reader.stream(path, layout, (t_index, y_index), show_progress=show_progress)
+        if comments + layout.comments:
+            notes.append(f"skipped {comments + layout.comments} comment line(s) starting with #")
+    else:
+        time, how = reader.as_floats(arrays[t_column], t_column, source)
+        values, _ = reader.as_floats(arrays[column], column, source)
+        if time.size != values.size:
+            raise BadInputError(
+                f"{source}: {t_column!r} has {time.size} values and {column!r} {values.size}; valid: one per sample in each"
+            )
+        rows = time.size
+        notes.extend([how] if how else [])
+    # units: an explicit factor, else what the column's name or the units row states, else SI
+    units = columns.units_row
+    t_factor, t_note, t_warning = reader.resolve(
+        time_scale,
+        reader.stated(t_column, units[t_index] if units else None, "time", "the time"),
+        "time",
+        t_column,
+        "--time-scale",
+    )
+    y_factor, y_note, y_warning = reader.resolve(
+        scale, reader.stated(column, units[y_index] if units else None, signal, chosen), signal, column, "--scale"
+    )
+    if t_note or y_note:
+        notes.append("; ".join(note for note in (t_note, y_note) if note))
+    for warning, option in ((t_warning, "--time-scale"), (y_warning, "--scale")):
+        if warning:
+            notes.append(f"warning: {warning}; give {option} FACTOR if it is not")
+    if t_factor != 1.0:
+        time = time * t_factor
+    if y_factor != 1.0:
+        values = values * y_factor
+    if not (np.all(np.isfinite(time[~np.isnan(time)])) and np.all(np.isfinite(values[~np.isnan(values)]))):
+        raise BadInputError(f"{source} holds an infinite value; valid: finite numbers")
     keep = np.isfinite(time) & np.isfinite(values)
-    time, values = time[keep], values[keep]
-    skipped = int(np.count_nonzero(~keep))
-    notes = []
+    skipped = int(keep.size - np.count_nonzero(keep))
     if skipped:
+        time, values = time[keep], values[keep]
         notes.append(f"skipped {skipped} row(s) with a missing or NaN value")
-    if scale != 1.0:
-        notes.append(f"signal scaled by {scale:g} into {SIGNALS[signal]}")
-    _check_enough(time.size, column, skipped, path)
+    _check_enough(time.size, column, skipped, source)
     steps = np.diff(time)
     if np.any(steps <= 0):
         bad = int(np.flatnonzero(steps <= 0)[0])
         raise BadInputError(
-            f"{str(path)!r}: time must increase strictly, but t = {time[bad + 1]:g} s follows"
+            f"{source}: time must increase strictly, but t = {time[bad + 1]:g} s follows"
             f" t = {time[bad]:g} s; valid: one row per sample, in time order"
         )
     if not np.allclose(steps, steps[0], rtol=1e-6, atol=0):
@@ -253,28 +259,55 @@ def load(
         signal=signal,
         column=column,
         origin=float(time[0]),
-        rows=len(rows),
+        rows=rows,
         skipped_nan=skipped,
         notes=tuple(notes),
     )
     if start is not None:
-        return _cut(record, start, path, detected=False)
-    if detect_release:
-        release = find_release(record.time, record.values)
-        if release is not None:
-            return _cut(record, release, path, detected=True)
+        return _cut(record, start, source, detected=False)
     return record
 
 
-def _check_enough(samples: int, column: str, skipped: int, path: str | os.PathLike) -> None:
+def _check_factor(value: float | None, option: str, meaning: str, *, positive: bool) -> None:
+    """A factor is None (from the data's units) or a finite number, non-zero (positive for time)."""
+    if value is None:
+        return
+    bad = not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value)
+    if bad or value == 0 or (positive and value < 0):
+        kind = "positive" if positive else "non-zero"
+        raise BadInputError(f"{option} must be a finite {kind} factor ({meaning}), got {value!r}")
+
+
+def _names(header: Sequence[str], mapping: Mapping[str, str], source: str) -> list[str]:
+    """Each column's springlab name: mapped by its whole name or its name without the unit, else that name."""
+    bases = [reader.split_unit(column)[0] for column in header]
+    for key in mapping:
+        if key in header:
+            continue
+        matches = [column for column, base in zip(header, bases) if base == key]
+        if not matches:
+            raise BadInputError(f"--map names column {key!r}, which {source} lacks; its columns: {', '.join(header)}")
+        if len(matches) > 1:
+            raise BadInputError(
+                f"--map names {key!r}, which could be any of {', '.join(map(repr, matches))}; name one whole"
+            )
+    return [mapping.get(column, mapping.get(base, base)) for column, base in zip(header, bases)]
+
+
+def _check_enough(samples: int, column: str, skipped: int, source: str) -> None:
     if samples < MIN_SAMPLES:
         raise BadInputError(
-            f"{str(path)!r} has {samples} usable sample(s) of {column!r}"
+            f"{source} has {samples} usable sample(s) of {column!r}"
             f" ({skipped} skipped as missing/NaN); a fit needs at least {MIN_SAMPLES}"
         )
 
 
-def _cut(record: Record, start: float, path: str | os.PathLike, *, detected: bool) -> Record:
+def cut_at_release(record: Record, start: float) -> Record:
+    """The record from a detected release on: samples before `start` [s] dropped (and noted), t = 0 there."""
+    return _cut(record, start, record.column, detected=True)
+
+
+def _cut(record: Record, start: float, path: str, *, detected: bool) -> Record:
     """The record without the samples before `start` [s], the model's t = 0 there."""
     if not isinstance(start, (int, float)) or not math.isfinite(start):
         raise BadInputError(f"--start must be a finite time in seconds, got {start!r}")
@@ -309,28 +342,3 @@ def noise_level(values: np.ndarray) -> float:
         return 0.0
     d3 = np.diff(values, 3)
     return float(1.4826 * np.median(np.abs(d3 - np.median(d3))) / math.sqrt(20.0))
-
-
-def find_release(time: np.ndarray, values: np.ndarray) -> float | None:
-    """Time [s] of the first sample after the release when the record starts still; None otherwise.
-
-    Held: within 5 noise levels (or 1e-9 of the signal's range, for noiseless
-    data) of the first samples' median, for at least 10 samples and 1 % of the
-    record. The fit starts at the first sample that left that band: it is
-    surely after the release, and the initial state there is fitted, so the
-    unknown moment of the release between the samples biases nothing.
-    """
-    n = values.size
-    head = values[: max(5, n // 100)]
-    level = float(np.median(head))
-    span = float(np.ptp(values))
-    threshold = max(5.0 * noise_level(values), 1e-9 * span)
-    if span == 0:
-        return None
-    outside = np.flatnonzero(np.abs(values - level) > threshold)
-    if not outside.size:
-        return None
-    first = int(outside[0])
-    if first < max(10, n // 100):
-        return None
-    return float(time[first])

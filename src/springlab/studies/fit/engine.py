@@ -9,16 +9,32 @@
 * `sysid.optimize` with MuJoCo's Levenberg-Marquardt (`mujoco.minimize`) finds
   the estimate; `check_identifiable` refuses a rank-deficient Jacobian.
 
-The model is simulated with RK4 on its own even grid (omega dt <= 0.05 on the
-fastest mode: relative bias (omega dt)^4 / 120 < 1e-7 in the frequency) and
-read at the recorded times by cubic Hermite interpolation of position and
-velocity (error (omega dt)^4 / 384), so uneven sampling costs nothing.
+The model is simulated with RK4 on its own even grid, whose timestep follows from the accuracy the fit
+needs, not from the sample rate, and is read at the recorded times by cubic Hermite interpolation of
+position and velocity (fourth order, like RK4), so uneven or dense sampling costs nothing (`set_grid`).
 Acceleration comes from fourth-order differences of the velocity on the grid.
+
+The timestep (`choose_dt`). A model error e at the n samples moves estimate i by at most
+sqrt((J^T J)^-1_ii) |e|_2 (the least-squares estimate is linear in the data), that is by at most
+|e|_2 / sigma of its standard errors for noise sigma. The grid is therefore fine enough that the bound
+|e|_2 <= sqrt(n) max|e| stays below ACCURACY_IN_SE sigma, with max|e| the error bound springlab's
+verdict machinery derives for every run (springlab.runs.compare: 2 x the leading-order global error
+C h^4 t |A^5 z(t)| of RK4, plus the round-off of the steps) plus the Hermite reading error
+h^4 |x''''| / 384 (velocity and acceleration add their finite differences' errors), for the mode at
+the start values and sigma estimated from the record (`data.noise_level`). A record too clean for that
+(sigma -> 0) takes the exact-record grid |lambda| h = OMEGA_DT, whose frequency bias
+(|lambda| h)^4 / 120 = 5e-8 is far below the 1e-6 an exact record is fitted to. The step never leaves
+the range where compare's error estimate holds (`compare.estimate_range`), |lambda| h <= MAX_RATE_DT
+(the reading's error constants), or span / 200. After the fit, `accuracy` measures the effect itself at
+the estimate: the simulated signal against the closed form at every sample (e) moves the estimate by
+J^+ e, held against max(ACCURACY_IN_SE standard errors, EXACT_ACCURACY of the name's scale); the fit
+refines its grid once where that is not met.
 """
 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import io
 import logging
 import math
@@ -31,10 +47,11 @@ import mujoco
 import numpy as np
 
 from springlab.errors import BadInputError
-from springlab.scenes.base import Scenario
+from springlab.runs import compare
+from springlab.scenes.base import Reference, Scenario
 from springlab.sim.simulate import quiet_mujoco
 
-from .data import Record
+from .data import Record, noise_level
 from .models import FitModel
 
 if TYPE_CHECKING:  # annotations only: mujoco.sysid is imported when a fit runs
@@ -43,8 +60,22 @@ if TYPE_CHECKING:  # annotations only: mujoco.sysid is imported when a fit runs
 #: growth of the Levenberg-Marquardt regularizer per rejected step: mujoco.minimize's 10^0.1 spends ~70 rollouts
 #: climbing from 1e-6 to 10 once the objective sits on its round-off floor at the optimum
 MU_FACTOR = 10**0.5
-#: largest (fastest mode's rate x dt) of the fit's grid [-]
+#: Levenberg-Marquardt iterations at most per optimization
+MAX_ITERATIONS = 100
+#: |lambda| dt [-] of the exact-record grid on the fastest mode (frequency bias (|lambda| dt)^4 / 120 = 5e-8)
 OMEGA_DT = 0.05
+#: the simulation may move an estimate by at most this many of its standard errors [-]
+ACCURACY_IN_SE = 0.1
+#: ... or by this fraction of the name's scale, on records too clean for that [-]
+EXACT_ACCURACY = 1e-7
+#: largest |lambda| dt [-] of any grid: the Hermite reading's and the differences' error constants hold to it
+MAX_RATE_DT = 1.0
+#: largest |s| dt [-] of the fastest pole a multi-start grid must keep stable (RK4: 2.785 on the real axis)
+STABLE_RATE_DT = 2.5
+#: the reading's error of a signal s, h^4 (c4 |s''''| + c5 h |s'''''|), as (c4, c5, power of A whose state row
+#: gives s'''', that row): position by cubic Hermite (1/384), velocity with slopes from fourth-order differences,
+#: acceleration (a = v') itself from fourth-order differences (one-sided at the ends: h^4 |a''''| / 5)
+READING = {"pos": (1 / 384, 0.0, 4, 0), "vel": (1 / 384, 8 / 135, 4, 1), "acc": (1 / 5 + 1 / 384, 8 / 135, 5, 1)}
 #: relative singular value of the scaled Jacobian below which parameters are not identifiable
 IDENTIFIABLE = 1e-9
 _FULL = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
@@ -93,6 +124,10 @@ class Problem:
         self.rollout_time = 0.0
         #: name -> (low, high) box bounds held fixed (multi-starts: the first start's); None: around the start
         self.bounds: dict[str, tuple[float, float]] | None = None
+        #: noise level [signal unit] the grid is chosen for: the record's (data.noise_level)
+        self.noise = noise_level(record.values)
+        #: how the grid was chosen (fit.json's `timestep`)
+        self.grid: dict[str, Any] = {}
         self.set_grid(start)
         # a thread pool costs ~5 ms per rollout call: worth it only for long batches
         self.threads = 2 if self.steps * (len(free) + 1) >= 200_000 and (os.cpu_count() or 1) > 1 else 1
@@ -103,21 +138,27 @@ class Problem:
         """Fastest pole |s| [1/s] of the motion at these values (0 for a polynomial)."""
         return self.how.fastest_rate(values, self.base, self.modal)
 
-    def set_grid(self, values: dict[str, float], rate: float | None = None) -> None:
-        """dt [s] and steps of the simulation grid covering the record (and a delay's reach).
-
-        `rate` [1/s] overrides the values' fastest rate (multi-starts: a grid stable over the whole box)."""
+    def set_grid(self, values: dict[str, float], stable_rate: float | None = None, dt: float | None = None) -> None:
+        """dt [s] and steps of the simulation grid covering the record (and a delay's reach): `choose_dt` at
+        these values, or `dt` itself; never above STABLE_RATE_DT / `stable_rate` [1/s] (multi-starts: a grid
+        stable anywhere in the box)."""
         span = float(self.t[-1])
         reach = 1.1 * span if "delay" in self.free else span
-        rate = self.fastest_rate(values) if rate is None else rate
-        # bounds let omega move 10x: keep even that stable (RK4 limit 2.8), accurate at the start
-        self.dt = min(OMEGA_DT / rate if rate > 0 else math.inf, span / 200.0)
+        if dt is None:
+            dt, self.grid = choose_dt(self, values)
+        if stable_rate is not None and stable_rate > 0 and dt > STABLE_RATE_DT / stable_rate:
+            dt = STABLE_RATE_DT / stable_rate
+            self.grid["rule"] = f"{self.grid['rule']}; stable at the fastest pole in the starts' box"
+        self.grid.update(_described(self, values, dt))
+        self.dt = dt
         self.steps = int(math.ceil(reach / self.dt)) + 3
         if self.steps > 5_000_000:
+            rate = self.fastest_rate(values)
             raise BadInputError(
                 f"the record spans {span:g} s, {span * rate / (2 * math.pi):.3g} periods of its mode:"
                 " too long to simulate for a fit; cut it with --start or a shorter file"
             )
+        self.grid.update(dt_s=self.dt, steps=self.steps)
 
     # -- values ----------------------------------------------------------------
 
@@ -317,9 +358,10 @@ def solve(problem: Problem, record: Record) -> dict[str, Any]:
             verbose=False,
             x_scale=scale,
             output=log,
-            max_iters=100,
+            max_iters=MAX_ITERATIONS,
             gtol=1e-12,
             mu_factor=MU_FACTOR,
+            iter_callback=_keep_last_jacobian,
         )
         x = optimum.as_vector()
         residuals, _, _ = residual_fn(x, optimum)
@@ -338,6 +380,13 @@ def solve(problem: Problem, record: Record) -> dict[str, Any]:
         "residual_fn": residual_fn,
         "scale": scale,
     }
+
+
+def _keep_last_jacobian(trace: list) -> None:
+    """mujoco.minimize's log keeps every iteration's residual and Jacobian (n x p floats each, ~500 B per sample
+    over a fit); only the last one is read: drop the earlier ones as the optimization goes."""
+    if len(trace) > 1 and trace[-2].jacobian is not None:
+        trace[-2] = dataclasses.replace(trace[-2], residual=None, jacobian=None)
 
 
 def _typical(problem: Problem, name: str) -> float:
@@ -383,3 +432,128 @@ def check_identifiable(problem: Problem, jacobian: np.ndarray) -> None:
             f"{', '.join(names)} cannot be told apart from this record (they change it the same way);"
             " fix one of them with --set"
         )
+
+
+def error_bound(problem: Problem, values: dict[str, float], dt: float, roundoff: bool = True) -> float:
+    """Bound [signal unit] on the simulated signal's error at the record's times on a grid of `dt` [s] (module
+    docstring): compare's run error bound plus the Hermite reading (and the steps' round-off); 0 without a mode."""
+    system = problem.how.system(values, problem.base, problem.modal, problem.force)
+    if system is None:
+        return 0.0
+    a, rest = system
+    span = float(problem.t[-1])
+    times = np.linspace(0.0, span, 2001)
+    known = dict(values, offset=0.0, delay=0.0)
+    params = problem.how.scene_params(values, problem.base, problem.modal)
+    x = problem.how.closed_form(times, params, known, "pos", problem.force) - rest
+    v = problem.how.closed_form(times, params, known, "vel", problem.force)
+    z = np.column_stack([x, v])
+    joint = problem.how.joint
+    reference = Reference(pos={joint: x}, vel={joint: v}, system=a, states=z, rows={joint: (0, 1)})
+    predicted = compare.predicted_error(reference, "rk4", dt, times)
+    rk4 = compare.SAFETY * np.array([predicted[f"{joint}_pos"], predicted[f"{joint}_vel"]])
+    signal = problem.record.signal
+    simulated = {"pos": rk4[0], "vel": rk4[1], "acc": abs(a[1, 0]) * rk4[0] + abs(a[1, 1]) * rk4[1]}[signal]
+    c4, c5, power, row = READING[signal]
+    fourth = float(np.max(np.abs(z @ np.linalg.matrix_power(a, power).T)[:, row]))
+    fifth = float(np.max(np.abs(z @ np.linalg.matrix_power(a, power + 1).T)[:, row]))
+    reading = dt**4 * (c4 * fourth + c5 * dt * fifth)
+    size = float(np.max(np.abs(z @ np.linalg.matrix_power(a, power - 4).T)[:, row]))
+    return float(simulated + reading + (_roundoff(span, dt, size) if roundoff else 0.0))
+
+
+def _roundoff(span: float, dt: float, size: float) -> float:
+    """compare's round-off allowance [signal unit] of the steps over `span` [s] on a signal of `size`."""
+    return compare.ROUNDOFF_PER_STEP * span / dt * size
+
+
+def choose_dt(problem: Problem, values: dict[str, float]) -> tuple[float, dict[str, Any]]:
+    """The grid's timestep [s] for the fit's accuracy at `values`, and how it was chosen (module docstring)."""
+    span = float(problem.t[-1])
+    n = problem.t.size
+    needed = ACCURACY_IN_SE * problem.noise / math.sqrt(n)
+    spacing = float(np.median(np.diff(problem.record.time))) if n > 1 else span
+    facts: dict[str, Any] = {"integrator": "rk4", "noise": problem.noise, "needed_error": needed}
+    facts["median_sample_spacing_s"] = spacing
+    system = problem.how.system(values, problem.base, problem.modal, problem.force)
+    rate = problem.fastest_rate(values)
+    if system is None or rate <= 0:
+        dt = span / 200.0
+        facts.update(rule="span / 200: the model is a polynomial, which RK4 integrates exactly")
+        return dt, facts | _described(problem, values, dt)
+    eigenvalues = np.linalg.eigvals(system[0])
+    exact = OMEGA_DT / rate
+    # the bound grows as h^4 (leading order): scale it from the exact grid's
+    leading = error_bound(problem, values, exact, roundoff=False)
+    noisy = exact * (needed / leading) ** 0.25 if needed > 0 and leading > 0 else 0.0
+    if noisy > exact:
+        dt, rule = noisy, f"error bound sqrt(n) max|e| = {ACCURACY_IN_SE:g} x the noise level"
+    else:
+        dt, rule = exact, f"|lambda| dt = {OMEGA_DT:g}, the exact-record grid (the noise allows no coarser one)"
+    limits = [(MAX_RATE_DT / rate, f"|lambda| dt = {MAX_RATE_DT:g}, the reading's limit"), (span / 200.0, "span / 200")]
+    inside = compare.estimate_range(eigenvalues, "rk4", dt, span)
+    if not inside.inside:
+        limits.append((inside.largest_dt, "the range of compare's error estimate"))
+    for limit, why in limits:
+        if dt > limit:
+            dt, rule = limit, why
+    facts["rule"] = rule
+    return dt, facts | _described(problem, values, dt)
+
+
+def _described(problem: Problem, values: dict[str, float], dt: float) -> dict[str, Any]:
+    """A grid of `dt` [s] at `values` in fit.json's `timestep` terms: its error bound [signal unit] (round-off
+    alone for a model without a mode), |lambda| dt and compare's estimate range (None without a mode)."""
+    span = float(problem.t[-1])
+    system = problem.how.system(values, problem.base, problem.modal, problem.force)
+    if system is None:
+        size = float(np.max(np.abs(problem.record.values))) or 1.0
+        return {"error_bound": _roundoff(span, dt, size), "rate_dt": 0.0, "estimate_range": None}
+    eigenvalues = np.linalg.eigvals(system[0])
+    return {
+        "error_bound": error_bound(problem, values, dt),
+        "rate_dt": float(np.max(np.abs(eigenvalues))) * dt,
+        "estimate_range": compare.estimate_range(eigenvalues, "rk4", dt, span).to_dict(),
+    }
+
+
+def accuracy(problem: Problem, solved: dict[str, Any]) -> dict[str, Any]:
+    """The simulation's effect on the estimate, measured at it (module docstring).
+
+    e, the simulated signal against the closed form at every sample, moves the least-squares estimate by
+    J^+ e to first order (e is small: first order is all there is); 'ratio' <= 1 when no estimate moves by
+    more than max(ACCURACY_IN_SE standard errors, EXACT_ACCURACY x the name's scale).
+
+    Returns
+    -------
+    dict
+        'error' max|e| [signal unit], 'effect' (J^+ e), 'standard_error', 'allowed' ((p,) [units of the names]),
+        'ratio' (largest |effect| / allowed [-]), 'in_standard_errors' (largest |effect| / standard error [-]),
+        'noise' (the residual's sigma [signal unit]).
+    """
+    x = np.asarray(solved["x"], float)
+    values = problem.values(x)
+    params = problem.how.scene_params(values, problem.base, problem.modal)
+    residual = np.concatenate(solved["residuals"])  # scaled: (model - data) / problem.scale
+    fitted = problem.record.values + residual * problem.scale
+    closed = problem.how.closed_form(problem.t, params, values, problem.record.signal, problem.force)
+    gap = (fitted - closed) / problem.scale
+    scale = np.asarray(solved["scale"], float)
+    u, sv, vt = np.linalg.svd(np.asarray(solved["jacobian"], float) * scale, full_matrices=False)
+    keep = sv > 0
+    effect = (vt[keep].T @ ((u[:, keep].T @ gap) / sv[keep])) * scale  # J^+ e in the names' units
+    inverse = (vt[keep].T / sv[keep] ** 2) @ vt[keep]  # (J^T J)^-1 in names scaled to O(1)
+    n, p = residual.size, x.size
+    sigma = math.sqrt(float(residual @ residual) / max(n - p, 1))
+    standard_error = np.sqrt(np.clip(np.diag(inverse), 0.0, None)) * scale * sigma
+    allowed = np.maximum(ACCURACY_IN_SE * standard_error, EXACT_ACCURACY * scale)
+    size = np.abs(effect)
+    return {
+        "error": float(np.max(np.abs(gap))) * problem.scale,
+        "effect": effect,
+        "standard_error": standard_error,
+        "allowed": allowed,
+        "ratio": float(np.max(size / allowed)) if p else 0.0,
+        "in_standard_errors": float(np.max(size / np.where(standard_error > 0, standard_error, np.inf))) if p else 0.0,
+        "noise": sigma * problem.scale,
+    }

@@ -28,12 +28,16 @@ from springlab.runs.run import Result, run_scenario
 from springlab.scenes.base import Scenario
 from springlab.studies.executor import Executor
 from springlab.studies.fit import data as fit_data
+from springlab.studies.fit import release as fit_release
 from springlab.studies.fit import results as fit_results
 from springlab.studies.fit import starts as fit_starts
 
-from .engine import OMEGA_DT, Problem, check_identifiable, solve
+from .engine import Problem, accuracy, check_identifiable, choose_dt, solve
 from .models import ALIASES, FitModel, PolynomialModel, model_of, not_fittable
 from .results import FitResult
+
+#: samples per simulation step from which the record is called denser than the model needs
+DENSE = 4.0
 
 
 def _canonical(name: str) -> str:
@@ -42,12 +46,13 @@ def _canonical(name: str) -> str:
 
 def fit(
     scene: str,
-    data: str | os.PathLike,
+    data: fit_data.DataSource,
     scenario: str | None = None,
     *,
     map: Mapping[str, str] | Sequence[str] | None = None,  # noqa: A002 - the CLI's --map
     free: Sequence[str] | None = None,
-    scale: float = 1.0,
+    scale: float | None = None,
+    time_scale: float | None = None,
     start: float | None = None,
     degree: int | None = None,
     run_scene: bool = True,
@@ -55,27 +60,32 @@ def fit(
     workers: int | None = None,
     scheduler: str | None = None,
     executor: Executor | None = None,
+    show_progress: bool | None = None,
     **parameters: Any,
 ) -> FitResult:
-    """Identify `scene` from the record in `data` (a CSV file).
+    """Identify `scene` from the record in `data` (a CSV file, a mapping of arrays or a DataFrame).
 
     Parameters
     ----------
     scene
         A scene that declares a fit (`Scene.fit`; `fittable()` lists them).
     data
-        CSV with a header: `time` [s] and one signal `<joint>_pos` [m],
-        `<joint>_vel` [m/s] or `<joint>_acc` [m/s^2] (see springlab.studies.fit.data).
+        A CSV file with a header, a mapping of column name -> array ({'time': t, 'slider_pos': x}) or a
+        pandas DataFrame: `time` [s] and one signal `<joint>_pos` [m], `<joint>_vel` [m/s] or
+        `<joint>_acc` [m/s^2] (see springlab.studies.fit.data; units the column names state are applied).
     scenario
         The scene's scenario the record shows (None: the fit's default for the scene).
     map
-        File column -> springlab name, e.g. {'t': 'time', 'x_mm': 'slider_pos'}.
+        Column -> springlab name, e.g. {'t': 'time', 'x_mm': 'slider_pos'}.
     free
         Names to fit (None: the scene's declared default; see springlab.studies.fit.models).
     scale
-        Factor [SI per file unit] applied to the signal, e.g. 0.001 for mm.
+        Factor [SI per unit of the data] applied to the signal, e.g. 0.001 for mm (None: the unit the
+        column states, else SI). Given, it wins over the column's unit.
+    time_scale
+        Factor [s per unit of the data] applied to the time, e.g. 0.001 for ms (None: as `scale`).
     start
-        Release time [s]: the record before it is dropped (None: detected).
+        Release time [s, after `time_scale`]: the record before it is dropped (None: detected).
     degree
         A polynomial fit only: its degree, 0 to the highest it declares (frees its coefficients x0, v0, ...
         in order); None: chosen, from the highest down while the highest coefficient's 95 % interval contains 0.
@@ -88,6 +98,8 @@ def fit(
         Where the starts run (springlab.studies.executor): a LocalCluster of `workers`
         processes, a running dask scheduler's address, or an Executor; none: in this process. Same numbers
         either way. A single start always runs in this process.
+    show_progress
+        A progress bar while a large file is read (None: on a terminal only; False: never).
     **parameters
         Fixed values: scene parameters (e.g. mass=2.0 [kg]) and
         x0 [m], v0 [m/s], offset [signal unit], delay [s].
@@ -134,9 +146,10 @@ def fit(
         (how.joint,),
         mapping=fit_data.parse_map(map),
         scale=scale,
+        time_scale=time_scale,
         start=start,
-        detect_release=not wants_delay,
         signals=how.signals,
+        show_progress=show_progress,
     )
     free_given = bool(free)
     free = _free_names(how, free, degree, record)
@@ -151,6 +164,8 @@ def fit(
         )
     modal = how.modal(free)
     fixed = dict(nuisance) | {k: base[k] for k in ("x0", "v0") if k in parameters and k in base}
+    # a held start is dropped only when the data show it beyond their noise (springlab.studies.fit.release)
+    record, release = fit_release.decide(how, record, base, fixed, free, force, given=start, delay=wants_delay)
     if not isinstance(how, PolynomialModel):
         # an initial state neither fitted nor given: the first sample, at rest
         if "x0" not in free and "x0" not in fixed:
@@ -174,7 +189,7 @@ def fit(
             free = free[:-1]
             problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force)
             result = _finish(problem, solved, None, run_scene=False)
-    return _finish(problem, solved, runs, run_scene)
+    return _finish(problem, solved, runs, run_scene, release)
 
 
 def _identify(
@@ -198,10 +213,22 @@ def _identify(
         solved = solve(problem, record)
     else:
         solved, runs = fit_starts.run(problem, starts, executor)
+    # the grid was chosen at the start: refine it once where the estimate needs a finer one, or where the
+    # simulation, measured against the closed form at the estimate, moves it more than the fit allows
     estimate = problem.values(solved["x"])
-    if problem.fastest_rate(estimate) * problem.dt > 1.5 * OMEGA_DT:
+    needed, facts = choose_dt(problem, estimate)
+    ratio = accuracy(problem, solved)["ratio"]
+    if ratio > 1.0 or problem.dt > 1.5 * needed:
         problem.start = dict(estimate)
-        problem.set_grid(estimate)
+        if ratio > 1.0 and problem.dt * (0.8 / ratio) ** 0.25 < needed:
+            # the error grows as dt^4: 0.8 of what the fit allows
+            needed = problem.dt * (0.8 / ratio) ** 0.25
+            why = f"the simulation moved an estimate by {ratio:.3g} x what the fit allows at dt = {problem.dt:.4g} s"
+            facts["rule"] = f"{why}; refined as dt^4"
+        else:
+            facts["rule"] = f"{facts['rule']}, at the estimate"
+        problem.grid = facts
+        problem.set_grid(estimate, dt=needed)
         solved = solve(problem, record)
     return problem, solved, runs
 
@@ -217,8 +244,8 @@ def _start(
     """Start values; with a free delay, from the part after the detected release, shifted to it."""
     if "delay" not in free:
         return how.start(record, base, fixed, free, force)
-    release = fit_data.find_release(record.time, record.values)
-    delay = 0.0 if release is None else release - record.origin
+    found = fit_release.held_start(how, record, base, fixed, [n for n in free if n != "delay"], force)
+    delay = found.start_s - record.origin if found.decision == "held" else 0.0
     after = record.time >= record.origin + delay
     shifted = dataclasses.replace(
         record, time=record.time[after], values=record.values[after], origin=record.origin + delay
@@ -244,12 +271,25 @@ def _free_names(how: FitModel, free: Sequence[str] | None, degree: int | None, r
     return names
 
 
-def _finish(problem: Problem, solved: dict[str, Any], runs: dict[str, Any] | None, run_scene: bool) -> FitResult:
+def _finish(
+    problem: Problem,
+    solved: dict[str, Any],
+    runs: dict[str, Any] | None,
+    run_scene: bool,
+    release: fit_release.Release | None = None,
+) -> FitResult:
     """The FitResult: intervals, derived quantities, cross-check, the starts' record (`runs`: None for a single
-    start) and the identified scene's run."""
+    start), the decision on where the motion starts (`release`) and the identified scene's run."""
     from mujoco import sysid
 
     how, record, free = problem.how, problem.record, problem.free
+    spacing = problem.grid.get("median_sample_spacing_s") or 0.0
+    if spacing > 0 and problem.dt >= DENSE * spacing:
+        note = (
+            f"data denser than the model needs: {problem.dt / spacing:.3g} samples per simulation step of"
+            f" {problem.dt:.3g} s (the model runs at the step its accuracy needs and is read at every sample)"
+        )
+        record = dataclasses.replace(record, notes=(*record.notes, note))
     x, jacobian = solved["x"], solved["jacobian"]
     check_identifiable(problem, jacobian)
     # in parameters scaled to O(1): sysid's zero-eigenvalue threshold is relative, and k ~ 1e6 N/m beside
@@ -286,8 +326,9 @@ def _finish(problem: Problem, solved: dict[str, Any], runs: dict[str, Any] | Non
     derived = {k: v for k, v in derived.items() if k not in free and same.get(k) not in free}
     params = how.scene_params(values, problem.base, problem.modal)
     curves = _curves(problem, x, covariance, quantile) if isinstance(how, PolynomialModel) else {}
-    cross = fit_results.cross_check(problem, x, half, fitted)
-    converged = solved["status"] in ("norm(dx) < tol", "norm(gradient) < tol")
+    numerics = accuracy(problem, solved)
+    cross = fit_results.cross_check(problem, x, half, fitted, numerics["effect"], scale)
+    judged = fit_results.convergence(problem, solved, covariance, numerics, cross)
     level = values["offset"] + (how.equilibrium(params) if record.signal == "pos" else 0.0)
     run, run_note = None, ""
     if run_scene:
@@ -321,12 +362,15 @@ def _finish(problem: Problem, solved: dict[str, Any], runs: dict[str, Any] | Non
             "steps": problem.steps,
             "integrator": "rk4",
         },
-        converged=converged,
+        converged=judged["converged"],
+        convergence=judged,
+        timestep=fit_results.timestep(problem.grid, numerics),
         run=run,
         run_note=run_note,
         curves=curves,
         amplitude=how.amplitude(fitted, level),
         starts=fit_starts.starts_entry(runs, list(free), covariance, record.unit),
+        release=release.to_dict() if release is not None else {},
     )
 
 

@@ -194,6 +194,13 @@ class FitModel:
         """Fastest pole |s| [1/s] of the motion at these values (0: none, a polynomial)."""
         return 0.0
 
+    def system(
+        self, values: dict[str, float], base: dict[str, float], modal: bool, force: float = 0.0
+    ) -> tuple[np.ndarray, float] | None:
+        """(A [1/s], x_rest [m]): the motion as z' = A z with z = (x - x_rest, v); None where it has no mode
+        (a polynomial, which RK4 integrates exactly)."""
+        return None
+
     def derived(self, values: dict[str, float], base: dict[str, float], modal: bool) -> dict[str, float]:
         """Named results computed from the fitted values (SI)."""
         raise NotImplementedError
@@ -454,6 +461,15 @@ class OscillatorModel(FitModel):
         k, d = params[self.stiffness], params[self.damping]
         omega, zeta = math.sqrt(k / m), d / (2 * math.sqrt(k * m))
         return omega * (zeta + math.sqrt(max(zeta * zeta - 1.0, 0.0))) if zeta > 1 else omega
+
+    def system(
+        self, values: dict[str, float], base: dict[str, float], modal: bool, force: float = 0.0
+    ) -> tuple[np.ndarray, float] | None:
+        """(A [1/s], x_rest [m]) of m x'' + d x' + k (x - x_eq) = F: z = (x - x_rest, v), x_rest = x_eq + F / k."""
+        params = self.scene_params(values, base, modal)
+        m, k, d = self.mode_mass(params), params[self.stiffness], params[self.damping]
+        rest = self.equilibrium(params) + (force / k if k > 0 else 0.0)
+        return np.array([[0.0, 1.0], [-k / m, -d / m]]), rest
 
     def derived(self, values: dict[str, float], base: dict[str, float], modal: bool) -> dict[str, float]:
         """omega_n, zeta, the natural frequency, m, k, d and, underdamped, the damped frequency and period (SI)."""

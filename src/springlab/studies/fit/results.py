@@ -19,6 +19,7 @@ import numpy as np
 
 from springlab import files, tables
 from springlab.exact import analytic
+from springlab.runs import compare
 
 from .data import Record
 from .models import POWER_TERMS
@@ -32,6 +33,10 @@ if TYPE_CHECKING:  # annotations only
 
 #: t^n as the verdict writes it
 POWERS = ("", "t", "t²", "t³")
+#: the closed-form cross-check allows this share of an estimate's 95 % half-width (plus its numerical accuracy)
+CROSS_IN_HALFWIDTHS = 0.01
+#: the Gauss-Newton step a converged fit may still have open, in standard errors of each estimate [-]
+STEP_IN_SE = 0.1
 
 
 @dataclasses.dataclass(frozen=True, eq=False)  # arrays: compare fields, not results
@@ -69,7 +74,8 @@ class FitResult:
     optimizer
         Status, iterations, rollouts, times.
     converged
-        Whether the optimizer stopped on a tolerance (`success`, as scipy calls it).
+        Whether the solution converged (`convergence`; `success`, as scipy calls it): judged on the solution,
+        not on the optimizer's message (`message`).
     run
         The identified scene's own run (springlab.runs.run.Result), or None.
     run_note
@@ -80,6 +86,14 @@ class FitResult:
         The motion's size in the fitted signal [signal unit] (about its rest level, or its range).
     starts
         The multi-start record (springlab.studies.fit.starts.starts_entry): count, best, at_best_minimum, spread.
+    convergence
+        Whether the solution converged, and why (`convergence`): the remaining Gauss-Newton step, the
+        cross-check, the optimizer's message.
+    timestep
+        The simulation grid and why (`timestep`): dt_s, steps, rule, error_bound, measured_error, ...
+    release
+        Where the motion starts and why (springlab.studies.fit.release.Release.to_dict): decision, start_s,
+        release_s, statistic, threshold, false_alarm, noise, held_samples, reason.
     """
 
     scene: str
@@ -103,6 +117,9 @@ class FitResult:
     curves: dict[str, Any] = dataclasses.field(default_factory=dict)
     amplitude: float = 0.0
     starts: dict[str, Any] = dataclasses.field(default_factory=dict)
+    release: dict[str, Any] = dataclasses.field(default_factory=dict)
+    convergence: dict[str, Any] = dataclasses.field(default_factory=dict)
+    timestep: dict[str, Any] = dataclasses.field(default_factory=dict)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "free", tuple(self.free))
@@ -113,12 +130,12 @@ class FitResult:
 
     @property
     def success(self) -> bool:
-        """Whether the optimizer stopped on a tolerance (scipy's name for `converged`)."""
+        """Whether the solution converged (scipy's name for `converged`)."""
         return self.converged
 
     @property
     def message(self) -> str:
-        """Why the optimizer stopped, e.g. 'norm(dx) < tol' (scipy's `message`)."""
+        """Why the optimizer stopped, e.g. 'norm(dx) < tol' (scipy's `message`; `convergence` judges the solution)."""
         return str(self.optimizer["status"])
 
     @property
@@ -157,7 +174,10 @@ class FitResult:
                 "cross_check": self.cross_check,
                 "optimizer": self.optimizer,
                 "starts": self.starts,
+                "release": self.release,
                 "converged": self.converged,
+                "convergence": self.convergence,
+                "timestep": self.timestep,
                 "run_note": self.run_note,
                 "verdict": self.verdict,
             }
@@ -209,8 +229,24 @@ def delta_intervals(
     return out
 
 
-def cross_check(problem: Problem, x: np.ndarray, half_widths: np.ndarray, fitted: np.ndarray) -> dict[str, Any]:
-    """The closed form (springlab.analytic) fitted independently with scipy, and how far MuJoCo's fit is from it."""
+def cross_check(
+    problem: Problem,
+    x: np.ndarray,
+    half_widths: np.ndarray,
+    fitted: np.ndarray,
+    effect: np.ndarray | None = None,
+    scale: np.ndarray | None = None,
+) -> dict[str, Any]:
+    """The closed form (springlab.analytic) fitted independently with scipy, and how far MuJoCo's fit is from it.
+
+    The two agree when every estimate differs by at most its tolerance: CROSS_IN_HALFWIDTHS of its 95 %
+    half-width, plus the fit's own numerical accuracy: SAFETY x how far its simulation moves it (`effect`
+    [units of the names], engine.accuracy's J^+ e), plus EXACT_ACCURACY of its `scale` (the optimizer's, [units
+    of the names]) for the optimizers' own stopping; so an exact record, whose half-widths vanish, is held to
+    what its simulation resolves.
+    """
+    from .engine import EXACT_ACCURACY
+
     how, record = problem.how, problem.record
     t = record.model_time
 
@@ -229,8 +265,12 @@ def cross_check(problem: Problem, x: np.ndarray, half_widths: np.ndarray, fitted
     solution = scipy.optimize.least_squares(
         residual, start, bounds=(bounds[0], bounds[1]), x_scale="jac", xtol=1e-15, ftol=1e-15, gtol=1e-15
     )
-    relative = np.abs(solution.x - x) / np.maximum(np.abs(x), 1e-300)
-    in_halfwidths = np.abs(solution.x - x) / np.where(half_widths > 0, half_widths, np.inf)
+    difference = np.abs(solution.x - x)
+    relative = difference / np.maximum(np.abs(x), 1e-300)
+    in_halfwidths = difference / np.where(half_widths > 0, half_widths, np.inf)
+    numerical = np.zeros_like(x) if effect is None else compare.SAFETY * np.abs(np.asarray(effect, float))
+    scale = np.abs(x) if scale is None else np.asarray(scale, float)
+    tolerance = CROSS_IN_HALFWIDTHS * np.abs(half_widths) + numerical + EXACT_ACCURACY * scale
     model_gap = float(np.max(np.abs(closed(x) - fitted)))
     amplitude = float(np.ptp(record.values)) or 1.0
     return {
@@ -239,8 +279,137 @@ def cross_check(problem: Problem, x: np.ndarray, half_widths: np.ndarray, fitted
         "max_relative_difference": float(np.max(relative)),
         "max_difference_in_ci95_halfwidths": float(np.max(in_halfwidths)),
         "mujoco_vs_closed_form_at_estimate": model_gap / amplitude,
-        "agrees": bool(np.max(in_halfwidths) < 0.01 or np.max(relative) < 1e-6),
+        "numerical_accuracy": dict(zip(problem.free, numerical.tolist())),
+        "tolerance": dict(zip(problem.free, tolerance.tolist())),
+        "max_difference_in_tolerances": float(np.max(difference / tolerance)),
+        "agrees": bool(np.all(difference <= tolerance)),
     }
+
+
+#: why the optimizer stops, as the convergence reason explains it
+STOPS = {
+    "norm(dx) < tol": "its step fell below its tolerance",
+    "norm(gradient) < tol": "its gradient fell below its tolerance",
+    "insufficient reduction": "no step reduced the cost any further, as on the round-off floor of a minimum",
+    "maximum iterations reached": "it ran out of iterations",
+    "factorization failed": "its linear system could not be factorized",
+}
+
+
+def convergence(
+    problem: Problem,
+    solved: dict[str, Any],
+    covariance: np.ndarray,
+    accuracy: dict[str, Any],
+    cross: dict[str, Any],
+) -> dict[str, Any]:
+    """Whether the fit converged, judged on its solution rather than on the optimizer's message.
+
+    Converged: the Gauss-Newton step still open at the estimate (J^+ r, names at a bound they press against
+    held) moves no estimate by more than its allowance, max(STEP_IN_SE standard errors, EXACT_ACCURACY of
+    its scale, the fit's numerical accuracy), and the closed-form cross-check agrees. fit.json's
+    `convergence`: converged, optimizer_status, optimizer_met_tolerance, remaining_step (name -> [unit]),
+    remaining_step_in_standard_errors, remaining_step_in_allowances (the largest), remaining_cost_reduction
+    (what the step would still take off the sum of squares, in noise variances), at_bound, cross_check_agrees,
+    reason (one line), short (the verdict's words when not converged).
+    """
+    from .engine import EXACT_ACCURACY
+
+    free = problem.free
+    x = np.asarray(solved["x"], float)
+    scale = np.asarray(solved["scale"], float)
+    residual = np.concatenate(solved["residuals"])
+    jacobian = np.asarray(solved["jacobian"], float) * scale
+    if problem.bounds is not None:
+        bounds = np.array([problem.bounds[n] for n in free], float)
+    else:
+        bounds = np.array([problem.how.bounds(n, problem.start[n], problem.record) for n in free], float)
+    width = bounds[:, 1] - bounds[:, 0]
+    held = np.zeros(x.size, bool)
+    for _ in range(x.size):
+        step = np.zeros(x.size)
+        if np.any(~held):
+            step[~held] = -np.linalg.lstsq(jacobian[:, ~held], residual, rcond=None)[0]
+        pressing = ((x <= bounds[:, 0] + 1e-9 * width) & (step < 0)) | ((x >= bounds[:, 1] - 1e-9 * width) & (step > 0))
+        if not np.any(pressing & ~held):
+            break
+        held |= pressing
+    explained = jacobian @ step
+    n, p = residual.size, x.size
+    noise = float(residual @ residual) / max(n - p, 1)
+    step = step * scale
+    standard_error = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
+    allowance = np.maximum.reduce(
+        [STEP_IN_SE * standard_error, EXACT_ACCURACY * scale, compare.SAFETY * np.abs(np.asarray(accuracy["effect"]))]
+    )
+    in_allowances = np.abs(step) / allowance
+    in_errors = np.abs(step) / np.where(standard_error > 0, standard_error, np.inf)
+    status = str(solved["status"])
+    met = status in ("norm(dx) < tol", "norm(gradient) < tol")
+    settled = bool(np.all(in_allowances <= 1.0))
+    agrees = bool(cross["agrees"])
+    worst = free[int(np.argmax(in_allowances))] if p else ""
+    stopped = f"the optimizer stopped on '{status}' ({STOPS.get(status, 'unknown reason')})"
+    left = (
+        f"the remaining Gauss-Newton step is {float(np.max(in_allowances)):.2g} of its allowance"
+        f" ({STEP_IN_SE:g} standard errors, or the fit's numerical accuracy)"
+    )
+    if settled and agrees:
+        short = ""
+        reason = f"converged: {left} and the closed-form cross-check agrees; {stopped}"
+        if not met:
+            reason = f"converged although {stopped}: {left} and the closed-form cross-check agrees"
+    elif not settled:
+        i = free.index(worst)
+        short = f"{worst} can still move {in_errors[i]:.3g} standard errors"
+        reason = (
+            f"NOT CONVERGED: the remaining Gauss-Newton step still moves {worst} by {in_errors[i]:.3g} standard"
+            f" errors ({in_allowances[i]:.3g} x its allowance); {stopped}"
+        )
+    else:
+        names = cross.get("tolerance", {})
+        far = max(names, key=lambda n: abs(cross["estimates"][n] - x[free.index(n)]) / names[n]) if names else worst
+        short = f"the closed-form cross-check disagrees in {far}"
+        reason = (
+            f"NOT CONVERGED: {left}, but the closed form fitted independently lands"
+            f" {cross.get('max_difference_in_tolerances', math.inf):.3g} tolerances away in {far}"
+            f" (another minimum, or the simulation misses the closed form); {stopped}"
+        )
+    return {
+        "converged": settled and agrees,
+        "optimizer_status": status,
+        "optimizer_met_tolerance": met,
+        "remaining_step": dict(zip(free, step.tolist())),
+        "remaining_step_in_standard_errors": float(np.max(in_errors)) if p else 0.0,
+        "remaining_step_in_allowances": float(np.max(in_allowances)) if p else 0.0,
+        "remaining_cost_reduction": float(explained @ explained) / noise if noise > 0 else 0.0,
+        "at_bound": [name for name, flag in zip(free, held) if flag],
+        "cross_check_agrees": agrees,
+        "reason": reason,
+        "short": short,
+    }
+
+
+def timestep(grid: Mapping[str, Any], numerics: Mapping[str, Any]) -> dict[str, Any]:
+    """fit.json's `timestep`: the grid (engine.choose_dt's facts) and its check at the estimate.
+
+    Parameters
+    ----------
+    grid
+        engine.Problem.grid: dt_s [s], steps, integrator, rule, error_bound and needed_error [signal unit],
+        noise, median_sample_spacing_s [s], rate_dt, estimate_range.
+    numerics
+        engine.accuracy at the estimate.
+    """
+    out = dict(grid)
+    spacing = float(out.get("median_sample_spacing_s") or 0.0)
+    out["samples_per_step"] = out["dt_s"] / spacing if spacing > 0 else None
+    out["measured_error"] = numerics["error"]
+    out["within_error_bound"] = bool(numerics["error"] <= out.get("error_bound", math.inf))
+    out["effect"] = numerics["effect"].tolist()
+    out["effect_in_standard_errors"] = numerics["in_standard_errors"]
+    out["effect_in_allowances"] = numerics["ratio"]
+    return out
 
 
 def t_quantile(dof: int) -> float:
@@ -306,5 +475,6 @@ def verdict(result: FitResult) -> str:
         zeta = (der.get("damping_ratio") or est["zeta"])["value"]
         m, k, d = 1.0, 1.0, 2 * zeta
         text = ", ".join(parts) + f": {analytic.regime(m, k, d) if zeta > 0 else 'undamped'}"
-    status = "" if result.converged else f"; NOT CONVERGED ({result.optimizer['status']})"
+    why = result.convergence.get("short") or result.optimizer["status"]
+    status = "" if result.converged else f"; NOT CONVERGED ({why})"
     return f"{text}; residual RMS {rms_text}{share}{status}"

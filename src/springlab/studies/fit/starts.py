@@ -21,8 +21,8 @@ payload is plain data (scene and scenario names, the scene's parameters, the
 record's arrays, the start's values, the bounds, the grid) and `run_start`
 rebuilds the scene's MjSpec on whichever process runs it. Every start runs on
 the same simulation grid so the final costs compare like for like: start 1's
-grid (omega dt <= 0.05 at its mode), made finer where needed so that RK4 stays
-stable at the fastest pole anywhere in the box (|s| dt <= `STABLE_RATE_DT`;
+grid (chosen for the fit's accuracy at its values, springlab.studies.fit.engine), made finer where needed
+so that RK4 stays stable at the fastest pole anywhere in the box (|s| dt <= `engine.STABLE_RATE_DT`;
 RK4's real-axis limit is 2.785), because the optimizer may step to any corner;
 the winner is the first start whose cost is within 0.01 / dof (relative) of the
 lowest: statistically the same point (`SAME_IN_SE` below, since a cost excess of
@@ -52,7 +52,7 @@ from springlab.errors import BadInputError, DivergedError
 from springlab.studies.executor import Executor, resolve
 from springlab.studies.fit import data as fit_data
 
-from .engine import OMEGA_DT, Problem, solve
+from .engine import Problem, solve
 from .models import model_of
 
 #: free names that enter the response linearly: they keep start 1's values in every start
@@ -63,8 +63,6 @@ SEED = 20260513
 SAME_IN_SE = 0.1
 #: ... or within this fraction of the optimizer's scale of a name (exact records, standard error ~ 0) [-]
 SAME_RELATIVE = 1e-6
-#: largest |s| dt [-] of the fastest pole anywhere in the box (RK4 is stable to 2.785 on the real axis)
-STABLE_RATE_DT = 2.5
 #: bounds spanning at least this ratio (and positive) are sampled log-uniformly
 LOG_SPAN = 10.0
 
@@ -129,7 +127,8 @@ def sample(start: dict[str, float], bounds: dict[str, tuple[float, float]], free
 
 
 def grid_rate(problem: Problem, bounds: dict[str, tuple[float, float]]) -> float:
-    """The rate [1/s] every start's grid is set for: start 1's, or the box's fastest pole scaled to stay stable.
+    """The fastest pole [1/s] anywhere in the box: every start's grid keeps RK4 stable there
+    (|s| dt <= engine.STABLE_RATE_DT).
 
     The fastest pole grows monotonically with omega_n, zeta, stiffness and damping and falls with the mass, so
     its largest value over the box is at a corner of the nonlinear names' bounds.
@@ -140,7 +139,7 @@ def grid_rate(problem: Problem, bounds: dict[str, tuple[float, float]]) -> float
         values = dict(problem.start)
         values.update({n: bounds[n][(corner >> i) & 1] for i, n in enumerate(names)})
         fastest = max(fastest, problem.fastest_rate(values))
-    return max(problem.fastest_rate(problem.start), fastest * OMEGA_DT / STABLE_RATE_DT)
+    return fastest
 
 
 def run_start(payload: dict[str, Any], nthread: int = 0) -> dict[str, Any]:
@@ -151,7 +150,7 @@ def run_start(payload: dict[str, Any], nthread: int = 0) -> dict[str, Any]:
     payload
         {"index", "scene", "scenario", "base" (scene parameters, SI), "record" (springlab.studies.fit.data.Record's
         fields), "free", "grid_start" (start 1's values: the grid), "start" (this start's values), "bounds",
-        "modal", "force" [N], "rate" (the grid's, 1/s)}.
+        "modal", "force" [N], "rate" (the fastest pole in the box the grid keeps stable, 1/s)}.
     nthread
         rollout threads (1 on a dask worker; otherwise the fit's own choice).
 
@@ -170,7 +169,7 @@ def run_start(payload: dict[str, Any], nthread: int = 0) -> dict[str, Any]:
     problem = Problem(
         how, chosen, dict(payload["base"]), record, free, payload["grid_start"], payload["modal"], payload["force"]
     )
-    problem.set_grid(payload["grid_start"], rate=payload["rate"])
+    problem.set_grid(payload["grid_start"], stable_rate=payload["rate"])
     problem.start = dict(payload["start"])
     problem.bounds = {name: tuple(b) for name, b in payload["bounds"].items()}
     if nthread == 1:
@@ -244,7 +243,7 @@ def run(problem: Problem, count: int, executor: Executor | None = None) -> tuple
         "force": problem.force,
     }
     rate = grid_rate(problem, bounds)
-    problem.set_grid(problem.start, rate=rate)
+    problem.set_grid(problem.start, stable_rate=rate)
     common["rate"] = rate
     starts = sample(problem.start, bounds, free, count)
     payloads = [dict(common, index=i, start=values) for i, values in enumerate(starts)]
