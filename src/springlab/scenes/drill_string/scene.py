@@ -154,9 +154,10 @@ class DrillString(Scene):
         "breakaway": (
             "How does friction at the bit influence the rotation of a kilometre-long rod (Fig. 5.2)?",
             "The bit sticks while the string winds up {windup_turns:.3g} turns; it breaks free at"
-            " {breakaway_time_s:.4g} s (exact rod: {breakaway_time_s_continuum:.4g} s), whips round at up to"
+            " {breakaway_time_s:.5g} s (exact rod: {breakaway_time_s_continuum:.5g} s), whips round at up to"
             " {peak_bit_speed_rpm:.4g} rpm, {peak_speed_ratio:.2g} times the top drive's {top_speed_rpm:.3g} rpm,"
-            " and slows to a near stop again at {restick_time_s:.4g} s: stick-slip, with a perfectly steady top drive.",
+            " and slows to a near stop again at {restick_time_s:.4g} s: stick-slip, with a perfectly steady top drive"
+            " (MuJoCo's dry friction is Coulomb; the velocity-weakening friction of real bits is not a MuJoCo model).",
         ),
     }
     #: `springlab refine`: how many elements each question needs, and with which integrator and timestep
