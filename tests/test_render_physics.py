@@ -136,6 +136,7 @@ def _inside_masks():
         "car": _paint,
         "printer_head": carriage,
         "friction": orange,  # the box has the slider's block colour
+        "drill_string": orange,  # the orange stripes along its rotors, which turn with them
     }
 
 

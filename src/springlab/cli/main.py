@@ -240,7 +240,8 @@ def cmd_plot(args: argparse.Namespace) -> int:
             figure = plots.phase_family(families.run_phase_family(result))
             verdict = EXIT_OK  # a family is a picture of many runs; the verdict belongs to single runs
         else:
-            figure = plots.time_series(result) if args.kind == "time" else plots.phase_plane(result)
+            draw = {"time": plots.time_series, "phase": plots.phase_plane, "scene": plots.scene_figure}[args.kind]
+            figure = draw(result)
             verdict = _verdict(result)
     print(f"wrote {plots.save(figure, args.output)}")
     return verdict
@@ -277,6 +278,41 @@ def cmd_tradeoff(args: argparse.Namespace) -> int:
         _print_json(result.to_dict())
     else:
         cli_text.print_tradeoff(result, args.output)
+    pick = result.recommendation
+    return EXIT_FAILED if pick is not None and not pick.found else EXIT_OK
+
+
+def cmd_refine(args: argparse.Namespace) -> int:
+    """How much model a question needs: model size x integrator x timestep (springlab.studies.refine)."""
+    from springlab.plots import refine as refine_chart  # matplotlib only when this command draws
+    from springlab.studies import refine
+
+    if args.output:
+        files.check_directory(args.output)  # before the study's minute of computing, not after
+    sizes = None
+    if args.sizes:
+        try:
+            sizes = [float(s) for s in args.sizes.split(",")]
+        except ValueError:
+            raise BadInputError(f"--sizes takes whole numbers 'a,b,c', got {args.sizes!r}") from None
+    integrators = args.integrators.split(",") if args.integrators else tuple(INTEGRATORS)
+    with _executor(args) as executor:
+        result = refine.refine(
+            args.scene,
+            args.question,
+            tol=args.tol,
+            sizes=sizes,  # type: ignore[arg-type]  # checked as the size parameter by the study
+            integrators=integrators,
+            duration=args.duration,
+            executor=executor,
+            **_parse_sets(args.set),
+        )
+    if args.output:
+        refine_chart.write_refine(result, args.output)
+    if args.json:
+        _print_json(result.to_dict())
+    else:
+        cli_text.print_refine(result, args.output)
     pick = result.recommendation
     return EXIT_FAILED if pick is not None and not pick.found else EXIT_OK
 
@@ -550,9 +586,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--kind",
         default="time",
-        choices=("time", "phase", "family", "zeta"),
+        choices=("time", "phase", "family", "zeta", "scene"),
         help="time: x(t), v(t) with the exact solution and the error on a log axis (default); "
         "phase: phase plane with vector field, equilibria, separatrices; "
+        "scene: the panels the scene declares (e.g. the drill string's speeds, twist and mode shapes); "
         "family: phase trajectories from several initial displacements; "
         "zeta: responses for damping ratios 0 to 2",
     )
@@ -568,6 +605,25 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--output", metavar="DIR", help="write DIR/tradeoff.json and DIR/tradeoff.png")
     p.add_argument("--json", action="store_true", help="print tradeoff.json")
     COMMANDS["tradeoff"] = cmd_tradeoff
+
+    p = sub.add_parser(
+        "refine", help="how much model a question needs: model size x integrator x timestep, cheapest for --tol"
+    )
+    p.add_argument("scene", help="a scene whose model size is a parameter (see docs/cli.md)")
+    p.add_argument("--question", metavar="QUANTITY", help="the quantity to answer (default: the scene's first)")
+    p.add_argument(
+        "--tol", type=float, metavar="TOL", help="recommend the cheapest verified setting meeting this relative error"
+    )
+    p.add_argument("--sizes", metavar="A,B,C", help="model sizes to sweep (default: the scene's)")
+    p.add_argument("--integrators", metavar="A,B", help=f"integrators to sweep (default: {','.join(INTEGRATORS)})")
+    p.add_argument("--duration", type=float, metavar="SECONDS", help="simulated time [s] (default: the scenario's)")
+    p.add_argument(
+        "--set", action="append", default=[], metavar="NAME=VALUE", help="override a parameter, SI units (repeatable)"
+    )
+    _executor_arguments(p)
+    p.add_argument("--output", metavar="DIR", help="write DIR/refine.json and DIR/refine.png")
+    p.add_argument("--json", action="store_true", help="print refine.json")
+    COMMANDS["refine"] = cmd_refine
 
     p = sub.add_parser("stability", help="stability boundaries vs theory, extremes table, undamped energy")
     p.add_argument(

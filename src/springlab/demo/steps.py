@@ -240,6 +240,46 @@ def design_step(state: DemoState) -> list[Artifact]:
     ]
 
 
+#: the demo's refine study: the first sizes a scene declares (the rest take minutes) and this tolerance
+DEMO_REFINE_SIZES = 5
+DEMO_REFINE_TOL = 1e-3
+
+
+def refine_step(state: DemoState) -> list[Artifact]:
+    """How much model each question needs, for every scene whose model size is a parameter (`Scene.refinable`):
+    the first declared question at DEMO_REFINE_TOL over its first DEMO_REFINE_SIZES sizes."""
+    from springlab.plots import refine as refine_chart  # here: matplotlib only when this step runs
+    from springlab.studies import refine
+
+    written = []
+    for name in refine.refinable_scenes():
+        spec = scenes.get(name).refinable
+        assert spec is not None  # refinable_scenes lists only scenes that declare it
+        study = refine.refine(name, tol=DEMO_REFINE_TOL, sizes=spec.sizes[:DEMO_REFINE_SIZES])
+        folder = pathlib.Path("refine") / name
+        refine_chart.write_refine(study, state.out / folder)
+        state.timings.append((f"refine {name} ({study.question})", study.sweep_wall_time_s))
+        pick = study.recommendation
+        answer = (
+            f"cheapest for {DEMO_REFINE_TOL:g}: {study.size_parameter} = {pick.size}, {pick.integrator} at dt ="
+            f" {pick.dt:.3g} s (verified)"
+            if pick is not None and pick.verified
+            else f"no setting meets {DEMO_REFINE_TOL:g}"
+        )
+        written += [
+            Artifact(
+                str(folder / "refine.png"),
+                "plot",
+                f"{name}: how much model does {study.description} need? error vs cost over"
+                f" {study.size_parameter} x integrator x dt; {answer}",
+                name,
+                study.scenario,
+            ),
+            Artifact(str(folder / "refine.json"), "data", f"{name}: the refine study of {study.question}", name),
+        ]
+    return written
+
+
 def audit_step(state: DemoState) -> list[Artifact]:
     """`springlab audit` on the car's model, as any MJCF would be: modes, limits, error vs cost."""
     from springlab.plots import audit as charts_audit  # here: matplotlib only when this step runs
@@ -312,6 +352,7 @@ STEPS: tuple[Callable[[DemoState], list[Artifact]], ...] = (
     design_step,
     audit_step,
     friction_step,
+    refine_step,
 )
 #: steps that run after every step in STEPS (the report lists everything)
 FINAL_STEPS: tuple[Callable[[DemoState], list[Artifact]], ...] = (report_step,)

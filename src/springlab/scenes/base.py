@@ -30,7 +30,7 @@ from springlab.exact.limits import stability_limit
 from springlab.sim import model_files
 from springlab.sim.simulate import Setup, Trajectory, quiet_mujoco
 
-from .capabilities import DesignSpec, DryFrictionSpec, FitSpec, OscillatorSpec
+from .capabilities import DesignSpec, DryFrictionSpec, FigureHook, FitSpec, OscillatorSpec, RefinableSpec
 
 #: smallest body mass [kg] and principal inertia [kg m^2] MuJoCo compiles: its mjMINVAL
 #: (1e-15); a moving body below it fails `MjSpec.compile` ("must be larger than mjMINVAL")
@@ -288,7 +288,10 @@ class Scene:
     10. Capabilities the studies read (springlab.scenes.capabilities): `fit`, how `springlab fit`
        identifies the scene from a record (an `OscillatorFit` or a `PolynomialFit`; None: it cannot);
        `design`, the design question the scene answers (`DesignSpec`: swept properties, fixed ones,
-       the figure of merit and the hooks that simulate and estimate it; springlab.studies.design).
+       the figure of merit and the hooks that simulate and estimate it; springlab.studies.design);
+       `refinable`, the model's size is a parameter and which quantities converge to which continuum
+       values (`RefinableSpec`; springlab.studies.refine); `figure`, the panels of the scene's own
+       figure of a run (a `FigureHook`; springlab.plots.run.scene_figure).
     11. Optionally, `oscillator` (springlab.scenes.capabilities.OscillatorSpec): the scene is the
        textbook's one-mode mass-spring-damper, the unit oscillator of `springlab stability`.
     12. Optionally, `dry_friction` (springlab.scenes.capabilities.DryFrictionSpec): the scene's dry
@@ -327,6 +330,11 @@ class Scene:
     #: exact dry-friction cases and MuJoCo's friction settings as parameters (None: none;
     #: springlab.studies.friction_settings reads it)
     dry_friction: DryFrictionSpec | None = None
+    #: the model's size is a parameter: how much model a question needs (None: fixed size;
+    #: springlab.studies.refine reads it)
+    refinable: RefinableSpec | None = None
+    #: the panels of the scene's own figure of a run (None: none; springlab.plots.run.scene_figure draws it)
+    figure: FigureHook | None = None
 
     def question_and_answer(self, scenario: str, quantities: dict, parameters: dict) -> tuple[str, str] | None:
         """(question, answer sentence) of a scenario's run, or None where the scene states none."""

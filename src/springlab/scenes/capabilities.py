@@ -601,3 +601,132 @@ class DryFrictionSpec:
     def settings_of(self, friction: str) -> tuple[SolverSetting, ...]:
         """The settings that act on `friction` (JOINT_FRICTION or CONTACT_FRICTION)."""
         return tuple(s for s in self.settings if friction in s.acts_on)
+
+
+# -- refinable: a scene whose model size is a parameter (springlab.studies.refine) ------------------------
+
+
+@dataclasses.dataclass(frozen=True)
+class RefinedQuestion:
+    """A quantity a run of the scene measures that converges, as the model is refined, to a continuum value.
+
+    The refine study reads three of the run's quantities: the measured value (`name`), the same quantity
+    of the discretized model solved exactly (`exact`: the gap to it is the integration error) and of the
+    continuum (`continuum`: the gap between the two exact values is the discretization error).
+
+    Attributes
+    ----------
+    name
+        the measured quantity, e.g. 'mode_1_frequency_hz'.
+    scenario
+        the scenario whose runs measure it.
+    description
+        the question in words, e.g. 'the first torsional frequency'.
+    exact
+        the quantity holding the discretized model's exact value.
+    continuum
+        the quantity holding the continuum's exact value.
+    """
+
+    name: str
+    scenario: str
+    description: str
+    exact: str
+    continuum: str
+
+
+@dataclasses.dataclass(frozen=True)
+class RefinableSpec:
+    """The scene's model size is a parameter (`Scene.refinable`): how much model does a question need?
+
+    springlab.studies.refine sweeps the size x integrator x timestep, measures each question's error
+    against its continuum value and the cost of every run, and finds the cheapest verified setting.
+
+    Attributes
+    ----------
+    size
+        the parameter that sets the model's size (an integer, e.g. 'n_elements').
+    description
+        what the size counts, in words (e.g. 'lumped elements').
+    sizes
+        the sizes the study sweeps by default, ascending.
+    questions
+        the questions, the first the default.
+    order
+        the expected order of the discretization error in the size (error ~ size^-order).
+    switch_time
+        a parameter [s] every timestep of the study divides (an input switched on the step grid at that
+        time, e.g. the end of a ramp), so all runs of a size solve the same problem; '' for none.
+    """
+
+    size: str
+    description: str
+    sizes: tuple[int, ...]
+    questions: tuple[RefinedQuestion, ...]
+    order: float
+    switch_time: str = ""
+
+    def question(self, name: str | None) -> RefinedQuestion:
+        """The question measuring `name` (None: the first).
+
+        Raises
+        ------
+        KeyError
+            no question measures that quantity.
+        """
+        if name is None:
+            return self.questions[0]
+        for question in self.questions:
+            if question.name == name:
+                return question
+        raise KeyError(name)
+
+
+# -- figure: what a scene adds to its runs' figures (springlab.plots.run.scene_figure) ----------------------
+
+
+@dataclasses.dataclass(frozen=True)
+class Curve:
+    """One curve of a declared panel.
+
+    Attributes
+    ----------
+    label
+        legend text.
+    x, y
+        the points, in the panel's units.
+    kind
+        'simulated' (solid), 'exact' (dashed) or 'continuum' (dotted).
+    """
+
+    label: str
+    x: np.ndarray
+    y: np.ndarray
+    kind: str = "simulated"
+
+
+@dataclasses.dataclass(frozen=True)
+class Panel:
+    """One panel of a scene's own figure.
+
+    Attributes
+    ----------
+    title
+        one line.
+    xlabel, ylabel
+        axis labels with units.
+    curves
+        what is drawn.
+    marks
+        vertical lines: (x, label), e.g. an exact event time.
+    """
+
+    title: str
+    xlabel: str
+    ylabel: str
+    curves: tuple[Curve, ...]
+    marks: tuple[tuple[float, str], ...] = ()
+
+
+#: hook: (compiled model, parameters, scenario name, trajectory) -> the panels of the run's own figure
+FigureHook: TypeAlias = Callable[[mujoco.MjModel, Mapping[str, float], str, Any], tuple[Panel, ...]]
