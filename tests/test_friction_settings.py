@@ -171,10 +171,13 @@ def test_the_study_gives_the_same_errors_on_dask_workers(monkeypatch):
 
 
 @pytest.mark.slow
-def test_the_demo_answers_how_much_mujocos_friction_drifts_and_what_stopping_it_costs(tmp_path):
+def test_the_demo_answers_how_much_mujocos_friction_drifts_and_what_stopping_it_costs(tmp_path, monkeypatch):
     from springlab.demo import report, steps
     from springlab.demo.state import DemoState
 
+    # one of the demo's two integrators beside MuJoCo's default: 2/3 of its runs, the same section and
+    # answer lines (rk4 at the smaller timesteps is what meets 1e-2 where euler cannot)
+    monkeypatch.setattr(steps, "DEMO_FRICTION_INTEGRATORS", ("rk4",))
     state = DemoState(out=tmp_path)
     written = steps.friction_step(state)
     assert {a.path for a in written} == {

@@ -91,7 +91,8 @@ def _case_panels(case: CaseStudy, cost_ax, dt_ax, tol: float | None) -> None:
     dt_ax.set_xlabel("timestep dt [s]")
     dt_ax.set_ylabel(f"max relative error of {MODEL_INTEGRATOR} [-]")
     dt_ax.set_title("flat as dt -> 0: MuJoCo's model error", fontsize=9)
-    dt_ax.legend(fontsize=6.5, loc="best")
+    if dt_ax.get_legend_handles_labels()[0]:  # no curve: no model error measured (MODEL_INTEGRATOR not swept)
+        dt_ax.legend(fontsize=6.5, loc="best")
     for axis in (cost_ax, dt_ax):
         axis.grid(True, which="both", alpha=0.3)
 
