@@ -147,8 +147,8 @@ MAX_FRAMES = 150
 
 @pytest.mark.slow
 @pytest.mark.parametrize("scene, scenario", CASES)
-def test_the_moving_body_is_inside_the_frame_in_every_frame(scene, scenario, tmp_path):
-    result = run_scenario(scene, scenario)
+def test_the_moving_body_is_inside_the_frame_in_every_frame(scene, scenario, tmp_path, scenario_run):
+    result = scenario_run(scene, scenario)
     duration = min(float(result.time[-1]), 12.0)
     # the default slow motion at 10 fps (what a user sees), at most MAX_FRAMES frames spread over the run:
     # the framing is fixed for the video, so sparser frames still test every part of the motion
