@@ -141,9 +141,15 @@ def _stability_dt(scene, scenario, integrator: str) -> float | None:
 @pytest.mark.slow
 @pytest.mark.parametrize("integrator", list(INTEGRATORS))
 def test_a_pass_never_certifies_more_than_the_cap_up_to_the_stability_limit(integrator):
-    """Every scene with an exact reference, dt from its validated one up to the stability limit."""
+    """Every scene with an exact reference, dt from its validated one up to the stability limit.
+
+    Each integrator takes every other exact scenario (alternating with the integrator's place), so every
+    integrator meets every scene and every scenario meets two or three integrators."""
     passes = not_validated = 0
-    for scene, scenario in _exact_scenarios():
+    parity = list(INTEGRATORS).index(integrator) % 2
+    for index, (scene, scenario) in enumerate(_exact_scenarios()):
+        if index % 2 != parity and len(scene.scenarios) > 1:
+            continue
         validated_dt = scenario.dt or scene.dt
         # up to 0.95 x the stability limit (euler's for discrete, which has none), 4 log-spaced points
         stable = _stability_dt(scene, scenario, integrator)
@@ -173,7 +179,7 @@ def test_a_pass_never_certifies_more_than_the_cap_up_to_the_stability_limit(inte
     ("scene", "scenario", "dts", "integrators"),
     [
         ("slider", "harmonic", (0.05, 0.02, 0.01, 0.005, 0.002), tuple(INTEGRATORS)),
-        ("car", "road_bump", (2e-3, 1.3e-3, 1e-3, 7e-4, 5e-4), tuple(INTEGRATORS)),
+        ("car", "road_bump", (2e-3, 1e-3, 5e-4), tuple(INTEGRATORS)),
         ("printer_head", "move", (2e-4, 1e-4, 5e-5, 3.5e-5, 2e-5), tuple(INTEGRATORS)),
         # issue 10's case: rk4 at dt = 5e-5 right after rk4 at 1e-4 on the shared model
         ("printer_head", "move", (1e-4, 5e-5), ("rk4",)),
