@@ -129,7 +129,15 @@ def _inside_masks():
         r, g, b = _rgb(f)
         return (b > 120) & (b > 1.5 * r) & (g > 70) & (g < 0.8 * b)
 
-    return {"slider": orange, "kinematics": orange, "nonlinear": green, "car": _paint, "printer_head": carriage}
+    return {
+        "slider": orange,
+        "kinematics": orange,
+        "nonlinear": green,
+        "car": _paint,
+        "printer_head": carriage,
+        "friction": orange,  # the box has the slider's block colour
+        "drill_string": orange,  # the orange stripes along its rotors, which turn with them
+    }
 
 
 CASES = [(s.name, c) for s in scenes.SCENES.values() for c in s.scenarios]
