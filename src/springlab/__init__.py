@@ -17,7 +17,7 @@ from springlab.studies.fit.fit import fit
 from springlab.studies.sweeps import sweep
 
 from . import errors
-from .errors import BadInputError, DivergedError, SpringlabError, UnknownNameError
+from .errors import BadInputError, ClusterError, DivergedError, SpringlabError, UnknownNameError
 from .scenes import SCENES
 
 __all__ = [
@@ -37,5 +37,6 @@ __all__ = [
     "BadInputError",
     "UnknownNameError",
     "DivergedError",
+    "ClusterError",
 ]
 __version__ = "0.1.0"

@@ -40,3 +40,10 @@ class DivergedError(SpringlabError):
     """The simulation blew up; nothing is reported or written for it (exit 3)."""
 
     exit_code = 3
+
+
+class ClusterError(SpringlabError):
+    """The dask cluster a study ran on was lost mid-run (scheduler gone, no workers left, a chunk's
+    workers all died); the study stopped and returned nothing (exit 2, like an unreachable scheduler)."""
+
+    exit_code = 2

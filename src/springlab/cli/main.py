@@ -112,12 +112,21 @@ def _executor_arguments(parser: argparse.ArgumentParser) -> None:
         help="run the chunks on a running dask scheduler, e.g. tcp://10.0.0.5:8786"
         f" (unreachable for {CONNECT_TIMEOUT_S:g} s: exit 2)",
     )
+    parser.add_argument(
+        "--verbose",
+        action="store_true",
+        help="with --workers/--scheduler: let dask.distributed's own log lines through to stderr",
+    )
 
 
 def _executor(args: argparse.Namespace, nthread: int = 0) -> Executor:
     """Where a study's chunks run: locally (default, on `nthread` threads), --workers N or --scheduler ADDRESS."""
     return Executor(
-        workers=args.workers, scheduler=args.scheduler, progress=False if args.json else None, nthread=nthread
+        workers=args.workers,
+        scheduler=args.scheduler,
+        progress=False if args.json else None,
+        nthread=nthread,
+        quiet=not args.verbose,
     )
 
 

@@ -7,6 +7,7 @@ printed in seconds [s] or milliseconds [ms] as each header says; errors are rela
 
 from __future__ import annotations
 
+import collections
 import pathlib
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
@@ -273,6 +274,14 @@ def print_sweep(result: Sweep, quantity: str | None, output: str | None) -> None
         f" ({result.configurations_per_s:.0f}/s, {result.chunks} chunks)"
     )
     print(f"  passed {result.passed}, failed {result.failed}, diverged {result.diverged}, invalid {result.invalid}")
+    # why the failures failed, by kind (each row's `detail` has its own reason and numbers)
+    kinds = collections.Counter(
+        "diverged" if row.diverged else row.detail.split(":")[0] for row in result.rows if row.passed is False
+    )
+    if kinds:
+        print(
+            f"  not passed: {', '.join(f'{n} {kind}' for kind, n in kinds.most_common())} (each row's detail says why)"
+        )
     quantity = quantity or (sweep_plot.default_quantity(result) if result.diverged < result.size else None)
     if quantity:
         values = result.column(quantity)

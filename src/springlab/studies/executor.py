@@ -37,15 +37,20 @@ import logging
 import os
 import pathlib
 import socket
+import time
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 from urllib.parse import urlsplit
 
 from springlab import progress
-from springlab.errors import BadInputError, SpringlabError
+from springlab.errors import BadInputError, ClusterError, SpringlabError
 
 #: seconds to wait for a scheduler to answer before giving up (exit 2)
 CONNECT_TIMEOUT_S = 10.0
+#: seconds between looks for a worker while no chunk finishes (a scheduler without workers waits forever)
+WORKER_POLL_S = 1.0
+#: seconds between looks for finished chunks (chunks take seconds: a negligible delay)
+RESULT_POLL_S = 0.02
 #: the extra that brings dask.distributed
 _EXTRA = "pip install 'springlab[distributed]'"
 
@@ -59,10 +64,28 @@ def _import_distributed():
     return distributed
 
 
+#: the loggers whose lines stay off stderr unless asked for (--verbose); their children too
+_DASK_LOGGERS = ("distributed", "tornado", "asyncio")
+
+
 @contextlib.contextmanager
-def _quiet_dask() -> Iterator[None]:
-    """Keep distributed's INFO/WARNING chatter (worker restarts, closing comms) off the terminal."""
-    loggers = [logging.getLogger(name) for name in ("distributed", "tornado", "asyncio")]
+def _quiet_dask(quiet: bool = True) -> Iterator[None]:
+    """Keep distributed's log lines (worker restarts, closing comms, a lost scheduler's tracebacks) off stderr.
+
+    distributed's logging configuration gives child loggers their own levels
+    (`distributed.client: warning`), so silencing the parent alone lets
+    `distributed.client`'s reconnect errors through: every existing logger under
+    the three names is set to CRITICAL, and restored afterwards.
+    """
+    if not quiet:
+        yield
+        return
+    names = [
+        name
+        for name in list(logging.root.manager.loggerDict)
+        if any(name == root or name.startswith(root + ".") for root in _DASK_LOGGERS)
+    ]
+    loggers = [logging.getLogger(name) for name in {*names, *_DASK_LOGGERS}]
     levels = [logger.level for logger in loggers]
     for logger in loggers:
         logger.setLevel(logging.CRITICAL)
@@ -113,7 +136,12 @@ class Executor:
         optional callback(chunk index) after each chunk's result arrives (tests use it).
     nthread
         batch threads of a local run (0: one per CPU); dask tasks always get 1.
+    quiet
+        keep distributed's own log lines off stderr while the executor is connected (the CLI's
+        default; `--verbose` turns it off).
 
+    A lost cluster (the scheduler gone, no worker left for `timeout` seconds, a chunk whose
+    workers all died) ends the map with one ClusterError line; the study returns nothing.
     Use as a context manager (or call `close`) so a LocalCluster started here is shut down;
     one Executor can run several maps (a study and its plane) on the same cluster.
     """
@@ -127,6 +155,7 @@ class Executor:
         progress: bool | None = None,
         on_result: Callable[[int], None] | None = None,
         nthread: int = 0,
+        quiet: bool = True,
     ):
         if workers is not None and scheduler is not None:
             raise BadInputError("give --workers N (a local cluster) or --scheduler ADDRESS (a running one), not both")
@@ -137,9 +166,12 @@ class Executor:
         self.workers, self.scheduler, self.timeout = workers, scheduler, float(timeout)
         if isinstance(nthread, bool) or not isinstance(nthread, int) or nthread < 0:
             raise BadInputError(f"threads must be an integer >= 0 (0: one per CPU), got {nthread!r}")
-        self.progress, self.on_result, self.nthread = progress, on_result, nthread
+        self.progress, self.on_result, self.nthread, self.quiet = progress, on_result, nthread, quiet
         self._cluster = None
         self._client = None
+        # distributed's loggers stay quiet from the connection to `close`: a lost scheduler's
+        # reconnect errors are logged from the client's own thread, between and after maps
+        self._quiet = contextlib.ExitStack()
 
     @property
     def distributed(self) -> bool:
@@ -160,39 +192,46 @@ class Executor:
     def client(self) -> Any:
         """The dask Client (connecting or starting the cluster on first use)."""
         if self._client is None:
-            self._client = self._connect()
+            distributed = _import_distributed()
+            self._quiet.enter_context(_quiet_dask(self.quiet))
+            try:
+                self._client = self._connect(distributed)
+            except BaseException:
+                self._quiet.close()
+                raise
         return self._client
 
-    def _connect(self):
-        distributed = _import_distributed()
-        with _quiet_dask():
-            if self.scheduler is not None:
-                _check_reachable(self.scheduler, self.timeout)
-                try:
-                    return distributed.Client(self.scheduler, timeout=self.timeout, set_as_default=False)
-                except (OSError, TimeoutError) as error:
-                    raise BadInputError(
-                        f"cannot connect to the dask scheduler at {self.scheduler} within {self.timeout:g} s: {error}"
-                    ) from None
-            self._cluster = distributed.LocalCluster(
-                n_workers=self.workers,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=":0",  # any free port: a second cluster must not warn that 8787 is taken
-                silence_logs=logging.CRITICAL,
-                # the workers import springlab from wherever this process does
-                env={"PYTHONPATH": _pythonpath_for_workers()},
-            )
-            return distributed.Client(self._cluster, timeout=self.timeout, set_as_default=False)
+    def _connect(self, distributed: Any) -> Any:
+        if self.scheduler is not None:
+            _check_reachable(self.scheduler, self.timeout)
+            try:
+                return distributed.Client(self.scheduler, timeout=self.timeout, set_as_default=False)
+            except (OSError, TimeoutError) as error:
+                raise BadInputError(
+                    f"cannot connect to the dask scheduler at {self.scheduler} within {self.timeout:g} s: {error}"
+                ) from None
+        self._cluster = distributed.LocalCluster(
+            n_workers=self.workers,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=":0",  # any free port: a second cluster must not warn that 8787 is taken
+            silence_logs=logging.CRITICAL if self.quiet else False,
+            # the workers import springlab from wherever this process does
+            env={"PYTHONPATH": _pythonpath_for_workers()},
+        )
+        return distributed.Client(self._cluster, timeout=self.timeout, set_as_default=False)
 
     def close(self) -> None:
         """Disconnect, and shut down a LocalCluster this executor started."""
-        with _quiet_dask():
+        try:
             if self._client is not None:
-                self._client.close()
+                with contextlib.suppress(Exception):  # a client whose scheduler is gone closes as it can
+                    self._client.close()
             if self._cluster is not None:
                 self._cluster.close()
-        self._client = self._cluster = None
+        finally:
+            self._client = self._cluster = None
+            self._quiet.close()
 
     def __enter__(self) -> Executor:
         return self
@@ -243,32 +282,126 @@ class Executor:
                     if self.on_result is not None:
                         self.on_result(index)
                 return results
-            distributed = _import_distributed()
-            client = self.client
-            with _quiet_dask():
-                futures = client.map(function, payloads, nthread=1, pure=False)
-                index_of = {future.key: i for i, future in enumerate(futures)}
-                try:
-                    for future in distributed.as_completed(futures, loop=client.loop):
-                        index = index_of[future.key]
-                        results[index] = _result(future)
-                        bar.update(sizes[index])
-                        if self.on_result is not None:
-                            self.on_result(index)
-                finally:
-                    for future in futures:
-                        future.release()
+            self._gather(function, payloads, results, sizes, bar)
         return results
 
+    def _gather(self, function, payloads, results, sizes, bar) -> None:
+        """Submit every chunk to dask and collect the results into `results` as they finish.
 
-def _result(future) -> Any:
-    """A finished future's value; a chunk's SpringlabError is re-raised as itself."""
-    try:
-        return future.result()
-    except SpringlabError:
-        raise
-    except Exception as error:  # the workers' KilledWorker after too many deaths, a broken install...
-        raise BadInputError(f"a chunk failed on the dask cluster: {type(error).__name__}: {error}") from None
+        Polls rather than blocking on `as_completed`, so a cluster without workers is noticed:
+        tasks on a scheduler with no worker would otherwise wait forever.
+        """
+        distributed = _import_distributed()
+        client = self.client
+        futures = client.map(function, payloads, nthread=1, pure=False)
+        index_of = {future.key: i for i, future in enumerate(futures)}
+        finished = 0
+        workerless_since: float | None = None
+        next_look = time.monotonic() + WORKER_POLL_S
+        try:
+            pending = distributed.as_completed(futures, loop=client.loop)
+            while not pending.is_empty():
+                if not pending.has_ready():
+                    if time.monotonic() >= next_look:
+                        workerless_since = self._look_for_workers(client, workerless_since, finished, len(futures))
+                        next_look = time.monotonic() + WORKER_POLL_S
+                    time.sleep(RESULT_POLL_S)
+                    continue
+                for future in pending.next_batch(block=False):
+                    index = index_of[future.key]
+                    results[index] = self._result(future, finished, len(futures))
+                    finished += 1
+                    workerless_since = None
+                    bar.update(sizes[index])
+                    if self.on_result is not None:
+                        self.on_result(index)
+        except SpringlabError:
+            raise
+        except (OSError, TimeoutError, distributed.comm.CommClosedError) as error:
+            # the client's own calls (submitting, asking for workers) on a connection that broke
+            raise self._connection_lost(_why_lost(error), finished, len(futures)) from None
+        finally:
+            for future in futures:
+                with contextlib.suppress(Exception):  # a lost client cannot release; nothing is left to free
+                    future.release()
+
+    def _where(self) -> str:
+        return f"the dask scheduler at {self.scheduler}" if self.scheduler is not None else "the local dask cluster"
+
+    def _lost(self, what: str, advice: str, finished: int, total: int) -> ClusterError:
+        """The one-line ClusterError for a cluster lost after `finished` of `total` chunks."""
+        return ClusterError(f"{what} after {finished} of {total} chunks; the study stopped and wrote nothing: {advice}")
+
+    def _connection_lost(self, why: str, finished: int, total: int) -> ClusterError:
+        again = "rerun when it is back, or without --scheduler" if self.scheduler is not None else "rerun"
+        return self._lost(f"lost the connection to {self._where()} ({why})", again, finished, total)
+
+    def _look_for_workers(self, client: Any, since: float | None, finished: int, total: int) -> float | None:
+        """When the cluster first had no worker (None: it has some); ClusterError after `timeout` s without."""
+        if client.status not in ("running", "connecting"):
+            raise self._connection_lost(f"the client is {client.status}", finished, total)
+        workers = client.nthreads(callback_timeout=self.timeout)
+        if workers:
+            return None
+        now = time.monotonic()
+        since = now if since is None else since
+        if now - since >= self.timeout:
+            start = f"start workers with 'dask worker {self.scheduler}' and rerun" if self.scheduler else "rerun"
+            raise self._lost(f"{self._where()} has had no worker for {self.timeout:g} s", start, finished, total)
+        return since
+
+    def _result(self, future: Any, finished: int, total: int) -> Any:
+        """A finished future's value; a chunk's SpringlabError is re-raised as itself, a lost cluster
+        as one ClusterError line."""
+        distributed = _import_distributed()
+        try:
+            return future.result()
+        except SpringlabError:
+            raise
+        except distributed.client.FutureCancelledError as error:
+            # the client cancels every future when its connection to the scheduler drops
+            reason = "the connection closed" if error.reason == "scheduler-connection-lost" else error.reason
+            raise self._connection_lost(reason, finished, total) from None
+        except distributed.KilledWorker:
+            raise self._lost(
+                f"a chunk killed every worker that ran it on {self._where()}"
+                f" ({_allowed_failures() + 1} deaths; dask's allowed-failures)",
+                "see the workers' logs",
+                finished,
+                total,
+            ) from None
+        except Exception as error:
+            if future.status != "error":
+                # the chunk ran, but fetching its result failed (CommClosedError, a reset connection)
+                raise self._connection_lost(_why_lost(error), finished, total) from None
+            # the chunk itself raised: a broken install on the workers, a bug; one line, the cluster's words
+            raise BadInputError(
+                f"a chunk failed on the dask cluster: {type(error).__name__}: {_first_line(error)}"
+            ) from None
+
+
+def _why_lost(error: BaseException) -> str:
+    """A short reason for a broken connection (distributed's messages name its internal pools)."""
+    import distributed
+
+    if isinstance(error, distributed.comm.CommClosedError):
+        return "the connection closed"
+    if isinstance(error, TimeoutError):
+        return "no answer"
+    return getattr(error, "strerror", None) or _first_line(error)
+
+
+def _first_line(error: BaseException) -> str:
+    """The first line of an exception's message (distributed's run over several)."""
+    text = str(error).strip()
+    return text.splitlines()[0] if text else type(error).__name__
+
+
+def _allowed_failures() -> int:
+    """Dask's `distributed.scheduler.allowed-failures`: worker deaths a task survives before KilledWorker."""
+    import dask
+
+    return int(dask.config.get("distributed.scheduler.allowed-failures"))
 
 
 def _pythonpath_for_workers() -> str:

@@ -28,7 +28,8 @@ import numpy as np
 from springlab import scenes, tables
 from springlab.errors import BadInputError, DivergedError, UnknownNameError
 from springlab.files import json_ready
-from springlab.runs.run import evaluate, prepare
+from springlab.runs.compare import Verdict
+from springlab.runs.run import Result, evaluate, prepare
 from springlab.sim.batch import Job, run_rollout
 from springlab.sim.simulate import check_timing, integrator_id
 
@@ -131,8 +132,11 @@ class SweepRow:
     diverged
         the run blew up.
     detail
-        why it diverged, or "invalid: ..." for a configuration the scenario cannot start from
-        (e.g. a bump that lifts the car); "" otherwise.
+        why the row did not pass, in one line: why it diverged, "invalid: ..." for a configuration
+        the scenario cannot start from (e.g. a bump that lifts the car), or for a run that failed
+        the reason of its verdict (see `failure_detail`: which column or check, its error against
+        its tolerance, the scene's physical cause such as the tire leaving the road); "" for a
+        run that passed.
     """
 
     values: dict[str, float]
@@ -396,7 +400,45 @@ def run_chunk(payload: Mapping[str, Any], nthread: int = 0) -> list[dict[str, An
             row["quantities"] = _scalars(result.quantities)
             row["errors"] = {column: e.max_rel for column, e in result.errors.items()}
             row["passed"] = result.passed
+            row["detail"] = failure_detail(result)
     return rows
+
+
+def failure_detail(result: Result) -> str:
+    """Why a run did not pass, in one line; "" for a run that passed (or had nothing to pass).
+
+    The verdict's reason (`Result.message`: the columns and checks outside their tolerance with
+    error and tolerance, the range of the error estimate, or the scene's own words on where its
+    equations stop holding, e.g. a tire leaving the road), prefixed with what kind of failure it is;
+    where the reason is not a tolerance, the worst compared column against its tolerance follows,
+    so the row says whether the numbers themselves were accurate.
+
+    Parameters
+    ----------
+    result
+        the run of one configuration.
+
+    Returns
+    -------
+    str
+        "outside its tolerance: ...", "outside the scene's model: ...; ..." or "outside the range
+        of the error estimate: ...; ...", or "".
+    """
+    if result.passed is not False:
+        return ""
+    if result.verdict is Verdict.FAIL:
+        return f"outside its tolerance: {result.message}"
+    detail = result.message
+    tolerances = result.column_tolerances
+    if result.errors and tolerances:
+        column = max(tolerances, key=lambda c: result.errors[c].max_rel / tolerances[c])
+        error, tolerance = result.errors[column].max_rel, tolerances[column]
+        relation = "within" if error <= tolerance else "above"
+        detail += (
+            f"; errors {relation} tolerance (worst {column}: max relative error {error:.3g}"
+            f" {'<=' if error <= tolerance else '>'} {tolerance:.3g})"
+        )
+    return detail
 
 
 def _scalars(quantities: Mapping[str, Any]) -> dict[str, Any]:
