@@ -10,6 +10,7 @@ from __future__ import annotations
 import logging
 import os
 import pathlib
+import re
 import subprocess
 import sys
 import textwrap
@@ -74,9 +75,10 @@ def _springlab(*args: str) -> subprocess.Popen:
 def test_a_scheduler_killed_mid_sweep_is_one_line_exit_2_and_no_file(tmp_path):
     cluster, address = _start_cluster("worker")
     try:
-        # 6 chunks of 64 slider runs (the CLI's chunk size): the first finishes long before the last
+        # 12 chunks of 64 slider runs (the CLI's chunk size): the first finishes seconds before the last,
+        # a margin a loaded machine's delay between the announcement and the kill cannot use up
         command = _springlab(
-            "sweep", "slider", "free", "--vary", "damping=0.5:40:48:log", "--vary", "stiffness=100:1000:8",
+            "sweep", "slider", "free", "--vary", "damping=0.5:40:48:log", "--vary", "stiffness=100:1000:16",
             "--scheduler", address, "--output", str(tmp_path / "out"),
         )  # fmt: skip
         assert cluster.stdout.readline().strip() == "finished"  # type: ignore[union-attr]
@@ -93,7 +95,8 @@ def test_a_scheduler_killed_mid_sweep_is_one_line_exit_2_and_no_file(tmp_path):
     assert lines[0].startswith(
         f"springlab: error: lost the connection to the dask scheduler at {address} (the connection closed)"
     )
-    assert "after 1 of 6 chunks" in lines[0] or "after 0 of 6 chunks" in lines[0], lines[0]
+    finished = re.search(r"after (\d+) of 12 chunks", lines[0])
+    assert finished and int(finished.group(1)) < 12, lines[0]
     assert "wrote nothing" in lines[0]
     assert not (tmp_path / "out").exists()  # no sweep.csv, not even the folder
     assert out == ""
