@@ -87,10 +87,10 @@ def _shared_fixture(item: pytest.Item) -> str | None:
     return None
 
 
-def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+def pytest_itemcollected(item: pytest.Item) -> None:
     """Under `pytest -n N --dist loadgroup` (make test), the tests that read one shared study run on one
-    worker, so the study is computed once, not once per worker (a session fixture is per process)."""
-    for item in items:
-        group = _shared_fixture(item)
-        if group is not None:
-            item.add_marker(pytest.mark.xdist_group(group))
+    worker, so the study is computed once, not once per worker (a session fixture is per process). Marked
+    as each test is collected: xdist reads the groups in its own pytest_collection_modifyitems."""
+    group = _shared_fixture(item)
+    if group is not None:
+        item.add_marker(pytest.mark.xdist_group(group))
