@@ -32,7 +32,7 @@ from springlab.studies.fit import release as fit_release
 from springlab.studies.fit import results as fit_results
 from springlab.studies.fit import starts as fit_starts
 
-from .engine import Problem, accuracy, check_identifiable, choose_dt, solve
+from .engine import Problem, accuracy, check_identifiable, choose_dt, residual_rms, solve
 from .models import ALIASES, FitModel, PolynomialModel, model_of, not_fittable
 from .results import FitResult
 
@@ -280,8 +280,6 @@ def _finish(
 ) -> FitResult:
     """The FitResult: intervals, derived quantities, cross-check, the starts' record (`runs`: None for a single
     start), the decision on where the motion starts (`release`) and the identified scene's run."""
-    from mujoco import sysid
-
     how, record, free = problem.how, problem.record, problem.free
     spacing = problem.grid.get("median_sample_spacing_s") or 0.0
     if spacing > 0 and problem.dt >= DENSE * spacing:
@@ -295,14 +293,19 @@ def _finish(
     # in parameters scaled to O(1): sysid's zero-eigenvalue threshold is relative, and k ~ 1e6 N/m beside
     # an offset ~ 1e-3 m would otherwise look singular
     scale = np.array(solved["scale"])
-    covariance, half = sysid.calculate_intervals(solved["residuals"], jacobian * scale)
+    n, p = record.time.size, len(free)
+    covariance, half = fit_results.intervals(solved["residuals"], jacobian * scale, n)
     covariance = np.asarray(covariance, float) * np.outer(scale, scale)
     half = np.asarray(half, float) * scale
-    n, p = record.time.size, len(free)
     dof = n - p
-    residual = np.concatenate(solved["residuals"]) * problem.scale
-    fitted = record.values + residual
     values = problem.values(x)
+    if problem.compression is None:
+        residual = np.concatenate(solved["residuals"]) * problem.scale
+        fitted = record.values + residual
+        rms = float(np.sqrt(np.mean(residual**2)))
+    else:  # sysid saw the reduced rows: the signal at every sample from one more rollout at the estimate
+        fitted = problem.signal(values)
+        rms = residual_rms(problem, np.concatenate(solved["residuals"]))
     units = how.units()
     estimates: dict[str, dict[str, Any]] = {}
     for i, name in enumerate(free):
@@ -345,7 +348,7 @@ def _finish(
         derived=derived,
         correlation=correlation,
         covariance=covariance,
-        residual_rms=float(np.sqrt(np.mean(residual**2))),
+        residual_rms=rms,
         dof=dof,
         parameters=params,
         fitted=fitted,
@@ -376,7 +379,7 @@ def _finish(
 
 def _curves(problem: Problem, x: np.ndarray, covariance: np.ndarray, quantile: float) -> dict[str, Any]:
     """A polynomial's x(t), v(t), a(t) with 95 % bands on 41 times over the record."""
-    t = np.linspace(0.0, float(problem.t[-1]), 41)
+    t = np.linspace(0.0, problem.span, 41)
     out: dict[str, Any] = {"time_s": (t + problem.record.origin).tolist()}
     for signal in ("pos", "vel", "acc"):
 
@@ -398,7 +401,7 @@ def _scene_run(
     """The identified scene's own run over the record's span, or (None, why not)."""
     overrides, note = problem.how.run_parameters(params, values, moving)
     try:
-        run = run_scenario(problem.how.name, problem.scenario.name, duration=float(problem.t[-1]), **overrides)
+        run = run_scenario(problem.how.name, problem.scenario.name, duration=problem.span, **overrides)
     except SpringlabError as error:
         return None, f"the identified scene could not be run: {error}"
     return run, note
