@@ -22,12 +22,13 @@ from typing import Any
 
 import numpy as np
 
-from springlab import scenes
+from springlab import progress, scenes
 from springlab.errors import BadInputError, ParameterError, SpringlabError
 from springlab.runs.run import Result, run_scenario
 from springlab.scenes.base import Scenario
 from springlab.studies.executor import Executor
 from springlab.studies.fit import data as fit_data
+from springlab.studies.fit import reductions
 from springlab.studies.fit import release as fit_release
 from springlab.studies.fit import results as fit_results
 from springlab.studies.fit import starts as fit_starts
@@ -99,7 +100,8 @@ def fit(
         processes, a running dask scheduler's address, or an Executor; none: in this process. Same numbers
         either way. A single start always runs in this process.
     show_progress
-        A progress bar while a large file is read (None: on a terminal only; False: never).
+        Progress bars while a large file is read and a long record (more than reductions.BLOCK samples) is
+        fitted (None: on a terminal only; False: never).
     **parameters
         Fixed values: scene parameters (e.g. mass=2.0 [kg]) and
         x0 [m], v0 [m/s], offset [signal unit], delay [s].
@@ -172,24 +174,33 @@ def fit(
             fixed["x0"] = float(record.values[0]) if record.signal == "pos" else how.equilibrium(base)
         if "v0" not in free and "v0" not in fixed:
             fixed["v0"] = 0.0
-    if starts > 1 and executor is None:
-        with Executor(workers=workers, scheduler=scheduler, progress=False) as own:
-            problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force, starts, own)
-    else:
-        problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force, starts, executor)
-    if isinstance(how, PolynomialModel) and not free_given and degree is None:
-        # the degree is chosen: drop the highest coefficient while its 95 % interval contains 0
-        result = _finish(problem, solved, None, run_scene=False)
-        while len(free) > 1:
-            low, high = result.estimates[free[-1]]["ci95"]
-            if not low <= 0.0 <= high:
-                break
-            note = f"degree chosen: {free[-1]}'s 95 % interval [{low:.3g}, {high:.3g}] contains 0"
-            record = dataclasses.replace(record, notes=(*record.notes, note))
-            free = free[:-1]
-            problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force)
+    # a long record's fit takes seconds: its stages on a terminal (a short one's would only flicker)
+    long = record.time.size > reductions.BLOCK
+    with progress.bar(
+        2, description="fitting: optimizing", unit="stage", enabled=show_progress if long else False
+    ) as bar:
+        if starts > 1 and executor is None:
+            with Executor(workers=workers, scheduler=scheduler, progress=False) as own:
+                problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force, starts, own)
+        else:
+            problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force, starts, executor)
+        if isinstance(how, PolynomialModel) and not free_given and degree is None:
+            # the degree is chosen: drop the highest coefficient while its 95 % interval contains 0
             result = _finish(problem, solved, None, run_scene=False)
-    return _finish(problem, solved, runs, run_scene, release)
+            while len(free) > 1:
+                low, high = result.estimates[free[-1]]["ci95"]
+                if not low <= 0.0 <= high:
+                    break
+                note = f"degree chosen: {free[-1]}'s 95 % interval [{low:.3g}, {high:.3g}] contains 0"
+                record = dataclasses.replace(record, notes=(*record.notes, note))
+                free = free[:-1]
+                problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force)
+                result = _finish(problem, solved, None, run_scene=False)
+        bar.update(1)
+        bar.set_description("fitting: intervals, cross-check, scene run")
+        result = _finish(problem, solved, runs, run_scene, release)
+        bar.update(1)
+    return result
 
 
 def _identify(
