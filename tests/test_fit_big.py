@@ -211,6 +211,8 @@ def test_a_record_above_the_block_size_gives_the_per_sample_fit(monkeypatch):
     per_sample = fit("slider", data, mass=2.0, start=0.0, run_scene=False, show_progress=False)
     assert made == [], "the reference fit is the per-sample one"
     assert reduced.dof == per_sample.dof == data["time"].size - 5
+    said = [note for note in reduced.record.notes if "rows that reduce the" in note]
+    assert len(said) == 1 and not any("rows that reduce the" in note for note in per_sample.record.notes)
     assert reduced.converged and per_sample.converged
     condition = np.linalg.cond(per_sample.correlation)
     finite_differences = math.sqrt(EPS) * condition

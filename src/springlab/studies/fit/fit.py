@@ -298,6 +298,11 @@ def _finish(
             f"data denser than the model needs: {problem.dt / spacing:.3g} samples per simulation step of"
             f" {problem.dt:.3g} s (the model runs at the step its accuracy needs and is read at every sample)"
         )
+        if problem.compression is not None:
+            note += (
+                f"; fitted on {problem.compression.rows} rows that reduce the {problem.samples} samples"
+                " exactly (the same estimates and intervals; docs/fit.md, big files)"
+            )
         record = dataclasses.replace(record, notes=(*record.notes, note))
     x, jacobian = solved["x"], solved["jacobian"]
     check_identifiable(problem, jacobian)
