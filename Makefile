@@ -22,11 +22,11 @@ demo: $(STAMP)
 ARGS ?=
 JOBS ?= auto
 test: $(STAMP)
-	$(BIN)/python -m pytest -n $(JOBS) $(ARGS)
+	$(BIN)/python -m pytest -n $(JOBS) --dist loadgroup $(ARGS)
 
 # the quick loop: everything but the tests marked slow (> ~5 s on one core)
 test-fast: $(STAMP)
-	$(BIN)/python -m pytest -n $(JOBS) -m "not slow" $(ARGS)
+	$(BIN)/python -m pytest -n $(JOBS) --dist loadgroup -m "not slow" $(ARGS)
 
 # ruff (lint and format) over the whole tree, mypy over src/ (config in pyproject.toml)
 lint: $(STAMP)

@@ -2,6 +2,7 @@
 tests read are computed once per test session (session-scoped fixtures; their results are immutable, so
 sharing them cannot couple the tests)."""
 
+import inspect
 import os
 
 import mujoco
@@ -44,6 +45,22 @@ def shipped_audit():
 
 
 @pytest.fixture(scope="session")
+def scenario_run():
+    """`run_scenario(scene, scenario)` at the scenario's own settings, computed once per scenario: call the
+    fixture with the scene's and the scenario's names (the non-linear scene's chaos figures alone cost 5 s)."""
+    from springlab.runs.run import run_scenario
+
+    done = {}
+
+    def get(scene, scenario):
+        if (scene, scenario) not in done:
+            done[scene, scenario] = run_scenario(scene, scenario)
+        return done[scene, scenario]
+
+    return get
+
+
+@pytest.fixture(scope="session")
 def small_design_study():
     """The printer head's design study on 3^4 = 81 configurations (the grid's corners and centre), with a
     9 x 9 plane and Sobol indices from N = 8 base samples: computed once per test run (per xdist worker)
@@ -51,3 +68,29 @@ def small_design_study():
     from springlab.studies.design import run_study
 
     return run_study("printer_head", levels=3, plane_levels=9, sobol=8)
+
+
+_TESTS = os.path.dirname(os.path.abspath(__file__))
+
+
+def _shared_fixture(item: pytest.Item) -> str | None:
+    """The first module- or session-scoped fixture of this test suite that `item` reads, as a group name."""
+    infos = getattr(item, "_fixtureinfo", None)
+    for name in getattr(infos, "names_closure", ()):
+        definitions = infos.name2fixturedefs.get(name)
+        if not definitions:
+            continue
+        definition = definitions[-1]
+        source = os.path.abspath(inspect.getfile(definition.func))
+        if definition.scope in ("module", "session") and source.startswith(_TESTS):
+            return name if definition.scope == "session" else f"{item.module.__name__}.{name}"
+    return None
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Under `pytest -n N --dist loadgroup` (make test), the tests that read one shared study run on one
+    worker, so the study is computed once, not once per worker (a session fixture is per process)."""
+    for item in items:
+        group = _shared_fixture(item)
+        if group is not None:
+            item.add_marker(pytest.mark.xdist_group(group))

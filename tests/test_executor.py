@@ -170,3 +170,14 @@ def test_a_scheduler_that_never_answers_gives_up_after_the_stated_timeout():
 def test_workers_and_scheduler_together_are_refused(capsys):
     code = main(["sweep", "slider", "--vary", "mass=1:2:2", "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"])
     assert code == 2 and "not allowed with argument" in capsys.readouterr().err
+
+
+def test_the_refine_study_on_two_workers_equals_the_local_one(cluster):
+    from springlab.studies import refine
+
+    def numbers(study):
+        return [(r.size, r.integrator, r.dt, r.steps, r.value, r.exact, r.continuum) for r in study.runs]
+
+    options = dict(sizes=(2, 4), integrators=("rk4", "euler"))
+    local = refine.refine("drill_string", **options)
+    assert numbers(refine.refine("drill_string", executor=cluster, **options)) == numbers(local)

@@ -240,12 +240,12 @@ def test_report_reads_like_the_chapter(demo_out):
 
 
 @pytest.mark.slow
-def test_every_scenario_states_its_question_and_an_answer_from_its_own_run():
+def test_every_scenario_states_its_question_and_an_answer_from_its_own_run(scenario_run):
     from springlab import scenes
 
     for scene in scenes.SCENES.values():
         for scenario in scene.scenarios:
-            result = run_scenario(scene.name, scenario)
+            result = scenario_run(scene.name, scenario)
             qa = scene.question_and_answer(scenario, result.quantities, result.parameters)
             assert qa is not None and qa[0].strip() and qa[1].strip(), f"{scene.name}/{scenario}"
             assert "{" not in qa[1], f"{scene.name}/{scenario}: unfilled template {qa[1]!r}"

@@ -240,7 +240,8 @@ def cmd_plot(args: argparse.Namespace) -> int:
             figure = plots.phase_family(families.run_phase_family(result))
             verdict = EXIT_OK  # a family is a picture of many runs; the verdict belongs to single runs
         else:
-            figure = plots.time_series(result) if args.kind == "time" else plots.phase_plane(result)
+            draw = {"time": plots.time_series, "phase": plots.phase_plane, "scene": plots.scene_figure}[args.kind]
+            figure = draw(result)
             verdict = _verdict(result)
     print(f"wrote {plots.save(figure, args.output)}")
     return verdict
@@ -277,6 +278,41 @@ def cmd_tradeoff(args: argparse.Namespace) -> int:
         _print_json(result.to_dict())
     else:
         cli_text.print_tradeoff(result, args.output)
+    pick = result.recommendation
+    return EXIT_FAILED if pick is not None and not pick.found else EXIT_OK
+
+
+def cmd_refine(args: argparse.Namespace) -> int:
+    """How much model a question needs: model size x integrator x timestep (springlab.studies.refine)."""
+    from springlab.plots import refine as refine_chart  # matplotlib only when this command draws
+    from springlab.studies import refine
+
+    if args.output:
+        files.check_directory(args.output)  # before the study's minute of computing, not after
+    sizes = None
+    if args.sizes:
+        try:
+            sizes = [float(s) for s in args.sizes.split(",")]
+        except ValueError:
+            raise BadInputError(f"--sizes takes whole numbers 'a,b,c', got {args.sizes!r}") from None
+    integrators = args.integrators.split(",") if args.integrators else tuple(INTEGRATORS)
+    with _executor(args) as executor:
+        result = refine.refine(
+            args.scene,
+            args.question,
+            tol=args.tol,
+            sizes=sizes,  # type: ignore[arg-type]  # checked as the size parameter by the study
+            integrators=integrators,
+            duration=args.duration,
+            executor=executor,
+            **_parse_sets(args.set),
+        )
+    if args.output:
+        refine_chart.write_refine(result, args.output)
+    if args.json:
+        _print_json(result.to_dict())
+    else:
+        cli_text.print_refine(result, args.output)
     pick = result.recommendation
     return EXIT_FAILED if pick is not None and not pick.found else EXIT_OK
 
@@ -386,6 +422,41 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         return EXIT_OK
     cli_text.print_sweep(result, args.quantity, args.output)
     return EXIT_OK
+
+
+def cmd_friction_settings(args: argparse.Namespace) -> int:
+    from springlab.plots import friction_settings as friction_chart  # matplotlib only for this command
+    from springlab.studies import friction_settings
+
+    if args.output:
+        files.check_directory(args.output)  # before minutes of computing, not after
+    integrators = [name.strip() for name in args.integrators.split(",")] if args.integrators else None
+    dts = _numbers("--dt", args.dt) if args.dt else None
+    with _executor(args) as executor:
+        study = friction_settings.friction_settings(
+            args.scene,
+            args.scenarios or None,
+            tol=args.tol,
+            integrators=integrators,
+            dts=dts,
+            executor=executor,
+            **_parse_sets(args.set),
+        )
+    if args.output:
+        friction_chart.write(study, args.output)
+    if args.json:
+        _print_json(study.to_dict())
+    else:
+        cli_text.print_friction_settings(study, args.output)
+    return EXIT_FAILED if any(c.pick is not None and not c.pick.found for c in study.cases) else EXIT_OK
+
+
+def _numbers(option: str, text: str) -> list[float]:
+    """'a,b,c' -> [a, b, c] (floats), or BadInputError naming the option."""
+    try:
+        return [float(part) for part in text.split(",") if part.strip()]
+    except ValueError:
+        raise BadInputError(f"{option} takes numbers separated by commas, e.g. 0.002,0.001; got {text!r}") from None
 
 
 def cmd_fit(args: argparse.Namespace) -> int:
@@ -515,9 +586,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--kind",
         default="time",
-        choices=("time", "phase", "family", "zeta"),
+        choices=("time", "phase", "family", "zeta", "scene"),
         help="time: x(t), v(t) with the exact solution and the error on a log axis (default); "
         "phase: phase plane with vector field, equilibria, separatrices; "
+        "scene: the panels the scene declares (e.g. the drill string's speeds, twist and mode shapes); "
         "family: phase trajectories from several initial displacements; "
         "zeta: responses for damping ratios 0 to 2",
     )
@@ -533,6 +605,25 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--output", metavar="DIR", help="write DIR/tradeoff.json and DIR/tradeoff.png")
     p.add_argument("--json", action="store_true", help="print tradeoff.json")
     COMMANDS["tradeoff"] = cmd_tradeoff
+
+    p = sub.add_parser(
+        "refine", help="how much model a question needs: model size x integrator x timestep, cheapest for --tol"
+    )
+    p.add_argument("scene", help="a scene whose model size is a parameter (see docs/cli.md)")
+    p.add_argument("--question", metavar="QUANTITY", help="the quantity to answer (default: the scene's first)")
+    p.add_argument(
+        "--tol", type=float, metavar="TOL", help="recommend the cheapest verified setting meeting this relative error"
+    )
+    p.add_argument("--sizes", metavar="A,B,C", help="model sizes to sweep (default: the scene's)")
+    p.add_argument("--integrators", metavar="A,B", help=f"integrators to sweep (default: {','.join(INTEGRATORS)})")
+    p.add_argument("--duration", type=float, metavar="SECONDS", help="simulated time [s] (default: the scenario's)")
+    p.add_argument(
+        "--set", action="append", default=[], metavar="NAME=VALUE", help="override a parameter, SI units (repeatable)"
+    )
+    _executor_arguments(p)
+    p.add_argument("--output", metavar="DIR", help="write DIR/refine.json and DIR/refine.png")
+    p.add_argument("--json", action="store_true", help="print refine.json")
+    COMMANDS["refine"] = cmd_refine
 
     p = sub.add_parser("stability", help="stability boundaries vs theory, extremes table, undamped energy")
     p.add_argument(
@@ -638,6 +729,26 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--output", metavar="DIR", help="write DIR/sweep.csv and DIR/sweep.png")
     p.add_argument("--json", action="store_true", help="print the sweep (setting, counts, every row) as JSON")
     COMMANDS["sweep"] = cmd_sweep
+
+    p = sub.add_parser(
+        "friction-settings",
+        help="MuJoCo's friction settings vs exact dry friction: model error, error vs cost, the cheapest for --tol",
+    )
+    frictional = ", ".join(name for name, scene in scenes.SCENES.items() if scene.dry_friction is not None)
+    p.add_argument("scene", help=f"a scene with exact dry-friction cases: {frictional}")
+    p.add_argument("scenarios", nargs="*", help="its cases to sweep (default: all)")
+    p.add_argument("--tol", type=float, metavar="TOL", help="pick the cheapest setting meeting this relative error")
+    p.add_argument("--integrators", metavar="A,B", help=f"integrators to sweep (default: {','.join(INTEGRATORS)})")
+    p.add_argument("--dt", metavar="LIST", help="timesteps to sweep, e.g. 0.002,0.001 [s] (default: the scene's)")
+    p.add_argument(
+        "--set", action="append", default=[], metavar="NAME=VALUE", help="a parameter that is not swept (repeatable)"
+    )
+    _executor_arguments(p)
+    p.add_argument(
+        "--output", metavar="DIR", help="write friction_settings.json, friction_settings.csv, friction_settings.png"
+    )
+    p.add_argument("--json", action="store_true", help="print friction_settings.json")
+    COMMANDS["friction-settings"] = cmd_friction_settings
 
     p = sub.add_parser("fit", help="identify a scene's parameters from a recorded signal (CSV)")
     # the scenes that declare a fit (Scene.fit), e.g. "slider, car, printer_head or kinematics"

@@ -24,6 +24,8 @@ if TYPE_CHECKING:  # annotations only: these load mujoco.batch, scipy or sysid, 
     from springlab.studies.design.sobol import SobolStudy
     from springlab.studies.design.study import Study
     from springlab.studies.fit.results import FitResult
+    from springlab.studies.friction_settings import FrictionSettings
+    from springlab.studies.refine import Refinement
     from springlab.studies.stability import StabilityReport
     from springlab.studies.sweeps import Sweep
 
@@ -283,6 +285,26 @@ def print_sweep(result: Sweep, quantity: str | None, output: str | None) -> None
         print(f"  wrote {pathlib.Path(output) / 'sweep.csv'} and sweep.png")
 
 
+def print_friction_settings(study: FrictionSettings, output: str | None) -> None:
+    """`springlab friction-settings`: per case MuJoCo's default, the model errors, the Pareto front and the pick."""
+    integrator, dt = study.mujoco_default
+    print(
+        f"{study.scene}: {study.runs} runs in {study.wall_time_s:.1f} s ({', '.join(study.integrators)};"
+        f" dt = {', '.join(f'{d:g}' for d in study.dts)} s); baseline MuJoCo's defaults ({integrator}, dt = {dt:g} s)"
+    )
+    for case in study.cases:
+        print(f"\n{case.answer()}")
+        print(f"  {'Pareto front':<58}{'integrator':<13}{'dt [s]':>9}{'error':>10}{'cpu [ms]':>10}")
+        for r in case.pareto:
+            print(
+                f"  {case.describe(r.settings):<58}{r.integrator:<13}{r.dt:>9.3g}{r.error:>10.2e}{r.cpu_time_s * 1e3:>10.2f}"
+            )
+    if output:
+        print(
+            f"\nwrote {pathlib.Path(output) / 'friction_settings.json'}, friction_settings.csv and friction_settings.png"
+        )
+
+
 def print_fit(result: FitResult, output: str | None) -> None:
     """`springlab fit`: the record used, each estimate with its 95% interval (in its unit), the verdict."""
     record = result.record
@@ -330,3 +352,58 @@ def print_demo(rows: Sequence[ValidationRow], artifacts: int, out: pathlib.Path 
     print(validation_table(rows))
     failed = sum(not r.passed for r in rows)
     print(f"{len(rows) - failed} passed, {failed} failed; wrote {artifacts} files under {out}/ in {seconds:.1f} s")
+
+
+def print_refine(result: Refinement, output: str | None) -> None:
+    """`springlab refine`: per size the discretization error and the costs, the Pareto front, the recommendation."""
+    size = result.size_parameter
+    print(
+        f"{result.scene} / {result.scenario}: {result.description} ({result.question}), {len(result.runs)} runs"
+        f" over {result.duration:g} s in {result.sweep_wall_time_s:.1f} s"
+    )
+    names = list(result.cost_growth)
+    print(
+        f"  {size:>12}  {'w_max [1/s]':>11}  {'discretiz.':>10}  {'per step [us]':>13}  "
+        + "  ".join(f"{name + ' [ms/s]':>17}" for name in names)
+    )
+    for cost in result.sizes:
+        step = min(cost.cost_per_step_s.values(), default=float("nan")) * 1e6
+        per_second = [cost.cost_per_simulated_second_s.get(name) for name in names]
+        error = f"{cost.discretization_error:.3e}" if cost.discretization_error is not None else "-"
+        print(
+            f"  {cost.size:>12}  {cost.fastest_rate_rad_s:>11.4g}  {error:>10}  {step:>13.2f}  "
+            + "  ".join(f"{v * 1e3:>17.4g}" if v is not None else f"{'no limit':>17}" for v in per_second)
+        )
+    order = result.discretization_order
+    print(
+        f"  discretization error ~ {size}^-{order:.2f} (expected {result.expected_order:g})"
+        if order is not None
+        else "  discretization order: too few sizes"
+    )
+    growth = ", ".join(f"{name} {g:.2f}" if g is not None else f"{name} -" for name, g in result.cost_growth.items())
+    step_growth = result.step_cost_growth
+    print(
+        f"  cost per step ~ {size}^{step_growth:.2f}; per simulated second at the stability limit: {growth}"
+        if step_growth is not None
+        else f"  per simulated second at the stability limit: {growth}"
+    )
+    print("  Pareto front (error bound = discretization + integration, vs wall time):")
+    for run in result.pareto:
+        print(
+            f"    {size} = {run.size:<5} {run.integrator:<13} dt = {run.dt:<9.3g} bound {run.error_bound:.3e}"
+            f" (discretization {run.discretization_error:.1e}, integration {run.integration_error:.1e};"
+            f" error {run.error:.1e})"
+            f" {run.wall_time_s * 1e3:.3f} ms"
+        )
+    pick = result.recommendation
+    if pick is not None:
+        if not pick.verified:
+            print(f"  tol {pick.tol:g}: no setting of the study meets it")
+        else:
+            print(
+                f"  tol {pick.tol:g}: use {size} = {pick.size}, {pick.integrator} at dt = {pick.dt:g} s (verified by a"
+                f" run: discretization {pick.discretization_error:.2e} + integration {pick.integration_error:.2e} <= tol;"
+                f" error {pick.error:.2e}; {(pick.wall_time_s or 0.0) * 1e3:.3f} ms)"
+            )
+    if output:
+        print(f"  wrote {pathlib.Path(output) / 'refine.json'} and refine.png")

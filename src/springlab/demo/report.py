@@ -242,6 +242,12 @@ def _question(scene, scenario_name: str, result) -> str:
     return text + "</p>"
 
 
+def _answer(artifact) -> str:
+    """A study's question (the artifact's title) and its answer, one paragraph per line of the answer."""
+    lines = "".join(f"<br>{_e(line)}" for line in artifact.answer.splitlines() if line.strip())
+    return f"<p class='question'><b>Question.</b> {_e(artifact.title)}<br><b>Answer.</b>{lines}</p>"
+
+
 def _parameters(scene, result) -> str:
     """The run's parameters with their units, on one line."""
     if result is None or not result.parameters:
@@ -319,7 +325,8 @@ def build_html(state: DemoState, *, wall_time_s: float | None = None) -> str:
         general = [a for a in own if not a.scenario]
         if general:
             media, rest = _media(sorted(general, key=_kind_rank), ids)
-            body.append(f"<h3>{_e(name)}: all scenarios</h3>{media}{_links(rest)}")
+            answers = "".join(_answer(a) for a in general if a.answer)
+            body.append(f"<h3>{_e(name)}: all scenarios</h3>{answers}{media}{_links(rest)}")
 
     shared = [a for a in artifacts if not a.scene]
     if shared:

@@ -23,6 +23,9 @@ class Artifact:
         one line saying what it shows.
     scene, scenario
         what it belongs to ('' for cross-scene artifacts).
+    answer
+        for a study that answers a question: the answer in words, shown with the title as its
+        question ('' for none).
     """
 
     path: str
@@ -30,6 +33,7 @@ class Artifact:
     title: str
     scene: str = ""
     scenario: str = ""
+    answer: str = ""
 
 
 @dataclasses.dataclass

@@ -240,6 +240,46 @@ def design_step(state: DemoState) -> list[Artifact]:
     ]
 
 
+#: the demo's refine study: the first sizes a scene declares (the rest take minutes) and this tolerance
+DEMO_REFINE_SIZES = 5
+DEMO_REFINE_TOL = 1e-3
+
+
+def refine_step(state: DemoState) -> list[Artifact]:
+    """How much model each question needs, for every scene whose model size is a parameter (`Scene.refinable`):
+    the first declared question at DEMO_REFINE_TOL over its first DEMO_REFINE_SIZES sizes."""
+    from springlab.plots import refine as refine_chart  # here: matplotlib only when this step runs
+    from springlab.studies import refine
+
+    written = []
+    for name in refine.refinable_scenes():
+        spec = scenes.get(name).refinable
+        assert spec is not None  # refinable_scenes lists only scenes that declare it
+        study = refine.refine(name, tol=DEMO_REFINE_TOL, sizes=spec.sizes[:DEMO_REFINE_SIZES])
+        folder = pathlib.Path("refine") / name
+        refine_chart.write_refine(study, state.out / folder)
+        state.timings.append((f"refine {name} ({study.question})", study.sweep_wall_time_s))
+        pick = study.recommendation
+        answer = (
+            f"cheapest for {DEMO_REFINE_TOL:g}: {study.size_parameter} = {pick.size}, {pick.integrator} at dt ="
+            f" {pick.dt:.3g} s (verified)"
+            if pick is not None and pick.verified
+            else f"no setting meets {DEMO_REFINE_TOL:g}"
+        )
+        written += [
+            Artifact(
+                str(folder / "refine.png"),
+                "plot",
+                f"{name}: how much model does {study.description} need? error vs cost over"
+                f" {study.size_parameter} x integrator x dt; {answer}",
+                name,
+                study.scenario,
+            ),
+            Artifact(str(folder / "refine.json"), "data", f"{name}: the refine study of {study.question}", name),
+        ]
+    return written
+
+
 def audit_step(state: DemoState) -> list[Artifact]:
     """`springlab audit` on the car's model, as any MJCF would be: modes, limits, error vs cost."""
     from springlab.plots import audit as charts_audit  # here: matplotlib only when this step runs
@@ -259,6 +299,51 @@ def audit_step(state: DemoState) -> list[Artifact]:
     ]
 
 
+#: the friction-settings study the demo runs: each swept setting at MuJoCo's default and at its last
+#: declared value, MuJoCo's default integrator, implicitfast and rk4, the declared timesteps but the smallest
+DEMO_FRICTION_INTEGRATORS = ("implicitfast", "rk4")
+#: the question the demo's friction-settings section answers
+FRICTION_QUESTION = "How much does MuJoCo's friction drift, and what does it cost to make it stop?"
+
+
+def friction_step(state: DemoState) -> list[Artifact]:
+    """Every scene that declares dry friction (Scene.dry_friction): a smaller friction-settings study for 1e-2."""
+    from springlab.plots import friction_settings as chart  # here: matplotlib only when this step runs
+    from springlab.studies import friction_settings
+
+    written = []
+    default_integrator, _ = friction_settings.mujoco_defaults()
+    for scene in scenes.SCENES.values():
+        spec = scene.dry_friction
+        if spec is None:
+            continue
+        values = {s.name: tuple(dict.fromkeys((s.mujoco_default, s.values[-1]))) for s in spec.settings}
+        integrators = tuple(dict.fromkeys((default_integrator, *DEMO_FRICTION_INTEGRATORS)))
+        study = friction_settings.friction_settings(
+            scene.name,
+            tol=1e-2,
+            integrators=integrators,
+            dts=spec.dts[:-1] if len(spec.dts) > 2 else spec.dts,
+            values=values,
+        )
+        folder = pathlib.Path(scene.name) / "friction_settings"
+        chart.write(study, state.out / folder)
+        state.timings.append((f"friction settings of {scene.name} ({study.runs} runs)", study.wall_time_s))
+        written += [
+            Artifact(
+                str(folder / "friction_settings.png"), "plot", FRICTION_QUESTION, scene.name, answer=study.answer()
+            ),
+            Artifact(
+                str(folder / "friction_settings.json"),
+                "data",
+                f"{scene.name}: every run of MuJoCo's friction settings, the model errors and the picks for 1e-2",
+                scene.name,
+            ),
+            Artifact(str(folder / "friction_settings.csv"), "data", f"{scene.name}: one row per run", scene.name),
+        ]
+    return written
+
+
 #: the demo's steps, in order (defined once, here: nothing is added at import time)
 STEPS: tuple[Callable[[DemoState], list[Artifact]], ...] = (
     core_step,
@@ -266,6 +351,8 @@ STEPS: tuple[Callable[[DemoState], list[Artifact]], ...] = (
     tradeoff_step,
     design_step,
     audit_step,
+    friction_step,
+    refine_step,
 )
 #: steps that run after every step in STEPS (the report lists everything)
 FINAL_STEPS: tuple[Callable[[DemoState], list[Artifact]], ...] = (report_step,)

@@ -81,7 +81,11 @@ def draw_phase_background(
     *,
     arrows: int = 21,
 ) -> None:
-    """Vector field (normalized arrows, grey), separatrices and equilibria on `ax` within the limits."""
+    """Vector field (normalized arrows, grey), separatrices and equilibria on `ax` within the limits.
+
+    An equilibrium with a "to" entry is one end of a continuum of equilibria (dry friction's stick
+    zone), drawn as a thick segment of the v = 0 axis to the position "to" names.
+    """
     if field is not None:
         gx, gv = np.meshgrid(np.linspace(xlim[0], xlim[1], arrows), np.linspace(vlim[0], vlim[1], int(arrows * 0.8)))
         with np.errstate(all="ignore"):
@@ -108,8 +112,30 @@ def draw_phase_background(
         )
     for i, (x, v) in enumerate(separatrices):
         ax.plot(x, v, zorder=2, label="separatrix" if i == 0 else None, **SEPARATRIX)
-    stable = [e["x"] for e in equilibria if e.get("stable")]
-    unstable = [e["x"] for e in equilibria if not e.get("stable")]
+    # dry friction: a continuum of equilibria, its ends given with "to" naming the other end
+    zones = {tuple(sorted((e["x"], e["to"]))) for e in equilibria if "to" in e}
+    for i, (low, high) in enumerate(sorted(zones)):
+        ax.plot(
+            [low, high],
+            [0.0, 0.0],
+            color="k",
+            lw=3.5,
+            solid_capstyle="butt",
+            zorder=5,
+            label="stick zone (every point at rest stays)" if i == 0 else None,
+        )
+        ax.plot(
+            [low, high],
+            [0.0, 0.0],
+            "|",
+            color="k",
+            ms=14,
+            mew=2,
+            zorder=5,
+            label="its ends: centres of the arcs" if i == 0 else None,
+        )
+    stable = [e["x"] for e in equilibria if e.get("stable") and "to" not in e]
+    unstable = [e["x"] for e in equilibria if not e.get("stable") and "to" not in e]
     if stable:
         ax.plot(stable, np.zeros(len(stable)), "o", color="k", ms=7, zorder=5, label="stable equilibrium")
     if unstable:

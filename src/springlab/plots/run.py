@@ -18,6 +18,8 @@ Figures (each function returns a Figure; `save` writes it atomically):
   one-well and two-well) orbits side by side where a separatrix exists.
 * `zeta_family(family)`: the chapter's damping-ratio slider as one figure:
   x(t) and the phase plane for zeta = 0 ... 2, exact curves dashed.
+* `scene_figure(result)`: the panels a scene declares for its runs (`Scene.figure`, e.g. speeds with
+  exact events marked, a profile along a structure, mode shapes beside the continuum's), side by side.
 
 The families are runs, made by springlab.studies.families; nothing here
 simulates. Units follow the joint type: slide joints in [m] and [m/s], hinges
@@ -38,7 +40,7 @@ from matplotlib.figure import Figure
 
 from springlab import files
 from springlab.errors import BadInputError
-from springlab.runs.run import Result
+from springlab.runs.run import Result, scene_and_scenario
 from springlab.studies.families import PhaseFamily, ZetaFamily
 
 from .phase import (
@@ -146,6 +148,55 @@ def time_series(result: Result) -> Figure:
         legend_outside(axes[row, -1])
     if has_error and axes[2, -1].get_legend_handles_labels()[0]:
         legend_outside(axes[2, -1])
+    verdict = f", {result.verdict}" if result.verdict is not None else ""
+    figure.suptitle(f"{title(result)}: {result.integrator}, dt = {result.dt:g} s{verdict}")
+    return figure
+
+
+# -- a scene's own figure --------------------------------------------------------------
+
+#: line styles of a declared panel's curves, by Curve.kind
+CURVE_STYLES: dict[str, dict[str, Any]] = {
+    "simulated": dict(lw=1.5),
+    "exact": dict(lw=1.1, ls=(0, (4, 3))),
+    "continuum": dict(lw=1.3, ls=(0, (1, 1.5))),
+}
+
+
+@styled
+def scene_figure(result: Result) -> Figure:
+    """The panels the run's scene declares (`Scene.figure`), one beside the other.
+
+    Raises
+    ------
+    BadInputError
+        the scene declares no figure of its own.
+    """
+    scene, scenario = scene_and_scenario(result)
+    if scene.figure is None:
+        raise BadInputError(f"{result.scene} declares no figure of its own; use --kind time or --kind phase")
+    panels = scene.figure(result.model, result.parameters, scenario.name, result.trajectory)
+    figure = new_figure(5.6 * len(panels) + 1.0, 4.8)
+    axes = figure.subplots(1, len(panels), squeeze=False)[0]
+    for ax, panel in zip(axes, panels):
+        for curve in panel.curves:
+            ax.plot(curve.x, curve.y, label=curve.label, **CURVE_STYLES.get(curve.kind, {}))
+        for x, label in panel.marks:
+            ax.axvline(x, color="0.25", lw=0.9, ls="-.")
+            ax.annotate(
+                label,
+                (x, 1.0),
+                xycoords=("data", "axes fraction"),
+                rotation=90,
+                va="top",
+                ha="right",
+                fontsize=7,
+                color="0.25",
+            )
+        ax.set_title(panel.title)
+        ax.set_xlabel(panel.xlabel)
+        ax.set_ylabel(panel.ylabel)
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, frameon=False)
     verdict = f", {result.verdict}" if result.verdict is not None else ""
     figure.suptitle(f"{title(result)}: {result.integrator}, dt = {result.dt:g} s{verdict}")
     return figure

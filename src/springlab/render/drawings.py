@@ -13,6 +13,8 @@ video, and MuJoCo computes nothing for them at each physics step:
   a dashpot, a cylinder of radius RADIUS [m] fixed at SITE1 and a rod from
   SITE2 sliding into it; drawn only when the model has damping (a damper with
   zero damping would be a false picture);
+* ``<text name="note:NAME" data="ANY TEXT"/>``: a line written on every frame under the label, for
+  what the picture changes (e.g. "length drawn 1:250"; :func:`drawn_notes`);
 * ``<text name="belt:NAME" data="DRIVE CLAMP WIDTH R G B A"/>``: a toothed
   belt loop around two pulleys at the ends of the travel, its upper span
   clamped at CLAMP (the carriage), its lower span driven at DRIVE (the motor's
@@ -42,6 +44,8 @@ __all__ = [
     "SPRING_PREFIX",
     "DAMPER_PREFIX",
     "BELT_PREFIX",
+    "NOTE_PREFIX",
+    "drawn_notes",
     "COIL_RADIUS",
     "drawn_springs",
     "covering_guides",
@@ -53,6 +57,7 @@ __all__ = [
 SPRING_PREFIX = "spring:"
 DAMPER_PREFIX = "damper:"
 BELT_PREFIX = "belt:"
+NOTE_PREFIX = "note:"
 #: coil radius of a drawn spring, in units of its declared width [-]
 COIL_RADIUS = 3.5
 #: capsule segments per helix turn
@@ -64,6 +69,11 @@ MARK_REACH = 40.0
 BUMP_RGBA = (0.55, 0.38, 0.22, 1.0)
 
 _DECOR = mujoco.mjtCatBit.mjCAT_DECOR
+
+
+def drawn_notes(model: mujoco.MjModel) -> list[str]:
+    """The lines the model asks to be written on every frame (its ``note:`` custom texts), in file order."""
+    return [" ".join(fields) for _, fields in _texts(model, NOTE_PREFIX)]
 
 
 def _texts(model: mujoco.MjModel, prefix: str) -> list[tuple[str, list[str]]]:

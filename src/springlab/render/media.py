@@ -136,7 +136,7 @@ def plot_files(
 ) -> list[tuple[str, str, str]]:
     """Write a run's plots into `folder`: [(path relative to `out`, kind of plot, title)].
 
-    Time series and phase plane always; the family of initial displacements when
+    Time series and phase plane always, the scene's own figure where it declares one; the family of initial displacements when
     one is given (studies.families.run_phase_family of the same run).
     """
     from springlab.plots import run as plots  # see render_run: matplotlib only when plots are drawn
@@ -145,6 +145,7 @@ def plot_files(
     figures = [
         ("time_series.png", "time series with the exact solution and the error", lambda: plots.time_series(result)),
         ("phase_plane.png", "phase plane", lambda: plots.phase_plane(result)),
+        ("scene.png", "the scene's own figure (its declared panels)", lambda: plots.scene_figure(result)),
     ]
     if family is not None:
         figures.append(

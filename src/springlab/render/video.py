@@ -45,7 +45,7 @@ from springlab.errors import BadInputError  # a ValueError; the CLI maps it to e
 from springlab.progress import bar as progress_bar
 from springlab.render import scale as render_scale
 
-from .drawings import SPRING_PREFIX, Drawings, RoadBump, covering_guides, drawn_springs
+from .drawings import SPRING_PREFIX, Drawings, RoadBump, covering_guides, drawn_notes, drawn_springs
 from .framing import frame_camera, framed_model
 from .gl import OffscreenScene, ensure_gl_backend
 from .sink import X264_CRF, X264_PRESET, GifSink, Mp4Sink, WriterThread
@@ -418,7 +418,7 @@ def render_video(
             label,
             height,
             float(at[-1]),
-            notes=render_scale.labels(slow_motion, exaggerate),
+            notes=[*render_scale.labels(slow_motion, exaggerate), *drawn_notes(model)],
             time_step=1.0 / (fps * slow_motion),
         )
 

@@ -141,18 +141,23 @@ def check_tolerance(tol: Any) -> float:
     return float(tol)
 
 
-def column_errors(simulated: dict[str, np.ndarray], reference: dict[str, np.ndarray]) -> dict[str, ColumnError]:
+def column_errors(
+    simulated: dict[str, np.ndarray], reference: dict[str, np.ndarray], scales: dict[str, float] | None = None
+) -> dict[str, ColumnError]:
     """Per column: max_abs = max |sim - ref| and max_rel = max_abs / max |ref|.
 
     Parameters
     ----------
     simulated, reference
         column name -> series (same length).
+    scales
+        column -> the scale [its unit] of max_rel where the reference is 0 throughout (a block
+        held at rest; `Reference.scales`); without one such a column's max_rel is its max_abs.
     """
     errors = {}
     for name, ref in reference.items():
         max_abs = float(np.max(np.abs(simulated[name] - ref)))
-        scale = float(np.max(np.abs(ref)))
+        scale = float(np.max(np.abs(ref))) or float((scales or {}).get(name, 0.0))
         errors[name] = ColumnError(max_abs, max_abs / scale if scale > 0 else max_abs)
     return errors
 

@@ -489,11 +489,15 @@ def evaluate(
     model: mujoco.MjModel,
     trajectory: Trajectory,
     tol: float | None = None,
+    *,
+    checks: bool = True,
 ) -> Result:
     """Compare a finished run with its reference: errors, tolerance, checks, verdict -> Result.
 
     Shared by `run` and the batched studies (springlab.studies.tradeoff, springlab.studies.extremes), so every path judges a run
-    the same way. Raises DivergedError for a run whose error dwarfs its signal.
+    the same way. Raises DivergedError for a run whose error dwarfs its signal. `checks=False` leaves
+    the scene's checks out (a study that measures the same claims itself over many runs, e.g.
+    springlab.studies.friction_settings, verifies its pick with a full run).
     """
     columns = scene.joint_columns(model, trajectory)
     pos = {j: c[0] for j, c in columns.items()}
@@ -517,7 +521,7 @@ def evaluate(
             for j in reference.pos
             for k in ("pos", "vel")
         }
-        errors = compare.column_errors(simulated, exact)
+        errors = compare.column_errors(simulated, exact, reference.scales)
         worst = max(e.max_rel for e in errors.values())
         if not math.isfinite(worst) or worst > BLOWUP_RATIO:
             advice = _stability_advice(
@@ -550,12 +554,11 @@ def evaluate(
         passed = all(errors[c].max_rel <= per_column[c] for c in errors)
         if validity is not None and not validity.inside:
             passed = False  # the tolerance is no tolerance here: nothing is certified
-    checks = tuple(
-        _capped(check, tol) for check in (scene.checks(model, params, scenario, trajectory) if scenario.exact else [])
-    )
-    if checks:
+    claims = scene.checks(model, params, scenario, trajectory) if scenario.exact and checks else []
+    held = tuple(_capped(check, tol) for check in claims)
+    if held:
         # a scenario without compared columns is held to its checks alone
-        passed = all(c.passed for c in checks) and passed is not False
+        passed = all(c.passed for c in held) and passed is not False
     limits = tuple(scene.model_limits(model, params, scenario, trajectory))
     if limits:
         passed = False  # matching the reference proves nothing once the equations no longer hold
@@ -584,7 +587,7 @@ def evaluate(
         passed=passed,
         verdict=verdict,
         estimate_range=validity,
-        checks=checks,
+        checks=held,
         model_limits=limits,
         time=trajectory.time,
         pos=pos,
@@ -599,7 +602,10 @@ def evaluate(
 
 def _capped(check: Check, tol: float | None) -> Check:
     """A check whose relative error a PASS certifies, with its tolerance capped at compare.CERTIFIED_CAP
-    unless the caller asked for a tolerance (the same cap as the compared columns)."""
+    unless the caller asked for a tolerance (the same cap as the compared columns); a check that
+    follows the run's tolerance (`Check.follows_tol`) is held to the requested one."""
+    if tol is not None and check.follows_tol:
+        return dataclasses.replace(check, tolerance=tol, basis=f"{check.basis}; held to the requested tolerance")
     if tol is not None or not check.certifies_error or check.reference == 0 or check.tolerance <= compare.CERTIFIED_CAP:
         return check
     basis = f"{check.basis}; capped at {compare.CERTIFIED_CAP:g}, the most a PASS certifies without --tol"

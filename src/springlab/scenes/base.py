@@ -30,7 +30,7 @@ from springlab.exact.limits import stability_limit
 from springlab.sim import model_files
 from springlab.sim.simulate import Setup, Trajectory, quiet_mujoco
 
-from .capabilities import DesignSpec, FitSpec, OscillatorSpec
+from .capabilities import DesignSpec, DryFrictionSpec, FigureHook, FitSpec, OscillatorSpec, RefinableSpec
 
 #: smallest body mass [kg] and principal inertia [kg m^2] MuJoCo compiles: its mjMINVAL
 #: (1e-15); a moving body below it fails `MjSpec.compile` ("must be larger than mjMINVAL")
@@ -171,6 +171,9 @@ class Reference:
         column -> exact max absolute difference [m or m/s] between the
         responses to the input the model realizes and the true input, added to
         that column's tolerance (`tolerance_basis` says where it comes from).
+    scales
+        column -> the scale [m or m/s] its max_rel is relative to where the exact motion
+        has none (max |ref| = 0: a block held at rest); otherwise max |ref| is.
     """
 
     pos: dict[str, np.ndarray]
@@ -182,6 +185,7 @@ class Reference:
     tolerance_basis: str = ""
     switches: list[tuple[float, np.ndarray]] = dataclasses.field(default_factory=list)
     input_error: dict[str, float] = dataclasses.field(default_factory=dict)
+    scales: dict[str, float] = dataclasses.field(default_factory=dict)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -209,6 +213,9 @@ class Check:
         without a requested tolerance certifies only up to springlab.runs.compare.CERTIFIED_CAP
         (False for a diagnostic, e.g. an observed order of convergence against the
         integrator's).
+    follows_tol
+        a relative error [-] held to the run's own tolerance: the requested tolerance when
+        there is one (`tolerance` then gives way to it), else `tolerance`.
     """
 
     name: str
@@ -217,6 +224,7 @@ class Check:
     tolerance: float
     basis: str
     certifies_error: bool = True
+    follows_tol: bool = False
 
     @property
     def error(self) -> float:
@@ -280,9 +288,15 @@ class Scene:
     10. Capabilities the studies read (springlab.scenes.capabilities): `fit`, how `springlab fit`
        identifies the scene from a record (an `OscillatorFit` or a `PolynomialFit`; None: it cannot);
        `design`, the design question the scene answers (`DesignSpec`: swept properties, fixed ones,
-       the figure of merit and the hooks that simulate and estimate it; springlab.studies.design).
+       the figure of merit and the hooks that simulate and estimate it; springlab.studies.design);
+       `refinable`, the model's size is a parameter and which quantities converge to which continuum
+       values (`RefinableSpec`; springlab.studies.refine); `figure`, the panels of the scene's own
+       figure of a run (a `FigureHook`; springlab.plots.run.scene_figure).
     11. Optionally, `oscillator` (springlab.scenes.capabilities.OscillatorSpec): the scene is the
        textbook's one-mode mass-spring-damper, the unit oscillator of `springlab stability`.
+    12. Optionally, `dry_friction` (springlab.scenes.capabilities.DryFrictionSpec): the scene's dry
+       friction has exact Coulomb answers and takes MuJoCo's friction settings as parameters, which
+       `springlab friction-settings` sweeps (springlab.studies.friction_settings).
 
     The module exposes the instance as `SCENE`; springlab.scenes discovers it. Tests check each
     claim against a reference built in the test (closed form, expm, scipy's DOP853 at tight
@@ -313,6 +327,14 @@ class Scene:
     oscillator: OscillatorSpec | None = None
     #: the design question the scene answers (None: none; springlab.studies.design reads it)
     design: DesignSpec | None = None
+    #: exact dry-friction cases and MuJoCo's friction settings as parameters (None: none;
+    #: springlab.studies.friction_settings reads it)
+    dry_friction: DryFrictionSpec | None = None
+    #: the model's size is a parameter: how much model a question needs (None: fixed size;
+    #: springlab.studies.refine reads it)
+    refinable: RefinableSpec | None = None
+    #: the panels of the scene's own figure of a run (None: none; springlab.plots.run.scene_figure draws it)
+    figure: FigureHook | None = None
 
     def question_and_answer(self, scenario: str, quantities: dict, parameters: dict) -> tuple[str, str] | None:
         """(question, answer sentence) of a scenario's run, or None where the scene states none."""

@@ -1,0 +1,129 @@
+"""Speed of springlab's friction-settings study, side by side in one run.
+
+1. Cost per run: the study's chunk (springlab.studies.friction_settings.settings_chunk: build the model,
+   set it up, one mujoco.rollout call, compare with the exact answer, measure the events) against a plain
+   Python loop of mujoco.mj_step on the same compiled model, the same settings and steps, recording qpos
+   and qvel; measured alternately, best of 3, on 16 configurations spread over the four cases, the
+   integrators and the timesteps.
+2. The full sweep (`springlab friction-settings friction --tol 1e-2 --workers 2`: 6,840 runs, the picks
+   verified) against its 5-minute budget on 2 cores, with the machine's load average beside it (a machine
+   shared with other jobs stretches the wall time, not the CPU time each run reports).
+
+Run: python benchmarks/bench_friction.py [--skip-full]
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+
+import mujoco
+import numpy as np
+
+from springlab.runs.run import prepare
+from springlab.scenes import get
+from springlab.sim.simulate import INTEGRATORS, check_timing
+from springlab.studies import friction_settings
+from springlab.studies.executor import Executor
+from timing import best_of
+
+#: (scenario, integrator, dt [s]) of the per-run comparison, each at MuJoCo's defaults and at the last values
+SAMPLE = [
+    ("coulomb_decay", "euler", 2e-3),
+    ("coulomb_decay", "rk4", 5e-4),
+    ("contact_decay", "implicitfast", 1e-3),
+    ("contact_decay", "rk4", 2.5e-4),
+    ("incline_hold", "euler", 2e-3),
+    ("incline_hold", "discrete", 1e-3),
+    ("incline_slide", "implicitfast", 5e-4),
+    ("incline_slide", "rk4", 1e-3),
+]
+
+
+def _settings(scenario: str, last: bool) -> dict[str, float]:
+    spec = get("friction").dry_friction
+    case = spec.case(scenario)
+    return {s.name: float(s.values[-1] if last else s.mujoco_default) for s in spec.settings_of(case.friction)}
+
+
+def _plain_loop(scenario: str, integrator: str, dt: float, settings: dict[str, float]):
+    """The same run as a plain mj_step loop: build once (outside the timing), then step and record."""
+    scene, chosen, params = prepare("friction", scenario, settings)
+    model = scene.build(params, chosen)
+    model.opt.integrator, model.opt.timestep = INTEGRATORS[integrator], dt
+    steps = check_timing(dt, chosen.duration)
+    setup = scene.setup(model, params, chosen, steps, dt)
+    data = mujoco.MjData(model)
+
+    def run():
+        mujoco.mj_resetData(model, data)
+        data.qpos[:], data.qvel[:] = setup.qpos, setup.qvel
+        qpos, qvel = np.empty((steps, model.nq)), np.empty((steps, model.nv))
+        for i in range(steps):
+            mujoco.mj_step(model, data)
+            qpos[i], qvel[i] = data.qpos, data.qvel
+        return qpos, qvel
+
+    return run, steps
+
+
+def per_run() -> float:
+    """Print the per-run comparison; return the mean ratio springlab / plain loop."""
+    print("1) cost per run: the study's chunk (build, set up, rollout, compare, measure) vs a plain mj_step loop")
+    ratios = []
+    for scenario, integrator, dt in SAMPLE:
+        for last in (False, True):
+            settings = _settings(scenario, last)
+            loop, steps = _plain_loop(scenario, integrator, dt, settings)
+            payload = {
+                "scene": "friction",
+                "scenario": scenario,
+                "overrides": {},
+                "duration": get("friction").scenario(scenario).duration,
+                "measures": [(m.quantity, m.scale) for m in get("friction").dry_friction.case(scenario).measures],
+                "groups": [[(settings, integrator, dt)]],
+            }
+            # alternately: one of each, three times, the best of each kept
+            study_times, loop_times = [], []
+            for _ in range(3):
+                study_times.append(best_of(lambda p=payload: friction_settings.settings_chunk(p, nthread=1), repeat=1))
+                loop_times.append(best_of(loop, repeat=1))
+            study, plain = min(study_times), min(loop_times)
+            ratios.append(study / plain)
+            which = "last values" if last else "MuJoCo's defaults"
+            print(
+                f"   {scenario:<14}{integrator:<13}dt {dt:<8g}{which:<18}{steps:>7} steps"
+                f"  study {study * 1e3:8.2f} ms  plain loop {plain * 1e3:8.2f} ms  ratio {study / plain:5.2f}"
+            )
+    mean = float(np.mean(ratios))
+    print(f"   mean ratio study/plain loop {mean:.2f} (below 1: the rollout's C loop beats Python's mj_step calls)")
+    return mean
+
+
+def full_sweep() -> None:
+    load = os.getloadavg()[0]
+    start = time.perf_counter()
+    with Executor(workers=2, progress=False) as executor:
+        study = friction_settings.friction_settings("friction", tol=1e-2, executor=executor)
+    wall = time.perf_counter() - start
+    cpu = sum(r.cpu_time_s for case in study.cases for r in case.runs)
+    print(
+        f"2) friction-settings friction --tol 1e-2 --workers 2: {study.runs} runs in {wall:.0f} s (budget 300 s);"
+        f" {cpu:.0f} s of CPU in the simulations ({cpu / study.runs * 1e3:.1f} ms a run);"
+        f" load average {load:.1f} before, {os.getloadavg()[0]:.1f} after, on {os.cpu_count()} CPUs"
+    )
+    for case in study.cases:
+        pick = case.pick
+        found = (
+            f"{case.describe(pick.run.settings)}, {pick.run.integrator} at {pick.run.dt:g} s"
+            if pick and pick.run
+            else "none"
+        )
+        print(f"   {case.scenario:<14} pick for 1e-2: {found}")
+
+
+if __name__ == "__main__":
+    per_run()
+    if "--skip-full" not in sys.argv:
+        full_sweep()

@@ -1,0 +1,148 @@
+"""The chart of the three-axis trade (springlab.studies.refine): how much model a question needs.
+
+Three log-log panels of a `Refinement`, never simulating:
+
+* error against the continuum vs wall time of every run (colour: the size, marker: the integrator), the
+  Pareto front, the tolerance and the verified recommendation;
+* the discretization error vs the size with its observed order, and each size's best integration error;
+* what refining costs: wall time per step and per simulated second at each integrator's stability limit.
+"""
+
+from __future__ import annotations
+
+import math
+import pathlib
+
+from springlab import files
+from springlab.studies.refine import Refinement
+
+from .charts import _COLORS, _figure, _save
+
+#: marker per integrator
+_MARKERS = {"euler": "o", "implicit": "s", "implicitfast": "D", "rk4": "^", "discrete": "v"}
+
+
+def plot_refine(result: Refinement, path: str | pathlib.Path) -> pathlib.Path:
+    """Write the three panels (see the module docstring) to `path` (.png)."""
+    from matplotlib import colormaps
+
+    fig, (left, middle, right) = _figure(3, (17, 5.2), layout="constrained")
+    sizes = [c.size for c in result.sizes]
+    cmap = colormaps["viridis"]
+    shade = {size: cmap(i / max(len(sizes) - 1, 1)) for i, size in enumerate(sizes)}
+    seen = set()
+    for run in result.runs:
+        if run.error_bound is None:
+            continue
+        label = None
+        if run.integrator not in seen:
+            seen.add(run.integrator)
+            label = run.integrator
+        left.loglog(
+            run.wall_time_s,
+            max(run.error_bound, 1e-17),
+            _MARKERS.get(run.integrator, "o"),
+            color=shade[run.size],
+            ms=4,
+            alpha=0.8,
+            label=label,
+        )
+    front = [r for r in result.pareto if r.error is not None]
+    if front:
+        left.loglog(
+            [r.wall_time_s for r in front],
+            [max(r.error or 0.0, 1e-17) for r in front],
+            "k-",
+            lw=0.9,
+            label="Pareto front",
+        )
+    pick = result.recommendation
+    if pick is not None:
+        left.axhline(pick.tol, color="0.4", ls=":", lw=0.9, label=f"tol {pick.tol:g}")
+        if pick.verified and pick.wall_time_s is not None and pick.error is not None:
+            left.loglog(
+                pick.wall_time_s,
+                pick.error,
+                "*",
+                color="#d62728",
+                ms=14,
+                label=f"cheapest: {result.size_parameter} = {pick.size}, {pick.integrator}, dt = {pick.dt:g} s",
+            )
+    for size in sizes:
+        left.plot([], [], "o", color=shade[size], label=f"{result.size_parameter} = {size}")
+    left.set_xlabel("wall time of the run [s]")
+    left.set_ylabel(f"{result.question}: discretization + integration error [-]")
+    left.set_title(f"{result.description}: error vs cost")
+    left.legend(fontsize=6.5, loc="lower left", ncol=2)
+
+    discretization = [(c.size, c.discretization_error) for c in result.sizes if c.discretization_error]
+    if discretization:
+        middle.loglog(*zip(*discretization), "ko-", label="discretization (exact model vs continuum)")
+        first_size, first_error = discretization[0]
+        guide = [first_error * (s / first_size) ** -result.expected_order for s, _ in discretization]
+        middle.loglog(
+            [s for s, _ in discretization],
+            guide,
+            color="0.6",
+            ls="--",
+            lw=0.8,
+            label=f"order {result.expected_order:g}",
+        )
+    for name in dict.fromkeys(r.integrator for r in result.runs):
+        best = []
+        for size in sizes:
+            errors = [
+                r.integration_error
+                for r in result.runs
+                if r.size == size and r.integrator == name and r.integration_error
+            ]
+            if errors:
+                best.append((size, min(errors)))
+        if best:
+            middle.loglog(
+                *zip(*best),
+                marker=_MARKERS.get(name, "o"),
+                color=_COLORS.get(name),
+                lw=0.8,
+                label=f"{name}: best integration error",
+            )
+    order = result.discretization_order
+    middle.set_title(f"discretization: observed order {order:.2f}" if order is not None else "discretization")
+    middle.set_xlabel(f"{result.size_parameter} ({result.size_description})")
+    middle.set_ylabel("relative error [-]")
+    middle.legend(fontsize=6.5)
+
+    step_cost = [(c.size, min(c.cost_per_step_s.values())) for c in result.sizes if c.cost_per_step_s]
+    if step_cost:
+        growth = result.step_cost_growth
+        right.loglog(
+            *zip(*step_cost),
+            "k--",
+            marker="o",
+            ms=3,
+            label="per step (cheapest integrator)" + (f", ~N^{growth:.2f}" if growth is not None else ""),
+        )
+    for name, exponent in result.cost_growth.items():
+        points = [(c.size, c.cost_per_simulated_second_s.get(name)) for c in result.sizes]
+        points = [(s, v) for s, v in points if v is not None and math.isfinite(v)]
+        if points:
+            right.loglog(
+                *zip(*points),
+                marker=_MARKERS.get(name, "o"),
+                color=_COLORS.get(name),
+                label=f"{name}: per simulated s at its stability limit"
+                + (f", ~N^{exponent:.2f}" if exponent is not None else ""),
+            )
+    right.set_xlabel(f"{result.size_parameter} ({result.size_description})")
+    right.set_ylabel("wall time [s]")
+    right.set_title("refining costs twice: per step x steps per second")
+    right.legend(fontsize=6.5)
+    fig.suptitle(f"{result.scene} / {result.scenario}: how much model does {result.question} need?")
+    return _save(fig, path)
+
+
+def write_refine(result: Refinement, directory: str | pathlib.Path) -> list[pathlib.Path]:
+    """Write DIR/refine.json and DIR/refine.png."""
+    written = files.write_text_files(directory, {"refine.json": files.dumps(result.to_dict()) + "\n"})
+    written.append(plot_refine(result, pathlib.Path(directory) / "refine.png"))
+    return written

@@ -1,0 +1,5 @@
+"""The friction scene: its Scene (the registry reads `SCENE`)."""
+
+from .scene import SCENE, Friction
+
+__all__ = ["SCENE", "Friction"]

@@ -1,0 +1,618 @@
+"""How much model does a question need? The three-axis trade: model size x integrator x timestep.
+
+For a scene that declares its model size a parameter (`Scene.refinable`, a
+springlab.scenes.capabilities.RefinableSpec) and a question (a quantity its runs measure, with the same
+quantity of the discretized model solved exactly and of the continuum), the study runs every size x
+integrator x timestep and splits each run's error against the continuum into
+
+* discretization: the discretized model's exact answer against the continuum's (depends on the size only);
+* integration: the run against the discretized model's exact answer (depends on integrator and dt).
+
+The timestep grid of each size follows its fastest mode w_max (from the scene's `modes`): w_max dt in
+`OMEGA_DT`, from well inside every explicit integrator's stability limit to far beyond it (where only an
+integrator without one survives), each lowered to divide the scene's declared switch time where it has one.
+Refining the size costs twice: each step costs more (more degrees of
+freedom) and, for an integrator with a stability limit, w_max grows with the size, so the largest stable
+dt shrinks; `SizeCost` reports both and their product, the cost of a simulated second at the stability
+limit. For a tolerance, the cheapest run (wall time) whose error bound (discretization + integration:
+the parts' signs differ between integrators and sizes, so their sum is not counted on to cancel) meets it is
+verified by a fresh run at that setting (springlab.runs.run.run_scenario: validated as `springlab run`
+validates it) and reported with both parts of its error.
+
+Chunks (one size's runs) go through springlab.studies.executor like every sweep: locally, on a local
+dask cluster or on a running scheduler; the errors and steps are the same everywhere, wall times are
+measured where the runs ran (one mujoco.rollout call each).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time as _time
+from collections.abc import Iterable, Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from springlab import scenes, tables
+from springlab.errors import BadInputError, DivergedError
+from springlab.files import json_ready
+from springlab.runs import compare
+from springlab.runs.run import prepare, run_scenario
+from springlab.scenes.base import Scene
+from springlab.sim.batch import TIMING_STEPS, Job, time_run
+from springlab.sim.simulate import INTEGRATORS, MAX_STEPS, check_timing, integrator_id, simulate
+
+from .executor import Executor
+
+if TYPE_CHECKING:
+    import pandas
+
+#: w_max dt of every size's timestep grid: inside every limit (0.2) ... explicit Euler's 2 (1.9), RK4's
+#: 2.83 (2.8), far beyond both (8, 30)
+OMEGA_DT = (0.2, 0.5, 1.0, 1.9, 2.8, 8.0, 30.0)
+#: runs beyond this many steps are left out of the grid (the finest dt of a large size)
+MAX_REFINE_STEPS = 400_000
+#: runs per chunk
+CHUNK_RUNS = 12
+
+WALL_TIME_BASIS = (
+    "each run alone on one thread as `springlab run` steps it (one mujoco.rollout call), best of 3, timed where"
+    f" it ran; runs over {TIMING_STEPS} steps timed on their first {TIMING_STEPS} steps and scaled by steps"
+)
+
+
+@dataclasses.dataclass(frozen=True)
+class RefineRun:
+    """One (size, integrator, dt) of the study.
+
+    Attributes
+    ----------
+    size
+        the model's size (e.g. elements).
+    integrator, dt
+        the setting [-, s].
+    steps
+        physics steps.
+    value, exact, continuum
+        the question's measured value, the discretized model's exact one and the continuum's (None: diverged).
+    wall_time_s
+        wall time of the run [s].
+    diverged
+        the run blew up (its error is None).
+    detail
+        how it diverged.
+    """
+
+    size: int
+    integrator: str
+    dt: float
+    steps: int
+    value: float | None
+    exact: float | None
+    continuum: float | None
+    wall_time_s: float
+    diverged: bool = False
+    detail: str = ""
+
+    @property
+    def error(self) -> float | None:
+        """|value - continuum| / |continuum| [-]: the whole error of the answer (None: diverged)."""
+        if self.value is None or self.continuum is None or not math.isfinite(self.value):
+            return None
+        return abs(self.value - self.continuum) / abs(self.continuum)
+
+    @property
+    def error_bound(self) -> float | None:
+        """discretization_error + integration_error [-]: a bound on the error that does not count on the two
+        parts cancelling (their signs depend on the integrator and the size; the study ranks runs by this)."""
+        if self.discretization_error is None or self.integration_error is None:
+            return None
+        return self.discretization_error + self.integration_error
+
+    @property
+    def discretization_error(self) -> float | None:
+        """|exact - continuum| / |continuum| [-]: the model's size alone."""
+        if self.exact is None or self.continuum is None:
+            return None
+        return abs(self.exact - self.continuum) / abs(self.continuum)
+
+    @property
+    def integration_error(self) -> float | None:
+        """|value - exact| / |exact| [-]: the integrator and dt alone."""
+        if self.value is None or self.exact is None or not math.isfinite(self.value):
+            return None
+        return abs(self.value - self.exact) / abs(self.exact)
+
+    def to_dict(self) -> dict[str, Any]:
+        """refine.json's row: size, integrator, dt [s], steps, value, exact, continuum, error,
+        discretization_error, integration_error, error_bound, wall_time_s [s], diverged."""
+        return {
+            "size": self.size,
+            "integrator": self.integrator,
+            "dt": self.dt,
+            "steps": self.steps,
+            "value": self.value,
+            "exact": self.exact,
+            "continuum": self.continuum,
+            "error": self.error,
+            "discretization_error": self.discretization_error,
+            "integration_error": self.integration_error,
+            "error_bound": self.error_bound,
+            "wall_time_s": self.wall_time_s,
+            "diverged": self.diverged,
+        }
+
+
+@dataclasses.dataclass(frozen=True)
+class SizeCost:
+    """What one size costs: per step, and per simulated second at each integrator's stability limit.
+
+    Attributes
+    ----------
+    size
+        the model's size.
+    fastest_rate_rad_s
+        w_max of the model [rad/s].
+    discretization_error
+        the question's discretization error at this size [-].
+    cost_per_step_s
+        integrator -> the fewest seconds of wall time per step over its runs [s].
+    stable_dt_s
+        integrator -> the largest stable dt on w_max [s] (None: no limit).
+    cost_per_simulated_second_s
+        integrator -> cost_per_step / stable_dt: wall time per simulated second at the limit (None: no limit).
+    """
+
+    size: int
+    fastest_rate_rad_s: float
+    discretization_error: float | None
+    cost_per_step_s: dict[str, float]
+    stable_dt_s: dict[str, float | None]
+    cost_per_simulated_second_s: dict[str, float | None]
+
+    def to_dict(self) -> dict[str, Any]:
+        """refine.json's `sizes` row."""
+        return {
+            "size": self.size,
+            "fastest_rate_rad_s": self.fastest_rate_rad_s,
+            "discretization_error": self.discretization_error,
+            "cost_per_step_s": dict(self.cost_per_step_s),
+            "stable_dt_s": dict(self.stable_dt_s),
+            "cost_per_simulated_second_s": dict(self.cost_per_simulated_second_s),
+        }
+
+
+@dataclasses.dataclass(frozen=True)
+class RefineRecommendation:
+    """The cheapest (size, integrator, dt) whose answer meets the tolerance, verified by a run.
+
+    Attributes
+    ----------
+    tol
+        the relative tolerance [-] on the answer against the continuum.
+    size, integrator, dt
+        the setting (None: no run of the study meets tol).
+    error, discretization_error, integration_error
+        the verification run's error against the continuum and its two parts [-]; their sum is at most tol.
+    wall_time_s
+        the verification run's wall time [s].
+    verified
+        the verification run meets tol.
+    verdict
+        what `springlab run` says of that run (its own validation against the exact discretized model).
+    """
+
+    tol: float
+    size: int | None
+    integrator: str | None
+    dt: float | None
+    error: float | None
+    discretization_error: float | None
+    integration_error: float | None
+    wall_time_s: float | None
+    verified: bool
+    verdict: str | None
+
+    @property
+    def found(self) -> bool:
+        """Whether a verified setting meets tol."""
+        return self.verified
+
+    def to_dict(self) -> dict[str, Any]:
+        """refine.json's `recommendation`."""
+        return {
+            "tol": self.tol,
+            "size": self.size,
+            "integrator": self.integrator,
+            "dt": self.dt,
+            "error": self.error,
+            "discretization_error": self.discretization_error,
+            "integration_error": self.integration_error,
+            "wall_time_s": self.wall_time_s,
+            "verified": self.verified,
+            "verdict": self.verdict,
+        }
+
+
+@dataclasses.dataclass(frozen=True)
+class Refinement:
+    """The three-axis trade of one question (`refine`).
+
+    `to_dict()` is refine.json (what `springlab refine --json` prints), `to_pandas()` one row per run.
+
+    Attributes
+    ----------
+    scene, scenario
+        names.
+    question, description
+        the measured quantity and the question in words.
+    size_parameter, size_description
+        the parameter that sets the size and what it counts.
+    duration
+        simulated time of every run [s].
+    overrides
+        parameters the caller set.
+    runs
+        every run, by size, integrator, dt descending.
+    sizes
+        one SizeCost per size.
+    pareto
+        the runs no other beats in both error (against the continuum) and wall time, cheapest first.
+    discretization_order
+        observed order of the discretization error in the size (fitted; None: too few points).
+    expected_order
+        the order the scene declares.
+    cost_growth
+        integrator -> fitted exponent of cost_per_simulated_second_s in the size (None: no limit or too few).
+    step_cost_growth
+        fitted exponent of the cheapest cost_per_step_s in the size.
+    recommendation
+        with a tolerance, the verified cheapest setting.
+    sweep_wall_time_s
+        wall time of the whole study [s].
+    """
+
+    scene: str
+    scenario: str
+    question: str
+    description: str
+    size_parameter: str
+    size_description: str
+    duration: float
+    overrides: dict[str, Any]
+    runs: tuple[RefineRun, ...] = dataclasses.field(repr=False)
+    sizes: tuple[SizeCost, ...] = dataclasses.field(repr=False)
+    pareto: tuple[RefineRun, ...] = dataclasses.field(repr=False)
+    discretization_order: float | None
+    expected_order: float
+    cost_growth: dict[str, float | None]
+    step_cost_growth: float | None
+    recommendation: RefineRecommendation | None = None
+    sweep_wall_time_s: float = 0.0
+
+    def to_dict(self) -> dict[str, Any]:
+        """refine.json: scene, scenario, question, description, size_parameter, size_description, duration,
+        parameters, runs, sizes, pareto, discretization_order, expected_order, cost_growth, step_cost_growth,
+        recommendation, wall_time_basis, sweep_wall_time_s (plain JSON values)."""
+        return json_ready(
+            {
+                "scene": self.scene,
+                "scenario": self.scenario,
+                "question": self.question,
+                "description": self.description,
+                "size_parameter": self.size_parameter,
+                "size_description": self.size_description,
+                "duration": self.duration,
+                "parameters": dict(self.overrides),
+                "runs": [r.to_dict() for r in self.runs],
+                "sizes": [s.to_dict() for s in self.sizes],
+                "pareto": [r.to_dict() for r in self.pareto],
+                "discretization_order": self.discretization_order,
+                "expected_order": self.expected_order,
+                "cost_growth": dict(self.cost_growth),
+                "step_cost_growth": self.step_cost_growth,
+                "recommendation": None if self.recommendation is None else self.recommendation.to_dict(),
+                "wall_time_basis": WALL_TIME_BASIS,
+                "sweep_wall_time_s": self.sweep_wall_time_s,
+            }
+        )
+
+    def to_pandas(self) -> pandas.DataFrame:
+        """One row per run: refine.json's `runs` columns plus `pareto` (on the front) (needs pandas)."""
+        front = {id(r) for r in self.pareto}
+        return tables.to_pandas([{**r.to_dict(), "pareto": id(r) in front} for r in self.runs])
+
+
+def _round_sig(value: float, digits: int = 3) -> float:
+    return float(f"{value:.{digits - 1}e}")
+
+
+def refinable_scenes() -> list[str]:
+    """Names of the scenes that declare a model size (`Scene.refinable`)."""
+    return [name for name, scene in scenes.SCENES.items() if scene.refinable is not None]
+
+
+def _spec_of(scene: Scene):
+    spec = scene.refinable
+    if spec is None:
+        raise BadInputError(
+            f"{scene.name} has no model size to refine; scenes that have one: {', '.join(refinable_scenes()) or 'none'}"
+        )
+    return spec
+
+
+def refine(
+    scene: str | Scene,
+    question: str | None = None,
+    *,
+    tol: float | None = None,
+    sizes: Sequence[int] | None = None,
+    integrators: Iterable[str] = tuple(INTEGRATORS),
+    duration: float | None = None,
+    omega_dt: Sequence[float] = OMEGA_DT,
+    executor: Executor | None = None,
+    **parameters: Any,
+) -> Refinement:
+    """Sweep size x integrator x timestep for one question and, with `tol`, find the cheapest verified setting.
+
+    Parameters
+    ----------
+    scene
+        scene name or object; it declares `refinable`.
+    question
+        the quantity to answer (None: the scene's first question).
+    tol
+        relative tolerance [-] on the answer against the continuum (None: no recommendation).
+    sizes
+        model sizes (None: the scene's default sizes).
+    integrators
+        integrator names (default: all five).
+    duration
+        simulated time [s] (None: the question's scenario's).
+    omega_dt
+        the timestep grid of each size as w_max dt [-] (default OMEGA_DT).
+    executor
+        where the chunks run (None: locally).
+    **parameters
+        other scene parameters (SI); the size parameter is the study's.
+
+    Returns
+    -------
+    Refinement
+        runs, per-size costs, Pareto front, observed orders and (with tol) the recommendation.
+
+    Raises
+    ------
+    BadInputError
+        a scene without a model size, an unknown question or integrator, bad sizes or tolerance.
+    """
+    started = _time.perf_counter()
+    scene_obj = scenes.get(scene) if isinstance(scene, str) else scene
+    spec = _spec_of(scene_obj)
+    try:
+        asked = spec.question(question)
+    except KeyError:
+        valid = ", ".join(q.name for q in spec.questions)
+        raise BadInputError(f"{scene_obj.name} has no refinable question {question!r}; valid: {valid}") from None
+    if spec.size in parameters:
+        raise BadInputError(f"the study sets {spec.size} itself; choose the sizes with sizes= (--sizes)")
+    if tol is not None:
+        tol = compare.check_tolerance(tol)
+    integrators = list(integrators)
+    for name in integrators:
+        integrator_id(name)
+    sizes = list(spec.sizes if sizes is None else sizes)
+    size_parameter = scene_obj.parameters[spec.size]
+    if not sizes:
+        raise BadInputError(f"give at least one {spec.size}")
+    for size in sizes:
+        checked = size_parameter.check(size)
+        if checked != round(checked):
+            raise BadInputError(f"{spec.size} must be whole numbers, got {size!r}")
+    sizes = sorted({int(round(s)) for s in sizes})
+    scenario = scene_obj.scenario(asked.scenario)
+    duration = scenario.duration if duration is None else duration
+    check_timing(duration / 2, duration)
+
+    plans = []
+    for size in sizes:
+        _, chosen, params = prepare(scene_obj, asked.scenario, {**parameters, spec.size: size})
+        model = scene_obj.build(params, chosen)
+        modes = scene_obj.modes(model, params, chosen)
+        fastest = max(omega for omega, _ in modes)
+        limits: dict[str, float | None] = {}
+        for name in integrators:
+            ratio = min(
+                scene_obj.stability_limit(model, params, chosen, name, omega, zeta) / omega for omega, zeta in modes
+            )
+            limits[name] = ratio if math.isfinite(ratio) else None
+        dts = sorted({_on_grid(_round_sig(f / fastest), params.get(spec.switch_time)) for f in omega_dt}, reverse=True)
+        dts = [dt for dt in dts if duration / dt <= min(MAX_REFINE_STEPS, MAX_STEPS) and dt <= duration / 4]
+        plans.append((size, fastest, limits, dts))
+    reference = scene_obj.name if scenes.SCENES.get(scene_obj.name) is scene_obj else scene_obj
+    payloads = []
+    for size, _, _, dts in plans:
+        pairs = [(name, dt) for dt in dts for name in integrators]
+        for start in range(0, len(pairs), CHUNK_RUNS):
+            payloads.append(
+                {
+                    "scene": reference,
+                    "scenario": asked.scenario,
+                    "question": (asked.name, asked.exact, asked.continuum),
+                    "parameters": {**parameters, spec.size: size},
+                    "size": size,
+                    "duration": duration,
+                    "pairs": pairs[start : start + CHUNK_RUNS],
+                }
+            )
+    runner = Executor(progress=False) if executor is None else executor
+    outcomes = runner.map(refine_chunk, payloads, description="refine", sizes=[len(p["pairs"]) for p in payloads])
+    runs = [run for part in outcomes for run in part]
+    runs.sort(key=lambda r: (r.size, integrators.index(r.integrator), -r.dt))
+    costs = _size_costs(plans, runs, integrators)
+    front = _pareto(runs)
+    recommendation = _recommend(scene_obj, asked, spec.size, runs, tol, duration, parameters) if tol else None
+    return Refinement(
+        scene=scene_obj.name,
+        scenario=asked.scenario,
+        question=asked.name,
+        description=asked.description,
+        size_parameter=spec.size,
+        size_description=spec.description,
+        duration=duration,
+        overrides=dict(parameters),
+        runs=tuple(runs),
+        sizes=tuple(costs),
+        pareto=tuple(front),
+        discretization_order=_order([(c.size, c.discretization_error) for c in costs]),
+        expected_order=spec.order,
+        cost_growth={
+            name: _slope([(c.size, c.cost_per_simulated_second_s.get(name)) for c in costs]) for name in integrators
+        },
+        step_cost_growth=_slope([(c.size, min(c.cost_per_step_s.values(), default=None)) for c in costs]),
+        recommendation=recommendation,
+        sweep_wall_time_s=_time.perf_counter() - started,
+    )
+
+
+def refine_chunk(payload: dict[str, Any], nthread: int = 0) -> list[RefineRun]:
+    """One chunk of one size: each (integrator, dt) run alone, its question's three values read from the
+    scene's quantities (a module-level function of plain data for dask workers; the model is rebuilt here)."""
+    scene_obj, chosen, params = prepare(payload["scene"], payload["scenario"], payload["parameters"])
+    model = scene_obj.build(params, chosen)
+    name, exact_name, continuum_name = payload["question"]
+    duration = payload["duration"]
+    out = []
+    for integrator, dt in payload["pairs"]:
+        steps = check_timing(dt, duration)
+        setup = scene_obj.setup(model, params, chosen, steps, dt)
+        try:
+            trajectory = simulate(
+                model,
+                integrator=integrator,
+                dt=dt,
+                duration=duration,
+                qpos=setup.qpos,
+                qvel=setup.qvel,
+                act=setup.act,
+                control=setup.control,
+            )
+        except DivergedError as error:
+            out.append(RefineRun(payload["size"], integrator, dt, steps, None, None, None, math.nan, True, str(error)))
+            continue
+        quantities = scene_obj.quantities(model, params, chosen, trajectory)
+        value = quantities.get(name)
+        value = float(value) if value is not None and math.isfinite(float(value)) else None
+        out.append(
+            RefineRun(
+                payload["size"],
+                integrator,
+                dt,
+                trajectory.steps,
+                value,
+                float(quantities[exact_name]),
+                float(quantities[continuum_name]),
+                time_run(Job(model, integrator, dt, steps, setup)),
+                value is None,
+                "" if value is not None else f"the run measured no {name}",
+            )
+        )
+    return out
+
+
+def _on_grid(dt: float, period: float | None) -> float:
+    """dt [s], lowered to period / ceil(period / dt) when a switch time `period` [s] must fall on the step grid."""
+    if not period:
+        return dt
+    return period / math.ceil(period / dt * (1 - 1e-12))
+
+
+def _pareto(runs: Sequence[RefineRun]) -> list[RefineRun]:
+    """Runs no other run beats in both error and wall time, cheapest first."""
+    candidates = sorted((r for r in runs if r.error is not None), key=lambda r: (r.wall_time_s, r.error))
+    front, best = [], math.inf
+    for r in candidates:
+        assert r.error is not None
+        if r.error < best:
+            front.append(r)
+            best = r.error
+    return front
+
+
+def _size_costs(plans, runs: Sequence[RefineRun], integrators: Sequence[str]) -> list[SizeCost]:
+    costs = []
+    for size, fastest, limits, _ in plans:
+        mine = [r for r in runs if r.size == size and not r.diverged and r.steps > 0]
+        per_step = {}
+        for name in integrators:
+            times = [r.wall_time_s / r.steps for r in mine if r.integrator == name]
+            if times:
+                per_step[name] = float(min(times))
+        per_second = {
+            name: (per_step[name] / limits[name] if name in per_step and limits[name] else None) for name in integrators
+        }
+        discretization = next((r.discretization_error for r in mine if r.discretization_error is not None), None)
+        costs.append(SizeCost(size, fastest, discretization, per_step, dict(limits), per_second))
+    return costs
+
+
+def _slope(points: Sequence[tuple[float, float | None]]) -> float | None:
+    """Least-squares slope of log y vs log x over the points with y > 0 (None: fewer than 3)."""
+    kept = [(x, y) for x, y in points if y is not None and y > 0 and math.isfinite(y)]
+    if len(kept) < 3:
+        return None
+    slope, _ = np.polyfit(np.log([x for x, _ in kept]), np.log([y for _, y in kept]), 1)
+    return float(slope)
+
+
+def _order(points: Sequence[tuple[float, float | None]]) -> float | None:
+    """The observed order of the discretization error: -slope of log error vs log size over the finest three
+    sizes whose error is above 1e-13 (round-off of the exact values)."""
+    kept = [(x, y) for x, y in points if y is not None and y > 1e-13]
+    slope = _slope(kept[-3:])
+    return None if slope is None else -slope
+
+
+def _recommend(
+    scene: Scene, asked, size_parameter: str, runs: Sequence[RefineRun], tol: float, duration: float, overrides
+) -> RefineRecommendation:
+    """The cheapest run whose error bound meets tol, verified by run_scenario at its setting (the next if it fails)."""
+    meeting = sorted(
+        (r for r in runs if r.error_bound is not None and r.error_bound <= tol), key=lambda r: r.wall_time_s
+    )
+    for candidate in meeting:
+        try:
+            result = run_scenario(
+                scene.name,
+                asked.scenario,
+                integrator=candidate.integrator,
+                dt=candidate.dt,
+                duration=duration,
+                **{**overrides, size_parameter: candidate.size},
+            )
+        except DivergedError:
+            continue
+        value = result.quantities.get(asked.name)
+        setup = scene.setup(result.model, result.parameters, scene.scenario(asked.scenario), result.steps, result.dt)
+        wall = time_run(Job(result.model, candidate.integrator, candidate.dt, result.steps, setup))
+        exact, continuum = result.quantities[asked.exact], result.quantities[asked.continuum]
+        if value is None or not math.isfinite(float(value)):
+            continue
+        error = abs(float(value) - continuum) / abs(continuum)
+        discretization, integration = abs(exact - continuum) / abs(continuum), abs(float(value) - exact) / abs(exact)
+        if discretization + integration > tol:
+            continue
+        return RefineRecommendation(
+            tol=tol,
+            size=candidate.size,
+            integrator=candidate.integrator,
+            dt=candidate.dt,
+            error=error,
+            discretization_error=discretization,
+            integration_error=integration,
+            wall_time_s=wall,
+            verified=True,
+            verdict=None if result.verdict is None else str(result.verdict),
+        )
+    return RefineRecommendation(tol, None, None, None, None, None, None, None, False, None)

@@ -1,0 +1,195 @@
+"""The friction-settings study: it reads the scene's declaration, separates model from integration error,
+and its pick for a tolerance is verified by a run; where nothing meets the tolerance it names the floor."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+
+import pytest
+
+import springlab
+from springlab.scenes import get
+from springlab.scenes.capabilities import CONTACT_FRICTION, JOINT_FRICTION
+from springlab.studies import friction_settings as study_module
+from springlab.studies.friction_settings import friction_settings, grid, mujoco_defaults
+
+#: a small grid: each setting at MuJoCo's default and at its last declared value
+SPEC = get("friction").dry_friction
+ENDS = {s.name: (s.mujoco_default, s.values[-1]) for s in SPEC.settings}
+INTEGRATORS = ("euler", "rk4")
+DTS = (2e-3, 1e-3, 5e-4)
+
+
+@pytest.fixture(scope="module")
+def small_study():
+    """The joint decay and the hold on the small grid, picks for 1e-2: computed once for this module."""
+    return friction_settings(
+        "friction", ["coulomb_decay", "incline_hold"], tol=1e-2, integrators=INTEGRATORS, dts=DTS, values=ENDS
+    )
+
+
+def test_the_study_sweeps_only_the_settings_that_act_on_each_cases_friction(small_study):
+    joint, hold = small_study.cases
+    assert joint.friction == JOINT_FRICTION and hold.friction == CONTACT_FRICTION
+    assert {s.name for s in joint.settings} == {"solref_timeconst", "solimp_d0", "noslip_iterations"}
+    assert {s.name for s in hold.settings} == {s.name for s in SPEC.settings}
+    # 2^3 (joint) and 2^5 (contact) settings x 2 integrators x 3 dts, less the time constants MuJoCo would
+    # raise to 2 dt (0.002 s at dt = 0.002 s)
+    assert len(joint.runs) == 8 * 2 * 3 - 4 * 2 and len(hold.runs) == 32 * 2 * 3 - 16 * 2
+    groups = grid(SPEC, SPEC.case("coulomb_decay"), INTEGRATORS, DTS, ENDS)
+    assert len(joint.runs) == sum(len(g) for g in groups)
+    assert all(b[2] == a[2] / 2 and a[:2] == b[:2] for g in groups for a, b in zip(g, g[1:]))
+
+
+def test_mujocos_defaults_are_the_baseline_and_their_error_is_the_models(small_study):
+    integrator, dt = mujoco_defaults()
+    assert (integrator, dt) == ("euler", 0.002)  # read from MuJoCo, as MuJoCo's documentation states them
+    for case in small_study.cases:
+        default = case.default
+        assert default is not None and default.integrator == integrator and default.dt == dt
+        assert all(default.settings[s.name] == s.mujoco_default for s in case.settings)
+        model = case.default_model
+        assert model is not None and model.converged and model.model_error > 1e-2
+        # the run at MuJoCo's defaults is within 20 % of the model's error: integration adds little to it
+        assert abs(default.error - model.model_error) <= 0.2 * model.model_error
+
+
+def test_the_pick_is_the_cheapest_verified_run_and_a_run_of_it_passes(small_study):
+    for case in small_study.cases:
+        pick = case.pick
+        assert pick is not None and pick.found and pick.run.error <= 1e-2
+        run = springlab.run(
+            "friction", case.scenario, integrator=pick.run.integrator, dt=pick.run.dt, tol=1e-2, **pick.run.settings
+        )
+        assert run.passed and run.max_rel_error == pytest.approx(pick.verified_error, rel=1e-12)
+        band = study_module._cost_band
+        cheaper = [
+            r
+            for r in case.runs
+            if not r.diverged and r.error <= 1e-2 and band(r.cpu_time_s) < band(pick.run.cpu_time_s)
+        ]
+        for other in cheaper:  # every run in a cheaper cost band within tol fails its own verification
+            again = springlab.run(
+                "friction", case.scenario, integrator=other.integrator, dt=other.dt, tol=1e-2, **other.settings
+            )
+            assert not again.passed
+
+
+def test_the_pareto_front_is_sorted_and_undominated(small_study):
+    for case in small_study.cases:
+        front = case.pareto
+        assert [r.cpu_time_s for r in front] == sorted(r.cpu_time_s for r in front)
+        assert all(b.error < a.error for a, b in zip(front, front[1:]))
+        runs = [r for r in case.runs if not r.diverged]
+        for point in front:  # no run is both cheaper and more accurate than a point of the front
+            assert not any(r.cpu_time_s < point.cpu_time_s and r.error < point.error for r in runs)
+
+
+def test_noslip_makes_a_held_block_stop_creeping(small_study):
+    hold = small_study.cases[1]
+    stopped = [
+        r
+        for r in hold.runs
+        if r.settings["noslip_iterations"] > 0 and r.settings["elliptic_cone"] == 1.0 and not r.diverged
+    ]
+    assert stopped and all(abs(r.values["creep_velocity_m_s"]) <= 1e-12 for r in stopped)
+
+
+def test_where_no_setting_reaches_the_tolerance_the_study_says_the_floor_is_mujocos():
+    study = friction_settings(
+        "friction", ["coulomb_decay"], tol=1e-6, integrators=("rk4",), dts=(1e-3, 5e-4), values=ENDS
+    )
+    case = study.cases[0]
+    assert case.pick is not None and not case.pick.found
+    assert "MuJoCo's model is the floor" in case.pick.floor
+    best = case.best_model
+    assert best.model_error > 1e-6 and f"{best.model_error:.2g}" in case.pick.floor
+
+
+def test_bad_arguments_are_bad_input():
+    with pytest.raises(springlab.errors.BadInputError, match="at least two timesteps"):
+        friction_settings("friction", dts=(1e-3,))
+    with pytest.raises(springlab.errors.BadInputError, match="sweeps"):
+        friction_settings("friction", impratio=10.0)
+    with pytest.raises(springlab.errors.BadInputError, match="no swept setting"):
+        friction_settings("friction", values={"mass": (1.0,)})
+
+
+def test_the_command_prints_json_and_writes_its_files(tmp_path):
+    out = tmp_path / "settings"
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "springlab",
+            "friction-settings",
+            "friction",
+            "coulomb_decay",
+            "--integrators",
+            "rk4",
+            "--dt",
+            "0.001,0.0005",
+            "--tol",
+            "1e-2",
+            "--json",
+            "--output",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert done.returncode == 0, done.stderr
+    data = json.loads(done.stdout)
+    assert set(data) >= {"scene", "tol", "integrators", "dts", "mujoco_default", "runs", "cases"}
+    case = data["cases"][0]
+    assert set(case) >= {"default_model_error", "model_errors", "pareto", "pick", "answer", "runs"}
+    assert data["runs"] == len(case["runs"]) and all(math.isfinite(r["cpu_time_s"]) for r in case["runs"])
+    assert {p.name for p in out.iterdir()} == {
+        "friction_settings.json",
+        "friction_settings.csv",
+        "friction_settings.png",
+    }
+    assert json.loads((out / "friction_settings.json").read_text())["runs"] == data["runs"]
+
+
+@pytest.mark.slow
+def test_the_study_gives_the_same_errors_on_dask_workers(monkeypatch):
+    from springlab.studies.executor import Executor
+
+    monkeypatch.setattr(study_module, "CHUNK_RUNS", 5)  # 16 runs: four chunks travel
+    arguments = dict(integrators=("rk4",), dts=(1e-3, 5e-4), values=ENDS)
+    local = friction_settings("friction", ["coulomb_decay"], **arguments)
+    with Executor(workers=2, progress=False) as executor:
+        remote = friction_settings("friction", ["coulomb_decay"], executor=executor, **arguments)
+    assert len(local.cases[0].runs) == 16
+    assert [r.max_rel_error for r in local.cases[0].runs] == [r.max_rel_error for r in remote.cases[0].runs]
+    assert [r.values for r in local.cases[0].runs] == [r.values for r in remote.cases[0].runs]
+
+
+@pytest.mark.slow
+def test_the_demo_answers_how_much_mujocos_friction_drifts_and_what_stopping_it_costs(tmp_path, monkeypatch):
+    from springlab.demo import report, steps
+    from springlab.demo.state import DemoState
+
+    # one of the demo's two integrators beside MuJoCo's default: 2/3 of its runs, the same section and
+    # answer lines (rk4 at the smaller timesteps is what meets 1e-2 where euler cannot)
+    monkeypatch.setattr(steps, "DEMO_FRICTION_INTEGRATORS", ("rk4",))
+    state = DemoState(out=tmp_path)
+    written = steps.friction_step(state)
+    assert {a.path for a in written} == {
+        "friction/friction_settings/friction_settings.png",
+        "friction/friction_settings/friction_settings.json",
+        "friction/friction_settings/friction_settings.csv",
+    }
+    assert all((tmp_path / a.path).stat().st_size > 0 for a in written)
+    answer = next(a for a in written if a.answer)
+    assert answer.title == steps.FRICTION_QUESTION
+    lines = answer.answer.splitlines()
+    assert len(lines) == 4 and all("MuJoCo's defaults" in line for line in lines)
+    state.artifacts.extend(written)
+    page = report.build_html(state)
+    assert "How much does MuJoCo&#x27;s friction drift" in page and "MuJoCo&#x27;s model error" in page
