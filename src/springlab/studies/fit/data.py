@@ -341,4 +341,6 @@ def noise_level(values: np.ndarray) -> float:
     if values.size < 8:
         return 0.0
     d3 = np.diff(values, 3)
-    return float(1.4826 * np.median(np.abs(d3 - np.median(d3))) / math.sqrt(20.0))
+    # in place (the medians reorder d3, which the MAD does not see): one n-long array, not four
+    d3 -= np.median(d3, overwrite_input=True)
+    return float(1.4826 * np.median(np.abs(d3, out=d3), overwrite_input=True) / math.sqrt(20.0))

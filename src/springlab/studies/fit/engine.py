@@ -14,6 +14,18 @@ needs, not from the sample rate, and is read at the recorded times by cubic Herm
 position and velocity (fourth order, like RK4), so uneven or dense sampling costs nothing (`set_grid`).
 Acceleration comes from fourth-order differences of the velocity on the grid.
 
+A long record is fitted on its reduced rows (`Problem.compression`, springlab.studies.fit.reductions.Grouped):
+within grid step k the signal at the samples is B_i c_k, the Hermite basis at the sample's place in the step
+times the step's four coefficients (the end values plus the offset, and dt times the end slopes; a held sample,
+before a fixed delay, reads the held value). The basis depends on the data's times only, so each step's samples
+reduce once, before the fit, to at most 5 rows [W | z] (the factor of [B_k | y_k]), with
+sum over the step of (B_i c_k - y_i)^2 = |W c_k - z|^2 for every candidate: sysid's residual is W c - z, about
+5 rows per grid step instead of every sample, with the per-sample cost, gradient, Gauss-Newton matrix, estimate
+and covariance (the residual variance divides by the true n - p; `intervals`, `accuracy`, `convergence`). The
+fitted signal at every sample is read from one more rollout at the estimate (`Problem.signal`). Records of at most
+reductions.BLOCK samples, fewer than COMPRESS_PER_STEP samples per step, or with a fitted delay (which moves the
+samples within the steps) are fitted per sample.
+
 The timestep (`choose_dt`). A model error e at the n samples moves estimate i by at most
 sqrt((J^T J)^-1_ii) |e|_2 (the least-squares estimate is linear in the data), that is by at most
 |e|_2 / sigma of its standard errors for noise sigma. The grid is therefore fine enough that the bound
@@ -51,6 +63,7 @@ from springlab.runs import compare
 from springlab.scenes.base import Reference, Scenario
 from springlab.sim.simulate import quiet_mujoco
 
+from . import reductions
 from .data import Record, noise_level
 from .models import FitModel
 
@@ -78,6 +91,8 @@ STABLE_RATE_DT = 2.5
 READING = {"pos": (1 / 384, 0.0, 4, 0), "vel": (1 / 384, 8 / 135, 4, 1), "acc": (1 / 5 + 1 / 384, 8 / 135, 5, 1)}
 #: relative singular value of the scaled Jacobian below which parameters are not identifiable
 IDENTIFIABLE = 1e-9
+#: samples per grid step (on average) from which a long record is fitted on its reduced rows (5 per step at most)
+COMPRESS_PER_STEP = 10
 _FULL = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
 _STATUS = (
     "factorization failed",
@@ -117,7 +132,12 @@ class Problem:
         self.how, self.scene, self.scenario = how, how.scene, scenario
         self.base, self.record, self.free, self.modal, self.force = base, record, free, modal, force
         self.start = dict(start)
-        self.t = record.model_time
+        #: samples, and the span since the origin [s]: the model's times are read from the record when needed
+        #: (`t`, `times`), not held beside it
+        self.samples = int(record.time.size)
+        self.span = float(record.time[-1] - record.origin)
+        #: median spacing of the samples [s]
+        self.spacing = float(np.median(np.diff(record.time), overwrite_input=True)) if self.samples > 1 else self.span
         self.scale = float(np.std(record.values)) or 1.0
         self.rollouts = 0
         self._spec: mujoco.MjSpec | None = None
@@ -128,6 +148,9 @@ class Problem:
         self.noise = noise_level(record.values)
         #: how the grid was chosen (fit.json's `timestep`)
         self.grid: dict[str, Any] = {}
+        #: the record reduced to at most 5 rows per grid step (module docstring), or None: fitted per sample
+        self.compression: reductions.Grouped | None = None
+        self._compressed_delay = 0.0
         self.set_grid(start)
         # a thread pool costs ~5 ms per rollout call: worth it only for long batches
         self.threads = 2 if self.steps * (len(free) + 1) >= 200_000 and (os.cpu_count() or 1) > 1 else 1
@@ -142,7 +165,7 @@ class Problem:
         """dt [s] and steps of the simulation grid covering the record (and a delay's reach): `choose_dt` at
         these values, or `dt` itself; never above STABLE_RATE_DT / `stable_rate` [1/s] (multi-starts: a grid
         stable anywhere in the box)."""
-        span = float(self.t[-1])
+        span = self.span
         reach = 1.1 * span if "delay" in self.free else span
         if dt is None:
             dt, self.grid = choose_dt(self, values)
@@ -159,6 +182,40 @@ class Problem:
                 " too long to simulate for a fit; cut it with --start or a shorter file"
             )
         self.grid.update(dt_s=self.dt, steps=self.steps)
+        self.compression = self._compress()
+
+    def _compress(self) -> reductions.Grouped | None:
+        """The record's reduced rows on this grid (module docstring), or None where it is fitted per sample."""
+        n = self.samples
+        if n <= reductions.BLOCK or "delay" in self.free or n < COMPRESS_PER_STEP * (self.steps + 1):
+            return None
+        delay = float(self.start["delay"])
+        self._compressed_delay = delay
+        return reductions.Grouped(
+            n, lambda index: self._locate(index, delay), 4, lambda index: self.record.values[index]
+        )
+
+    def _locate(self, index: np.ndarray, delay: float) -> tuple[np.ndarray, np.ndarray]:
+        """(group, Hermite basis (m, 4)) of the samples `index` on the grid: group k + 1 for grid step k (as
+        `hermite` places them), 0 for a sample before the delay (basis (1, 0, 0, 0): the held value)."""
+        s = self.times(index) - delay
+        x = np.clip(s, 0.0, None) / self.dt
+        i = np.minimum(np.floor(x).astype(int), self.steps - 1)
+        u = x - i
+        u2, u3 = u * u, u * u * u
+        basis = np.column_stack([2 * u3 - 3 * u2 + 1, u3 - 2 * u2 + u, -2 * u3 + 3 * u2, u3 - u2])
+        held = s < 0
+        basis[held] = (1.0, 0.0, 0.0, 0.0)
+        return np.where(held, 0, i + 1), basis
+
+    @property
+    def t(self) -> np.ndarray:
+        """(n,) times since the origin [s] of every sample (a new array: `times` reads some)."""
+        return self.record.model_time
+
+    def times(self, index: np.ndarray | slice) -> np.ndarray:
+        """Times since the origin [s] of the samples `index` (equal to `t[index]`, without holding `t`'s copy)."""
+        return self.record.time[index] - self.record.origin
 
     # -- values ----------------------------------------------------------------
 
@@ -263,33 +320,78 @@ class Problem:
         state: np.ndarray | None = None,
         **_: Any,
     ) -> tuple[np.ndarray, sysid.TimeSeries, sysid.TimeSeries]:
-        """sysid's residual hook: the candidate's signal at the recorded times minus the record, scaled."""
+        """sysid's residual hook: the candidate's signal at the recorded times minus the record, scaled (on a
+        compressed record: its reduced rows, W c - z, against the reduced record z that `solve` hands sysid)."""
         from mujoco import sysid
 
         assert state is not None, "sysid passes every rollout's states as state="
         values = self.values_of(params)
-        y = self.predict(model, values, state)
-        residual = (y - self.record.values) / self.scale
+        if self.compression is not None:
+            assert values["delay"] == self._compressed_delay, "the reduction was made for this fixed delay"
+            y = self.compression.model(self.coefficients(model, values, state))
+            residual = (y - self.compression.data) / self.scale
+        else:
+            y = self.predict(model, values, state)
+            residual = (y - self.record.values) / self.scale
         fitted = sysid.TimeSeries(measured.times, y[:, None], measured.signal_mapping)
         return residual, fitted, measured
 
-    def predict(self, model: mujoco.MjModel, values: dict[str, float], state: np.ndarray) -> np.ndarray:
-        """The signal at the recorded times [signal unit] from a rollout's states ((steps, nstate), t = dt on)."""
+    def grid_signal(
+        self, model: mujoco.MjModel, values: dict[str, float], state: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, float]:
+        """(the signal on the grid, its slope, the held value) [signal unit, per s] from a rollout's states
+        ((steps, nstate), t = dt on), before the offset."""
         joint = model.joint(self.how.joint)
         q = np.concatenate([[values["x0"]], state[:, 1 + joint.qposadr[0]]])
         v = np.concatenate([[values["v0"]], state[:, 1 + model.nq + joint.dofadr[0]]])
-        s = self.t - values["delay"]
         if self.record.signal == "pos":
-            y = hermite(s, self.dt, q, v)
-            held = values["x0"]
-        elif self.record.signal == "vel":
-            y = hermite(s, self.dt, v, derivative(v, self.dt))
-            held = 0.0
-        else:
-            a = derivative(v, self.dt)
-            y = hermite(s, self.dt, a, derivative(a, self.dt))
-            held = 0.0
-        return np.where(s < 0, held, y) + values["offset"]
+            return q, v, values["x0"]
+        if self.record.signal == "vel":
+            return v, derivative(v, self.dt), 0.0
+        a = derivative(v, self.dt)
+        return a, derivative(a, self.dt), 0.0
+
+    def predict(self, model: mujoco.MjModel, values: dict[str, float], state: np.ndarray) -> np.ndarray:
+        """The signal at the recorded times [signal unit] from a rollout's states ((steps, nstate), t = dt on)."""
+        return self.read(self.grid_signal(model, values, state), values, slice(None))
+
+    def read(
+        self, grid: tuple[np.ndarray, np.ndarray, float], values: dict[str, float], index: np.ndarray | slice
+    ) -> np.ndarray:
+        """The signal at the samples `index` [signal unit] from `grid_signal`'s (signal, slope, held value)."""
+        y, dy, held = grid
+        s = self.times(index) - values["delay"]
+        return np.where(s < 0, held, hermite(s, self.dt, y, dy)) + values["offset"]
+
+    def coefficients(self, model: mujoco.MjModel, values: dict[str, float], state: np.ndarray) -> np.ndarray:
+        """(steps + 1, 4) the Hermite coefficients of a rollout by group (`_locate`): the held value, then per
+        grid step its end values (plus the offset) and dt times its end slopes [signal unit]."""
+        y, dy, held = self.grid_signal(model, values, state)
+        offset = values["offset"]
+        c = np.zeros((self.steps + 1, 4))
+        c[0, 0] = held + offset
+        c[1:, 0], c[1:, 1] = y[:-1] + offset, self.dt * dy[:-1]
+        c[1:, 2], c[1:, 3] = y[1:] + offset, self.dt * dy[1:]
+        return c
+
+    def simulate(self, values: dict[str, float]) -> tuple[np.ndarray, np.ndarray, float]:
+        """`grid_signal` of one rollout at these values (as sysid's rollout makes it)."""
+        from mujoco import rollout
+
+        model = self.compile(self.how.scene_params(values, self.base, self.modal))
+        state, control = self.initial(model, values)
+        with quiet_mujoco():
+            states, _ = rollout.rollout(model, mujoco.MjData(model), state[None], control[None, :-1], nstep=self.steps)
+        return self.grid_signal(model, values, states[0])
+
+    def signal(self, values: dict[str, float]) -> np.ndarray:
+        """(n,) the model's signal at every recorded time at these values [signal unit]: one rollout, read in
+        blocks of samples (the fitted signal of a compressed record)."""
+        grid = self.simulate(values)
+        out = np.empty(self.samples)
+        for start, stop in reductions.blocks(self.samples):
+            out[start:stop] = self.read(grid, values, slice(start, stop))
+        return out
 
 
 def hermite(s: np.ndarray, dt: float, y: np.ndarray, dy: np.ndarray) -> np.ndarray:
@@ -326,7 +428,11 @@ def solve(problem: Problem, record: Record) -> dict[str, Any]:
     state0, control0 = problem.initial(model0, problem.start)
     grid = np.arange(problem.steps + 1) * problem.dt
     mapping = {"fit_signal": (sysid.SignalType.MjSensor, np.array([0]))}
-    measured = sysid.TimeSeries(record.time, record.values[:, None], mapping)
+    if problem.compression is not None:  # the reduced record, its rows numbered (module docstring)
+        rows = problem.compression.rows
+        measured = sysid.TimeSeries(np.arange(rows, dtype=float), problem.compression.data[:, None], mapping)
+    else:
+        measured = sysid.TimeSeries(record.time, record.values[:, None], mapping)
     with _quiet_sysid(), quiet_mujoco():
         sequence = sysid.ModelSequences("record", spec, "record", state0, sysid.TimeSeries(grid, control0), measured)
     residual_fn = sysid.build_residual_fn(
@@ -392,7 +498,7 @@ def _keep_last_jacobian(trace: list) -> None:
 def _typical(problem: Problem, name: str) -> float:
     """A magnitude for scaling a free name when its start is 0."""
     amplitude = float(np.ptp(problem.record.values)) or 1.0
-    span = float(problem.t[-1])
+    span = problem.span
     rate = problem.fastest_rate(problem.start) or 1.0 / span
     return {
         "v0": amplitude * rate,
@@ -441,7 +547,7 @@ def error_bound(problem: Problem, values: dict[str, float], dt: float, roundoff:
     if system is None:
         return 0.0
     a, rest = system
-    span = float(problem.t[-1])
+    span = problem.span
     times = np.linspace(0.0, span, 2001)
     known = dict(values, offset=0.0, delay=0.0)
     params = problem.how.scene_params(values, problem.base, problem.modal)
@@ -469,10 +575,10 @@ def _roundoff(span: float, dt: float, size: float) -> float:
 
 def choose_dt(problem: Problem, values: dict[str, float]) -> tuple[float, dict[str, Any]]:
     """The grid's timestep [s] for the fit's accuracy at `values`, and how it was chosen (module docstring)."""
-    span = float(problem.t[-1])
-    n = problem.t.size
+    span = problem.span
+    n = problem.samples
     needed = ACCURACY_IN_SE * problem.noise / math.sqrt(n)
-    spacing = float(np.median(np.diff(problem.record.time))) if n > 1 else span
+    spacing = problem.spacing
     facts: dict[str, Any] = {"integrator": "rk4", "noise": problem.noise, "needed_error": needed}
     facts["median_sample_spacing_s"] = spacing
     system = problem.how.system(values, problem.base, problem.modal, problem.force)
@@ -504,7 +610,7 @@ def choose_dt(problem: Problem, values: dict[str, float]) -> tuple[float, dict[s
 def _described(problem: Problem, values: dict[str, float], dt: float) -> dict[str, Any]:
     """A grid of `dt` [s] at `values` in fit.json's `timestep` terms: its error bound [signal unit] (round-off
     alone for a model without a mode), |lambda| dt and compare's estimate range (None without a mode)."""
-    span = float(problem.t[-1])
+    span = problem.span
     system = problem.how.system(values, problem.base, problem.modal, problem.force)
     if system is None:
         size = float(np.max(np.abs(problem.record.values))) or 1.0
@@ -522,7 +628,9 @@ def accuracy(problem: Problem, solved: dict[str, Any]) -> dict[str, Any]:
 
     e, the simulated signal against the closed form at every sample, moves the least-squares estimate by
     J^+ e to first order (e is small: first order is all there is); 'ratio' <= 1 when no estimate moves by
-    more than max(ACCURACY_IN_SE standard errors, EXACT_ACCURACY x the name's scale).
+    more than max(ACCURACY_IN_SE standard errors, EXACT_ACCURACY x the name's scale). On a compressed record
+    e is taken to the reduced rows with the same rotations (reductions.Grouped.reduce), where the reduced
+    Jacobian's pseudo-inverse gives the same J^+ e.
 
     Returns
     -------
@@ -535,21 +643,36 @@ def accuracy(problem: Problem, solved: dict[str, Any]) -> dict[str, Any]:
     values = problem.values(x)
     params = problem.how.scene_params(values, problem.base, problem.modal)
     residual = np.concatenate(solved["residuals"])  # scaled: (model - data) / problem.scale
-    fitted = problem.record.values + residual * problem.scale
-    closed = problem.how.closed_form(problem.t, params, values, problem.record.signal, problem.force)
-    gap = (fitted - closed) / problem.scale
+    how, signal = problem.how, problem.record.signal
+    if problem.compression is None:
+        fitted = problem.record.values + residual * problem.scale
+        closed = how.closed_form(problem.t, params, values, signal, problem.force)
+        gap = (fitted - closed) / problem.scale
+        error = float(np.max(np.abs(gap))) * problem.scale
+    else:
+        grid = problem.simulate(values)
+        largest = [0.0]
+
+        def samples_gap(index: np.ndarray) -> np.ndarray:
+            closed = how.closed_form(problem.times(index), params, values, signal, problem.force)
+            part = (problem.read(grid, values, index) - closed) / problem.scale
+            largest[0] = max(largest[0], float(np.max(np.abs(part))))
+            return part
+
+        gap = problem.compression.reduce(samples_gap)
+        error = largest[0] * problem.scale
     scale = np.asarray(solved["scale"], float)
     u, sv, vt = np.linalg.svd(np.asarray(solved["jacobian"], float) * scale, full_matrices=False)
     keep = sv > 0
     effect = (vt[keep].T @ ((u[:, keep].T @ gap) / sv[keep])) * scale  # J^+ e in the names' units
     inverse = (vt[keep].T / sv[keep] ** 2) @ vt[keep]  # (J^T J)^-1 in names scaled to O(1)
-    n, p = residual.size, x.size
+    n, p = problem.samples, x.size
     sigma = math.sqrt(float(residual @ residual) / max(n - p, 1))
     standard_error = np.sqrt(np.clip(np.diag(inverse), 0.0, None)) * scale * sigma
     allowed = np.maximum(ACCURACY_IN_SE * standard_error, EXACT_ACCURACY * scale)
     size = np.abs(effect)
     return {
-        "error": float(np.max(np.abs(gap))) * problem.scale,
+        "error": error,
         "effect": effect,
         "standard_error": standard_error,
         "allowed": allowed,
@@ -557,3 +680,11 @@ def accuracy(problem: Problem, solved: dict[str, Any]) -> dict[str, Any]:
         "in_standard_errors": float(np.max(size / np.where(standard_error > 0, standard_error, np.inf))) if p else 0.0,
         "noise": sigma * problem.scale,
     }
+
+
+def residual_rms(problem: Problem, residual: np.ndarray) -> float:
+    """RMS [signal unit] of the record minus the model, from sysid's (scaled) residual: per sample, or the
+    reduced rows, whose squares sum to the per-sample sum (reductions.Grouped), over the true n samples."""
+    if problem.compression is None:
+        return float(np.sqrt(np.mean(residual**2))) * problem.scale
+    return math.sqrt(float(residual @ residual) / problem.samples) * problem.scale

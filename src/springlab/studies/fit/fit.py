@@ -22,17 +22,18 @@ from typing import Any
 
 import numpy as np
 
-from springlab import scenes
+from springlab import progress, scenes
 from springlab.errors import BadInputError, ParameterError, SpringlabError
 from springlab.runs.run import Result, run_scenario
 from springlab.scenes.base import Scenario
 from springlab.studies.executor import Executor
 from springlab.studies.fit import data as fit_data
+from springlab.studies.fit import reductions
 from springlab.studies.fit import release as fit_release
 from springlab.studies.fit import results as fit_results
 from springlab.studies.fit import starts as fit_starts
 
-from .engine import Problem, accuracy, check_identifiable, choose_dt, solve
+from .engine import Problem, accuracy, check_identifiable, choose_dt, residual_rms, solve
 from .models import ALIASES, FitModel, PolynomialModel, model_of, not_fittable
 from .results import FitResult
 
@@ -99,7 +100,8 @@ def fit(
         processes, a running dask scheduler's address, or an Executor; none: in this process. Same numbers
         either way. A single start always runs in this process.
     show_progress
-        A progress bar while a large file is read (None: on a terminal only; False: never).
+        Progress bars while a large file is read and a long record (more than reductions.BLOCK samples) is
+        fitted (None: on a terminal only; False: never).
     **parameters
         Fixed values: scene parameters (e.g. mass=2.0 [kg]) and
         x0 [m], v0 [m/s], offset [signal unit], delay [s].
@@ -172,24 +174,33 @@ def fit(
             fixed["x0"] = float(record.values[0]) if record.signal == "pos" else how.equilibrium(base)
         if "v0" not in free and "v0" not in fixed:
             fixed["v0"] = 0.0
-    if starts > 1 and executor is None:
-        with Executor(workers=workers, scheduler=scheduler, progress=False) as own:
-            problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force, starts, own)
-    else:
-        problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force, starts, executor)
-    if isinstance(how, PolynomialModel) and not free_given and degree is None:
-        # the degree is chosen: drop the highest coefficient while its 95 % interval contains 0
-        result = _finish(problem, solved, None, run_scene=False)
-        while len(free) > 1:
-            low, high = result.estimates[free[-1]]["ci95"]
-            if not low <= 0.0 <= high:
-                break
-            note = f"degree chosen: {free[-1]}'s 95 % interval [{low:.3g}, {high:.3g}] contains 0"
-            record = dataclasses.replace(record, notes=(*record.notes, note))
-            free = free[:-1]
-            problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force)
+    # a long record's fit takes seconds: its stages on a terminal (a short one's would only flicker)
+    long = record.time.size > reductions.BLOCK
+    with progress.bar(
+        2, description="fitting: optimizing", unit="stage", enabled=show_progress if long else False
+    ) as bar:
+        if starts > 1 and executor is None:
+            with Executor(workers=workers, scheduler=scheduler, progress=False) as own:
+                problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force, starts, own)
+        else:
+            problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force, starts, executor)
+        if isinstance(how, PolynomialModel) and not free_given and degree is None:
+            # the degree is chosen: drop the highest coefficient while its 95 % interval contains 0
             result = _finish(problem, solved, None, run_scene=False)
-    return _finish(problem, solved, runs, run_scene, release)
+            while len(free) > 1:
+                low, high = result.estimates[free[-1]]["ci95"]
+                if not low <= 0.0 <= high:
+                    break
+                note = f"degree chosen: {free[-1]}'s 95 % interval [{low:.3g}, {high:.3g}] contains 0"
+                record = dataclasses.replace(record, notes=(*record.notes, note))
+                free = free[:-1]
+                problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force)
+                result = _finish(problem, solved, None, run_scene=False)
+        bar.update(1)
+        bar.set_description("fitting: intervals, cross-check, scene run")
+        result = _finish(problem, solved, runs, run_scene, release)
+        bar.update(1)
+    return result
 
 
 def _identify(
@@ -280,8 +291,6 @@ def _finish(
 ) -> FitResult:
     """The FitResult: intervals, derived quantities, cross-check, the starts' record (`runs`: None for a single
     start), the decision on where the motion starts (`release`) and the identified scene's run."""
-    from mujoco import sysid
-
     how, record, free = problem.how, problem.record, problem.free
     spacing = problem.grid.get("median_sample_spacing_s") or 0.0
     if spacing > 0 and problem.dt >= DENSE * spacing:
@@ -289,20 +298,30 @@ def _finish(
             f"data denser than the model needs: {problem.dt / spacing:.3g} samples per simulation step of"
             f" {problem.dt:.3g} s (the model runs at the step its accuracy needs and is read at every sample)"
         )
+        if problem.compression is not None:
+            note += (
+                f"; fitted on {problem.compression.rows} rows that reduce the {problem.samples} samples"
+                " exactly (the same estimates and intervals; docs/fit.md, big files)"
+            )
         record = dataclasses.replace(record, notes=(*record.notes, note))
     x, jacobian = solved["x"], solved["jacobian"]
     check_identifiable(problem, jacobian)
     # in parameters scaled to O(1): sysid's zero-eigenvalue threshold is relative, and k ~ 1e6 N/m beside
     # an offset ~ 1e-3 m would otherwise look singular
     scale = np.array(solved["scale"])
-    covariance, half = sysid.calculate_intervals(solved["residuals"], jacobian * scale)
+    n, p = record.time.size, len(free)
+    covariance, half = fit_results.intervals(solved["residuals"], jacobian * scale, n)
     covariance = np.asarray(covariance, float) * np.outer(scale, scale)
     half = np.asarray(half, float) * scale
-    n, p = record.time.size, len(free)
     dof = n - p
-    residual = np.concatenate(solved["residuals"]) * problem.scale
-    fitted = record.values + residual
     values = problem.values(x)
+    if problem.compression is None:
+        residual = np.concatenate(solved["residuals"]) * problem.scale
+        fitted = record.values + residual
+        rms = float(np.sqrt(np.mean(residual**2)))
+    else:  # sysid saw the reduced rows: the signal at every sample from one more rollout at the estimate
+        fitted = problem.signal(values)
+        rms = residual_rms(problem, np.concatenate(solved["residuals"]))
     units = how.units()
     estimates: dict[str, dict[str, Any]] = {}
     for i, name in enumerate(free):
@@ -345,7 +364,7 @@ def _finish(
         derived=derived,
         correlation=correlation,
         covariance=covariance,
-        residual_rms=float(np.sqrt(np.mean(residual**2))),
+        residual_rms=rms,
         dof=dof,
         parameters=params,
         fitted=fitted,
@@ -376,7 +395,7 @@ def _finish(
 
 def _curves(problem: Problem, x: np.ndarray, covariance: np.ndarray, quantile: float) -> dict[str, Any]:
     """A polynomial's x(t), v(t), a(t) with 95 % bands on 41 times over the record."""
-    t = np.linspace(0.0, float(problem.t[-1]), 41)
+    t = np.linspace(0.0, problem.span, 41)
     out: dict[str, Any] = {"time_s": (t + problem.record.origin).tolist()}
     for signal in ("pos", "vel", "acc"):
 
@@ -398,7 +417,7 @@ def _scene_run(
     """The identified scene's own run over the record's span, or (None, why not)."""
     overrides, note = problem.how.run_parameters(params, values, moving)
     try:
-        run = run_scenario(problem.how.name, problem.scenario.name, duration=float(problem.t[-1]), **overrides)
+        run = run_scenario(problem.how.name, problem.scenario.name, duration=problem.span, **overrides)
     except SpringlabError as error:
         return None, f"the identified scene could not be run: {error}"
     return run, note

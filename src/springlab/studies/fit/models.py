@@ -39,6 +39,7 @@ from springlab.exact import analytic
 from springlab.scenes.base import Scene
 from springlab.scenes.capabilities import OscillatorFit, PolynomialFit
 
+from . import reductions
 from .data import Record
 
 #: modal names of an oscillator and their units
@@ -211,7 +212,7 @@ class FitModel:
 
     def amplitude(self, fitted: np.ndarray, level: float) -> float:
         """The motion's size in the fitted signal [signal unit], about `level` (the rest level) where it has one."""
-        return float(np.max(np.abs(fitted - level)))
+        return max(float(np.max(np.abs(fitted[a:b] - level))) for a, b in reductions.blocks(fitted.size))
 
 
 class OscillatorModel(FitModel):
@@ -390,23 +391,28 @@ class OscillatorModel(FitModel):
         physical = self.scene_params(values, params, modal=True)
         m, k, d = self.mode_mass(physical), physical[self.stiffness], physical[self.damping]
         eq = self.equilibrium(physical)
-        t = record.model_time
-        columns, names = [], []
-        for name, (x0, v0) in (("x0", (1.0, 0.0)), ("v0", (0.0, 1.0))):
-            if name in free:
-                x, v = analytic.free_response(t, m, k, d, x0, v0)
-                columns.append({"pos": x, "vel": v, "acc": -(k * x + d * v) / m}[record.signal])
-                names.append(name)
-        if "offset" in free:
-            columns.append(np.ones_like(t))
-            names.append("offset")
-        if columns:
+        names = [name for name in ("x0", "v0", "offset") if name in free]
+        if names:
             known = dict(values, offset=values["offset"] if "offset" not in free else 0.0)
             for name in names:
                 if name in ("x0", "v0"):
                     known[name] = eq if name == "x0" else 0.0
-            base = self.closed_form(t, physical, dict(known, delay=0.0), record.signal, force)
-            solution = np.linalg.lstsq(np.column_stack(columns), record.values - base, rcond=None)[0]
+
+            def rows(start: int, stop: int) -> tuple[np.ndarray, np.ndarray]:
+                """The linear names' columns and the data less the rest, for samples start..stop-1."""
+                t = record.time[start:stop] - record.origin
+                columns = []
+                for name, (x0, v0) in (("x0", (1.0, 0.0)), ("v0", (0.0, 1.0))):
+                    if name in free:
+                        x, v = analytic.free_response(t, m, k, d, x0, v0)
+                        columns.append({"pos": x, "vel": v, "acc": -(k * x + d * v) / m}[record.signal])
+                if "offset" in free:
+                    columns.append(np.ones_like(t))
+                base = self.closed_form(t, physical, dict(known, delay=0.0), record.signal, force)
+                return np.column_stack(columns), record.values[start:stop] - base
+
+            # over blocks of samples for a long record (springlab.studies.fit.reductions: the same solution)
+            solution = reductions.lstsq(record.time.size, rows)
             for name, value in zip(names, solution):
                 values[name] = float(value) + (eq if name == "x0" else 0.0)
         return values
@@ -437,7 +443,7 @@ class OscillatorModel(FitModel):
     def bounds(self, name: str, start: float, record: Record) -> tuple[float, float]:
         """Box bounds of a free name around its start value (wide: they only keep the model physical)."""
         scale = float(np.ptp(record.values)) + abs(float(np.mean(record.values))) + 1e-12
-        span = float(record.model_time[-1])
+        span = float(record.time[-1] - record.origin)
         if name == "omega_n":
             return start / 10.0, start * 10.0
         if name == "zeta":
@@ -587,26 +593,30 @@ class PolynomialModel(FitModel):
         """Linear least squares on the monomials: exact for a polynomial (the MuJoCo fit then confirms it)."""
         values = self.values_from_params(params) | {n: 0.0 for n in self.coefficients}
         values.update({k: v for k, v in fixed.items() if k in values})
-        t = record.model_time
-        monomials = (
-            {"pos": np.ones_like(t)},
-            {"pos": t, "vel": np.ones_like(t)},
-            {"pos": t**2 / 2, "vel": t, "acc": np.ones_like(t)},
-            {"pos": t**3 / 6, "vel": t**2 / 2, "acc": t},
-        )
-        basis = dict(zip(self.coefficients, monomials))
         names = [n for n in self.coefficients if n in free]
-        known = self.closed_form(t, params, {**values, **{n: 0.0 for n in names}}, record.signal)
-        if names:
-            matrix = np.column_stack([basis[n][record.signal] for n in names])
-            solution = np.linalg.lstsq(matrix, record.values - known, rcond=None)[0]
+
+        def rows(start: int, stop: int) -> tuple[np.ndarray, np.ndarray]:
+            """The free coefficients' monomials and the data less the rest, for samples start..stop-1."""
+            t = record.time[start:stop] - record.origin
+            monomials = (
+                {"pos": np.ones_like(t)},
+                {"pos": t, "vel": np.ones_like(t)},
+                {"pos": t**2 / 2, "vel": t, "acc": np.ones_like(t)},
+                {"pos": t**3 / 6, "vel": t**2 / 2, "acc": t},
+            )
+            basis = dict(zip(self.coefficients, monomials))
+            known = self.closed_form(t, params, {**values, **{n: 0.0 for n in names}}, record.signal)
+            return np.column_stack([basis[n][record.signal] for n in names]), record.values[start:stop] - known
+
+        if names:  # over blocks of samples for a long record (springlab.studies.fit.reductions: the same solution)
+            solution = reductions.lstsq(record.time.size, rows)
             values.update({n: float(v) for n, v in zip(names, solution)})
         return values
 
     def bounds(self, name: str, start: float, record: Record) -> tuple[float, float]:
         """Box bounds of a coefficient: wide (a polynomial is linear in them)."""
         scale = float(np.max(np.abs(record.values))) + 1.0
-        width = 1e3 * scale * (1.0 + float(record.model_time[-1])) ** 3
+        width = 1e3 * scale * (1.0 + float(record.time[-1] - record.origin)) ** 3
         return start - width, start + width
 
     def derived(self, values: dict[str, float], base: dict[str, float], modal: bool) -> dict[str, float]:

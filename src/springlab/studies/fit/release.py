@@ -42,6 +42,7 @@ import numpy as np
 from springlab.errors import SpringlabError
 
 from . import data as fit_data
+from . import reductions
 from .data import Record
 from .models import FitModel
 
@@ -163,16 +164,16 @@ def held_start(
     if span == 0:
         return Release("moving", t0, noise=sigma, reason=f"{first}: the signal never changes")
     level = float(np.median(y[:5]))
-    off = np.flatnonzero(np.abs(y - level) > BAND * sigma)
-    if not off.size or off[0] < MIN_HELD:
+    off = _first_off(y, level, BAND * sigma)
+    if off is None or off < MIN_HELD:
         band = f"the band of {BAND:g} noise levels around its first level"
         why = (
-            f"{first}: it leaves {band} within {int(off[0]) + 1} sample(s)"
-            if off.size
+            f"{first}: it leaves {band} within {off + 1} sample(s)"
+            if off is not None
             else f"{first}: it never leaves {band}"
         )
         return Release("moving", t0, noise=sigma, reason=why)
-    exit_ = int(off[0])
+    exit_ = off
     names = [n for n in free if n != "delay"]
     for name in ("x0", "v0"):  # the test needs the motion's own state at the start, unless the user gave it
         if name in how.units() and name not in names and name not in fixed:
@@ -189,8 +190,8 @@ def held_start(
         why = f"{first}: a held start explains the first {exit_} samples no better than the motion ({odds}, {rate})"
         return Release("moving", t0, statistic=statistic, threshold=threshold, noise=sigma, reason=why)
     held_level = float(np.mean(y[:release_index]))
-    after = np.flatnonzero((np.abs(y - held_level) > BAND * sigma) & (np.arange(y.size) >= release_index))
-    start_index = int(after[0]) if after.size else exit_
+    after = _first_off(y, held_level, BAND * sigma, release_index)
+    start_index = after if after is not None else exit_
     release = float(record.time[release_index])
     start = float(record.time[start_index])
     why = (
@@ -320,6 +321,16 @@ def _change_point(
             near = candidates.index(best_j)
             best_j = min(candidates[max(near - coarse, 0) : near + coarse + 1], key=misfit)
     return best, threshold, int(rows[best_j])
+
+
+def _first_off(y: np.ndarray, level: float, band: float, begin: int = 0) -> int | None:
+    """Index of the first sample from `begin` on more than `band` off `level` [signal unit] (None: none), read in
+    blocks of samples: the answer is near the start, and a long record is never copied whole."""
+    for start, stop in reductions.blocks(y.size - begin):
+        off = np.flatnonzero(np.abs(y[begin + start : begin + stop] - level) > band)
+        if off.size:
+            return begin + start + int(off[0])
+    return None
 
 
 def _typical(name: str, y: np.ndarray, t: np.ndarray) -> float:

@@ -52,7 +52,7 @@ from springlab.errors import BadInputError, DivergedError
 from springlab.studies.executor import Executor, resolve
 from springlab.studies.fit import data as fit_data
 
-from .engine import Problem, solve
+from .engine import Problem, residual_rms, solve
 from .models import model_of
 
 #: free names that enter the response linearly: they keep start 1's values in every start
@@ -205,7 +205,7 @@ def run_start(payload: dict[str, Any], nthread: int = 0) -> dict[str, Any]:
         "iterations": solved["iterations"],
         "scale": np.asarray(solved["scale"], float),
         "cost": cost if math.isfinite(cost) else math.inf,
-        "residual_rms": float(np.sqrt(np.mean(residual**2))) * problem.scale,
+        "residual_rms": residual_rms(problem, residual),
         "rollouts": problem.rollouts,
         "rollout_time_s": problem.rollout_time,
         "wall_time_s": solved["wall_time_s"],
