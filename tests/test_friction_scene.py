@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import springlab
+from springlab.cli.main import main
 from springlab.errors import ParameterError
 from springlab.runs.compare import CERTIFIED_CAP, Verdict
 
@@ -99,12 +100,15 @@ def test_the_decays_count_their_half_cycles_against_the_exact_ones():
         (["friction-settings", "slider"], "declares no dry-friction cases"),
     ],
 )
-def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path, argv, fragment):
+def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path, argv, fragment, capsys, monkeypatch):
+    # in process (the command line's own entry point): an interpreter per case cost a second each
+    monkeypatch.chdir(tmp_path)
     out = tmp_path / "out"
-    done = _springlab(*argv, "--output", str(out), cwd=tmp_path)
-    assert done.returncode == 2, done.stderr
-    lines = done.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("springlab: error:") and fragment in lines[0], done.stderr
+    code = main([*argv, "--output", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("springlab: error:") and fragment in lines[0], err
     assert not out.exists() and not list(tmp_path.glob("MUJOCO_LOG*"))
 
 
