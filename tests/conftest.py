@@ -74,8 +74,10 @@ _TESTS = os.path.dirname(os.path.abspath(__file__))
 
 
 def _shared_fixture(item: pytest.Item) -> str | None:
-    """The first module- or session-scoped fixture of this test suite that `item` reads, as a group name."""
+    """The shared fixture of this test suite that `item` reads, as a group name: a session-scoped one first
+    (a module fixture built on it then joins its group), else the first module-scoped one."""
     infos = getattr(item, "_fixtureinfo", None)
+    found: dict[str, str] = {}
     for name in getattr(infos, "names_closure", ()):
         definitions = infos.name2fixturedefs.get(name)
         if not definitions:
@@ -83,8 +85,9 @@ def _shared_fixture(item: pytest.Item) -> str | None:
         definition = definitions[-1]
         source = os.path.abspath(inspect.getfile(definition.func))
         if definition.scope in ("module", "session") and source.startswith(_TESTS):
-            return name if definition.scope == "session" else f"{item.module.__name__}.{name}"
-    return None
+            group = name if definition.scope == "session" else f"{item.module.__name__}.{name}"
+            found.setdefault(definition.scope, group)
+    return found.get("session", found.get("module"))
 
 
 def pytest_itemcollected(item: pytest.Item) -> None:

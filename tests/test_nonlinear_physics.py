@@ -306,8 +306,10 @@ def test_phase_field_is_mujocos_acceleration():
 
 
 @pytest.fixture(scope="module")
-def forced():
-    return springlab.run("nonlinear", "forced_duffing")
+def forced(scenario_run):
+    # springlab.run("nonlinear", "forced_duffing") validates the scenario's own settings (rk4, 1 ms): the
+    # session's shared run of them (tests/conftest.py), whose chaos figures cost 5 s
+    return scenario_run("nonlinear", "forced_duffing")
 
 
 @pytest.mark.slow
