@@ -27,8 +27,12 @@ def _decode(path):
 
 def _block_mask(frames):
     """Pixels of the slider's orange block (material rgba 0.85 0.33 0.18), any shading of it."""
-    r, g, b = (frames[..., i].astype(int) for i in range(3))
-    return (r > 90) & (r > 2 * g) & (r > 2.5 * b)
+    # frame by frame in int16: a whole video as int64 channels and float products is gigabytes
+    masks = []
+    for frame in frames:
+        r, g, b = (frame[..., i].astype(np.int16) for i in range(3))
+        masks.append((r > 90) & (r > 2 * g) & (r > 2.5 * b))
+    return np.array(masks)
 
 
 @pytest.fixture(scope="module")

@@ -27,7 +27,12 @@ def _decode(path):
 
 
 def _rgb(frames):
-    return (frames[..., i].astype(int) for i in range(3))
+    return (frames[..., i].astype(np.int16) for i in range(3))  # int16: a video in int64 is gigabytes
+
+
+def _per_frame(mask, frames):
+    """mask(frames) evaluated one frame at a time: its float products stay one frame large."""
+    return np.concatenate([mask(frames[i : i + 1]) for i in range(len(frames))])
 
 
 def _paint(frames):
@@ -56,7 +61,7 @@ def test_the_exaggerated_car_body_follows_the_heave_by_at_least_ten_pixels(tmp_p
     info = media.render_run(result, tmp_path / "car.mp4", progress=False)
     assert info["exaggeration"] > 1  # a 4.9 mm motion of a 4.2 m car is magnified by default
     frames = _decode(tmp_path / "car.mp4")
-    row = _row_centroid(_paint(frames))
+    row = _row_centroid(_per_frame(_paint, frames))
     heave = np.interp(_frame_times(info, float(result.time[-1])), result.time, result.pos["heave"])
     assert abs(np.corrcoef(row, heave)[0, 1]) > 0.99
     assert np.ptp(row) >= 10  # [px]
@@ -107,8 +112,12 @@ def test_the_printer_move_is_slowed_to_many_frames_and_the_carriage_follows_its_
     frequency = max(omega for omega, _ in belt_hz) / (2 * math.pi)
     assert info["fps"] * info["slow_motion"] / frequency >= render_scale.FRAMES_PER_PERIOD
     frames = _decode(tmp_path / "move.mp4")
-    r, g, b = _rgb(frames)
-    carriage = (b > 120) & (b > 1.5 * r) & (g > 70) & (g < 0.8 * b)  # material 0.2 0.45 0.8
+
+    def blue(f):  # the carriage's material 0.2 0.45 0.8
+        r, g, b = _rgb(f)
+        return (b > 120) & (b > 1.5 * r) & (g > 70) & (g < 0.8 * b)
+
+    carriage = _per_frame(blue, frames)
     column = _column_centroid(carriage)
     position = np.interp(_frame_times(info, float(result.time[-1])), result.time, result.pos["carriage"])
     assert np.corrcoef(column, position)[0, 1] > 0.99
@@ -165,7 +174,7 @@ def test_the_moving_body_is_inside_the_frame_in_every_frame(scene, scenario, tmp
         progress=False,
     )
     frames = _decode(tmp_path / "v.mp4")
-    mask = _inside_masks()[scene](frames)
+    mask = _per_frame(_inside_masks()[scene], frames)
     assert np.all(mask.sum(axis=(1, 2)) > 30), "the body is visible in every frame"
     border = mask[:, [0, -1], :].any(axis=(1, 2)) | mask[:, :, [0, -1]].any(axis=(1, 2))
     assert not border.any(), f"the body touches the edge in frames {np.flatnonzero(border)[:10]} of {info['frames']}"
