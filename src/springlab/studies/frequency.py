@@ -593,8 +593,10 @@ def _check_band(band: Any) -> tuple[float, float]:
         raise BadInputError(f"band must be (fmin, fmax) in Hz, got {band!r}") from None
     if not (math.isfinite(fmin) and math.isfinite(fmax) and fmin > 0):
         raise BadInputError(f"band must be finite with fmin > 0 Hz (a log-spaced grid), got {fmin:g}:{fmax:g}")
-    if fmin >= fmax:
-        raise BadInputError(f"band is empty: fmin must be below fmax, got {fmin:g}:{fmax:g} Hz")
+    if fmin == fmax:
+        raise BadInputError(f"band is empty ({fmin:g}:{fmax:g} Hz); give FMIN:FMAX with fmin < fmax")
+    if fmin > fmax:
+        raise BadInputError(f"band is inverted: fmin must be below fmax, got {fmin:g}:{fmax:g} Hz")
     return fmin, fmax
 
 
