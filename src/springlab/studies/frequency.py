@@ -30,7 +30,7 @@ import math
 import os
 import pathlib
 import time as _time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
 import mujoco
@@ -248,7 +248,7 @@ class FrequencyResponse:
 
     def to_dict(self) -> dict[str, Any]:
         """frequency.json (docs/json.md lists the keys)."""
-        rows = self.rows()
+        rows = {name: column.tolist() for name, column in self.rows().items()}
         return {
             "source": self.source,
             "description": self.description,
@@ -297,7 +297,7 @@ class _Source:
     description: str
 
 
-def _load(scene_or_model: Any, scenario: str | None) -> _Source:
+def _load(scene_or_model: Any, scenario: str | None, parameters: Mapping[str, Any]) -> _Source:
     """The model to analyse: an MjModel, an MJCF path, or a scene (its declared scenario and edit)."""
     if isinstance(scene_or_model, mujoco.MjModel):
         model = scene_or_model
@@ -309,7 +309,7 @@ def _load(scene_or_model: Any, scenario: str | None) -> _Source:
     if not path.exists() and text in scenes.SCENES:
         scene = scenes.get(text)
         spec = scene.frequency
-        scene, chosen, params = prepare(scene, scenario or (spec.scenario if spec else None), {})
+        scene, chosen, params = prepare(scene, scenario or (spec.scenario if spec else None), dict(parameters))
         model_spec = scene.model_spec()
         scene.edit(model_spec, params, chosen)
         if spec is not None and spec.edit is not None:
@@ -327,8 +327,8 @@ def _load(scene_or_model: Any, scenario: str | None) -> _Source:
             spec.response if spec else None,
             spec.description if spec else "",
         )
-    if scenario is not None:
-        raise BadInputError(f"a scenario ({scenario!r}) goes with a scene name, not with a model file")
+    if scenario is not None or parameters:
+        raise BadInputError("a scenario and parameters go with a scene name, not with a model file")
     if not path.is_file():
         raise BadInputError(f"no such model file or scene {text!r}; scenes: {', '.join(sorted(scenes.SCENES))}")
     try:
@@ -628,6 +628,7 @@ def frequency(
     dt: float | None = None,
     tol: float = DEFAULT_TOL,
     integrators: tuple[str, ...] | None = None,
+    parameters: Mapping[str, Any] | None = None,
 ) -> FrequencyResponse:
     """The frequency response of a model's linearization, and how well an integrator at dt reproduces it.
 
@@ -653,7 +654,9 @@ def frequency(
     tol
         tolerance on the relative complex error |H_d / H - 1| [-], in (0, 1).
     integrators
-        those whose largest dt covering the band is searched (None: MuJoCo's five).
+        those whose largest dt covering the band is searched (None: MuJoCo's five; (): none).
+    parameters
+        a scene's parameter overrides [SI] (as `springlab.run`'s keywords).
 
     Returns
     -------
@@ -666,7 +669,7 @@ def frequency(
         unknown names, an empty or inverted band, a band above Nyquist of dt, a bad number.
     """
     started = _time.perf_counter()
-    source = _load(scene_or_model, scenario)
+    source = _load(scene_or_model, scenario, parameters or {})
     model = source.model
     integrator = source.integrator if integrator is None else integrator
     integrator_id(integrator)
