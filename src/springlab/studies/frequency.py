@@ -736,6 +736,8 @@ def frequency(
         within_tol_hz=within,
         covers_band=within is not None and within[1] >= band[1],
         integrators=tuple(bands),
-        description=source.description or f"{input_name} to {response_name}",
+        description=source.description
+        if (input_name, response_name) == (source.input, source.response) and source.description
+        else f"{input_name} to {response_name}",
         wall_time_s=_time.perf_counter() - started,
     )
