@@ -202,3 +202,14 @@ def test_command_writes_json_csv_and_bode(tmp_path, capsys):
     assert header[0] == "frequency_hz" and "relative_error" in header
     assert {b["integrator"] for b in data["integrators"]} == {"euler", "implicit", "implicitfast", "rk4", "discrete"}
     assert "reproduces" in capsys.readouterr().out
+
+
+def test_an_unwritable_output_fails_before_any_computing(tmp_path, capsys, monkeypatch):
+    def must_not_run(*args, **kwargs):
+        raise AssertionError("computed before checking --output")
+
+    monkeypatch.setattr("springlab.cli.main.run_frequency", must_not_run)
+    blocker = tmp_path / "file"
+    blocker.write_text("a file, not a folder")
+    assert main(["frequency", "slider", "--output", str(blocker / "sub")]) == 2
+    assert "cannot write into output directory" in capsys.readouterr().err
