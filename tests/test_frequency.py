@@ -213,3 +213,23 @@ def test_an_unwritable_output_fails_before_any_computing(tmp_path, capsys, monke
     blocker.write_text("a file, not a folder")
     assert main(["frequency", "slider", "--output", str(blocker / "sub")]) == 2
     assert "cannot write into output directory" in capsys.readouterr().err
+
+
+def test_sinestream_in_mujoco_matches_the_discrete_response_within_its_stated_accuracy():
+    """24 sines from the band's bottom to an octave above it: each MuJoCo estimate within the demodulation's
+    stated accuracy (plus the discrete response's own finite-difference error) of the one-step map's response,
+    and at the top, above the band, exact and discrete part by far more than that, and the estimate follows
+    the discrete one."""
+    result = springlab.frequency("printer_head", band=(20.0, 400.0), points=40, integrators=(), sines=24)
+    stream = result.sinestream
+    assert len(stream.frequencies_hz) == 24 and stream.frequencies_hz[-1] > result.band_hz[1]
+    assert np.all(stream.error_vs_discrete <= stream.bound) and stream.agrees
+    parted = np.abs(stream.discrete / stream.exact - 1.0)
+    assert parted[-1] > 1e3 * stream.bound[-1]
+    assert np.abs(stream.estimate[-1] / stream.exact[-1] - 1.0) == pytest.approx(parted[-1], rel=1e-3)
+    assert json.loads(json.dumps(result.to_dict()))["sinestream"]["agrees"] is True
+
+
+def test_sinestream_needs_an_actuator_input():
+    with pytest.raises(springlab.BadInputError, match="actuator"):
+        springlab.frequency("slider", input="slider", integrators=(), sines=4)

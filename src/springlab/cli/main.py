@@ -357,24 +357,28 @@ def cmd_audit(args: argparse.Namespace) -> int:
 def cmd_frequency(args: argparse.Namespace) -> int:
     if args.output:
         files.check_directory(args.output)  # before the analysis, not after
-    result = run_frequency(
-        args.model,
-        args.scenario,
-        input=args.input,
-        response=args.response,
-        band=args.band,
-        points=args.points,
-        integrator=args.integrator,
-        dt=args.dt,
-        tol=args.tol,
-    )
+    with _executor(args) as executor:
+        result = run_frequency(
+            args.model,
+            args.scenario,
+            input=args.input,
+            response=args.response,
+            band=args.band,
+            points=args.points,
+            integrator=args.integrator,
+            dt=args.dt,
+            tol=args.tol,
+            sines=args.sinestream,
+            executor=executor,
+        )
     if args.output:
         charts_frequency.write_frequency(result, args.output)
     if args.json:
         _print_json(result.to_dict())
     else:
         cli_text.print_frequency(result, args.output)
-    return EXIT_OK if result.covers_band else EXIT_FAILED
+    agrees = result.sinestream is None or result.sinestream.agrees
+    return EXIT_OK if result.covers_band and agrees else EXIT_FAILED
 
 
 def cmd_stability(args: argparse.Namespace) -> int:
@@ -726,8 +730,16 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="TOL",
         help="tolerance on the relative error |H_d / H - 1| in (0, 1) (default 1e-3)",
     )
+    p.add_argument(
+        "--sinestream",
+        type=int,
+        default=0,
+        metavar="N",
+        help="verify by simulating N sines in MuJoCo over the band and an octave above (default 0: none)",
+    )
     p.add_argument("--output", metavar="DIR", help="write DIR/frequency.json, frequency.csv and bode.png")
     p.add_argument("--json", action="store_true", help="print frequency.json")
+    _executor_arguments(p)
     COMMANDS["frequency"] = cmd_frequency
 
     p = sub.add_parser("design", help="design study: positioning time over a property sweep, ranked sensitivities")

@@ -2,7 +2,7 @@
 never simulates).
 
 bode.png has three panels sharing the log-frequency axis: the magnitude (exact: black; the integrator's
-discrete-time response: coloured, dashed), the phase [deg], and the relative error |H_d / H - 1| with the
+discrete-time response: coloured, dashed; the sinestream's MuJoCo estimates: circles), the phase [deg], and the relative error |H_d / H - 1| with the
 held input's own floor (grey, dotted) and the tolerance (dotted line). Resonances are marked (triangles,
 labelled with frequency and damping ratio), anti-resonances (circles); the band within tol is shaded.
 """
@@ -49,6 +49,29 @@ def plot_bode(result: FrequencyResponse, path: str | pathlib.Path) -> pathlib.Pa
     err_ax.loglog(f, np.maximum(rows["relative_error"], 1e-17), color=color, label=f"{setting}")
     err_ax.loglog(f, np.maximum(rows["hold_error"], 1e-17), ":", color="0.5", label="held input alone (exact ZOH)")
     err_ax.axhline(result.tol, color="k", linestyle=":", linewidth=1, label=f"tol {result.tol:g}")
+    stream = result.sinestream
+    if stream is not None:
+        estimate = stream.estimate
+        mag_ax.loglog(
+            stream.frequencies_hz,
+            np.abs(estimate),
+            "o",
+            color=color,
+            fillstyle="none",
+            label="sinestream (MuJoCo runs)",
+        )
+        phase = np.degrees(np.angle(estimate))
+        reference = np.interp(stream.frequencies_hz, f, rows["discrete_phase_deg"])
+        phase = phase + 360.0 * np.round((reference - phase) / 360.0)  # on the unwrapped curve's branch
+        phase_ax.semilogx(stream.frequencies_hz, phase, "o", color=color, fillstyle="none")
+        err_ax.loglog(
+            stream.frequencies_hz,
+            np.maximum(np.abs(estimate / stream.exact - 1.0), 1e-17),
+            "o",
+            color=color,
+            fillstyle="none",
+            label="sinestream vs exact",
+        )
     for resonance in result.resonances:
         zeta = "" if resonance.damping_ratio is None else f"\nzeta {resonance.damping_ratio:.3g}"
         mag_ax.plot(resonance.frequency_hz, resonance.magnitude, "v", color="k")

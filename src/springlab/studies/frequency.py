@@ -39,6 +39,7 @@ import numpy as np
 from springlab import scenes, tables
 from springlab.errors import BadInputError, UnknownNameError
 from springlab.exact.linearize import (
+    FD_STEP,
     Linearization,
     OperatingPoint,
     input_column,
@@ -68,6 +69,7 @@ EVALUATIONS = {"euler": 1, "implicit": 1, "implicitfast": 1, "rk4": 4, "discrete
 #: a zero within this relative distance of a pole cancels it (finite differences leave ~1e-8 of a mode the
 #: input does not reach)
 CANCEL = 1e-5
+_EPS = float(np.finfo(float).eps)
 #: response kinds: 'JOINT' (position), 'JOINT:vel', 'JOINT:acc'
 RESPONSE_KINDS = ("pos", "vel", "acc")
 
@@ -118,6 +120,83 @@ class IntegratorBand:
     def to_dict(self) -> dict[str, Any]:
         """{"integrator", "max_dt_s", "evaluations_per_s"}."""
         return dataclasses.asdict(self)
+
+
+@dataclasses.dataclass(frozen=True)
+class Sinestream:
+    """The response estimated by simulating MuJoCo (the nonlinear model, the chosen integrator and dt): one held
+    sine after another, each started on the exact steady state, settled, then demodulated.
+
+    Attributes
+    ----------
+    frequencies_hz
+        (m,) the sines [Hz], log-spaced over the band and one octave above it.
+    estimate
+        (m,) complex: the demodulated response (least squares of the window on 1, t, cos, sin: an offset and a
+        drift, a free body's, are fitted away).
+    discrete
+        (m,) the integrator's discrete-time response at the same frequencies (what the estimate must match).
+    exact
+        (m,) the exact response there.
+    accuracy
+        (m,) the demodulation's stated relative accuracy: the slowest decaying mode's envelope left after the
+        settling time, times the mode basis' condition number, plus round-off over the run's steps.
+    amplitude
+        the input amplitude [input unit].
+    settle_s, estimate_periods
+        (m,) the settling time [s] and the whole periods demodulated.
+    uncertainty
+        (m,) the discrete response's own relative error from its finite differences (maps at steps h and 2 h).
+    steps
+        total MuJoCo steps of all sines.
+    wall_time_s
+        how long the simulation took [s].
+    """
+
+    frequencies_hz: np.ndarray
+    estimate: np.ndarray
+    discrete: np.ndarray
+    exact: np.ndarray
+    accuracy: np.ndarray
+    amplitude: float
+    settle_s: np.ndarray
+    estimate_periods: np.ndarray
+    uncertainty: np.ndarray
+    steps: int
+    wall_time_s: float
+
+    @property
+    def error_vs_discrete(self) -> np.ndarray:
+        """|H_est / H_d - 1| [-]: within `bound` when MuJoCo's run is the measured one-step map's."""
+        return np.abs(self.estimate / self.discrete - 1.0)
+
+    @property
+    def bound(self) -> np.ndarray:
+        """accuracy + uncertainty [-]: what `error_vs_discrete` must stay within."""
+        return self.accuracy + self.uncertainty
+
+    @property
+    def agrees(self) -> bool:
+        """Whether every sine's estimate is within `bound` of the discrete response."""
+        return bool(np.all(self.error_vs_discrete <= self.bound))
+
+    def to_dict(self) -> dict[str, Any]:
+        """frequency.json's "sinestream"."""
+        return {
+            "frequencies_hz": self.frequencies_hz.tolist(),
+            "magnitude": np.abs(self.estimate).tolist(),
+            "phase_deg": np.degrees(np.angle(self.estimate)).tolist(),
+            "error_vs_discrete": self.error_vs_discrete.tolist(),
+            "error_vs_exact": np.abs(self.estimate / self.exact - 1.0).tolist(),
+            "accuracy": self.accuracy.tolist(),
+            "uncertainty": self.uncertainty.tolist(),
+            "agrees": self.agrees,
+            "amplitude": self.amplitude,
+            "settle_s": self.settle_s.tolist(),
+            "estimate_periods": self.estimate_periods.tolist(),
+            "steps": self.steps,
+            "wall_time_s": self.wall_time_s,
+        }
 
 
 @dataclasses.dataclass(frozen=True)
@@ -178,6 +257,7 @@ class FrequencyResponse:
     integrators: tuple[IntegratorBand, ...]
     description: str
     wall_time_s: float
+    sinestream: Sinestream | None = None
 
     @property
     def relative_error(self) -> np.ndarray:
@@ -244,6 +324,14 @@ class FrequencyResponse:
         if self.cheapest is not None:
             best = self.cheapest
             lines.append(f"cheapest: {best.integrator} at dt = {best.max_dt_s:.3g} s")
+        if self.sinestream is not None:
+            stream = self.sinestream
+            worst = float(np.max(stream.error_vs_discrete / stream.bound))
+            word = "match" if stream.agrees else "DO NOT match"
+            lines.append(
+                f"sinestream: {len(stream.frequencies_hz)} sines simulated in MuJoCo ({stream.steps} steps) {word} the"
+                f" discrete response within the stated accuracy (worst: {worst:.2g} of it)"
+            )
         return lines
 
     def to_dict(self) -> dict[str, Any]:
@@ -275,6 +363,7 @@ class FrequencyResponse:
             "covers_band": self.covers_band,
             "integrators": [b.to_dict() for b in self.integrators],
             "cheapest": None if self.cheapest is None else self.cheapest.to_dict(),
+            "sinestream": None if self.sinestream is None else self.sinestream.to_dict(),
             "wall_time_s": self.wall_time_s,
         }
 
@@ -506,12 +595,13 @@ class _Discretizer:
     def __init__(self, model: mujoco.MjModel, point: OperatingPoint, kind: str, index: int, c: np.ndarray, d: float):
         self.model, self.point, self.kind, self.index, self.c, self.d = model, point, kind, index, c, d
 
-    def response(self, integrator: str, dt: float, f: np.ndarray) -> np.ndarray | None:
-        """H_d at f [Hz], or None where the one-step map is unstable (no steady state)."""
-        phi = one_step_map(self.model, integrator, dt, self.point)
+    def response(self, integrator: str, dt: float, f: np.ndarray, step: float = FD_STEP) -> np.ndarray | None:
+        """H_d at f [Hz], or None where the one-step map is unstable (no steady state); `step`: the maps'
+        finite-difference step."""
+        phi = one_step_map(self.model, integrator, dt, self.point, step=step)
         if spectral_radius(phi) > STABLE_RADIUS:
             return None
-        gamma = step_input_column(self.model, integrator, self.kind, self.index, dt, self.point)
+        gamma = step_input_column(self.model, integrator, self.kind, self.index, dt, self.point, step=step)
         return _discrete(phi, gamma, self.c, self.d, dt, f)
 
 
@@ -629,6 +719,8 @@ def frequency(
     tol: float = DEFAULT_TOL,
     integrators: tuple[str, ...] | None = None,
     parameters: Mapping[str, Any] | None = None,
+    sines: int = 0,
+    executor: Any = None,
 ) -> FrequencyResponse:
     """The frequency response of a model's linearization, and how well an integrator at dt reproduces it.
 
@@ -657,6 +749,10 @@ def frequency(
         those whose largest dt covering the band is searched (None: MuJoCo's five; (): none).
     parameters
         a scene's parameter overrides [SI] (as `springlab.run`'s keywords).
+    sines
+        verify by simulation: this many sines log-spaced over the band and an octave above it (0: none).
+    executor
+        where the sines run (a `springlab.studies.executor.Executor`; None: locally).
 
     Returns
     -------
@@ -677,6 +773,8 @@ def frequency(
     tol = _check_number("tol", tol, 0.0, 1.0)
     if isinstance(points, bool) or not isinstance(points, (int, np.integer)) or points < 2:
         raise BadInputError(f"points must be an integer >= 2, got {points!r}")
+    if isinstance(sines, bool) or not isinstance(sines, (int, np.integer)) or sines < 0 or sines == 1:
+        raise BadInputError(f"sines must be 0 (none) or an integer >= 2, got {sines!r}")
     swept = tuple(INTEGRATORS) if integrators is None else tuple(integrators)
     for name in swept:
         integrator_id(name)
@@ -715,6 +813,32 @@ def frequency(
     for name in swept:
         top = _max_dt(discretizer, name, grid, exact, tol)
         bands.append(IntegratorBand(name, top, None if top is None else EVALUATIONS[name] / top))
+    stream = None
+    if sines:
+        top = min(2.0 * band[1], 0.45 / dt)  # an octave above the band, below Nyquist
+        sine_grid = np.geomspace(band[0], top, int(sines))
+        sine_discrete = discretizer.response(integrator, dt, sine_grid)
+        coarse = discretizer.response(integrator, dt, sine_grid, step=2 * FD_STEP)
+        if sine_discrete is None or coarse is None:
+            raise BadInputError(f"{integrator} at dt = {dt:g} s is unstable on this model: no steady state to estimate")
+        stream = sinestream(
+            model,
+            point,
+            linear,
+            b,
+            c,
+            kind,
+            index,
+            dof,
+            out_kind,
+            integrator,
+            dt,
+            sine_grid,
+            sine_discrete,
+            exact_of,
+            np.abs(coarse / sine_discrete - 1.0),
+            executor,
+        )
     for array in (grid, exact, discrete, hold):
         array.setflags(write=False)
     return FrequencyResponse(
@@ -739,5 +863,170 @@ def frequency(
         description=source.description
         if (input_name, response_name) == (source.input, source.response) and source.description
         else f"{input_name} to {response_name}",
+        wall_time_s=_time.perf_counter() - started,
+        sinestream=stream,
+    )
+
+
+# -- the sinestream: the response estimated by simulating MuJoCo --------------------------------------------------
+
+#: the demodulation's target relative accuracy: the settling time lets the slowest mode's transient decay to it
+SINESTREAM_ACCURACY = 1e-7
+#: whole periods demodulated per sine (at least), and samples in the window (at least)
+ESTIMATE_PERIODS = 4
+ESTIMATE_SAMPLES = 256
+#: a sine's run is capped at this many steps (its stated accuracy then says what the shorter settling gives)
+MAX_SINE_STEPS = 200_000
+#: sines per executor chunk (one batched MuJoCo call each)
+SINES_PER_CHUNK = 8
+
+
+def _sine_chunk(payload: dict[str, Any], nthread: int = 0) -> list[np.ndarray]:
+    """Run one chunk of sines (batched) and return each run's response samples (a module-level function: it
+    runs on dask workers too)."""
+    from springlab.sim.batch import Job, run_batched
+    from springlab.sim.simulate import Setup
+
+    model = payload["model"]
+    jobs = [
+        Job(model, payload["integrator"], payload["dt"], int(len(control)), Setup(qpos, qvel, act, control))
+        for qpos, qvel, act, control in payload["runs"]
+    ]
+    out = []
+    for outcome in run_batched(jobs, nthread=nthread):
+        if isinstance(outcome, Exception):
+            raise outcome
+        column = outcome.qpos[:, payload["qposadr"]] if payload["kind"] == "pos" else outcome.qvel[:, payload["dof"]]
+        out.append(np.asarray(column, float) - payload["offset"])
+    return out
+
+
+def _demodulate(y: np.ndarray, t: np.ndarray, omega: float) -> complex:
+    """Y of y(t) = a + b t + Re(Y exp(j omega t)) by least squares (numpy.linalg.lstsq)."""
+    t0 = t - t[0]
+    basis = np.column_stack([np.ones_like(t), t0, np.cos(omega * t), np.sin(omega * t)])
+    coef, *_ = np.linalg.lstsq(basis, y, rcond=None)
+    return complex(coef[2], -coef[3])
+
+
+def sinestream(
+    model: mujoco.MjModel,
+    point: OperatingPoint,
+    linear: Linearization,
+    b: np.ndarray,
+    c: np.ndarray,
+    kind: str,
+    index: int,
+    dof: int,
+    out_kind: str,
+    integrator: str,
+    dt: float,
+    frequencies_hz: np.ndarray,
+    discrete: np.ndarray,
+    exact_of: Callable[[np.ndarray], np.ndarray],
+    uncertainty: np.ndarray,
+    executor: Any = None,
+) -> Sinestream:
+    """Simulate MuJoCo at each frequency and demodulate (`Sinestream`; the module docstring says how).
+
+    Each sine u_k = U sin(omega (k + 1/2) dt), held over step k, starts on the exact linearization's steady
+    state (so only the small discrete-minus-exact difference is left to decay), runs `settle` (the slowest
+    non-rigid mode's envelope exp(-sigma t) times the mode basis' condition number down to
+    SINESTREAM_ACCURACY), then ESTIMATE_PERIODS whole periods (at least ESTIMATE_SAMPLES samples) are
+    demodulated by least squares on (1, t, cos, sin). `uncertainty` (m,) is the discrete response's own
+    relative finite-difference error (its maps at the steps h and 2 h compared).
+
+    Raises
+    ------
+    BadInputError
+        the input is not an actuator, or the response is an acceleration (the run records positions and
+        velocities).
+    """
+    from springlab.studies.executor import chunked, resolve
+
+    if kind != "ctrl":
+        raise BadInputError("the sinestream drives an actuator's control; name an actuator as the input")
+    if out_kind == "acc":
+        raise BadInputError("the sinestream measures a position or a velocity response, not an acceleration")
+    started = _time.perf_counter()
+    nv = model.nv
+    limited = (
+        bool(model.actuator_ctrllimited[index])
+        and model.actuator_ctrlrange[index, 1] > model.actuator_ctrlrange[index, 0]
+    )
+    low, high = model.actuator_ctrlrange[index]
+    base = float(point.ctrl[index])
+    amplitude = min(1.0, 0.5 * min(high - base, base - low)) if limited else 1.0
+    if amplitude <= 0:
+        raise BadInputError("the operating point's control sits on its limit: no room for a sine")
+    moving = [-lam.real for lam in linear.eigenvalues if abs(lam) > linear.growth_tolerance and lam.real < 0]
+    sigma = min(moving) if moving else math.inf
+    _, vectors = np.linalg.eig(linear.A)
+    condition = float(np.linalg.cond(vectors)) if vectors.size else 1.0
+    exact = exact_of(frequencies_hz)
+    runs, meta = [], []
+    for f in frequencies_hz:
+        omega = 2 * math.pi * float(f)
+        period = 1.0 / float(f)
+        settle = math.log(condition / SINESTREAM_ACCURACY) / sigma if math.isfinite(sigma) else 0.0
+        periods = max(ESTIMATE_PERIODS, math.ceil(ESTIMATE_SAMPLES * dt / period))
+        estimate_steps = int(round(periods * period / dt))
+        settle_steps = min(int(math.ceil(settle / dt)), max(MAX_SINE_STEPS - estimate_steps, 0))
+        steps = settle_steps + estimate_steps
+        # the exact steady state at t = 0 of the input U sin(omega t) = Re(-j U exp(j omega t))
+        state = np.linalg.solve(1j * omega * np.eye(linear.A.shape[0]) - linear.A, b * (-1j * amplitude))
+        start = state.real
+        qpos = point.qpos.copy()
+        mujoco.mj_integratePos(model, qpos, start[:nv], 1.0)
+        qvel = point.qvel + start[nv : 2 * nv]
+        act = point.act + start[2 * nv :]
+        control = np.tile(point.ctrl, (steps, 1))
+        control[:, index] = base + amplitude * np.sin(omega * (np.arange(steps) + 0.5) * dt)
+        runs.append((qpos, qvel, act, control))
+        left = condition * math.exp(-sigma * settle_steps * dt) if math.isfinite(sigma) else 0.0
+        rounding = 1e3 * _EPS * math.sqrt(steps)
+        meta.append((omega, settle_steps, estimate_steps, periods, min(left, 1.0) + rounding))
+    joint_qposadr = int(model.jnt_qposadr[int(model.dof_jntid[dof])])
+    offset = float(point.qpos[joint_qposadr]) if out_kind == "pos" else float(point.qvel[dof])
+    common = {
+        "model": model,
+        "integrator": integrator,
+        "dt": dt,
+        "kind": out_kind,
+        "qposadr": joint_qposadr,
+        "dof": dof,
+        "offset": offset,
+    }
+    chunks = chunked(len(runs), SINES_PER_CHUNK)
+    payloads = [{**common, "runs": [runs[i] for i in chunk]} for chunk in chunks]
+    results = [y for part in resolve(executor).map(_sine_chunk, payloads, description="sines") for y in part]
+    estimates = []
+    for y, (omega, _, estimate_steps, _, _) in zip(results, meta):
+        window = slice(len(y) - estimate_steps - 1, len(y))
+        t = np.arange(len(y)) * dt
+        estimates.append(_demodulate(y[window], t[window], omega) / (-1j * amplitude))
+    arrays = [
+        np.asarray(frequencies_hz, float),
+        np.array(estimates),
+        np.asarray(discrete),
+        np.asarray(exact),
+        np.array([m[4] for m in meta]),
+        np.array([m[1] * dt for m in meta]),
+        np.array([m[3] for m in meta]),
+        np.asarray(uncertainty, float),
+    ]
+    for array in arrays:
+        array.setflags(write=False)
+    return Sinestream(
+        frequencies_hz=arrays[0],
+        estimate=arrays[1],
+        discrete=arrays[2],
+        exact=arrays[3],
+        accuracy=arrays[4],
+        amplitude=float(amplitude),
+        settle_s=arrays[5],
+        estimate_periods=arrays[6],
+        uncertainty=arrays[7],
+        steps=int(sum(len(r[3]) for r in runs)),
         wall_time_s=_time.perf_counter() - started,
     )
