@@ -556,9 +556,12 @@ def _anti_resonances(
 
 
 def _resonances(
-    response: Callable[[np.ndarray], np.ndarray], band: tuple[float, float], points: int
+    response: Callable[[np.ndarray], np.ndarray], band: tuple[float, float], points: int, poles: np.ndarray
 ) -> tuple[Resonance, ...]:
-    """The resonances inside the band: local maxima of |H| on a log grid, refined, with the half-power width."""
+    """The resonances inside the band: local maxima of |H| on a log grid, refined, with the half-power width.
+
+    A maximum counts only near an oscillatory pole p (| 2 pi f - |p| | <= 2 |Re p| plus two grid steps): far
+    above the modes |H| falls by orders of magnitude and round-off makes local maxima of no physics."""
     from scipy.optimize import brentq, minimize_scalar
 
     grid = np.geomspace(band[0], band[1], max(points, SEARCH_POINTS))
@@ -575,6 +578,9 @@ def _resonances(
             lambda f: -size(f), bounds=(grid[i - 1], grid[i + 1]), method="bounded", options={"xatol": 1e-12 * grid[i]}
         )
         f0, m0 = float(found.x), size(float(found.x))
+        step = 2.0 * (grid[i + 1] / grid[i] - 1.0) * 2 * math.pi * f0
+        if not any(abs(2 * math.pi * f0 - abs(p)) <= 2 * abs(p.real) + step for p in poles if p.imag > 0):
+            continue
         half = m0 / math.sqrt(2.0)
         below = mag < half
         left = np.nonzero(below[:i])[0]
@@ -807,7 +813,7 @@ def frequency(
     errors = _error(None if np.isnan(discrete).any() else discrete, exact)
     within = _within(discretizer, integrator, dt, exact_of, grid, errors, tol)
     hold = _hold(linear.A, b, c, d, dt, grid)
-    resonances = _resonances(exact_of, band, int(points))
+    resonances = _resonances(exact_of, band, int(points), np.asarray(linear.eigenvalues, complex))
     anti = _anti_resonances(linear.A, b, c, d, band)
     bands = []
     for name in swept:
