@@ -5,7 +5,7 @@
    Python loop of mujoco.mj_step on the same compiled model, the same settings and steps, recording qpos
    and qvel; measured alternately, best of 3, on 16 configurations spread over the four cases, the
    integrators and the timesteps.
-2. The full sweep (`springlab friction-settings friction --tol 1e-2 --workers 2`: 6,840 runs, the picks
+2. The full sweep (`springlab friction-settings friction --tol 1e-2 --workers 2`: 4,560 runs, the picks
    verified) against its 5-minute budget on 2 cores, with the machine's load average beside it (a machine
    shared with other jobs stretches the wall time, not the CPU time each run reports).
 

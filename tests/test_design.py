@@ -33,10 +33,9 @@ def small_study(small_design_study):
 
 
 @pytest.fixture(scope="module")
-def default_study():
-    """5^4 = 625 configurations over the default spans (the default 7^4 takes 10-20 s on 2 shared
-    cores: it runs in the demo and `springlab design`, not here)."""
-    return design.run_study("printer_head", levels=5, plane_levels=0)
+def default_study(default_design_study):
+    """The default grid's 7^4 = 2401 configurations (tests/conftest.py, shared with the settling test)."""
+    return default_design_study
 
 
 def test_default_sweep_has_at_least_1000_configurations():
@@ -62,7 +61,7 @@ def test_the_scenes_that_declare_a_design_question_are_the_design_studies():
 
 @pytest.mark.slow
 def test_every_configuration_settles_for_good(default_study):
-    assert default_study.size == 625
+    assert default_study.size == design.DEFAULT_LEVELS**4 == 2401
     assert np.all(np.isfinite(default_study.positioning_time_s))
 
 

@@ -260,12 +260,7 @@ def test_the_coarse_design_grid_settles_when_the_exact_motion_does(small_design_
 
 
 @pytest.mark.slow
-def test_a_fifth_of_the_design_grid_drawn_at_random_settles_when_the_exact_motion_does():
-    # 480 of the 2401 configurations (seeded): all 2401 cost 25 s of runs (benchmarks/bench_design.py times them);
-    # the eight the samples missed and the coarse grid's 81 are tested above
-    base, values = _configurations(design.DEFAULT_LEVELS)
-    chosen = np.sort(np.random.default_rng(25).choice(2401, size=480, replace=False))
-    values = {name: np.asarray(v)[chosen] for name, v in values.items()}
-    runs = simulate("printer_head", base, values)
-    differences = _check_batched(base, values, runs.positioning_time_s, runs.dt_s)
-    assert len(differences) == 480
+def test_the_whole_design_grid_settles_when_the_exact_motion_does(default_design_study):
+    study = default_design_study  # all 2401 configurations, shared with tests/test_design.py (tests/conftest.py)
+    differences = _check_batched(study.base, study.values, study.positioning_time_s, study.dt_s)
+    assert len(differences) == 2401

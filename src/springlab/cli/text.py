@@ -314,10 +314,13 @@ def print_friction_settings(study: FrictionSettings, output: str | None) -> None
     )
     for case in study.cases:
         print(f"\n{case.answer()}")
-        print(f"  {'Pareto front':<58}{'integrator':<13}{'dt [s]':>9}{'error':>10}{'cpu [ms]':>10}")
+        # the settings column as wide as its longest entry: four changed settings run past 58 characters
+        width = max([58, *(len(case.describe(r.settings)) + 2 for r in case.pareto)])
+        print(f"  {'Pareto front':<{width}}{'integrator':<13}{'dt [s]':>9}{'error':>10}{'cpu [ms]':>10}")
         for r in case.pareto:
             print(
-                f"  {case.describe(r.settings):<58}{r.integrator:<13}{r.dt:>9.3g}{r.error:>10.2e}{r.cpu_time_s * 1e3:>10.2f}"
+                f"  {case.describe(r.settings):<{width}}{r.integrator:<13}{r.dt:>9.3g}{r.error:>10.2e}"
+                f"{r.cpu_time_s * 1e3:>10.2f}"
             )
     if output:
         print(
