@@ -401,6 +401,8 @@ def _load(scene_or_model: Any, scenario: str | None, parameters: Mapping[str, An
         scene, chosen, params = prepare(scene, scenario or (spec.scenario if spec else None), dict(parameters))
         model_spec = scene.model_spec()
         scene.edit(model_spec, params, chosen)
+        if spec is not None and chosen.name != spec.scenario:
+            spec = None  # another scenario: its own model, the user names the input and response
         if spec is not None and spec.edit is not None:
             spec.edit(model_spec, params)
         with quiet_mujoco():
