@@ -31,6 +31,7 @@ RESULTS = {
     "studies/audit/limits.py": {"Limit", "ConstraintFlag"},
     "studies/stability.py": {"StabilityReport", "Boundary", "EnergyCheck", "EnergyHistories", "AmplificationMap"},
     "studies/extremes.py": {"ExtremeRun"},
+    "studies/frequency.py": {"FrequencyResponse", "Resonance", "IntegratorBand", "Sinestream"},
     "studies/design/study.py": {"Study", "Plane"},
     "studies/design/sobol.py": {"SobolStudy"},
 }
@@ -46,6 +47,7 @@ ROWS = {
     "StabilityReport",
     "Study",
     "SobolStudy",
+    "FrequencyResponse",
 }
 
 

@@ -14,6 +14,7 @@ from springlab.runs.run import Result, ValidationRow
 from springlab.studies.audit.audit import Audit, audit
 from springlab.studies.auto import run, validate
 from springlab.studies.fit.fit import fit
+from springlab.studies.frequency import FrequencyResponse, frequency
 from springlab.studies.sweeps import sweep
 
 from . import errors
@@ -28,6 +29,8 @@ __all__ = [
     "sweep",
     "audit",
     "Audit",
+    "frequency",
+    "FrequencyResponse",
     "fit",
     "Result",
     "Verdict",

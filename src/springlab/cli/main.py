@@ -25,6 +25,7 @@ from springlab.demo import steps as demo
 from springlab.errors import BadInputError, SpringlabError
 from springlab.plots import audit as charts_audit
 from springlab.plots import charts
+from springlab.plots import frequency as charts_frequency
 from springlab.runs.compare import Verdict
 from springlab.runs.run import Result, write_run
 from springlab.sim.simulate import INTEGRATORS
@@ -32,6 +33,9 @@ from springlab.studies import auto, stability, tradeoff
 from springlab.studies.audit.audit import DEFAULT_PERTURB, DEFAULT_TOL
 from springlab.studies.audit.audit import audit as run_audit
 from springlab.studies.executor import CONNECT_TIMEOUT_S, Executor
+from springlab.studies.frequency import DEFAULT_POINTS
+from springlab.studies.frequency import DEFAULT_TOL as FREQUENCY_TOL
+from springlab.studies.frequency import frequency as run_frequency
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_DIVERGED = 0, 1, 2, 3
 #: 128 + the signal number, as shells report a process a signal ended
@@ -348,6 +352,33 @@ def cmd_audit(args: argparse.Namespace) -> int:
     else:
         cli_text.print_audit(result, args.output)
     return EXIT_OK if result.own_ok else EXIT_FAILED
+
+
+def cmd_frequency(args: argparse.Namespace) -> int:
+    if args.output:
+        files.check_directory(args.output)  # before the analysis, not after
+    with _executor(args) as executor:
+        result = run_frequency(
+            args.model,
+            args.scenario,
+            input=args.input,
+            response=args.response,
+            band=args.band,
+            points=args.points,
+            integrator=args.integrator,
+            dt=args.dt,
+            tol=args.tol,
+            sines=args.sinestream,
+            executor=executor,
+        )
+    if args.output:
+        charts_frequency.write_frequency(result, args.output)
+    if args.json:
+        _print_json(result.to_dict())
+    else:
+        cli_text.print_frequency(result, args.output)
+    agrees = result.sinestream is None or result.sinestream.agrees
+    return EXIT_OK if result.covers_band and agrees else EXIT_FAILED
 
 
 def cmd_stability(args: argparse.Namespace) -> int:
@@ -672,6 +703,44 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print audit.json")
     _executor_arguments(p)
     COMMANDS["audit"] = cmd_audit
+
+    p = sub.add_parser(
+        "frequency", help="frequency response of any model's linearization, and the band an integrator reproduces"
+    )
+    p.add_argument("model", help="path to an MJCF file, or a scene name")
+    p.add_argument("scenario", nargs="?", help="a scene's scenario (default: the one its frequency response declares)")
+    p.add_argument("--input", metavar="NAME", help="an actuator (its control) or a joint (a force on it)")
+    p.add_argument("--response", metavar="NAME", help="a joint: JOINT (position), JOINT:vel or JOINT:acc")
+    p.add_argument(
+        "--band",
+        metavar="FMIN:FMAX",
+        help="frequency band [Hz] (default: a decade below the slowest mode to 3x the fastest)",
+    )
+    p.add_argument(
+        "--points", type=int, default=DEFAULT_POINTS, metavar="N", help="log-spaced frequencies (default 200)"
+    )
+    p.add_argument(
+        "--integrator", metavar="NAME", help=f"one of {', '.join(INTEGRATORS)} (default: the scene's or model's)"
+    )
+    p.add_argument("--dt", type=float, metavar="SECONDS", help="timestep [s] (default: the scene's or model's)")
+    p.add_argument(
+        "--tol",
+        type=float,
+        default=FREQUENCY_TOL,
+        metavar="TOL",
+        help="tolerance on the relative error |H_d / H - 1| in (0, 1) (default 1e-3)",
+    )
+    p.add_argument(
+        "--sinestream",
+        type=int,
+        default=0,
+        metavar="N",
+        help="verify by simulating N sines in MuJoCo over the band and an octave above (default 0: none)",
+    )
+    p.add_argument("--output", metavar="DIR", help="write DIR/frequency.json, frequency.csv and bode.png")
+    p.add_argument("--json", action="store_true", help="print frequency.json")
+    _executor_arguments(p)
+    COMMANDS["frequency"] = cmd_frequency
 
     p = sub.add_parser("design", help="design study: positioning time over a property sweep, ranked sensitivities")
     declared = ", ".join(name for name, scene in scenes.SCENES.items() if scene.design is not None)

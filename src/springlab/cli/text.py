@@ -25,6 +25,7 @@ if TYPE_CHECKING:  # annotations only: these load mujoco.batch, scipy or sysid, 
     from springlab.studies.design.sobol import SobolStudy
     from springlab.studies.design.study import Study
     from springlab.studies.fit.results import FitResult
+    from springlab.studies.frequency import FrequencyResponse
     from springlab.studies.friction_settings import FrictionSettings
     from springlab.studies.refine import Refinement
     from springlab.studies.stability import StabilityReport
@@ -177,6 +178,16 @@ def print_audit(result: Audit, output: str | None) -> None:
     print(result.message)
     if output:
         print(f"wrote {pathlib.Path(output) / 'audit.json'} and audit.png")
+
+
+def print_frequency(result: FrequencyResponse, output: str | None) -> None:
+    """`springlab frequency`: a few lines, the band the setting reproduces, resonances, the dt each integrator
+    needs, and what was written."""
+    print(f"{result.description} ({result.source})")
+    for line in result.verdict():
+        print(f"  {line}")
+    if output:
+        print(f"wrote {pathlib.Path(output) / 'frequency.json'}, frequency.csv and bode.png")
 
 
 def print_stability(report: StabilityReport, output: str | None) -> None:

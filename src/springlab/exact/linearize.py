@@ -636,3 +636,79 @@ def settle(model: mujoco.MjModel, point: OperatingPoint, seconds: float) -> Oper
         data.ctrl.copy(),
         f"{point.label} settled for {seconds:g} s",
     )
+
+
+# -- inputs: a control or a generalized force, and how it enters the dynamics and one step --------------
+
+#: input kinds: an actuator's control (held over a step, as MuJoCo applies it) or a generalized force
+#: on one degree of freedom (`qfrc_applied`, also held)
+INPUT_KINDS = ("ctrl", "force")
+
+
+def _apply_input(data: mujoco.MjData, kind: str, index: int, delta: float) -> None:
+    if kind == "ctrl":
+        data.ctrl[index] += delta
+    elif kind == "force":
+        data.qfrc_applied[index] += delta
+    else:
+        raise ValueError(f"input kind is one of {INPUT_KINDS}, got {kind!r}")
+
+
+def input_column(
+    model: mujoco.MjModel, kind: str, index: int, point: OperatingPoint | None = None, *, step: float = FD_STEP
+) -> np.ndarray:
+    """b = d(dx/dt)/du [1/s per input unit], (n,): how one input enters the continuous-time dynamics.
+
+    Centred differences of `mj_forward` (the continuous forward pass, as in `linearize`) in the input
+    `kind` ('ctrl': control `index`; 'force': `qfrc_applied` of dof `index`) at `point`; the position
+    rows are 0 (an input acts through forces). `model` is not modified.
+    """
+    point = _point_or_default(model, point)
+    work = _continuous_model(model)
+    data = mujoco.MjData(work)
+    sides = []
+    with quiet_mujoco():
+        for sign in (1.0, -1.0):
+            point.load(work, data)
+            _apply_input(data, kind, index, sign * step)
+            sides.append(_forward_rates(work, data))
+    column = np.zeros(2 * model.nv + model.na)
+    column[model.nv :] = (sides[0] - sides[1]) / (2 * step)
+    return column
+
+
+def step_input_column(
+    model: mujoco.MjModel,
+    integrator: str,
+    kind: str,
+    index: int,
+    dt: float,
+    point: OperatingPoint | None = None,
+    *,
+    step: float = FD_STEP,
+) -> np.ndarray:
+    """gamma = d x_{n+1} / d u [per input unit], (n,): one `mj_step` of `integrator` at `dt` [s] with the
+    input held over the step (MuJoCo's zero-order hold), beside `one_step_map`'s Phi.
+
+    Centred differences of `mj_step` in the tangent space (positions through `mj_differentiatePos`), for
+    every integrator alike. `model` is not modified.
+    """
+    point = _point_or_default(model, point)
+    work = copy.copy(model)
+    work.opt.integrator = integrator_id(integrator)
+    work.opt.timestep = dt
+    data = mujoco.MjData(work)
+    nv = work.nv
+    after = []
+    with quiet_mujoco():
+        for sign in (1.0, -1.0):
+            point.load(work, data)
+            mujoco.mj_forward(work, data)
+            data.qacc_warmstart[:] = data.qacc
+            _apply_input(data, kind, index, sign * step)
+            mujoco.mj_step(work, data)
+            after.append((data.qpos.copy(), data.qvel.copy(), data.act.copy()))
+    (q_plus, v_plus, a_plus), (q_minus, v_minus, a_minus) = after
+    dq = np.zeros(nv)
+    mujoco.mj_differentiatePos(work, dq, 2 * step, q_minus, q_plus)
+    return np.concatenate([dq, (v_plus - v_minus) / (2 * step), (a_plus - a_minus) / (2 * step)])

@@ -30,7 +30,7 @@ from springlab.exact.limits import stability_limit
 from springlab.sim import model_files
 from springlab.sim.simulate import Setup, Trajectory, quiet_mujoco
 
-from .capabilities import DesignSpec, DryFrictionSpec, FigureHook, FitSpec, OscillatorSpec, RefinableSpec
+from .capabilities import DesignSpec, DryFrictionSpec, FigureHook, FitSpec, FrequencySpec, OscillatorSpec, RefinableSpec
 
 #: smallest body mass [kg] and principal inertia [kg m^2] MuJoCo compiles: its mjMINVAL
 #: (1e-15); a moving body below it fails `MjSpec.compile` ("must be larger than mjMINVAL")
@@ -297,6 +297,8 @@ class Scene:
     12. Optionally, `dry_friction` (springlab.scenes.capabilities.DryFrictionSpec): the scene's dry
        friction has exact Coulomb answers and takes MuJoCo's friction settings as parameters, which
        `springlab friction-settings` sweeps (springlab.studies.friction_settings).
+    13. Optionally, `frequency` (springlab.scenes.capabilities.FrequencySpec): the default input and
+       response of `springlab frequency SCENE`, and an MjSpec edit that makes the input a control.
 
     The module exposes the instance as `SCENE`; springlab.scenes discovers it. Tests check each
     claim against a reference built in the test (closed form, expm, scipy's DOP853 at tight
@@ -335,6 +337,9 @@ class Scene:
     refinable: RefinableSpec | None = None
     #: the panels of the scene's own figure of a run (None: none; springlab.plots.run.scene_figure draws it)
     figure: FigureHook | None = None
+    #: the default input and response of its frequency response (None: the user names them;
+    #: springlab.studies.frequency reads it)
+    frequency: FrequencySpec | None = None
 
     def question_and_answer(self, scenario: str, quantities: dict, parameters: dict) -> tuple[str, str] | None:
         """(question, answer sentence) of a scenario's run, or None where the scene states none."""

@@ -730,3 +730,35 @@ class Panel:
 
 #: hook: (compiled model, parameters, scenario name, trajectory) -> the panels of the run's own figure
 FigureHook: TypeAlias = Callable[[mujoco.MjModel, Mapping[str, float], str, Any], tuple[Panel, ...]]
+
+
+# -- frequency: the frequency response of a scene (springlab.studies.frequency) ----------------------------
+
+#: hook: (the scenario's MjSpec after the scene's own edits, its parameters) -> None; edits the spec so the
+#: declared input exists as an actuator (e.g. a road height as a control), the physics otherwise unchanged
+FrequencyEdit: TypeAlias = Callable[[mujoco.MjSpec, Mapping[str, float]], None]
+
+
+@dataclasses.dataclass(frozen=True)
+class FrequencySpec:
+    """The frequency response a scene answers by default (`springlab frequency SCENE`).
+
+    Attributes
+    ----------
+    scenario
+        the scenario whose model is analysed when the user names none.
+    input
+        the default input: an actuator or joint name of that model (after `edit`).
+    response
+        the default response: a joint name ('JOINT' position, 'JOINT:vel', 'JOINT:acc').
+    description
+        the question in words, e.g. 'road height to body heave: the transmissibility'.
+    edit
+        MjSpec edit applied after the scene's own (None: none), e.g. the car's road height as a control.
+    """
+
+    scenario: str
+    input: str
+    response: str
+    description: str
+    edit: FrequencyEdit | None = None

@@ -7,6 +7,7 @@ mu xw'' =  ks (xs - xw - rest) + cs (xs' - xw') + kt (radius + r(t) - xw) - mu g
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 import mujoco
 import numpy as np
@@ -336,3 +337,31 @@ class RoadBump(Variant):
             f" {-peaks['min_tire_force']:.4g} N on the road, which a real tire cannot, so the answers after that"
             " instant are not the car's; use a lower bump or another speed"
         ]
+
+
+def road_as_control(spec: mujoco.MjSpec, params: Mapping[str, float]) -> None:
+    """road_bump's quarter car with the road height under the tire as a control [m] (`springlab frequency`).
+
+    The tire on the flat road becomes force = kt (radius + ctrl - x_w): a gain kt on the control and an affine
+    bias kt radius - kt x_w, the same spring (ctrl = 0 is the flat road, the static equilibrium of qpos0), now
+    with the road height as an input MuJoCo holds over each step. The bump exciter, its tendon and the tire
+    on the bump are removed: the quarter car is left with its two degrees of freedom, heave and wheel.
+
+    Parameters
+    ----------
+    spec
+        road_bump's spec after the scene's edits.
+    params
+        the scene's parameters (SI).
+    """
+    spec.delete(spec.actuator("tire_on_bump"))
+    spec.delete(spec.tendon("bump_contact"))
+    spec.delete(spec.body("road"))
+    tire = spec.actuator("tire_on_road")
+    kt = -float(tire.gainprm[1])
+    radius = float(tire.gainprm[0]) / kt
+    tire.name = "road"
+    tire.gaintype = mujoco.mjtGain.mjGAIN_FIXED
+    tire.gainprm = [kt] + [0.0] * 9
+    tire.biastype = mujoco.mjtBias.mjBIAS_AFFINE
+    tire.biasprm = [kt * radius, -kt, 0.0] + [0.0] * 7

@@ -90,13 +90,13 @@ import numpy as np
 
 from springlab.errors import ParameterError
 from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene
-from springlab.scenes.capabilities import OscillatorFit
+from springlab.scenes.capabilities import FrequencySpec, OscillatorFit
 from springlab.sim.simulate import Setup, Trajectory, quiet_mujoco
 
 from .parts import gravity
 from .pitch_heave import FRONT_STIFFNESS_SHARE, PitchHeave, linearize, pitch_heave_defaults
 from .release import Release, damping_from_ratio
-from .road_bump import COMFORT_STIFFNESS, RoadBump
+from .road_bump import COMFORT_STIFFNESS, RoadBump, road_as_control
 
 __all__ = ["SCENE", "Car", "linearize", "FRONT_STIFFNESS_SHARE", "COMFORT_STIFFNESS"]
 
@@ -225,6 +225,10 @@ class Car(Scene):
         )
     }
     #: `springlab fit`: the car bottom's height rings about the clearance; a run starts at rest, pushed down
+    #: `springlab frequency car`: the quarter car's road height to body heave (its transmissibility)
+    frequency = FrequencySpec(
+        "road_bump", "road", "heave", "road height to body heave: the quarter car's transmissibility", road_as_control
+    )
     fit = OscillatorFit(
         "heave",
         ("damped_release", "push_release"),

@@ -98,7 +98,7 @@ from springlab.exact import analytic
 from springlab.exact.limits import stability_limit as joint_damping_stability_limit
 from springlab.exact.linearize import one_step_map, operating_point
 from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene
-from springlab.scenes.capabilities import OscillatorFit
+from springlab.scenes.capabilities import FrequencySpec, OscillatorFit
 from springlab.sim.simulate import Setup, Trajectory, integrator_id
 
 from .design import DESIGN
@@ -158,6 +158,9 @@ class PrinterHead(Scene):
     default_scenario = "move"
     #: the design question it answers, read by springlab.studies.design (design.py)
     design = DESIGN
+    frequency = FrequencySpec(
+        "move", "drive", "carriage", "drive force to carriage position: the rigid body and the belt's resonance"
+    )
     #: the textbook question each scenario answers, and its answer as a sentence (Scene.questions)
     questions = {
         "move": (

@@ -37,7 +37,7 @@ import numpy as np
 from springlab.exact import analytic
 from springlab.exact.linear import generator_system, state_matrix
 from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene
-from springlab.scenes.capabilities import OscillatorFit, OscillatorSpec
+from springlab.scenes.capabilities import FrequencySpec, OscillatorFit, OscillatorSpec
 from springlab.sim import exciter
 from springlab.sim.simulate import Setup, Trajectory
 
@@ -77,6 +77,7 @@ class Slider(Scene):
     dt = 2e-3
     default_scenario = "free"
     #: the textbook's unit oscillator (springlab.studies.stability, springlab.studies.extremes)
+    frequency = FrequencySpec("free", "force", "slider", "applied force to block position: 1 / (m s^2 + d s + k)")
     oscillator = OscillatorSpec(
         mass="mass", stiffness="stiffness", damping="damping", x0="x0", v0="v0", free="free", joint="slider"
     )

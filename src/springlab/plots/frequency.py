@@ -1,0 +1,136 @@
+"""bode.png, frequency.json and frequency.csv: what `springlab frequency` writes (reads a FrequencyResponse,
+never simulates).
+
+bode.png has three panels sharing the log-frequency axis: the magnitude (exact: black; the integrator's
+discrete-time response: coloured, dashed; the sinestream's MuJoCo estimates: circles), the phase [deg], and the relative error |H_d / H - 1| with the
+held input's own floor (grey, dotted) and the tolerance (dotted line). Resonances are marked (triangles,
+labelled with frequency and damping ratio), anti-resonances (circles); the band within tol is shaded.
+"""
+
+from __future__ import annotations
+
+import pathlib
+
+import numpy as np
+
+from springlab import files
+from springlab.studies.frequency import FrequencyResponse
+
+from .charts import _COLORS, _save
+
+
+def plot_bode(result: FrequencyResponse, path: str | pathlib.Path) -> pathlib.Path:
+    """Draw bode.png (module docstring) into `path`.
+
+    Parameters
+    ----------
+    result
+        the frequency response to draw.
+    path
+        the PNG to write.
+
+    Returns
+    -------
+    pathlib.Path
+        the written file.
+    """
+    from matplotlib.figure import Figure  # no pyplot: a caller's backend and figures stay untouched
+
+    fig = Figure(figsize=(9, 10), layout="constrained")
+    mag_ax, phase_ax, err_ax = fig.subplots(3, 1, sharex=True)
+    f = result.frequencies_hz
+    rows = result.rows()
+    setting = f"{result.integrator} at dt = {result.dt:.3g} s"
+    color = _COLORS.get(result.integrator, "#1f77b4")
+    mag_ax.loglog(f, rows["exact_magnitude"], color="k", label="exact (linearization)")
+    mag_ax.loglog(f, rows["discrete_magnitude"], "--", color=color, label=f"{setting} (one-step map)")
+    phase_ax.semilogx(f, rows["exact_phase_deg"], color="k")
+    phase_ax.semilogx(f, rows["discrete_phase_deg"], "--", color=color)
+    err_ax.loglog(f, np.maximum(rows["relative_error"], 1e-17), color=color, label=f"{setting}")
+    err_ax.loglog(f, np.maximum(rows["hold_error"], 1e-17), ":", color="0.5", label="held input alone (exact ZOH)")
+    err_ax.axhline(result.tol, color="k", linestyle=":", linewidth=1, label=f"tol {result.tol:g}")
+    stream = result.sinestream
+    if stream is not None:
+        estimate = stream.estimate
+        mag_ax.loglog(
+            stream.frequencies_hz,
+            np.abs(estimate),
+            "o",
+            color=color,
+            fillstyle="none",
+            label="sinestream (MuJoCo runs)",
+        )
+        phase = np.degrees(np.angle(estimate))
+        reference = np.interp(stream.frequencies_hz, f, rows["discrete_phase_deg"])
+        phase = phase + 360.0 * np.round((reference - phase) / 360.0)  # on the unwrapped curve's branch
+        phase_ax.semilogx(stream.frequencies_hz, phase, "o", color=color, fillstyle="none")
+        err_ax.loglog(
+            stream.frequencies_hz,
+            np.maximum(np.abs(estimate / stream.exact - 1.0), 1e-17),
+            "o",
+            color=color,
+            fillstyle="none",
+            label="sinestream vs exact",
+        )
+    for resonance in result.resonances:
+        zeta = "" if resonance.damping_ratio is None else f"\nzeta {resonance.damping_ratio:.3g}"
+        mag_ax.plot(resonance.frequency_hz, resonance.magnitude, "v", color="k")
+        mag_ax.annotate(
+            f"{resonance.frequency_hz:.4g} Hz{zeta}",
+            (resonance.frequency_hz, resonance.magnitude),
+            textcoords="offset points",
+            xytext=(6, 4),
+            fontsize=8,
+        )
+    for anti in result.anti_resonances:
+        mag_ax.plot(anti.frequency_hz, anti.magnitude, "o", color="#2ca02c", fillstyle="none")
+        mag_ax.annotate(
+            f"{anti.frequency_hz:.4g} Hz",
+            (anti.frequency_hz, anti.magnitude),
+            xytext=(6, -12),
+            fontsize=8,
+            textcoords="offset points",
+        )
+    if result.within_tol_hz is not None:
+        for ax in (mag_ax, phase_ax, err_ax):
+            ax.axvspan(*result.within_tol_hz, color=color, alpha=0.08, linewidth=0)
+    mag_ax.set_ylabel(f"|H| [{result.units['response']} / {result.units['input']}]")
+    phase_ax.set_ylabel("phase [deg]")
+    err_ax.set_ylabel("relative error |H_d / H - 1| [-]")
+    err_ax.set_xlabel("frequency [Hz]")
+    mag_ax.legend(fontsize=8, loc="best")
+    err_ax.legend(fontsize=8, loc="best")
+    shaded = "" if result.within_tol_hz is None else f"; shaded: within tol up to {result.within_tol_hz[1]:.4g} Hz"
+    fig.suptitle(f"{result.description}\n{result.source}, {setting}{shaded}", fontsize=10)
+    return _save(fig, path)
+
+
+def write_frequency(result: FrequencyResponse, directory: str | pathlib.Path) -> list[pathlib.Path]:
+    """Write DIR/frequency.json, frequency.csv and bode.png; all appear, or none does.
+
+    Parameters
+    ----------
+    result
+        the frequency response.
+    directory
+        where to write.
+
+    Returns
+    -------
+    list[pathlib.Path]
+        the written files.
+    """
+    written = files.write_text_files(
+        directory,
+        {
+            "frequency.json": files.dumps(result.to_dict()) + "\n",
+            "frequency.csv": files.csv_text(result.rows()),
+        },
+    )
+    try:
+        written.append(plot_bode(result, pathlib.Path(directory) / "bode.png"))
+    except BaseException:
+        for path in written:
+            path.unlink(missing_ok=True)
+        raise
+    return written
