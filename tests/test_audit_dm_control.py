@@ -37,7 +37,7 @@ CASES = {
     "cartpole": (1.0, 1e-3),
     "acrobot": (1.0, 1e-3),
     "cheetah": (0.3, 2e-2),
-    "humanoid": (0.2, 1e-2),
+    # the humanoid: in ROBOTS below, lying on the floor (issue 25), where its contacts are the hard case
 }
 
 

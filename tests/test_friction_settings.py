@@ -178,6 +178,11 @@ def test_the_demo_answers_how_much_mujocos_friction_drifts_and_what_stopping_it_
     # one of the demo's two integrators beside MuJoCo's default: 2/3 of its runs, the same section and
     # answer lines (rk4 at the smaller timesteps is what meets 1e-2 where euler cannot)
     monkeypatch.setattr(steps, "DEMO_FRICTION_INTEGRATORS", ("rk4",))
+    # and its two largest timesteps: still a measured convergence, the same section and answer lines
+    from springlab.studies import friction_settings as study_module
+
+    full = study_module.friction_settings
+    monkeypatch.setattr(study_module, "friction_settings", lambda *a, dts, **k: full(*a, dts=dts[:2], **k))
     state = DemoState(out=tmp_path)
     written = steps.friction_step(state)
     assert {a.path for a in written} == {
