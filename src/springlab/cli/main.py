@@ -547,6 +547,14 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return EXIT_FAILED if any(not r.passed for r in state.validation) else EXIT_OK
 
 
+def cmd_view(args: argparse.Namespace) -> int:
+    """Watch a scene's validated run (or any MJCF) live in MuJoCo's interactive viewer (springlab.cli.view)."""
+    from springlab.cli import view  # GLFW only for the command that opens a window
+
+    result = view.command(args, _run)
+    return EXIT_OK if result is None else _verdict(result)
+
+
 # -- parser --------------------------------------------------------------------
 
 COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {}
@@ -871,6 +879,23 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--output", metavar="DIR", help="write fit.json, fit.png, trajectory.csv and summary.json")
     p.add_argument("--json", action="store_true", help="print fit.json")
     COMMANDS["fit"] = cmd_fit
+
+    p = sub.add_parser("view", help="watch a scene's validated run (or any MJCF) live in MuJoCo's interactive viewer")
+    p.add_argument("scene", metavar="SCENE|MODEL.xml", help="scene name (see 'springlab list') or an MJCF file")
+    p.add_argument("scenario", nargs="?", help="scenario name (default: the scene's first)")
+    p.add_argument(
+        "--set", action="append", default=[], metavar="NAME=VALUE", help="override a parameter, SI units (repeatable)"
+    )
+    _timing_arguments(p)
+    p.add_argument(
+        "--slow-motion",
+        type=float,
+        default=1.0,
+        metavar="FACTOR",
+        help="run FACTOR times slower (default 1: real time)",
+    )
+    p.add_argument("--close-after", type=float, metavar="SECONDS", help="close the window after SECONDS of wall time")
+    COMMANDS["view"] = cmd_view
 
     p = sub.add_parser("demo", help="the main job: validate everything, write out/")
     p.add_argument("--output", default="out", metavar="DIR", help="output folder (default: out)")
