@@ -207,6 +207,7 @@ def display(tmp_path):
         process.wait(timeout=30)
 
 
+@pytest.mark.slow  # 3.5 s on two cores, 5 s pinned to one: the window is open 1.2 s, the command starts in 2
 def test_the_window_shows_the_block_and_its_drawn_spring_moving_in_real_time(display):
     """`springlab view slider free` under Xvfb: the window opens (its first line says so), the X screen
     shows the block in its colour and the spring the videos draw (in the spring's colour: it exists only
