@@ -126,7 +126,7 @@ def test_a_display_glfw_cannot_open_is_one_line_and_exit_2(monkeypatch, capsys, 
     [
         (["view", "no_such_scene"], "no such model file or scene 'no_such_scene'; scenes: car,"),
         (["view", "slider", "no_such_scenario"], "unknown scenario of slider 'no_such_scenario'; valid:"),
-        (["view", "slider", "--slow-motion", "0.5"], "--slow-motion must be a number >= 1"),
+        (["view", "slider", "--slow-motion", "0.5"], "--slow-motion must be a finite number >= 1"),
         (["view", "slider", "--close-after", "-1"], "--close-after must be a number of seconds > 0"),
     ],
 )
@@ -245,3 +245,21 @@ def test_the_window_shows_the_block_and_its_drawn_spring_moving_in_real_time(dis
         assert np.nonzero(spring)[1].mean() < np.nonzero(block)[1].mean()  # the spring runs from the wall on the left
     shift = np.nonzero(_like(after, BLOCK_RGB))[1].mean() - np.nonzero(_like(before, BLOCK_RGB))[1].mean()
     assert abs(shift) > 3, f"the block moved {shift:.1f} px"
+
+
+def test_small_motions_are_drawn_magnified_around_the_runs_mean_and_the_physics_is_not(scenario_run):
+    """The car's push and release moves by millimetres: like its video, the window draws it x30 around the
+    run's mean position (q_drawn = mean + 30 (q - mean) on every coordinate), while the stepped state stays
+    the run's; the springs the videos draw are appended to the viewer's scene each frame."""
+    result = scenario_run("car", "push_release")
+    live = view.live_run(result)
+    states = np.asarray(result.trajectory.qpos)
+    centre = states.mean(axis=0)
+    model, drawings, _ = stage(live.model, states, 0, 640, 360)
+    picture = view._Picture(model, mujoco.MjData(model), drawings, 30.0, centre)
+    scene = mujoco.MjvScene(model, 2000)
+    live.advance(137)
+    picture.show(live, scene)
+    np.testing.assert_array_equal(live.data.qpos, states[137])
+    np.testing.assert_allclose(picture.data.qpos, centre + 30.0 * (states[137] - centre), rtol=1e-13, atol=1e-15)
+    assert scene.ngeom > 0 and all(scene.geoms[i].category == mujoco.mjtCatBit.mjCAT_DECOR for i in range(scene.ngeom))

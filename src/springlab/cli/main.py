@@ -894,6 +894,12 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="FACTOR",
         help="run FACTOR times slower (default 1: real time)",
     )
+    p.add_argument(
+        "--exaggerate",
+        type=float,
+        metavar="FACTOR",
+        help="draw displacements FACTOR times larger around their mean, as 'render' does (default: render's)",
+    )
     p.add_argument("--close-after", type=float, metavar="SECONDS", help="close the window after SECONDS of wall time")
     COMMANDS["view"] = cmd_view
 

@@ -12,7 +12,8 @@
 * **The same pictures as the videos.** `springlab.render.stage` arranges a copy of the model for
   drawing (rails over the travel, the camera framed on the motion) with the videos' springs,
   dampers, belts and road (`Drawings`), added to the viewer's `user_scn` every frame. The physics
-  steps the model that was validated; its state is copied into the drawing copy each frame. The
+  steps the model that was validated; its state is copied into the drawing copy each frame, small
+  motions magnified around the run's mean as the videos magnify them (--exaggerate). The
   scene's fixed camera becomes the viewer's free camera at the same pose (tracking the body when
   the videos' camera follows it), so the mouse can still turn and zoom.
 * **No display.** Without DISPLAY or WAYLAND_DISPLAY (Linux), or when GLFW cannot open a window
@@ -41,7 +42,8 @@ import numpy as np
 
 from springlab import scenes
 from springlab.errors import BadInputError, SpringlabError
-from springlab.render.drawings import Drawings
+from springlab.render import scale as render_scale
+from springlab.render.drawings import Drawings, RoadBump
 from springlab.render.stage import road_bump, stage
 from springlab.runs.run import Result, scene_and_scenario
 from springlab.sim.simulate import INTEGRATORS, check_timing, configured, initial_state, quiet_mujoco
@@ -54,6 +56,8 @@ FRAME_RATE = 60.0
 STEP_SHARE = 0.7
 #: key that pauses and resumes the run (GLFW key code of the space bar)
 PAUSE_KEY = 32
+#: most recorded states the camera is framed on (a run's steps are thinned to about this many) [-]
+FRAMING_STATES = 2000
 #: longest wait for the window's thread to finish closing [s]
 CLOSE_TIMEOUT = 10.0
 _FULL = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
@@ -304,8 +308,9 @@ def show(
     size: tuple[int, int] = (640, 480),
     label: str = "",
     setting: str = "",
-    road: Any = None,
+    road: RoadBump | None = None,
     slow_motion: float = 1.0,
+    exaggerate: float = 1.0,
     close_after: float | None = None,
     opened: Callable[[], None] | None = None,
 ) -> Viewed:
@@ -328,6 +333,9 @@ def show(
         the quarter car's road (`render.stage.road_bump`), or None.
     slow_motion
         factor >= 1 [-] simulated time runs slower than the wall clock.
+    exaggerate
+        factor >= 1 [-] positions are drawn magnified by around their mean over `states`, as in the
+        videos (`render.scale.exaggerated`; drawing only, the physics is stepped as it is).
     close_after
         close the window after this many seconds [s] (None: when the user closes it).
     opened
@@ -341,7 +349,11 @@ def show(
     import mujoco.viewer
 
     width, height = size
-    view_model, drawings, camera_path = stage(live.model, states, camera_id, width, height, road)
+    centre = np.asarray(states, float).mean(axis=0)
+    if road is not None and exaggerate != 1.0:
+        road = dataclasses.replace(road, exaggeration=exaggerate)
+    drawn = render_scale.exaggerated(live.model, states, exaggerate)
+    view_model, drawings, camera_path = stage(live.model, drawn, camera_id, width, height, road)
     if view_model is live.model:
         view_model = _copy(live.model)
     if camera_id >= 0:
@@ -353,8 +365,9 @@ def show(
         if key == PAUSE_KEY:
             paused.clear() if paused.is_set() else paused.set()
 
-    state = np.empty(mujoco.mj_stateSize(live.model, _FULL))
-    _show_state(live, view_model, view_data, drawings_scene=None, drawings=drawings, state=state)
+    picture = _Picture(view_model, view_data, drawings, exaggerate, centre)
+    picture.show(live)
+    notes = ", ".join(render_scale.labels(slow_motion, exaggerate)).replace("×", "x")  # MuJoCo's font is ASCII
     frames = 0
     before = set(threading.enumerate())
     with mujoco.viewer.launch_passive(
@@ -379,8 +392,8 @@ def show(
                     live.advance(wanted, deadline=now + STEP_SHARE * frame_s)
                 target = min(target, live.elapsed + frame_s / slow_motion)  # behind: no race to catch up
             last = now
-            _show_state(live, view_model, view_data, viewer.user_scn, drawings, state)
-            clock = f"{live.data.time:.3f} s" + (f"  (1/{slow_motion:g} speed)" if slow_motion != 1 else "")
+            picture.show(live, viewer.user_scn)
+            clock = f"{live.data.time:.3f} s" + (f"  ({notes})" if notes else "")
             viewer.set_texts(
                 (
                     mujoco.mjtFontScale.mjFONTSCALE_150,
@@ -406,21 +419,29 @@ def _copy(model: mujoco.MjModel) -> mujoco.MjModel:
     return copy.copy(model)
 
 
-def _show_state(
-    live: LiveRun,
-    view_model: mujoco.MjModel,
-    view_data: mujoco.MjData,
-    drawings_scene: mujoco.MjvScene | None,
-    drawings: Drawings,
-    state: np.ndarray,
-) -> None:
-    """Copy the physics state into the drawing copy and redraw the springs and dampers into `drawings_scene`."""
-    mujoco.mj_getState(live.model, live.data, state, _FULL)
-    mujoco.mj_setState(view_model, view_data, state, _FULL)
-    mujoco.mj_kinematics(view_model, view_data)
-    if drawings_scene is not None:
-        drawings_scene.ngeom = 0
-        drawings.add(drawings_scene, view_data)
+@dataclasses.dataclass(eq=False)
+class _Picture:
+    """The drawing copy of the physics: its model and data, the drawings, the exaggeration and its centre."""
+
+    model: mujoco.MjModel
+    data: mujoco.MjData
+    drawings: Drawings
+    exaggerate: float
+    centre: np.ndarray
+
+    def show(self, live: LiveRun, scene: mujoco.MjvScene | None = None) -> None:
+        """Copy the physics state into the drawing copy (magnified) and redraw the springs and dampers into `scene`."""
+        state = np.empty(mujoco.mj_stateSize(live.model, _FULL))
+        mujoco.mj_getState(live.model, live.data, state, _FULL)
+        mujoco.mj_setState(self.model, self.data, state, _FULL)
+        if self.exaggerate != 1.0:
+            self.data.qpos[:] = render_scale.exaggerated(
+                self.model, self.data.qpos[None], self.exaggerate, self.centre
+            )[0]
+        mujoco.mj_kinematics(self.model, self.data)
+        if scene is not None:
+            scene.ngeom = 0
+            self.drawings.add(scene, self.data)
 
 
 # -- the command -------------------------------------------------------------------------------
@@ -459,8 +480,9 @@ def command(args: argparse.Namespace, run: Callable[[argparse.Namespace], Result
         the command line's `springlab run` (the same run, the same setting).
     """
     kind, model = _resolve(args.scene)
-    if args.slow_motion is None or not (math.isfinite(args.slow_motion) and args.slow_motion >= 1):
-        raise BadInputError(f"--slow-motion must be a number >= 1, got {args.slow_motion!r}")
+    render_scale.check_factor("--slow-motion", args.slow_motion)
+    if args.exaggerate is not None:
+        render_scale.check_factor("--exaggerate", args.exaggerate)
     if args.close_after is not None and not (math.isfinite(args.close_after) and args.close_after > 0):
         raise BadInputError(f"--close-after must be a number of seconds > 0, got {args.close_after!r}")
     if kind == "scene":
@@ -491,6 +513,9 @@ def command(args: argparse.Namespace, run: Callable[[argparse.Namespace], Result
         result = run(args)
         live = live_run(result, args.duration)
         states = np.asarray(result.trajectory.qpos)
+        states = states[
+            :: max(1, len(states) // FRAMING_STATES)
+        ]  # the framing needs the motion's extent, not every step
         camera_id = _camera_id(result.model, scenes.get(result.scene).camera)
         label = f"{result.scene} / {result.scenario}"
         verdict = "no exact reference" if result.verdict is None else result.verdict.value
@@ -504,11 +529,15 @@ def command(args: argparse.Namespace, run: Callable[[argparse.Namespace], Result
         verdict = "its own setting, not validated"
     integrator = next(n for n, v in INTEGRATORS.items() if v == int(live.model.opt.integrator))
     setting = f"{integrator}, dt = {float(live.model.opt.timestep):g} s"
+    exaggerate = args.exaggerate
+    if exaggerate is None:  # the videos' default: a motion below 1 % of the body's size magnified to about 3 %
+        exaggerate = render_scale.default_exaggeration(live.model, states) if kind == "scene" else 1.0
 
     def opened() -> None:
         speed = "real time" if args.slow_motion == 1 else f"1/{args.slow_motion:g} speed"
+        drawn = "".join(f", {note}" for note in render_scale.labels(1.0, exaggerate)).replace("×", "x")
         print(
-            f"viewing {label} ({setting}; {verdict}) live at {speed}: space pauses, close the window to stop",
+            f"viewing {label} ({setting}; {verdict}) live at {speed}{drawn}: space pauses, close the window to stop",
             flush=True,
         )
 
@@ -521,6 +550,7 @@ def command(args: argparse.Namespace, run: Callable[[argparse.Namespace], Result
         setting=setting,
         road=road,
         slow_motion=args.slow_motion,
+        exaggerate=exaggerate,
         close_after=args.close_after,
         opened=opened,
     )
