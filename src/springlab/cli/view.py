@@ -370,9 +370,13 @@ def show(
     notes = ", ".join(render_scale.labels(slow_motion, exaggerate)).replace("×", "x")  # MuJoCo's font is ASCII
     frames = 0
     before = set(threading.enumerate())
-    with mujoco.viewer.launch_passive(
-        view_model, view_data, key_callback=keys, show_left_ui=False, show_right_ui=False
-    ) as viewer:
+    try:
+        handle = mujoco.viewer.launch_passive(
+            view_model, view_data, key_callback=keys, show_left_ui=False, show_right_ui=False
+        )
+    except RuntimeError as error:  # macOS outside mjpython: "`launch_passive` requires ... `mjpython`"
+        raise NoDisplayError(f"cannot open MuJoCo's viewer: {_one_line(error)}") from None
+    with handle as viewer:
         with viewer.lock():
             _place_camera(viewer.cam, view_model, camera_id, camera_path is not None)
             viewer.opt.flags[mujoco.mjtVisFlag.mjVIS_TENDON] = 1  # the spring, as in the videos
