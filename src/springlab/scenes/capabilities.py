@@ -744,8 +744,13 @@ FrequencyEdit: TypeAlias = Callable[[mujoco.MjSpec, Mapping[str, float]], None]
 #: "pole_damping_ratio"}, the band (fmin, fmax) [Hz]) -> (named answers, SI, names ending in their unit;
 #: verdict lines): what the response means for the scene's own question (e.g. where a suspension isolates)
 FrequencyInterpret: TypeAlias = Callable[
-    [mujoco.MjModel, Mapping[str, float], Callable[[np.ndarray], np.ndarray], tuple[Mapping[str, Any], ...],
-     tuple[float, float]],
+    [
+        mujoco.MjModel,
+        Mapping[str, float],
+        Callable[[np.ndarray], np.ndarray],
+        tuple[Mapping[str, Any], ...],
+        tuple[float, float],
+    ],
     tuple[dict[str, Any], tuple[str, ...]],
 ]
 

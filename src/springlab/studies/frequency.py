@@ -412,6 +412,24 @@ def _spec_for(declared: Any, scenario: str | None) -> Any:
     return next((spec for spec in specs if spec.scenario == scenario), None)
 
 
+def declared_scenarios(scene_name: str) -> tuple[str, ...]:
+    """The scenarios of a scene that declare a frequency question (`Scene.frequency`), the default first.
+
+    Parameters
+    ----------
+    scene_name
+        a registered scene's name.
+
+    Returns
+    -------
+    tuple[str, ...]
+        the scenario names; () when the scene declares none.
+    """
+    declared = scenes.get(scene_name).frequency
+    specs = () if declared is None else (declared,) if not isinstance(declared, tuple) else declared
+    return tuple(spec.scenario for spec in specs)
+
+
 def _load(scene_or_model: Any, scenario: str | None, parameters: Mapping[str, Any]) -> _Source:
     """The model to analyse: an MjModel, an MJCF path, or a scene (its declared scenario and edit)."""
     if isinstance(scene_or_model, mujoco.MjModel):

@@ -231,14 +231,17 @@ class Car(Scene):
     #: (the isolation frequency sqrt(2) omega_n); both pitch-plane modes under the passers-by's push
     frequency = (
         FrequencySpec(
-            "road_bump", "road", "heave", "road height to body heave: the quarter car's transmissibility", road_as_control
+            "road_bump",
+            "road",
+            "heave",
+            "road height to body heave: the quarter car's transmissibility",
+            road_as_control,
         ),
         FrequencySpec(
             "damped_release",
             "road_acceleration",
             "heave:acc",
-            "road acceleration to body acceleration (the road drives spring and damper):"
-            " the single mass's transmissibility (c s + k) / (m s^2 + c s + k)",
+            "road to body acceleration: the single mass's transmissibility (c s + k) / (m s^2 + c s + k)",
             road_under_the_car,
             isolation,
         ),
@@ -246,7 +249,7 @@ class Car(Scene):
             "pitch_heave",
             "push",
             "pitch",
-            "a push at push_position (over the front axle) to body pitch: both pitch-plane modes",
+            "a push over the front axle to body pitch: both pitch-plane modes",
             push_at_the_front,
             name_modes,
         ),
