@@ -331,3 +331,15 @@ def test_demo_frequency_step_writes_every_declared_question_and_the_report_shows
         for line in plot.answer.splitlines():
             assert report._e(line) in page
     assert "isolation" in page and "positioning" in page and "pitch-dominated" in page
+
+
+def test_command_takes_a_scene_parameter_and_prints_the_answers(capsys):
+    """`--set` reaches the scene: lighter dampers show both pitch-plane peaks; frequency.json carries the answers."""
+    import json
+
+    from springlab.cli.main import main
+
+    main(["frequency", "car", "pitch_heave", "--set", "damping_ratio=0.05", "--points", "40", "--json"])
+    data = json.loads(capsys.readouterr().out)
+    assert len(data["resonances"]) == 2 and all(r["natural_frequency_hz"] > 0 for r in data["resonances"])
+    assert data["answers"]["mode_2_shape"] == "pitch-dominated" and data["answers"]["mode_2_resonance_hz"] > 0
