@@ -314,7 +314,9 @@ def test_demo_frequency_step_writes_every_declared_question_and_the_report_shows
     from springlab.demo import report, steps
     from springlab.studies.frequency import declared_scenarios
 
-    monkeypatch.setattr(steps, "DEMO_FREQUENCY_POINTS", 30)  # the figures' resolution is not the claim
+    # the figures' resolution and the number of integrators searched are not the claim
+    monkeypatch.setattr(steps, "DEMO_FREQUENCY_POINTS", 30)
+    monkeypatch.setattr(steps, "DEMO_FREQUENCY_INTEGRATORS", ("rk4",))
     state = steps.DemoState(out=tmp_path)
     artifacts = steps.frequency_step(state)
     declared = [(s.name, q) for s in springlab.scenes.SCENES.values() for q in declared_scenarios(s.name)]
