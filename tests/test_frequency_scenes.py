@@ -52,6 +52,7 @@ def test_single_mass_transmissibility_and_its_isolation_at_sqrt2_omega_n(zeta):
         "car", "damped_release", parameters={"damping_ratio": zeta}, band=band, points=90, integrators=()
     )
     assert (result.input, result.response) == ("road_acceleration", "heave:acc")
+    assert result.units == {"input": "m/s^2", "response": "m/s^2"}  # the transmissibility: per unit, dimensionless
     s = 2j * np.pi * result.frequencies_hz
     closed = (c * s + k) / (m * s**2 + c * s + k)
     a = np.array([[0.0, 1.0], [-k / m, -c / m]])

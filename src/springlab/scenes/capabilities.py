@@ -774,6 +774,9 @@ class FrequencySpec:
     interpret
         what the default input -> response means for the scene's question (None: nothing beyond the
         resonances), e.g. the single-mass car's isolation frequency or the printer head's shortest move.
+    input_unit
+        the declared input's unit where it is an actuator ('' : MuJoCo's actuator unit, unknown), e.g. 'm'
+        for the car's road height, so the plot's |H| reads in physical units.
 
     A scene answering several frequency questions declares a tuple of specs, one per scenario, the first
     the default (`Scene.frequency`).
@@ -785,3 +788,4 @@ class FrequencySpec:
     description: str
     edit: FrequencyEdit | None = None
     interpret: FrequencyInterpret | None = None
+    input_unit: str = ""

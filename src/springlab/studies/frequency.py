@@ -402,6 +402,7 @@ class _Source:
     description: str
     parameters: Mapping[str, float] = dataclasses.field(default_factory=dict)
     interpret: Any = None
+    input_unit: str = ""
 
 
 def _spec_for(declared: Any, scenario: str | None) -> Any:
@@ -463,6 +464,7 @@ def _load(scene_or_model: Any, scenario: str | None, parameters: Mapping[str, An
             spec.description if spec else "",
             dict(params),
             spec.interpret if spec else None,
+            spec.input_unit if spec else "",
         )
     if scenario is not None or parameters:
         raise BadInputError("a scenario and parameters go with a scene name, not with a model file")
@@ -839,6 +841,8 @@ def frequency(
     if input_name is None or response_name is None:
         raise BadInputError("name the input (--input ACTUATOR|JOINT) and the response (--response JOINT[:vel|:acc])")
     kind, index, input_unit = resolve_input(model, input_name)
+    if input_name == source.input and source.input_unit:
+        input_unit = source.input_unit  # the scene knows what its actuator's control is
     dof, out_kind, response_unit = resolve_response(model, response_name)
     if band is not None:
         band = parse_band(band) if isinstance(band, str) else _check_band(band)

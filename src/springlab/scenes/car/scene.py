@@ -236,6 +236,7 @@ class Car(Scene):
             "heave",
             "road height to body heave: the quarter car's transmissibility",
             road_as_control,
+            input_unit="m",
         ),
         FrequencySpec(
             "damped_release",
@@ -244,6 +245,7 @@ class Car(Scene):
             "road to body acceleration: the single mass's transmissibility (c s + k) / (m s^2 + c s + k)",
             road_under_the_car,
             isolation,
+            input_unit="m/s^2",
         ),
         FrequencySpec(
             "pitch_heave",
@@ -252,6 +254,7 @@ class Car(Scene):
             "a push over the front axle to body pitch: both pitch-plane modes",
             push_at_the_front,
             name_modes,
+            input_unit="N",
         ),
     )
     fit = OscillatorFit(

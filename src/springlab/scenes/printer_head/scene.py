@@ -166,6 +166,7 @@ class PrinterHead(Scene):
         "carriage",
         "drive force to carriage position: the rigid body and the belt's resonance",
         interpret=positioning,
+        input_unit="N",
     )
     #: the textbook question each scenario answers, and its answer as a sentence (Scene.questions)
     questions = {
