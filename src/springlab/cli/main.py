@@ -370,6 +370,7 @@ def cmd_frequency(args: argparse.Namespace) -> int:
             tol=args.tol,
             sines=args.sinestream,
             executor=executor,
+            parameters=_parse_sets(args.set),
         )
     if args.output:
         charts_frequency.write_frequency(result, args.output)
@@ -719,6 +720,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("scenario", nargs="?", help="a scene's scenario (default: the one its frequency response declares)")
     p.add_argument("--input", metavar="NAME", help="an actuator (its control) or a joint (a force on it)")
     p.add_argument("--response", metavar="NAME", help="a joint: JOINT (position), JOINT:vel or JOINT:acc")
+    p.add_argument(
+        "--set", action="append", default=[], metavar="NAME=VALUE", help="a scene's parameter, SI units (repeatable)"
+    )
     p.add_argument(
         "--band",
         metavar="FMIN:FMAX",
