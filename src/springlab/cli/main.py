@@ -547,6 +547,24 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return EXIT_FAILED if any(not r.passed for r in state.validation) else EXIT_OK
 
 
+# -- springlab interactive (issue 27): a scenario with real MuJoCo in the browser ---------------
+
+
+def cmd_interactive(args: argparse.Namespace) -> int:
+    """Write the scenario's interactive page (MuJoCo's WebAssembly build, sliders, exact solution, verdict)."""
+    from springlab.render import interactive
+
+    page = interactive.write_interactive(args.scene, args.scenario, args.output)
+    if args.json:
+        _print_json(page.to_dict())
+    else:
+        print(
+            f"wrote {page.path} ({page.size_bytes / 1e6:.1f} MB with MuJoCo {interactive.MUJOCO_JS_MUJOCO} as"
+            f" WebAssembly); open it from disk or a web server"
+        )
+    return EXIT_OK
+
+
 # -- parser --------------------------------------------------------------------
 
 COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {}
@@ -871,6 +889,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--output", metavar="DIR", help="write fit.json, fit.png, trajectory.csv and summary.json")
     p.add_argument("--json", action="store_true", help="print fit.json")
     COMMANDS["fit"] = cmd_fit
+
+    p = sub.add_parser("interactive", help="a scenario as a web page running MuJoCo in the browser, with sliders")
+    p.add_argument("scene", help="a scene that runs in the browser (slider)")
+    p.add_argument("scenario", nargs="?", help="one of its scenarios that run in the browser (default: the first)")
+    p.add_argument("--output", required=True, metavar="DIR", help="folder for SCENE-SCENARIO.html and its scripts")
+    p.add_argument("--json", action="store_true", help="print what was written as JSON")
+    COMMANDS["interactive"] = cmd_interactive
 
     p = sub.add_parser("demo", help="the main job: validate everything, write out/")
     p.add_argument("--output", default="out", metavar="DIR", help="output folder (default: out)")

@@ -762,3 +762,71 @@ class FrequencySpec:
     response: str
     description: str
     edit: FrequencyEdit | None = None
+
+
+# -- interactive: the scene in the browser (springlab.render.interactive) ---------------------------------
+
+
+@dataclasses.dataclass(frozen=True)
+class MjcfEdit:
+    """One parameter written into the MJCF text, the browser's form of a line of `Scene.edit`.
+
+    The page edits the scene's MJCF file as text (an XML attribute) and recompiles it, so the model it
+    steps is the one `Scene.build` makes; tests/test_interactive.py compiles both and compares them.
+
+    Attributes
+    ----------
+    parameter
+        the scene parameter written.
+    tag, name
+        the element `<tag name="name">` of the MJCF file.
+    attribute
+        the attribute written (the value in full precision).
+    child
+        write into this child element of it instead (e.g. a body's `inertial`); None: the element itself.
+    """
+
+    parameter: str
+    tag: str
+    name: str
+    attribute: str
+    child: str | None = None
+
+
+@dataclasses.dataclass(frozen=True)
+class InteractiveSpec:
+    """A scene whose scenarios run in the browser with real MuJoCo (`springlab interactive`).
+
+    The page's exact solution is the one-mode oscillator m x'' + d x' + k x = F (F constant from t = 0,
+    through an actuator's control, as `Scene.setup` holds it), ported to JavaScript; it is the kind
+    every declaring scene shares (`kind`).
+
+    Attributes
+    ----------
+    joint
+        the oscillating joint, x; its qpos and qvel are the page's x and v.
+    scenarios
+        the scenarios the page can run: those whose model is the MJCF with `edits` applied (no
+        MjSpec-built parts such as a harmonic exciter); the first is the default.
+    edits
+        the parameters written into the MJCF text.
+    mass, stiffness, damping, x0, v0
+        the scene's parameter names of m [kg], k [N/m], d [N s/m], x(0) [m], v(0) [m/s].
+    force
+        the parameter of the constant force F [N] (None: free response only).
+    actuator
+        the actuator whose control holds F.
+    """
+
+    kind: ClassVar[str] = "oscillator"
+
+    joint: str
+    scenarios: tuple[str, ...]
+    edits: tuple[MjcfEdit, ...]
+    mass: str = "mass"
+    stiffness: str = "stiffness"
+    damping: str = "damping"
+    x0: str = "x0"
+    v0: str = "v0"
+    force: str | None = None
+    actuator: str | None = None
