@@ -554,13 +554,14 @@ def cmd_interactive(args: argparse.Namespace) -> int:
     """Write the scenario's interactive page (MuJoCo's WebAssembly build, sliders, exact solution, verdict)."""
     from springlab.render import interactive
 
-    page = interactive.write_interactive(args.scene, args.scenario, args.output)
+    pages = interactive.write_interactive(args.scene, args.scenario, args.output)
     if args.json:
-        _print_json(page.to_dict())
+        _print_json([page.to_dict() for page in pages])
     else:
+        others = f" and {len(pages) - 1} more scenarios beside it" if len(pages) > 1 else ""
         print(
-            f"wrote {page.path} ({page.size_bytes / 1e6:.1f} MB with MuJoCo {interactive.MUJOCO_JS_MUJOCO} as"
-            f" WebAssembly); open it from disk or a web server"
+            f"wrote {pages[0].path}{others} ({pages[0].size_bytes / 1e6:.1f} MB with MuJoCo"
+            f" {interactive.MUJOCO_JS_MUJOCO} as WebAssembly); open it from disk or a web server"
         )
     return EXIT_OK
 
@@ -892,7 +893,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("interactive", help="a scenario as a web page running MuJoCo in the browser, with sliders")
     p.add_argument("scene", help="a scene that runs in the browser (slider)")
-    p.add_argument("scenario", nargs="?", help="one of its scenarios that run in the browser (default: the first)")
+    p.add_argument("scenario", nargs="?", help="one of its scenarios that run in the browser (default: all of them)")
     p.add_argument("--output", required=True, metavar="DIR", help="folder for SCENE-SCENARIO.html and its scripts")
     p.add_argument("--json", action="store_true", help="print what was written as JSON")
     COMMANDS["interactive"] = cmd_interactive

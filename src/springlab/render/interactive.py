@@ -53,7 +53,11 @@ MUJOCO_SCRIPT = f"mujoco-js-{MUJOCO_JS_VERSION}.js"
 LICENSE_FILE = "LICENSE-mujoco-js.txt"
 _WEB = pathlib.Path(__file__).with_name("web")
 _ASSETS = ("springlab-exact.js", "springlab-interactive.js", "springlab-interactive.css")
-_SOURCES = {"springlab-exact.js": "exact.js", "springlab-interactive.js": "page.js", "springlab-interactive.css": "page.css"}
+_SOURCES = {
+    "springlab-exact.js": "exact.js",
+    "springlab-interactive.js": "page.js",
+    "springlab-interactive.css": "page.css",
+}
 #: the dt slider's range [s] (log scale): from a fine RK4 step to past every integrator's stability limit
 DT_RANGE = (1e-4, 0.5)
 
@@ -183,7 +187,10 @@ def strip_custom_sections(wasm: bytes) -> bytes:
 
 def classic_script(module_text: str) -> str:
     """mujoco-js's ES module as a classic script defining `loadMujoco`, its WebAssembly stripped."""
-    text = module_text.replace("import.meta.url", "(typeof document != 'undefined' && document.currentScript ? document.currentScript.src : '')")
+    text = module_text.replace(
+        "import.meta.url",
+        "(typeof document != 'undefined' && document.currentScript ? document.currentScript.src : '')",
+    )
     if "\nexport default loadMujoco;" not in text or "import.meta" in text:
         raise ValueError("mujoco-js is not the module this build knows how to load as a classic script")
     text = text.replace("\nexport default loadMujoco;", "\n")
@@ -322,7 +329,6 @@ def page_config(scene_name: str, scenario_name: str | None = None) -> dict:
         "dampers": _pictures(model, DAMPER_PREFIX),
         "coilRadius": COIL_RADIUS,
         "mujocoJs": {"package": MUJOCO_JS_PACKAGE, "version": MUJOCO_JS_VERSION, "mujoco": MUJOCO_JS_MUJOCO},
-        "others": [s for s in spec.scenarios if s != scenario.name],
     }
 
 
@@ -338,11 +344,11 @@ def page_html(config: dict) -> str:
 <html lang="en"><head><meta charset="utf-8"><meta name="viewport" content="width=device-width, initial-scale=1">
 <title>{esc(title)}</title><link rel="stylesheet" href="springlab-interactive.css"></head>
 <body>
-<header><h1>{esc(config['scene'])} / {esc(config['scenario'])}</h1>
-<p class="muted">{esc(config['title'])}: {esc(config['description'])}</p>
-<p class="question">{esc(config['question'])}</p>
-{f'<p class="muted">other scenarios: {links}</p>' if links else ''}</header>
-<p id="status">loading MuJoCo {esc(config['mujocoJs']['mujoco'])} (WebAssembly)…</p>
+<header><h1>{esc(config["scene"])} / {esc(config["scenario"])}</h1>
+<p class="muted">{esc(config["title"])}: {esc(config["description"])}</p>
+<p class="question">{esc(config["question"])}</p>
+{f'<p class="muted">other scenarios: {links}</p>' if links else ""}</header>
+<p id="status">loading MuJoCo {esc(config["mujocoJs"]["mujoco"])} (WebAssembly)…</p>
 <section id="controls" aria-label="settings"></section>
 <p id="result" role="status" aria-live="polite"></p>
 <section id="views">
@@ -352,10 +358,10 @@ def page_html(config: dict) -> str:
 <figure><canvas id="error" width="560" height="200"></canvas><figcaption>|x − x<sub>exact</sub>| (log scale) and the tolerance × max|x|</figcaption></figure>
 </section>
 <table id="numbers"></table>
-<footer class="muted"><p>Each move recompiles the scene's MJCF (models/{esc(config['scene'])}.xml with the same edits
-springlab makes in Python) and steps it with MuJoCo {esc(config['mujocoJs']['mujoco'])} compiled to WebAssembly
-(npm {esc(config['mujocoJs']['package'])} {esc(config['mujocoJs']['version'])}); the exact solution, the tolerance and the
-verdict are springlab's (springlab run {esc(config['scene'])} {esc(config['scenario'])} gives the same numbers).
+<footer class="muted"><p>Each move recompiles the scene's MJCF (models/{esc(config["scene"])}.xml with the same edits
+springlab makes in Python) and steps it with MuJoCo {esc(config["mujocoJs"]["mujoco"])} compiled to WebAssembly
+(npm {esc(config["mujocoJs"]["package"])} {esc(config["mujocoJs"]["version"])}); the exact solution, the tolerance and the
+verdict are springlab's (springlab run {esc(config["scene"])} {esc(config["scenario"])} gives the same numbers).
 MuJoCo: Apache-2.0, see <a href="{LICENSE_FILE}">{LICENSE_FILE}</a>. Made by springlab interactive.</p></footer>
 <script type="application/json" id="springlab-config">{data}</script>
 <script src="{MUJOCO_SCRIPT}"></script>
@@ -373,17 +379,23 @@ def _escape(value: object) -> str:
 
 def write_interactive(
     scene: str, scenario: str | None, output: str | os.PathLike, *, cache: pathlib.Path | None = None
-) -> InteractivePage:
+) -> tuple[InteractivePage, ...]:
     """Write `<scene>-<scenario>.html` and the files it loads into the folder `output`.
 
     Parameters
     ----------
     scene, scenario
-        the scene and one of the scenarios it runs in the browser (None: the first).
+        the scene and one of the scenarios it runs in the browser (None: every one of them, each page
+        linking to the others).
     output
-        the folder (created; other pages may share it and its scripts).
+        the folder (created; the pages share their scripts).
     cache
         where the npm tarball and the prepared script are kept (None: `cache_directory()`).
+
+    Returns
+    -------
+    tuple[InteractivePage, ...]
+        the pages written, the named (or first) scenario's first.
 
     Raises
     ------
@@ -392,20 +404,31 @@ def write_interactive(
     NodeUnavailableError
         mujoco-js is not cached and npm is missing or failed.
     """
-    config = page_config(scene, scenario)
-    config["linked"] = config.pop("others")
+    if scenario is None:
+        _choose(scene, None)
+        chosen = list(scenes.get(scene).interactive.scenarios)  # type: ignore[union-attr]
+    else:
+        chosen = [_choose(scene, scenario)[1].name]
+    configs = [page_config(scene, name) for name in chosen]
     folder = files.check_directory(output)
     script, notice = mujoco_script(cache)
-    name = f"{config['scene']}-{config['scenario']}.html"
-    texts = {name: page_html(config), MUJOCO_SCRIPT: script, LICENSE_FILE: notice}
+    texts = {MUJOCO_SCRIPT: script, LICENSE_FILE: notice}
     for asset in _ASSETS:
         texts[asset] = (_WEB / _SOURCES[asset]).read_text(encoding="utf-8")
-    written = files.write_text_files(folder, texts)
-    loaded = [folder / n for n in (name, MUJOCO_SCRIPT, *_ASSETS)]
-    return InteractivePage(
-        scene=config["scene"],
-        scenario=config["scenario"],
-        path=folder / name,
-        files=tuple(written),
-        size_bytes=sum(p.stat().st_size for p in loaded),
+    names = []
+    for config in configs:
+        config["linked"] = [other for other in chosen if other != config["scenario"]]
+        names.append(f"{config['scene']}-{config['scenario']}.html")
+        texts[names[-1]] = page_html(config)
+    written = tuple(files.write_text_files(folder, texts))
+    shared = sum((folder / n).stat().st_size for n in (MUJOCO_SCRIPT, *_ASSETS))
+    return tuple(
+        InteractivePage(
+            scene=config["scene"],
+            scenario=config["scenario"],
+            path=folder / name,
+            files=written,
+            size_bytes=shared + (folder / name).stat().st_size,
+        )
+        for config, name in zip(configs, names)
     )

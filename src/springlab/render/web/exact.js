@@ -191,10 +191,16 @@
     return out;
   }
 
+  // numpy.linalg.matrix_power's order of products (binary powers), so round-off matches where it can
   function matrixPower(a, p) {
-    var out = a;
-    for (var i = 1; i < p; i++) out = matmul(out, a);
-    return out;
+    var result = null, z = null, n = p;
+    while (n > 0) {
+      z = z === null ? a : matmul(z, z);
+      var bit = n % 2;
+      n = Math.floor(n / 2);
+      if (bit) result = result === null ? z : matmul(result, z);
+    }
+    return result;
   }
 
   // nonzero eigenvalues {re, im} [1/s] of the system (compare.system_rates): the oscillator's two roots

@@ -1,0 +1,396 @@
+"""The interactive page (springlab interactive): real MuJoCo in headless Chromium agrees with springlab's Python.
+
+One Chromium for the module, driven over its DevTools pipe: each page opens from file://, the test reads
+#result, moves the page's own sliders (input events, as a reader's hand would) and compares every
+setting's final position, error and verdict with `run_scenario` at the same settings. The JavaScript
+ports of the closed form, the tolerance and the range of the error estimate are compared with the Python
+in node on a grid of parameters. The browser is Debian's chromium (tests/test_report.py: skipped where
+absent unless SPRINGLAB_REQUIRE_CHROMIUM is set); mujoco-js comes from `npm pack`, cached.
+
+Agreement: the browser steps MuJoCo 3.3.8 (mujoco-js 0.0.7), Python steps MuJoCo 4.0; the slider's
+model is a slide joint with stiffness and damping stepped by the same integrator code, and the final
+positions agree to the last bit (asserted to 1e-12 of the motion's size, the issue's bound).
+"""
+
+import functools
+import http.server
+import json
+import math
+import os
+import shutil
+import subprocess
+import threading
+import xml.etree.ElementTree as ElementTree
+
+import mujoco
+import numpy as np
+import pytest
+
+from springlab import scenes
+from springlab.errors import BadInputError, DivergedError
+from springlab.render import interactive
+from springlab.runs import compare
+from springlab.runs.run import run_scenario
+from springlab.sim import model_files
+from test_report import CHROMIUM_FLAGS, _chromium
+
+#: the issue's bound on the agreement of the final position (relative to max |x|) and of the error [-]
+AGREEMENT = 1e-12
+
+
+def _npm_or_skip() -> None:
+    if shutil.which("npm") is None and shutil.which("node") is None:
+        if os.environ.get("SPRINGLAB_REQUIRE_CHROMIUM"):
+            pytest.fail("node and npm are required here (SPRINGLAB_REQUIRE_CHROMIUM) but not on PATH")
+        pytest.skip("the interactive page needs npm (mujoco-js) and node")
+
+
+@pytest.fixture(scope="module")
+def pages(tmp_path_factory):
+    """slider free and step pages in one folder (the npm tarball from the user's cache after the first run)."""
+    _npm_or_skip()
+    out = tmp_path_factory.mktemp("interactive")
+    written = interactive.write_interactive("slider", None, out)
+    assert [page.scenario for page in written] == list(scenes.get("slider").interactive.scenarios)
+    return {page.scenario: page for page in written}
+
+
+class _DevTools:
+    """Headless Chromium over --remote-debugging-pipe (fd 3 commands in, fd 4 answers out)."""
+
+    def __init__(self, chromium: str, profile) -> None:
+        commands_in, self._commands = os.pipe()
+        self._answers, answers_out = os.pipe()
+
+        def wire() -> None:
+            os.dup2(commands_in, 3)
+            os.dup2(answers_out, 4)
+
+        self.process = subprocess.Popen(
+            [chromium, *CHROMIUM_FLAGS, "--remote-debugging-pipe", f"--user-data-dir={profile}", "about:blank"],
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            close_fds=False,
+            preexec_fn=wire,
+        )
+        os.close(commands_in)
+        os.close(answers_out)
+        self._buffer = b""
+        self._id = 0
+        self.targets: dict[str, str] = {}
+
+    def call(self, method: str, params: dict | None = None, session: str | None = None) -> dict:
+        self._id += 1
+        message = {"id": self._id, "method": method, "params": params or {}}
+        if session:
+            message["sessionId"] = session
+        os.write(self._commands, json.dumps(message).encode() + b"\0")
+        while True:
+            while b"\0" not in self._buffer:
+                chunk = os.read(self._answers, 1 << 16)
+                assert chunk, "chromium closed its DevTools pipe"
+                self._buffer += chunk
+            raw, self._buffer = self._buffer.split(b"\0", 1)
+            answer = json.loads(raw)
+            if answer.get("id") == self._id:
+                if "error" in answer:
+                    raise RuntimeError(answer["error"]["message"])
+                return answer["result"]
+
+    def open(self, url: str) -> str:
+        """A new tab showing `url`, its document loaded (the session id)."""
+        target = self.call("Target.createTarget", {"url": "about:blank"})["targetId"]
+        session = self.call("Target.attachToTarget", {"targetId": target, "flatten": True})["sessionId"]
+        self.targets[session] = target
+        self.call("Page.navigate", {"url": url}, session)
+        for _ in range(1000):
+            try:  # until the evaluation runs in the page itself, not in about:blank on its way out
+                if self.evaluate(session, "location.href + ' ' + document.readyState") == f"{url} complete":
+                    return session
+            except RuntimeError:
+                pass
+        raise AssertionError(f"{url} did not load")
+
+    def evaluate(self, session: str, expression: str):
+        answer = self.call(
+            "Runtime.evaluate", {"expression": expression, "awaitPromise": True, "returnByValue": True}, session
+        )
+        assert "exceptionDetails" not in answer, answer["exceptionDetails"]
+        return answer["result"].get("value")
+
+    def close(self) -> None:
+        """Browser.close: chromium ends its renderers itself (terminate only if it does not)."""
+        try:
+            self.call("Browser.close")
+            self.process.wait(timeout=30)
+        except (RuntimeError, AssertionError, subprocess.TimeoutExpired):
+            self.process.terminate()
+            self.process.wait(timeout=30)
+        os.close(self._commands)
+        os.close(self._answers)
+
+
+#: resolves with #result's data- attributes once the page has published run number `after` + 1 or later
+_RESULT = """new Promise((resolve, reject) => {{
+  const start = Date.now();
+  (function poll() {{
+    const r = document.getElementById('result');
+    if (r && r.dataset.verdict === 'error') reject(new Error(document.getElementById('status').textContent));
+    else if (r && Number(r.dataset.run || 0) > {after})
+      resolve(Object.fromEntries([...r.attributes].filter(a => a.name.startsWith('data-')).map(a => [a.name.slice(5), a.value])));
+    else if (Date.now() - start > 120000) reject(new Error('no result'));
+    else setTimeout(poll, 10);
+  }})();
+}})"""
+
+
+@pytest.fixture(scope="module")
+def browser(tmp_path_factory):
+    chromium = _chromium()
+    tools = _DevTools(chromium, tmp_path_factory.mktemp("chromium-profile"))
+    yield tools
+    tools.close()
+
+
+def _python(result: dict):
+    """springlab's Python run at the page's settings (the parameters it reports, in full precision)."""
+    params = json.loads(result["parameters"])
+    return run_scenario(
+        result["scene"],
+        result["scenario"],
+        integrator=result["integrator"],
+        dt=float(result["dt"]),
+        duration=float(result["duration"]),
+        mass=params["mass"],
+        stiffness=params["stiffness"],
+        damping=params["damping"],
+        x0=params["x0"],
+        v0=params["v0"],
+        force_amplitude=params["force_amplitude"],
+    )
+
+
+def _assert_agrees(page: dict, python) -> None:
+    size = float(np.max(np.abs(python.pos["slider"])))
+    assert page["verdict"] == python.verdict.value
+    assert int(page["steps"]) == python.steps
+    assert abs(float(page["final-position"]) - float(python.pos["slider"][-1])) <= AGREEMENT * size
+    assert abs(float(page["max-error"]) - python.max_rel_error) <= AGREEMENT
+    assert math.isclose(float(page["tolerance"]), python.tolerance, rel_tol=1e-9)
+
+
+@pytest.mark.slow
+def test_every_page_from_file_agrees_with_python_at_its_initial_settings(pages, browser):
+    """The slider's seven browser scenarios (free, step, the damping family, the exercise) opened from disk."""
+    scene = scenes.get("slider")
+    for name, page in pages.items():
+        session = browser.open(page.path.as_uri())
+        initial = browser.evaluate(session, _RESULT.format(after=0))
+        scenario = scene.scenario(name)
+        assert (initial["scene"], initial["scenario"]) == ("slider", name)
+        assert initial["integrator"] == scene.integrator
+        assert float(initial["dt"]) == scenario.dt and float(initial["duration"]) == scenario.duration
+        assert json.loads(initial["parameters"]) == scene.resolve(scenario, {})
+        python = run_scenario("slider", name)
+        _assert_agrees(initial, python)
+        assert float(initial["final-position"]) == float(python.pos["slider"][-1])  # bit for bit, in fact
+        browser.call("Target.closeTarget", {"targetId": browser.targets[session]})
+
+
+def test_slider_moves_agree_with_python_and_a_dt_past_the_stability_limit_diverges(pages, browser):
+    """Two slider positions set through the page's own inputs: zeta, k, dt and the integrator moved, then
+    the dt slider at its top with RK4 (omega dt = 4.9 > 2.83), which the page and springlab call diverged;
+    and the page's MJCF edit compiles to the model Scene.edit builds through MjSpec."""
+    scene = scenes.get("slider")
+    session = browser.open(pages["free"].path.as_uri())
+    initial = browser.evaluate(session, _RESULT.format(after=0))
+    params = json.loads(initial["parameters"]) | {"mass": 2.5, "stiffness": 40.0, "damping": 0.7}
+    xml = browser.evaluate(session, f"window.springlabPage.editedMjcf({json.dumps(params)})")
+    _assert_same_model(mujoco.MjModel.from_xml_string(xml), scene.build(params, scene.scenario("free")))
+
+    moved = browser.evaluate(
+        session,
+        "(() => { const set = (id, v) => { const e = document.getElementById(id); e.value = String(v);"
+        " e.dispatchEvent(new Event('input')); };"
+        " set('zeta', 0.3); set('stiffness', 2.4); set('dt', Math.log10(0.02)); set('integrator', 'euler');"
+        f" return {_RESULT.format(after=1)}; }})()",
+    )
+    assert moved["integrator"] == "euler" and abs(float(moved["dt"]) - 0.02) < 0.001
+    moved_params = json.loads(moved["parameters"])
+    assert moved_params["stiffness"] == pytest.approx(10**2.4, rel=1e-12)
+    assert moved_params["damping"] == pytest.approx(2 * 0.3 * math.sqrt(10**2.4), rel=1e-12)
+    _assert_agrees(moved, _python(moved))
+
+    blown = browser.evaluate(
+        session,
+        "(() => { const e = document.getElementById('dt'); e.value = e.max; e.dispatchEvent(new Event('input'));"
+        " const i = document.getElementById('integrator'); i.value = 'rk4'; i.dispatchEvent(new Event('input'));"
+        f" return {_RESULT.format(after=2)}; }})()",
+    )
+    # the slider's top, 0.49 s on its 0.01-decade steps
+    assert blown["verdict"] == "diverged" and float(blown["dt"]) > 0.45
+    with pytest.raises(DivergedError):
+        _python(blown)
+
+
+def test_a_page_served_over_http_computes_the_same_run(pages, browser):
+    """From a web server (loopback, a thread of this test) the free page publishes what it does from file://."""
+    folder = pages["free"].path.parent
+    handler = functools.partial(http.server.SimpleHTTPRequestHandler, directory=str(folder))
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    try:
+        session = browser.open(f"http://127.0.0.1:{server.server_address[1]}/{pages['free'].path.name}")
+        served = browser.evaluate(session, _RESULT.format(after=0))
+    finally:
+        server.shutdown()
+        server.server_close()
+    _assert_agrees(served, run_scenario("slider", "free"))
+
+
+def _assert_same_model(page: mujoco.MjModel, python: mujoco.MjModel) -> None:
+    for field in ("body_mass", "body_inertia", "jnt_stiffness", "dof_damping", "qpos0", "actuator_gear"):
+        np.testing.assert_array_equal(getattr(page, field), getattr(python, field), err_msg=field)
+
+
+def test_declared_edits_write_what_scene_edit_sets(tmp_path):
+    """The InteractiveSpec edits, applied to the MJCF text by ElementTree, compile to Scene.build's model."""
+    scene = scenes.get("slider")
+    spec = scene.interactive
+    for name in spec.scenarios:
+        scenario = scene.scenario(name)
+        params = scene.resolve(scenario, {"mass": 0.3, "stiffness": 7.0, "damping": 0.125})
+        root = ElementTree.fromstring(model_files.path("slider").read_text())
+        for edit in spec.edits:
+            element = root.find(f".//{edit.tag}[@name='{edit.name}']")
+            assert element is not None
+            target = element.find(edit.child) if edit.child else element
+            target.set(edit.attribute, repr(params[edit.parameter]))
+        _assert_same_model(
+            mujoco.MjModel.from_xml_string(ElementTree.tostring(root, "unicode")), scene.build(params, scenario)
+        )
+
+
+#: (m [kg], k [N/m], d [N s/m], x0 [m], v0 [m/s], F [N]): every regime, k = 0, heavy overdamping, a step
+GRID = [
+    (1.0, 100.0, 1.0, 0.1, 0.0, 0.0),
+    (1.0, 100.0, 0.0, 0.1, 0.3, 0.0),
+    (2.0, 8.0, 8.0, 0.5, 0.0, 0.0),  # critical: d = 2 sqrt(k m)
+    (1.0, 2.0, 3.0, 5.0, 0.0, 0.0),  # the exercise
+    (1.0, 1.0, 1e4, 1.0, -2.0, 0.0),
+    (3.0, 0.0, 0.5, 0.0, 1.0, 0.0),
+    (1.0, 100.0, 1.0, 0.0, 0.0, 10.0),
+    (0.5, 50.0, 20.0, 0.2, 0.1, -3.0),
+    (1.0, 0.0, 0.0, 0.0, 1.0, 2.0),
+]
+SETTINGS = [("rk4", 5e-3, 5.0), ("euler", 2e-2, 5.0), ("implicit", 1e-3, 3.0), ("rk4", 0.25, 6.0)]
+
+
+def test_javascript_exact_solution_tolerance_and_range_match_the_python(tmp_path):
+    """web/exact.js in node against springlab.exact.analytic and springlab.runs.compare on GRID x SETTINGS."""
+    node = shutil.which("node")
+    if node is None:
+        _npm_or_skip()
+        pytest.fail("node is required for the JavaScript ports")
+    scene = scenes.get("slider")
+    cases = []
+    for m, k, d, x0, v0, force in GRID:
+        for integrator, dt, duration in SETTINGS:
+            time = np.arange(round(duration / dt) + 1) * dt
+            cases.append(
+                {
+                    "p": dict(m=m, k=k, d=d, x0=x0, v0=v0, force=force),
+                    "integrator": integrator,
+                    "dt": dt,
+                    "time": list(time),
+                }
+            )
+    script = tmp_path / "grid.js"
+    script.write_text(
+        f"const exact = require({json.dumps(str(interactive._WEB / 'exact.js'))});\n"
+        f"const cases = {json.dumps(cases)};\n"
+        "const out = cases.map(c => { const p = c.p, t = Float64Array.from(c.time);"
+        " const ref = exact.response(t, p.m, p.k, p.d, p.x0, p.v0, p.force);"
+        " const tol = exact.tolerances(t, ref, p.m, p.k, p.d, p.force, c.integrator, c.dt);"
+        " const range = exact.estimateRange(exact.rates(p.m, p.k, p.d), c.integrator, c.dt, t[t.length - 1]);"
+        " return {x: Array.from(ref.x), v: Array.from(ref.v), tol, inside: range.inside, factor: range.factor,"
+        " largest: range.largestDt}; });\n"
+        "process.stdout.write(JSON.stringify(out));\n"
+    )
+    done = subprocess.run([node, str(script)], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    answers = json.loads(done.stdout, parse_constant=float)
+    for case, js in zip(cases, answers):
+        p, time = case["p"], np.array(case["time"])
+        params = scene.resolve(
+            scene.scenario("step"),
+            {
+                "mass": p["m"],
+                "stiffness": p["k"],
+                "damping": p["d"],
+                "x0": p["x0"],
+                "v0": p["v0"],
+                "force_amplitude": p["force"],
+            },
+        )
+        reference = scene.reference(
+            scene.build(params, scene.scenario("step")), params, scene.scenario("step"), time, dt=case["dt"]
+        )
+        x, v = reference.pos["slider"], reference.vel["slider"]
+        # the same operations in the same order: libm's and V8's exp/cos differ by an ulp at most
+        scale_x, scale_v = float(np.max(np.abs(x))) or 1.0, float(np.max(np.abs(v))) or 1.0
+        assert np.max(np.abs(np.array(js["x"]) - x)) <= 64 * np.finfo(float).eps * scale_x, case
+        assert np.max(np.abs(np.array(js["v"]) - v)) <= 64 * np.finfo(float).eps * scale_v, case
+        tolerances = compare.tolerances(reference, case["integrator"], case["dt"], time)
+        noise = _roundoff_of_tolerance(reference, case["integrator"], case["dt"], time)
+        for kind in ("pos", "vel"):
+            python = min(tolerances[f"slider_{kind}"], compare.CERTIFIED_CAP)
+            assert abs(js["tol"][kind] - python) <= 1e-9 * python + noise[kind], (case["p"], case["integrator"], kind)
+        expected = compare.estimate_range(
+            compare.system_rates(reference), case["integrator"], case["dt"], float(time[-1])
+        )
+        assert js["inside"] == expected.inside, case
+        factor = js["factor"] if js["factor"] is not None else math.inf
+        assert factor == pytest.approx(expected.factor, rel=1e-9) or factor == expected.factor == math.inf
+        largest = js["largest"] if js["largest"] is not None else math.inf
+        assert largest == expected.largest_dt
+
+
+def _roundoff_of_tolerance(reference, integrator: str, dt: float, time: np.ndarray) -> dict[str, float]:
+    """How far round-off alone moves the tolerance [-]: A^(p+1) z(t) loses eps |A|^(p+1) |z| to cancellation.
+
+    Where A is stiff (d = 1e4: |A|^5 ~ 1e20 while A^5 z follows the slow mode) the predicted error is
+    round-off in Python and JavaScript alike; elsewhere this is far below the 1e-9 agreement.
+    """
+    order = compare.ORDERS[integrator]
+    a = np.asarray(reference.system, float)
+    power = np.linalg.matrix_power(np.abs(a), order + 1)
+    bound = 16 * np.finfo(float).eps * compare.ERROR_CONSTANTS[integrator] * dt**order
+    spread = bound * (time - time[0])[:, None] * (np.abs(reference.states) @ power.T)
+    rho = max(float(np.max(np.abs(np.linalg.eigvals(a)))), 1.0 / float(time[-1]))
+    worst = float(np.max(np.hypot(spread[:, 0], spread[:, 1] / rho)))
+    return {
+        kind: compare.SAFETY * worst * scale / (float(np.max(np.abs(series))) or 1.0)
+        for kind, scale, series in (("pos", 1.0, reference.pos["slider"]), ("vel", rho, reference.vel["slider"]))
+    }
+
+
+def test_scenes_without_a_browser_page_and_bad_scenarios_are_one_line_errors(tmp_path):
+    with pytest.raises(BadInputError, match="car has no interactive page"):
+        interactive.write_interactive("car", None, tmp_path)
+    with pytest.raises(BadInputError, match="harmonic"):
+        interactive.write_interactive("slider", "harmonic", tmp_path)
+    assert not any(tmp_path.iterdir())
+
+
+def test_the_vendored_module_is_pinned_and_its_webassembly_only_loses_custom_sections(pages):
+    """The written script is the pinned tarball's module, classic, with a wasm whose code sections are unchanged."""
+    folder = pages["free"].path.parent
+    notice = (folder / interactive.LICENSE_FILE).read_text()
+    assert "Apache License, Version 2.0" in notice and interactive.MUJOCO_JS_SHA256 in notice
+    script = (folder / interactive.MUJOCO_SCRIPT).read_text()
+    assert "import.meta" not in script and "export default" not in script
+    module = b"\0asm\x01\0\0\0" + bytes([0, 5, 4]) + b"name" + bytes([1, 1, 0]) + bytes([0, 3, 2]) + b"ab"
+    assert interactive.strip_custom_sections(module) == b"\0asm\x01\0\0\0" + bytes([1, 1, 0])
