@@ -394,3 +394,26 @@ def test_the_vendored_module_is_pinned_and_its_webassembly_only_loses_custom_sec
     assert "import.meta" not in script and "export default" not in script
     module = b"\0asm\x01\0\0\0" + bytes([0, 5, 4]) + b"name" + bytes([1, 1, 0]) + bytes([0, 3, 2]) + b"ab"
     assert interactive.strip_custom_sections(module) == b"\0asm\x01\0\0\0" + bytes([1, 1, 0])
+
+
+def test_the_demo_links_the_pages_from_its_report_and_skips_them_in_one_line_without_npm(tmp_path, monkeypatch, capsys):
+    from springlab.demo import report
+    from springlab.demo import steps as demo
+
+    _npm_or_skip()
+    state = demo.DemoState(out=tmp_path / "out")
+    artifacts = demo.interactive_step(state)
+    paths = {a.path for a in artifacts}
+    assert "interactive/slider-free.html" in paths and len(paths) == len(scenes.get("slider").interactive.scenarios)
+    assert all((state.out / path).is_file() for path in paths)
+    state.artifacts.extend(artifacts)
+    assert "href='interactive/slider-free.html'" in report.build_html(state)
+
+    # no npm on PATH and nothing cached: the demo goes on and says so in one line
+    monkeypatch.setenv("PATH", str(tmp_path / "empty"))
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    capsys.readouterr()
+    assert demo.interactive_step(demo.DemoState(out=tmp_path / "bare")) == []
+    said = capsys.readouterr().out.strip().splitlines()
+    assert len(said) == 1 and said[0].startswith("demo: interactive page skipped: ") and "npm is not on PATH" in said[0]
+    assert not (tmp_path / "bare" / "interactive").exists()
