@@ -12,6 +12,7 @@ model is a slide joint with stiffness and damping stepped by the same integrator
 positions agree to the last bit (asserted to 1e-12 of the motion's size, the issue's bound).
 """
 
+import fcntl
 import functools
 import http.server
 import json
@@ -61,10 +62,14 @@ class _DevTools:
     def __init__(self, chromium: str, profile) -> None:
         commands_in, self._commands = os.pipe()
         self._answers, answers_out = os.pipe()
+        # the child's ends above fd 10 first, so that moving them to 3 and 4 cannot overwrite one another
+        ends = [fcntl.fcntl(fd, fcntl.F_DUPFD_CLOEXEC, 10) for fd in (commands_in, answers_out)]
+        os.close(commands_in)
+        os.close(answers_out)
 
         def wire() -> None:
-            os.dup2(commands_in, 3)
-            os.dup2(answers_out, 4)
+            os.dup2(ends[0], 3)
+            os.dup2(ends[1], 4)
 
         self.process = subprocess.Popen(
             [chromium, *CHROMIUM_FLAGS, "--remote-debugging-pipe", f"--user-data-dir={profile}", "about:blank"],
@@ -74,8 +79,8 @@ class _DevTools:
             close_fds=False,
             preexec_fn=wire,
         )
-        os.close(commands_in)
-        os.close(answers_out)
+        for fd in ends:
+            os.close(fd)
         self._buffer = b""
         self._id = 0
         self.targets: dict[str, str] = {}
