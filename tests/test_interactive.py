@@ -32,6 +32,7 @@ from springlab.errors import BadInputError, DivergedError
 from springlab.render import interactive
 from springlab.runs import compare
 from springlab.runs.run import run_scenario
+from springlab.scenes.capabilities import formula
 from springlab.sim import model_files
 from test_report import CHROMIUM_FLAGS, _chromium
 
@@ -48,12 +49,15 @@ def _npm_or_skip() -> None:
 
 @pytest.fixture(scope="module")
 def pages(tmp_path_factory):
-    """slider free and step pages in one folder (the npm tarball from the user's cache after the first run)."""
+    """Every page of the slider and the car in one folder (the npm tarball from the user's cache after the first run)."""
     _npm_or_skip()
     out = tmp_path_factory.mktemp("interactive")
-    written = interactive.write_interactive("slider", None, out)
-    assert [page.scenario for page in written] == list(scenes.get("slider").interactive.scenarios)
-    return {page.scenario: page for page in written}
+    pages = {}
+    for scene in ("slider", "car"):
+        written = interactive.write_interactive(scene, None, out)
+        assert [page.scenario for page in written] == list(scenes.get(scene).interactive.scenarios)
+        pages.update({(scene, page.scenario): page for page in written})
+    return pages
 
 
 class _DevTools:
@@ -159,7 +163,8 @@ def browser(tmp_path_factory):
 
 
 def _python(result: dict):
-    """springlab's Python run at the page's settings (the parameters it reports, in full precision)."""
+    """springlab's Python run at the page's settings: the values its sliders move, in full precision."""
+    spec = scenes.get(result["scene"]).interactive
     params = json.loads(result["parameters"])
     return run_scenario(
         result["scene"],
@@ -167,39 +172,36 @@ def _python(result: dict):
         integrator=result["integrator"],
         dt=float(result["dt"]),
         duration=float(result["duration"]),
-        mass=params["mass"],
-        stiffness=params["stiffness"],
-        damping=params["damping"],
-        x0=params["x0"],
-        v0=params["v0"],
-        force_amplitude=params["force_amplitude"],
+        **{name: params[name] for name in (spec.mass, spec.stiffness, spec.damping)},
     )
 
 
 def _assert_agrees(page: dict, python) -> None:
-    size = float(np.max(np.abs(python.pos["slider"])))
+    x = python.pos[scenes.get(python.scene).interactive.joint]
     assert page["verdict"] == python.verdict.value
     assert int(page["steps"]) == python.steps
-    assert abs(float(page["final-position"]) - float(python.pos["slider"][-1])) <= AGREEMENT * size
+    assert abs(float(page["final-position"]) - float(x[-1])) <= AGREEMENT * float(np.max(np.abs(x)))
     assert abs(float(page["max-error"]) - python.max_rel_error) <= AGREEMENT
     assert math.isclose(float(page["tolerance"]), python.tolerance, rel_tol=1e-9)
 
 
 @pytest.mark.slow
 def test_every_page_from_file_agrees_with_python_at_its_initial_settings(pages, browser):
-    """The slider's seven browser scenarios (free, step, the damping family, the exercise) opened from disk."""
-    scene = scenes.get("slider")
-    for name, page in pages.items():
+    """The slider's seven browser scenarios (free, step, the damping family, the exercise) and the car's two
+    releases, opened from disk: bit for bit, MuJoCo 3.3.8 in the page against 4.0 in Python."""
+    for (scene_name, name), page in pages.items():
+        scene = scenes.get(scene_name)
         session = browser.open(page.path.as_uri())
         initial = browser.evaluate(session, _RESULT.format(after=0))
         scenario = scene.scenario(name)
-        assert (initial["scene"], initial["scenario"]) == ("slider", name)
+        assert (initial["scene"], initial["scenario"]) == (scene_name, name)
         assert initial["integrator"] == scene.integrator
         assert float(initial["dt"]) == scenario.dt and float(initial["duration"]) == scenario.duration
         assert json.loads(initial["parameters"]) == scene.resolve(scenario, {})
-        python = run_scenario("slider", name)
+        python = run_scenario(scene_name, name)
         _assert_agrees(initial, python)
-        assert float(initial["final-position"]) == float(python.pos["slider"][-1])  # bit for bit, in fact
+        x = python.pos[scene.interactive.joint]
+        assert float(initial["final-position"]) == float(x[-1])  # bit for bit, in fact
         browser.call("Target.closeTarget", {"targetId": browser.targets[session]})
 
 
@@ -208,7 +210,7 @@ def test_slider_moves_agree_with_python_and_a_dt_past_the_stability_limit_diverg
     the dt slider at its top with RK4 (omega dt = 4.9 > 2.83), which the page and springlab call diverged;
     and the page's MJCF edit compiles to the model Scene.edit builds through MjSpec."""
     scene = scenes.get("slider")
-    session = browser.open(pages["free"].path.as_uri())
+    session = browser.open(pages["slider", "free"].path.as_uri())
     initial = browser.evaluate(session, _RESULT.format(after=0))
     params = json.loads(initial["parameters"]) | {"mass": 2.5, "stiffness": 40.0, "damping": 0.7}
     xml = browser.evaluate(session, f"window.springlabPage.editedMjcf({json.dumps(params)})")
@@ -239,15 +241,33 @@ def test_slider_moves_agree_with_python_and_a_dt_past_the_stability_limit_diverg
         _python(blown)
 
 
+def test_car_release_moves_agree_with_python(pages, browser):
+    """The car's damped release at a moved damping ratio, mass and dt: the spring's relaxed length and the
+    pushed-down start follow the mass and stiffness in the page as in Release.edit and Release.setup."""
+    session = browser.open(pages["car", "damped_release"].path.as_uri())
+    browser.evaluate(session, _RESULT.format(after=0))
+    moved = browser.evaluate(
+        session,
+        "(() => { const set = (id, v) => { const e = document.getElementById(id); e.value = String(v);"
+        " e.dispatchEvent(new Event('input')); };"
+        " set('zeta', 0.55); set('mass', 3.3); set('dt', Math.log10(0.01));"
+        f" return {_RESULT.format(after=1)}; }})()",
+    )
+    params = json.loads(moved["parameters"])
+    # the mass slider's 0.01-decade steps start at its declared 250 kg: 10^3.3 snaps to 10^3.298
+    assert params["mass"] == pytest.approx(10**3.3, rel=0.03) and abs(float(moved["dt"]) - 0.01) < 1e-3
+    _assert_agrees(moved, _python(moved))
+
+
 def test_a_page_served_over_http_computes_the_same_run(pages, browser):
     """From a web server (loopback, a thread of this test) the free page publishes what it does from file://."""
-    folder = pages["free"].path.parent
+    folder = pages["slider", "free"].path.parent
     handler = functools.partial(http.server.SimpleHTTPRequestHandler, directory=str(folder))
     server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
     thread = threading.Thread(target=server.serve_forever, daemon=True)
     thread.start()
     try:
-        session = browser.open(f"http://127.0.0.1:{server.server_address[1]}/{pages['free'].path.name}")
+        session = browser.open(f"http://127.0.0.1:{server.server_address[1]}/{pages['slider', 'free'].path.name}")
         served = browser.evaluate(session, _RESULT.format(after=0))
     finally:
         server.shutdown()
@@ -260,65 +280,94 @@ def _assert_same_model(page: mujoco.MjModel, python: mujoco.MjModel) -> None:
         np.testing.assert_array_equal(getattr(page, field), getattr(python, field), err_msg=field)
 
 
-def test_declared_edits_write_what_scene_edit_sets(tmp_path):
-    """The InteractiveSpec edits, applied to the MJCF text by ElementTree, compile to Scene.build's model."""
-    scene = scenes.get("slider")
+@pytest.mark.parametrize(
+    ("scene_name", "overrides"),
+    [("slider", {"mass": 0.3, "stiffness": 7.0, "damping": 0.125}), ("car", {"mass": 1234.5, "stiffness": 3.3e5})],
+)
+def test_declared_edits_write_what_scene_edit_sets(scene_name, overrides):
+    """The InteractiveSpec edits, applied to the MJCF text by ElementTree, compile to Scene.build's model, and
+    its x0 formula is where Scene.setup starts the joint."""
+    scene = scenes.get(scene_name)
     spec = scene.interactive
     for name in spec.scenarios:
         scenario = scene.scenario(name)
-        params = scene.resolve(scenario, {"mass": 0.3, "stiffness": 7.0, "damping": 0.125})
-        root = ElementTree.fromstring(model_files.path("slider").read_text())
+        params = scene.resolve(scenario, overrides)
+        built = scene.build(params, scenario)
+        values = params | {"g": -float(built.opt.gravity[2])}
+        root = ElementTree.fromstring(model_files.path(scene_name).read_text())
         for edit in spec.edits:
             element = root.find(f".//{edit.tag}[@name='{edit.name}']")
             assert element is not None
             target = element.find(edit.child) if edit.child else element
-            target.set(edit.attribute, repr(params[edit.parameter]))
-        _assert_same_model(
-            mujoco.MjModel.from_xml_string(ElementTree.tostring(root, "unicode")), scene.build(params, scenario)
-        )
+            target.set(edit.attribute, repr(formula(edit.value, values)))
+        page = mujoco.MjModel.from_xml_string(ElementTree.tostring(root, "unicode"))
+        _assert_same_model(page, built)
+        np.testing.assert_array_equal(page.qpos_spring, built.qpos_spring)
+        setup = scene.setup(built, params, scenario, 10, scenario.dt)
+        joint = built.joint(spec.joint)
+        assert formula(spec.x0, values) == setup.qpos[joint.qposadr[0]]
+        assert formula(spec.v0, values) == setup.qvel[joint.dofadr[0]]
 
 
-#: (m [kg], k [N/m], d [N s/m], x0 [m], v0 [m/s], F [N]): every regime, k = 0, heavy overdamping, a step
+_SLIDER = ("mass", "stiffness", "damping", "x0", "v0", "force_amplitude")
+#: (scene, scenario, overrides): the slider's every regime, k = 0, heavy overdamping, steps; the car's releases
 GRID = [
-    (1.0, 100.0, 1.0, 0.1, 0.0, 0.0),
-    (1.0, 100.0, 0.0, 0.1, 0.3, 0.0),
-    (2.0, 8.0, 8.0, 0.5, 0.0, 0.0),  # critical: d = 2 sqrt(k m)
-    (1.0, 2.0, 3.0, 5.0, 0.0, 0.0),  # the exercise
-    (1.0, 1.0, 1e4, 1.0, -2.0, 0.0),
-    (3.0, 0.0, 0.5, 0.0, 1.0, 0.0),
-    (1.0, 100.0, 1.0, 0.0, 0.0, 10.0),
-    (0.5, 50.0, 20.0, 0.2, 0.1, -3.0),
-    (1.0, 0.0, 0.0, 0.0, 1.0, 2.0),
+    ("slider", "step", dict(zip(_SLIDER, values)))
+    for values in (
+        (1.0, 100.0, 1.0, 0.1, 0.0, 0.0),
+        (1.0, 100.0, 0.0, 0.1, 0.3, 0.0),
+        (2.0, 8.0, 8.0, 0.5, 0.0, 0.0),  # critical: d = 2 sqrt(k m)
+        (1.0, 2.0, 3.0, 5.0, 0.0, 0.0),  # the exercise
+        (1.0, 1.0, 1e4, 1.0, -2.0, 0.0),
+        (3.0, 0.0, 0.5, 0.0, 1.0, 0.0),
+        (1.0, 100.0, 1.0, 0.0, 0.0, 10.0),
+        (0.5, 50.0, 20.0, 0.2, 0.1, -3.0),
+        (1.0, 0.0, 0.0, 0.0, 1.0, 2.0),
+    )
+] + [
+    ("car", "push_release", {}),
+    ("car", "damped_release", {}),
+    ("car", "damped_release", {"mass": 2500.0, "stiffness": 2e5, "damping_ratio": 1.5}),
 ]
 SETTINGS = [("rk4", 5e-3, 5.0), ("euler", 2e-2, 5.0), ("implicit", 1e-3, 3.0), ("rk4", 0.25, 6.0)]
 
 
 def test_javascript_exact_solution_tolerance_and_range_match_the_python(tmp_path):
-    """web/exact.js in node against springlab.exact.analytic and springlab.runs.compare on GRID x SETTINGS."""
+    """web/exact.js in node against springlab.exact.analytic and springlab.runs.compare on GRID x SETTINGS:
+    the scenes' own references (the car's about its gravity-loaded rest height), built by the scenes."""
     node = shutil.which("node")
     if node is None:
         _npm_or_skip()
         pytest.fail("node is required for the JavaScript ports")
-    scene = scenes.get("slider")
     cases = []
-    for m, k, d, x0, v0, force in GRID:
+    for scene_name, scenario_name, overrides in GRID:
+        scene = scenes.get(scene_name)
+        spec, scenario = scene.interactive, scene.scenario(scenario_name)
+        params = scene.resolve(scenario, overrides)
+        model = scene.build(params, scenario)
+        values = params | {"g": -float(model.opt.gravity[2])}
+        p = {
+            "m": params[spec.mass],
+            "k": params[spec.stiffness],
+            "d": params[spec.damping],
+            "x0": formula(spec.x0, values),
+            "v0": formula(spec.v0, values),
+            "force": formula(spec.force, values) if spec.force else 0.0,
+            "rest": formula(spec.rest, values) if spec.rest else None,
+        }
         for integrator, dt, duration in SETTINGS:
             time = np.arange(round(duration / dt) + 1) * dt
+            reference = scene.reference(model, params, scenario, time, dt=dt)
             cases.append(
-                {
-                    "p": dict(m=m, k=k, d=d, x0=x0, v0=v0, force=force),
-                    "integrator": integrator,
-                    "dt": dt,
-                    "time": list(time),
-                }
+                dict(p=p, integrator=integrator, dt=dt, time=list(time), reference=reference, joint=spec.joint)
             )
     script = tmp_path / "grid.js"
     script.write_text(
         f"const exact = require({json.dumps(str(interactive._WEB / 'exact.js'))});\n"
-        f"const cases = {json.dumps(cases)};\n"
+        f"const cases = {json.dumps([{k: c[k] for k in ('p', 'integrator', 'dt', 'time')} for c in cases])};\n"
         "const out = cases.map(c => { const p = c.p, t = Float64Array.from(c.time);"
-        " const ref = exact.response(t, p.m, p.k, p.d, p.x0, p.v0, p.force);"
-        " const tol = exact.tolerances(t, ref, p.m, p.k, p.d, p.force, c.integrator, c.dt);"
+        " const ref = exact.reference(t, p);"
+        " const tol = exact.tolerances(t, ref, p.m, p.k, p.d, exact.generatorOf(p), c.integrator, c.dt);"
         " const range = exact.estimateRange(exact.rates(p.m, p.k, p.d), c.integrator, c.dt, t[t.length - 1]);"
         " return {x: Array.from(ref.x), v: Array.from(ref.v), tol, inside: range.inside, factor: range.factor,"
         " largest: range.largestDt}; });\n"
@@ -328,42 +377,28 @@ def test_javascript_exact_solution_tolerance_and_range_match_the_python(tmp_path
     assert done.returncode == 0, done.stderr
     answers = json.loads(done.stdout, parse_constant=float)
     for case, js in zip(cases, answers):
-        p, time = case["p"], np.array(case["time"])
-        params = scene.resolve(
-            scene.scenario("step"),
-            {
-                "mass": p["m"],
-                "stiffness": p["k"],
-                "damping": p["d"],
-                "x0": p["x0"],
-                "v0": p["v0"],
-                "force_amplitude": p["force"],
-            },
-        )
-        reference = scene.reference(
-            scene.build(params, scene.scenario("step")), params, scene.scenario("step"), time, dt=case["dt"]
-        )
-        x, v = reference.pos["slider"], reference.vel["slider"]
+        reference, time, joint, where = case["reference"], np.array(case["time"]), case["joint"], case["p"]
+        x, v = reference.pos[joint], reference.vel[joint]
         # the same operations in the same order: libm's and V8's exp/cos differ by an ulp at most
         scale_x, scale_v = float(np.max(np.abs(x))) or 1.0, float(np.max(np.abs(v))) or 1.0
-        assert np.max(np.abs(np.array(js["x"]) - x)) <= 64 * np.finfo(float).eps * scale_x, case
-        assert np.max(np.abs(np.array(js["v"]) - v)) <= 64 * np.finfo(float).eps * scale_v, case
+        assert np.max(np.abs(np.array(js["x"]) - x)) <= 64 * np.finfo(float).eps * scale_x, where
+        assert np.max(np.abs(np.array(js["v"]) - v)) <= 64 * np.finfo(float).eps * scale_v, where
         tolerances = compare.tolerances(reference, case["integrator"], case["dt"], time)
-        noise = _roundoff_of_tolerance(reference, case["integrator"], case["dt"], time)
+        noise = _roundoff_of_tolerance(reference, joint, case["integrator"], case["dt"], time)
         for kind in ("pos", "vel"):
-            python = min(tolerances[f"slider_{kind}"], compare.CERTIFIED_CAP)
-            assert abs(js["tol"][kind] - python) <= 1e-9 * python + noise[kind], (case["p"], case["integrator"], kind)
+            python = min(tolerances[f"{joint}_{kind}"], compare.CERTIFIED_CAP)
+            assert abs(js["tol"][kind] - python) <= 1e-9 * python + noise[kind], (where, case["integrator"], kind)
         expected = compare.estimate_range(
             compare.system_rates(reference), case["integrator"], case["dt"], float(time[-1])
         )
-        assert js["inside"] == expected.inside, case
+        assert js["inside"] == expected.inside, where
         factor = js["factor"] if js["factor"] is not None else math.inf
         assert factor == pytest.approx(expected.factor, rel=1e-9) or factor == expected.factor == math.inf
         largest = js["largest"] if js["largest"] is not None else math.inf
         assert largest == expected.largest_dt
 
 
-def _roundoff_of_tolerance(reference, integrator: str, dt: float, time: np.ndarray) -> dict[str, float]:
+def _roundoff_of_tolerance(reference, joint: str, integrator: str, dt: float, time: np.ndarray) -> dict[str, float]:
     """How far round-off alone moves the tolerance [-]: A^(p+1) z(t) loses eps |A|^(p+1) |z| to cancellation.
 
     Where A is stiff (d = 1e4: |A|^5 ~ 1e20 while A^5 z follows the slow mode) the predicted error is
@@ -378,13 +413,15 @@ def _roundoff_of_tolerance(reference, integrator: str, dt: float, time: np.ndarr
     worst = float(np.max(np.hypot(spread[:, 0], spread[:, 1] / rho)))
     return {
         kind: compare.SAFETY * worst * scale / (float(np.max(np.abs(series))) or 1.0)
-        for kind, scale, series in (("pos", 1.0, reference.pos["slider"]), ("vel", rho, reference.vel["slider"]))
+        for kind, scale, series in (("pos", 1.0, reference.pos[joint]), ("vel", rho, reference.vel[joint]))
     }
 
 
 def test_scenes_without_a_browser_page_and_bad_scenarios_are_one_line_errors(tmp_path):
-    with pytest.raises(BadInputError, match="car has no interactive page"):
-        interactive.write_interactive("car", None, tmp_path)
+    with pytest.raises(BadInputError, match="kinematics has no interactive page"):
+        interactive.write_interactive("kinematics", None, tmp_path)
+    with pytest.raises(BadInputError, match="pitch_heave"):
+        interactive.write_interactive("car", "pitch_heave", tmp_path)
     with pytest.raises(BadInputError, match="harmonic"):
         interactive.write_interactive("slider", "harmonic", tmp_path)
     assert not any(tmp_path.iterdir())
@@ -392,7 +429,7 @@ def test_scenes_without_a_browser_page_and_bad_scenarios_are_one_line_errors(tmp
 
 def test_the_vendored_module_is_pinned_and_its_webassembly_only_loses_custom_sections(pages):
     """The written script is the pinned tarball's module, classic, with a wasm whose code sections are unchanged."""
-    folder = pages["free"].path.parent
+    folder = pages["slider", "free"].path.parent
     notice = (folder / interactive.LICENSE_FILE).read_text()
     assert "Apache License, Version 2.0" in notice and interactive.MUJOCO_JS_SHA256 in notice
     script = (folder / interactive.MUJOCO_SCRIPT).read_text()
@@ -409,7 +446,8 @@ def test_the_demo_links_the_pages_from_its_report_and_skips_them_in_one_line_wit
     state = demo.DemoState(out=tmp_path / "out")
     artifacts = demo.interactive_step(state)
     paths = {a.path for a in artifacts}
-    assert "interactive/slider-free.html" in paths and len(paths) == len(scenes.get("slider").interactive.scenarios)
+    assert {"interactive/slider-free.html", "interactive/car-push_release.html"} <= paths
+    assert len(paths) == sum(len(s.interactive.scenarios) for s in scenes.SCENES.values() if s.interactive)
     assert all((state.out / path).is_file() for path in paths)
     state.artifacts.extend(artifacts)
     assert "href='interactive/slider-free.html'" in report.build_html(state)

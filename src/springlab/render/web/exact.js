@@ -170,12 +170,29 @@
     return { x: x, v: v };
   }
 
+  /* the exact x, v of p = {m, k, d, x0, v0, force, rest} at `times`: the response to F, or about a rest
+     position the free response from x0 - rest, shifted (the car's Release.reference) */
+  function reference(times, p) {
+    if (p.rest === null || p.rest === undefined) return response(times, p.m, p.k, p.d, p.x0, p.v0, p.force);
+    var free = response(times, p.m, p.k, p.d, p.x0 - p.rest, p.v0, 0);
+    for (var i = 0; i < free.x.length; i++) free.x[i] = free.x[i] + p.rest;
+    return free;
+  }
+
   // -- the tolerance: compare.predicted_error and compare.tolerances for z = (x, v[, F]) --------------
 
-  function systemMatrix(m, k, d, force) {
+  /* A of z = (x, v) or, with a constant input, z = (x, v, g): g = F with coupling 1/m (a force), or
+     g = 1 with coupling k rest / m (a preloaded spring holding a load: springlab.exact.linear.generator_system) */
+  function systemMatrix(m, k, d, generator) {
     var a = [[0, 1], [-(k / m), -(d / m)]];
-    if (!force) return a;
-    return [[0, 1, 0], [-(k / m), -(d / m), 1 / m], [0, 0, 0]];
+    if (!generator) return a;
+    return [[0, 1, 0], [-(k / m), -(d / m), generator.coupling], [0, 0, 0]];
+  }
+
+  function generatorOf(p) {
+    if (p.rest !== null && p.rest !== undefined) return { value: 1, coupling: (p.k * p.rest) / p.m };
+    if (p.force) return { value: p.force, coupling: 1 / p.m };
+    return null;
   }
 
   function matmul(a, b) {
@@ -217,9 +234,9 @@
     return out.filter(function (r) { return Math.hypot(r.re, r.im) > 1e-12 * scale; });
   }
 
-  function tolerances(time, ref, m, k, d, force, integrator, dt) {
+  function tolerances(time, ref, m, k, d, generator, integrator, dt) {
     var order = ORDERS[integrator];
-    var a = systemMatrix(m, k, d, force);
+    var a = systemMatrix(m, k, d, generator);
     var ap = matrixPower(a, order + 1);
     var scale = errorConstant(integrator) * Math.pow(dt, order);
     var r = rates(m, k, d);
@@ -228,7 +245,7 @@
     var rho = Math.max(spectral, 1.0 / Math.max(time[time.length - 1], 1e-300));
     var worst = 0;
     for (var i = 0; i < time.length; i++) {
-      var z = force ? [ref.x[i], ref.v[i], force] : [ref.x[i], ref.v[i]];
+      var z = generator ? [ref.x[i], ref.v[i], generator.value] : [ref.x[i], ref.v[i]];
       var ex = 0, ev = 0;
       for (var l = 0; l < z.length; l++) { ex += z[l] * ap[0][l]; ev += z[l] * ap[1][l]; }
       var elapsed = time[i] - time[0];
@@ -308,9 +325,9 @@
 
   /* The verdict of a finished run as springlab's run.evaluate states it.
      run: {time, x, v (Float64Arrays, MuJoCo's clock), blewUp (MuJoCo reset or non-finite state)};
-     p: {m, k, d, x0, v0, force}; returns {ref, errors {pos, vel}, maxError, tolerances, range, verdict}. */
+     p: {m, k, d, x0, v0, force, rest}; returns {ref, errors {pos, vel}, maxError, tolerances, range, verdict}. */
   function judge(run, p, integrator, dt) {
-    var ref = response(run.time, p.m, p.k, p.d, p.x0, p.v0, p.force);
+    var ref = reference(run.time, p);
     var errors = {}, worst = 0;
     [['pos', run.x, ref.x], ['vel', run.v, ref.v]].forEach(function (c) {
       var abs = 0;
@@ -325,7 +342,7 @@
       out.verdict = VERDICTS.DIVERGED;
       return out;
     }
-    out.tolerances = tolerances(run.time, ref, p.m, p.k, p.d, p.force, integrator, dt);
+    out.tolerances = tolerances(run.time, ref, p.m, p.k, p.d, generatorOf(p), integrator, dt);
     var span = run.time[run.time.length - 1] - run.time[0];
     out.range = estimateRange(rates(p.m, p.k, p.d), integrator, dt, Math.max(span, dt));
     var passed = errors.pos.maxRel <= out.tolerances.pos && errors.vel.maxRel <= out.tolerances.vel;
@@ -340,6 +357,8 @@
     dampingRatio: dampingRatio,
     regime: regime,
     response: response,
+    reference: reference,
+    generatorOf: generatorOf,
     rates: rates,
     tolerances: tolerances,
     modeFactor: modeFactor,

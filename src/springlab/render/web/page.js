@@ -13,6 +13,19 @@
   var config = JSON.parse(document.getElementById('springlab-config').textContent);
   var exact = window.springlabExact;
   var names = config.names;
+  var formulas = {};
+
+  // an InteractiveSpec formula (+ - * / over parameter names and g): JavaScript's precedence and left-to-right
+  // order are Python's, so it rounds as springlab.scenes.capabilities.formula does
+  function formula(text, params) {
+    if (!/^[A-Za-z0-9_.+\-*\/() eE]*$/.test(text)) throw new Error('not a formula: ' + text);
+    if (!formulas[text]) {
+      var names = Object.keys(config.parameters).concat(['g']);
+      formulas[text] = { names: names, fn: new Function(names.join(','), '"use strict"; return (' + text + ');') };
+    }
+    var f = formulas[text];
+    return f.fn.apply(null, f.names.map(function (n) { return n === 'g' ? config.g : params[n]; }));
+  }
   var state = {
     params: Object.assign({}, config.parameters),
     integrator: config.integrator,
@@ -45,7 +58,7 @@
         found = child;
       }
       // String(x) is the shortest text that parses back to the same double: MuJoCo reads x exactly
-      found.setAttribute(edit.attribute, String(params[edit.parameter]));
+      found.setAttribute(edit.attribute, String(formula(edit.value, params)));
     });
     return new XMLSerializer().serializeToString(doc);
   }
@@ -94,9 +107,10 @@
     var steps = exact.roundHalfEven(state.duration / state.dt);
     var time = new Float64Array(steps + 1), x = new Float64Array(steps + 1), v = new Float64Array(steps + 1);
     var qpos = d.qpos, qvel = d.qvel;
-    qpos[config.qposadr] = p[names.x0];
-    qvel[config.dofadr] = p[names.v0];
-    if (config.actuator >= 0) d.ctrl[config.actuator] = names.force ? p[names.force] : 0;
+    var q = physical();
+    qpos[config.qposadr] = q.x0;
+    qvel[config.dofadr] = q.v0;
+    if (config.actuator >= 0) d.ctrl[config.actuator] = q.force;
     time[0] = d.time; x[0] = qpos[config.qposadr]; v[0] = qvel[config.dofadr];
     var blewUp = false, started = performance.now(), n = steps;
     for (var i = 1; i <= steps; i++) {
@@ -114,7 +128,13 @@
 
   function physical() {
     var p = state.params;
-    return { m: p[names.mass], k: p[names.stiffness], d: p[names.damping], x0: p[names.x0], v0: p[names.v0], force: names.force ? p[names.force] : 0 };
+    var f = config.formulas;
+    return {
+      m: p[names.mass], k: p[names.stiffness], d: p[names.damping],
+      x0: formula(f.x0, p), v0: formula(f.v0, p),
+      force: f.force ? formula(f.force, p) : 0,
+      rest: f.rest ? formula(f.rest, p) : null,
+    };
   }
 
   function update() {
@@ -173,7 +193,7 @@
     var rows = [
       ['regime', exact.regime(p.m, p.k, p.d) + ', ζ = ' + fmt(zeta, 4)],
       ['m, k, d', fmt(p.m) + ' kg, ' + fmt(p.k) + ' N/m, ' + fmt(p.d) + ' N s/m'],
-      ['x(0), v(0)' + (p.force ? ', F' : ''), fmt(p.x0) + ' m, ' + fmt(p.v0) + ' m/s' + (p.force ? ', ' + fmt(p.force) + ' N' : '')],
+      ['x(0), v(0)' + (p.force ? ', F' : ''), fmt(p.x0) + ' m, ' + fmt(p.v0) + ' m/s' + (p.force ? ', ' + fmt(p.force) + ' N' : '') + (p.rest !== null ? ' (at rest: ' + fmt(p.rest) + ' m)' : '')],
       ['steps', run.steps + ' of dt = ' + fmt(state.dt, 4) + ' s (' + state.duration + ' s), ' + fmt(run.wallMs, 3) + ' ms in MuJoCo, ' + fmt(ms, 3) + ' ms with the verdict'],
       ['final x', String(run.x[run.x.length - 1]) + ' m (exact ' + String(judged.ref.x[judged.ref.x.length - 1]) + ' m)'],
       ['max error', 'position ' + fmt(judged.errors.pos.maxRel, 3) + ', velocity ' + fmt(judged.errors.vel.maxRel, 3) + ' (relative)'],
@@ -228,11 +248,17 @@
     var p = state.params;
     state.zeta = exact.dampingRatio(p[names.mass], p[names.stiffness], p[names.damping]);
     var m0 = p[names.mass], k0 = p[names.stiffness];
+    // a decade either side, or the range the scene declares (where it stays inside its model)
+    function bounds(name, value) {
+      var r = config.ranges[name] || [value / 10, value * 10];
+      return [Math.log10(r[0]), Math.log10(r[1])];
+    }
+    var mb = bounds(names.mass, m0), kb = bounds(names.stiffness, k0);
     box.appendChild(slider('zeta', 'damping ratio ζ =', 0, Math.max(2, Math.ceil(state.zeta)), 0.01, state.zeta, false,
       function (v) { state.zeta = v; setDamping(); }, function (v) { return fmt(v, 3); }));
-    box.appendChild(slider('mass', 'mass m [kg] =', Math.log10(m0) - 1, Math.log10(m0) + 1, 0.01, m0, true,
+    box.appendChild(slider('mass', 'mass m [kg] =', mb[0], mb[1], 0.01, m0, true,
       function (v) { p[names.mass] = v; setDamping(); }, function (v) { return fmt(v, 3); }));
-    box.appendChild(slider('stiffness', 'stiffness k [N/m] =', Math.log10(k0) - 1, Math.log10(k0) + 1, 0.01, k0, true,
+    box.appendChild(slider('stiffness', 'stiffness k [N/m] =', kb[0], kb[1], 0.01, k0, true,
       function (v) { p[names.stiffness] = v; setDamping(); }, function (v) { return fmt(v, 3); }));
     box.appendChild(slider('dt', 'timestep dt [s] =', Math.log10(config.dtRange[0]), Math.log10(config.dtRange[1]), 0.01, state.dt, true,
       function (v) { state.dt = v; }, function (v) { return fmt(v, 3); }));

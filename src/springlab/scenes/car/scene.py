@@ -90,7 +90,7 @@ import numpy as np
 
 from springlab.errors import ParameterError
 from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene
-from springlab.scenes.capabilities import FrequencySpec, OscillatorFit
+from springlab.scenes.capabilities import FrequencySpec, InteractiveSpec, MjcfEdit, OscillatorFit
 from springlab.sim.simulate import Setup, Trajectory, quiet_mujoco
 
 from .parts import gravity
@@ -235,6 +235,24 @@ class Car(Scene):
         default_free=("stiffness", "damping", "x0", "v0", "offset"),
         rest="clearance",
         release=_released_at,
+    )
+    #: `springlab interactive`: the 1-DOF releases in the browser, the values Release.edit sets written into the
+    #: MJCF text; the clearance is fixed (it moves the body's pos), the mass slider stops where the rebound
+    #: would leave the springs (push_mass 250 kg: check_consistency) and the stiffness where the push reaches
+    #: the ground; pitch_heave and road_bump need a matrix exponential in the page (docs/interactive.md)
+    interactive = InteractiveSpec(
+        joint="heave",
+        scenarios=("push_release", "damped_release"),
+        edits=(
+            MjcfEdit("mass", "body", "car", "mass", child="inertial"),
+            MjcfEdit("stiffness", "joint", "heave", "stiffness"),
+            MjcfEdit("damping", "joint", "heave", "damping"),
+            MjcfEdit("clearance + mass * g / stiffness", "joint", "heave", "springref"),
+        ),
+        x0="clearance + mass * g / stiffness - (mass + push_mass) * g / stiffness",
+        v0="0",
+        rest="clearance + mass * g / stiffness - mass * g / stiffness",
+        ranges={"mass": (250.0, 10000.0), "stiffness": (1e5, 1e7)},
     )
     scenarios = {
         s.name: s
