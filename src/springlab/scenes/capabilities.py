@@ -781,6 +781,7 @@ def formula(expression: str, values: Mapping[str, float]) -> float:
     values
         name -> value (SI).
     """
+
     def walk(node: ast.AST) -> float:
         if isinstance(node, ast.Expression):
             return walk(node.body)
