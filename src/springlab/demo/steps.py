@@ -364,8 +364,9 @@ def interactive_step(state: DemoState) -> list[Artifact]:
                 Artifact(
                     str(page.path.relative_to(state.out)),
                     "interactive",
-                    f"interactive: move the damping ratio, dt and the integrator and watch MuJoCo (in your browser,"
-                    f" {page.size_bytes / 1e6:.1f} MB) against the exact solution and springlab's verdict",
+                    f"interactive: move the damping ratio, mass, stiffness, dt and the integrator and watch MuJoCo"
+                    f" (in your browser, {page.size_bytes / 1e6:.1f} MB) against the exact solution and springlab's"
+                    " verdict",
                     page.scene,
                     page.scenario,
                 )

@@ -237,9 +237,9 @@ class Car(Scene):
         release=_released_at,
     )
     #: `springlab interactive`: the 1-DOF releases in the browser, the values Release.edit sets written into the
-    #: MJCF text; the clearance is fixed (it moves the body's pos), the mass slider stops where the rebound
-    #: would leave the springs (push_mass 250 kg: check_consistency) and the stiffness where the push reaches
-    #: the ground; pitch_heave and road_bump need a matrix exponential in the page (docs/interactive.md)
+    #: MJCF text; the clearance is fixed (it moves the body's pos), the mass slider stops short of where the
+    #: undamped rebound would leave the springs (m = push_mass = 250 kg: check_consistency) and the stiffness
+    #: well before the push reaches the ground (k = 24,525 N/m); pitch_heave and road_bump need a matrix exponential in the page (docs/interactive.md)
     interactive = InteractiveSpec(
         joint="heave",
         scenarios=("push_release", "damped_release"),
@@ -252,7 +252,7 @@ class Car(Scene):
         x0="clearance + mass * g / stiffness - (mass + push_mass) * g / stiffness",
         v0="0",
         rest="clearance + mass * g / stiffness - mass * g / stiffness",
-        ranges={"mass": (250.0, 10000.0), "stiffness": (1e5, 1e7)},
+        ranges={"mass": (260.0, 10000.0), "stiffness": (1e5, 1e7)},
     )
     scenarios = {
         s.name: s
