@@ -9,6 +9,7 @@ in its own cells, so a notebook that runs but computes nonsense fails too.
 from __future__ import annotations
 
 import pathlib
+import sys
 
 import jupytext
 import nbclient
@@ -20,6 +21,13 @@ NOTEBOOKS = sorted(EXAMPLES.glob("*.py"))
 SLOW = {"sweep_on_dask"}
 #: seconds a cell may take before the run is called hung
 CELL_TIMEOUT_S = 300
+
+
+@pytest.fixture(autouse=True)
+def _this_python_kernel(monkeypatch):
+    # the kernel named python3 is this interpreter's (ipykernel's spec, "python" replaced by sys.executable);
+    # searched first, so a personal python3 kernel elsewhere (~/.local/share/jupyter) cannot shadow it
+    monkeypatch.setenv("JUPYTER_PATH", str(pathlib.Path(sys.prefix) / "share" / "jupyter"))
 
 
 def _execute(path: pathlib.Path, folder: pathlib.Path):
@@ -38,6 +46,8 @@ def test_notebook_runs_top_to_bottom(path, tmp_path):
     code = [cell for cell in notebook.cells if cell.cell_type == "code"]
     assert code and all(cell.execution_count for cell in code), "a code cell did not run"
     assert any("assert " in cell.source for cell in code), f"{path.name} checks no claim"
+    errors = [out for cell in code for out in cell.get("outputs", []) if out.output_type == "error"]
+    assert not errors
 
 
 def test_a_failing_claim_fails_the_notebook(tmp_path):
