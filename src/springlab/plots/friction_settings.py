@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import pathlib
 
+import numpy as np
+
 from springlab import files
 from springlab.studies.friction_settings import MODEL_INTEGRATOR, CaseStudy, FrictionSettings, ModelError
 
@@ -138,8 +140,8 @@ def write(study: FrictionSettings, directory: str | pathlib.Path) -> list[pathli
 def _cell(value) -> str:
     if value is None:
         return ""
-    if isinstance(value, bool):
-        return str(value).lower()
-    if isinstance(value, float):
-        return repr(value)
+    if isinstance(value, (bool, np.bool_)):
+        return str(bool(value)).lower()
+    if isinstance(value, (float, np.floating)):  # np.float64's own repr is `np.float64(0.1)` under numpy 2
+        return files.number_text(value)
     return str(value)

@@ -35,7 +35,7 @@ def default_quantity(sweep: Sweep) -> str:
 
 
 def csv_text(sweep: Sweep) -> str:
-    """sweep.csv: header, then one row per configuration; numbers at full precision (repr)."""
+    """sweep.csv: header, then one row per configuration; numbers in their shortest exact form (files.number_text)."""
     header, body = sweep.table()
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
@@ -49,7 +49,7 @@ def _cell(value) -> str:
     if isinstance(value, (bool, np.bool_)):
         return "true" if value else "false"
     if isinstance(value, (float, np.floating, int, np.integer)):
-        return repr(float(value)) if isinstance(value, (float, np.floating)) else str(int(value))
+        return files.number_text(value) if isinstance(value, (float, np.floating)) else str(int(value))
     return str(value)
 
 
