@@ -24,8 +24,6 @@ import sys
 
 import numpy as np
 import pytest
-from test_layers import layer_of
-from test_report import CHROMIUM_FLAGS, _chromium
 
 import springlab
 from springlab import display, files
@@ -41,6 +39,8 @@ from springlab.studies.families import run_phase_family, run_zeta_family
 from springlab.studies.friction_settings import friction_settings
 from springlab.studies.refine import refine
 from springlab.studies.tradeoff import tradeoff
+from test_layers import layer_of
+from test_report import CHROMIUM_FLAGS, _chromium
 
 #: lines of a plain repr at most: the verdict, its reason, the figures
 REPR_LINES = 3

@@ -9,8 +9,8 @@
 """
 
 from springlab.exact import analytic
-from springlab.runs.compare import Verdict
 from springlab.render.inline import Video, video
+from springlab.runs.compare import Verdict
 from springlab.runs.run import Result, ValidationRow
 from springlab.studies.audit.audit import Audit, audit
 from springlab.studies.auto import run, validate

@@ -127,7 +127,7 @@ def recorded_rows(n: int, every: int = 1) -> np.ndarray:
     return rows if rows[-1] == n - 1 else np.append(rows, n - 1)
 
 
-def number_text(value: float) -> str:
+def number_text(value: float | np.floating) -> str:
     """`value` in the shortest text that reads back (float()) to the same double: `0.1`, not `0.10000000000000001`.
 
     Python's repr of a float is that shortest round-trip form (as pandas and numpy write); a trailing `.0`
