@@ -85,6 +85,12 @@ def results(stability_report, shipped_audit):
     return built
 
 
+@pytest.fixture(scope="module")
+def drawn(results):
+    """`.plot()` of every result that has one, by class name: each figure drawn once for the tests below."""
+    return {name: result.plot() for name, result in results.items() if hasattr(result, "plot")}
+
+
 def _verdict(result) -> str:
     return result._shown().verdict
 
@@ -164,10 +170,10 @@ def test_a_long_table_shows_its_first_and_last_rows(results):
 # -- .plot() -------------------------------------------------------------------------------------------
 
 
-def test_plot_draws_the_results_own_arrays(results):
+def test_plot_draws_the_results_own_arrays(results, drawn):
     run = results["Result"]
-    fig = run.plot()
-    lines = fig.axes[0].get_lines()
+    lines = drawn["Result"].axes[0].get_lines()
+    assert len(drawn["Result"].axes) == 3, "position, velocity, error"
     np.testing.assert_array_equal(lines[0].get_xdata(), run.time)
     np.testing.assert_array_equal(lines[0].get_ydata(), run.pos["slider"])
     np.testing.assert_array_equal(lines[1].get_ydata(), run.ref_pos["slider"])
@@ -179,26 +185,24 @@ def test_plot_draws_the_results_own_arrays(results):
     np.testing.assert_array_equal(line.get_ydata(), sweep.column("damping_ratio")[order])
 
     response = results["FrequencyResponse"]
-    drawn = [ln.get_ydata() for ln in response.plot().axes[0].get_lines()]
-    assert any(np.array_equal(y, np.abs(response.exact)) for y in drawn), "the exact magnitude is drawn"
+    curves = [ln.get_ydata() for ln in drawn["FrequencyResponse"].axes[0].get_lines()]
+    assert any(np.array_equal(y, np.abs(response.exact)) for y in curves), "the exact magnitude is drawn"
 
     trade = results["Tradeoff"]
-    for ln in trade.plot().axes[0].get_lines():
+    for ln in drawn["Tradeoff"].axes[0].get_lines():
         name = ln.get_label().split(" ")[0]
         if ln.get_linestyle() != "None" and name in trade.orders:
             ok = [r.dt for r in trade.runs if r.integrator == name and not r.diverged]
             np.testing.assert_array_equal(ln.get_xdata(), ok)
 
 
-def test_every_result_with_plot_returns_a_figure(results):
+def test_every_result_with_plot_returns_a_figure(results, drawn):
     from matplotlib.figure import Figure
 
-    for name, result in results.items():
-        if hasattr(result, "plot"):
-            fig = result.plot()
-            assert isinstance(fig, Figure) and fig.axes, name
-    report = results["StabilityReport"]
-    energy = report.plot().axes
+    assert set(drawn) == {name for name, result in results.items() if hasattr(result, "plot")}
+    for name, fig in drawn.items():
+        assert isinstance(fig, Figure) and fig.axes, name
+    energy = drawn["StabilityReport"].axes
     assert len(energy) == 3 and "E/E0" in energy[0].get_ylabel()
     with pytest.raises(springlab.BadInputError, match="no figure for a ValidationRow"):
         display.plot(results["ValidationRow"])

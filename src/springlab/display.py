@@ -128,6 +128,15 @@ def _cell(value: Any) -> str:
     return html.escape(number(value))
 
 
+def _row(values: Sequence[Any]) -> str:
+    """One table row: numbers right-aligned (their digits line up), words left-aligned."""
+    cells = []
+    for value in values:
+        align = "left" if isinstance(value, str) else "right"
+        cells.append(f'<td style="padding:1px 8px;text-align:{align};border-bottom:1px solid #eee">{_cell(value)}</td>')
+    return "<tr>" + "".join(cells) + "</tr>"
+
+
 def html_text(summary: Summary) -> str:
     """The HTML summary (`_repr_html_`): the verdict badge and message, the facts, then the table."""
     e = html.escape
@@ -155,13 +164,13 @@ def html_text(summary: Summary) -> str:
         cell = 'style="padding:1px 8px;text-align:right;border-bottom:1px solid #eee"'
         out.append('<table class="springlab-rows" style="border-collapse:collapse;font-size:12px">')
         out.append("<tr>" + "".join(f"<th {cell}>{e(c)}</th>" for c in rows.columns) + "</tr>")
-        out += ["<tr>" + "".join(f"<td {cell}>{_cell(v)}</td>" for v in row) + "</tr>" for row in rows.head]
+        out += [_row(row) for row in rows.head]
         if rows.tail:
             hidden = rows.total - len(rows.head) - len(rows.tail)
             out.append(
                 f'<tr><td colspan="{len(rows.columns)}" style="padding:1px 8px;color:#777">... {hidden} more rows</td></tr>'
             )
-            out += ["<tr>" + "".join(f"<td {cell}>{_cell(v)}</td>" for v in row) + "</tr>" for row in rows.tail]
+            out += [_row(row) for row in rows.tail]
         out.append("</table>")
         out.append(f'<div style="color:#777;font-size:11px">{rows.total} rows</div>')
     if summary.note:

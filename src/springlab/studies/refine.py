@@ -295,6 +295,7 @@ class Refinement(display.Shown):
     def _shown(self) -> display.Summary:
         """The refinement as a notebook shows it: the recommendation first, the orders, then the sizes."""
         pick = self.recommendation
+        names = list(dict.fromkeys(n for c in self.sizes for n in c.cost_per_step_s))
         if pick is None:
             verdict, ok, message = "no tol", None, self.description
         elif pick.found:
@@ -317,8 +318,8 @@ class Refinement(display.Shown):
                 display.Fact("runs", len(self.runs)),
             ),
             display.table(
-                (self.size_parameter, "discretization error [-]", "cost per step [s]"),
-                [(c.size, c.discretization_error, c.cost_per_step_s) for c in self.sizes],
+                (self.size_parameter, "discretization error [-]", *(f"{n} cost per step [s]" for n in names)),
+                [(c.size, c.discretization_error, *(c.cost_per_step_s.get(n) for n in names)) for c in self.sizes],
             ),
         )
 
