@@ -9,6 +9,8 @@ of them on one page with an inline video; a `.plot()` that draws the result's ow
 
 The CSV writers are read back with `float()` cell by cell and compared bit for bit with the values in
 memory, and no cell is longer than Python's shortest round-trip repr of its value.
+
+The tests that read `results` are marked slow: building it takes ~5 s of CPU beyond the shared fixtures.
 """
 
 from __future__ import annotations
@@ -98,6 +100,7 @@ def _verdict(result) -> str:
 # -- the classes ------------------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_every_top_level_result_shows_itself_and_this_test_builds_each(results):
     shown = {cls.__name__ for cls in _shown_classes()}
     returned = {"Result", "ValidationRow", "Sweep", "Tradeoff", "FitResult", "Audit", "StabilityReport"}
@@ -128,6 +131,7 @@ def test_importing_the_results_imports_neither_matplotlib_nor_the_plots():
 # -- repr -----------------------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_the_plain_repr_is_a_few_lines_that_lead_with_the_verdict(results):
     for name, result in results.items():
         text = repr(result)
@@ -157,6 +161,7 @@ def test_a_summary_escapes_every_string():
     assert page.count("&lt;script&gt;alert(1)&lt;/script&gt; &amp; &#x27;x&#x27;") == 10
 
 
+@pytest.mark.slow
 def test_a_long_table_shows_its_first_and_last_rows(results):
     sweep = results["Sweep"]
     page = sweep._repr_html_()
@@ -170,6 +175,7 @@ def test_a_long_table_shows_its_first_and_last_rows(results):
 # -- .plot() -------------------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_plot_draws_the_results_own_arrays(results, drawn):
     run = results["Result"]
     lines = drawn["Result"].axes[0].get_lines()
@@ -196,6 +202,7 @@ def test_plot_draws_the_results_own_arrays(results, drawn):
             np.testing.assert_array_equal(ln.get_xdata(), ok)
 
 
+@pytest.mark.slow
 def test_every_result_with_plot_returns_a_figure(results, drawn):
     from matplotlib.figure import Figure
 
@@ -234,6 +241,7 @@ def _page(results, clip) -> str:
     return _PAGE.format(cells="\n".join(cells))
 
 
+@pytest.mark.slow
 def test_every_summary_and_a_video_render_in_headless_chromium_without_errors(results, tmp_path):
     chromium = _chromium()
     clip = springlab.video(results["Result"], duration=0.3, width=160, height=120, slow_motion=1.0)
@@ -304,6 +312,7 @@ def _assert_exact(cells: list[str], values) -> None:
         assert len(cell) <= len(repr(value)), (cell, value)
 
 
+@pytest.mark.slow
 def test_every_csv_reads_back_exactly_in_the_shortest_form(results, tmp_path):
     run = results["Result"]
     write_run(tmp_path / "run", run)
