@@ -130,12 +130,11 @@ def recorded_rows(n: int, every: int = 1) -> np.ndarray:
 def number_text(value: float | np.floating) -> str:
     """`value` in the shortest text that reads back (float()) to the same double: `0.1`, not `0.10000000000000001`.
 
-    Python's repr of a float is that shortest round-trip form (as pandas and numpy write); a trailing `.0`
-    is dropped, so integral values read as `%.17g` wrote them (`3`, `-0`, `500`). `inf`, `-inf` and `nan`
-    are written as repr writes them, and float() reads them back.
+    Python's repr of a float is that shortest round-trip form, and pandas' `to_csv` writes the same; an
+    integral value keeps its `.0` (`3.0`, `-0.0`), so a column of floats reads back as floats
+    (`pandas.read_csv` would make a column of `3`s integers). `inf`, `-inf` and `nan` as repr writes them.
     """
-    text = repr(float(value))
-    return text[:-2] if text.endswith(".0") else text
+    return repr(float(value))
 
 
 def csv_text(columns: Mapping[str, np.ndarray], every: int = 1) -> str:
