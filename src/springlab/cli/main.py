@@ -370,6 +370,7 @@ def cmd_frequency(args: argparse.Namespace) -> int:
             tol=args.tol,
             sines=args.sinestream,
             executor=executor,
+            parameters=_parse_sets(args.set),
         )
     if args.output:
         charts_frequency.write_frequency(result, args.output)
@@ -547,6 +548,14 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return EXIT_FAILED if any(not r.passed for r in state.validation) else EXIT_OK
 
 
+def cmd_view(args: argparse.Namespace) -> int:
+    """Watch a scene's validated run (or any MJCF) live in MuJoCo's interactive viewer (springlab.cli.view)."""
+    from springlab.cli import view  # GLFW only for the command that opens a window
+
+    result = view.command(args, _run)
+    return EXIT_OK if result is None else _verdict(result)
+
+
 # -- parser --------------------------------------------------------------------
 
 COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {}
@@ -712,6 +721,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--input", metavar="NAME", help="an actuator (its control) or a joint (a force on it)")
     p.add_argument("--response", metavar="NAME", help="a joint: JOINT (position), JOINT:vel or JOINT:acc")
     p.add_argument(
+        "--set", action="append", default=[], metavar="NAME=VALUE", help="a scene's parameter, SI units (repeatable)"
+    )
+    p.add_argument(
         "--band",
         metavar="FMIN:FMAX",
         help="frequency band [Hz] (default: a decade below the slowest mode to 3x the fastest)",
@@ -871,6 +883,29 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--output", metavar="DIR", help="write fit.json, fit.png, trajectory.csv and summary.json")
     p.add_argument("--json", action="store_true", help="print fit.json")
     COMMANDS["fit"] = cmd_fit
+
+    p = sub.add_parser("view", help="watch a scene's validated run (or any MJCF) live in MuJoCo's interactive viewer")
+    p.add_argument("scene", metavar="SCENE|MODEL.xml", help="scene name (see 'springlab list') or an MJCF file")
+    p.add_argument("scenario", nargs="?", help="scenario name (default: the scene's first)")
+    p.add_argument(
+        "--set", action="append", default=[], metavar="NAME=VALUE", help="override a parameter, SI units (repeatable)"
+    )
+    _timing_arguments(p)
+    p.add_argument(
+        "--slow-motion",
+        type=float,
+        default=1.0,
+        metavar="FACTOR",
+        help="run FACTOR times slower (default 1: real time)",
+    )
+    p.add_argument(
+        "--exaggerate",
+        type=float,
+        metavar="FACTOR",
+        help="draw displacements FACTOR times larger around their mean, as 'render' does (default: render's)",
+    )
+    p.add_argument("--close-after", type=float, metavar="SECONDS", help="close the window after SECONDS of wall time")
+    COMMANDS["view"] = cmd_view
 
     p = sub.add_parser("demo", help="the main job: validate everything, write out/")
     p.add_argument("--output", default="out", metavar="DIR", help="output folder (default: out)")

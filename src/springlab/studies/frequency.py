@@ -88,14 +88,20 @@ class Resonance:
     damping_ratio
         a resonance's from the half-power width, (f2 - f1) / (2 f) [-] (None: a half-power point outside
         the band or not below the neighbouring valley); an anti-resonance's, its zero's -Re(z) / |z|.
+    natural_frequency_hz, pole_damping_ratio
+        a resonance's mode: the linearization's oscillatory pole p it peaks near, |p| / 2 pi [Hz] and
+        -Re(p) / |p| [-] (exact, where the peak's frequency and half-power width are estimates); None for an
+        anti-resonance.
     """
 
     frequency_hz: float
     magnitude: float
     damping_ratio: float | None = None
+    natural_frequency_hz: float | None = None
+    pole_damping_ratio: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
-        """{"frequency_hz", "magnitude", "damping_ratio"}."""
+        """{"frequency_hz", "magnitude", "damping_ratio", "natural_frequency_hz", "pole_damping_ratio"}."""
         return dataclasses.asdict(self)
 
 
@@ -236,6 +242,11 @@ class FrequencyResponse(display.Shown):
         the question in words (a scene's declaration; else input -> response).
     wall_time_s
         how long the analysis took [s].
+    sinestream
+        the simulated verification (None: not asked for).
+    answers, answer_lines
+        what the response means for the scene's question (`FrequencySpec.interpret`: named values, SI, and
+        their verdict lines), e.g. the single-mass car's isolation frequency; empty for a model file.
     """
 
     source: str
@@ -259,6 +270,8 @@ class FrequencyResponse(display.Shown):
     description: str
     wall_time_s: float
     sinestream: Sinestream | None = None
+    answers: Mapping[str, Any] = dataclasses.field(default_factory=dict)
+    answer_lines: tuple[str, ...] = ()
 
     @property
     def relative_error(self) -> np.ndarray:
@@ -321,10 +334,12 @@ class FrequencyResponse(display.Shown):
             f"{b.integrator} <= {b.max_dt_s:.3g} s" if b.max_dt_s is not None else f"{b.integrator}: none"
             for b in self.integrators
         )
-        lines.append(f"the band within {self.tol:g} needs dt: {dts}")
+        if dts:  # none when no integrator was searched
+            lines.append(f"the band within {self.tol:g} needs dt: {dts}")
         if self.cheapest is not None:
             best = self.cheapest
             lines.append(f"cheapest: {best.integrator} at dt = {best.max_dt_s:.3g} s")
+        lines.extend(self.answer_lines)
         if self.sinestream is not None:
             stream = self.sinestream
             worst = float(np.max(stream.error_vs_discrete / stream.bound))
@@ -400,6 +415,7 @@ class FrequencyResponse(display.Shown):
             "integrators": [b.to_dict() for b in self.integrators],
             "cheapest": None if self.cheapest is None else self.cheapest.to_dict(),
             "sinestream": None if self.sinestream is None else self.sinestream.to_dict(),
+            "answers": dict(self.answers),
             "wall_time_s": self.wall_time_s,
         }
 
@@ -420,6 +436,35 @@ class _Source:
     input: str | None
     response: str | None
     description: str
+    parameters: Mapping[str, float] = dataclasses.field(default_factory=dict)
+    interpret: Any = None
+    input_unit: str = ""
+
+
+def _spec_for(declared: Any, scenario: str | None) -> Any:
+    """The scene's FrequencySpec for `scenario` (None: its default, the first declared), or None."""
+    specs = () if declared is None else (declared,) if not isinstance(declared, tuple) else declared
+    if scenario is None:
+        return specs[0] if specs else None
+    return next((spec for spec in specs if spec.scenario == scenario), None)
+
+
+def declared_scenarios(scene_name: str) -> tuple[str, ...]:
+    """The scenarios of a scene that declare a frequency question (`Scene.frequency`), the default first.
+
+    Parameters
+    ----------
+    scene_name
+        a registered scene's name.
+
+    Returns
+    -------
+    tuple[str, ...]
+        the scenario names; () when the scene declares none.
+    """
+    declared = scenes.get(scene_name).frequency
+    specs = () if declared is None else (declared,) if not isinstance(declared, tuple) else declared
+    return tuple(spec.scenario for spec in specs)
 
 
 def _load(scene_or_model: Any, scenario: str | None, parameters: Mapping[str, Any]) -> _Source:
@@ -433,7 +478,7 @@ def _load(scene_or_model: Any, scenario: str | None, parameters: Mapping[str, An
     path = pathlib.Path(text)
     if not path.exists() and text in scenes.SCENES:
         scene = scenes.get(text)
-        spec = scene.frequency
+        spec = _spec_for(scene.frequency, scenario)
         scene, chosen, params = prepare(scene, scenario or (spec.scenario if spec else None), dict(parameters))
         model_spec = scene.model_spec()
         scene.edit(model_spec, params, chosen)
@@ -453,6 +498,9 @@ def _load(scene_or_model: Any, scenario: str | None, parameters: Mapping[str, An
             spec.input if spec else None,
             spec.response if spec else None,
             spec.description if spec else "",
+            dict(params),
+            spec.interpret if spec else None,
+            spec.input_unit if spec else "",
         )
     if scenario is not None or parameters:
         raise BadInputError("a scenario and parameters go with a scene name, not with a model file")
@@ -617,8 +665,10 @@ def _resonances(
         )
         f0, m0 = float(found.x), size(float(found.x))
         step = 2.0 * (grid[i + 1] / grid[i] - 1.0) * 2 * math.pi * f0
-        if not any(abs(2 * math.pi * f0 - abs(p)) <= 2 * abs(p.real) + step for p in poles if p.imag > 0):
+        near = [p for p in poles if p.imag > 0 and abs(2 * math.pi * f0 - abs(p)) <= 2 * abs(p.real) + step]
+        if not near:
             continue
+        pole = min(near, key=lambda p: abs(2 * math.pi * f0 - abs(p)))
         half = m0 / math.sqrt(2.0)
         below = mag < half
         left = np.nonzero(below[:i])[0]
@@ -629,7 +679,7 @@ def _resonances(
             f1 = brentq(lambda f, h=half: size(f) - h, grid[lo_i], f0)
             f2 = brentq(lambda f, h=half: size(f) - h, f0, grid[hi_i])
             zeta = (f2 - f1) / (2.0 * f0)
-        peaks.append(Resonance(f0, m0, zeta))
+        peaks.append(Resonance(f0, m0, zeta, float(abs(pole) / (2 * math.pi)), float(-pole.real / abs(pole))))
     return tuple(peaks)
 
 
@@ -827,6 +877,8 @@ def frequency(
     if input_name is None or response_name is None:
         raise BadInputError("name the input (--input ACTUATOR|JOINT) and the response (--response JOINT[:vel|:acc])")
     kind, index, input_unit = resolve_input(model, input_name)
+    if input_name == source.input and source.input_unit:
+        input_unit = source.input_unit  # the scene knows what its actuator's control is
     dof, out_kind, response_unit = resolve_response(model, response_name)
     if band is not None:
         band = parse_band(band) if isinstance(band, str) else _check_band(band)
@@ -885,6 +937,13 @@ def frequency(
         )
     for array in (grid, exact, discrete, hold):
         array.setflags(write=False)
+    answers: dict[str, Any] = {}
+    answer_lines: tuple[str, ...] = ()
+    if source.interpret is not None and (input_name, response_name) == (source.input, source.response):
+        # the scene's own question, asked of its declared input and response only
+        answers, answer_lines = source.interpret(
+            model, source.parameters, exact_of, tuple(r.to_dict() for r in resonances), band
+        )
     return FrequencyResponse(
         source=source.label,
         input=input_name,
@@ -909,6 +968,8 @@ def frequency(
         else f"{input_name} to {response_name}",
         wall_time_s=_time.perf_counter() - started,
         sinestream=stream,
+        answers=answers,
+        answer_lines=tuple(answer_lines),
     )
 
 
