@@ -9,6 +9,7 @@
 """
 
 from springlab.exact import analytic
+from springlab.render.inline import Video, video
 from springlab.runs.compare import Verdict
 from springlab.runs.run import Result, ValidationRow
 from springlab.studies.audit.audit import Audit, audit
@@ -41,5 +42,7 @@ __all__ = [
     "UnknownNameError",
     "DivergedError",
     "ClusterError",
+    "video",
+    "Video",
 ]
 __version__ = "0.1.0"

@@ -7,7 +7,6 @@ into place, so an interrupted or failed write never leaves a partial file.
 from __future__ import annotations
 
 import contextlib
-import io
 import json
 import math
 import os
@@ -128,16 +127,25 @@ def recorded_rows(n: int, every: int = 1) -> np.ndarray:
     return rows if rows[-1] == n - 1 else np.append(rows, n - 1)
 
 
+def number_text(value: float | np.floating) -> str:
+    """`value` in the shortest text that reads back (float()) to the same double: `0.1`, not `0.10000000000000001`.
+
+    Python's repr of a float is that shortest round-trip form, and pandas' `to_csv` writes the same; an
+    integral value keeps its `.0` (`3.0`, `-0.0`), so a column of floats reads back as floats
+    (`pandas.read_csv` would make a column of `3`s integers). `inf`, `-inf` and `nan` as repr writes them.
+    """
+    return repr(float(value))
+
+
 def csv_text(columns: Mapping[str, np.ndarray], every: int = 1) -> str:
-    """CSV with a header row and every `every`-th row (the last always kept) at full double precision (%.17g)."""
+    """CSV with a header row and every `every`-th row (the last always kept), each number in the shortest
+    form that reads back exactly (`number_text`)."""
     names = list(columns)
     n = len(np.asarray(columns[names[0]]))
     rows = recorded_rows(n, every)
     table = np.column_stack([np.asarray(columns[name], float)[rows] for name in names])
-    buffer = io.StringIO()
-    buffer.write(",".join(names) + "\n")
-    np.savetxt(buffer, table, fmt="%.17g", delimiter=",")
-    return buffer.getvalue()
+    lines = [",".join(names)] + [",".join(map(number_text, row)) for row in table.tolist()]
+    return "\n".join(lines) + "\n"
 
 
 def write_text_files(directory: str | os.PathLike, files: Mapping[str, str]) -> list[pathlib.Path]:

@@ -16,15 +16,24 @@ from __future__ import annotations
 
 import math
 import pathlib
+from typing import TYPE_CHECKING
 
 from springlab import files
 from springlab.studies.audit.audit import Audit
 
 from .charts import _COLORS, _figure, _save
 
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
 
 def plot_audit(result: Audit, path: str | pathlib.Path) -> pathlib.Path:
     """Draw audit.png (module docstring) into `path`."""
+    return _save(audit_figure(result), path)
+
+
+def audit_figure(result: Audit) -> Figure:
+    """The three panels of audit.png (module docstring)."""
     fig, (modes_ax, limits_ax, cost_ax) = _figure(3, (16, 5), layout="constrained")
     _modes_panel(result, modes_ax)
     _limits_panel(result, limits_ax)
@@ -32,7 +41,7 @@ def plot_audit(result: Audit, path: str | pathlib.Path) -> pathlib.Path:
     own = result.own
     name = pathlib.Path(result.model).name if result.model.endswith((".xml", ".urdf")) else result.model
     fig.suptitle(f"audit of {name}: own setting {own.integrator} at {own.dt:g} s, tol {result.tol:g}")
-    return _save(fig, path)
+    return fig
 
 
 def _modes_panel(result: Audit, ax) -> None:

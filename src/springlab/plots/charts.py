@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 import pathlib
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -17,6 +18,9 @@ from springlab.exact.limits import stability_limit
 from springlab.runs import compare
 from springlab.studies.stability import AmplificationMap, EnergyHistories, StabilityReport
 from springlab.studies.tradeoff import Tradeoff
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 _COLORS = {
     "euler": "#1f77b4",
@@ -45,6 +49,11 @@ def _save(fig, path: str | pathlib.Path) -> pathlib.Path:
 
 
 def plot_tradeoff(result: Tradeoff, path: str | pathlib.Path) -> pathlib.Path:
+    """Write `tradeoff_figure(result)` to `path` (PNG)."""
+    return _save(tradeoff_figure(result), path)
+
+
+def tradeoff_figure(result: Tradeoff) -> Figure:
     """Two log-log panels: error vs dt (with the observed orders) and error vs wall time (Pareto front)."""
     fig, (left, right) = _figure(2, (12, 5))
     diverged = sum(r.diverged for r in result.runs)
@@ -102,7 +111,7 @@ def plot_tradeoff(result: Tradeoff, path: str | pathlib.Path) -> pathlib.Path:
     note += f"; x: {unvalidated} not validated" if unvalidated else ""
     fig.suptitle(f"{result.scene} / {result.scenario}: {len(result.runs)} runs over {result.duration:g} s{note}")
     fig.tight_layout()
-    return _save(fig, path)
+    return fig
 
 
 #: run length [natural periods] of the estimate-range line drawn on the stability map
@@ -125,6 +134,11 @@ def estimate_range_line(integrator: str, zetas: Sequence[float] | np.ndarray) ->
 
 
 def plot_stability(report: StabilityReport, amplification: AmplificationMap, path: str | pathlib.Path) -> pathlib.Path:
+    """Write `stability_figure(report, amplification)` to `path` (PNG)."""
+    return _save(stability_figure(report, amplification), path)
+
+
+def stability_figure(report: StabilityReport, amplification: AmplificationMap) -> Figure:
     """Per integrator: measured per-step amplification over (zeta, omega*dt), theory boundary, measured boundary.
 
     Parameters
@@ -133,8 +147,6 @@ def plot_stability(report: StabilityReport, amplification: AmplificationMap, pat
         `stability.stability_report` (its measured boundaries are drawn).
     amplification
         `stability.amplification_map` (the colour map).
-    path
-        the PNG to write.
     """
     from matplotlib.colors import TwoSlopeNorm
 
@@ -177,10 +189,15 @@ def plot_stability(report: StabilityReport, amplification: AmplificationMap, pat
     axes[0].set_ylabel("omega * dt [-]")
     fig.colorbar(image, ax=list(axes), label="log10 per-step amplification (> 0: grows)", shrink=0.85)
     fig.suptitle("stability map: MuJoCo's measured one-step amplification, theory (line), measured boundary (o)")
-    return _save(fig, path)
+    return fig
 
 
 def plot_energy(series: EnergyHistories, path: str | pathlib.Path) -> pathlib.Path:
+    """Write `energy_figure(series)` to `path` (PNG)."""
+    return _save(energy_figure(series), path)
+
+
+def energy_figure(series: EnergyHistories) -> Figure:
     """E/E0 over time of every integrator on the undamped oscillator, each against its exact formula.
 
     Three panels: the integrators that keep an invariant (`series.bounds`, the euler family) between
@@ -228,7 +245,7 @@ def plot_energy(series: EnergyHistories, path: str | pathlib.Path) -> pathlib.Pa
         f"undamped {series.scene}, omega*dt = y = {y:g}: energy from qpos/qvel vs each step map's exact formula"
     )
     fig.tight_layout()
-    return _save(fig, path)
+    return fig
 
 
 def write_tradeoff(result: Tradeoff, directory: str | pathlib.Path) -> list[pathlib.Path]:

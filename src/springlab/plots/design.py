@@ -8,6 +8,7 @@ scene's declared ones. Times are drawn in [ms].
 from __future__ import annotations
 
 import pathlib
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -15,9 +16,25 @@ from springlab import files
 from springlab.studies.design.sobol import CONFIDENCE, SobolStudy
 from springlab.studies.design.study import Study
 
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+
+def _save(fig: Figure, path: str | pathlib.Path) -> pathlib.Path:
+    path = pathlib.Path(path)
+    files.prepare_directory(path.parent)
+    with files.atomic_path(path) as temporary:
+        fig.savefig(temporary, dpi=110, format="png")
+    return path
+
 
 def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
-    """PNG: positioning time over the two most influential properties (the others at their
+    """Write `design_figure(study)` to `path` (PNG)."""
+    return _save(design_figure(study), path)
+
+
+def design_figure(study: Study) -> Figure:
+    """Positioning time over the two most influential properties (the others at their
     defaults; the dense plane if the study has one, else the grid's slice), and simulated vs
     analytic positioning time of every configuration."""
     import matplotlib.colors
@@ -97,14 +114,16 @@ def plot(study: Study, path: str | pathlib.Path) -> pathlib.Path:
         fontsize=10,
     )
     right.legend(fontsize=8)
-    path = pathlib.Path(path)
-    with files.atomic_path(path) as temporary:
-        fig.savefig(temporary, dpi=110, format="png")
-    return path
+    return fig
 
 
 def plot_sobol(study: SobolStudy, path: str | pathlib.Path) -> pathlib.Path:
-    """PNG, two panels: first-order and total Sobol indices with their confidence intervals per property
+    """Write `sobol_figure(study)` to `path` (PNG)."""
+    return _save(sobol_figure(study), path)
+
+
+def sobol_figure(study: SobolStudy) -> Figure:
+    """Two panels: first-order and total Sobol indices with their confidence intervals per property
     (total minus first-order is the interactions' share), and the elasticities |d ln T / d ln p| from the
     same runs, for the ranking they would give."""
     from matplotlib.figure import Figure  # no pyplot: a caller's backend and figures stay untouched
@@ -146,8 +165,4 @@ def plot_sobol(study: SobolStudy, path: str | pathlib.Path) -> pathlib.Path:
     right.set_xticks(x, [n.replace("_", "\n") for n in names])
     right.set_ylabel("|elasticity d ln T / d ln p| [-]")
     right.set_title(f"elasticities from the same runs (log-log fit, R^2 = {study.regression_r2:.2f})", fontsize=10)
-    path = pathlib.Path(path)
-    files.prepare_directory(path.parent)
-    with files.atomic_path(path) as temporary:
-        fig.savefig(temporary, dpi=110, format="png")
-    return path
+    return fig

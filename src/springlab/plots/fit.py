@@ -17,6 +17,7 @@ from . import charts
 
 if TYPE_CHECKING:  # annotations only: the fit machinery is not needed to draw
     from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
     from springlab.studies.fit.results import FitResult
 
@@ -28,7 +29,12 @@ _SIGNAL = {"pos": "position", "vel": "velocity", "acc": "acceleration"}
 
 
 def plot_fit(result: FitResult, path: str | os.PathLike) -> pathlib.Path:
-    """Write fit.png for a FitResult: data and fit, residuals, and the phase plane (or v(t), a(t) for a polynomial)."""
+    """Write fit.png for a FitResult (`fit_figure`)."""
+    return charts._save(fit_figure(result), pathlib.Path(path))
+
+
+def fit_figure(result: FitResult) -> Figure:
+    """A FitResult's figure: data and fit, residuals, and the phase plane (or v(t), a(t) for a polynomial)."""
     record = result.record
     from matplotlib.figure import Figure  # a bare Figure: the caller's pyplot state stays untouched
 
@@ -60,7 +66,7 @@ def plot_fit(result: FitResult, path: str | os.PathLike) -> pathlib.Path:
         _phase_panel(phase, result)
     fig.suptitle(textwrap.fill(result.verdict, 140), fontsize=9)
     fig.tight_layout(rect=(0, 0, 1, 0.95))
-    return charts._save(fig, pathlib.Path(path))
+    return fig
 
 
 def _phase_panel(ax: Axes, result: FitResult) -> None:

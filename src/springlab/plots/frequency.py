@@ -10,6 +10,7 @@ labelled with frequency and damping ratio), anti-resonances (circles); the band 
 from __future__ import annotations
 
 import pathlib
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -17,6 +18,9 @@ from springlab import files
 from springlab.studies.frequency import FrequencyResponse
 
 from .charts import _COLORS, _save
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 
 def plot_bode(result: FrequencyResponse, path: str | pathlib.Path) -> pathlib.Path:
@@ -34,6 +38,11 @@ def plot_bode(result: FrequencyResponse, path: str | pathlib.Path) -> pathlib.Pa
     pathlib.Path
         the written file.
     """
+    return _save(bode_figure(result), path)
+
+
+def bode_figure(result: FrequencyResponse) -> Figure:
+    """The figure of bode.png (module docstring) for `result`."""
     from matplotlib.figure import Figure  # no pyplot: a caller's backend and figures stay untouched
 
     fig = Figure(figsize=(9, 10), layout="constrained")
@@ -102,7 +111,7 @@ def plot_bode(result: FrequencyResponse, path: str | pathlib.Path) -> pathlib.Pa
     err_ax.legend(fontsize=8, loc="best")
     shaded = "" if result.within_tol_hz is None else f"; shaded: within tol up to {result.within_tol_hz[1]:.4g} Hz"
     fig.suptitle(f"{result.description}\n{result.source}, {setting}{shaded}", fontsize=10)
-    return _save(fig, path)
+    return fig
 
 
 def write_frequency(result: FrequencyResponse, directory: str | pathlib.Path) -> list[pathlib.Path]:

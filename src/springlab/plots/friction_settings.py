@@ -12,11 +12,17 @@ log-log panels per case:
 from __future__ import annotations
 
 import pathlib
+from typing import TYPE_CHECKING
+
+import numpy as np
 
 from springlab import files
 from springlab.studies.friction_settings import MODEL_INTEGRATOR, CaseStudy, FrictionSettings, ModelError
 
 from .style import new_figure, styled
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 #: drawn instead of an error of exactly 0 on a log axis (NoSlip can make a creep vanish) [-]
 FLOOR = 1e-12
@@ -106,16 +112,23 @@ def _pick_model(case: CaseStudy) -> ModelError | None:
 @styled
 def plot(study: FrictionSettings, path: str | pathlib.Path) -> pathlib.Path:
     """Write the study's figure (see the module docstring) to `path` (.png); return the path."""
-    figure = new_figure(11.0, 3.4 * len(study.cases) + 0.6)
-    axes = figure.subplots(len(study.cases), 2, squeeze=False)
-    for case, (cost_ax, dt_ax) in zip(study.cases, axes):
-        _case_panels(case, cost_ax, dt_ax, study.tol)
-    figure.suptitle(f"{study.scene}: MuJoCo's friction settings, error vs cost ({study.runs} runs)")
+    figure = friction_figure(study)
     path = pathlib.Path(path)
     files.prepare_directory(path.parent)
     with files.atomic_path(path) as temporary:
         figure.savefig(temporary, format="png")
     return path
+
+
+@styled
+def friction_figure(study: FrictionSettings) -> Figure:
+    """The study's figure (see the module docstring): per case, error vs cost and error vs dt."""
+    figure = new_figure(11.0, 3.4 * len(study.cases) + 0.6)
+    axes = figure.subplots(len(study.cases), 2, squeeze=False)
+    for case, (cost_ax, dt_ax) in zip(study.cases, axes):
+        _case_panels(case, cost_ax, dt_ax, study.tol)
+    figure.suptitle(f"{study.scene}: MuJoCo's friction settings, error vs cost ({study.runs} runs)")
+    return figure
 
 
 def write(study: FrictionSettings, directory: str | pathlib.Path) -> list[pathlib.Path]:
@@ -138,8 +151,8 @@ def write(study: FrictionSettings, directory: str | pathlib.Path) -> list[pathli
 def _cell(value) -> str:
     if value is None:
         return ""
-    if isinstance(value, bool):
-        return str(value).lower()
-    if isinstance(value, float):
-        return repr(value)
+    if isinstance(value, (bool, np.bool_)):
+        return str(bool(value)).lower()
+    if isinstance(value, (float, np.floating)):  # np.float64's own repr is `np.float64(0.1)` under numpy 2
+        return files.number_text(value)
     return str(value)

@@ -12,11 +12,15 @@ from __future__ import annotations
 
 import math
 import pathlib
+from typing import TYPE_CHECKING
 
 from springlab import files
 from springlab.studies.refine import Refinement
 
 from .charts import _COLORS, _figure, _save
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 #: marker per integrator
 _MARKERS = {"euler": "o", "implicit": "s", "implicitfast": "D", "rk4": "^", "discrete": "v"}
@@ -24,6 +28,11 @@ _MARKERS = {"euler": "o", "implicit": "s", "implicitfast": "D", "rk4": "^", "dis
 
 def plot_refine(result: Refinement, path: str | pathlib.Path) -> pathlib.Path:
     """Write the three panels (see the module docstring) to `path` (.png)."""
+    return _save(refine_figure(result), path)
+
+
+def refine_figure(result: Refinement) -> Figure:
+    """The three panels (see the module docstring)."""
     from matplotlib import colormaps
 
     fig, (left, middle, right) = _figure(3, (17, 5.2), layout="constrained")
@@ -138,7 +147,7 @@ def plot_refine(result: Refinement, path: str | pathlib.Path) -> pathlib.Path:
     right.set_title("refining costs twice: per step x steps per second")
     right.legend(fontsize=6.5)
     fig.suptitle(f"{result.scene} / {result.scenario}: how much model does {result.question} need?")
-    return _save(fig, path)
+    return fig
 
 
 def write_refine(result: Refinement, directory: str | pathlib.Path) -> list[pathlib.Path]:

@@ -19,6 +19,7 @@ from springlab.studies.sweeps import Sweep
 
 if TYPE_CHECKING:  # matplotlib is imported only when a figure is drawn
     from matplotlib.cm import ScalarMappable
+    from matplotlib.figure import Figure
 
 
 def default_quantity(sweep: Sweep) -> str:
@@ -35,7 +36,7 @@ def default_quantity(sweep: Sweep) -> str:
 
 
 def csv_text(sweep: Sweep) -> str:
-    """sweep.csv: header, then one row per configuration; numbers at full precision (repr)."""
+    """sweep.csv: header, then one row per configuration; numbers in their shortest exact form (files.number_text)."""
     header, body = sweep.table()
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
@@ -49,12 +50,22 @@ def _cell(value) -> str:
     if isinstance(value, (bool, np.bool_)):
         return "true" if value else "false"
     if isinstance(value, (float, np.floating, int, np.integer)):
-        return repr(float(value)) if isinstance(value, (float, np.floating)) else str(int(value))
+        return files.number_text(value) if isinstance(value, (float, np.floating)) else str(int(value))
     return str(value)
 
 
 def plot(sweep: Sweep, path: str | pathlib.Path, quantity: str | None = None) -> pathlib.Path:
-    """PNG of `quantity` over the varied parameters.
+    """Write `sweep_figure(sweep, quantity)` to `path` (PNG)."""
+    fig = sweep_figure(sweep, quantity)
+    path = pathlib.Path(path)
+    files.prepare_directory(path.parent)
+    with files.atomic_path(path) as temporary:
+        fig.savefig(temporary, dpi=110, format="png")
+    return path
+
+
+def sweep_figure(sweep: Sweep, quantity: str | None = None) -> Figure:
+    """`quantity` over the varied parameters.
 
     One varied parameter: the quantity against it (diverged configurations as red crosses on the
     axis). Two or more: a colour map over the first two (a grid: the other axes at their middle
@@ -114,11 +125,7 @@ def plot(sweep: Sweep, path: str | pathlib.Path, quantity: str | None = None) ->
         if a.log:
             ax.set_yscale("log")
     ax.set_title(title, fontsize=9)
-    path = pathlib.Path(path)
-    files.prepare_directory(path.parent)
-    with files.atomic_path(path) as temporary:
-        fig.savefig(temporary, dpi=110, format="png")
-    return path
+    return fig
 
 
 def write(sweep: Sweep, directory: str | pathlib.Path, quantity: str | None = None) -> list[pathlib.Path]:

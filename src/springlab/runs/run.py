@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING, Any
 import mujoco
 import numpy as np
 
-from springlab import scenes, tables
+from springlab import display, scenes, tables
 from springlab.errors import BadInputError, DivergedError, ParameterError, SpringlabError
 from springlab.files import csv_text, dumps, json_ready, write_text_files
 from springlab.scenes.base import Check, Scenario, Scene
@@ -54,6 +54,7 @@ from .compare import ColumnError, EstimateRange, Verdict
 
 if TYPE_CHECKING:
     import pandas
+    from matplotlib.figure import Figure
 
 #: a run whose error exceeds this many times its signal has blown up, flagged or not
 BLOWUP_RATIO = 1e3
@@ -71,8 +72,8 @@ def _read_only(values: np.ndarray) -> np.ndarray:
     return view
 
 
-@dataclasses.dataclass(frozen=True, eq=False)
-class Result:
+@dataclasses.dataclass(frozen=True, eq=False, repr=False)
+class Result(display.Shown):
     """One run of a scenario: its setting, its trajectory, the exact reference, errors and verdict.
 
     Immutable: the attributes cannot be rebound and the series are read-only arrays.
@@ -224,6 +225,60 @@ class Result:
             "model_limits": list(self.model_limits),
         }
 
+    def _shown(self) -> display.Summary:
+        """The run as a notebook shows it: verdict, setting, worst error against tolerance, quantities."""
+        facts = [
+            display.Fact("integrator", self.integrator),
+            display.Fact("dt", self.dt, "s"),
+            display.Fact("duration", self.duration, "s"),
+            display.Fact("steps", self.steps),
+            display.Fact("max relative error", self.max_rel_error),
+            display.Fact("tolerance", self.tolerance),
+            display.Fact("wall time", self.wall_time_s, "s"),
+        ]
+        facts += [
+            display.Fact(name, value)
+            for name, value in list(self.quantities.items())[:6]
+            if isinstance(value, (int, float, np.floating)) and not isinstance(value, bool)
+        ]
+        if self.errors:
+            rows = display.table(
+                ("column", "max abs", "max rel [-]", "tolerance [-]"),
+                [
+                    (name, e.max_abs, e.max_rel, self.column_tolerances.get(name, self.tolerance))
+                    for name, e in self.errors.items()
+                ],
+            )
+        elif self.checks:
+            rows = display.table(
+                ("check", "value", "reference", "error", "tolerance", "passed"),
+                [(c.name, c.value, c.reference, c.error, c.tolerance, c.passed) for c in self.checks],
+            )
+        else:
+            rows = None
+        return display.Summary(
+            "Result",
+            f"{self.scene} / {self.scenario}",
+            None if self.verdict is None else str(self.verdict),
+            self.passed,
+            self.message,
+            tuple(facts[:7]),
+            rows,
+            note=""
+            if len(facts) <= 7
+            else "quantities: " + ", ".join(f"{f.label} {display.number(f.value)}" for f in facts[7:]),
+        )
+
+    def plot(self) -> Figure:
+        """Positions and velocities against time, the exact solution dashed, and |simulated - exact| with the tolerance (`springlab.plots.run.time_series`).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            a bare Figure (no pyplot): Jupyter shows it inline; `.savefig(path)` writes it.
+        """
+        return display.plot(self)
+
     def to_dict(self) -> dict[str, Any]:
         """summary.json, exactly what `springlab run --json` prints (plain JSON values: inf and nan are None).
 
@@ -259,8 +314,8 @@ class Result:
         return tables.to_pandas({name: np.array(values, float) for name, values in self._csv_columns().items()})
 
 
-@dataclasses.dataclass(frozen=True)
-class ValidationRow:
+@dataclasses.dataclass(frozen=True, repr=False)
+class ValidationRow(display.Shown):
     """One row of the validation table (`springlab validate`, the demo's validation.json) for one run.
 
     A scenario without compared columns shows its tightest check in `max_rel_error` and
@@ -349,6 +404,25 @@ class ValidationRow:
             wall_time_s=result.wall_time_s,
             checks=result.checks,
             note=note,
+        )
+
+    def _shown(self) -> display.Summary:
+        """The row as a notebook shows it: verdict, setting, error against tolerance."""
+        return display.Summary(
+            "ValidationRow",
+            f"{self.scene} / {self.scenario}",
+            None if self.verdict is None else str(self.verdict),
+            self.passed,
+            self.note
+            or f"{self.measure} {display.number(self.max_rel_error)} against tolerance {display.number(self.tolerance)}",
+            (
+                display.Fact("integrator", self.integrator),
+                display.Fact("dt", self.dt, "s"),
+                display.Fact("steps", self.steps),
+                display.Fact(self.measure, self.max_rel_error),
+                display.Fact("tolerance", self.tolerance),
+                display.Fact("wall time", self.wall_time_s, "s"),
+            ),
         )
 
     def to_dict(self) -> dict[str, Any]:

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from springlab import scenes, tables
+from springlab import display, scenes, tables
 from springlab.errors import BadInputError, DivergedError
 from springlab.files import json_ready
 from springlab.runs.run import Result, prepare, run_scenario, scene_and_scenario
@@ -38,6 +38,7 @@ Curves = list[tuple[np.ndarray, np.ndarray]]
 
 if TYPE_CHECKING:
     import pandas
+    from matplotlib.figure import Figure
 
 
 def _read_only(values: np.ndarray | None) -> np.ndarray | None:
@@ -85,8 +86,8 @@ class Member:
         return {"start": self.start, "fraction": self.fraction, "stopped": self.stopped, "diverged": self.diverged}
 
 
-@dataclasses.dataclass(frozen=True)
-class PhaseFamily:
+@dataclasses.dataclass(frozen=True, repr=False)
+class PhaseFamily(display.Shown):
     """The phase trajectories of one scenario from several initial displacements.
 
     Attributes
@@ -112,6 +113,31 @@ class PhaseFamily:
     center: float
     straddles: bool
     members: tuple[Member, ...]
+
+    def _shown(self) -> display.Summary:
+        """The family as a notebook shows it: the releases, which stopped, and the run they come from."""
+        return display.Summary(
+            "PhaseFamily",
+            f"{self.result.scene} / {self.result.scenario}: {self.joint}",
+            f"{len(self.members)} releases",
+            None,
+            f"{sum(m.stopped for m in self.members)} of {len(self.members)} stopped"
+            + ("; the releases straddle a separatrix" if self.straddles else ""),
+            (display.Fact("centre", self.center), display.Fact("equilibria", len(self.equilibria))),
+            display.table(
+                ("start", "fraction [-]", "stopped"), [(m.start, m.fraction, m.stopped) for m in self.members]
+            ),
+        )
+
+    def plot(self) -> Figure:
+        """The phase trajectories of the releases (`springlab.plots.run.phase_family`).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            a bare Figure (no pyplot): Jupyter shows it inline; `.savefig(path)` writes it.
+        """
+        return display.plot(self)
 
     def to_dict(self) -> dict[str, Any]:
         """The family's facts (plain JSON values): scene, scenario, integrator, dt [s], joint, center [m],
@@ -143,8 +169,8 @@ class PhaseFamily:
         )
 
 
-@dataclasses.dataclass(frozen=True)
-class ZetaFamily:
+@dataclasses.dataclass(frozen=True, repr=False)
+class ZetaFamily(display.Shown):
     """One scenario at several damping ratios.
 
     Attributes
@@ -166,6 +192,35 @@ class ZetaFamily:
     def joint(self) -> str:
         """The one reported joint."""
         return next(iter(self.runs[0][1].pos))
+
+    def _shown(self) -> display.Summary:
+        """The family as a notebook shows it: whether every run passed, then one row per damping ratio."""
+        passed = [r.passed for _, r in self.runs]
+        return display.Summary(
+            "ZetaFamily",
+            f"{self.scene} / {self.scenario}",
+            f"{sum(p is True for p in passed)} of {len(passed)} passed",
+            all(p is not False for p in passed),
+            f"the scenario at {len(self.runs)} damping ratios",
+            (display.Fact("damping per unit ratio", self.damping_per_ratio, "N s/m"),),
+            display.table(
+                ("zeta [-]", "verdict", "max rel error [-]", "tolerance [-]"),
+                [
+                    (zeta, None if r.verdict is None else str(r.verdict), r.max_rel_error, r.tolerance)
+                    for zeta, r in self.runs
+                ],
+            ),
+        )
+
+    def plot(self) -> Figure:
+        """x(t) and the phase plane at every damping ratio, exact curves dashed (`springlab.plots.run.zeta_family`).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            a bare Figure (no pyplot): Jupyter shows it inline; `.savefig(path)` writes it.
+        """
+        return display.plot(self)
 
     def to_dict(self) -> dict[str, Any]:
         """scene, scenario, damping_per_ratio [N s/m], runs: [{"zeta", "run": summary.json of that run}]."""

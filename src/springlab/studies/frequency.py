@@ -36,7 +36,7 @@ from typing import TYPE_CHECKING, Any
 import mujoco
 import numpy as np
 
-from springlab import scenes, tables
+from springlab import display, scenes, tables
 from springlab.errors import BadInputError, UnknownNameError
 from springlab.exact.linearize import (
     FD_STEP,
@@ -54,6 +54,7 @@ from springlab.sim.simulate import INTEGRATORS, integrator_id, quiet_mujoco
 
 if TYPE_CHECKING:
     import pandas
+    from matplotlib.figure import Figure
 
 #: defaults of the command line and the API
 DEFAULT_TOL = 1e-3
@@ -205,8 +206,8 @@ class Sinestream:
         }
 
 
-@dataclasses.dataclass(frozen=True)
-class FrequencyResponse:
+@dataclasses.dataclass(frozen=True, repr=False)
+class FrequencyResponse(display.Shown):
     """The exact and the integrator's frequency response of one input to one response.
 
     Attributes
@@ -348,6 +349,41 @@ class FrequencyResponse:
                 f" discrete response within the stated accuracy (worst: {worst:.2g} of it)"
             )
         return lines
+
+    def _shown(self) -> display.Summary:
+        """The response as a notebook shows it: whether the setting covers the band, then the resonances."""
+        lines = self.verdict()
+        facts = [
+            display.Fact("setting", f"{self.integrator} at dt = {self.dt:g} s"),
+            display.Fact("band", self.band_hz, "Hz"),
+            display.Fact("within tol", self.within_tol_hz, "Hz"),
+            display.Fact("tol", self.tol),
+        ]
+        facts += [display.Fact(f"largest dt, {b.integrator}", b.max_dt_s, "s") for b in self.integrators]
+        return display.Summary(
+            "FrequencyResponse",
+            f"{self.source}: {self.input} -> {self.response}",
+            "covers the band" if self.covers_band else "does not cover the band",
+            self.covers_band,
+            lines[0],
+            tuple(facts),
+            display.table(
+                ("kind", "frequency [Hz]", "|H|", "damping ratio [-]"),
+                [("resonance", r.frequency_hz, r.magnitude, r.damping_ratio) for r in self.resonances]
+                + [("anti-resonance", r.frequency_hz, r.magnitude, r.damping_ratio) for r in self.anti_resonances],
+            ),
+            note="; ".join(lines[1:]),
+        )
+
+    def plot(self) -> Figure:
+        """Exact and discrete magnitude and phase, and their relative error against tol (`springlab.plots.frequency.bode_figure`).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            a bare Figure (no pyplot): Jupyter shows it inline; `.savefig(path)` writes it.
+        """
+        return display.plot(self)
 
     def to_dict(self) -> dict[str, Any]:
         """frequency.json (docs/json.md lists the keys)."""

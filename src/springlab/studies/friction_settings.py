@@ -39,7 +39,7 @@ from typing import TYPE_CHECKING, Any
 import mujoco
 import numpy as np
 
-from springlab import scenes, tables
+from springlab import display, scenes, tables
 from springlab.errors import BadInputError, DivergedError
 from springlab.files import json_ready
 from springlab.runs import compare
@@ -52,6 +52,7 @@ from .executor import Executor, chunked, resolve
 
 if TYPE_CHECKING:
     import pandas
+    from matplotlib.figure import Figure
 
 #: runs per chunk (a few seconds of work each)
 CHUNK_RUNS = 48
@@ -351,8 +352,8 @@ class CaseStudy:
         )
 
 
-@dataclasses.dataclass(frozen=True)
-class FrictionSettings:
+@dataclasses.dataclass(frozen=True, repr=False)
+class FrictionSettings(display.Shown):
     """The friction-settings study of one scene (`friction_settings`).
 
     `to_dict()` is friction_settings.json (what `springlab friction-settings --json` prints),
@@ -395,6 +396,47 @@ class FrictionSettings:
     def answer(self) -> str:
         """How much MuJoCo's friction drifts and what it costs to make it stop, one paragraph per case."""
         return "\n".join(case.answer() for case in self.cases)
+
+    def _shown(self) -> display.Summary:
+        """The study as a notebook shows it: the picks first (or that none was asked for), then the runs."""
+        picks = [c.pick for c in self.cases]
+        if self.tol is None:
+            verdict, ok = "measured (no tol)", None
+        elif all(p is not None and p.run is not None for p in picks):
+            verdict, ok = f"a verified setting for tol {self.tol:g} in every case", True
+        else:
+            verdict, ok = f"no verified setting for tol {self.tol:g} in some case", False
+        return display.Summary(
+            "FrictionSettings",
+            f"{self.scene}: {', '.join(c.scenario for c in self.cases)}",
+            verdict,
+            ok,
+            self.answer(),
+            (
+                display.Fact("runs", self.runs),
+                display.Fact("integrators", ", ".join(self.integrators)),
+                display.Fact("MuJoCo default", f"{self.mujoco_default[0]} at dt = {self.mujoco_default[1]:g} s"),
+                display.Fact("wall time", self.wall_time_s, "s"),
+            ),
+            display.table(
+                ("scenario", "settings", "integrator", "dt [s]", "max rel error [-]", "CPU time [s]"),
+                [
+                    (c.scenario, c.describe(r.settings), r.integrator, r.dt, r.max_rel_error, r.cpu_time_s)
+                    for c in self.cases
+                    for r in c.runs
+                ],
+            ),
+        )
+
+    def plot(self) -> Figure:
+        """Per case, error against cost and against dt, the pick marked (`springlab.plots.friction_settings.friction_figure`).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            a bare Figure (no pyplot): Jupyter shows it inline; `.savefig(path)` writes it.
+        """
+        return display.plot(self)
 
     def to_dict(self) -> dict[str, Any]:
         """friction_settings.json: scene, tol, integrators, dts, mujoco_default, runs, wall_time_s, cases."""

@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from springlab import scenes, tables
+from springlab import display, scenes, tables
 from springlab.errors import BadInputError, DivergedError
 from springlab.files import json_ready
 from springlab.runs import compare
@@ -47,6 +47,7 @@ from .executor import Executor
 
 if TYPE_CHECKING:
     import pandas
+    from matplotlib.figure import Figure
 
 #: w_max dt of every size's timestep grid: inside every limit (0.2) ... explicit Euler's 2 (1.9), RK4's
 #: 2.83 (2.8), far beyond both (8, 30)
@@ -235,8 +236,8 @@ class RefineRecommendation:
         }
 
 
-@dataclasses.dataclass(frozen=True)
-class Refinement:
+@dataclasses.dataclass(frozen=True, repr=False)
+class Refinement(display.Shown):
     """The three-axis trade of one question (`refine`).
 
     `to_dict()` is refine.json (what `springlab refine --json` prints), `to_pandas()` one row per run.
@@ -290,6 +291,47 @@ class Refinement:
     step_cost_growth: float | None
     recommendation: RefineRecommendation | None = None
     sweep_wall_time_s: float = 0.0
+
+    def _shown(self) -> display.Summary:
+        """The refinement as a notebook shows it: the recommendation first, the orders, then the sizes."""
+        pick = self.recommendation
+        names = list(dict.fromkeys(n for c in self.sizes for n in c.cost_per_step_s))
+        if pick is None:
+            verdict, ok, message = "no tol", None, self.description
+        elif pick.found:
+            verdict = f"{self.size_parameter} {pick.size}, {pick.integrator} at dt = {display.number(pick.dt)} s"
+            ok = pick.verified
+            message = f"the cheapest within tol {pick.tol:g}: error {display.number(pick.error)} ({pick.verdict})"
+        else:
+            verdict, ok, message = "no setting meets tol", False, f"no run reached tol {pick.tol:g}"
+        return display.Summary(
+            "Refinement",
+            f"{self.scene} / {self.scenario}",
+            verdict,
+            ok,
+            message,
+            (
+                display.Fact("question", self.question),
+                display.Fact("discretization order", self.discretization_order),
+                display.Fact("expected order", self.expected_order),
+                display.Fact("step cost growth", self.step_cost_growth),
+                display.Fact("runs", len(self.runs)),
+            ),
+            display.table(
+                (self.size_parameter, "discretization error [-]", *(f"{n} cost per step [s]" for n in names)),
+                [(c.size, c.discretization_error, *(c.cost_per_step_s.get(n) for n in names)) for c in self.sizes],
+            ),
+        )
+
+    def plot(self) -> Figure:
+        """Error against size, against dt and against wall time (`springlab.plots.refine.refine_figure`).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            a bare Figure (no pyplot): Jupyter shows it inline; `.savefig(path)` writes it.
+        """
+        return display.plot(self)
 
     def to_dict(self) -> dict[str, Any]:
         """refine.json: scene, scenario, question, description, size_parameter, size_description, duration,

@@ -39,7 +39,7 @@ from typing import TYPE_CHECKING, Any, Literal
 import numpy as np
 from mujoco import batch as _mjbatch
 
-from springlab import tables
+from springlab import display, tables
 from springlab.errors import BadInputError, DivergedError
 from springlab.exact.limits import stability_limit
 from springlab.sim.batch import RECORD_SPEC, Job, run_batched
@@ -58,6 +58,7 @@ from .extremes import (
 
 if TYPE_CHECKING:
     import pandas
+    from matplotlib.figure import Figure
 
 #: damping ratios of the default boundary measurement (the contract needs 0, 0.1, 1, 10)
 STABILITY_ZETAS = (0.0, 0.1, 0.5, 1.0, 2.0, 10.0)
@@ -508,8 +509,8 @@ def energy_histories(
 StabilityTable = Literal["boundaries", "extremes", "energy"]
 
 
-@dataclasses.dataclass(frozen=True)
-class StabilityReport:
+@dataclasses.dataclass(frozen=True, repr=False)
+class StabilityReport(display.Shown):
     """`springlab stability`: boundaries, extremes and energy (`stability_report`); `to_dict()` is its JSON.
 
     Attributes
@@ -557,6 +558,41 @@ class StabilityReport:
             if row.integrator == integrator and row.zeta == zeta:
                 return row
         raise KeyError(f"no boundary measured for {integrator!r} at zeta = {zeta:g}")
+
+    def _shown(self) -> display.Summary:
+        """The report as a notebook shows it: every boundary within tolerance or not, then the boundaries."""
+        worst = max((b.relative_difference for b in self.boundaries), default=None)
+        return display.Summary(
+            "StabilityReport",
+            f"{len(self.boundaries)} boundaries",
+            "PASS" if self.passed else "FAIL",
+            self.passed,
+            f"{sum(b.within_tolerance for b in self.boundaries)} of {len(self.boundaries)} measured boundaries"
+            " within tolerance of the theory",
+            (
+                display.Fact("largest relative difference", worst),
+                display.Fact("growth test", self.growth_test),
+                display.Fact("wall time", self.wall_time_s, "s"),
+            ),
+            display.table(
+                ("integrator", "zeta [-]", "measured omega dt [-]", "theory omega dt [-]", "rel. difference [-]"),
+                [
+                    (b.integrator, b.zeta, b.measured_omega_dt, b.theory_omega_dt, b.relative_difference)
+                    for b in self.boundaries
+                ],
+            ),
+        )
+
+    def plot(self, amplification: AmplificationMap | None = None) -> Figure:
+        """The energy of every integrator against its exact formula (`springlab.plots.charts.energy_figure`), or
+        with `amplification` (`amplification_map()`) the stability map with the measured boundaries.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            a bare Figure (no pyplot): Jupyter shows it inline; `.savefig(path)` writes it.
+        """
+        return display.plot(self, amplification=amplification)
 
     def to_dict(self) -> dict[str, Any]:
         """stability.json and `springlab stability --json`: {"boundaries", "extremes", "energy", "growth_test",

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from springlab import scenes, tables
+from springlab import display, scenes, tables
 from springlab.errors import BadInputError, DivergedError, UnknownNameError
 from springlab.files import json_ready
 from springlab.runs.compare import Verdict
@@ -37,6 +37,7 @@ from .executor import Executor, chunked, resolve
 
 if TYPE_CHECKING:
     import pandas
+    from matplotlib.figure import Figure
 
 #: configurations per chunk (one batched MuJoCo call each): seconds of work, not milliseconds
 CHUNK_CONFIGURATIONS = 64
@@ -165,8 +166,8 @@ class SweepRow:
         }
 
 
-@dataclasses.dataclass(frozen=True)
-class Sweep:
+@dataclasses.dataclass(frozen=True, repr=False)
+class Sweep(display.Shown):
     """A finished sweep; one row per configuration, in order (the last axis fastest on a grid).
 
     `to_dict()` is what `springlab sweep --json` prints, `to_pandas()` is sweep.csv as a DataFrame.
@@ -292,6 +293,38 @@ class Sweep:
         ("" where a configuration has no value)."""
         header, body = self._records()
         return header, [["" if value is None else value for value in line] for line in body]
+
+    def _shown(self) -> display.Summary:
+        """The sweep as a notebook shows it: counts first, then the setting, then the rows (truncated)."""
+        bad = self.failed + self.diverged + self.invalid
+        header, body = self.table()
+        keep = [i for i, name in enumerate(header) if name != "detail"][:9]
+        return display.Summary(
+            "Sweep",
+            f"{self.scene} / {self.scenario}",
+            f"{self.passed} of {self.size} passed",
+            bad == 0,
+            f"{self.failed} failed, {self.diverged} diverged, {self.invalid} invalid",
+            (
+                display.Fact("varied", ", ".join(a.name for a in self.axes)),
+                display.Fact("integrator", self.integrator),
+                display.Fact("dt", self.dt, "s"),
+                display.Fact("duration", self.duration, "s"),
+                display.Fact("wall time", self.wall_time_s, "s"),
+                display.Fact("configurations per second", self.configurations_per_s, "1/s"),
+            ),
+            display.table([header[i] for i in keep], [[line[i] for i in keep] for line in body]),
+        )
+
+    def plot(self, quantity: str | None = None) -> Figure:
+        """A quantity over the varied parameters (`springlab.plots.sweep.sweep_figure`; `quantity=None`: the scenario's last).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            a bare Figure (no pyplot): Jupyter shows it inline; `.savefig(path)` writes it.
+        """
+        return display.plot(self, quantity=quantity)
 
     def to_dict(self) -> dict[str, Any]:
         """What `springlab sweep --json` prints: setting, axes, counts, timings and every row (plain JSON values)."""

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 import mujoco
 import numpy as np
 
-from springlab import scenes, tables
+from springlab import display, scenes, tables
 from springlab.errors import BadInputError, DivergedError
 from springlab.files import json_ready
 from springlab.runs import compare
@@ -38,6 +38,7 @@ from .executor import Executor, chunked
 
 if TYPE_CHECKING:
     import pandas
+    from matplotlib.figure import Figure
 
 #: the sweep spans omega_max*dt from SWEEP_TOP down by SWEEP_DECADES decades
 SWEEP_TOP = 1.0
@@ -100,8 +101,8 @@ class Recommendation:
         }
 
 
-@dataclasses.dataclass(frozen=True)
-class Tradeoff:
+@dataclasses.dataclass(frozen=True, repr=False)
+class Tradeoff(display.Shown):
     """A speed-accuracy sweep of one scenario.
 
     `to_dict()` is tradeoff.json (what `springlab tradeoff --json` prints), `to_pandas()` one
@@ -139,6 +140,41 @@ class Tradeoff:
     pareto: tuple[Run, ...] = dataclasses.field(repr=False)
     recommendation: Recommendation | None = None
     sweep_wall_time_s: float = 0.0
+
+    def _shown(self) -> display.Summary:
+        """The trade-off as a notebook shows it: the recommendation first, the orders, then the runs."""
+        pick = self.recommendation
+        if pick is None:
+            verdict, ok, message = "no tol", None, "the trade alone (give tol for a recommendation)"
+        elif pick.found:
+            verdict, ok = f"{pick.integrator} at dt = {display.number(pick.dt)} s", True
+            message = f"the cheapest setting within tol {pick.tol:g}: error {display.number(pick.max_rel_error)}"
+        else:
+            verdict, ok, message = "no setting meets tol", False, f"no run reached tol {pick.tol:g}"
+        facts = [display.Fact("duration", self.duration, "s"), display.Fact("runs", len(self.runs))]
+        facts += [display.Fact(f"order of {name}", order) for name, order in self.orders.items()]
+        return display.Summary(
+            "Tradeoff",
+            f"{self.scene} / {self.scenario}",
+            verdict,
+            ok,
+            message,
+            tuple(facts),
+            display.table(
+                ("integrator", "dt [s]", "max rel error [-]", "wall time [s]", "diverged"),
+                [(r.integrator, r.dt, r.max_rel_error, r.wall_time_s, r.diverged) for r in self.runs],
+            ),
+        )
+
+    def plot(self) -> Figure:
+        """Error against dt (the observed orders) and against wall time, with the Pareto front (`springlab.plots.charts.tradeoff_figure`).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            a bare Figure (no pyplot): Jupyter shows it inline; `.savefig(path)` writes it.
+        """
+        return display.plot(self)
 
     def to_dict(self) -> dict[str, Any]:
         """tradeoff.json: scene, scenario, duration, parameters, runs, orders, pareto, recommendation,

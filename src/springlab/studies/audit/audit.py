@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Any
 import mujoco
 import numpy as np
 
-from springlab import scenes, tables
+from springlab import display, scenes, tables
 from springlab.errors import BadInputError, DivergedError
 from springlab.exact.linearize import (
     ConstraintState,
@@ -96,6 +96,7 @@ _NAMES = {value: name for name, value in INTEGRATORS.items()}
 
 if TYPE_CHECKING:
     import pandas
+    from matplotlib.figure import Figure
 
 
 @dataclasses.dataclass(frozen=True)
@@ -329,8 +330,8 @@ STABILITY_CRITERION = (
 )
 
 
-@dataclasses.dataclass(frozen=True)
-class Audit:
+@dataclasses.dataclass(frozen=True, repr=False)
+class Audit(display.Shown):
     """An audit of one model (see the module docstring); `to_dict()` is audit.json and `audit --json`.
 
     Attributes
@@ -506,6 +507,42 @@ class Audit:
                 " errors below that are not resolved"
             )
         return "\n".join(lines)
+
+    def _shown(self) -> display.Summary:
+        """The audit as a notebook shows it: whether the model's own setting meets tol, then the numbers."""
+        own, pick = self.own, self.recommendation
+        return display.Summary(
+            "Audit",
+            self.model,
+            f"own setting {'meets' if self.own_ok else 'misses'} tol {self.tol:g}",
+            self.own_ok,
+            self.message.split("\n")[0],
+            (
+                display.Fact("own setting", f"{own.integrator} at dt = {own.dt:g} s"),
+                display.Fact("own error", own.error),
+                display.Fact("stability margin", own.margin),
+                display.Fact("modes", self.mode_count),
+                display.Fact(
+                    "recommended", f"{pick.integrator} at dt = {display.number(pick.dt)} s" if pick.integrator else None
+                ),
+                display.Fact("recommended error", pick.error),
+                display.Fact("wall time", self.timings.total_s, "s"),
+            ),
+            display.table(
+                ("integrator", "limit dt [s]", "method"),
+                [(name, limit.limit_dt_s, limit.method) for name, limit in self.stability.items()],
+            ),
+        )
+
+    def plot(self) -> Figure:
+        """The modes, the stability limits against the own setting, and error against cost (`springlab.plots.audit.audit_figure`).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            a bare Figure (no pyplot): Jupyter shows it inline; `.savefig(path)` writes it.
+        """
+        return display.plot(self)
 
     def to_dict(self) -> dict[str, Any]:
         """audit.json and `springlab audit --json`: the model, its operating point, modes, stability limits,

@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from springlab import files, tables
+from springlab import display, files, tables
 from springlab.errors import BadInputError
 from springlab.scenes.base import Scene
 from springlab.studies.executor import Executor, chunked, resolve
@@ -46,6 +46,7 @@ from . import moves
 
 if TYPE_CHECKING:
     import pandas
+    from matplotlib.figure import Figure
 
 #: base samples N of the default study: N (D + 2) = 16384 x 7 = 114,688 simulations of the printer head
 DEFAULT_BASE_SAMPLES = 16384
@@ -187,8 +188,8 @@ def properties(
     return values
 
 
-@dataclasses.dataclass(frozen=True, eq=False)
-class SobolStudy:
+@dataclasses.dataclass(frozen=True, eq=False, repr=False)
+class SobolStudy(display.Shown):
     """Sobol indices of a scene's figure of merit (the positioning time) over its declared inputs.
 
     Immutable: mappings are read-only views, arrays read-only.
@@ -299,6 +300,37 @@ class SobolStudy:
             + f"Elasticity ranking from the same runs (R^2 = {self.regression_r2:.2f}): {', '.join(elastic)}"
             + ("; the same order." if elastic == self.ranking else f"; by variance: {', '.join(self.ranking)}.")
         )
+
+    def _shown(self) -> display.Summary:
+        """The Sobol study as a notebook shows it: the ranking first, then the indices."""
+        s1, st = self.indices["S1"], self.indices["ST"]
+        return display.Summary(
+            "SobolStudy",
+            f"{self.scene}: {self.merit}",
+            " > ".join(self.ranking),
+            None,
+            self.answer,
+            (
+                display.Fact("runs", self.runs),
+                display.Fact("first-order sum", self.first_order_sum),
+                display.Fact("unsettled", self.unsettled),
+                display.Fact("wall time", self.wall_time_s, "s"),
+            ),
+            display.table(
+                ("property", "S1 [-]", "ST [-]", "ST conf [-]"),
+                [(n, s1[n], st[n], self.indices["ST_conf"][n]) for n in self.ranking],
+            ),
+        )
+
+    def plot(self) -> Figure:
+        """First-order and total Sobol indices with their intervals, and the elasticities (`springlab.plots.design.sobol_figure`).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            a bare Figure (no pyplot): Jupyter shows it inline; `.savefig(path)` writes it.
+        """
+        return display.plot(self)
 
     def to_dict(self) -> dict[str, Any]:
         """The `sobol` entry of design.json and `design --sobol --json`: parameters, S1, S1_conf, ST, ST_conf,

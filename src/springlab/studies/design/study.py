@@ -43,7 +43,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from springlab import files, tables
+from springlab import display, files, tables
 from springlab.errors import BadInputError
 from springlab.scenes.base import Scene
 from springlab.scenes.capabilities import DesignSpec
@@ -55,6 +55,7 @@ from .sobol import SobolStudy, check_base_samples, run_sobol
 
 if TYPE_CHECKING:
     import pandas
+    from matplotlib.figure import Figure
 
 __all__ = [
     "DEFAULT_LEVELS",
@@ -141,8 +142,8 @@ class Plane:
         )
 
 
-@dataclasses.dataclass(frozen=True, eq=False)
-class Study:
+@dataclasses.dataclass(frozen=True, eq=False, repr=False)
+class Study(display.Shown):
     """A finished design sweep; arrays are per configuration, (n,), and read-only.
 
     Attributes
@@ -307,6 +308,37 @@ class Study:
         return out
 
     # -- serialisation -------------------------------------------------------------------
+
+    def _shown(self) -> display.Summary:
+        """The design study as a notebook shows it: its answer first, then the fastest and default times."""
+        fastest, default = self.fastest_index, self.default_index
+        return display.Summary(
+            "Study",
+            f"{self.scene}: {self.setting}",
+            "answer",
+            None,
+            self.answer,
+            (
+                display.Fact("configurations", self.size),
+                display.Fact("fastest positioning time", float(self.positioning_time_s[fastest]), "s"),
+                display.Fact("default positioning time", float(self.positioning_time_s[default]), "s"),
+                display.Fact("ranking", " > ".join(self.ranking)),
+                display.Fact("wall time", self.wall_time_s, "s"),
+            ),
+            display.table(
+                ("property", "elasticity d ln T / d ln p [-]"), [(n, self.elasticities[n]) for n in self.ranking]
+            ),
+        )
+
+    def plot(self) -> Figure:
+        """Positioning time over the two most influential properties, and simulated against analytic times (`springlab.plots.design.design_figure`).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            a bare Figure (no pyplot): Jupyter shows it inline; `.savefig(path)` writes it.
+        """
+        return display.plot(self)
 
     def to_dict(self) -> dict[str, Any]:
         """What `springlab design --json` prints and design.json holds (JSON-ready: inf and nan as None)."""

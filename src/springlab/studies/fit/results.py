@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from springlab import files, tables
+from springlab import display, files, tables
 from springlab.exact import analytic
 from springlab.runs import compare
 
@@ -27,6 +27,7 @@ from .models import POWER_TERMS
 
 if TYPE_CHECKING:  # annotations only
     import pandas
+    from matplotlib.figure import Figure
 
     from springlab.runs.run import Result
 
@@ -40,8 +41,8 @@ CROSS_IN_HALFWIDTHS = 0.01
 STEP_IN_SE = 0.1
 
 
-@dataclasses.dataclass(frozen=True, eq=False)  # arrays: compare fields, not results
-class FitResult:
+@dataclasses.dataclass(frozen=True, eq=False, repr=False)  # arrays: compare fields, not results
+class FitResult(display.Shown):
     """An identified scene, built once and immutable (its arrays are read-only).
 
     Attributes
@@ -143,6 +144,37 @@ class FitResult:
     def verdict(self) -> str:
         """The one-line answer (see `verdict`)."""
         return verdict(self)
+
+    def _shown(self) -> display.Summary:
+        """The fit as a notebook shows it: converged or not with the one-line answer, then the estimates."""
+        rows = [
+            (name, q["value"], q["ci95"][0], q["ci95"][1], q.get("unit", ""))
+            for name, q in [*self.estimates.items(), *self.derived.items()]
+        ]
+        return display.Summary(
+            "FitResult",
+            f"{self.scene} / {self.scenario} ({self.kind})",
+            "converged" if self.converged else "not converged",
+            self.converged,
+            self.verdict,
+            (
+                display.Fact("residual RMS", self.residual_rms, self.record.unit),
+                display.Fact("samples", int(self.record.time.size)),
+                display.Fact("degrees of freedom", self.dof),
+                display.Fact("free", ", ".join(self.free)),
+            ),
+            display.table(("estimate", "value", "95 % low", "95 % high", "unit"), rows),
+        )
+
+    def plot(self) -> Figure:
+        """Data and fit, the residuals, and the phase plane (`springlab.plots.fit.fit_figure`).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            a bare Figure (no pyplot): Jupyter shows it inline; `.savefig(path)` writes it.
+        """
+        return display.plot(self)
 
     def to_dict(self) -> dict[str, Any]:
         """fit.json's content, exactly what `springlab fit --json` prints (docs/fit.md, "fit.json").
