@@ -1077,8 +1077,10 @@ def frequency(
         if duffing is not None:
 
             def linear_error(f: np.ndarray) -> np.ndarray:
+                # the integrator's own share (the hold's sinc is in the harmonic balance's force already)
                 h_d = discretizer.response(integrator, dt, f)
-                return np.zeros(len(f)) if h_d is None else np.abs(h_d / exact_of(f) - 1.0)
+                held = _hold(linear.A, b, c, d, dt, f)
+                return np.zeros(len(f)) if h_d is None else np.abs(h_d / held - 1.0)
 
             branches = _harmonic_balance(branches, duffing, dt, (float(band[0]), float(band[1])), linear_error)
         for branch in branches:
@@ -1458,7 +1460,8 @@ class SweepBranch:
     bound
         (m,) the derived bound on |measured - predicted| [response unit] (springlab.exact.harmonic_balance:
         twice the first-order shift by the neglected third harmonic, plus twice the residue and the
-        integrator's relative error on the linearization, times the measured amplitude).
+        integrator's relative error on the linearization beyond the held input's (|H_d / H_zoh - 1|), times
+        the measured amplitude).
     fold_hz
         (f, low, high) [Hz]: the harmonic-balance fold where this direction's branch ends, with the bracket
         first-order balance promises, or None.
