@@ -131,7 +131,9 @@ def test_duffing_sweeps_jump_at_the_harmonic_balance_folds(duffing_sweep):
     low, high = _fold_band(FORCE)
     a_fold = float(np.median(_roots(FORCE, 2 * math.pi * high * (1 - 1e-6))))
     r3 = _r3(a_fold, 2 * math.pi * high)
-    widen = max(abs(_fold_band(FORCE, K3 * (1 + s * 2 * r3))[i] - f) for s in (-1, 1) for i, f in enumerate((low, high)))
+    widen = max(
+        abs(_fold_band(FORCE, K3 * (1 + s * 2 * r3))[i] - f) for s in (-1, 1) for i, f in enumerate((low, high))
+    )
     assert up.jump_hz is not None and down.jump_hz is not None
     assert up.jump_hz[0] - widen <= high <= up.jump_hz[1] + widen
     assert down.jump_hz[0] - widen <= low <= down.jump_hz[1] + widen
@@ -228,7 +230,9 @@ def test_a_jointpos_sensor_response_is_the_joint_position_and_an_accelerometer_i
     assert np.all(np.abs(b.estimate / a.estimate - 1.0) <= a.accuracy + b.accuracy)
     assert sensor.sinestream.agrees
     acc = springlab.frequency(sensed, response="acc[0]", input="drive", band=(0.5, 20.0), points=30, integrators=())
-    joint_acc = springlab.frequency(sensed, response="x:acc", input="drive", band=(0.5, 20.0), points=30, integrators=())
+    joint_acc = springlab.frequency(
+        sensed, response="x:acc", input="drive", band=(0.5, 20.0), points=30, integrators=()
+    )
     # the accelerometer's rows are centred differences of a linear function too
     assert np.max(np.abs(acc.exact / joint_acc.exact - 1.0)) <= tol
     assert acc.units["response"] == "m/s^2"
@@ -240,7 +244,7 @@ def test_a_joint_force_input_is_the_motor_with_gear_one():
     kwargs = {"band": (0.5, 20.0), "points": 30, "integrators": (), "sines": 4, "parameters": SLIDER}
     motor = springlab.frequency("slider", input="force", **kwargs)
     joint = springlab.frequency("slider", input="slider:force", **kwargs)
-    assert joint.units["input"] == "N"
+    assert joint.units["input"] == motor.units["input"] == "N"
     tol = _tolerance(motor.frequencies_hz, motor.dt)
     assert np.max(np.abs(joint.exact / motor.exact - 1.0)) <= tol
     assert np.max(np.abs(joint.discrete / motor.discrete - 1.0)) <= tol
@@ -272,3 +276,19 @@ def test_an_unknown_sensor_lists_the_sensors_and_their_components(sensed):
         springlab.frequency(sensed, input="drive", response="nosuch", integrators=())
     message = str(caught.value)
     assert "xs" in message and "acc[0]" in message and "acc[2]" in message and "x:vel" in message
+
+
+def test_the_cubic_oscillator_is_read_from_the_model_and_another_spring_is_not_one(duffing_sweep):
+    """m, c, k, k3 read back from MuJoCo's forward dynamics are the parameters the test set (a cubic fit of a
+    cubic force only rounds); a spring with a quadratic term is not the relation's form: no comparison."""
+    from springlab.exact.harmonic_balance import cubic_oscillator
+    from springlab.exact.linearize import OperatingPoint
+
+    found = duffing_sweep.duffing
+    assert (found.m, found.c, found.k, found.k3, found.gain) == pytest.approx((M, C, K, K3, 1.0), rel=1e-9)
+    quadratic = mujoco.MjModel.from_xml_string(
+        '<mujoco><option gravity="0 0 0"/><worldbody><body><joint name="x" type="slide" stiffness="100 50 1e4"'
+        ' damping="1"/><geom size="0.1" mass="1"/></body></worldbody><actuator><motor joint="x"/></actuator>'
+        "</mujoco>"
+    )
+    assert cubic_oscillator(quadratic, OperatingPoint.at(quadratic), "ctrl", 0, 0.1) is None

@@ -212,8 +212,8 @@ def cubic_oscillator(
         drag = np.array([-mass * acceleration(0.0, v) for v in vs])
         gain = mass * (acceleration(0.0, 0.0, 1.0) - acceleration(0.0, 0.0, -1.0)) / 2.0
     damper = np.polynomial.Polynomial.fit(vs, drag, 1).convert()
-    k0, k1, k2, k3 = (list(spring.coef) + [0.0] * 4)[:4]
-    d0, c = (list(damper.coef) + [0.0] * 2)[:2]
+    k0, k1, k2, k3 = (float(v) for v in np.pad(np.asarray(spring.coef, float), (0, 4))[:4])
+    d0, c = (float(v) for v in np.pad(np.asarray(damper.coef, float), (0, 2))[:2])
     scale = max(float(np.max(np.abs(force))), float(np.max(np.abs(drag))), 1e-300)
     rounding = FIT_ROUNDING * _EPS * scale
     residual = max(float(np.max(np.abs(spring(xs) - force))), float(np.max(np.abs(damper(vs) - drag))))

@@ -561,6 +561,24 @@ def _names(model: mujoco.MjModel, kind: str, count: int) -> list[str]:
     return [getter(i).name for i in range(count) if getter(i).name]
 
 
+def _actuator_unit(model: mujoco.MjModel, actuator: int) -> str:
+    """'N' or 'N m' for a motor (fixed gain 1, no bias) with gear 1 on a slide or hinge joint: its control is the
+    joint's force; else 'actuator unit'."""
+    motor = (
+        int(model.actuator_trntype[actuator]) == int(mujoco.mjtTrn.mjTRN_JOINT)
+        and int(model.actuator_gaintype[actuator]) == int(mujoco.mjtGain.mjGAIN_FIXED)
+        and int(model.actuator_biastype[actuator]) == int(mujoco.mjtBias.mjBIAS_NONE)
+        and float(model.actuator_gainprm[actuator, 0]) == 1.0
+        and float(model.actuator_gear[actuator, 0]) == 1.0
+    )
+    if not motor:
+        return "actuator unit"
+    joint_type = int(model.jnt_type[int(model.actuator_trnid[actuator, 0])])
+    if joint_type == int(mujoco.mjtJoint.mjJNT_SLIDE):
+        return "N"
+    return "N m" if joint_type == int(mujoco.mjtJoint.mjJNT_HINGE) else "actuator unit"
+
+
 def resolve_input(model: mujoco.MjModel, name: str) -> tuple[str, int, str]:
     """(kind, index, unit) of the input called `name`: an actuator's control ('ctrl', its id), else a force
     on a joint's first degree of freedom ('force', its dof address): 'JOINT' or 'JOINT:force'.
@@ -572,7 +590,8 @@ def resolve_input(model: mujoco.MjModel, name: str) -> tuple[str, int, str]:
     """
     actuators = _names(model, "actuator", model.nu)
     if name in actuators:
-        return "ctrl", int(model.actuator(name).id), "actuator unit"
+        actuator = int(model.actuator(name).id)
+        return "ctrl", actuator, _actuator_unit(model, actuator)
     joints = _names(model, "joint", model.njnt)
     joint_name = name[: -len(":force")] if name.endswith(":force") else name
     if joint_name in joints:
