@@ -9,7 +9,8 @@ and gives the frequency-amplitude relation
 
 a cubic in A = a^2 (`amplitudes`: its positive real roots, numpy.roots). Where it has three roots the
 sweep up and the sweep down follow different branches; the band's ends are the fold points (`folds`: the
-cubic's discriminant is zero there), where a sweep jumps.
+cubic's discriminant is zero there), where a sweep jumps (`branch_end`: the fold where the branch a sweep
+starts on ends, followed root to root).
 
 What it neglects, derived (`third_harmonic_ratio`, `amplitude_bound`): the cubic's other part,
 1/4 k3 a^3 cos 3 theta, drives a third harmonic b3 cos 3 theta whose own balance, with the stiffness the
@@ -148,27 +149,60 @@ def amplitude_bound(duffing: Duffing, force: float, a: float, omega: float) -> f
     return 2.0 * shift
 
 
-def fold_brackets(duffing: Duffing, force: float, band_hz: tuple[float, float]) -> list[tuple[float, float, float]]:
-    """Per fold in the band: (f [Hz], lowest, highest [Hz]) where the relation with k3 (1 +- 2 r3) folds, r3 at
-    the fold's own amplitude and frequency: the fold frequency first-order balance can promise."""
-    out = []
-    for f in folds(duffing, force, band_hz):
-        omega = 2 * math.pi * f
-        roots = amplitudes(duffing, force, omega * (1 + 1e-9))
-        roots = roots if roots.size else amplitudes(duffing, force, omega * (1 - 1e-9))
-        # the double root: the two closest roots just inside the three-root band
-        a = float(np.median(roots)) if roots.size == 3 else float(roots[0])
-        r3 = third_harmonic_ratio(duffing, a, omega)
-        wide = (band_hz[0] / 2, band_hz[1] * 2)
-        moved = []
-        for sign in (-1.0, 1.0):
-            candidates = folds(duffing, force, wide, duffing.k3 * (1 + sign * 2 * r3))
-            if candidates:
-                moved.append(min(candidates, key=lambda g: abs(g - f)))
-        lo = min([f, *moved])
-        hi = max([f, *moved])
-        out.append((f, lo, hi))
-    return out
+def branch_end(
+    duffing: Duffing, force: float, start_hz: float, stop_hz: float, start_amplitude: float, k3: float | None = None
+) -> float | None:
+    """Where the branch a sweep from `start_hz` to `stop_hz` [Hz] (up or down) rides ends [Hz]: the relation's root
+    nearest `start_amplitude` [m] at the start, followed root to root (the nearest in log a) over FOLD_GRID
+    frequencies until it merges with the middle root and vanishes (a fold, refined by scipy.optimize.brentq on
+    the discriminant); None: it reaches `stop_hz`. `k3` [N/m^3] overrides the oscillator's."""
+    from scipy.optimize import brentq
+
+    k3 = duffing.k3 if k3 is None else k3
+    model = dataclasses.replace(duffing, k3=k3)
+    grid = np.geomspace(start_hz, stop_hz, FOLD_GRID)
+    roots = amplitudes(model, force, 2 * math.pi * grid[0])
+    tracked = float(roots[np.argmin(np.abs(np.log(roots / start_amplitude)))])
+    old = roots
+    for before, after in zip(grid[:-1], grid[1:]):
+        new = amplitudes(model, force, 2 * math.pi * after)
+        if len(old) == 3 and len(new) == 1:
+            # the two closest roots merged; if the tracked one was among them, its branch ends here
+            merged = (0, 1) if old[1] - old[0] < old[2] - old[1] else (1, 2)
+            index = int(np.argmin(np.abs(np.log(old / tracked))))
+            if index in merged:
+                omega = brentq(
+                    lambda w: _discriminant(model, force, w, k3),
+                    2 * math.pi * min(before, after),
+                    2 * math.pi * max(before, after),
+                    xtol=1e-14,
+                    rtol=1e-13,
+                )
+                return omega / (2 * math.pi)
+        tracked = float(new[np.argmin(np.abs(np.log(new / tracked)))])
+        old = new
+    return None
+
+
+def fold_bracket(
+    duffing: Duffing, force: float, start_hz: float, stop_hz: float, start_amplitude: float
+) -> tuple[float, float, float] | None:
+    """(f, lowest, highest) [Hz]: `branch_end`, and where it falls with k3 (1 +- 2 r3), r3 at the fold's own
+    amplitude and frequency: the jump first-order balance can promise (None: the branch does not end)."""
+    f = branch_end(duffing, force, start_hz, stop_hz, start_amplitude)
+    if f is None:
+        return None
+    omega = 2 * math.pi * f
+    near = amplitudes(duffing, force, omega * (1 + 1e-9))
+    near = near if near.size == 3 else amplitudes(duffing, force, omega * (1 - 1e-9))
+    a = float(np.median(near))  # the double root is the middle one just inside the three-root band
+    r3 = third_harmonic_ratio(duffing, a, omega)
+    moved = [f]
+    for sign in (-1.0, 1.0):
+        other = branch_end(duffing, force, start_hz, stop_hz, start_amplitude, duffing.k3 * (1 + sign * 2 * r3))
+        if other is not None:
+            moved.append(other)
+    return f, min(moved), max(moved)
 
 
 def cubic_oscillator(
@@ -219,4 +253,6 @@ def cubic_oscillator(
     residual = max(float(np.max(np.abs(spring(xs) - force))), float(np.max(np.abs(damper(vs) - drag))))
     if residual > rounding or abs(k2) * reach**2 > rounding or abs(k0) > rounding or abs(d0) > rounding:
         return None
+    if abs(k3) * reach**3 <= rounding:
+        k3 = 0.0  # a linear spring: the fit's round-off is no cubic term
     return Duffing(m=mass, c=float(c), k=float(k1), k3=float(k3), gain=float(gain))

@@ -57,7 +57,7 @@ def plot_bode(result: FrequencyResponse, path: str | pathlib.Path) -> pathlib.Pa
         _draw_amplitudes(result, mag_ax, phase_ax)
         stream = None
     if result.sweeps:
-        _draw_sweeps(result, mag_ax)
+        _draw_sweeps(result, mag_ax, phase_ax)
     if stream is not None:
         estimate = stream.estimate
         mag_ax.loglog(
@@ -133,7 +133,7 @@ def _draw_amplitudes(result: FrequencyResponse, mag_ax, phase_ax) -> None:
         phase_ax.semilogx(f, np.degrees(np.angle(stream.estimate)), "o", color=color, fillstyle="none")
 
 
-def _draw_sweeps(result: FrequencyResponse, mag_ax) -> None:
+def _draw_sweeps(result: FrequencyResponse, mag_ax, phase_ax) -> None:
     """The sweeps' branches, their jumps and, for a cubic oscillator, the harmonic-balance curve."""
     from springlab.exact import harmonic_balance as hb
 
@@ -150,6 +150,14 @@ def _draw_sweeps(result: FrequencyResponse, mag_ax) -> None:
             fillstyle="none" if branch.direction == "down" else "full",
             markersize=5,
             label=f"sweep {branch.direction} at {branch.amplitude:g} {unit}",
+        )
+        phase_ax.semilogx(
+            branch.frequencies_hz,
+            np.degrees(np.angle(branch.estimate)),
+            marker,
+            color=color,
+            fillstyle="none" if branch.direction == "down" else "full",
+            markersize=5,
         )
         if branch.jump_hz is not None:
             for f in branch.jump_hz:

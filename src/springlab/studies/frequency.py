@@ -434,6 +434,8 @@ class FrequencyResponse:
             if branch.fold_hz is not None:
                 f, low, high = branch.fold_hz
                 head += f"; harmonic balance predicts the jump at {f:.4g} Hz ({low:.4g}-{high:.4g})"
+            elif branch.predicted is not None:
+                head += "; harmonic balance's branch does not end in the band"
             lines.append(head)
         if self.duffing is not None and self.sweeps:
             d = self.duffing
@@ -1482,8 +1484,8 @@ class SweepBranch:
         integrator's relative error on the linearization beyond the held input's (|H_d / H_zoh - 1|), times
         the measured amplitude).
     fold_hz
-        (f, low, high) [Hz]: the harmonic-balance fold where this direction's branch ends, with the bracket
-        first-order balance promises, or None.
+        (f, low, high) [Hz]: the harmonic-balance fold where the branch this sweep starts on ends (followed
+        root to root from the first point's root), with the bracket first-order balance promises, or None.
     steps
         MuJoCo steps of the sweep.
     """
@@ -1674,10 +1676,9 @@ def _harmonic_balance(
             root = float(roots[np.argmin(np.abs(np.log(roots / measured)))])
             predicted.append(root)
             bound.append(hb.amplitude_bound(duffing, float(force), root, float(omega)) + (2 * residue + err) * measured)
+        # the fold where the branch the sweep starts on ends (harmonic balance followed from the first point)
         force_mid = duffing.gain * branch.amplitude * float(np.sinc(math.sqrt(band[0] * band[1]) * dt))
-        brackets = hb.fold_brackets(duffing, force_mid, band)
-        fold = None
-        if len(brackets) == 2:
-            fold = brackets[1] if branch.direction == "up" else brackets[0]
+        first, last = float(branch.frequencies_hz[0]), float(branch.frequencies_hz[-1])
+        fold = hb.fold_bracket(duffing, force_mid, first, last, float(branch.response_amplitude[0]))
         out.append(dataclasses.replace(branch, predicted=np.array(predicted), bound=np.array(bound), fold_hz=fold))
     return out
