@@ -730,6 +730,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--response", metavar="NAME", help="JOINT (position), JOINT:vel, JOINT:acc, or a sensor SENSOR or SENSOR[i]"
     )
     p.add_argument(
+        "--set", action="append", default=[], metavar="NAME=VALUE", help="a scene's parameter, SI units (repeatable)"
+    )
+    p.add_argument(
         "--band",
         metavar="FMIN:FMAX",
         help="frequency band [Hz] (default: a decade below the slowest mode to 3x the fastest)",
@@ -764,9 +767,6 @@ def build_parser() -> argparse.ArgumentParser:
         "--sweep",
         choices=("up", "down", "both"),
         help="sweep the band in frequency, each sine from the last one's state (a non-linear model's jump)",
-    )
-    p.add_argument(
-        "--set", action="append", default=[], metavar="NAME=VALUE", help="a scene's parameter, SI units (repeatable)"
     )
     p.add_argument("--output", metavar="DIR", help="write DIR/frequency.json, frequency.csv and bode.png")
     p.add_argument("--json", action="store_true", help="print frequency.json")

@@ -344,6 +344,47 @@ def friction_step(state: DemoState) -> list[Artifact]:
     return written
 
 
+#: the demo's frequency responses: fewer points than the command's default (the figures look the same)
+DEMO_FREQUENCY_POINTS = 100
+#: the integrators whose largest dt for the band the demo searches (None: MuJoCo's five)
+DEMO_FREQUENCY_INTEGRATORS: tuple[str, ...] | None = None
+
+
+def frequency_step(state: DemoState) -> list[Artifact]:
+    """Every scene's frequency questions (`Scene.frequency`): bode.png, frequency.json and frequency.csv under
+    out/<scene>/frequency/<scenario>/, and the verdict (the band the scene's setting reproduces, the largest dt
+    per integrator, the resonances and what they mean) as the answer, in the scene's section of the report."""
+    from springlab.plots import frequency as chart  # here: matplotlib only when this step runs
+    from springlab.studies import frequency
+
+    written = []
+    for scene in scenes.SCENES.values():
+        for scenario in frequency.declared_scenarios(scene.name):
+            start = time.perf_counter()
+            result = frequency.frequency(
+                scene.name, scenario, points=DEMO_FREQUENCY_POINTS, integrators=DEMO_FREQUENCY_INTEGRATORS
+            )
+            folder = pathlib.Path(scene.name) / "frequency" / scenario
+            chart.write_frequency(result, state.out / folder)
+            state.timings.append((f"frequency response of {scene.name}/{scenario}", time.perf_counter() - start))
+            question = (
+                f"Frequency response ({scenario}), {result.description}: up to which frequency does"
+                f" {result.integrator} at dt = {result.dt:.3g} s reproduce it to {result.tol:g}, and what does each"
+                " integrator need?"
+            )
+            # scene-level artifacts (no scenario): the report shows their answers in the scene's own block
+            written += [
+                Artifact(str(folder / "bode.png"), "plot", question, scene.name, answer="\n".join(result.verdict())),
+                Artifact(
+                    str(folder / "frequency.json"),
+                    "data",
+                    f"{scene.name} {scenario}: the exact and discrete responses, resonances, band per integrator",
+                    scene.name,
+                ),
+            ]
+    return written
+
+
 #: the demo's steps, in order (defined once, here: nothing is added at import time)
 STEPS: tuple[Callable[[DemoState], list[Artifact]], ...] = (
     core_step,
@@ -353,6 +394,7 @@ STEPS: tuple[Callable[[DemoState], list[Artifact]], ...] = (
     audit_step,
     friction_step,
     refine_step,
+    frequency_step,
 )
 #: steps that run after every step in STEPS (the report lists everything)
 FINAL_STEPS: tuple[Callable[[DemoState], list[Artifact]], ...] = (report_step,)

@@ -297,8 +297,9 @@ class Scene:
     12. Optionally, `dry_friction` (springlab.scenes.capabilities.DryFrictionSpec): the scene's dry
        friction has exact Coulomb answers and takes MuJoCo's friction settings as parameters, which
        `springlab friction-settings` sweeps (springlab.studies.friction_settings).
-    13. Optionally, `frequency` (springlab.scenes.capabilities.FrequencySpec): the default input and
-       response of `springlab frequency SCENE`, and an MjSpec edit that makes the input a control.
+    13. Optionally, `frequency` (springlab.scenes.capabilities.FrequencySpec, or a tuple of them, one per
+       scenario, the first the default): the default input and response of `springlab frequency SCENE`, an
+       MjSpec edit that makes the input a control, and what the response means for the scene's question.
 
     The module exposes the instance as `SCENE`; springlab.scenes discovers it. Tests check each
     claim against a reference built in the test (closed form, expm, scipy's DOP853 at tight
@@ -339,7 +340,7 @@ class Scene:
     figure: FigureHook | None = None
     #: the default input and response of its frequency response (None: the user names them;
     #: springlab.studies.frequency reads it)
-    frequency: FrequencySpec | None = None
+    frequency: FrequencySpec | tuple[FrequencySpec, ...] | None = None
 
     def question_and_answer(self, scenario: str, quantities: dict, parameters: dict) -> tuple[str, str] | None:
         """(question, answer sentence) of a scenario's run, or None where the scene states none."""

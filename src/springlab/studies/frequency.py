@@ -102,14 +102,20 @@ class Resonance:
     damping_ratio
         a resonance's from the half-power width, (f2 - f1) / (2 f) [-] (None: a half-power point outside
         the band or not below the neighbouring valley); an anti-resonance's, its zero's -Re(z) / |z|.
+    natural_frequency_hz, pole_damping_ratio
+        a resonance's mode: the linearization's oscillatory pole p it peaks near, |p| / 2 pi [Hz] and
+        -Re(p) / |p| [-] (exact, where the peak's frequency and half-power width are estimates); None for an
+        anti-resonance.
     """
 
     frequency_hz: float
     magnitude: float
     damping_ratio: float | None = None
+    natural_frequency_hz: float | None = None
+    pole_damping_ratio: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
-        """{"frequency_hz", "magnitude", "damping_ratio"}."""
+        """{"frequency_hz", "magnitude", "damping_ratio", "natural_frequency_hz", "pole_damping_ratio"}."""
         return dataclasses.asdict(self)
 
 
@@ -250,6 +256,11 @@ class FrequencyResponse:
         the question in words (a scene's declaration; else input -> response).
     wall_time_s
         how long the analysis took [s].
+    sinestream
+        the simulated verification (None: not asked for).
+    answers, answer_lines
+        what the response means for the scene's question (`FrequencySpec.interpret`: named values, SI, and
+        their verdict lines), e.g. the single-mass car's isolation frequency; empty for a model file.
     """
 
     source: str
@@ -276,6 +287,9 @@ class FrequencyResponse:
     sinestreams: tuple[Sinestream, ...] = ()
     sweeps: tuple[SweepBranch, ...] = ()
     duffing: Duffing | None = None
+
+    answers: Mapping[str, Any] = dataclasses.field(default_factory=dict)
+    answer_lines: tuple[str, ...] = ()
 
     @property
     def amplitude_spread(self) -> np.ndarray | None:
@@ -380,10 +394,12 @@ class FrequencyResponse:
             f"{b.integrator} <= {b.max_dt_s:.3g} s" if b.max_dt_s is not None else f"{b.integrator}: none"
             for b in self.integrators
         )
-        lines.append(f"the band within {self.tol:g} needs dt: {dts}")
+        if dts:  # none when no integrator was searched
+            lines.append(f"the band within {self.tol:g} needs dt: {dts}")
         if self.cheapest is not None:
             best = self.cheapest
             lines.append(f"cheapest: {best.integrator} at dt = {best.max_dt_s:.3g} s")
+        lines.extend(self.answer_lines)
         if len(self.sinestreams) > 1:
             lines.extend(self._amplitude_lines())
         elif self.sinestream is not None:
@@ -487,6 +503,7 @@ class FrequencyResponse:
             "sinestreams": [s.to_dict() for s in self.sinestreams],
             "sweeps": [b.to_dict() for b in self.sweeps],
             "harmonic_balance": None if self.duffing is None else self.duffing.to_dict(),
+            "answers": dict(self.answers),
             "wall_time_s": self.wall_time_s,
         }
 
@@ -507,6 +524,35 @@ class _Source:
     input: str | None
     response: str | None
     description: str
+    parameters: Mapping[str, float] = dataclasses.field(default_factory=dict)
+    interpret: Any = None
+    input_unit: str = ""
+
+
+def _spec_for(declared: Any, scenario: str | None) -> Any:
+    """The scene's FrequencySpec for `scenario` (None: its default, the first declared), or None."""
+    specs = () if declared is None else (declared,) if not isinstance(declared, tuple) else declared
+    if scenario is None:
+        return specs[0] if specs else None
+    return next((spec for spec in specs if spec.scenario == scenario), None)
+
+
+def declared_scenarios(scene_name: str) -> tuple[str, ...]:
+    """The scenarios of a scene that declare a frequency question (`Scene.frequency`), the default first.
+
+    Parameters
+    ----------
+    scene_name
+        a registered scene's name.
+
+    Returns
+    -------
+    tuple[str, ...]
+        the scenario names; () when the scene declares none.
+    """
+    declared = scenes.get(scene_name).frequency
+    specs = () if declared is None else (declared,) if not isinstance(declared, tuple) else declared
+    return tuple(spec.scenario for spec in specs)
 
 
 def _load(scene_or_model: Any, scenario: str | None, parameters: Mapping[str, Any]) -> _Source:
@@ -520,7 +566,7 @@ def _load(scene_or_model: Any, scenario: str | None, parameters: Mapping[str, An
     path = pathlib.Path(text)
     if not path.exists() and text in scenes.SCENES:
         scene = scenes.get(text)
-        spec = scene.frequency
+        spec = _spec_for(scene.frequency, scenario)
         scene, chosen, params = prepare(scene, scenario or (spec.scenario if spec else None), dict(parameters))
         model_spec = scene.model_spec()
         scene.edit(model_spec, params, chosen)
@@ -540,6 +586,9 @@ def _load(scene_or_model: Any, scenario: str | None, parameters: Mapping[str, An
             spec.input if spec else None,
             spec.response if spec else None,
             spec.description if spec else "",
+            dict(params),
+            spec.interpret if spec else None,
+            spec.input_unit if spec else "",
         )
     if scenario is not None or parameters:
         raise BadInputError("a scenario and parameters go with a scene name, not with a model file")
@@ -781,8 +830,10 @@ def _resonances(
         )
         f0, m0 = float(found.x), size(float(found.x))
         step = 2.0 * (grid[i + 1] / grid[i] - 1.0) * 2 * math.pi * f0
-        if not any(abs(2 * math.pi * f0 - abs(p)) <= 2 * abs(p.real) + step for p in poles if p.imag > 0):
+        near = [p for p in poles if p.imag > 0 and abs(2 * math.pi * f0 - abs(p)) <= 2 * abs(p.real) + step]
+        if not near:
             continue
+        pole = min(near, key=lambda p: abs(2 * math.pi * f0 - abs(p)))
         half = m0 / math.sqrt(2.0)
         below = mag < half
         left = np.nonzero(below[:i])[0]
@@ -793,7 +844,7 @@ def _resonances(
             f1 = brentq(lambda f, h=half: size(f) - h, grid[lo_i], f0)
             f2 = brentq(lambda f, h=half: size(f) - h, f0, grid[hi_i])
             zeta = (f2 - f1) / (2.0 * f0)
-        peaks.append(Resonance(f0, m0, zeta))
+        peaks.append(Resonance(f0, m0, zeta, float(abs(pole) / (2 * math.pi)), float(-pole.real / abs(pole))))
     return tuple(peaks)
 
 
@@ -1018,6 +1069,8 @@ def frequency(
             "name the input (--input ACTUATOR|JOINT:force) and the response (--response JOINT[:vel|:acc]|SENSOR[i])"
         )
     kind, index, input_unit = resolve_input(model, input_name)
+    if input_name == source.input and source.input_unit:
+        input_unit = source.input_unit  # the scene knows what its actuator's control is
     dof, out_kind, response_unit = resolve_response(model, response_name)
     probe = _Probe(kind, index, out_kind, dof)
     if sweep is not None and sweep not in SWEEP_DIRECTIONS:
@@ -1109,6 +1162,13 @@ def frequency(
                 array.setflags(write=False)
     for array in (grid, exact, discrete, hold):
         array.setflags(write=False)
+    answers: dict[str, Any] = {}
+    answer_lines: tuple[str, ...] = ()
+    if source.interpret is not None and (input_name, response_name) == (source.input, source.response):
+        # the scene's own question, asked of its declared input and response only
+        answers, answer_lines = source.interpret(
+            model, source.parameters, exact_of, tuple(r.to_dict() for r in resonances), band
+        )
     return FrequencyResponse(
         source=source.label,
         input=input_name,
@@ -1136,6 +1196,8 @@ def frequency(
         sinestreams=tuple(streams),
         sweeps=tuple(branches),
         duffing=duffing,
+        answers=answers,
+        answer_lines=tuple(answer_lines),
     )
 
 

@@ -93,6 +93,7 @@ from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Parameter, Referenc
 from springlab.scenes.capabilities import FrequencySpec, OscillatorFit
 from springlab.sim.simulate import Setup, Trajectory, quiet_mujoco
 
+from .frequency import isolation, name_modes, push_at_the_front, road_under_the_car
 from .parts import gravity
 from .pitch_heave import FRONT_STIFFNESS_SHARE, PitchHeave, linearize, pitch_heave_defaults
 from .release import Release, damping_from_ratio
@@ -225,9 +226,36 @@ class Car(Scene):
         )
     }
     #: `springlab fit`: the car bottom's height rings about the clearance; a run starts at rest, pushed down
-    #: `springlab frequency car`: the quarter car's road height to body heave (its transmissibility)
-    frequency = FrequencySpec(
-        "road_bump", "road", "heave", "road height to body heave: the quarter car's transmissibility", road_as_control
+    #: `springlab frequency car [SCENARIO]` (frequency.py): the quarter car's road height to body heave (its
+    #: transmissibility, the default); the chapter's single mass driven by the road through spring and damper
+    #: (the isolation frequency sqrt(2) omega_n); both pitch-plane modes under the passers-by's push
+    frequency = (
+        FrequencySpec(
+            "road_bump",
+            "road",
+            "heave",
+            "road height to body heave: the quarter car's transmissibility",
+            road_as_control,
+            input_unit="m",
+        ),
+        FrequencySpec(
+            "damped_release",
+            "road_acceleration",
+            "heave:acc",
+            "road to body acceleration: the single mass's transmissibility (c s + k) / (m s^2 + c s + k)",
+            road_under_the_car,
+            isolation,
+            input_unit="m/s^2",
+        ),
+        FrequencySpec(
+            "pitch_heave",
+            "push",
+            "pitch",
+            "a push over the front axle to body pitch: both pitch-plane modes",
+            push_at_the_front,
+            name_modes,
+            input_unit="N",
+        ),
     )
     fit = OscillatorFit(
         "heave",

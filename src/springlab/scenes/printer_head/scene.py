@@ -102,6 +102,7 @@ from springlab.scenes.capabilities import FrequencySpec, OscillatorFit
 from springlab.sim.simulate import Setup, Trajectory, integrator_id
 
 from .design import DESIGN
+from .frequency import positioning
 from .moves import BeltRun, Move, Settle, StepForce, move_profile
 
 __all__ = ["SCENE", "PrinterHead", "linearized_mode", "step_matrix"]
@@ -158,8 +159,14 @@ class PrinterHead(Scene):
     default_scenario = "move"
     #: the design question it answers, read by springlab.studies.design (design.py)
     design = DESIGN
+    #: `springlab frequency printer_head` (frequency.py): the belt's resonance and what it means for positioning
     frequency = FrequencySpec(
-        "move", "drive", "carriage", "drive force to carriage position: the rigid body and the belt's resonance"
+        "move",
+        "drive",
+        "carriage",
+        "drive force to carriage position: the rigid body and the belt's resonance",
+        interpret=positioning,
+        input_unit="N",
     )
     #: the textbook question each scenario answers, and its answer as a sentence (Scene.questions)
     questions = {

@@ -77,7 +77,9 @@ class Slider(Scene):
     dt = 2e-3
     default_scenario = "free"
     #: the textbook's unit oscillator (springlab.studies.stability, springlab.studies.extremes)
-    frequency = FrequencySpec("free", "force", "slider", "applied force to block position: 1 / (m s^2 + d s + k)")
+    frequency = FrequencySpec(
+        "free", "force", "slider", "applied force to block position: 1 / (m s^2 + d s + k)", input_unit="N"
+    )
     oscillator = OscillatorSpec(
         mass="mass", stiffness="stiffness", damping="damping", x0="x0", v0="v0", free="free", joint="slider"
     )
