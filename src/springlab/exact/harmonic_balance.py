@@ -52,7 +52,7 @@ _EPS = float(np.finfo(float).eps)
 #: a fit residual within this many eps of the force scale is round-off (the model is a cubic oscillator)
 FIT_ROUNDING = 1e4
 #: grid points per band for the discriminant's sign changes before brentq refines them
-FOLD_GRID = 4000
+FOLD_GRID = 2000
 
 
 @dataclasses.dataclass(frozen=True)

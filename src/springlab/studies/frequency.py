@@ -1635,29 +1635,32 @@ def _run_sweeps(
     starts = [_steady_start(model, point, linear, b, w, a) for w, (a, _) in zip(first, chains)]
     common = _common(model, point, probe, integrator, dt)
     shift = 0 if probe.response_kind == "sensor" else 1
-    batch = _batch(common, starts, 1)
+    # every chain advances together, one batched rollout per frequency index (threads across chains): the same
+    # settling for all, and each chain's own whole-period window at the end of it
+    batch = _batch(common, starts, min(len(chains), os.cpu_count() or 1))
     phases = [0.0] * len(chains)
     found: list[list[np.ndarray]] = [[] for _ in chains]
+    ids = np.arange(len(chains), dtype=np.int32)
     total = 0
+    settle_steps = int(math.ceil(settle / dt))
     with quiet_mujoco():
         for i in range(len(grid)):
-            for j, (amplitude, _) in enumerate(chains):
-                f = float(orders[j][i])
-                omega = 2 * math.pi * f
+            freqs = [float(order[i]) for order in orders]
+            windows = []
+            for f in freqs:
                 periods = max(2 * ESTIMATE_PERIODS, 2 * math.ceil(0.5 * ESTIMATE_SAMPLES * dt * f))
-                window = int(round(periods / f / dt))
-                steps = int(math.ceil(settle / dt)) + window
-                control = _drive(common, omega, phases[j], amplitude, 0, steps)[None]
-                out = batch.rollout(
-                    steps,
-                    control=control,
-                    control_spec=_CONTROL_SPEC,
-                    record=_record(common),
-                    ids=np.array([j], np.int32),
-                )
-                y = _measure(common, out, 0)
-                _check_finite(batch, [y], "a sweep")
-                t = (np.arange(steps) + shift) * dt
+                windows.append(int(round(periods / f / dt)))
+            steps = settle_steps + max(windows)
+            control = np.stack(
+                [_drive(common, 2 * math.pi * f, phases[j], chains[j][0], 0, steps) for j, f in enumerate(freqs)]
+            )
+            out = batch.rollout(steps, control=control, control_spec=_CONTROL_SPEC, record=_record(common), ids=ids)
+            ys = [_measure(common, out, j) for j in range(len(chains))]
+            _check_finite(batch, ys, "a sweep")
+            t = (np.arange(steps) + shift) * dt
+            for j, (amplitude, _) in enumerate(chains):
+                f, y, window = freqs[j], ys[j], windows[j]
+                omega = 2 * math.pi * f
                 tail, half = slice(steps - window, steps), slice(steps - window // 2, steps)
                 early = slice(steps - window, steps - window // 2)
                 whole = _demodulate(y[tail], t[tail], omega, dt)
@@ -1668,7 +1671,7 @@ def _run_sweeps(
                 residue = abs(late - before) / max(abs(whole[0]), 1e-300)
                 found[j].append(np.array([f, whole[0] / phasor, abs(whole[0]), third, residue], complex))
                 phases[j] = math.fmod(phases[j] + omega * steps * dt, 2 * math.pi)
-                total += steps
+            total += steps * len(chains)
     branches = []
     for j, (amplitude, direction) in enumerate(chains):
         rows = np.array(found[j])
