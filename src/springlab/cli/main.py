@@ -563,6 +563,33 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return EXIT_FAILED if any(not r.passed for r in state.validation) else EXIT_OK
 
 
+def cmd_view(args: argparse.Namespace) -> int:
+    """Watch a scene's validated run (or any MJCF) live in MuJoCo's interactive viewer (springlab.cli.view)."""
+    from springlab.cli import view  # GLFW only for the command that opens a window
+
+    result = view.command(args, _run)
+    return EXIT_OK if result is None else _verdict(result)
+
+
+# -- springlab interactive (issue 27): a scenario with real MuJoCo in the browser ---------------
+
+
+def cmd_interactive(args: argparse.Namespace) -> int:
+    """Write the scenario's interactive page (MuJoCo's WebAssembly build, sliders, exact solution, verdict)."""
+    from springlab.render import interactive
+
+    pages = interactive.write_interactive(args.scene, args.scenario, args.output)
+    if args.json:
+        _print_json([page.to_dict() for page in pages])
+    else:
+        others = f" and {len(pages) - 1} more scenarios beside it" if len(pages) > 1 else ""
+        print(
+            f"wrote {pages[0].path}{others} ({pages[0].size_bytes / 1e6:.1f} MB with MuJoCo"
+            f" {interactive.MUJOCO_JS_MUJOCO} as WebAssembly); open it from disk or a web server"
+        )
+    return EXIT_OK
+
+
 # -- parser --------------------------------------------------------------------
 
 COMMANDS: dict[str, Callable[[argparse.Namespace], int]] = {}
@@ -902,6 +929,35 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--output", metavar="DIR", help="write fit.json, fit.png, trajectory.csv and summary.json")
     p.add_argument("--json", action="store_true", help="print fit.json")
     COMMANDS["fit"] = cmd_fit
+
+    p = sub.add_parser("view", help="watch a scene's validated run (or any MJCF) live in MuJoCo's interactive viewer")
+    p.add_argument("scene", metavar="SCENE|MODEL.xml", help="scene name (see 'springlab list') or an MJCF file")
+    p.add_argument("scenario", nargs="?", help="scenario name (default: the scene's first)")
+    p.add_argument(
+        "--set", action="append", default=[], metavar="NAME=VALUE", help="override a parameter, SI units (repeatable)"
+    )
+    _timing_arguments(p)
+    p.add_argument(
+        "--slow-motion",
+        type=float,
+        default=1.0,
+        metavar="FACTOR",
+        help="run FACTOR times slower (default 1: real time)",
+    )
+    p.add_argument(
+        "--exaggerate",
+        type=float,
+        metavar="FACTOR",
+        help="draw displacements FACTOR times larger around their mean, as 'render' does (default: render's)",
+    )
+    p.add_argument("--close-after", type=float, metavar="SECONDS", help="close the window after SECONDS of wall time")
+    COMMANDS["view"] = cmd_view
+    p = sub.add_parser("interactive", help="a scenario as a web page running MuJoCo in the browser, with sliders")
+    p.add_argument("scene", help="a scene that runs in the browser (slider)")
+    p.add_argument("scenario", nargs="?", help="one of its scenarios that run in the browser (default: all of them)")
+    p.add_argument("--output", required=True, metavar="DIR", help="folder for SCENE-SCENARIO.html and its scripts")
+    p.add_argument("--json", action="store_true", help="print what was written as JSON")
+    COMMANDS["interactive"] = cmd_interactive
 
     p = sub.add_parser("demo", help="the main job: validate everything, write out/")
     p.add_argument("--output", default="out", metavar="DIR", help="output folder (default: out)")

@@ -385,6 +385,36 @@ def frequency_step(state: DemoState) -> list[Artifact]:
     return written
 
 
+# -- issue 27: the textbook's interactive figure, real MuJoCo in the browser ----------------------
+
+
+def interactive_step(state: DemoState) -> list[Artifact]:
+    """Every scene's browser pages (springlab.render.interactive) under out/interactive/; skipped, in one
+    line, where npm cannot supply MuJoCo's WebAssembly build (no Node.js and nothing cached)."""
+    from springlab.render import interactive
+
+    written: list[Artifact] = []
+    for scene_name in interactive.interactive_scenes():
+        try:
+            pages = interactive.write_interactive(scene_name, None, state.out / "interactive")
+        except interactive.NodeUnavailableError as error:
+            print(f"demo: interactive page skipped: {error}")
+            return written
+        for page in pages:
+            written.append(
+                Artifact(
+                    str(page.path.relative_to(state.out)),
+                    "interactive",
+                    f"interactive: move the damping ratio, mass, stiffness, dt and the integrator and watch MuJoCo"
+                    f" (in your browser, {page.size_bytes / 1e6:.1f} MB) against the exact solution and springlab's"
+                    " verdict",
+                    page.scene,
+                    page.scenario,
+                )
+            )
+    return written
+
+
 #: the demo's steps, in order (defined once, here: nothing is added at import time)
 STEPS: tuple[Callable[[DemoState], list[Artifact]], ...] = (
     core_step,
@@ -395,6 +425,7 @@ STEPS: tuple[Callable[[DemoState], list[Artifact]], ...] = (
     friction_step,
     refine_step,
     frequency_step,
+    interactive_step,
 )
 #: steps that run after every step in STEPS (the report lists everything)
 FINAL_STEPS: tuple[Callable[[DemoState], list[Artifact]], ...] = (report_step,)

@@ -130,7 +130,7 @@ def piecewise_linear_velocity(
     knot_velocities
         Velocities at the knots [m/s].
     x0
-        Position at knot_times[0] [m].
+        Position [m] at knot_times[0].
 
     Returns
     -------

@@ -16,6 +16,7 @@ from typing import Any
 from springlab import scenes
 from springlab.errors import BadInputError, SpringlabError
 from springlab.render import scale as render_scale
+from springlab.render import stage
 from springlab.render import video as render
 from springlab.runs.run import Result
 from springlab.studies.families import PhaseFamily
@@ -87,13 +88,6 @@ def render_run(
         )
 
         panel = plots_panel.PhasePanel(result, height)
-    road_bump = None
-    if {"bump_height", "bump_length", "speed"} <= set(result.parameters) and "road" in _joint_names(result.model):
-        # the quarter car: the road it drives over is drawn, the exciter that realizes it is not
-        p = result.parameters
-        road_bump = render.RoadBump(
-            p["bump_height"], p["bump_length"], p["speed"], "wheel_front_right", "wheel_rear_right"
-        )
     try:
         return render.render_video(
             result.model,
@@ -110,15 +104,11 @@ def render_run(
             panel=panel,
             slow_motion=slow_motion,
             exaggerate=exaggerate,
-            road_bump=road_bump,
+            road_bump=stage.road_bump(result),  # the quarter car's road
             antialias=antialias,
         )
     except RuntimeError as error:  # GL context or ffmpeg: not the user's input, still one clean line
         raise SpringlabError(f"cannot render {str(output)!r}: {error}") from None
-
-
-def _joint_names(model) -> set[str]:
-    return {model.joint(j).name for j in range(model.njnt)}
 
 
 def default_slow_motion(result: Result, duration: float, fps: float) -> float:

@@ -135,11 +135,15 @@ def default_exaggeration(model: mujoco.MjModel, states: np.ndarray) -> float:
     return nice_at_least(TARGET_MOTION / ratio)
 
 
-def exaggerated(model: mujoco.MjModel, states: np.ndarray, factor: float) -> np.ndarray:
+def exaggerated(
+    model: mujoco.MjModel, states: np.ndarray, factor: float, centre: np.ndarray | None = None
+) -> np.ndarray:
     """States drawn at ``centre + factor (q - centre)`` per coordinate (centre: the mean over frames).
 
     Quaternion coordinates (free and ball joints) are left as simulated: a
-    rotation cannot be magnified by scaling its components.
+    rotation cannot be magnified by scaling its components. ``centre`` (nq,)
+    gives the centre instead (the live viewer draws one state at a time around
+    the mean of the run it replays).
     """
     states = np.asarray(states, dtype=float)
     if factor == 1.0:
@@ -151,7 +155,7 @@ def exaggerated(model: mujoco.MjModel, states: np.ndarray, factor: float) -> np.
             scaled[adr + 3 : adr + 7] = False
         elif model.jnt_type[j] == mujoco.mjtJoint.mjJNT_BALL:
             scaled[adr : adr + 4] = False
-    centre = states.mean(axis=0)
+    centre = states.mean(axis=0) if centre is None else np.asarray(centre, dtype=float)
     out = states.copy()
     out[:, scaled] = centre[scaled] + factor * (states[:, scaled] - centre[scaled])
     return out

@@ -45,10 +45,11 @@ from springlab.errors import BadInputError  # a ValueError; the CLI maps it to e
 from springlab.progress import bar as progress_bar
 from springlab.render import scale as render_scale
 
-from .drawings import SPRING_PREFIX, Drawings, RoadBump, covering_guides, drawn_notes, drawn_springs
-from .framing import frame_camera, framed_model
+from .drawings import SPRING_PREFIX, RoadBump, drawn_notes, drawn_springs
+from .framing import framed_model
 from .gl import OffscreenScene, ensure_gl_backend
 from .sink import X264_CRF, X264_PRESET, GifSink, Mp4Sink, WriterThread
+from .stage import stage
 from .text import TextOverlay
 
 __all__ = [
@@ -395,12 +396,9 @@ def render_video(
     if exaggerate is None:
         exaggerate = render_scale.default_exaggeration(model, states)
     states = render_scale.exaggerated(model, states, exaggerate)
-    model = covering_guides(model, states)
     if road_bump is not None and exaggerate != 1.0:
         road_bump = dataclasses.replace(road_bump, exaggeration=exaggerate)
-    drawings = Drawings(model, states, road_bump, height)
-    model, camera_path = frame_camera(model, states, cam_id, width, height, anchors=drawings.anchors())
-    drawings.rail_marks = camera_path is not None  # a following camera needs marks to show the travel
+    model, drawings, camera_path = stage(model, states, cam_id, width, height, road_bump)
 
     try:
         out_path.parent.mkdir(parents=True, exist_ok=True)

@@ -30,7 +30,16 @@ from springlab.exact.limits import stability_limit
 from springlab.sim import model_files
 from springlab.sim.simulate import Setup, Trajectory, quiet_mujoco
 
-from .capabilities import DesignSpec, DryFrictionSpec, FigureHook, FitSpec, FrequencySpec, OscillatorSpec, RefinableSpec
+from .capabilities import (
+    DesignSpec,
+    DryFrictionSpec,
+    FigureHook,
+    FitSpec,
+    FrequencySpec,
+    InteractiveSpec,
+    OscillatorSpec,
+    RefinableSpec,
+)
 
 #: smallest body mass [kg] and principal inertia [kg m^2] MuJoCo compiles: its mjMINVAL
 #: (1e-15); a moving body below it fails `MjSpec.compile` ("must be larger than mjMINVAL")
@@ -300,6 +309,8 @@ class Scene:
     13. Optionally, `frequency` (springlab.scenes.capabilities.FrequencySpec, or a tuple of them, one per
        scenario, the first the default): the default input and response of `springlab frequency SCENE`, an
        MjSpec edit that makes the input a control, and what the response means for the scene's question.
+    14. Optionally, `interactive` (springlab.scenes.capabilities.InteractiveSpec): the scenarios that run
+       in the browser with real MuJoCo and the MJCF attributes the page writes (`springlab interactive`).
 
     The module exposes the instance as `SCENE`; springlab.scenes discovers it. Tests check each
     claim against a reference built in the test (closed form, expm, scipy's DOP853 at tight
@@ -341,6 +352,9 @@ class Scene:
     #: the default input and response of its frequency response (None: the user names them;
     #: springlab.studies.frequency reads it)
     frequency: FrequencySpec | tuple[FrequencySpec, ...] | None = None
+    #: the scenarios that run in the browser and how the page edits the MJCF (None: none;
+    #: springlab.render.interactive reads it)
+    interactive: InteractiveSpec | None = None
 
     def question_and_answer(self, scenario: str, quantities: dict, parameters: dict) -> tuple[str, str] | None:
         """(question, answer sentence) of a scenario's run, or None where the scene states none."""

@@ -90,7 +90,7 @@ import numpy as np
 
 from springlab.errors import ParameterError
 from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene
-from springlab.scenes.capabilities import FrequencySpec, OscillatorFit
+from springlab.scenes.capabilities import FrequencySpec, InteractiveSpec, MjcfEdit, OscillatorFit
 from springlab.sim.simulate import Setup, Trajectory, quiet_mujoco
 
 from .frequency import isolation, name_modes, push_at_the_front, road_under_the_car
@@ -263,6 +263,24 @@ class Car(Scene):
         default_free=("stiffness", "damping", "x0", "v0", "offset"),
         rest="clearance",
         release=_released_at,
+    )
+    #: `springlab interactive`: the 1-DOF releases in the browser, the values Release.edit sets written into the
+    #: MJCF text; the clearance is fixed (it moves the body's pos), the mass slider stops short of where the
+    #: undamped rebound would leave the springs (m = push_mass = 250 kg: check_consistency) and the stiffness
+    #: well before the push reaches the ground (k = 24,525 N/m); pitch_heave and road_bump need a matrix exponential in the page (docs/interactive.md)
+    interactive = InteractiveSpec(
+        joint="heave",
+        scenarios=("push_release", "damped_release"),
+        edits=(
+            MjcfEdit("mass", "body", "car", "mass", child="inertial"),
+            MjcfEdit("stiffness", "joint", "heave", "stiffness"),
+            MjcfEdit("damping", "joint", "heave", "damping"),
+            MjcfEdit("clearance + mass * g / stiffness", "joint", "heave", "springref"),
+        ),
+        x0="clearance + mass * g / stiffness - (mass + push_mass) * g / stiffness",
+        v0="0",
+        rest="clearance + mass * g / stiffness - mass * g / stiffness",
+        ranges={"mass": (260.0, 10000.0), "stiffness": (1e5, 1e7)},
     )
     scenarios = {
         s.name: s

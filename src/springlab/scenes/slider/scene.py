@@ -37,7 +37,7 @@ import numpy as np
 from springlab.exact import analytic
 from springlab.exact.linear import generator_system, state_matrix
 from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene
-from springlab.scenes.capabilities import FrequencySpec, OscillatorFit, OscillatorSpec
+from springlab.scenes.capabilities import FrequencySpec, InteractiveSpec, MjcfEdit, OscillatorFit, OscillatorSpec
 from springlab.sim import exciter
 from springlab.sim.simulate import Setup, Trajectory
 
@@ -82,6 +82,19 @@ class Slider(Scene):
     )
     oscillator = OscillatorSpec(
         mass="mass", stiffness="stiffness", damping="damping", x0="x0", v0="v0", free="free", joint="slider"
+    )
+    #: `springlab interactive`: the free and step scenarios in the browser, the same three values `edit` sets
+    #: written into the MJCF text (the harmonic ones add the exciter through MjSpec: not in the page)
+    interactive = InteractiveSpec(
+        joint="slider",
+        scenarios=("free", "underdamped", "undamped", "critical", "overdamped", "exercise", "step"),
+        edits=(
+            MjcfEdit("mass", "body", "block", "mass", child="inertial"),
+            MjcfEdit("stiffness", "joint", "slider", "stiffness"),
+            MjcfEdit("damping", "joint", "slider", "damping"),
+        ),
+        force="force_amplitude",
+        actuator="force",
     )
     #: the textbook question each scenario answers, and its answer as a sentence (Scene.questions)
     questions = {
