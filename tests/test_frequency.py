@@ -230,6 +230,6 @@ def test_sinestream_in_mujoco_matches_the_discrete_response_within_its_stated_ac
     assert json.loads(json.dumps(result.to_dict()))["sinestream"]["agrees"] is True
 
 
-def test_sinestream_needs_an_actuator_input():
-    with pytest.raises(springlab.BadInputError, match="actuator"):
-        springlab.frequency("slider", input="slider", integrators=(), sines=4)
+def test_sinestream_refuses_a_joint_acceleration_response():
+    with pytest.raises(springlab.BadInputError, match="accelerometer"):
+        springlab.frequency("slider", response="slider:acc", integrators=(), sines=4)

@@ -187,7 +187,8 @@ def print_frequency(result: FrequencyResponse, output: str | None) -> None:
     for line in result.verdict():
         print(f"  {line}")
     if output:
-        print(f"wrote {pathlib.Path(output) / 'frequency.json'}, frequency.csv and bode.png")
+        extra = ", sinestream.csv" if result.sinestreams or result.sweeps else ""
+        print(f"wrote {pathlib.Path(output) / 'frequency.json'}, frequency.csv{extra} and bode.png")
 
 
 def print_stability(report: StabilityReport, output: str | None) -> None:

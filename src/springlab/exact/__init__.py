@@ -1,4 +1,5 @@
 """Layer 1, exact answers: closed forms (`analytic`), linear systems by the matrix exponential (`linear`),
-kinematics (`polynomials`), MuJoCo's own linearization (`linearize`), events between samples (`events`) and
-the integrators' exact stability limits (`limits`).
+kinematics (`polynomials`), MuJoCo's own linearization (`linearize`), events between samples (`events`),
+the integrators' exact stability limits (`limits`) and the forced Duffing oscillator's first-order harmonic
+balance with its derived error bound (`harmonic_balance`).
 """

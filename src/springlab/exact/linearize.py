@@ -712,3 +712,54 @@ def step_input_column(
     dq = np.zeros(nv)
     mujoco.mj_differentiatePos(work, dq, 2 * step, q_minus, q_plus)
     return np.concatenate([dq, (v_plus - v_minus) / (2 * step), (a_plus - a_minus) / (2 * step)])
+
+
+# -- responses: a sensor's rows, as MuJoCo's step computes it ----------------------------------------------------
+
+
+def sensor_rows(
+    model: mujoco.MjModel,
+    kind: str,
+    index: int,
+    point: OperatingPoint | None = None,
+    *,
+    integrator: str | None = None,
+    dt: float | None = None,
+    step: float = FD_STEP,
+) -> tuple[np.ndarray, np.ndarray]:
+    """(C, d): d(sensordata) = C dx + d du, (nsensordata, n) and (nsensordata,), at `point`.
+
+    The sensors of one `mj_step`, which computes them at the step's start (x_k, u_k): C and, for a control
+    input, d from MuJoCo's `mjd_transitionFD` (centred, its C and D); for a generalized force ('force', dof
+    `index`) d by centred differences of `mj_forward`'s sensordata in `qfrc_applied`. `integrator` None: the
+    continuous forward pass (as `linearize`; euler's forward pass is the continuous one); else that integrator
+    at `dt` [s] ('discrete' reports its finite-difference acceleration to acceleration-stage sensors; rk4,
+    which `mjd_transitionFD` refuses, evaluates its sensors in the continuous forward pass at the step's start,
+    so it takes the continuous rows). `model` is not modified.
+    """
+    point = _point_or_default(model, point)
+    if integrator is None or integrator == "rk4":
+        work = _continuous_model(model)
+    else:
+        work = copy.copy(model)
+        work.opt.integrator = integrator_id(integrator)
+        if dt is not None:
+            work.opt.timestep = dt
+    data = mujoco.MjData(work)
+    n = 2 * work.nv + work.na
+    rows = np.zeros((work.nsensordata, n))
+    controls = np.zeros((work.nsensordata, work.nu))
+    with quiet_mujoco():
+        point.load(work, data)
+        mujoco.mj_forward(work, data)
+        data.qacc_warmstart[:] = data.qacc
+        mujoco.mjd_transitionFD(work, data, step, 1, None, None, rows, controls)
+        if kind == "ctrl":
+            return rows, controls[:, index].copy()
+        sides = []
+        for sign in (1.0, -1.0):
+            point.load(work, data)
+            _apply_input(data, kind, index, sign * step)
+            mujoco.mj_forward(work, data)
+            sides.append(data.sensordata.copy())
+    return rows, (sides[0] - sides[1]) / (2 * step)

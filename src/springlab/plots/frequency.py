@@ -5,6 +5,9 @@ bode.png has three panels sharing the log-frequency axis: the magnitude (exact: 
 discrete-time response: coloured, dashed; the sinestream's MuJoCo estimates: circles), the phase [deg], and the relative error |H_d / H - 1| with the
 held input's own floor (grey, dotted) and the tolerance (dotted line). Resonances are marked (triangles,
 labelled with frequency and damping ratio), anti-resonances (circles); the band within tol is shaded.
+Several sinestream amplitudes: one set of circles each (a colour per amplitude). A sweep: its branches as
+triangles pointing the way they were swept (up: ^, down: v), their jumps marked, and for a cubic oscillator
+the first-order harmonic-balance curve (every root over the band, grey) in the magnitude panel.
 """
 
 from __future__ import annotations
@@ -59,6 +62,11 @@ def bode_figure(result: FrequencyResponse) -> Figure:
     err_ax.loglog(f, np.maximum(rows["hold_error"], 1e-17), ":", color="0.5", label="held input alone (exact ZOH)")
     err_ax.axhline(result.tol, color="k", linestyle=":", linewidth=1, label=f"tol {result.tol:g}")
     stream = result.sinestream
+    if len(result.sinestreams) > 1:
+        _draw_amplitudes(result, mag_ax, phase_ax)
+        stream = None
+    if result.sweeps:
+        _draw_sweeps(result, mag_ax, phase_ax)
     if stream is not None:
         estimate = stream.estimate
         mag_ax.loglog(
@@ -114,8 +122,75 @@ def bode_figure(result: FrequencyResponse) -> Figure:
     return fig
 
 
+_AMPLITUDE_COLORS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b")
+
+
+def _draw_amplitudes(result: FrequencyResponse, mag_ax, phase_ax) -> None:
+    """One set of circles per sinestream amplitude."""
+    unit = result.units["input"]
+    for i, stream in enumerate(result.sinestreams):
+        color = _AMPLITUDE_COLORS[i % len(_AMPLITUDE_COLORS)]
+        f = stream.frequencies_hz
+        mag_ax.loglog(
+            f,
+            np.abs(stream.estimate),
+            "o",
+            color=color,
+            fillstyle="none",
+            label=f"sinestream at {stream.amplitude:g} {unit}",
+        )
+        phase_ax.semilogx(f, np.degrees(np.angle(stream.estimate)), "o", color=color, fillstyle="none")
+
+
+def _draw_sweeps(result: FrequencyResponse, mag_ax, phase_ax) -> None:
+    """The sweeps' branches, their jumps and, for a cubic oscillator, the harmonic-balance curve."""
+    from springlab.exact import harmonic_balance as hb
+
+    unit = result.units["input"]
+    amplitudes = sorted({b.amplitude for b in result.sweeps})
+    for branch in result.sweeps:
+        color = _AMPLITUDE_COLORS[amplitudes.index(branch.amplitude) % len(_AMPLITUDE_COLORS)]
+        marker = "^" if branch.direction == "up" else "v"
+        mag_ax.loglog(
+            branch.frequencies_hz,
+            np.abs(branch.estimate),
+            marker,
+            color=color,
+            fillstyle="none" if branch.direction == "down" else "full",
+            markersize=5,
+            label=f"sweep {branch.direction} at {branch.amplitude:g} {unit}",
+        )
+        phase_ax.semilogx(
+            branch.frequencies_hz,
+            np.degrees(np.angle(branch.estimate)),
+            marker,
+            color=color,
+            fillstyle="none" if branch.direction == "down" else "full",
+            markersize=5,
+        )
+        if branch.jump_hz is not None:
+            for f in branch.jump_hz:
+                mag_ax.axvline(f, color=color, linestyle=":", linewidth=0.8)
+    duffing = result.duffing
+    if duffing is None:
+        return
+    lo, hi = result.band_hz
+    grid = np.geomspace(lo, hi, 600)
+    for amplitude in amplitudes:
+        force = duffing.gain * amplitude
+        f_points, h_points = [], []
+        for f in grid:
+            for a in hb.amplitudes(duffing, force, 2 * np.pi * f):
+                f_points.append(f)
+                h_points.append(a / amplitude)
+        mag_ax.loglog(
+            f_points, h_points, ".", color="0.5", markersize=1.5, label=f"harmonic balance at {amplitude:g} {unit}"
+        )
+
+
 def write_frequency(result: FrequencyResponse, directory: str | pathlib.Path) -> list[pathlib.Path]:
-    """Write DIR/frequency.json, frequency.csv and bode.png; all appear, or none does.
+    """Write DIR/frequency.json, frequency.csv, bode.png (and sinestream.csv after a sinestream or a sweep);
+    all appear, or none does.
 
     Parameters
     ----------
@@ -129,13 +204,13 @@ def write_frequency(result: FrequencyResponse, directory: str | pathlib.Path) ->
     list[pathlib.Path]
         the written files.
     """
-    written = files.write_text_files(
-        directory,
-        {
-            "frequency.json": files.dumps(result.to_dict()) + "\n",
-            "frequency.csv": files.csv_text(result.rows()),
-        },
-    )
+    texts = {
+        "frequency.json": files.dumps(result.to_dict()) + "\n",
+        "frequency.csv": files.csv_text(result.rows()),
+    }
+    if result.sinestreams or result.sweeps:
+        texts["sinestream.csv"] = files.csv_text(result.sweep_rows())
+    written = files.write_text_files(directory, texts)
     try:
         written.append(plot_bode(result, pathlib.Path(directory) / "bode.png"))
     except BaseException:

@@ -38,6 +38,7 @@ import numpy as np
 
 from springlab import display, scenes, tables
 from springlab.errors import BadInputError, UnknownNameError
+from springlab.exact.harmonic_balance import Duffing, cubic_oscillator
 from springlab.exact.linearize import (
     FD_STEP,
     Linearization,
@@ -46,6 +47,7 @@ from springlab.exact.linearize import (
     linearize,
     one_step_map,
     operating_point,
+    sensor_rows,
     spectral_radius,
     step_input_column,
 )
@@ -73,6 +75,19 @@ CANCEL = 1e-5
 _EPS = float(np.finfo(float).eps)
 #: response kinds: 'JOINT' (position), 'JOINT:vel', 'JOINT:acc'
 RESPONSE_KINDS = ("pos", "vel", "acc")
+#: sinestream.csv's columns (FrequencyResponse.sweep_rows)
+SINESTREAM_COLUMNS = (
+    "amplitude",
+    "sweep",
+    "frequency_hz",
+    "magnitude",
+    "phase_deg",
+    "response_amplitude",
+    "harmonic_balance_amplitude",
+    "bound",
+)
+#: sweep frequencies when `sweep` is given without `sines`
+DEFAULT_SWEEP_POINTS = 40
 
 
 @dataclasses.dataclass(frozen=True)
@@ -270,8 +285,54 @@ class FrequencyResponse(display.Shown):
     description: str
     wall_time_s: float
     sinestream: Sinestream | None = None
+    sinestreams: tuple[Sinestream, ...] = ()
+    sweeps: tuple[SweepBranch, ...] = ()
+    duffing: Duffing | None = None
+
     answers: Mapping[str, Any] = dataclasses.field(default_factory=dict)
     answer_lines: tuple[str, ...] = ()
+
+    @property
+    def amplitude_spread(self) -> np.ndarray | None:
+        """(m,) max over the sinestreams' amplitudes of |H_A / H_A0 - 1| per sine [-], A0 the first amplitude
+        (None: fewer than two amplitudes): 0 up to the demodulation's accuracy for a linear model."""
+        if len(self.sinestreams) < 2:
+            return None
+        first = self.sinestreams[0].estimate
+        return np.max([np.abs(s.estimate / first - 1.0) for s in self.sinestreams[1:]], axis=0)
+
+    @property
+    def sweeps_agree(self) -> bool:
+        """Every sweep point within its harmonic-balance bound (True without sweeps or a prediction)."""
+        return all(branch.agrees for branch in self.sweeps)
+
+    def sweep_rows(self) -> dict[str, np.ndarray]:
+        """The columns of sinestream.csv, one row per simulated sine: `amplitude` [input unit], `sweep`
+        (0: the sinestream, 1: a sweep up, -1: down), `frequency_hz`, `magnitude`, `phase_deg`,
+        `response_amplitude` [response unit], `harmonic_balance_amplitude` and `bound` (nan: none)."""
+        parts = []
+        for stream in self.sinestreams:
+            m = len(stream.frequencies_hz)
+            nan = np.full(m, np.nan)
+            parts.append((stream.amplitude, 0.0, stream.frequencies_hz, stream.estimate, nan, nan))
+        for branch in self.sweeps:
+            m = len(branch.frequencies_hz)
+            nan = np.full(m, np.nan)
+            sign = 1.0 if branch.direction == "up" else -1.0
+            predicted = nan if branch.predicted is None else branch.predicted
+            bound = nan if branch.bound is None else branch.bound
+            parts.append((branch.amplitude, sign, branch.frequencies_hz, branch.estimate, predicted, bound))
+        columns: dict[str, list[np.ndarray]] = {k: [] for k in SINESTREAM_COLUMNS}
+        for amplitude, sign, f, estimate, predicted, bound in parts:
+            columns["amplitude"].append(np.full(len(f), amplitude))
+            columns["sweep"].append(np.full(len(f), sign))
+            columns["frequency_hz"].append(np.asarray(f, float))
+            columns["magnitude"].append(np.abs(estimate))
+            columns["phase_deg"].append(np.degrees(np.angle(estimate)))
+            columns["response_amplitude"].append(np.abs(estimate) * amplitude)
+            columns["harmonic_balance_amplitude"].append(np.asarray(predicted, float))
+            columns["bound"].append(np.asarray(bound, float))
+        return {k: np.concatenate(v) if v else np.zeros(0) for k, v in columns.items()}
 
     @property
     def relative_error(self) -> np.ndarray:
@@ -340,13 +401,73 @@ class FrequencyResponse(display.Shown):
             best = self.cheapest
             lines.append(f"cheapest: {best.integrator} at dt = {best.max_dt_s:.3g} s")
         lines.extend(self.answer_lines)
-        if self.sinestream is not None:
+        if len(self.sinestreams) > 1:
+            lines.extend(self._amplitude_lines())
+        elif self.sinestream is not None:
             stream = self.sinestream
             worst = float(np.max(stream.error_vs_discrete / stream.bound))
             word = "match" if stream.agrees else "DO NOT match"
             lines.append(
                 f"sinestream: {len(stream.frequencies_hz)} sines simulated in MuJoCo ({stream.steps} steps) {word} the"
                 f" discrete response within the stated accuracy (worst: {worst:.2g} of it)"
+            )
+        lines.extend(self._sweep_lines())
+        return lines
+
+    def _amplitude_lines(self) -> list[str]:
+        unit = self.units["input"]
+        amplitudes = ", ".join(f"{s.amplitude:g}" for s in self.sinestreams)
+        spread = self.amplitude_spread
+        assert spread is not None
+        worst = int(np.argmax(spread))
+        accuracy = float(max(np.max(s.accuracy) for s in self.sinestreams))
+        f = self.sinestreams[0].frequencies_hz[worst]
+        if float(spread[worst]) <= 2 * accuracy:
+            verdict = f"coincide to {spread[worst]:.2g} (within twice the demodulation's accuracy {accuracy:.2g})"
+        else:
+            verdict = f"part by up to {spread[worst]:.3g} (at {f:.4g} Hz): the response depends on the amplitude"
+        lines = [f"sinestream at amplitudes {amplitudes} {unit}: the estimates {verdict}"]
+        for stream in self.sinestreams:
+            word = "matches" if stream.agrees else "departs from"
+            departs = float(np.max(stream.error_vs_discrete))
+            lines.append(
+                f"  at {stream.amplitude:g} {unit}: {word} the linear discrete response (largest |H/H_d - 1| {departs:.2g})"
+            )
+        return lines
+
+    def _sweep_lines(self) -> list[str]:
+        unit = self.units["input"]
+        lines = []
+        for branch in self.sweeps:
+            m = len(branch.frequencies_hz)
+            head = (
+                f"sweep {branch.direction} at {branch.amplitude:g} {unit} ({m} frequencies, each from the last's state)"
+            )
+            if branch.jump_hz is not None:
+                lo, hi = branch.jump_hz
+                head += f": jumps between {lo:.4g} and {hi:.4g} Hz"
+            else:
+                head += ": no jump"
+            if branch.fold_hz is not None:
+                f, low, high = branch.fold_hz
+                head += f"; harmonic balance predicts the jump at {f:.4g} Hz ({low:.4g}-{high:.4g})"
+            elif branch.predicted is not None:
+                head += "; harmonic balance's branch does not end in the band"
+            lines.append(head)
+        if self.duffing is not None and self.sweeps:
+            d = self.duffing
+            inside = [b.within_bound for b in self.sweeps if b.within_bound is not None]
+            count = sum(int(np.sum(x)) for x in inside)
+            total = sum(len(x) for x in inside)
+            worst = max(
+                float(np.max(np.abs(b.response_amplitude - b.predicted) / b.bound))
+                for b in self.sweeps
+                if b.predicted is not None and b.bound is not None
+            )
+            lines.append(
+                f"harmonic balance (m = {d.m:.4g}, c = {d.c:.4g}, k = {d.k:.4g}, k3 = {d.k3:.4g}, read from the model):"
+                f" first-harmonic amplitude within its derived bound at {count} of {total} points (worst {worst:.2g}"
+                " of it)"
             )
         return lines
 
@@ -415,6 +536,9 @@ class FrequencyResponse(display.Shown):
             "integrators": [b.to_dict() for b in self.integrators],
             "cheapest": None if self.cheapest is None else self.cheapest.to_dict(),
             "sinestream": None if self.sinestream is None else self.sinestream.to_dict(),
+            "sinestreams": [s.to_dict() for s in self.sinestreams],
+            "sweeps": [b.to_dict() for b in self.sweeps],
+            "harmonic_balance": None if self.duffing is None else self.duffing.to_dict(),
             "answers": dict(self.answers),
             "wall_time_s": self.wall_time_s,
         }
@@ -520,13 +644,31 @@ def _integrator_name(model: mujoco.MjModel) -> str:
 
 
 def _names(model: mujoco.MjModel, kind: str, count: int) -> list[str]:
-    getter = model.actuator if kind == "actuator" else model.joint
+    getter = {"actuator": model.actuator, "joint": model.joint, "sensor": model.sensor}[kind]
     return [getter(i).name for i in range(count) if getter(i).name]
+
+
+def _actuator_unit(model: mujoco.MjModel, actuator: int) -> str:
+    """'N' or 'N m' for a motor (fixed gain 1, no bias) with gear 1 on a slide or hinge joint: its control is the
+    joint's force; else 'actuator unit'."""
+    motor = (
+        int(model.actuator_trntype[actuator]) == int(mujoco.mjtTrn.mjTRN_JOINT)
+        and int(model.actuator_gaintype[actuator]) == int(mujoco.mjtGain.mjGAIN_FIXED)
+        and int(model.actuator_biastype[actuator]) == int(mujoco.mjtBias.mjBIAS_NONE)
+        and float(model.actuator_gainprm[actuator, 0]) == 1.0
+        and float(model.actuator_gear[actuator, 0]) == 1.0
+    )
+    if not motor:
+        return "actuator unit"
+    joint_type = int(model.jnt_type[int(model.actuator_trnid[actuator, 0])])
+    if joint_type == int(mujoco.mjtJoint.mjJNT_SLIDE):
+        return "N"
+    return "N m" if joint_type == int(mujoco.mjtJoint.mjJNT_HINGE) else "actuator unit"
 
 
 def resolve_input(model: mujoco.MjModel, name: str) -> tuple[str, int, str]:
     """(kind, index, unit) of the input called `name`: an actuator's control ('ctrl', its id), else a force
-    on a joint's first degree of freedom ('force', its dof address).
+    on a joint's first degree of freedom ('force', its dof address): 'JOINT' or 'JOINT:force'.
 
     Raises
     ------
@@ -535,40 +677,81 @@ def resolve_input(model: mujoco.MjModel, name: str) -> tuple[str, int, str]:
     """
     actuators = _names(model, "actuator", model.nu)
     if name in actuators:
-        return "ctrl", int(model.actuator(name).id), "actuator unit"
+        actuator = int(model.actuator(name).id)
+        return "ctrl", actuator, _actuator_unit(model, actuator)
     joints = _names(model, "joint", model.njnt)
-    if name in joints:
-        joint = model.joint(name)
+    joint_name = name[: -len(":force")] if name.endswith(":force") else name
+    if joint_name in joints:
+        joint = model.joint(joint_name)
         unit = "N m" if int(joint.type[0]) == int(mujoco.mjtJoint.mjJNT_HINGE) else "N"
         return "force", int(joint.dofadr[0]), unit
-    raise UnknownNameError("input (an actuator or a joint)", name, actuators + joints)
+    raise UnknownNameError("input (ACTUATOR or JOINT:force)", name, actuators + [f"{j}:force" for j in joints])
+
+
+#: a sensor's unit by its type (others: 'sensor unit')
+_SENSOR_UNITS = {
+    int(mujoco.mjtSensor.mjSENS_ACCELEROMETER): "m/s^2",
+    int(mujoco.mjtSensor.mjSENS_VELOCIMETER): "m/s",
+    int(mujoco.mjtSensor.mjSENS_GYRO): "rad/s",
+    int(mujoco.mjtSensor.mjSENS_FORCE): "N",
+    int(mujoco.mjtSensor.mjSENS_TORQUE): "N m",
+    int(mujoco.mjtSensor.mjSENS_FRAMEPOS): "m",
+    int(mujoco.mjtSensor.mjSENS_FRAMELINVEL): "m/s",
+    int(mujoco.mjtSensor.mjSENS_FRAMEANGVEL): "rad/s",
+    int(mujoco.mjtSensor.mjSENS_FRAMELINACC): "m/s^2",
+    int(mujoco.mjtSensor.mjSENS_FRAMEANGACC): "rad/s^2",
+    int(mujoco.mjtSensor.mjSENS_ACTUATORFRC): "N",
+}
+
+
+def _sensor_unit(model: mujoco.MjModel, sensor: int) -> str:
+    kind = int(model.sensor_type[sensor])
+    if kind in (int(mujoco.mjtSensor.mjSENS_JOINTPOS), int(mujoco.mjtSensor.mjSENS_JOINTVEL)):
+        joint = int(model.sensor_objid[sensor])
+        base = "rad" if int(model.jnt_type[joint]) == int(mujoco.mjtJoint.mjJNT_HINGE) else "m"
+        return base if kind == int(mujoco.mjtSensor.mjSENS_JOINTPOS) else f"{base}/s"
+    return _SENSOR_UNITS.get(kind, "sensor unit")
 
 
 def resolve_response(model: mujoco.MjModel, name: str) -> tuple[int, str, str]:
-    """(row of the state x = (dq, dv), kind 'pos'|'vel'|'acc', unit) of the response called `name`:
-    'JOINT', 'JOINT:vel' or 'JOINT:acc'.
+    """(index, kind, unit) of the response called `name`: 'JOINT' (kind 'pos'), 'JOINT:vel', 'JOINT:acc' (index:
+    the joint's dof, a row of the state x = (dq, dv)), or a sensor 'SENSOR' (one-dimensional) or 'SENSOR[i]'
+    (component i; kind 'sensor', index: its sensordata address). A joint's name wins over a sensor's.
 
     Raises
     ------
     UnknownNameError
-        no joint of that name, or an unknown kind.
+        no joint or sensor of that name, an unknown kind, or a component out of range.
     """
     joint_name, _, kind = name.partition(":")
     kind = kind or "pos"
     joints = _names(model, "joint", model.njnt)
-    valid = [f"{j}{suffix}" for j in joints for suffix in ("", ":vel", ":acc")]
-    if joint_name not in joints or kind not in RESPONSE_KINDS:
-        raise UnknownNameError("response (JOINT, JOINT:vel or JOINT:acc)", name, valid)
-    joint = model.joint(joint_name)
-    dof = int(joint.dofadr[0])
-    hinge = int(joint.type[0]) == int(mujoco.mjtJoint.mjJNT_HINGE)
-    base = "rad" if hinge else "m"
-    unit = {"pos": base, "vel": f"{base}/s", "acc": f"{base}/s^2"}[kind]
-    return dof, kind, unit
+    if joint_name in joints and kind in RESPONSE_KINDS:
+        joint = model.joint(joint_name)
+        dof = int(joint.dofadr[0])
+        hinge = int(joint.type[0]) == int(mujoco.mjtJoint.mjJNT_HINGE)
+        base = "rad" if hinge else "m"
+        unit = {"pos": base, "vel": f"{base}/s", "acc": f"{base}/s^2"}[kind]
+        return dof, kind, unit
+    sensors = {}
+    for sensor in range(model.nsensor):
+        sensor_name = model.sensor(sensor).name
+        if not sensor_name:
+            continue
+        dim, adr = int(model.sensor_dim[sensor]), int(model.sensor_adr[sensor])
+        if dim == 1:
+            sensors[sensor_name] = (adr, sensor)
+        for i in range(dim):
+            sensors[f"{sensor_name}[{i}]"] = (adr + i, sensor)
+    if name in sensors:
+        adr, sensor = sensors[name]
+        return adr, "sensor", _sensor_unit(model, sensor)
+    valid = [f"{j}{suffix}" for j in joints for suffix in ("", ":vel", ":acc")] + list(sensors)
+    raise UnknownNameError("response (JOINT, JOINT:vel, JOINT:acc, SENSOR or SENSOR[i])", name, valid)
 
 
 def _output(linear: Linearization, b: np.ndarray, dof: int, kind: str) -> tuple[np.ndarray, float]:
-    """(c, d) of the response: a row of the state, or of dx/dt = A x + b u for an acceleration."""
+    """(c, d) of a joint response: a row of the state, or of dx/dt = A x + b u for an acceleration."""
     nv = linear.M.shape[0]
     n = linear.A.shape[0]
     if kind == "acc":
@@ -576,6 +759,24 @@ def _output(linear: Linearization, b: np.ndarray, dof: int, kind: str) -> tuple[
     c = np.zeros(n)
     c[dof if kind == "pos" else nv + dof] = 1.0
     return c, 0.0
+
+
+@dataclasses.dataclass(frozen=True)
+class _Probe:
+    """Where the sines go in and what is measured: the input (kind 'ctrl'|'force', index) and the response
+    (kind 'pos'|'vel'|'acc'|'sensor', index: a dof or a sensordata address)."""
+
+    input_kind: str
+    input_index: int
+    response_kind: str
+    response_index: int
+
+    def rows(
+        self, model: mujoco.MjModel, point: OperatingPoint, integrator: str | None = None, dt: float | None = None
+    ) -> tuple[np.ndarray, float]:
+        """(c, d) of a sensor response: the continuous forward pass's (integrator None) or one step's."""
+        rows, feedthrough = sensor_rows(model, self.input_kind, self.input_index, point, integrator=integrator, dt=dt)
+        return rows[self.response_index].copy(), float(feedthrough[self.response_index])
 
 
 # -- the responses --------------------------------------------------------------------------------------------
@@ -686,8 +887,18 @@ def _resonances(
 class _Discretizer:
     """MuJoCo's one-step map of an integrator at dt, with the input column, as a frequency response."""
 
-    def __init__(self, model: mujoco.MjModel, point: OperatingPoint, kind: str, index: int, c: np.ndarray, d: float):
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        point: OperatingPoint,
+        kind: str,
+        index: int,
+        c: np.ndarray,
+        d: float,
+        probe: _Probe | None = None,
+    ):
         self.model, self.point, self.kind, self.index, self.c, self.d = model, point, kind, index, c, d
+        self.probe = probe  # a sensor response: its rows come from the step of each integrator at its dt
 
     def response(self, integrator: str, dt: float, f: np.ndarray, step: float = FD_STEP) -> np.ndarray | None:
         """H_d at f [Hz], or None where the one-step map is unstable (no steady state); `step`: the maps'
@@ -696,7 +907,10 @@ class _Discretizer:
         if spectral_radius(phi) > STABLE_RADIUS:
             return None
         gamma = step_input_column(self.model, integrator, self.kind, self.index, dt, self.point, step=step)
-        return _discrete(phi, gamma, self.c, self.d, dt, f)
+        c, d = self.c, self.d
+        if self.probe is not None and self.probe.response_kind == "sensor" and integrator != "rk4":
+            c, d = self.probe.rows(self.model, self.point, integrator, dt)
+        return _discrete(phi, gamma, c, d, dt, f)
 
 
 def _error(discrete: np.ndarray | None, exact: np.ndarray) -> np.ndarray:
@@ -815,6 +1029,8 @@ def frequency(
     parameters: Mapping[str, Any] | None = None,
     sines: int = 0,
     executor: Any = None,
+    amplitudes: Any = None,
+    sweep: str | None = None,
 ) -> FrequencyResponse:
     """The frequency response of a model's linearization, and how well an integrator at dt reproduces it.
 
@@ -825,9 +1041,11 @@ def frequency(
     scenario
         a scene's scenario (None: the one its `frequency` capability declares, else its default).
     input
-        an actuator (its control) or a joint (a force on it) (None: the scene's default).
+        an actuator (its control), or 'JOINT:force' (or 'JOINT': a generalized force on its first degree of
+        freedom, `qfrc_applied`) (None: the scene's default).
     response
-        'JOINT' (position [m or rad]), 'JOINT:vel' or 'JOINT:acc' (None: the scene's default).
+        'JOINT' (position [m or rad]), 'JOINT:vel', 'JOINT:acc', or a sensor 'SENSOR' / 'SENSOR[i]' (its
+        component i) (None: the scene's default).
     band
         (fmin, fmax) or 'FMIN:FMAX' [Hz] (None: a decade below the slowest mode to three times the fastest,
         at most a quarter of 1 / dt).
@@ -847,6 +1065,14 @@ def frequency(
         verify by simulation: this many sines log-spaced over the band and an octave above it (0: none).
     executor
         where the sines run (a `springlab.studies.executor.Executor`; None: locally).
+    amplitudes
+        the sinestream's input amplitudes [input unit] (None: one, 1 or half an actuator's control room): one
+        sinestream each, so a non-linear model's amplitude dependence shows.
+    sweep
+        'up', 'down' or 'both': instead of independent sines, sweep `sines` (default DEFAULT_SWEEP_POINTS)
+        linearly spaced frequencies over the band, each continuing from the last one's state (a non-linear
+        model's branches and jumps), at each amplitude; a cubic oscillator's sweep is compared with the
+        first-order harmonic balance (springlab.exact.harmonic_balance).
 
     Returns
     -------
@@ -875,11 +1101,16 @@ def frequency(
     input_name = input if input is not None else source.input
     response_name = response if response is not None else source.response
     if input_name is None or response_name is None:
-        raise BadInputError("name the input (--input ACTUATOR|JOINT) and the response (--response JOINT[:vel|:acc])")
+        raise BadInputError(
+            "name the input (--input ACTUATOR|JOINT:force) and the response (--response JOINT[:vel|:acc]|SENSOR[i])"
+        )
     kind, index, input_unit = resolve_input(model, input_name)
     if input_name == source.input and source.input_unit:
         input_unit = source.input_unit  # the scene knows what its actuator's control is
     dof, out_kind, response_unit = resolve_response(model, response_name)
+    probe = _Probe(kind, index, out_kind, dof)
+    if sweep is not None and sweep not in SWEEP_DIRECTIONS:
+        raise BadInputError(f"sweep must be one of {', '.join(SWEEP_DIRECTIONS)}, got {sweep!r}")
     if band is not None:
         band = parse_band(band) if isinstance(band, str) else _check_band(band)
     point = operating_point(model)
@@ -892,11 +1123,16 @@ def frequency(
             f" dt = {dt:g} s; lower fmax or dt"
         )
     b = input_column(model, kind, index, point)
-    c, d = _output(linear, b, dof, out_kind)
+    amplitude_values = (
+        (default_amplitude(model, point, kind, index),)
+        if amplitudes is None
+        else _check_amplitudes(model, point, kind, index, amplitudes)
+    )
+    c, d = probe.rows(model, point) if out_kind == "sensor" else _output(linear, b, dof, out_kind)
     exact_of = _continuous(linear.A, b, c, d)
     grid = np.geomspace(band[0], band[1], int(points))
     exact = exact_of(grid)
-    discretizer = _Discretizer(model, point, kind, index, c, d)
+    discretizer = _Discretizer(model, point, kind, index, c, d, probe)
     discrete = discretizer.response(integrator, dt, grid)
     if discrete is None:
         discrete = np.full(grid.shape, np.nan + 0j)
@@ -909,32 +1145,57 @@ def frequency(
     for name in swept:
         top = _max_dt(discretizer, name, grid, exact, tol)
         bands.append(IntegratorBand(name, top, None if top is None else EVALUATIONS[name] / top))
-    stream = None
-    if sines:
+    streams: list[Sinestream] = []
+    branches: list[SweepBranch] = []
+    duffing = None
+    if sines and sweep is None:
         top = min(2.0 * band[1], 0.45 / dt)  # an octave above the band, below Nyquist
         sine_grid = np.geomspace(band[0], top, int(sines))
         sine_discrete = discretizer.response(integrator, dt, sine_grid)
         coarse = discretizer.response(integrator, dt, sine_grid, step=2 * FD_STEP)
         if sine_discrete is None or coarse is None:
             raise BadInputError(f"{integrator} at dt = {dt:g} s is unstable on this model: no steady state to estimate")
-        stream = sinestream(
-            model,
-            point,
-            linear,
-            b,
-            c,
-            kind,
-            index,
-            dof,
-            out_kind,
-            integrator,
-            dt,
-            sine_grid,
-            sine_discrete,
-            exact_of,
-            np.abs(coarse / sine_discrete - 1.0),
-            executor,
+        for amplitude in amplitude_values:
+            streams.append(
+                sinestream(
+                    model,
+                    point,
+                    linear,
+                    b,
+                    probe,
+                    integrator,
+                    dt,
+                    sine_grid,
+                    sine_discrete,
+                    exact_of,
+                    np.abs(coarse / sine_discrete - 1.0),
+                    amplitude,
+                    executor,
+                )
+            )
+    if sweep is not None:
+        sweep_grid = np.linspace(band[0], band[1], int(sines) if sines else DEFAULT_SWEEP_POINTS)
+        if discretizer.response(integrator, dt, sweep_grid[:1]) is None:
+            raise BadInputError(f"{integrator} at dt = {dt:g} s is unstable on this model: no steady state to sweep")
+        directions = ("up", "down") if sweep == "both" else (sweep,)
+        branches = _jumps(
+            _run_sweeps(model, point, linear, b, probe, integrator, dt, sweep_grid, amplitude_values, directions)
         )
+        if out_kind == "pos":
+            reach = 1.2 * max(float(np.max(br.response_amplitude)) for br in branches)
+            duffing = cubic_oscillator(model, point, kind, index, reach)
+        if duffing is not None:
+
+            def linear_error(f: np.ndarray) -> np.ndarray:
+                # the integrator's own share (the hold's sinc is in the harmonic balance's force already)
+                h_d = discretizer.response(integrator, dt, f)
+                held = _hold(linear.A, b, c, d, dt, f)
+                return np.zeros(len(f)) if h_d is None else np.abs(h_d / held - 1.0)
+
+            branches = _harmonic_balance(branches, duffing, dt, (float(band[0]), float(band[1])), linear_error)
+        for branch in branches:
+            for array in (branch.frequencies_hz, branch.estimate, branch.response_amplitude, branch.residue):
+                array.setflags(write=False)
     for array in (grid, exact, discrete, hold):
         array.setflags(write=False)
     answers: dict[str, Any] = {}
@@ -967,7 +1228,10 @@ def frequency(
         if (input_name, response_name) == (source.input, source.response) and source.description
         else f"{input_name} to {response_name}",
         wall_time_s=_time.perf_counter() - started,
-        sinestream=stream,
+        sinestream=streams[0] if streams else None,
+        sinestreams=tuple(streams),
+        sweeps=tuple(branches),
+        duffing=duffing,
         answers=answers,
         answer_lines=tuple(answer_lines),
     )
@@ -984,34 +1248,201 @@ ESTIMATE_SAMPLES = 256
 MAX_SINE_STEPS = 200_000
 #: sines per executor chunk (one batched MuJoCo call each)
 SINES_PER_CHUNK = 8
+#: harmonics demodulated beside the fundamental (those below the Nyquist frequency of dt): a non-linear
+#: response's harmonics are fitted, not aliased into the fundamental
+HARMONICS = 5
+#: the inputs a sine drives: every control and every generalized force, set before each step
+_CONTROL_SPEC = int(mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_QFRC_APPLIED)
+_STATE_SPEC = int(
+    mujoco.mjtState.mjSTATE_TIME
+    | mujoco.mjtState.mjSTATE_QPOS
+    | mujoco.mjtState.mjSTATE_QVEL
+    | mujoco.mjtState.mjSTATE_ACT
+)
+
+
+def _drive(common: dict[str, Any], omega: float, phase: float, amplitude: float, first: int, count: int) -> np.ndarray:
+    """(count, nu + nv) rows of (ctrl, qfrc_applied) for steps first .. first + count - 1: the operating point's
+    controls with amplitude sin(phase + omega (k + 1/2) dt) added to the input, held over step k."""
+    model = common["model"]
+    rows = np.zeros((count, model.nu + model.nv))
+    rows[:, : model.nu] = common["ctrl"]
+    column = common["input_index"] if common["input_kind"] == "ctrl" else model.nu + common["input_index"]
+    k = np.arange(first, first + count)
+    rows[:, column] += amplitude * np.sin(phase + omega * (k + 0.5) * common["dt"])
+    return rows
+
+
+def _measure(common: dict[str, Any], out: dict[Any, np.ndarray], row: int) -> np.ndarray:
+    """The response samples of one simulation of a batched rollout: a joint's after each step, a sensor's at
+    each step's start (MuJoCo computes sensors in the step's forward pass)."""
+    nq, nv = common["model"].nq, common["model"].nv
+    kind, index = common["response_kind"], common["response_index"]
+    if kind == "sensor":
+        values = out["sensordata"][row][:, index]
+    elif kind == "pos":
+        values = out[_STATE_SPEC][row][:, 1 + common["qposadr"]]
+    else:
+        values = out[_STATE_SPEC][row][:, 1 + nq + index]
+    del nv
+    return np.asarray(values, float) - common["offset"]
+
+
+def _record(common: dict[str, Any]) -> list[Any]:
+    return ["sensordata"] if common["response_kind"] == "sensor" else [_STATE_SPEC]
+
+
+def _batch(common: dict[str, Any], starts: list[tuple[np.ndarray, np.ndarray, np.ndarray]], nthread: int):
+    """A mujoco.batch.Batch of the configured model with one simulation per start (qpos, qvel, act)."""
+    from mujoco import batch as mjbatch
+
+    from springlab.sim.simulate import configured
+
+    model = configured(common["model"], common["integrator"], common["dt"])
+    batch = mjbatch.Batch(model, nsim=len(starts), nthread=nthread)
+    for i, (qpos, qvel, act) in enumerate(starts):
+        batch.time[i] = 0.0
+        batch.qpos[i] = qpos
+        batch.qvel[i] = qvel
+        if model.na:
+            batch.act[i] = act
+    batch.warning[:] = 0
+    return batch
+
+
+def _check_finite(batch, values: list[np.ndarray], what: str) -> None:
+    from springlab.errors import DivergedError
+    from springlab.sim.simulate import BAD_WARNINGS
+
+    warnings = np.array(batch.warning)
+    if any(warnings[:, w, 1].any() for w in BAD_WARNINGS) or not all(np.isfinite(v).all() for v in values):
+        raise DivergedError(f"{what} blew up in MuJoCo (non-finite state or MuJoCo's bad-state warnings)")
 
 
 def _sine_chunk(payload: dict[str, Any], nthread: int = 0) -> list[np.ndarray]:
-    """Run one chunk of sines (batched) and return each run's response samples (a module-level function: it
-    runs on dask workers too)."""
-    from springlab.sim.batch import Job, run_batched
-    from springlab.sim.simulate import Setup
+    """Run one chunk of sines (one batched MuJoCo rollout, segment by segment as the shorter runs end) and
+    return each run's response samples (a module-level function: it runs on dask workers too)."""
+    common = payload["common"]
+    runs = payload["runs"]  # (qpos, qvel, act, omega, amplitude, steps)
+    batch = _batch(common, [(r[0], r[1], r[2]) for r in runs], nthread)
+    steps = np.array([r[5] for r in runs])
+    records: list[list[np.ndarray]] = [[] for _ in runs]
+    done = 0
+    with quiet_mujoco():
+        for end in np.unique(steps):
+            ids = np.flatnonzero(steps >= end).astype(np.int32)
+            count = int(end - done)
+            control = np.stack([_drive(common, runs[i][3], 0.0, runs[i][4], done, count) for i in ids])
+            out = batch.rollout(count, control=control, control_spec=_CONTROL_SPEC, record=_record(common), ids=ids)
+            for row, i in enumerate(ids):
+                records[i].append(_measure(common, out, row))
+            done = int(end)
+    values = [np.concatenate(r) for r in records]
+    _check_finite(batch, values, "a sine")
+    return values
 
-    model = payload["model"]
-    jobs = [
-        Job(model, payload["integrator"], payload["dt"], int(len(control)), Setup(qpos, qvel, act, control))
-        for qpos, qvel, act, control in payload["runs"]
-    ]
-    out = []
-    for outcome in run_batched(jobs, nthread=nthread):
-        if isinstance(outcome, Exception):
-            raise outcome
-        column = outcome.qpos[:, payload["qposadr"]] if payload["kind"] == "pos" else outcome.qvel[:, payload["dof"]]
-        out.append(np.asarray(column, float) - payload["offset"])
-    return out
 
-
-def _demodulate(y: np.ndarray, t: np.ndarray, omega: float) -> complex:
-    """Y of y(t) = a + b t + Re(Y exp(j omega t)) by least squares (numpy.linalg.lstsq)."""
+def _demodulate(y: np.ndarray, t: np.ndarray, omega: float, dt: float | None = None) -> np.ndarray:
+    """(Y_1, ..., Y_H): y(t) = a + b t + sum_h Re(Y_h exp(j h omega t)) by least squares (numpy.linalg.lstsq);
+    the harmonics h = 2 .. HARMONICS below the Nyquist frequency of dt (None: the fundamental only)."""
+    top = 1 if dt is None else max(1, min(HARMONICS, int(math.ceil(math.pi / (omega * dt))) - 1))
     t0 = t - t[0]
-    basis = np.column_stack([np.ones_like(t), t0, np.cos(omega * t), np.sin(omega * t)])
-    coef, *_ = np.linalg.lstsq(basis, y, rcond=None)
-    return complex(coef[2], -coef[3])
+    columns = [np.ones_like(t), t0]
+    for h in range(1, top + 1):
+        columns += [np.cos(h * omega * t), np.sin(h * omega * t)]
+    coef, *_ = np.linalg.lstsq(np.column_stack(columns), y, rcond=None)
+    return np.array([complex(coef[2 + 2 * h], -coef[3 + 2 * h]) for h in range(top)])
+
+
+def _common(model: mujoco.MjModel, point: OperatingPoint, probe: _Probe, integrator: str, dt: float) -> dict[str, Any]:
+    """What every chunk needs: the model, the setting, the input and the response, and the response at the point."""
+    qposadr = 0
+    if probe.response_kind == "sensor":
+        data = mujoco.MjData(model)
+        with quiet_mujoco():
+            point.load(model, data)
+            mujoco.mj_forward(model, data)
+        offset = float(data.sensordata[probe.response_index])
+    else:
+        qposadr = int(model.jnt_qposadr[int(model.dof_jntid[probe.response_index])])
+        if probe.response_kind == "pos":
+            offset = float(point.qpos[qposadr])
+        else:
+            offset = float(point.qvel[probe.response_index])
+    return {
+        "model": model,
+        "integrator": integrator,
+        "dt": dt,
+        "ctrl": np.array(point.ctrl, float),
+        "input_kind": probe.input_kind,
+        "input_index": probe.input_index,
+        "response_kind": probe.response_kind,
+        "response_index": probe.response_index,
+        "qposadr": qposadr,
+        "offset": offset,
+    }
+
+
+def default_amplitude(model: mujoco.MjModel, point: OperatingPoint, kind: str, index: int) -> float:
+    """The sinestream's input amplitude when none is given: 1 input unit, or half the room an actuator's
+    control range leaves at the operating point [input unit].
+
+    Raises
+    ------
+    BadInputError
+        the operating point's control sits on its limit.
+    """
+    if kind != "ctrl":
+        return 1.0
+    low, high = model.actuator_ctrlrange[index]
+    limited = bool(model.actuator_ctrllimited[index]) and high > low
+    base = float(point.ctrl[index])
+    amplitude = min(1.0, 0.5 * min(high - base, base - low)) if limited else 1.0
+    if amplitude <= 0:
+        raise BadInputError("the operating point's control sits on its limit: no room for a sine")
+    return float(amplitude)
+
+
+def _check_amplitudes(
+    model: mujoco.MjModel, point: OperatingPoint, kind: str, index: int, amplitudes: Any
+) -> tuple[float, ...]:
+    """The amplitudes as floats > 0, each inside an actuator's control range around the operating point."""
+    try:
+        values = tuple(float(a) for a in amplitudes)
+    except (TypeError, ValueError):
+        raise BadInputError(f"amplitudes must be numbers > 0 in input units, got {amplitudes!r}") from None
+    if not values or not all(math.isfinite(a) and a > 0 for a in values):
+        raise BadInputError(f"amplitudes must be finite numbers > 0 in input units, got {amplitudes!r}")
+    if kind == "ctrl" and bool(model.actuator_ctrllimited[index]):
+        low, high = model.actuator_ctrlrange[index]
+        room = min(high - point.ctrl[index], point.ctrl[index] - low)
+        if max(values) > room:
+            raise BadInputError(
+                f"amplitude {max(values):g} leaves the actuator's control range {low:g}..{high:g} around"
+                f" {point.ctrl[index]:g}; give amplitudes <= {room:g}"
+            )
+    return values
+
+
+def _settle_rate(linear: Linearization) -> tuple[float, float]:
+    """(sigma [1/s], cond(V)): the slowest decaying non-rigid mode's rate and the mode basis' condition number."""
+    moving = [-lam.real for lam in linear.eigenvalues if abs(lam) > linear.growth_tolerance and lam.real < 0]
+    sigma = min(moving) if moving else math.inf
+    _, vectors = np.linalg.eig(linear.A)
+    condition = float(np.linalg.cond(vectors)) if vectors.size else 1.0
+    return sigma, condition
+
+
+def _steady_start(
+    model: mujoco.MjModel, point: OperatingPoint, linear: Linearization, b: np.ndarray, omega: float, amplitude: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(qpos, qvel, act) on the linearization's steady state at t = 0 of amplitude sin(omega t)."""
+    nv = model.nv
+    state = np.linalg.solve(1j * omega * np.eye(linear.A.shape[0]) - linear.A, b * (-1j * amplitude))
+    start = state.real
+    qpos = point.qpos.copy()
+    mujoco.mj_integratePos(model, qpos, start[:nv], 1.0)
+    return qpos, point.qvel + start[nv : 2 * nv], point.act + start[2 * nv :]
 
 
 def sinestream(
@@ -1019,55 +1450,43 @@ def sinestream(
     point: OperatingPoint,
     linear: Linearization,
     b: np.ndarray,
-    c: np.ndarray,
-    kind: str,
-    index: int,
-    dof: int,
-    out_kind: str,
+    probe: _Probe,
     integrator: str,
     dt: float,
     frequencies_hz: np.ndarray,
     discrete: np.ndarray,
     exact_of: Callable[[np.ndarray], np.ndarray],
     uncertainty: np.ndarray,
+    amplitude: float,
     executor: Any = None,
 ) -> Sinestream:
     """Simulate MuJoCo at each frequency and demodulate (`Sinestream`; the module docstring says how).
 
-    Each sine u_k = U sin(omega (k + 1/2) dt), held over step k, starts on the exact linearization's steady
-    state (so only the small discrete-minus-exact difference is left to decay), runs `settle` (the slowest
-    non-rigid mode's envelope exp(-sigma t) times the mode basis' condition number down to
-    SINESTREAM_ACCURACY), then ESTIMATE_PERIODS whole periods (at least ESTIMATE_SAMPLES samples) are
-    demodulated by least squares on (1, t, cos, sin). `uncertainty` (m,) is the discrete response's own
-    relative finite-difference error (its maps at the steps h and 2 h compared).
+    Each sine u_k = U sin(omega (k + 1/2) dt), held over step k on the input (an actuator's control or a
+    joint's `qfrc_applied`), starts on the exact linearization's steady state (so only the small
+    discrete-minus-exact difference is left to decay), runs `settle` (the slowest non-rigid mode's envelope
+    exp(-sigma t) times the mode basis' condition number down to SINESTREAM_ACCURACY), then ESTIMATE_PERIODS
+    whole periods (at least ESTIMATE_SAMPLES samples) of the response (a joint's position or velocity, or a
+    sensor) are demodulated by least squares on (1, t, cos h omega t, sin h omega t) with the harmonics h
+    below Nyquist. `uncertainty` (m,) is the discrete response's own relative finite-difference error (its maps
+    at the steps h and 2 h compared). The stated accuracy is the linear model's: for a non-linear one the
+    estimate is the first harmonic per input amplitude (its describing function) and may part from it.
 
     Raises
     ------
     BadInputError
-        the input is not an actuator, or the response is an acceleration (the run records positions and
-        velocities).
+        the response is a joint's acceleration (the run records positions and velocities; a sensor can
+        measure one).
     """
     from springlab.studies.executor import chunked, resolve
 
-    if kind != "ctrl":
-        raise BadInputError("the sinestream drives an actuator's control; name an actuator as the input")
-    if out_kind == "acc":
-        raise BadInputError("the sinestream measures a position or a velocity response, not an acceleration")
+    if probe.response_kind == "acc":
+        raise BadInputError(
+            "the sinestream measures a joint's position or velocity, or a sensor; not a joint's acceleration"
+            " (add an accelerometer sensor)"
+        )
     started = _time.perf_counter()
-    nv = model.nv
-    limited = (
-        bool(model.actuator_ctrllimited[index])
-        and model.actuator_ctrlrange[index, 1] > model.actuator_ctrlrange[index, 0]
-    )
-    low, high = model.actuator_ctrlrange[index]
-    base = float(point.ctrl[index])
-    amplitude = min(1.0, 0.5 * min(high - base, base - low)) if limited else 1.0
-    if amplitude <= 0:
-        raise BadInputError("the operating point's control sits on its limit: no room for a sine")
-    moving = [-lam.real for lam in linear.eigenvalues if abs(lam) > linear.growth_tolerance and lam.real < 0]
-    sigma = min(moving) if moving else math.inf
-    _, vectors = np.linalg.eig(linear.A)
-    condition = float(np.linalg.cond(vectors)) if vectors.size else 1.0
+    sigma, condition = _settle_rate(linear)
     exact = exact_of(frequencies_hz)
     runs, meta = [], []
     for f in frequencies_hz:
@@ -1078,38 +1497,21 @@ def sinestream(
         estimate_steps = int(round(periods * period / dt))
         settle_steps = min(int(math.ceil(settle / dt)), max(MAX_SINE_STEPS - estimate_steps, 0))
         steps = settle_steps + estimate_steps
-        # the exact steady state at t = 0 of the input U sin(omega t) = Re(-j U exp(j omega t))
-        state = np.linalg.solve(1j * omega * np.eye(linear.A.shape[0]) - linear.A, b * (-1j * amplitude))
-        start = state.real
-        qpos = point.qpos.copy()
-        mujoco.mj_integratePos(model, qpos, start[:nv], 1.0)
-        qvel = point.qvel + start[nv : 2 * nv]
-        act = point.act + start[2 * nv :]
-        control = np.tile(point.ctrl, (steps, 1))
-        control[:, index] = base + amplitude * np.sin(omega * (np.arange(steps) + 0.5) * dt)
-        runs.append((qpos, qvel, act, control))
+        qpos, qvel, act = _steady_start(model, point, linear, b, omega, amplitude)
+        runs.append((qpos, qvel, act, omega, amplitude, steps))
         left = condition * math.exp(-sigma * settle_steps * dt) if math.isfinite(sigma) else 0.0
         rounding = 1e3 * _EPS * math.sqrt(steps)
         meta.append((omega, settle_steps, estimate_steps, periods, min(left, 1.0) + rounding))
-    joint_qposadr = int(model.jnt_qposadr[int(model.dof_jntid[dof])])
-    offset = float(point.qpos[joint_qposadr]) if out_kind == "pos" else float(point.qvel[dof])
-    common = {
-        "model": model,
-        "integrator": integrator,
-        "dt": dt,
-        "kind": out_kind,
-        "qposadr": joint_qposadr,
-        "dof": dof,
-        "offset": offset,
-    }
+    common = _common(model, point, probe, integrator, dt)
+    shift = 0 if probe.response_kind == "sensor" else 1  # a joint's sample k is after step k
     chunks = chunked(len(runs), SINES_PER_CHUNK)
-    payloads = [{**common, "runs": [runs[i] for i in chunk]} for chunk in chunks]
+    payloads = [{"common": common, "runs": [runs[i] for i in chunk]} for chunk in chunks]
     results = [y for part in resolve(executor).map(_sine_chunk, payloads, description="sines") for y in part]
     estimates = []
     for y, (omega, _, estimate_steps, _, _) in zip(results, meta):
-        window = slice(len(y) - estimate_steps - 1, len(y))
-        t = np.arange(len(y)) * dt
-        estimates.append(_demodulate(y[window], t[window], omega) / (-1j * amplitude))
+        t = (np.arange(len(y)) + shift) * dt
+        window = slice(len(y) - estimate_steps - shift, len(y))
+        estimates.append(_demodulate(y[window], t[window], omega, dt)[0] / (-1j * amplitude))
     arrays = [
         np.asarray(frequencies_hz, float),
         np.array(estimates),
@@ -1132,6 +1534,252 @@ def sinestream(
         settle_s=arrays[5],
         estimate_periods=arrays[6],
         uncertainty=arrays[7],
-        steps=int(sum(len(r[3]) for r in runs)),
+        steps=int(sum(r[5] for r in runs)),
         wall_time_s=_time.perf_counter() - started,
     )
+
+
+# -- the sweep: up and down in frequency, each sine continuing from the last (a non-linear model's branches) -----
+
+#: each sweep frequency settles until the slowest mode's envelope falls to this, from where the last one ended
+SWEEP_ACCURACY = 1e-4
+#: the sweep's branches differ (hysteresis) where their first harmonics part by more than this many times
+#: SWEEP_ACCURACY
+HYSTERESIS_FACTOR = 100.0
+SWEEP_DIRECTIONS = ("up", "down", "both")
+
+
+@dataclasses.dataclass(frozen=True)
+class SweepBranch:
+    """One sweep in frequency at one input amplitude, each sine starting from the previous one's final state
+    (continuation: a non-linear model stays on the branch it is on until that branch ends).
+
+    Attributes
+    ----------
+    direction
+        'up' or 'down'.
+    amplitude
+        the input amplitude [input unit].
+    frequencies_hz
+        (m,) in the order swept [Hz].
+    estimate
+        (m,) complex: the response's first harmonic per input amplitude (the describing function).
+    response_amplitude
+        (m,) |first harmonic| [response unit].
+    third_harmonic
+        (m,) |third harmonic| / |first harmonic| [-] (nan where 3 f is above Nyquist).
+    residue
+        (m,) |Y(second half of the window) - Y(first half)| / |Y| [-]: what the transient left (settling check).
+    jump_hz
+        (f_before, f_after) [Hz] between which the branch jumps (the end of the band where the up and down
+        branches differ, in this sweep's direction), or None (no hysteresis, or only one direction swept).
+    predicted
+        (m,) the harmonic-balance amplitude nearest the measured one [response unit] (None: the model is no
+        cubic oscillator or the response is not its position).
+    bound
+        (m,) the derived bound on |measured - predicted| [response unit] (springlab.exact.harmonic_balance:
+        twice the first-order shift by the neglected third harmonic, plus twice the residue and the
+        integrator's relative error on the linearization beyond the held input's (|H_d / H_zoh - 1|), times
+        the measured amplitude).
+    fold_hz
+        (f, low, high) [Hz]: the harmonic-balance fold where the branch this sweep starts on ends (followed
+        root to root from the first point's root), with the bracket first-order balance promises, or None.
+    steps
+        MuJoCo steps of the sweep.
+    """
+
+    direction: str
+    amplitude: float
+    frequencies_hz: np.ndarray
+    estimate: np.ndarray
+    response_amplitude: np.ndarray
+    third_harmonic: np.ndarray
+    residue: np.ndarray
+    jump_hz: tuple[float, float] | None = None
+    predicted: np.ndarray | None = None
+    bound: np.ndarray | None = None
+    fold_hz: tuple[float, float, float] | None = None
+    steps: int = 0
+
+    @property
+    def within_bound(self) -> np.ndarray | None:
+        """(m,) bool: |measured - predicted| <= bound (None without a prediction)."""
+        if self.predicted is None or self.bound is None:
+            return None
+        return np.abs(self.response_amplitude - self.predicted) <= self.bound
+
+    @property
+    def agrees(self) -> bool:
+        """Every point within its harmonic-balance bound (True without a prediction)."""
+        inside = self.within_bound
+        return True if inside is None else bool(np.all(inside))
+
+    def to_dict(self) -> dict[str, Any]:
+        """One entry of frequency.json's "sweeps"."""
+        inside = self.within_bound
+        return {
+            "direction": self.direction,
+            "amplitude": self.amplitude,
+            "frequencies_hz": self.frequencies_hz.tolist(),
+            "magnitude": np.abs(self.estimate).tolist(),
+            "phase_deg": np.degrees(np.angle(self.estimate)).tolist(),
+            "response_amplitude": self.response_amplitude.tolist(),
+            "third_harmonic": [None if not math.isfinite(v) else float(v) for v in self.third_harmonic],
+            "residue": self.residue.tolist(),
+            "jump_hz": None if self.jump_hz is None else list(self.jump_hz),
+            "harmonic_balance_amplitude": None if self.predicted is None else self.predicted.tolist(),
+            "bound": None if self.bound is None else self.bound.tolist(),
+            "within_bound": None if inside is None else inside.tolist(),
+            "agrees": self.agrees,
+            "fold_hz": None if self.fold_hz is None else list(self.fold_hz),
+            "steps": self.steps,
+        }
+
+
+def _run_sweeps(
+    model: mujoco.MjModel,
+    point: OperatingPoint,
+    linear: Linearization,
+    b: np.ndarray,
+    probe: _Probe,
+    integrator: str,
+    dt: float,
+    grid: np.ndarray,
+    amplitudes: tuple[float, ...],
+    directions: tuple[str, ...],
+) -> list[SweepBranch]:
+    """Continuation sweeps, one chain per (amplitude, direction), all chains in one mujoco.batch.Batch.
+
+    At each frequency the input u_k = U sin(phi + omega (k + 1/2) dt) continues the last frequency's phase phi
+    (no jump in the drive), runs ln(1 / SWEEP_ACCURACY) / sigma (sigma: the slowest decaying mode of the
+    linearization; for a one-degree-of-freedom oscillator the mean decay of any periodic orbit's neighbours is
+    c / (2 m) too, by Liouville) and then 2 ESTIMATE_PERIODS whole periods, demodulated with their harmonics
+    (`_demodulate`); the halves of that window demodulated alone give the residue. The first frequency of each
+    chain starts on the linearization's steady state.
+    """
+    if probe.response_kind == "acc":
+        raise BadInputError(
+            "the sweep measures a joint's position or velocity, or a sensor; not a joint's acceleration"
+        )
+    sigma, _ = _settle_rate(linear)
+    if not math.isfinite(sigma):
+        raise BadInputError("the model has no damped mode: a sweep has no steady state to continue along")
+    settle = math.log(1.0 / SWEEP_ACCURACY) / sigma
+    chains = [(a, d) for a in amplitudes for d in directions]
+    orders = [grid if d == "up" else grid[::-1] for _, d in chains]
+    first = [2 * math.pi * float(order[0]) for order in orders]
+    starts = [_steady_start(model, point, linear, b, w, a) for w, (a, _) in zip(first, chains)]
+    common = _common(model, point, probe, integrator, dt)
+    shift = 0 if probe.response_kind == "sensor" else 1
+    # every chain advances together, one batched rollout per frequency index (threads across chains): the same
+    # settling for all, and each chain's own whole-period window at the end of it
+    batch = _batch(common, starts, min(len(chains), os.cpu_count() or 1))
+    phases = [0.0] * len(chains)
+    found: list[list[np.ndarray]] = [[] for _ in chains]
+    ids = np.arange(len(chains), dtype=np.int32)
+    total = 0
+    settle_steps = int(math.ceil(settle / dt))
+    with quiet_mujoco():
+        for i in range(len(grid)):
+            freqs = [float(order[i]) for order in orders]
+            windows = []
+            for f in freqs:
+                periods = max(2 * ESTIMATE_PERIODS, 2 * math.ceil(0.5 * ESTIMATE_SAMPLES * dt * f))
+                windows.append(int(round(periods / f / dt)))
+            steps = settle_steps + max(windows)
+            control = np.stack(
+                [_drive(common, 2 * math.pi * f, phases[j], chains[j][0], 0, steps) for j, f in enumerate(freqs)]
+            )
+            out = batch.rollout(steps, control=control, control_spec=_CONTROL_SPEC, record=_record(common), ids=ids)
+            ys = [_measure(common, out, j) for j in range(len(chains))]
+            _check_finite(batch, ys, "a sweep")
+            t = (np.arange(steps) + shift) * dt
+            for j, (amplitude, _) in enumerate(chains):
+                f, y, window = freqs[j], ys[j], windows[j]
+                omega = 2 * math.pi * f
+                tail, half = slice(steps - window, steps), slice(steps - window // 2, steps)
+                early = slice(steps - window, steps - window // 2)
+                whole = _demodulate(y[tail], t[tail], omega, dt)
+                late = _demodulate(y[half], t[half], omega, dt)[0]
+                before = _demodulate(y[early], t[early], omega, dt)[0]
+                phasor = -1j * amplitude * np.exp(1j * phases[j])
+                third = abs(whole[2]) / abs(whole[0]) if len(whole) >= 3 and abs(whole[0]) > 0 else math.nan
+                residue = abs(late - before) / max(abs(whole[0]), 1e-300)
+                found[j].append(np.array([f, whole[0] / phasor, abs(whole[0]), third, residue], complex))
+                phases[j] = math.fmod(phases[j] + omega * steps * dt, 2 * math.pi)
+            total += steps * len(chains)
+    branches = []
+    for j, (amplitude, direction) in enumerate(chains):
+        rows = np.array(found[j])
+        branches.append(
+            SweepBranch(
+                direction=direction,
+                amplitude=float(amplitude),
+                frequencies_hz=rows[:, 0].real.copy(),
+                estimate=rows[:, 1].copy(),
+                response_amplitude=rows[:, 2].real.copy(),
+                third_harmonic=rows[:, 3].real.copy(),
+                residue=rows[:, 4].real.copy(),
+                steps=total // len(chains),
+            )
+        )
+    return branches
+
+
+def _jumps(branches: list[SweepBranch]) -> list[SweepBranch]:
+    """Each branch with its jump: where the up and down sweeps at its amplitude stop differing, in its direction."""
+    out = []
+    for branch in branches:
+        other = next((o for o in branches if o.amplitude == branch.amplitude and o.direction != branch.direction), None)
+        if other is None:
+            out.append(branch)
+            continue
+        mine = dict(zip(branch.frequencies_hz, branch.estimate))
+        theirs = dict(zip(other.frequencies_hz, other.estimate))
+        grid = np.sort(branch.frequencies_hz)
+        differ = [
+            abs(mine[f] - theirs[f]) / max(abs(mine[f]), abs(theirs[f])) > HYSTERESIS_FACTOR * SWEEP_ACCURACY
+            for f in grid
+        ]
+        inside = np.nonzero(differ)[0]
+        jump = None
+        if inside.size:
+            if branch.direction == "up" and inside[-1] + 1 < len(grid):
+                jump = (float(grid[inside[-1]]), float(grid[inside[-1] + 1]))
+            if branch.direction == "down" and inside[0] > 0:
+                jump = (float(grid[inside[0] - 1]), float(grid[inside[0]]))
+        out.append(dataclasses.replace(branch, jump_hz=jump))
+    return out
+
+
+def _harmonic_balance(
+    branches: list[SweepBranch],
+    duffing: Any,
+    dt: float,
+    band: tuple[float, float],
+    linear_error: Callable[[np.ndarray], np.ndarray],
+) -> list[SweepBranch]:
+    """Each branch with the harmonic-balance amplitude nearest each measured one, its derived bound, and the fold
+    where its direction's branch ends (springlab.exact.harmonic_balance)."""
+    from springlab.exact import harmonic_balance as hb
+
+    out = []
+    for branch in branches:
+        omegas = 2 * math.pi * branch.frequencies_hz
+        hold = np.sinc(omegas * dt / (2 * math.pi))  # a held sine's first harmonic: sinc(omega dt / 2)
+        forces = duffing.gain * branch.amplitude * hold
+        predicted, bound = [], []
+        integrator = linear_error(branch.frequencies_hz)
+        for omega, force, measured, residue, err in zip(
+            omegas, forces, branch.response_amplitude, branch.residue, integrator
+        ):
+            roots = hb.amplitudes(duffing, float(force), float(omega))
+            root = float(roots[np.argmin(np.abs(np.log(roots / measured)))])
+            predicted.append(root)
+            bound.append(hb.amplitude_bound(duffing, float(force), root, float(omega)) + (2 * residue + err) * measured)
+        # the fold where the branch the sweep starts on ends (harmonic balance followed from the first point)
+        force_mid = duffing.gain * branch.amplitude * float(np.sinc(math.sqrt(band[0] * band[1]) * dt))
+        first, last = float(branch.frequencies_hz[0]), float(branch.frequencies_hz[-1])
+        fold = hb.fold_bracket(duffing, force_mid, first, last, float(branch.response_amplitude[0]))
+        out.append(dataclasses.replace(branch, predicted=np.array(predicted), bound=np.array(bound), fold_hz=fold))
+    return out
