@@ -8,12 +8,15 @@ in its own cells, so a notebook that runs but computes nonsense fails too.
 
 from __future__ import annotations
 
+import os
 import pathlib
 import sys
+import tempfile
 
 import jupytext
 import nbclient
 import pytest
+from jupyter_client.manager import AsyncKernelManager
 
 EXAMPLES = pathlib.Path(__file__).resolve().parents[1] / "docs" / "examples"
 NOTEBOOKS = sorted(EXAMPLES.glob("*.py"))
@@ -32,10 +35,20 @@ def _this_python_kernel(monkeypatch):
 
 def _execute(path: pathlib.Path, folder: pathlib.Path):
     notebook = jupytext.read(path)
-    client = nbclient.NotebookClient(
-        notebook, timeout=CELL_TIMEOUT_S, kernel_name="python3", resources={"metadata": {"path": str(folder)}}
-    )
-    return client.execute()
+    # the kernel's channels as Unix sockets, not TCP ports: over TCP, one run of the widget notebook in 5 to
+    # 10 got its last execute_reply only when nbclient's wait timed out (300 s, then no error: the cell had
+    # run; nbclient issue 312), and a port picked then released can be taken by a Dask worker meanwhile. In a
+    # short folder of their own: a Unix socket's path is limited to about 100 bytes
+    with tempfile.TemporaryDirectory(prefix="nb") as sockets:
+        kernel = AsyncKernelManager(kernel_name="python3", transport="ipc", ip=os.path.join(sockets, "k"))
+        client = nbclient.NotebookClient(
+            notebook,
+            km=kernel,
+            timeout=CELL_TIMEOUT_S,
+            kernel_name="python3",
+            resources={"metadata": {"path": str(folder)}},
+        )
+        return client.execute()
 
 
 @pytest.mark.parametrize(
