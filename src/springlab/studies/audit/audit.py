@@ -37,7 +37,6 @@ from springlab.exact.linearize import Linearization
 from springlab.exact.model_at_point import ModelAtPoint
 from springlab.exact.operating_point import OperatingPoint
 from springlab.runs import compare
-from springlab.runs.run import prepare
 from springlab.sim.batch import Job
 from springlab.sim.simulate import (
     INTEGRATORS,
@@ -602,10 +601,9 @@ def load(model_or_path: Any) -> _Source:
     text = os.fspath(model_or_path)
     path = pathlib.Path(text)
     if not path.exists() and text in scenes.SCENES:
-        scene, chosen, params = prepare(text, None, {})
-        model = scene.build(params, chosen)
-        steps = max(1, round(chosen.duration / model.opt.timestep))
-        setup = scene.setup(model, params, chosen, steps, model.opt.timestep)
+        case = scenes.case(text)
+        chosen, model = case.scenario, case.model
+        setup = case.setup(max(1, round(chosen.duration / model.opt.timestep)), model.opt.timestep)
         return _Source(f"scene {text!r} (scenario {chosen.name!r})", model, setup, chosen.duration, ("scene", text))
     if not path.is_file():
         raise BadInputError(f"no such model file or scene {text!r}; scenes: {', '.join(sorted(scenes.SCENES))}")
