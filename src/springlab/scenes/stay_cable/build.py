@@ -15,8 +15,8 @@ How the physics is encoded, and why:
   MuJoCo integrator treats tendon springs explicitly, as it treats joint springs.
 * **Intrinsic damping and the damper as joint damping**: a viscous force towards the still line at every node
   (c_s dx, `TautCable.structural_node_damping`) and the damper's coefficient added at the node nearest a.
-  Joint damping is what euler, implicit and implicitfast integrate implicitly (DESIGN.md's "MuJoCo facts that
-  bite"); tendon damping is not (euler explicit, implicit and implicitfast only its diagonal).
+  Joint damping is what euler, implicit and implicitfast integrate implicitly; tendon damping is not (euler
+  treats it explicitly, implicit and implicitfast only its diagonal: measured on the printer head's belt).
 * **Rain-wind as modal tendons**: `aero_k` (k = 1 ... aero_modes) has the coefficients sin(j k pi / (N + 1)) and
   the damping d_k of `TautCable.aero_mode_damping` (negative for rain-wind): C += d_k s_k s_k^T, mode k's ratio
   shifted by exactly zeta_a in the model. Dense in C, so every integrator treats it explicitly in part.
