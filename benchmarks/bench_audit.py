@@ -26,7 +26,7 @@ import dm_control
 import mujoco
 import numpy as np
 
-from springlab.exact.linearize import linearize, operating_point, settle
+from springlab.exact.model_at_point import ModelAtPoint
 from springlab.sim import batch
 from springlab.sim.simulate import INTEGRATORS, Setup, quiet_mujoco
 from springlab.studies.audit.audit import audit
@@ -39,18 +39,18 @@ SETTLE_S = 3.0
 
 
 def limits_two_ways(model) -> None:
-    point = settle(model, operating_point(model), SETTLE_S)
-    linear = linearize(model, point)
+    at = ModelAtPoint.at(model, settle_s=SETTLE_S)
+    point = at.point
     start = Setup(point.qpos, point.qvel, point.act, point.ctrl)
     seen = watch(model, start, 1.0)
     probe = RunProbe(start, 1.0, seen.peak_speed, float(np.linalg.norm(model.opt.gravity)), 0.1)
     found: dict[str, dict] = {}
 
     def linear_path():
-        found["map"] = stability_limits(model, linear, list(INTEGRATORS), 1.0, smooth=True)
+        found["map"] = stability_limits(at, list(INTEGRATORS), 1.0, smooth=True)
 
     def brute_force():
-        found["runs"] = stability_limits(model, linear, list(INTEGRATORS), 1.0, smooth=False, probe=probe)
+        found["runs"] = stability_limits(at, list(INTEGRATORS), 1.0, smooth=False, probe=probe)
 
     linear_s, brute_s = math.inf, math.inf
     for _ in range(3):  # alternating, so both see the same load

@@ -25,7 +25,7 @@ from scipy.optimize import brentq
 from contract import plain_json
 from springlab.errors import BadInputError, UnknownNameError
 from springlab.exact.limits import stability_limit
-from springlab.exact.linearize import linearize
+from springlab.exact.model_at_point import ModelAtPoint
 from springlab.sim import model_files
 from springlab.studies import stability, tradeoff
 from springlab.studies.audit.audit import INTEGRATORS, audit
@@ -299,8 +299,7 @@ def test_limits_split_joint_and_tendon_damping_as_each_integrator_does():
         f' damping="{2 * zeta_tendon * omega}"><joint joint="x" coef="1"/></fixed></tendon></mujoco>'
     )
     model = mujoco.MjModel.from_xml_string(xml)
-    linear = linearize(model)
-    limits = stability_limits(model, linear, ("euler", "implicit", "implicitfast"), 10.0)
+    limits = stability_limits(ModelAtPoint.at(model), ("euler", "implicit", "implicitfast"), 10.0)
 
     def bound(s):
         return 2 * s + 2 * math.hypot(s, 1.0)

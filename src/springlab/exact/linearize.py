@@ -13,7 +13,9 @@ n x n with n = 2 nv + na.
   A = [[0, I], [-M^-1 K, -M^-1 C]] (plus the activation rows and columns by
   centred differences of `mj_forward`), its eigenvalues lambda [1/s] and the
   modes they make (`Mode`).
-* `OperatingPoint.at(model, qpos=...)` / `operating_point(model, keyframe)`: where to linearize.
+* `OperatingPoint.at(model, qpos=...)` / `operating_point(model, keyframe)`: where to linearize
+  (springlab.exact.operating_point; `springlab.exact.model_at_point.ModelAtPoint` holds a model there
+  with its linearization, computed once).
 * `one_step_map`: Phi(dt) = d x_{n+1} / d x_n of one `mj_step` for any
   integrator: `mjd_transitionFD` (centred) where MuJoCo supports it, centred
   differences of `mj_step` in the tangent space for RK4 (which
@@ -30,6 +32,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import functools
 import math
 from collections.abc import Sequence
 from typing import Any
@@ -38,97 +41,31 @@ import mujoco
 import numpy as np
 
 from springlab.errors import BadInputError
-from springlab.sim.simulate import BAD_WARNINGS, integrator_id, quiet_mujoco
+
+# where to linearize lives in operating_point.py; the names stay importable from here, as before
+from springlab.exact.operating_point import OperatingPoint, operating_point
+from springlab.sim.simulate import integrator_id, quiet_mujoco
+
+__all__ = [
+    "FD_STEP",
+    "INPUT_KINDS",
+    "Linearization",
+    "Mode",
+    "OperatingPoint",
+    "input_column",
+    "linearize",
+    "modes_of",
+    "one_step_map",
+    "operating_point",
+    "sensor_rows",
+    "spectral_radius",
+    "step_input_column",
+]
 
 #: finite-difference step in the tangent space [m, rad, m/s, rad/s or activation units]
 FD_STEP = 1e-6
 _EPS = float(np.finfo(float).eps)
 _INTEGRATION = int(mujoco.mjtState.mjSTATE_INTEGRATION)
-
-
-@dataclasses.dataclass(frozen=True)
-class OperatingPoint:
-    """Where a model is linearized: qpos (nq,) [m, rad, quaternion], qvel (nv,) [m/s, rad/s],
-    act (na,) and ctrl (nu,) [actuator units]; `label` says where it came from (e.g. "keyframe 'home'")."""
-
-    qpos: np.ndarray
-    qvel: np.ndarray
-    act: np.ndarray
-    ctrl: np.ndarray
-    label: str = "qpos0"
-
-    @classmethod
-    def at(
-        cls,
-        model: mujoco.MjModel,
-        qpos: np.ndarray | None = None,
-        qvel: np.ndarray | None = None,
-        act: np.ndarray | None = None,
-        ctrl: np.ndarray | None = None,
-        label: str = "given state",
-    ) -> OperatingPoint:
-        """A point from whatever the caller has (the rest: qpos0, zero velocity, activation and control),
-        e.g. `linearize(model, OperatingPoint.at(model, qpos=sag))` for a scene's own linearization."""
-
-        def given(value, default):
-            return np.array(default if value is None else value, float)
-
-        return cls(
-            given(qpos, model.qpos0),
-            given(qvel, np.zeros(model.nv)),
-            given(act, np.zeros(model.na)),
-            given(ctrl, np.zeros(model.nu)),
-            label,
-        )
-
-    def to_dict(self) -> dict[str, Any]:
-        """{"label", "qpos", "qvel", "act", "ctrl"} as plain lists."""
-        return {
-            "label": self.label,
-            "qpos": self.qpos.tolist(),
-            "qvel": self.qvel.tolist(),
-            "act": self.act.tolist(),
-            "ctrl": self.ctrl.tolist(),
-        }
-
-    def load(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
-        """Reset `data` and put this point into it (time 0, MuJoCo's other defaults)."""
-        mujoco.mj_resetData(model, data)
-        data.qpos[:] = self.qpos
-        data.qvel[:] = self.qvel
-        data.act[:] = self.act
-        data.ctrl[:] = self.ctrl
-
-
-def operating_point(model: mujoco.MjModel, keyframe: str | int | None = None) -> OperatingPoint:
-    """The model's operating point: the keyframe named or numbered `keyframe`; None: the first keyframe
-    if the model has one, else qpos0 at rest.
-
-    Raises
-    ------
-    BadInputError
-        no such keyframe (the message lists the valid ones).
-    """
-    if keyframe is None and model.nkey == 0:
-        return OperatingPoint(
-            model.qpos0.copy(), np.zeros(model.nv), np.zeros(model.na), np.zeros(model.nu), "qpos0 (no keyframe)"
-        )
-    names = [model.key(i).name or str(i) for i in range(model.nkey)]
-    index = 0 if keyframe is None else None
-    if keyframe is not None:
-        text = str(keyframe)
-        if text in names:
-            index = names.index(text)
-        elif text.lstrip("-").isdigit() and 0 <= int(text) < model.nkey:
-            index = int(text)
-    if index is None:
-        valid = ", ".join(f"{i} ({n})" if n != str(i) else str(i) for i, n in enumerate(names)) or "none"
-        raise BadInputError(f"unknown keyframe {str(keyframe)!r}; valid: {valid}")
-    key = model.key(index)
-    label = f"keyframe {names[index]!r}" if names[index] != str(index) else f"keyframe {index}"
-    return OperatingPoint(
-        np.array(key.qpos, float), np.array(key.qvel, float), np.array(key.act, float), np.array(key.ctrl, float), label
-    )
 
 
 def _point_or_default(model: mujoco.MjModel, point: OperatingPoint | None) -> OperatingPoint:
@@ -255,6 +192,12 @@ class Linearization:
     def max_growth_rate(self) -> float:
         """max Re(lambda) over the physically unstable modes [1/s], 0 if none."""
         return max((mode.eigenvalue.real for mode in self.modes if mode.physically_unstable), default=0.0)
+
+    @functools.cached_property
+    def eigenvectors(self) -> tuple[np.ndarray, np.ndarray]:
+        """(values (n,) [1/s], vectors (n, n)) of A by `numpy.linalg.eig`, computed once: the mode shapes and
+        the basis that sorts a one-step map's eigenvalues by mode."""
+        return np.linalg.eig(self.A)
 
     def exact_map(self, dt: float) -> np.ndarray:
         """expm(A dt): the exact one-step map of the linearization over dt [s], (n, n)."""
@@ -471,171 +414,6 @@ def one_step_map(
 def spectral_radius(matrix: np.ndarray) -> float:
     """max |eigenvalue| of a square matrix [-] (0 for an empty one)."""
     return float(np.max(np.abs(np.linalg.eigvals(matrix)))) if matrix.size else 0.0
-
-
-# -- what holds the model at a state: constraints, contacts, dry friction --------------------------
-
-_CNSTR = mujoco.mjtConstraint
-#: constraint row types by what they are, for people (contacts are counted per contact, not per row)
-CONSTRAINT_KINDS = {
-    int(_CNSTR.mjCNSTR_EQUALITY): "equality",
-    int(_CNSTR.mjCNSTR_FRICTION_DOF): "dry friction",
-    int(_CNSTR.mjCNSTR_FRICTION_TENDON): "dry friction",
-    int(_CNSTR.mjCNSTR_LIMIT_JOINT): "joint limit",
-    int(_CNSTR.mjCNSTR_LIMIT_TENDON): "tendon limit",
-    int(_CNSTR.mjCNSTR_CONTACT_FRICTIONLESS): "contact",
-    int(_CNSTR.mjCNSTR_CONTACT_PYRAMIDAL): "contact",
-    int(_CNSTR.mjCNSTR_CONTACT_ELLIPTIC): "contact",
-}
-_FRICTIONAL_CONTACTS = (int(_CNSTR.mjCNSTR_CONTACT_PYRAMIDAL), int(_CNSTR.mjCNSTR_CONTACT_ELLIPTIC))
-
-
-@dataclasses.dataclass(frozen=True)
-class ConstraintState:
-    """What constrains a model at one state (or along a run: the union over its steps).
-
-    Attributes
-    ----------
-    elements
-        every active constraint, e.g. "joint limit 'hip'", "contact 'foot'/'floor'", "equality 'weld'",
-        "dry friction: joint 'x' (frictionloss)" (sorted; a run: every one active at some step).
-    counts
-        kind -> number of active elements ("contact", "joint limit", "tendon limit", "equality",
-        "dry friction").
-    dry_friction
-        the elements whose force is dry (Coulomb) friction: joint and tendon frictionloss, and contacts
-        with friction (condim >= 3): sticking and slipping are no linear dynamics.
-    max_abs_qvel
-        max |qvel| [m/s or rad/s] (a run: over its steps).
-    max_abs_qacc
-        max |qacc| [m/s^2 or rad/s^2] (a run: over its steps).
-    """
-
-    elements: tuple[str, ...]
-    counts: dict[str, int]
-    dry_friction: tuple[str, ...]
-    max_abs_qvel: float
-    max_abs_qacc: float
-
-    @property
-    def smooth(self) -> bool:
-        """No constraint, contact or dry friction is active: the dynamics is one smooth function there."""
-        return not self.elements
-
-    def describe(self) -> str:
-        """'3 contacts, 4 joint limits (with dry friction)' or 'nothing active', for people."""
-        if not self.elements:
-            return "no constraint, contact or dry friction active"
-        plural = {"contact": "contacts", "joint limit": "joint limits", "tendon limit": "tendon limits"}
-        plural["equality"] = "equality constraints"
-        parts = [f"{n} {kind if n == 1 else plural[kind]}" for kind, n in self.counts.items() if kind != "dry friction"]
-        if self.dry_friction:
-            parts.append(f"dry friction ({len(self.dry_friction)})")
-        return ", ".join(parts)
-
-    def to_dict(self) -> dict[str, Any]:
-        """{"elements", "counts", "dry_friction", "max_abs_qvel", "max_abs_qacc"}."""
-        return {
-            "elements": list(self.elements),
-            "counts": dict(self.counts),
-            "dry_friction": list(self.dry_friction),
-            "max_abs_qvel": self.max_abs_qvel,
-            "max_abs_qacc": self.max_abs_qacc,
-        }
-
-
-def _name(model: mujoco.MjModel, kind: str, index: int) -> str:
-    getter = {"joint": model.joint, "tendon": model.tendon, "equality": model.eq, "geom": model.geom}[kind]
-    element = getter(int(index))
-    if element.name:
-        return element.name
-    if kind == "geom":
-        body = model.body(int(model.geom_bodyid[index]))
-        return f"{body.name or 'body ' + str(body.id)} geom {index}"
-    return str(index)
-
-
-def active_constraints(model: mujoco.MjModel, data: mujoco.MjData) -> tuple[set[str], set[str]]:
-    """(active elements, the dry-friction ones among them) after a forward pass in `data`
-    (names as `ConstraintState.elements`)."""
-    elements: set[str] = set()
-    dry: set[str] = set()
-    for row in range(data.nefc):
-        kind_id, index = int(data.efc_type[row]), int(data.efc_id[row])
-        kind = CONSTRAINT_KINDS.get(kind_id, "constraint")
-        if kind == "contact":
-            contact = data.contact[index]
-            a, b = (_name(model, "geom", g) for g in contact.geom)
-            label = f"contact {a!r}/{b!r}"
-            if kind_id in _FRICTIONAL_CONTACTS:
-                dry.add(f"dry friction: contact {a!r}/{b!r}")
-        elif kind_id == int(_CNSTR.mjCNSTR_FRICTION_DOF):
-            joint = int(model.dof_jntid[index])
-            label = f"dry friction: joint {_name(model, 'joint', joint)!r} (frictionloss)"
-            dry.add(label)
-        elif kind_id == int(_CNSTR.mjCNSTR_FRICTION_TENDON):
-            label = f"dry friction: tendon {_name(model, 'tendon', index)!r} (frictionloss)"
-            dry.add(label)
-        elif kind == "joint limit":
-            label = f"joint limit {_name(model, 'joint', index)!r}"
-        elif kind == "tendon limit":
-            label = f"tendon limit {_name(model, 'tendon', index)!r}"
-        else:
-            label = f"equality {_name(model, 'equality', index)!r}"
-        elements.add(label)
-    return elements, dry
-
-
-def summarize_constraints(elements: set[str], dry: set[str], qvel: float, qacc: float) -> ConstraintState:
-    """A ConstraintState from the names `active_constraints` collected (at one state or along a run)."""
-    counts: dict[str, int] = {}
-    for label in sorted(elements):
-        kind = "dry friction" if label.startswith("dry friction") else label.split(" '")[0]
-        counts[kind] = counts.get(kind, 0) + 1
-    return ConstraintState(tuple(sorted(elements)), counts, tuple(sorted(dry)), float(qvel), float(qacc))
-
-
-def constraint_state(model: mujoco.MjModel, point: OperatingPoint) -> ConstraintState:
-    """What constrains `model` at `point` (one mj_forward): active contacts, joint and tendon limits,
-    equality constraints and dry friction, with |qvel| and |qacc| there (qacc ~ 0 at rest)."""
-    data = mujoco.MjData(model)
-    with quiet_mujoco():
-        point.load(model, data)
-        mujoco.mj_forward(model, data)
-    elements, dry = active_constraints(model, data)
-    qvel = float(np.max(np.abs(data.qvel), initial=0.0))
-    qacc = float(np.max(np.abs(data.qacc), initial=0.0))
-    return summarize_constraints(elements, dry, qvel, qacc)
-
-
-def settle(model: mujoco.MjModel, point: OperatingPoint, seconds: float) -> OperatingPoint:
-    """`point` after `seconds` [s] of the model's own motion (its own integrator and timestep, controls
-    held): where a robot comes to rest, or to its steady contact state, before it is linearized.
-
-    Raises
-    ------
-    BadInputError
-        the model blows up while settling (MuJoCo flags a bad position, velocity or acceleration).
-    """
-    work = copy.copy(model)
-    data = mujoco.MjData(work)
-    steps = max(1, round(seconds / work.opt.timestep))
-    with quiet_mujoco():
-        point.load(work, data)
-        for _ in range(steps):
-            mujoco.mj_step(work, data)
-    flagged = any(data.warning[int(w)].number for w in BAD_WARNINGS)
-    if flagged or not (np.isfinite(data.qpos).all() and np.isfinite(data.qvel).all()) or data.time < 0.5 * seconds:
-        raise BadInputError(
-            f"the model blew up while settling for {seconds:g} s at its own setting; settle for less or fix the model"
-        )
-    return OperatingPoint(
-        data.qpos.copy(),
-        data.qvel.copy(),
-        data.act.copy(),
-        data.ctrl.copy(),
-        f"{point.label} settled for {seconds:g} s",
-    )
 
 
 # -- inputs: a control or a generalized force, and how it enters the dynamics and one step --------------

@@ -32,15 +32,10 @@ import numpy as np
 
 from springlab import display, scenes, tables
 from springlab.errors import BadInputError, DivergedError
-from springlab.exact.linearize import (
-    ConstraintState,
-    Linearization,
-    OperatingPoint,
-    constraint_state,
-    linearize,
-    operating_point,
-    settle,
-)
+from springlab.exact.constraints import ConstraintState
+from springlab.exact.linearize import Linearization
+from springlab.exact.model_at_point import ModelAtPoint
+from springlab.exact.operating_point import OperatingPoint
 from springlab.runs import compare
 from springlab.runs.run import prepare
 from springlab.sim.batch import Job
@@ -829,9 +824,8 @@ def audit(
     source = load(model_or_path)
     duration = _check_number("duration", duration if duration is not None else source.duration or DEFAULT_DURATION)
     model = source.model
-    point = operating_point(model, keyframe)
-    if settle_s:
-        point = settle(model, point, settle_s)
+    at = ModelAtPoint.at(model, keyframe, settle_s=settle_s)
+    point = at.point
     start, control_offset, start_source = _start(model, point, perturb, duration, source)
     _check_perturbation(model, point, perturb, start)
     distributed = executor is not None and executor.distributed
@@ -840,7 +834,7 @@ def audit(
         assert executor is not None  # distributed implies an executor
         _ = executor.client  # an unreachable scheduler is exit 2 now, not after the limit scan
     own_name, own_dt = _NAMES[int(model.opt.integrator)], float(model.opt.timestep)
-    at_point = constraint_state(model, point)
+    at_point = at.constraints
     seen: Watch = watch(model, start, duration)
     smooth = at_point.smooth and seen.along.smooth
     drift = _drift(at_point, duration)
@@ -852,12 +846,12 @@ def audit(
         drift_m=drift,
         linear_map=smooth,
     )
-    linear = linearize(model, point)
+    linear = at.linear
     start_speed = float(np.max(np.abs(start.qvel), initial=0.0)) if start.qvel is not None else 0.0
     gravity = float(np.linalg.norm(model.opt.gravity))
     probe_runs = RunProbe(start, duration, max(seen.peak_speed, start_speed), gravity, duration / 10)
     limits = stability_limits(
-        model, linear, list(dict.fromkeys([*names, own_name])), duration, run=run, smooth=smooth, probe=probe_runs
+        at, list(dict.fromkeys([*names, own_name])), duration, run=run, smooth=smooth, probe=probe_runs
     )
     stamps["limits"] = _time.perf_counter()
 
@@ -891,16 +885,16 @@ def audit(
         still=still,
         source=start_source,
     )
-    change = math.inf if isinstance(probe, DivergedError) else linearity_change(model, linear, probe)
+    change = math.inf if isinstance(probe, DivergedError) else linearity_change(at, probe)
     threshold = linearity_tolerance(linear, tol, run_duration)
     is_linear = change <= threshold and smooth  # with constraints active the linear solution is no reference
     reference: Reference
     if is_linear:
-        reference = ExactReference(model, linear, start)
+        reference = ExactReference(at, start)
     else:
         step = reference_step(dts, spacing)
         coarse = probe if isinstance(probe, Trajectory) else None
-        reference = converged_reference(model, point, start, step, run_duration, tol, coarse=coarse, run=run)
+        reference = converged_reference(at, start, step, run_duration, tol, coarse=coarse, run=run)
     stamps["reference"] = _time.perf_counter()
 
     runs = []
@@ -908,12 +902,12 @@ def audit(
     costs = {name: cost_per_step(model, start, name, middle) for name in dict.fromkeys([*names, own_name])}
     for name in names:
         for dt_run in dts:
-            error = run_error(model, point, outcomes[(name, dt_run)], reference)
+            error = run_error(at, outcomes[(name, dt_run)], reference)
             steps = round(run_duration / dt_run)
             runs.append(SweepRun(name, dt_run, steps, error, costs[name] * steps, error is None))
     orders = {name: _order([r for r in runs if r.integrator == name], reference.error_estimate) for name in names}
     own_outcome = outcomes[(own_name, own_dt)]
-    own_error = run_error(model, point, own_outcome, reference)
+    own_error = run_error(at, own_outcome, reference)
     own_limit = limits[own_name]
     own = OwnSetting(
         integrator=own_name,
@@ -925,7 +919,7 @@ def audit(
         margin_confirmed=None if own_limit.limit_dt_s is None else bool(own_limit.confirmed),
     )
     if excitation.any_motion:
-        recommendation = _recommend(model, point, start, runs, limits, tol, run_duration, reference)
+        recommendation = _recommend(at, start, runs, limits, tol, run_duration, reference)
     else:  # every setting reproduces a model that does not move: nothing to verify
         recommendation = Recommendation(None, None, None, tol, False, None)
     stamps["end"] = _time.perf_counter()
@@ -1019,8 +1013,7 @@ def _pareto(runs: list[SweepRun]) -> list[SweepRun]:
 
 
 def _recommend(
-    model: mujoco.MjModel,
-    point: OperatingPoint,
+    at: ModelAtPoint,
     start: Setup,
     runs: list[SweepRun],
     limits: Mapping[str, Limit],
@@ -1046,7 +1039,7 @@ def _recommend(
     for run in candidates:
         try:
             trajectory = simulate(
-                model.__copy__(),
+                at.model.__copy__(),
                 integrator=run.integrator,
                 dt=run.dt,
                 duration=duration,
@@ -1057,7 +1050,7 @@ def _recommend(
             )
         except DivergedError:
             continue
-        error = run_error(model, point, trajectory, reference)
+        error = run_error(at, trajectory, reference)
         if error is not None and error <= budget:
             return Recommendation(run.integrator, run.dt, error, tol, True, run.wall_time_s)
     return Recommendation(None, None, None, tol, False, None)

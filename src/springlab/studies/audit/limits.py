@@ -41,17 +41,11 @@ import mujoco
 import numpy as np
 
 from springlab.errors import DivergedError
+from springlab.exact.constraints import ConstraintState, active_constraints, summarize_constraints
 from springlab.exact.limits import rk4_limit, stability_limit
-from springlab.exact.linearize import (
-    ConstraintState,
-    Linearization,
-    Mode,
-    OperatingPoint,
-    active_constraints,
-    linearize,
-    one_step_map,
-    summarize_constraints,
-)
+from springlab.exact.linearize import Linearization, Mode
+from springlab.exact.model_at_point import ModelAtPoint
+from springlab.exact.operating_point import OperatingPoint
 from springlab.sim.batch import Job, run_batched
 from springlab.sim.simulate import BAD_WARNINGS, Setup, Trajectory, integrator_id, quiet_mujoco
 
@@ -190,13 +184,14 @@ COUPLING_NOISE = 1e-9
 BRACKET_DOUBLINGS = 60
 
 
-def implicit_damping(model: mujoco.MjModel, point: OperatingPoint, integrator: str) -> np.ndarray:
-    """The damping matrix D [N s/m, N m s/rad] (nv, nv) `integrator` treats implicitly at `point`.
+def implicit_damping(at: ModelAtPoint, integrator: str) -> np.ndarray:
+    """The damping matrix D [N s/m, N m s/rad] (nv, nv) `integrator` treats implicitly at the operating point.
 
     euler: diag(dof_damping) (zero with the eulerdamp flag disabled); implicit / implicitfast: -qDeriv,
     MuJoCo's own analytic velocity derivative restricted to the sparsity of M (and symmetrised for
-    implicitfast), read after one mj_step from `point`; any other integrator: zero.
+    implicitfast), read after one mj_step from the point; any other integrator: zero.
     """
+    model = at.model
     nv = model.nv
     if integrator == "euler":
         if model.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_EULERDAMP):
@@ -204,10 +199,10 @@ def implicit_damping(model: mujoco.MjModel, point: OperatingPoint, integrator: s
         return np.diag(np.asarray(model.dof_damping, float))
     if integrator not in ("implicit", "implicitfast"):
         return np.zeros((nv, nv))
-    work = copy.copy(model)
+    work, data = at.workspace
     work.opt.integrator = integrator_id(integrator)
-    data = mujoco.MjData(work)
-    point.load(work, data)
+    work.opt.timestep = model.opt.timestep
+    at.point.load(work, data)
     with quiet_mujoco():
         mujoco.mj_step(work, data)  # qDeriv is taken at the step's start state
     dense = np.zeros((nv, nv))
@@ -230,7 +225,7 @@ def _closed_form_omega_dt(zeta_implicit: float, zeta_explicit: float) -> float:
 def _mode_shape(linear: Linearization, eigenvalue: complex) -> np.ndarray:
     """The real, M-normalised position part phi (nv,) of `eigenvalue`'s eigenvector of A [1/sqrt(kg)]."""
     nv = linear.M.shape[0]
-    values, vectors = np.linalg.eig(linear.A)
+    values, vectors = linear.eigenvectors
     psi = vectors[:nv, int(np.argmin(np.abs(values - eigenvalue)))]
     phi = np.real(psi * np.exp(-1j * np.angle(psi[int(np.argmax(np.abs(psi)))])))  # a damped mode's phase
     return phi / math.sqrt(float(phi @ linear.M @ phi))
@@ -283,13 +278,13 @@ def _implicit_limit(linear: Linearization, mode: Mode, damping: np.ndarray) -> f
     return low
 
 
-def explicit_stiffness(model: mujoco.MjModel, point: OperatingPoint) -> np.ndarray:
+def explicit_stiffness(at: ModelAtPoint) -> np.ndarray:
     """K_e [N/m, N m/rad] (nv, nv): the stiffness left when passive springs and actuators are switched off
     (gravity, and whatever else depends on position): what `discrete` integrates explicitly. Its metric
     M + dt D + dt^2 K_i takes joint, tendon and actuator stiffness (K_i = K - K_e) implicitly."""
-    work = copy.copy(model)
+    work = copy.copy(at.model)
     work.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_SPRING) | int(mujoco.mjtDisableBit.mjDSBL_ACTUATION)
-    return linearize(work, point).K
+    return ModelAtPoint(work, at.point, at.step).linear.K
 
 
 def _scalar_limit(k: float, c: float, d: float, k_implicit: float) -> float:
@@ -405,18 +400,19 @@ class _MapProbe:
     upright pole's fall does not hide a fast mode's numerical growth.
     """
 
-    def __init__(self, model: mujoco.MjModel, linear: Linearization, integrator: str):
-        self.model, self.linear, self.integrator = copy.copy(model), linear, integrator
+    def __init__(self, at: ModelAtPoint, integrator: str):
+        self.at, self.integrator = at, integrator
+        linear = at.linear
         self.sigma = linear.max_growth_rate
-        self.data = mujoco.MjData(self.model)
+        self.scratch = at.workspace  # one copy of the model for every map at this point
         self.basis = None
         if linear.physically_unstable:
-            values, vectors = np.linalg.eig(linear.A)
+            values, vectors = linear.eigenvectors
             self.rates = np.maximum(values.real, 0.0)
             self.basis = np.linalg.pinv(vectors)
 
     def map(self, dt: float) -> np.ndarray:
-        return one_step_map(self.model, self.integrator, dt, self.linear.point, data=self.data, copy_model=False)
+        return self.at.one_step_map(self.integrator, dt, self.scratch)
 
     def excess(self, dt: float, phi: np.ndarray | None = None) -> tuple[float, np.ndarray | None, float]:
         """(max |mu| / exact growth of its mode [-], that mu's eigenvector, that |mu| [-]); the first > 1 +
@@ -440,8 +436,7 @@ class _MapProbe:
 
 
 def measured_limit(
-    model: mujoco.MjModel,
-    linear: Linearization,
+    at: ModelAtPoint,
     integrator: str,
     scale_s: float,
     stop_s: float,
@@ -454,7 +449,7 @@ def measured_limit(
     first as a bracket [guess / GUESS_BRACKET, guess * GUESS_BRACKET] (it only saves map evaluations: a
     wrong guess falls back to the doubling scan from its stable side).
     """
-    probe = _MapProbe(model, linear, integrator)
+    probe = _MapProbe(at, integrator)
     stop = min(SCAN_STOP * scale_s, stop_s)
     low, high = 0.0, None
     if guess_s is not None and GUESS_BRACKET * guess_s < stop:
@@ -492,8 +487,7 @@ def _deviation(model: mujoco.MjModel, run_a, run_b) -> float:
 
 
 def confirm(
-    model: mujoco.MjModel,
-    linear: Linearization,
+    at: ModelAtPoint,
     limits: Iterable[Limit],
     *,
     nthread: int = 0,
@@ -508,11 +502,10 @@ def confirm(
     run blows up); below, it does not. `run` runs the jobs (default: one batch.run_batched call on
     `nthread` threads; the audit passes springlab.studies.audit.ship.Runner, which may send them to dask workers).
     """
-    point = linear.point
+    model, point, linear = at.model, at.point, at.linear
     given = list(limits)
     found: list[dict[str, Any]] = [{} for _ in given]  # per limit: the fields the confirmation fills in
     jobs, plan = [], []
-    data = mujoco.MjData(model)
     for index, limit in enumerate(given):
         measured = limit.limit_dt_measured_s
         if measured is None:
@@ -524,7 +517,7 @@ def confirm(
                     " so no timestep makes the map grow; nothing to confirm"
                 )
             continue
-        probe = _MapProbe(model, linear, limit.integrator)
+        probe = _MapProbe(at, limit.integrator)
         above = CONFIRM_ABOVE * measured
         growth, vector, size = probe.excess(above)
         found[index]["growth_per_step_above"] = growth
@@ -542,7 +535,7 @@ def confirm(
         if not np.any(direction):
             direction = np.imag(vector)
         direction = CONFIRM_SIZE * direction / np.max(np.abs(direction))
-        start = _perturbed(model, point, direction, data)
+        start = _perturbed(model, point, direction)
         base = Setup(point.qpos, point.qvel, point.act, point.ctrl)
         for fraction in (CONFIRM_BELOW, CONFIRM_ABOVE):
             dt = fraction * measured
@@ -570,7 +563,7 @@ def confirm(
     return [dataclasses.replace(limit, **fields) for limit, fields in zip(given, found)]
 
 
-def _perturbed(model: mujoco.MjModel, point: OperatingPoint, direction: np.ndarray, data: mujoco.MjData) -> Setup:
+def _perturbed(model: mujoco.MjModel, point: OperatingPoint, direction: np.ndarray) -> Setup:
     """The operating point moved by `direction` = (dq, dv, dact) in the tangent space."""
     nv = model.nv
     qpos = point.qpos.copy()
@@ -731,8 +724,7 @@ def run_limits(
 
 
 def stability_limits(
-    model: mujoco.MjModel,
-    linear: Linearization,
+    at: ModelAtPoint,
     integrators: Iterable[str],
     stop_s: float,
     *,
@@ -751,28 +743,29 @@ def stability_limits(
     Without a probe an unconfirmed map limit stays as measured, labelled unconfirmed.
     """
     run = run or (lambda jobs: run_batched(jobs, nthread=nthread))
+    model, linear = at.model, at.linear
     fastest = linear.fastest
     scale = 1.0 / fastest.rate_rad_s if fastest is not None else model.opt.timestep
     own_dt = float(model.opt.timestep)
     names = list(integrators)
     spring = None
     if "discrete" in names:
-        spring = linear.K - explicit_stiffness(model, linear.point)
+        spring = linear.K - explicit_stiffness(at)
     limits = []
     for name in names:
         damping = None
         if name in IMPLICIT_DAMPING_INTEGRATORS or name == "discrete":
-            damping = implicit_damping(model, linear.point, "implicitfast" if name == "discrete" else name)
+            damping = implicit_damping(at, "implicitfast" if name == "discrete" else name)
         prediction = predict(linear, name, damping, spring if name == "discrete" else None)
         kind = "exact" if prediction.exact and smooth else "estimate"
-        measured = measured_limit(model, linear, name, scale, stop_s, prediction.limit_s) if smooth else None
+        measured = measured_limit(at, name, scale, stop_s, prediction.limit_s) if smooth else None
         limits.append(
             Limit(
                 name, prediction.limit_s, measured, limit_dt_s=measured, prediction=kind if prediction.limit_s else None
             )
         )
     if smooth:
-        limits = confirm(model, linear, limits, run=run)
+        limits = confirm(at, limits, run=run)
     fallback = [lim for lim in limits if not smooth or (lim.limit_dt_measured_s is not None and not lim.confirmed)]
     if probe is not None and fallback:
         # an unconfirmed map limit is bracketed too (runs of RUN_MIN_STEPS cost the same at any timestep)

@@ -31,9 +31,11 @@ import mujoco
 import numpy as np
 
 from springlab.errors import BadInputError, DivergedError
-from springlab.exact.linearize import Linearization, OperatingPoint, linearize
+from springlab.exact.linearize import Linearization
+from springlab.exact.model_at_point import ModelAtPoint
+from springlab.exact.operating_point import OperatingPoint
 from springlab.sim.batch import Job, run_batched, time_run
-from springlab.sim.simulate import MAX_STEPS, Setup, Trajectory, quiet_mujoco
+from springlab.sim.simulate import MAX_STEPS, Setup, Trajectory
 
 #: default grid: this many timesteps ...
 GRID_POINTS = 12
@@ -189,18 +191,12 @@ class ExactReference(Reference):
 
     kind = "exact solution of the linearization"
 
-    def __init__(self, model: mujoco.MjModel, linear: Linearization, start: Setup):
-        point = linear.point
-        self.nv, n = model.nv, linear.A.shape[0]
-        self.work = copy.copy(model)
-        self.work.opt.integrator = int(mujoco.mjtIntegrator.mjINT_EULER)  # the continuous forward pass
-        data = mujoco.MjData(self.work)
-        with quiet_mujoco():
-            point.load(self.work, data)
-            if start.control is not None and self.work.nu:
-                data.ctrl[:] = np.atleast_2d(start.control)[0]  # the start's held control: its force is in the drift
-            mujoco.mj_forward(self.work, data)
-        drift = np.concatenate([data.qvel, data.qacc, data.act_dot])
+    def __init__(self, at: ModelAtPoint, start: Setup):
+        point, linear = at.point, at.linear
+        self.nv, n = at.model.nv, linear.A.shape[0]
+        self.work = at.continuous
+        # the start's held control: its force is in the drift
+        drift = at.rates(None if start.control is None else np.atleast_2d(start.control)[0])
         x0 = np.zeros(n)
         mujoco.mj_differentiatePos(self.work, x0[: self.nv], 1.0, point.qpos, start.qpos)
         x0[self.nv : 2 * self.nv] = start.qvel - point.qvel
@@ -232,9 +228,7 @@ class ExactReference(Reference):
         return qpos, self.point.qvel + tangent[:, nv : 2 * nv], np.ones(len(rows), bool)
 
 
-def run_error(
-    model: mujoco.MjModel, point: OperatingPoint, outcome: Trajectory | DivergedError, reference: Reference
-) -> float | None:
+def run_error(at: ModelAtPoint, outcome: Trajectory | DivergedError, reference: Reference) -> float | None:
     """A run's error [-] (module docstring) at its sampled steps, None if it diverged."""
     if isinstance(outcome, DivergedError):
         return None
@@ -244,7 +238,8 @@ def run_error(
     if len(rows) < 2:
         return None
     qpos, qvel = outcome.qpos[rows], outcome.qvel[rows]
-    scale_q = float(np.max(_tangent_distance(model, ref_q, np.broadcast_to(point.qpos, ref_q.shape))))
+    model = at.model
+    scale_q = float(np.max(_tangent_distance(model, ref_q, np.broadcast_to(at.point.qpos, ref_q.shape))))
     scale_v = float(np.max(np.abs(ref_v), initial=0.0))
     err_q = float(np.max(_tangent_distance(model, qpos, ref_q)))
     err_v = float(np.max(np.abs(qvel - ref_v), initial=0.0))
@@ -253,8 +248,9 @@ def run_error(
     return max(err_q / scale_q if scale_q > 0 else err_q, err_v / scale_v if scale_v > 0 else err_v)
 
 
-def linearity_change(model: mujoco.MjModel, linear: Linearization, trajectory: Trajectory) -> float:
+def linearity_change(at: ModelAtPoint, trajectory: Trajectory) -> float:
     """max ||A(x(t)) - A(x_op)||_max / ||A(x_op)||_max [-] over LINEARITY_PROBES states of the motion."""
+    linear = at.linear
     size = float(np.max(np.abs(linear.A), initial=0.0))
     if size == 0 or not len(trajectory.time):
         return 0.0
@@ -265,7 +261,7 @@ def linearity_change(model: mujoco.MjModel, linear: Linearization, trajectory: T
         probe = OperatingPoint(
             trajectory.qpos[row], trajectory.qvel[row], trajectory.act[row], linear.point.ctrl, "along the motion"
         )
-        change = max(change, float(np.max(np.abs(linearize(model, probe).A - linear.A))) / size)
+        change = max(change, float(np.max(np.abs(at.moved_to(probe).linear.A - linear.A))) / size)
     return change
 
 
@@ -278,8 +274,7 @@ def linearity_tolerance(linear: Linearization, tol: float, duration: float) -> f
 
 
 def converged_reference(
-    model: mujoco.MjModel,
-    point: OperatingPoint,
+    at: ModelAtPoint,
     start: Setup,
     step: float,
     duration: float,
@@ -307,13 +302,13 @@ def converged_reference(
         steps = [round(duration / d) for d in dts]
         if max(steps) > REFERENCE_MAX_STEPS:
             break
-        outcomes = run([Job(model, "rk4", d, s, start) for d, s in zip(dts, steps)])
+        outcomes = run([Job(at.model, "rk4", d, s, start) for d, s in zip(dts, steps)])
         finished = [o for o in outcomes if isinstance(o, Trajectory)]
         if len(finished) < len(outcomes):  # one diverged
             break
         levels.extend(finished)
         if len(levels) >= 2:
-            diff = run_error(model, point, levels[-2], TrajectoryReference(levels[-1]))
+            diff = run_error(at, levels[-2], TrajectoryReference(levels[-1]))
             diffs.append(math.inf if diff is None else diff)
             order = 4.0
             if len(diffs) >= 2 and diffs[-1] > 0 and diffs[-2] > 0:

@@ -1,0 +1,133 @@
+"""What holds a model at a state: active constraints, contacts and dry friction (MuJoCo's constraint rows).
+
+* `active_constraints(model, data)`: the named elements active after a forward pass.
+* `ConstraintState` / `summarize_constraints`: what is active at one state, or along a run (their union).
+
+`springlab.exact.model_at_point.ModelAtPoint.constraints` is what constrains a model at its operating point.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import mujoco
+
+_CNSTR = mujoco.mjtConstraint
+#: constraint row types by what they are, for people (contacts are counted per contact, not per row)
+CONSTRAINT_KINDS = {
+    int(_CNSTR.mjCNSTR_EQUALITY): "equality",
+    int(_CNSTR.mjCNSTR_FRICTION_DOF): "dry friction",
+    int(_CNSTR.mjCNSTR_FRICTION_TENDON): "dry friction",
+    int(_CNSTR.mjCNSTR_LIMIT_JOINT): "joint limit",
+    int(_CNSTR.mjCNSTR_LIMIT_TENDON): "tendon limit",
+    int(_CNSTR.mjCNSTR_CONTACT_FRICTIONLESS): "contact",
+    int(_CNSTR.mjCNSTR_CONTACT_PYRAMIDAL): "contact",
+    int(_CNSTR.mjCNSTR_CONTACT_ELLIPTIC): "contact",
+}
+_FRICTIONAL_CONTACTS = (int(_CNSTR.mjCNSTR_CONTACT_PYRAMIDAL), int(_CNSTR.mjCNSTR_CONTACT_ELLIPTIC))
+
+
+@dataclasses.dataclass(frozen=True)
+class ConstraintState:
+    """What constrains a model at one state (or along a run: the union over its steps).
+
+    Attributes
+    ----------
+    elements
+        every active constraint, e.g. "joint limit 'hip'", "contact 'foot'/'floor'", "equality 'weld'",
+        "dry friction: joint 'x' (frictionloss)" (sorted; a run: every one active at some step).
+    counts
+        kind -> number of active elements ("contact", "joint limit", "tendon limit", "equality",
+        "dry friction").
+    dry_friction
+        the elements whose force is dry (Coulomb) friction: joint and tendon frictionloss, and contacts
+        with friction (condim >= 3): sticking and slipping are no linear dynamics.
+    max_abs_qvel
+        max |qvel| [m/s or rad/s] (a run: over its steps).
+    max_abs_qacc
+        max |qacc| [m/s^2 or rad/s^2] (a run: over its steps).
+    """
+
+    elements: tuple[str, ...]
+    counts: dict[str, int]
+    dry_friction: tuple[str, ...]
+    max_abs_qvel: float
+    max_abs_qacc: float
+
+    @property
+    def smooth(self) -> bool:
+        """No constraint, contact or dry friction is active: the dynamics is one smooth function there."""
+        return not self.elements
+
+    def describe(self) -> str:
+        """'3 contacts, 4 joint limits (with dry friction)' or 'nothing active', for people."""
+        if not self.elements:
+            return "no constraint, contact or dry friction active"
+        plural = {"contact": "contacts", "joint limit": "joint limits", "tendon limit": "tendon limits"}
+        plural["equality"] = "equality constraints"
+        parts = [f"{n} {kind if n == 1 else plural[kind]}" for kind, n in self.counts.items() if kind != "dry friction"]
+        if self.dry_friction:
+            parts.append(f"dry friction ({len(self.dry_friction)})")
+        return ", ".join(parts)
+
+    def to_dict(self) -> dict[str, Any]:
+        """{"elements", "counts", "dry_friction", "max_abs_qvel", "max_abs_qacc"}."""
+        return {
+            "elements": list(self.elements),
+            "counts": dict(self.counts),
+            "dry_friction": list(self.dry_friction),
+            "max_abs_qvel": self.max_abs_qvel,
+            "max_abs_qacc": self.max_abs_qacc,
+        }
+
+
+def _name(model: mujoco.MjModel, kind: str, index: int) -> str:
+    getter = {"joint": model.joint, "tendon": model.tendon, "equality": model.eq, "geom": model.geom}[kind]
+    element = getter(int(index))
+    if element.name:
+        return element.name
+    if kind == "geom":
+        body = model.body(int(model.geom_bodyid[index]))
+        return f"{body.name or 'body ' + str(body.id)} geom {index}"
+    return str(index)
+
+
+def active_constraints(model: mujoco.MjModel, data: mujoco.MjData) -> tuple[set[str], set[str]]:
+    """(active elements, the dry-friction ones among them) after a forward pass in `data`
+    (names as `ConstraintState.elements`)."""
+    elements: set[str] = set()
+    dry: set[str] = set()
+    for row in range(data.nefc):
+        kind_id, index = int(data.efc_type[row]), int(data.efc_id[row])
+        kind = CONSTRAINT_KINDS.get(kind_id, "constraint")
+        if kind == "contact":
+            contact = data.contact[index]
+            a, b = (_name(model, "geom", g) for g in contact.geom)
+            label = f"contact {a!r}/{b!r}"
+            if kind_id in _FRICTIONAL_CONTACTS:
+                dry.add(f"dry friction: contact {a!r}/{b!r}")
+        elif kind_id == int(_CNSTR.mjCNSTR_FRICTION_DOF):
+            joint = int(model.dof_jntid[index])
+            label = f"dry friction: joint {_name(model, 'joint', joint)!r} (frictionloss)"
+            dry.add(label)
+        elif kind_id == int(_CNSTR.mjCNSTR_FRICTION_TENDON):
+            label = f"dry friction: tendon {_name(model, 'tendon', index)!r} (frictionloss)"
+            dry.add(label)
+        elif kind == "joint limit":
+            label = f"joint limit {_name(model, 'joint', index)!r}"
+        elif kind == "tendon limit":
+            label = f"tendon limit {_name(model, 'tendon', index)!r}"
+        else:
+            label = f"equality {_name(model, 'equality', index)!r}"
+        elements.add(label)
+    return elements, dry
+
+
+def summarize_constraints(elements: set[str], dry: set[str], qvel: float, qacc: float) -> ConstraintState:
+    """A ConstraintState from the names `active_constraints` collected (at one state or along a run)."""
+    counts: dict[str, int] = {}
+    for label in sorted(elements):
+        kind = "dry friction" if label.startswith("dry friction") else label.split(" '")[0]
+        counts[kind] = counts.get(kind, 0) + 1
+    return ConstraintState(tuple(sorted(elements)), counts, tuple(sorted(dry)), float(qvel), float(qacc))

@@ -1,0 +1,167 @@
+"""A model at its operating point, with what every study asks of it there computed once.
+
+The audit and the frequency response study one compiled model at one operating point many times over:
+its forward pass there (constraints, accelerations, sensors), its linearization (M, C, K, A, the modes and
+the eigenvectors of A), the continuous-time rates with a held control, and the one-step maps of each
+integrator. `ModelAtPoint` is that model and that point in one frozen object; what depends on nothing
+else (`data`, `constraints`, `continuous`, `linear`) is computed on first use and kept, so a study passes
+one object around instead of a model, a point and a linearization that each callee rebuilds.
+
+    at = ModelAtPoint.at(model, keyframe="home", settle_s=None)
+    at.linear.modes, at.constraints.describe(), at.one_step_map("rk4", 1e-3)
+
+Nothing here modifies `model`: integrators and timesteps are set on copies (`scratch`).
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import functools
+
+import mujoco
+import numpy as np
+
+from springlab.exact.constraints import ConstraintState, active_constraints, summarize_constraints
+from springlab.exact.linearize import (
+    FD_STEP,
+    Linearization,
+    input_column,
+    linearize,
+    one_step_map,
+    sensor_rows,
+    step_input_column,
+)
+from springlab.exact.operating_point import OperatingPoint, operating_point, settle
+from springlab.sim.simulate import integrator_id, quiet_mujoco
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class ModelAtPoint:
+    """A compiled model at an operating point; its derived facts are computed on first use and kept.
+
+    Attributes
+    ----------
+    model
+        the compiled model (never modified here: `scratch` gives copies to set integrators and timesteps on).
+    point
+        the operating point: qpos [m, rad, quaternion], qvel [m/s, rad/s], act and ctrl [actuator units].
+    step
+        finite-difference step of the linearization and the maps [m, rad, m/s, rad/s or activation units].
+    """
+
+    model: mujoco.MjModel
+    point: OperatingPoint
+    step: float = FD_STEP
+
+    @classmethod
+    def at(
+        cls, model: mujoco.MjModel, keyframe: str | int | None = None, *, settle_s: float | None = None
+    ) -> ModelAtPoint:
+        """`model` at its keyframe (`operating_point`: by name or index; None: the first, else qpos0 at rest),
+        left to move for `settle_s` [s] first where given (`settle`: where a robot comes to rest).
+
+        Raises
+        ------
+        BadInputError
+            no such keyframe, or the model blows up while settling.
+        """
+        point = operating_point(model, keyframe)
+        if settle_s:
+            point = settle(model, point, settle_s)
+        return cls(model, point)
+
+    def moved_to(self, point: OperatingPoint) -> ModelAtPoint:
+        """The same model at another point (e.g. a state along a motion, where the linearization is re-taken)."""
+        return ModelAtPoint(self.model, point, self.step)
+
+    @functools.cached_property
+    def data(self) -> mujoco.MjData:
+        """MjData after `mj_forward` at the point with the model's own options: read it (qacc, contacts,
+        sensordata, efc rows); to step from the point, step a `scratch` copy instead."""
+        data = mujoco.MjData(self.model)
+        with quiet_mujoco():
+            self.point.load(self.model, data)
+            mujoco.mj_forward(self.model, data)
+        return data
+
+    @functools.cached_property
+    def constraints(self) -> ConstraintState:
+        """What constrains the model at the point: active contacts, joint and tendon limits, equality
+        constraints and dry friction, with max |qvel| [m/s or rad/s] and |qacc| [m/s^2 or rad/s^2] there."""
+        elements, dry = active_constraints(self.model, self.data)
+        qvel = float(np.max(np.abs(self.data.qvel), initial=0.0))
+        qacc = float(np.max(np.abs(self.data.qacc), initial=0.0))
+        return summarize_constraints(elements, dry, qvel, qacc)
+
+    @functools.cached_property
+    def linear(self) -> Linearization:
+        """The continuous-time linearization at the point (`springlab.exact.linearize.linearize`): M, C, K
+        [SI], A [1/s], its eigenvalues and modes; `linear.eigenvectors` is cached on it too."""
+        return linearize(self.model, self.point, step=self.step)
+
+    @functools.cached_property
+    def continuous(self) -> mujoco.MjModel:
+        """A copy of the model whose forward pass is the continuous-time dynamics (the Euler integrator's:
+        'discrete' folds dt^2 K into qacc), for rates and tangent-space arithmetic."""
+        work = copy.copy(self.model)
+        work.opt.integrator = int(mujoco.mjtIntegrator.mjINT_EULER)
+        return work
+
+    def rates(self, ctrl: np.ndarray | None = None) -> np.ndarray:
+        """dx/dt = (qvel, qacc, act_dot) at the point [m/s or rad/s, m/s^2 or rad/s^2, activation/s], (2 nv +
+        na,), with `ctrl` held (None: the point's own): zero at an equilibrium with its own control."""
+        work = self.continuous
+        data = mujoco.MjData(work)
+        with quiet_mujoco():
+            self.point.load(work, data)
+            if ctrl is not None and work.nu:
+                data.ctrl[:] = ctrl
+            mujoco.mj_forward(work, data)
+        return np.concatenate([data.qvel, data.qacc, data.act_dot])
+
+    @functools.cached_property
+    def workspace(self) -> tuple[mujoco.MjModel, mujoco.MjData]:
+        """One `scratch()` pair kept on the object for the maps and probes of one study at this point: each
+        user sets the integrator and timestep and reloads the point before it steps (not for threads)."""
+        return self.scratch()
+
+    def scratch(self, integrator: str | None = None, dt: float | None = None) -> tuple[mujoco.MjModel, mujoco.MjData]:
+        """A copy of the model (with `integrator` and timestep `dt` [s] set where given) and an MjData for it
+        loaded with the point: for loops that step or difference from the point without touching `model`."""
+        work = copy.copy(self.model)
+        if integrator is not None:
+            work.opt.integrator = integrator_id(integrator)
+        if dt is not None:
+            work.opt.timestep = dt
+        data = mujoco.MjData(work)
+        self.point.load(work, data)
+        return work, data
+
+    def one_step_map(
+        self, integrator: str, dt: float, scratch: tuple[mujoco.MjModel, mujoco.MjData] | None = None
+    ) -> np.ndarray:
+        """MuJoCo's one-step map Phi (n, n) of `integrator` at timestep `dt` [s] at the point
+        (`springlab.exact.linearize.one_step_map`); `scratch`: a pair from `scratch()` reused across calls
+        (its model takes the integrator and timestep), so a scan over dt copies the model once."""
+        if scratch is None:
+            return one_step_map(self.model, integrator, dt, self.point, step=self.step)
+        work, data = scratch
+        return one_step_map(work, integrator, dt, self.point, step=self.step, data=data, copy_model=False)
+
+    def input_column(self, kind: str, index: int) -> np.ndarray:
+        """b = d(dx/dt)/du (n,) of input `kind` ('ctrl' or 'force') `index` at the point [1/s per input unit]
+        (`springlab.exact.linearize.input_column`)."""
+        return input_column(self.model, kind, index, self.point, step=self.step)
+
+    def step_input_column(self, integrator: str, kind: str, index: int, dt: float) -> np.ndarray:
+        """gamma = d x_{n+1} / d u (n,) of one step of `integrator` at `dt` [s], the input held over it [per
+        input unit] (`springlab.exact.linearize.step_input_column`)."""
+        return step_input_column(self.model, integrator, kind, index, dt, self.point, step=self.step)
+
+    def sensor_rows(
+        self, kind: str, index: int, integrator: str | None = None, dt: float | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(C, d) of the sensors at the point, as one step of `integrator` at `dt` [s] computes them (None:
+        the continuous forward pass) (`springlab.exact.linearize.sensor_rows`)."""
+        return sensor_rows(self.model, kind, index, self.point, integrator=integrator, dt=dt, step=self.step)
