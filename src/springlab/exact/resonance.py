@@ -32,8 +32,6 @@ import math
 
 import numpy as np
 import scipy.linalg
-import scipy.optimize
-import scipy.signal
 
 __all__ = ["ResonanceFit", "accelerance_response", "chirp", "fit_resonance"]
 
@@ -59,13 +57,15 @@ def chirp(amplitude: float, low_hz: float, high_hz: float, duration: float, dt: 
 
 def _discrete(omega: float, zeta: float, inverse_mass: float, dt: float) -> tuple[np.ndarray, np.ndarray]:
     """(b, a) of the exact ZOH discretization of G at step dt: y_k = C x_k, x_{k+1} = Phi x_k + Gamma F_k."""
+    from scipy import signal  # here: scipy.signal loads scipy.optimize and scipy.stats (tests/test_cli_usage.py)
+
     a = np.array([[0.0, 1.0], [-(omega**2), -2 * zeta * omega]])
     block = np.zeros((3, 3))
     block[:2, :2] = a * dt
     block[1, 2] = -inverse_mass * dt
     exponential = scipy.linalg.expm(block)
     c = np.array([[-(omega**2), -2 * zeta * omega]])
-    num, den = scipy.signal.ss2tf(exponential[:2, :2], exponential[:2, 2:], c, np.zeros((1, 1)))
+    num, den = signal.ss2tf(exponential[:2, :2], exponential[:2, 2:], c, np.zeros((1, 1)))
     return num[0], den
 
 
@@ -77,8 +77,10 @@ def accelerance_response(
     Sample j is the acceleration at t = j every dt, before that step's force acts on the carriage (the belt
     has no feedthrough), from rest.
     """
+    from scipy import signal  # here: scipy.signal loads scipy.optimize and scipy.stats (tests/test_cli_usage.py)
+
     b, a = _discrete(omega, zeta, inverse_mass, dt)
-    return scipy.signal.lfilter(b, a, force)[::every]
+    return signal.lfilter(b, a, force)[::every]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -150,6 +152,8 @@ def fit_resonance(force: np.ndarray, acceleration: np.ndarray, dt: float, every:
         A record too short for three parameters, or a fit that leaves the physical range (no resonance in the
         swept band).
     """
+    import scipy.optimize  # here: scipy.optimize costs every command start-up time (tests/test_cli_usage.py)
+
     acceleration = np.asarray(acceleration, dtype=float)
     if acceleration.size < 10 or len(force) < (acceleration.size - 1) * every + 1:
         raise ValueError("the resonance test needs at least 10 accelerometer samples within the force record")

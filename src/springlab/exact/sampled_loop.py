@@ -29,11 +29,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import TYPE_CHECKING
 
-import control
 import numpy as np
 import scipy.linalg
-import scipy.optimize
+
+if TYPE_CHECKING:
+    import control
 
 __all__ = [
     "Pid",
@@ -122,6 +124,8 @@ class Pid:
 
     def transfer(self) -> control.TransferFunction:
         """K(z) [N/m] from -y to u: kp + kd (z - 1) / (T z) + ki T z / (z - 1) (sampled at T)."""
+        import control  # here: python-control loads scipy.optimize, start-up time for every command
+
         t = self.period
         z = control.TransferFunction([1.0, 0.0], [1.0], t)
         law = self.kp + self.kd * (z - 1) / (t * z)
@@ -199,6 +203,8 @@ def step_response(
 
 def loop_transfer(phi: np.ndarray, gamma: np.ndarray, output: np.ndarray, pid: Pid) -> control.TransferFunction:
     """L(z) = K(z) P(z) [-], the loop broken at the plant's input (module docstring)."""
+    import control  # here: python-control loads scipy.optimize, start-up time for every command
+
     c = np.asarray(output, dtype=float).reshape(1, -1)
     plant = control.ss(phi, np.asarray(gamma, dtype=float).reshape(-1, 1), c, 0.0, pid.period)
     return pid.transfer() * control.ss2tf(plant)
@@ -240,6 +246,8 @@ def margins(
         {"gain_margin_db", "phase_margin_deg", "phase_crossover_hz", "gain_crossover_hz"}; inf and nan where
         there is no crossover.
     """
+    import scipy.optimize  # here: scipy.optimize costs every command start-up time (tests/test_cli_usage.py)
+
     nyquist = 0.5 / pid.period
     grid = np.geomspace(lowest_hz, nyquist * (1 - 1e-9), points)
     values = loop_response(phi, gamma, output, pid, grid)

@@ -45,7 +45,6 @@ import math
 from collections.abc import Callable
 
 import numpy as np
-import scipy.optimize
 
 __all__ = [
     "SHAPERS",
@@ -255,6 +254,8 @@ def ei(frequency_hz: float, damping_ratio: float, tolerance: float = EI_TOLERANC
     ValueError
         Outside those ranges, or if Newton's method does not reach the equations to 1e-12.
     """
+    import scipy.optimize  # here: scipy.optimize costs every command start-up time (tests/test_cli_usage.py)
+
     omega_s, _ = _check_design(frequency_hz, damping_ratio)
     if not (0 < tolerance <= 0.25):
         raise ValueError(f"EI vibration tolerance must be in (0, 0.25], got {tolerance!r}")
@@ -347,6 +348,8 @@ def insensitivity(shaper: Shaper, level: float = EI_TOLERANCE, damping_ratio: fl
     refined by bisection) that contains the design frequency; an EI shaper's V(f_s) = V_tol counts as inside a
     band of level V_tol (to 1e-9 of it).
     """
+    import scipy.optimize  # here: scipy.optimize costs every command start-up time (tests/test_cli_usage.py)
+
     errors = np.linspace(-0.6, 0.6, 12001)
     vibration = shaper.vibration(shaper.frequency_hz * (1 + errors), damping_ratio)
     below = vibration <= level * (1 + 1e-9)
