@@ -1,0 +1,311 @@
+"""Sampled-data feedback, exact: a plant held between samples, a PID difference equation, the closed loop.
+
+Plant. x' = A x + B u with u held constant over each controller period T [s] (zero-order hold): over one
+period the exact map is x_{k+1} = Phi x_k + Gamma u_k with Phi = e^{A T} and Gamma = int_0^T e^{A tau} d tau B,
+both read off one matrix exponential of the augmented matrix [[A, B], [0, 0]] T (no inverse of A: the
+printer head's rigid-body mode makes A singular). The measurement is y_k = C x_k, taken at the sample.
+
+Controller, the difference equation a firmware runs at each sample k (no computation delay: u_k is applied
+from t_k to t_{k+1}):
+
+    e_k = r_k - y_k
+    I_k = I_{k-1} + T e_k                               integral: rectangle rule including the current error
+    u_k = kp e_k - kd (y_k - y_{k-1}) / T + ki I_k      derivative: backward difference, on the measurement
+
+The derivative acts on the measurement, not the error, so a step of the reference does not kick the force
+(y_{-1} = y_0: the first difference is 0). Its transfer from -y to u is
+K(z) = kp + kd (z - 1) / (T z) + ki T z / (z - 1), and the loop transfer is L(z) = K(z) P(z) with
+P(z) = C (z I - Phi)^-1 Gamma; the closed loop's characteristic equation 1 + L(z) = 0 is the state-space
+closed loop's (`closed_loop`) eigenvalue problem.
+
+Gain margin: the factor g by which kp, kd and ki together can grow before a closed-loop pole leaves the unit
+circle (`critical_gain`, by bisection on the spectral radius, to 1e-12 relative), cross-checked by
+python-control's `stability_margins` of L (`margins`).
+
+Units: T [s], kp [N/m], kd [N s/m], ki [N/(m s)], positions [m], forces [N].
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+import scipy.linalg
+
+if TYPE_CHECKING:
+    import control
+
+__all__ = [
+    "Pid",
+    "PidLaw",
+    "closed_loop",
+    "critical_gain",
+    "loop_response",
+    "loop_transfer",
+    "margins",
+    "spectral_radius",
+    "step_response",
+    "zoh",
+]
+
+
+def zoh(a: np.ndarray, b: np.ndarray, period: float) -> tuple[np.ndarray, np.ndarray]:
+    """(Phi, Gamma): the exact one-period map of x' = A x + B u with u held, from one augmented exponential.
+
+    Parameters
+    ----------
+    a
+        State matrix A [1/s], (n, n).
+    b
+        Input matrix B [state units / (input units s)], (n, m).
+    period
+        Hold period T [s], > 0.
+    """
+    a, b = np.atleast_2d(np.asarray(a, dtype=float)), np.asarray(b, dtype=float).reshape(len(a), -1)
+    n, m = b.shape
+    block = np.zeros((n + m, n + m))
+    block[:n, :n], block[:n, n:] = a * period, b * period
+    exponential = scipy.linalg.expm(block)
+    return exponential[:n, :n], exponential[:n, n:]
+
+
+@dataclasses.dataclass(frozen=True)
+class Pid:
+    """The sampled PID law of the module docstring.
+
+    Attributes
+    ----------
+    kp
+        Proportional gain [N/m], >= 0.
+    kd
+        Derivative gain [N s/m], >= 0 (on the measurement, backward difference).
+    ki
+        Integral gain [N/(m s)], >= 0 (rectangle rule).
+    period
+        Controller period T [s], > 0.
+    """
+
+    kp: float
+    kd: float
+    ki: float
+    period: float
+
+    def __post_init__(self) -> None:
+        for name in ("kp", "kd", "ki"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+        if not (math.isfinite(self.period) and self.period > 0):
+            raise ValueError(f"controller period must be > 0 s, got {self.period!r}")
+
+    def scaled(self, gain: float) -> Pid:
+        """The same law with kp, kd and ki multiplied by `gain` [-]."""
+        return Pid(self.kp * gain, self.kd * gain, self.ki * gain, self.period)
+
+    def matrices(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, float]:
+        """The law as a state-space system in its state w_k = (y_{k-1}, I_{k-1}), or (y_{k-1}) when ki = 0.
+
+        Returns
+        -------
+        tuple
+            (F, G, R, H, J, L): w_{k+1} = F w_k + G y_k + R r_k and u_k = H w_k + J y_k + L r_k, F (nw, nw);
+            G, R, H (nw,); J, L floats. Without an integral term its state is left out (it would be an
+            uncontrolled eigenvalue 1 of the closed loop).
+        """
+        t = self.period
+        j = -self.kp - self.kd / t - self.ki * t
+        reference_gain = self.kp + self.ki * t
+        if self.ki == 0:
+            return np.zeros((1, 1)), np.array([1.0]), np.array([0.0]), np.array([self.kd / t]), j, reference_gain
+        f = np.array([[0.0, 0.0], [0.0, 1.0]])
+        return f, np.array([1.0, -t]), np.array([0.0, t]), np.array([self.kd / t, self.ki]), j, reference_gain
+
+    def transfer(self) -> control.TransferFunction:
+        """K(z) [N/m] from -y to u: kp + kd (z - 1) / (T z) + ki T z / (z - 1) (sampled at T)."""
+        import control  # here: python-control loads scipy.optimize, start-up time for every command
+
+        t = self.period
+        z = control.TransferFunction([1.0, 0.0], [1.0], t)
+        law = self.kp + self.kd * (z - 1) / (t * z)
+        return law + self.ki * t * z / (z - 1) if self.ki > 0 else law
+
+
+class PidLaw:
+    """The PID difference equation run sample by sample on measurements (a MuJoCo loop's controller).
+
+    `update(y, r)` takes the measurement y_k [m] and the reference r_k [m] and returns u_k [N]; the first call
+    takes y_{-1} = y_0.
+    """
+
+    def __init__(self, pid: Pid) -> None:
+        self.pid = pid
+        self.previous: float | None = None
+        self.integral = 0.0
+
+    def update(self, measurement: float, reference: float) -> float:
+        """u_k [N] of the measurement y_k [m] and reference r_k [m] (module docstring's law)."""
+        pid = self.pid
+        previous = measurement if self.previous is None else self.previous
+        error = reference - measurement
+        self.integral += pid.period * error
+        self.previous = measurement
+        return pid.kp * error - pid.kd * (measurement - previous) / pid.period + pid.ki * self.integral
+
+
+def closed_loop(
+    phi: np.ndarray, gamma: np.ndarray, output: np.ndarray, pid: Pid
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """The sampled-data closed loop in z_k = (x_k, w_k), w the law's state (`Pid.matrices`).
+
+    Returns
+    -------
+    tuple
+        (A_cl, B_cl, C_u, D_u): z_{k+1} = A_cl z_k + B_cl r_k and u_k = C_u z_k + D_u r_k [N]; y_k = output x_k.
+    """
+    c = np.asarray(output, dtype=float).reshape(-1)
+    g_col = np.asarray(gamma, dtype=float).reshape(-1)
+    f, g, r, h, j, r_gain = pid.matrices()
+    n, nw = len(c), len(g)
+    c_u = np.concatenate([j * c, h])
+    a_cl = np.zeros((n + nw, n + nw))
+    a_cl[:n, :n] = phi
+    a_cl[:n, :] += np.outer(g_col, c_u)
+    a_cl[n:, :n] = np.outer(g, c)
+    a_cl[n:, n:] = f
+    b_cl = np.concatenate([g_col * r_gain, r])
+    return a_cl, b_cl, c_u, r_gain
+
+
+def step_response(
+    phi: np.ndarray, gamma: np.ndarray, output: np.ndarray, pid: Pid, reference: float, samples: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The closed loop from rest with the reference stepping to `reference` [m] at sample 0.
+
+    Returns
+    -------
+    tuple
+        (y [m] at samples 0..samples, u [N] held over samples 0..samples-1, states x at samples 0..samples).
+    """
+    a_cl, b_cl, c_u, d_u = closed_loop(phi, gamma, output, pid)
+    c = np.asarray(output, dtype=float).reshape(-1)
+    n = len(c)
+    z = np.zeros(len(b_cl))
+    states, forces = [z[:n].copy()], []
+    for _ in range(samples):
+        forces.append(float(c_u @ z + d_u * reference))
+        z = a_cl @ z + b_cl * reference
+        states.append(z[:n].copy())
+    x = np.array(states)
+    return x @ c, np.array(forces), x
+
+
+def loop_transfer(phi: np.ndarray, gamma: np.ndarray, output: np.ndarray, pid: Pid) -> control.TransferFunction:
+    """L(z) = K(z) P(z) [-], the loop broken at the plant's input (module docstring)."""
+    import control  # here: python-control loads scipy.optimize, start-up time for every command
+
+    c = np.asarray(output, dtype=float).reshape(1, -1)
+    plant = control.ss(phi, np.asarray(gamma, dtype=float).reshape(-1, 1), c, 0.0, pid.period)
+    return pid.transfer() * control.ss2tf(plant)
+
+
+def loop_response(
+    phi: np.ndarray, gamma: np.ndarray, output: np.ndarray, pid: Pid, frequency_hz: np.ndarray
+) -> np.ndarray:
+    """L(e^{i omega T}) [-] at `frequency_hz` [Hz]: K(z) C (z I - Phi)^-1 Gamma evaluated exactly (batched solves)."""
+    z = np.exp(2j * math.pi * np.asarray(frequency_hz, dtype=float) * pid.period)
+    n = len(phi)
+    resolvent = np.linalg.solve(
+        z[:, None, None] * np.eye(n) - phi,
+        np.broadcast_to(np.asarray(gamma, dtype=complex).reshape(n, 1), (z.size, n, 1)),
+    )
+    plant = (np.asarray(output, dtype=float).reshape(1, n) @ resolvent)[:, 0, 0]
+    law = pid.kp + pid.kd * (z - 1) / (pid.period * z)
+    if pid.ki > 0:
+        law = law + pid.ki * pid.period * z / (z - 1)
+    return law * plant
+
+
+def margins(
+    phi: np.ndarray, gamma: np.ndarray, output: np.ndarray, pid: Pid, *, lowest_hz: float = 0.01, points: int = 40001
+) -> dict[str, float]:
+    """Gain margin [dB] (as the gain rises), phase margin [deg] and their frequencies [Hz] of L(z).
+
+    L is evaluated exactly (`loop_response`) on a logarithmic grid from `lowest_hz` to the Nyquist frequency
+    1 / (2 T); each sign change of Im L with Re L < 0 (a phase crossover) and of |L| - 1 (a gain crossover) is
+    refined by Brent's method. The gain margin is the smallest 1 / |L| above 1 at a phase crossover (the factor
+    by which the gains can rise; `critical_gain` finds it from the poles), the phase margin the smallest angle
+    between L and -1 at a gain crossover, 180 deg - |arg L| with arg L in (-180, 180] deg. Margins describe a
+    stable loop; whether it is stable is the poles' answer (`spectral_radius`). (python-control's `stability_margins` reads these off its own
+    frequency grid and misses the lightly damped belt's crossover by 3 % of the gain: not used.)
+
+    Returns
+    -------
+    dict
+        {"gain_margin_db", "phase_margin_deg", "phase_crossover_hz", "gain_crossover_hz"}; inf and nan where
+        there is no crossover.
+    """
+    import scipy.optimize  # here: scipy.optimize costs every command start-up time (tests/test_cli_usage.py)
+
+    nyquist = 0.5 / pid.period
+    grid = np.geomspace(lowest_hz, nyquist * (1 - 1e-9), points)
+    values = loop_response(phi, gamma, output, pid, grid)
+
+    def response(f: float) -> complex:
+        return complex(loop_response(phi, gamma, output, pid, np.array([f]))[0])
+
+    gain_margin, phase_crossover = math.inf, math.nan
+    for i in np.flatnonzero(np.sign(values.imag[:-1]) != np.sign(values.imag[1:])):
+        if values.real[i] < 0 or values.real[i + 1] < 0:
+            f = scipy.optimize.brentq(lambda x: response(x).imag, grid[i], grid[i + 1], xtol=1e-13 * grid[i])
+            value = response(f)
+            if value.real < 0 and 1 / abs(value) > 1 and 1 / abs(value) < gain_margin:
+                gain_margin, phase_crossover = 1 / abs(value), f
+    phase_margin, gain_crossover = math.inf, math.nan
+    excess = np.abs(values) - 1
+    for i in np.flatnonzero(np.sign(excess[:-1]) != np.sign(excess[1:])):
+        f = scipy.optimize.brentq(lambda x: abs(response(x)) - 1, grid[i], grid[i + 1], xtol=1e-13 * grid[i])
+        margin = 180.0 - abs(math.degrees(np.angle(response(f))))
+        if margin < phase_margin:
+            phase_margin, gain_crossover = margin, f
+    return {
+        "gain_margin_db": 20 * math.log10(gain_margin) if math.isfinite(gain_margin) else math.inf,
+        "phase_margin_deg": phase_margin,
+        "phase_crossover_hz": phase_crossover,
+        "gain_crossover_hz": gain_crossover,
+    }
+
+
+def spectral_radius(phi: np.ndarray, gamma: np.ndarray, output: np.ndarray, pid: Pid) -> float:
+    """Largest |pole| [-] of the closed loop (< 1: stable)."""
+    return float(np.max(np.abs(np.linalg.eigvals(closed_loop(phi, gamma, output, pid)[0]))))
+
+
+def critical_gain(phi: np.ndarray, gamma: np.ndarray, output: np.ndarray, pid: Pid, *, largest: float = 1e4) -> float:
+    """The factor g [-] on kp, kd and ki at the nearest stability boundary from g = 1.
+
+    Stable at g = 1: the g > 1 at which the loop first loses stability as the gains rise (the gain margin as a
+    factor; inf if stable up to `largest`). Unstable at g = 1: the g < 1 below which it is stable again (0 if
+    it stays unstable down to 1 / `largest`). Geometric scan (ratio 1.01) from 1, then bisection on the
+    spectral radius to 1e-12 relative.
+    """
+
+    def stable(gain: float) -> bool:
+        return spectral_radius(phi, gamma, output, pid.scaled(gain)) < 1.0
+
+    rising = stable(1.0)
+    ratio = 1.01 if rising else 1 / 1.01
+    low, high = 1.0, ratio
+    while stable(high) == rising:
+        low, high = high, high * ratio
+        if not (1 / largest < high < largest):
+            return math.inf if rising else 0.0
+    # low is on the side of g = 1, high across the boundary
+    while abs(high - low) > 1e-12 * max(high, low):
+        middle = 0.5 * (low + high)
+        if stable(middle) == rising:
+            low = middle
+        else:
+            high = middle
+    return 0.5 * (low + high)
