@@ -131,6 +131,9 @@ class Reference:
         instead of `tolerance`, where it depends on the run's integrator:
         integrator name -> that relative tolerance [-] (e.g. the printer
         head's closed loop, whose error the scene carries through its law).
+        With a `system` beside it, that is only where the run must lie inside
+        the range of a leading-order estimate (compare.estimate_range), not
+        the tolerance's source.
     switches
         for a linear scene whose input is switched on a step boundary:
         [(time [s], A after it)], in time order; `system` holds before the first.

@@ -441,16 +441,6 @@ def residual_envelope(
     return share * math.hypot(stretch, (stretch_rate + zeta * omega_n * stretch) / omega_d)
 
 
-def worst_case_envelope(force: float, carriage_mass: float, motor_mass: float, stiffness: float) -> float:
-    """Largest residual envelope [m] any bang-bang move at `force` [N] can leave: 4 F m_c m_m / (M^2 k).
-
-    The residual stretch of an undamped belt is 4 sin^2(omega_n T / 4) <= 4 times the static
-    stretch F m_c / (M k), and the carriage moves m_m / M of it.
-    """
-    total = carriage_mass + motor_mass
-    return 4 * force * carriage_mass * motor_mass / (total**2 * stiffness)
-
-
 def minimum_move_time(distance: float, mass: float, force: float) -> float:
     """Minimum time [s] of a rigid move of `distance` [m] of `mass` [kg] at force limit `force` [N].
 

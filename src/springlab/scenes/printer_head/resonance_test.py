@@ -79,7 +79,9 @@ class ResonanceTest(Variant):
 
     @staticmethod
     def sweep(params: dict[str, float], steps: int, dt: float) -> np.ndarray:
-        """The chirp's force per step [N] over the run."""
+        """The chirp's force per step [N] over the run (none for a run of less than two steps: no sweep at all)."""
+        if steps < 2:
+            return np.zeros(steps)
         return resonance.chirp(params["sweep_force"], params["sweep_low_hz"], params["sweep_high_hz"], steps * dt, dt)
 
     def setup(self, case: Case, steps: int, dt: float) -> Setup:
