@@ -61,7 +61,7 @@ def test_rates_away_from_the_bottom_are_the_pendulum_s_angular_acceleration():
     length, gravity, theta = 0.5, 9.81, 0.3
     model = mujoco.MjModel.from_xml_string(pendulum_xml(length))
     at = ModelAtPoint(model, OperatingPoint.at(model, qpos=np.array([theta])))
-    qvel, qacc = at.rates()
+    qvel, qacc = at.rates
     assert qvel == 0.0
     # a point mass on a massless rod; MuJoCo's inertia at the tip (1e-9 kg m^2) is 1e-8 of m l^2
     assert qacc == pytest.approx(-gravity / length * math.sin(theta), rel=1e-7)

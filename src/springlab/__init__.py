@@ -12,7 +12,8 @@ from springlab.exact import analytic
 from springlab.render.inline import Video, video
 from springlab.runs.compare import Verdict
 from springlab.runs.run import Result, ValidationRow
-from springlab.studies.audit.audit import Audit, audit
+from springlab.studies.audit.audit import audit
+from springlab.studies.audit.results import Audit
 from springlab.studies.auto import run, validate
 from springlab.studies.fit.fit import fit
 from springlab.studies.frequency import FrequencyResponse, frequency

@@ -30,8 +30,8 @@ from springlab.runs.compare import Verdict
 from springlab.runs.run import Result, write_run
 from springlab.sim.simulate import INTEGRATORS
 from springlab.studies import auto, stability, tradeoff
-from springlab.studies.audit.audit import DEFAULT_PERTURB, DEFAULT_TOL
 from springlab.studies.audit.audit import audit as run_audit
+from springlab.studies.audit.options import DEFAULT_PERTURB, DEFAULT_TOL
 from springlab.studies.executor import CONNECT_TIMEOUT_S, Executor
 from springlab.studies.frequency import DEFAULT_POINTS
 from springlab.studies.frequency import DEFAULT_TOL as FREQUENCY_TOL

@@ -21,7 +21,7 @@ from springlab.scenes.base import Check
 from springlab.studies import tradeoff
 
 if TYPE_CHECKING:  # annotations only: these load mujoco.batch, scipy or sysid, which the commands import lazily
-    from springlab.studies.audit.audit import Audit
+    from springlab.studies.audit.results import Audit
     from springlab.studies.design.sobol import SobolStudy
     from springlab.studies.design.study import Study
     from springlab.studies.fit.results import FitResult

@@ -9,6 +9,7 @@ one object around instead of a model, a point and a linearization that each call
 
     at = ModelAtPoint.at(model, keyframe="home", settle_s=None)
     at.linear.modes, at.constraints.describe(), at.one_step_map("rk4", 1e-3)
+    ModelAtPoint(model, another_point)      # the same model elsewhere (a state along a motion)
 
 Nothing here modifies `model`: integrators and timesteps are set on copies (`scratch`).
 """
@@ -71,10 +72,6 @@ class ModelAtPoint:
             point = settle(model, point, settle_s)
         return cls(model, point)
 
-    def moved_to(self, point: OperatingPoint) -> ModelAtPoint:
-        """The same model at another point (e.g. a state along a motion, where the linearization is re-taken)."""
-        return ModelAtPoint(self.model, point, self.step)
-
     @functools.cached_property
     def data(self) -> mujoco.MjData:
         """MjData after `mj_forward` at the point with the model's own options: read it (qacc, contacts,
@@ -108,15 +105,14 @@ class ModelAtPoint:
         work.opt.integrator = int(mujoco.mjtIntegrator.mjINT_EULER)
         return work
 
-    def rates(self, ctrl: np.ndarray | None = None) -> np.ndarray:
-        """dx/dt = (qvel, qacc, act_dot) at the point [m/s or rad/s, m/s^2 or rad/s^2, activation/s], (2 nv +
-        na,), with `ctrl` held (None: the point's own): zero at an equilibrium with its own control."""
+    @functools.cached_property
+    def rates(self) -> np.ndarray:
+        """dx/dt = (qvel, qacc, act_dot) at the point, its control held [m/s or rad/s, m/s^2 or rad/s^2,
+        activation/s], (2 nv + na,): zero at an equilibrium (the continuous forward pass, `continuous`)."""
         work = self.continuous
         data = mujoco.MjData(work)
         with quiet_mujoco():
             self.point.load(work, data)
-            if ctrl is not None and work.nu:
-                data.ctrl[:] = ctrl
             mujoco.mj_forward(work, data)
         return np.concatenate([data.qvel, data.qacc, data.act_dot])
 

@@ -19,7 +19,7 @@ import pathlib
 from typing import TYPE_CHECKING
 
 from springlab import files
-from springlab.studies.audit.audit import Audit
+from springlab.studies.audit.results import Audit
 
 from .charts import _COLORS, _figure, _save
 

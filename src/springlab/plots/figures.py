@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 from springlab.errors import BadInputError
 from springlab.runs.run import Result
-from springlab.studies.audit.audit import Audit
+from springlab.studies.audit.results import Audit
 from springlab.studies.design.sobol import SobolStudy
 from springlab.studies.design.study import Study
 from springlab.studies.families import PhaseFamily, ZetaFamily

@@ -23,7 +23,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from fractions import Fraction
 from typing import Any
 
@@ -37,10 +37,16 @@ from springlab.exact.operating_point import OperatingPoint
 from springlab.sim.batch import Job, run_batched, time_run
 from springlab.sim.simulate import MAX_STEPS, Setup, Trajectory
 
+from .limits import Limit
+
 #: default grid: this many timesteps ...
 GRID_POINTS = 12
 #: ... over this many decades below the largest
 GRID_DECADES = 3.0
+#: the default grid's largest timestep: this multiple of the largest confirmed limit (runs beyond show the blow-up)
+GRID_TOP_OVER_LIMIT = 1.2
+#: the default grid's finest timestep takes at most this many steps over the duration (never exit 2 for the grid)
+GRID_MAX_STEPS = 100_000
 #: the divisors m of the default grid's timesteps top / m: their lcm is at most 2x the largest
 SMOOTH = sorted({2**a * b for a in range(16) for b in (1, 3)})
 #: the duration holds at least this many of the largest timestep
@@ -129,6 +135,37 @@ def default_grid(top: float, points: int = GRID_POINTS, decades: float = GRID_DE
     return [top / m for m in chosen]
 
 
+def grid_for(limits: Mapping[str, Limit], duration: float, own_dt: float) -> list[float]:
+    """The default grid [s], largest first: `default_grid` below GRID_TOP_OVER_LIMIT x the largest confirmed
+    stability limit (or the largest timestep brute force found bounded where nothing blew up; at most a tenth
+    of the duration), its top a divisor of the duration that the model's own timestep divides (`grid_top`),
+    over up to GRID_DECADES decades whose finest takes at most GRID_MAX_STEPS steps."""
+    confirmed = [lim.confirmed_limit_s for lim in limits.values() if lim.confirmed_limit_s is not None]
+    confirmed += [
+        lim.runs_bounded_dt_s
+        for lim in limits.values()
+        if lim.limit_dt_s is None and lim.runs_blew_up_dt_s is None and lim.runs_bounded_dt_s is not None
+    ]
+    ceiling = min(GRID_TOP_OVER_LIMIT * max(confirmed), duration / 10) if confirmed else duration / 10
+    ceiling = max(ceiling, 10 * duration / GRID_MAX_STEPS)  # never a grid too fine to run
+    top = grid_top(duration, ceiling, own_dt)
+    decades = min(GRID_DECADES, math.log10(top * GRID_MAX_STEPS / duration))
+    return default_grid(top, max(2, round(GRID_POINTS * decades / GRID_DECADES)), decades)
+
+
+def grid_top(duration: float, ceiling: float, own_dt: float) -> float:
+    """The default grid's largest timestep [s]: duration / J for the fewest intervals J that keep it at most
+    `ceiling` [s], with J dividing duration / own_dt when that is an integer (so the model's own timestep
+    divides it and is compared at the same checkpoints)."""
+    fewest = max(1, math.ceil(duration / ceiling * (1 - 1e-12)))
+    own_steps = duration / own_dt
+    if abs(own_steps - round(own_steps)) <= 1e-9 * own_steps and own_dt <= ceiling:
+        steps = round(own_steps)
+        divisors = [j for j in range(fewest, steps + 1) if steps % j == 0]
+        return duration / divisors[0]
+    return duration / fewest
+
+
 def sample_rows(steps: int) -> np.ndarray:
     """The step indices a run of `steps` steps is compared at: all, or every k-th for at most MAX_SAMPLES."""
     stride = max(1, math.ceil(steps / MAX_SAMPLES))
@@ -196,7 +233,10 @@ class ExactReference(Reference):
         self.nv, n = at.model.nv, linear.A.shape[0]
         self.work = at.continuous
         # the start's held control: its force is in the drift
-        drift = at.rates(None if start.control is None else np.atleast_2d(start.control)[0])
+        held = (
+            at.point if start.control is None else dataclasses.replace(at.point, ctrl=np.atleast_2d(start.control)[0])
+        )
+        drift = ModelAtPoint(at.model, held, at.step).rates
         x0 = np.zeros(n)
         mujoco.mj_differentiatePos(self.work, x0[: self.nv], 1.0, point.qpos, start.qpos)
         x0[self.nv : 2 * self.nv] = start.qvel - point.qvel
@@ -261,7 +301,7 @@ def linearity_change(at: ModelAtPoint, trajectory: Trajectory) -> float:
         probe = OperatingPoint(
             trajectory.qpos[row], trajectory.qvel[row], trajectory.act[row], linear.point.ctrl, "along the motion"
         )
-        change = max(change, float(np.max(np.abs(at.moved_to(probe).linear.A - linear.A))) / size)
+        change = max(change, float(np.max(np.abs(ModelAtPoint(at.model, probe, at.step).linear.A - linear.A))) / size)
     return change
 
 

@@ -1,0 +1,179 @@
+"""The audit's result: `Audit`, immutable, its facts as attributes (`audit.recommendation.dt`,
+`audit.own.stable`, `audit.stability["rk4"].limit_dt_measured_s`, ...); `Audit.to_dict()` is audit.json,
+`Audit.to_pandas()` the sweep's table and `Audit.message` its words (springlab.studies.audit.text).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
+
+from springlab import display, tables
+from springlab.exact.linearize import Linearization
+from springlab.sim.simulate import Setup
+
+from . import text
+from .limits import ConstraintFlag, Limit
+from .parts import Excitation, Linearity, OwnSetting, PointReport, Recommendation, ReferenceUsed, Timings
+from .sweep import SweepRun
+
+if TYPE_CHECKING:
+    import pandas
+    from matplotlib.figure import Figure
+
+#: what audit.json says counts as numerically unstable
+STABILITY_CRITERION = (
+    "numerically unstable: the measured one-step map amplifies a mode more than the exact flow"
+    " exp(lambda dt) does, by more than 1e-4 per step"
+)
+
+
+@dataclasses.dataclass(frozen=True, repr=False)
+class Audit(display.Shown):
+    """An audit of one model (see the module docstring); `to_dict()` is audit.json and `audit --json`.
+
+    Attributes
+    ----------
+    model
+        where the model came from (path, scene name or "<MjModel>").
+    linear
+        the linearization at the operating point (its `point`, `modes`, `fastest`).
+    start
+        the perturbed start of the sweep runs.
+    duration
+        simulated time of every run [s].
+    tol
+        tolerance of the recommendation [-].
+    perturb
+        size of the initial perturbation [m or rad].
+    stability
+        integrator -> `Limit` (predicted / measured / confirmed stability limit [s], margin [-]).
+    own
+        the model's own setting (`OwnSetting`).
+    constraints
+        constraint settings the own timestep breaks (solref timeconst < 2 dt).
+    is_linear, linearity
+        the linearity verdict and its measure (`Linearity`).
+    reference
+        the reference of the sweep (`ReferenceUsed`).
+    runs
+        the sweep, per integrator, largest dt first (`SweepRun`; `to_pandas()` is their table).
+    orders
+        integrator -> observed order (None: no clean power law, e.g. contacts).
+    pareto
+        runs no other beats in both error and wall time.
+    recommendation
+        the cheapest setting meeting tol, verified (`Recommendation`).
+    timings
+        wall time of each stage [s] (`Timings`).
+    point_state
+        what constrains the operating point and the motion, whether it is at rest (`PointReport`).
+    excitation
+        how the start moves the model and what moved (`Excitation`).
+    """
+
+    model: str
+    linear: Linearization
+    start: Setup
+    duration: float
+    tol: float
+    perturb: float
+    stability: Mapping[str, Limit]
+    own: OwnSetting
+    constraints: tuple[ConstraintFlag, ...]
+    is_linear: bool
+    linearity: Linearity
+    reference: ReferenceUsed
+    runs: tuple[SweepRun, ...]
+    orders: Mapping[str, float | None]
+    pareto: tuple[SweepRun, ...]
+    recommendation: Recommendation
+    timings: Timings
+    point_state: PointReport
+    excitation: Excitation
+
+    @property
+    def own_ok(self) -> bool:
+        """The model's own setting is stable and meets tol (exit 0 of the CLI; otherwise 1)."""
+        return bool(self.own.stable) and self.own.error is not None and self.own.error <= self.tol
+
+    @property
+    def mode_count(self) -> str:
+        """'6 modes (2 rigid)': how the text and audit.png count the modes (a complex pair is one mode)."""
+        return text.mode_count(self.linear.modes)
+
+    @property
+    def message(self) -> str:
+        """A few lines for people (what `springlab audit` prints; springlab.studies.audit.text): modes, what
+        holds the operating point, the own setting's margin and error, the recommendation, warnings (not at
+        rest, no motion, broken constraints, an unconverged reference)."""
+        return text.message(self)
+
+    def _shown(self) -> display.Summary:
+        """The audit as a notebook shows it: whether the model's own setting meets tol, then the numbers."""
+        own, pick = self.own, self.recommendation
+        return display.Summary(
+            "Audit",
+            self.model,
+            f"own setting {'meets' if self.own_ok else 'misses'} tol {self.tol:g}",
+            self.own_ok,
+            self.message.split("\n")[0],
+            (
+                display.Fact("own setting", f"{own.integrator} at dt = {own.dt:g} s"),
+                display.Fact("own error", own.error),
+                display.Fact("stability margin", own.margin),
+                display.Fact("modes", self.mode_count),
+                display.Fact(
+                    "recommended", f"{pick.integrator} at dt = {display.number(pick.dt)} s" if pick.integrator else None
+                ),
+                display.Fact("recommended error", pick.error),
+                display.Fact("wall time", self.timings.total_s, "s"),
+            ),
+            display.table(
+                ("integrator", "limit dt [s]", "method"),
+                [(name, limit.limit_dt_s, limit.method) for name, limit in self.stability.items()],
+            ),
+        )
+
+    def plot(self) -> Figure:
+        """The modes, the stability limits against the own setting, and error against cost (`springlab.plots.audit.audit_figure`).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            a bare Figure (no pyplot): Jupyter shows it inline; `.savefig(path)` writes it.
+        """
+        return display.plot(self)
+
+    def to_dict(self) -> dict[str, Any]:
+        """audit.json and `springlab audit --json`: the model, its operating point, modes, stability limits,
+        own setting, sweep and recommendation, plus linearity, orders, pareto, reference, constraints and timings."""
+        fastest = self.linear.fastest
+        return {
+            "model": self.model,
+            "operating_point": self.linear.point.to_dict(),
+            "operating_point_state": self.point_state.to_dict(),
+            "perturb": self.perturb,
+            "excitation": self.excitation.to_dict(),
+            "duration_s": self.duration,
+            "linear": self.is_linear,
+            "linearity": self.linearity.to_dict(),
+            "modes": [m.to_dict() for m in self.linear.modes],
+            "fastest_mode": fastest.to_dict() if fastest else None,
+            "stability": {name: limit.to_dict() for name, limit in self.stability.items()},
+            "stability_criterion": STABILITY_CRITERION,
+            "own_setting": self.own.to_dict(),
+            "constraints_broken": [c.to_dict() for c in self.constraints],
+            "reference": self.reference.to_dict(),
+            "sweep": [r.to_dict() for r in self.runs],
+            "orders": dict(self.orders),
+            "pareto": [r.to_dict() for r in self.pareto],
+            "recommendation": self.recommendation.to_dict(),
+            "timings_s": self.timings.to_dict(),
+        }
+
+    def to_pandas(self) -> pandas.DataFrame:
+        """The sweep as a DataFrame, one row per (integrator, dt): the rows of `to_dict()["sweep"]`
+        (integrator, dt [s], steps, error [-], wall_time_s [s], diverged); pandas is optional."""
+        return tables.to_pandas([r.to_dict() for r in self.runs])
