@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import math
 import os
 import pathlib
 import signal
@@ -18,6 +19,8 @@ import time
 import warnings
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any, NoReturn
+
+import numpy as np
 
 from springlab import __version__, files, scenes
 from springlab.cli import text as cli_text
@@ -339,8 +342,8 @@ def cmd_audit(args: argparse.Namespace) -> int:
             keyframe=args.keyframe,
             settle_s=args.settle,
             tol=args.tol,
-            integrators=args.integrators,
-            dt=args.dt,
+            integrators=_audit_integrators(args.integrators),
+            dts=_audit_dts(args.dt),
             duration=args.duration,
             perturb=args.perturb,
             executor=executor,
@@ -352,6 +355,40 @@ def cmd_audit(args: argparse.Namespace) -> int:
     else:
         cli_text.print_audit(result, args.output)
     return EXIT_OK if result.own_ok else EXIT_FAILED
+
+
+def _audit_integrators(text: str | None) -> list[str] | None:
+    """--integrators 'a,b' -> ['a', 'b'] (None: all five)."""
+    if text is None:
+        return None
+    names = [name.strip() for name in text.split(",") if name.strip()]
+    if not names:
+        raise BadInputError(f"--integrators needs at least one of {', '.join(INTEGRATORS)}")
+    return names
+
+
+def _audit_dts(text: str | None) -> list[float] | None:
+    """--dt: seconds 'a,b,c', or a range 'LOW:HIGH:N' (N log-spaced values, each snapped to HIGH / m for an
+    integer m so that they share checkpoints); None: the audit's default grid."""
+    if text is None:
+        return None
+    spec = text.strip()
+    try:
+        if ":" in spec:
+            low_text, high_text, count_text = spec.split(":")
+            low, high, count = float(low_text), float(high_text), int(count_text)
+            if not (0 < low < high and math.isfinite(high) and count >= 2):
+                raise ValueError
+            values = sorted({high / round(high / v) for v in np.geomspace(low, high, count)}, reverse=True)
+        else:
+            values = [float(v) for v in spec.split(",") if v.strip()]
+    except ValueError:
+        raise BadInputError(
+            f"--dt must be seconds 'a,b,c' or a range 'LOW:HIGH:N' with 0 < LOW < HIGH, N >= 2; got {text!r}"
+        ) from None
+    if not values or any(not (math.isfinite(v) and v > 0) for v in values):
+        raise BadInputError(f"every dt must be a finite number > 0 s, got {text!r}")
+    return values
 
 
 def cmd_frequency(args: argparse.Namespace) -> int:
