@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import math
+
+import numpy as np
 
 from springlab.cli import options
 from springlab.cli import text as cli_text
-from springlab.errors import ExitCode
+from springlab.errors import BadInputError, ExitCode
 from springlab.plots import audit as charts_audit
 from springlab.sim.simulate import INTEGRATORS
 from springlab.studies.audit.audit import audit as run_audit
@@ -48,6 +51,40 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     options.executor_arguments(parser)
 
 
+def parse_integrators(text: str | None) -> list[str] | None:
+    """--integrators 'a,b' -> ['a', 'b'] (None: all five)."""
+    if text is None:
+        return None
+    names = [name.strip() for name in text.split(",") if name.strip()]
+    if not names:
+        raise BadInputError(f"--integrators needs at least one of {', '.join(INTEGRATORS)}")
+    return names
+
+
+def parse_dts(text: str | None) -> list[float] | None:
+    """--dt: seconds 'a,b,c', or a range 'LOW:HIGH:N' (N log-spaced values, each snapped to HIGH / m for an
+    integer m so that they share checkpoints); None: the audit's default grid."""
+    if text is None:
+        return None
+    spec = text.strip()
+    try:
+        if ":" in spec:
+            low_text, high_text, count_text = spec.split(":")
+            low, high, count = float(low_text), float(high_text), int(count_text)
+            if not (0 < low < high and math.isfinite(high) and count >= 2):
+                raise ValueError
+            values = sorted({high / round(high / v) for v in np.geomspace(low, high, count)}, reverse=True)
+        else:
+            values = [float(v) for v in spec.split(",") if v.strip()]
+    except ValueError:
+        raise BadInputError(
+            f"--dt must be seconds 'a,b,c' or a range 'LOW:HIGH:N' with 0 < LOW < HIGH, N >= 2; got {text!r}"
+        ) from None
+    if not values or any(not (math.isfinite(v) and v > 0) for v in values):
+        raise BadInputError(f"every dt must be a finite number > 0 s, got {text!r}")
+    return values
+
+
 def main(args: argparse.Namespace) -> int:
     options.check_output(args)
     with options.executor(args) as executor:
@@ -56,8 +93,8 @@ def main(args: argparse.Namespace) -> int:
             keyframe=args.keyframe,
             settle_s=args.settle,
             tol=args.tol,
-            integrators=args.integrators,
-            dt=args.dt,
+            integrators=parse_integrators(args.integrators),
+            dts=parse_dts(args.dt),
             duration=args.duration,
             perturb=args.perturb,
             executor=executor,
