@@ -208,7 +208,7 @@ def test_an_unwritable_output_fails_before_any_computing(tmp_path, capsys, monke
     def must_not_run(*args, **kwargs):
         raise AssertionError("computed before checking --output")
 
-    monkeypatch.setattr("springlab.cli.main.run_frequency", must_not_run)
+    monkeypatch.setattr("springlab.cli.commands.frequency.run_frequency", must_not_run)
     blocker = tmp_path / "file"
     blocker.write_text("a file, not a folder")
     assert main(["frequency", "slider", "--output", str(blocker / "sub")]) == 2
