@@ -14,12 +14,14 @@ from __future__ import annotations
 
 import json
 import math
+import re
 
 import numpy as np
 import pytest
 
 import springlab
 from springlab.cli.main import main
+from springlab.errors import BadInputError
 from springlab.scenes import get as get_scene
 
 EPS = float(np.finfo(float).eps)
@@ -38,7 +40,9 @@ def _slider(zeta: float, **extra):
     d = 2.0 * zeta * math.sqrt(k * m)
     result = springlab.frequency(
         "slider",
-        parameters={"mass": m, "stiffness": k, "damping": d},
+        mass=m,
+        stiffness=k,
+        damping=d,
         band=(0.1, 40.0),
         points=120,
         integrators=(),
@@ -233,3 +237,16 @@ def test_sinestream_in_mujoco_matches_the_discrete_response_within_its_stated_ac
 def test_sinestream_refuses_a_joint_acceleration_response():
     with pytest.raises(springlab.BadInputError, match="accelerometer"):
         springlab.frequency("slider", response="slider:acc", integrators=(), sines=4)
+
+
+@pytest.mark.parametrize(
+    "option, text, typed",
+    [
+        ("band", "0.1:10", "band=(0.1, 10.0)"),
+        ("amplitudes", "0.5,2", "amplitudes=(0.5, 2.0)"),
+        ("integrators", "rk4", "integrators=['rk4'"),
+    ],
+)
+def test_the_library_refuses_the_command_lines_strings_and_names_the_typed_form(option, text, typed):
+    with pytest.raises(BadInputError, match=re.escape(typed)):
+        springlab.frequency("slider", **{option: text})

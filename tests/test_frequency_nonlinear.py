@@ -95,7 +95,7 @@ def duffing_sweep():
         "nonlinear",
         input="force",
         response="block",
-        parameters=DUFFING,
+        **DUFFING,
         band=BAND,
         points=20,
         integrators=(),
@@ -167,7 +167,7 @@ def test_sinestream_amplitudes_coincide_on_the_linear_slider_and_part_on_the_duf
         "nonlinear",
         input="force",
         response="block",
-        parameters=DUFFING,
+        **DUFFING,
         band=(1.4, 1.8),
         integrators=(),
         points=10,
@@ -241,7 +241,7 @@ def test_a_jointpos_sensor_response_is_the_joint_position_and_an_accelerometer_i
 def test_a_joint_force_input_is_the_motor_with_gear_one():
     """The slider's motor has gear 1: a force on the joint (qfrc_applied) is the same input, in the
     linearization (exact and discrete) and in MuJoCo's sinestream."""
-    kwargs = {"band": (0.5, 20.0), "points": 30, "integrators": (), "sines": 4, "parameters": SLIDER}
+    kwargs = {"band": (0.5, 20.0), "points": 30, "integrators": (), "sines": 4, **SLIDER}
     motor = springlab.frequency("slider", input="force", **kwargs)
     joint = springlab.frequency("slider", input="slider:force", **kwargs)
     assert joint.units["input"] == motor.units["input"] == "N"
