@@ -14,11 +14,8 @@ import numpy as np
 
 from springlab import scenes
 from springlab.errors import BadInputError, UnknownNameError
-from springlab.exact.linearize import (
-    Linearization,
-    OperatingPoint,
-    sensor_rows,
-)
+from springlab.exact.linearize import Linearization
+from springlab.exact.model_at_point import ModelAtPoint
 from springlab.runs.run import prepare
 from springlab.sim.simulate import INTEGRATORS, quiet_mujoco
 
@@ -247,8 +244,9 @@ class Probe:
     response_index: int
 
     def rows(
-        self, model: mujoco.MjModel, point: OperatingPoint, integrator: str | None = None, dt: float | None = None
+        self, at: ModelAtPoint, integrator: str | None = None, dt: float | None = None
     ) -> tuple[np.ndarray, float]:
-        """(c, d) of a sensor response: the continuous forward pass's (integrator None) or one step's."""
-        rows, feedthrough = sensor_rows(model, self.input_kind, self.input_index, point, integrator=integrator, dt=dt)
+        """(c, d) of a sensor response at the model's operating point: the continuous forward pass's (integrator
+        None) or one step's of `integrator` at `dt` [s]."""
+        rows, feedthrough = at.sensor_rows(self.input_kind, self.input_index, integrator, dt)
         return rows[self.response_index].copy(), float(feedthrough[self.response_index])

@@ -4,19 +4,14 @@ integrator's largest dt."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 
-import mujoco
 import numpy as np
 
-from springlab.exact.linearize import (
-    FD_STEP,
-    OperatingPoint,
-    one_step_map,
-    spectral_radius,
-    step_input_column,
-)
+from springlab.exact.linearize import FD_STEP, spectral_radius
+from springlab.exact.model_at_point import ModelAtPoint
 
 from .inputs import Probe
 from .results import Resonance
@@ -137,33 +132,62 @@ def find_resonances(
     return tuple(peaks)
 
 
-class Discretizer:
-    """MuJoCo's one-step map of an integrator at dt, with the input column, as a frequency response."""
+@dataclasses.dataclass(frozen=True, eq=False)
+class StepMap:
+    """One step of an integrator at dt as a discrete-time system at the operating point: x_{k+1} = phi x_k +
+    gamma u_k, y_k = c x_k + d u_k (phi (n, n), gamma (n,), c (n,), d)."""
 
-    def __init__(
-        self,
-        model: mujoco.MjModel,
-        point: OperatingPoint,
-        kind: str,
-        index: int,
-        c: np.ndarray,
-        d: float,
-        probe: Probe | None = None,
-    ):
-        self.model, self.point, self.kind, self.index, self.c, self.d = model, point, kind, index, c, d
-        self.probe = probe  # a sensor response: its rows come from the step of each integrator at its dt
+    phi: np.ndarray
+    gamma: np.ndarray
+    c: np.ndarray
+    d: float
+
+
+class Discretizer:
+    """MuJoCo's one-step map of an integrator at dt, with the input column, as a frequency response.
+
+    Each (integrator, dt, finite-difference step) is differenced once at the model's operating point and kept:
+    the band's bisection in frequency, the sinestream and the sweep ask the same setting again and again.
+
+    Parameters
+    ----------
+    at
+        the model at its operating point (its `workspace` takes the integrator and timestep of each map).
+    probe
+        the input (its column gamma) and the response: a sensor's rows come from the step of each integrator at
+        its dt (rk4's from the continuous forward pass, `c` and `d`).
+    c, d
+        the response's row and feedthrough in the continuous system.
+    """
+
+    def __init__(self, at: ModelAtPoint, probe: Probe, c: np.ndarray, d: float):
+        self.at, self.probe, self.c, self.d = at, probe, c, d
+        self._maps: dict[tuple[str, float, float], StepMap | None] = {}
+
+    def step_map(self, integrator: str, dt: float, step: float = FD_STEP) -> StepMap | None:
+        """The discrete-time system of `integrator` at `dt` [s], or None where its one-step map is unstable (no
+        steady state); `step`: the maps' finite-difference step (the sensor rows keep FD_STEP)."""
+        key = (integrator, float(dt), float(step))
+        if key not in self._maps:
+            self._maps[key] = self._differenced(integrator, dt, step)
+        return self._maps[key]
 
     def response(self, integrator: str, dt: float, f: np.ndarray, step: float = FD_STEP) -> np.ndarray | None:
         """H_d at f [Hz], or None where the one-step map is unstable (no steady state); `step`: the maps'
         finite-difference step."""
-        phi = one_step_map(self.model, integrator, dt, self.point, step=step)
+        system = self.step_map(integrator, dt, step)
+        return None if system is None else _discrete(system.phi, system.gamma, system.c, system.d, dt, f)
+
+    def _differenced(self, integrator: str, dt: float, step: float) -> StepMap | None:
+        at = self.at if step == self.at.step else dataclasses.replace(self.at, step=step)
+        phi = at.one_step_map(integrator, dt, self.at.workspace)
         if spectral_radius(phi) > STABLE_RADIUS:
             return None
-        gamma = step_input_column(self.model, integrator, self.kind, self.index, dt, self.point, step=step)
+        gamma = at.step_input_column(integrator, self.probe.input_kind, self.probe.input_index, dt)
         c, d = self.c, self.d
-        if self.probe is not None and self.probe.response_kind == "sensor" and integrator != "rk4":
-            c, d = self.probe.rows(self.model, self.point, integrator, dt)
-        return _discrete(phi, gamma, c, d, dt, f)
+        if self.probe.response_kind == "sensor" and integrator != "rk4":
+            c, d = self.probe.rows(self.at, integrator, dt)
+        return StepMap(phi, gamma, c, d)
 
 
 def relative_error(discrete: np.ndarray | None, exact: np.ndarray) -> np.ndarray:

@@ -12,10 +12,8 @@ import mujoco
 import numpy as np
 
 from springlab.errors import BadInputError
-from springlab.exact.linearize import (
-    Linearization,
-    OperatingPoint,
-)
+from springlab.exact.linearize import Linearization, OperatingPoint
+from springlab.exact.model_at_point import ModelAtPoint
 from springlab.sim.simulate import quiet_mujoco
 
 from .inputs import Probe
@@ -167,15 +165,13 @@ def demodulate(y: np.ndarray, t: np.ndarray, omega: float, dt: float | None = No
     return np.array([complex(coef[2 + 2 * h], -coef[3 + 2 * h]) for h in range(top)])
 
 
-def common_setup(model: mujoco.MjModel, point: OperatingPoint, probe: Probe, integrator: str, dt: float) -> SineSetup:
-    """What every chunk needs: the model, the setting, the input and the response, and the response at the point."""
+def common_setup(at: ModelAtPoint, probe: Probe, integrator: str, dt: float) -> SineSetup:
+    """What every chunk needs: the model, the setting, the input and the response, and the response at the
+    operating point (a sensor's from the model's forward pass there, `at.data`)."""
+    model, point = at.model, at.point
     qposadr = 0
     if probe.response_kind == "sensor":
-        data = mujoco.MjData(model)
-        with quiet_mujoco():
-            point.load(model, data)
-            mujoco.mj_forward(model, data)
-        offset = float(data.sensordata[probe.response_index])
+        offset = float(at.data.sensordata[probe.response_index])
     else:
         qposadr = int(model.jnt_qposadr[int(model.dof_jntid[probe.response_index])])
         if probe.response_kind == "pos":
@@ -241,17 +237,19 @@ def settle_rate(linear: Linearization) -> tuple[float, float]:
     """(sigma [1/s], cond(V)): the slowest decaying non-rigid mode's rate and the mode basis' condition number."""
     moving = [-lam.real for lam in linear.eigenvalues if abs(lam) > linear.growth_tolerance and lam.real < 0]
     sigma = min(moving) if moving else math.inf
-    _, vectors = np.linalg.eig(linear.A)
+    _, vectors = linear.eigenvectors  # eig(A), computed once per linearization
     condition = float(np.linalg.cond(vectors)) if vectors.size else 1.0
     return sigma, condition
 
 
 def steady_start(
-    model: mujoco.MjModel, point: OperatingPoint, linear: Linearization, b: np.ndarray, omega: float, amplitude: float
+    at: ModelAtPoint, b: np.ndarray, omega: float, amplitude: float
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(qpos, qvel, act) on the linearization's steady state at t = 0 of amplitude sin(omega t)."""
+    """(qpos, qvel, act) on the linearization's steady state at t = 0 of `amplitude` sin(omega t) on the input
+    whose column is b [input unit, rad/s]."""
+    model, point, a = at.model, at.point, at.linear.A
     nv = model.nv
-    state = np.linalg.solve(1j * omega * np.eye(linear.A.shape[0]) - linear.A, b * (-1j * amplitude))
+    state = np.linalg.solve(1j * omega * np.eye(a.shape[0]) - a, b * (-1j * amplitude))
     start = state.real
     qpos = point.qpos.copy()
     mujoco.mj_integratePos(model, qpos, start[:nv], 1.0)
@@ -259,9 +257,7 @@ def steady_start(
 
 
 def sinestream(
-    model: mujoco.MjModel,
-    point: OperatingPoint,
-    linear: Linearization,
+    at: ModelAtPoint,
     b: np.ndarray,
     probe: Probe,
     integrator: str,
@@ -299,7 +295,7 @@ def sinestream(
             " (add an accelerometer sensor)"
         )
     started = _time.perf_counter()
-    sigma, condition = settle_rate(linear)
+    sigma, condition = settle_rate(at.linear)
     exact = exact_of(frequencies_hz)
     runs, meta = [], []
     for f in frequencies_hz:
@@ -310,12 +306,12 @@ def sinestream(
         estimate_steps = int(round(periods * period / dt))
         settle_steps = min(int(math.ceil(settle / dt)), max(MAX_SINE_STEPS - estimate_steps, 0))
         steps = settle_steps + estimate_steps
-        qpos, qvel, act = steady_start(model, point, linear, b, omega, amplitude)
+        qpos, qvel, act = steady_start(at, b, omega, amplitude)
         runs.append((qpos, qvel, act, omega, amplitude, steps))
         left = condition * math.exp(-sigma * settle_steps * dt) if math.isfinite(sigma) else 0.0
         rounding = 1e3 * EPS * math.sqrt(steps)
         meta.append((omega, settle_steps, estimate_steps, periods, min(left, 1.0) + rounding))
-    common = common_setup(model, point, probe, integrator, dt)
+    common = common_setup(at, probe, integrator, dt)
     shift = 0 if probe.response_kind == "sensor" else 1  # a joint's sample k is after step k
     chunks = chunked(len(runs), SINES_PER_CHUNK)
     payloads = [SineChunk(common, tuple(runs[i] for i in chunk)) for chunk in chunks]

@@ -16,14 +16,8 @@ import numpy as np
 
 from springlab.errors import BadInputError
 from springlab.exact.harmonic_balance import Duffing, cubic_oscillator
-from springlab.exact.linearize import (
-    FD_STEP,
-    Linearization,
-    OperatingPoint,
-    input_column,
-    linearize,
-    operating_point,
-)
+from springlab.exact.linearize import FD_STEP, Linearization
+from springlab.exact.model_at_point import ModelAtPoint
 from springlab.sim.simulate import INTEGRATORS, integrator_id
 from springlab.studies.executor import Executor
 
@@ -198,16 +192,15 @@ def frequency(
     swept = _check_counts(points, sines, integrators, sweep)
     signal = _signal(source, input, response)
     checked_band = None if band is None else _check_band(band)
-    point = operating_point(source.model)
-    linear = linearize(source.model, point)
-    band = _below_nyquist(_default_band(linear, dt) if checked_band is None else checked_band, dt)
+    at = ModelAtPoint.at(source.model)  # linearized once, its maps differenced once per setting
+    band = _below_nyquist(_default_band(at.linear, dt) if checked_band is None else checked_band, dt)
     probe = signal.probe
     amplitude_values = (
-        (default_amplitude(source.model, point, probe.input_kind, probe.input_index),)
+        (default_amplitude(at.model, at.point, probe.input_kind, probe.input_index),)
         if amplitudes is None
-        else check_amplitudes(source.model, point, probe.input_kind, probe.input_index, amplitudes)
+        else check_amplitudes(at.model, at.point, probe.input_kind, probe.input_index, amplitudes)
     )
-    responses = _responses(source.model, point, linear, signal, integrator, dt, tol, band, int(points), swept)
+    responses = _responses(at, signal, integrator, dt, tol, band, int(points), swept)
     streams: list[Sinestream] = []
     branches: tuple[SweepBranch, ...] = ()
     duffing = None
@@ -216,7 +209,7 @@ def frequency(
     if sweep is not None:
         branches, duffing = _sweeps(responses, integrator, dt, band, int(sines), amplitude_values, sweep)
     return _result(
-        source, signal, point.label, integrator, dt, tol, band, responses, streams, branches, duffing, started
+        source, signal, at.point.label, integrator, dt, tol, band, responses, streams, branches, duffing, started
     )
 
 
@@ -303,9 +296,7 @@ def _signal(source: Source, input_name: str | None, response_name: str | None) -
 class _Responses:
     """The exact and discrete responses over the grid, and what the sinestream and the sweep reuse."""
 
-    model: mujoco.MjModel
-    point: OperatingPoint
-    linear: Linearization
+    at: ModelAtPoint
     probe: Probe
     b: np.ndarray
     c: np.ndarray
@@ -323,9 +314,7 @@ class _Responses:
 
 
 def _responses(
-    model: mujoco.MjModel,
-    point: OperatingPoint,
-    linear: Linearization,
+    at: ModelAtPoint,
     signal: _Signal,
     integrator: str,
     dt: float,
@@ -336,16 +325,16 @@ def _responses(
 ) -> _Responses:
     """The exact response, the integrator's at dt, the exact hold's, the band within tol, the resonances and
     every swept integrator's largest dt covering the band."""
-    probe = signal.probe
-    b = input_column(model, probe.input_kind, probe.input_index, point)
+    probe, linear = signal.probe, at.linear
+    b = at.input_column(probe.input_kind, probe.input_index)
     if probe.response_kind == "sensor":
-        c, d = probe.rows(model, point)
+        c, d = probe.rows(at)
     else:
         c, d = output_row(linear, b, probe.response_index, probe.response_kind)
     exact_of = continuous_response(linear.A, b, c, d)
     grid = np.geomspace(band[0], band[1], points)
     exact = exact_of(grid)
-    discretizer = Discretizer(model, point, probe.input_kind, probe.input_index, c, d, probe)
+    discretizer = Discretizer(at, probe, c, d)
     discrete = discretizer.response(integrator, dt, grid)
     if discrete is None:
         discrete = np.full(grid.shape, np.nan + 0j)
@@ -359,9 +348,7 @@ def _responses(
     for array in (grid, exact, discrete, hold):
         array.setflags(write=False)
     return _Responses(
-        model=model,
-        point=point,
-        linear=linear,
+        at=at,
         probe=probe,
         b=b,
         c=c,
@@ -398,9 +385,7 @@ def _sinestreams(
         raise BadInputError(f"{integrator} at dt = {dt:g} s is unstable on this model: no steady state to estimate")
     return [
         sinestream(
-            responses.model,
-            responses.point,
-            responses.linear,
+            responses.at,
             responses.b,
             responses.probe,
             integrator,
@@ -426,16 +411,14 @@ def _sweeps(
     sweep: str,
 ) -> tuple[tuple[SweepBranch, ...], Duffing | None]:
     """The up and/or down sweeps over the band at each amplitude, and a cubic oscillator's harmonic balance."""
-    discretizer, linear, probe = responses.discretizer, responses.linear, responses.probe
+    discretizer, at, probe = responses.discretizer, responses.at, responses.probe
     sweep_grid = np.linspace(band[0], band[1], sines if sines else DEFAULT_SWEEP_POINTS)
     if discretizer.response(integrator, dt, sweep_grid[:1]) is None:
         raise BadInputError(f"{integrator} at dt = {dt:g} s is unstable on this model: no steady state to sweep")
     directions = ("up", "down") if sweep == "both" else (sweep,)
     branches = mark_jumps(
         run_sweeps(
-            responses.model,
-            responses.point,
-            linear,
+            at,
             responses.b,
             probe,
             integrator,
@@ -448,13 +431,13 @@ def _sweeps(
     duffing = None
     if probe.response_kind == "pos":
         reach = 1.2 * max(float(np.max(br.response_amplitude)) for br in branches)
-        duffing = cubic_oscillator(responses.model, responses.point, probe.input_kind, probe.input_index, reach)
+        duffing = cubic_oscillator(at.model, at.point, probe.input_kind, probe.input_index, reach)
     if duffing is not None:
 
         def linear_error(f: np.ndarray) -> np.ndarray:
             # the integrator's own share (the hold's sinc is in the harmonic balance's force already)
             h_d = discretizer.response(integrator, dt, f)
-            held = held_response(linear.A, responses.b, responses.c, responses.d, dt, f)
+            held = held_response(at.linear.A, responses.b, responses.c, responses.d, dt, f)
             return np.zeros(len(f)) if h_d is None else np.abs(h_d / held - 1.0)
 
         branches = compare_with_harmonic_balance(branches, duffing, dt, (float(band[0]), float(band[1])), linear_error)

@@ -9,14 +9,10 @@ import os
 from collections.abc import Callable
 from typing import Any
 
-import mujoco
 import numpy as np
 
 from springlab.errors import BadInputError
-from springlab.exact.linearize import (
-    Linearization,
-    OperatingPoint,
-)
+from springlab.exact.model_at_point import ModelAtPoint
 from springlab.sim.simulate import quiet_mujoco
 
 from .inputs import Probe
@@ -45,9 +41,7 @@ SWEEP_DIRECTIONS = ("up", "down", "both")
 
 
 def run_sweeps(
-    model: mujoco.MjModel,
-    point: OperatingPoint,
-    linear: Linearization,
+    at: ModelAtPoint,
     b: np.ndarray,
     probe: Probe,
     integrator: str,
@@ -69,15 +63,15 @@ def run_sweeps(
         raise BadInputError(
             "the sweep measures a joint's position or velocity, or a sensor; not a joint's acceleration"
         )
-    sigma, _ = settle_rate(linear)
+    sigma, _ = settle_rate(at.linear)
     if not math.isfinite(sigma):
         raise BadInputError("the model has no damped mode: a sweep has no steady state to continue along")
     settle = math.log(1.0 / SWEEP_ACCURACY) / sigma
     chains = [(a, d) for a in amplitudes for d in directions]
     orders = [grid if d == "up" else grid[::-1] for _, d in chains]
     first = [2 * math.pi * float(order[0]) for order in orders]
-    starts = [steady_start(model, point, linear, b, w, a) for w, (a, _) in zip(first, chains)]
-    common = common_setup(model, point, probe, integrator, dt)
+    starts = [steady_start(at, b, w, a) for w, (a, _) in zip(first, chains)]
+    common = common_setup(at, probe, integrator, dt)
     shift = 0 if probe.response_kind == "sensor" else 1
     # every chain advances together, one batched rollout per frequency index (threads across chains): the same
     # settling for all, and each chain's own whole-period window at the end of it
