@@ -440,7 +440,7 @@ def _sweeps(
             held = held_response(at.linear.A, responses.b, responses.c, responses.d, dt, f)
             return np.zeros(len(f)) if h_d is None else np.abs(h_d / held - 1.0)
 
-        branches = compare_with_harmonic_balance(branches, duffing, dt, (float(band[0]), float(band[1])), linear_error)
+        branches = compare_with_harmonic_balance(branches, duffing, dt, linear_error)
     for branch in branches:
         for array in (branch.frequencies_hz, branch.estimate, branch.response_amplitude, branch.residue):
             array.setflags(write=False)

@@ -158,11 +158,11 @@ def compare_with_harmonic_balance(
     branches: list[SweepBranch],
     duffing: Any,
     dt: float,
-    band: tuple[float, float],
     linear_error: Callable[[np.ndarray], np.ndarray],
 ) -> list[SweepBranch]:
     """Each branch with the harmonic-balance amplitude nearest each measured one, its derived bound, and the fold
-    where its direction's branch ends (springlab.exact.harmonic_balance)."""
+    where its direction's branch ends (springlab.exact.harmonic_balance); the sine held over steps of dt [s]
+    drives with its first harmonic, sinc(omega dt / 2) times the force, at each point and at each fold."""
     from springlab.exact import harmonic_balance as hb
 
     out = []
@@ -180,8 +180,8 @@ def compare_with_harmonic_balance(
             predicted.append(root)
             bound.append(hb.amplitude_bound(duffing, float(force), root, float(omega)) + (2 * residue + err) * measured)
         # the fold where the branch the sweep starts on ends (harmonic balance followed from the first point)
-        force_mid = duffing.gain * branch.amplitude * float(np.sinc(math.sqrt(band[0] * band[1]) * dt))
         first, last = float(branch.frequencies_hz[0]), float(branch.frequencies_hz[-1])
-        fold = hb.fold_bracket(duffing, force_mid, first, last, float(branch.response_amplitude[0]))
+        force = duffing.gain * branch.amplitude
+        fold = hb.fold_bracket(duffing, force, first, last, float(branch.response_amplitude[0]), hold_dt=dt)
         out.append(dataclasses.replace(branch, predicted=np.array(predicted), bound=np.array(bound), fold_hz=fold))
     return out
