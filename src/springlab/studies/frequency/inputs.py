@@ -7,7 +7,6 @@ import dataclasses
 import os
 import pathlib
 from collections.abc import Mapping
-from typing import Any
 
 import mujoco
 import numpy as np
@@ -17,6 +16,7 @@ from springlab.errors import BadInputError, UnknownNameError
 from springlab.exact.linearize import Linearization
 from springlab.exact.model_at_point import ModelAtPoint
 from springlab.runs.run import prepare
+from springlab.scenes.capabilities import FrequencyInterpret, FrequencySpec
 from springlab.sim.simulate import INTEGRATORS, quiet_mujoco
 
 #: response kinds: 'JOINT' (position), 'JOINT:vel', 'JOINT:acc'
@@ -25,6 +25,26 @@ RESPONSE_KINDS = ("pos", "vel", "acc")
 
 @dataclasses.dataclass(frozen=True)
 class Source:
+    """A compiled model, where it came from and the question its scene declares.
+
+    Attributes
+    ----------
+    label
+        for people: the path, "scene 'car' (scenario 'road_bump')" or "<MjModel>".
+    model
+        the compiled model.
+    integrator, dt
+        the scene's or the model's own integrator and timestep [s].
+    input, response, description
+        the declared input and response names and the question in words (None, None, '': a model file).
+    parameters
+        the scenario's resolved parameters [SI] (empty for a model file).
+    interpret
+        what the declared input -> response means for the scene's question (None: nothing more).
+    input_unit
+        the declared input's unit ('': from the model).
+    """
+
     label: str
     model: mujoco.MjModel
     integrator: str
@@ -33,13 +53,17 @@ class Source:
     response: str | None
     description: str
     parameters: Mapping[str, float] = dataclasses.field(default_factory=dict)
-    interpret: Any = None
+    interpret: FrequencyInterpret | None = None
     input_unit: str = ""
 
 
-def _spec_for(declared: Any, scenario: str | None) -> Any:
+def _specs(declared: FrequencySpec | tuple[FrequencySpec, ...] | None) -> tuple[FrequencySpec, ...]:
+    return () if declared is None else (declared,) if not isinstance(declared, tuple) else declared
+
+
+def _spec_for(declared: FrequencySpec | tuple[FrequencySpec, ...] | None, scenario: str | None) -> FrequencySpec | None:
     """The scene's FrequencySpec for `scenario` (None: its default, the first declared), or None."""
-    specs = () if declared is None else (declared,) if not isinstance(declared, tuple) else declared
+    specs = _specs(declared)
     if scenario is None:
         return specs[0] if specs else None
     return next((spec for spec in specs if spec.scenario == scenario), None)
@@ -58,13 +82,19 @@ def declared_scenarios(scene_name: str) -> tuple[str, ...]:
     tuple[str, ...]
         the scenario names; () when the scene declares none.
     """
-    declared = scenes.get(scene_name).frequency
-    specs = () if declared is None else (declared,) if not isinstance(declared, tuple) else declared
-    return tuple(spec.scenario for spec in specs)
+    return tuple(spec.scenario for spec in _specs(scenes.get(scene_name).frequency))
 
 
-def load_source(scene_or_model: Any, scenario: str | None, parameters: Mapping[str, Any]) -> Source:
-    """The model to analyse: an MjModel, an MJCF path, or a scene (its declared scenario and edit)."""
+def load_source(
+    scene_or_model: mujoco.MjModel | str | os.PathLike[str], scenario: str | None, parameters: Mapping[str, float]
+) -> Source:
+    """The model to analyse: an MjModel, an MJCF path, or a scene (its declared scenario and edit).
+
+    Raises
+    ------
+    BadInputError
+        neither a model, a file nor a scene; a file MuJoCo cannot compile; a scenario or parameters with a file.
+    """
     if isinstance(scene_or_model, mujoco.MjModel):
         model = scene_or_model
         return Source("<MjModel>", model, _integrator_name(model), model.opt.timestep, None, None, "")

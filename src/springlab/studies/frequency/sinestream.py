@@ -15,6 +15,7 @@ from springlab.errors import BadInputError
 from springlab.exact.linearize import Linearization, OperatingPoint
 from springlab.exact.model_at_point import ModelAtPoint
 from springlab.sim.simulate import quiet_mujoco
+from springlab.studies.executor import Executor, chunked, resolve
 
 from .inputs import Probe
 from .linear import EPS
@@ -119,8 +120,17 @@ class SineSetup:
     offset: float
 
 
-#: one sine's run: (qpos, qvel, act) it starts from, omega [rad/s], amplitude [input unit], steps
-SineRun = tuple[np.ndarray, np.ndarray, np.ndarray, float, float, int]
+@dataclasses.dataclass(frozen=True, eq=False)
+class SineRun:
+    """One sine of a chunk: the state it starts from, qpos [m, rad], qvel [m/s, rad/s] and act, its angular
+    frequency omega [rad/s], its amplitude [input unit] and its steps."""
+
+    qpos: np.ndarray
+    qvel: np.ndarray
+    act: np.ndarray
+    omega: float
+    amplitude: float
+    steps: int
 
 
 @dataclasses.dataclass(frozen=True)
@@ -135,15 +145,15 @@ def _sine_chunk(payload: SineChunk, nthread: int = 0) -> list[np.ndarray]:
     """Run one chunk of sines (one batched MuJoCo rollout, segment by segment as the shorter runs end) and
     return each run's response samples (a module-level function: it runs on dask workers too)."""
     common, runs = payload.common, payload.runs
-    batch = new_batch(common, [(r[0], r[1], r[2]) for r in runs], nthread)
-    steps = np.array([r[5] for r in runs])
+    batch = new_batch(common, [(run.qpos, run.qvel, run.act) for run in runs], nthread)
+    steps = np.array([run.steps for run in runs])
     records: list[list[np.ndarray]] = [[] for _ in runs]
     done = 0
     with quiet_mujoco():
         for end in np.unique(steps):
             ids = np.flatnonzero(steps >= end).astype(np.int32)
             count = int(end - done)
-            control = np.stack([drive(common, runs[i][3], 0.0, runs[i][4], done, count) for i in ids])
+            control = np.stack([drive(common, runs[i].omega, 0.0, runs[i].amplitude, done, count) for i in ids])
             out = batch.rollout(count, control=control, control_spec=CONTROL_SPEC, record=record(common), ids=ids)
             for row, i in enumerate(ids):
                 records[i].append(measure(common, out, row))
@@ -267,7 +277,7 @@ def sinestream(
     exact_of: Callable[[np.ndarray], np.ndarray],
     uncertainty: np.ndarray,
     amplitude: float,
-    executor: Any = None,
+    executor: Executor | None = None,
 ) -> Sinestream:
     """Simulate MuJoCo at each frequency and demodulate (`Sinestream`; the module docstring says how).
 
@@ -287,8 +297,6 @@ def sinestream(
         the response is a joint's acceleration (the run records positions and velocities; a sensor can
         measure one).
     """
-    from springlab.studies.executor import chunked, resolve
-
     if probe.response_kind == "acc":
         raise BadInputError(
             "the sinestream measures a joint's position or velocity, or a sensor; not a joint's acceleration"
@@ -307,7 +315,7 @@ def sinestream(
         settle_steps = min(int(math.ceil(settle / dt)), max(MAX_SINE_STEPS - estimate_steps, 0))
         steps = settle_steps + estimate_steps
         qpos, qvel, act = steady_start(at, b, omega, amplitude)
-        runs.append((qpos, qvel, act, omega, amplitude, steps))
+        runs.append(SineRun(qpos, qvel, act, omega, amplitude, steps))
         left = condition * math.exp(-sigma * settle_steps * dt) if math.isfinite(sigma) else 0.0
         rounding = 1e3 * EPS * math.sqrt(steps)
         meta.append((omega, settle_steps, estimate_steps, periods, min(left, 1.0) + rounding))
@@ -343,6 +351,6 @@ def sinestream(
         settle_s=arrays[5],
         estimate_periods=arrays[6],
         uncertainty=arrays[7],
-        steps=int(sum(r[5] for r in runs)),
+        steps=int(sum(run.steps for run in runs)),
         wall_time_s=_time.perf_counter() - started,
     )

@@ -373,7 +373,7 @@ def _sinestreams(
     band: tuple[float, float],
     sines: int,
     amplitudes: tuple[float, ...],
-    executor: Any,
+    executor: Executor | None,
 ) -> list[Sinestream]:
     """One sinestream per amplitude: `sines` sines log-spaced over the band and an octave above it."""
     top = min(2.0 * band[1], 0.45 / dt)  # an octave above the band, below Nyquist

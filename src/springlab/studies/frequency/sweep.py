@@ -7,11 +7,11 @@ import dataclasses
 import math
 import os
 from collections.abc import Callable
-from typing import Any
 
 import numpy as np
 
 from springlab.errors import BadInputError
+from springlab.exact import harmonic_balance as hb
 from springlab.exact.model_at_point import ModelAtPoint
 from springlab.sim.simulate import quiet_mujoco
 
@@ -156,15 +156,13 @@ def mark_jumps(branches: list[SweepBranch]) -> list[SweepBranch]:
 
 def compare_with_harmonic_balance(
     branches: list[SweepBranch],
-    duffing: Any,
+    duffing: hb.Duffing,
     dt: float,
     linear_error: Callable[[np.ndarray], np.ndarray],
 ) -> list[SweepBranch]:
     """Each branch with the harmonic-balance amplitude nearest each measured one, its derived bound, and the fold
     where its direction's branch ends (springlab.exact.harmonic_balance); the sine held over steps of dt [s]
     drives with its first harmonic, sinc(omega dt / 2) times the force, at each point and at each fold."""
-    from springlab.exact import harmonic_balance as hb
-
     out = []
     for branch in branches:
         omegas = 2 * math.pi * branch.frequencies_hz
