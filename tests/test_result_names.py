@@ -40,7 +40,7 @@ RESULTS = {
     "studies/audit/limits.py": {"Limit", "ConstraintFlag"},
     "studies/stability.py": {"StabilityReport", "Boundary", "EnergyCheck", "EnergyHistories", "AmplificationMap"},
     "studies/extremes.py": {"ExtremeRun"},
-    "studies/frequency.py": {"FrequencyResponse", "Resonance", "IntegratorBand", "Sinestream"},
+    "studies/frequency/results.py": {"FrequencyResponse", "Resonance", "IntegratorBand", "Sinestream", "SweepBranch"},
     "studies/design/study.py": {"Study", "Plane"},
     "studies/design/sobol.py": {"SobolStudy"},
 }

@@ -71,6 +71,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     options.executor_arguments(parser)
 
 
+def parse_band(text: str) -> tuple[float, float]:
+    """'FMIN:FMAX' [Hz] -> (fmin, fmax) (checked by springlab.frequency: finite, 0 < fmin < fmax)."""
+    parts = str(text).split(":")
+    try:
+        if len(parts) != 2:
+            raise ValueError
+        return float(parts[0]), float(parts[1])
+    except ValueError:
+        raise BadInputError(f"--band must be FMIN:FMAX in Hz (e.g. 0.1:100), got {text!r}") from None
+
+
 def parse_amplitudes(text: str | None) -> tuple[float, ...] | None:
     """'A1,A2,...' -> floats (checked by springlab.frequency); None: the default amplitude."""
     if text is None:
@@ -89,16 +100,16 @@ def main(args: argparse.Namespace) -> int:
             args.scenario,
             input=args.input,
             response=args.response,
-            band=args.band,
+            band=None if args.band is None else parse_band(args.band),
             points=args.points,
             integrator=args.integrator,
             dt=args.dt,
             tol=args.tol,
             sines=args.sinestream,
             executor=executor,
-            parameters=options.parse_sets(args.set),
             amplitudes=parse_amplitudes(args.amplitude),
             sweep=args.sweep,
+            **options.parse_sets(args.set),
         )
     if args.output:
         charts_frequency.write_frequency(result, args.output)
