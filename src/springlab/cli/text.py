@@ -418,23 +418,19 @@ def print_refine(result: Refinement, output: str | None) -> None:
         if step_growth is not None
         else f"  per simulated second at the stability limit: {growth}"
     )
-    print("  Pareto front (error bound = discretization + integration, vs wall time):")
+    print("  Pareto front (error bound = discretization + integration, vs counted work; wall time beside it):")
     for run in result.pareto:
         print(
             f"    {size} = {run.size:<5} {run.integrator:<13} dt = {run.dt:<9.3g} bound {run.error_bound:.3e}"
             f" (discretization {run.discretization_error:.1e}, integration {run.integration_error:.1e};"
-            f" error {run.error:.1e})"
-            f" {run.wall_time_s * 1e3:.3f} ms"
+            f" error {run.error:.1e}) work {run.cost:.4g}, {run.wall_time_s * 1e3:.3f} ms"
         )
     pick = result.recommendation
     if pick is not None:
-        if not pick.verified:
-            print(f"  tol {pick.tol:g}: no setting of the study meets it")
-        else:
-            print(
-                f"  tol {pick.tol:g}: use {size} = {pick.size}, {pick.integrator} at dt = {pick.dt:g} s (verified by a"
-                f" run: discretization {pick.discretization_error:.2e} + integration {pick.integration_error:.2e} <= tol;"
-                f" error {pick.error:.2e}; {(pick.wall_time_s or 0.0) * 1e3:.3f} ms)"
-            )
+        line = _recommendation_line(pick, pick.time_s)
+        if pick.found:
+            line += f" `springlab run` at that setting: {pick.details['verdict']}."
+        print(f"  tol {pick.tolerance:g}: {line}")
+    print(f"  work: {COST_BASIS}")
     if output:
         print(f"  wrote {pathlib.Path(output) / 'refine.json'} and refine.png")

@@ -443,10 +443,9 @@ class Recommendation(Generic[R]):
             "near": [s.to_dict() for s in self.near],
             "rejected": self.rejected,
             "text": self.text,
-            **self.details,
         }
         renamed = names or {}
-        return {renamed.get(key, key): value for key, value in out.items()}
+        return {**{renamed.get(key, key): value for key, value in out.items()}, **self.details}
 
 
 def cheapest_verified(
@@ -458,6 +457,7 @@ def cheapest_verified(
     max_tries: int | None = None,
     budget: float | None = None,
     none_text: str = "",
+    error_words: str = "error",
 ) -> Recommendation[R]:
     """The cheapest row within `tolerance` whose verification run passes.
 
@@ -483,6 +483,8 @@ def cheapest_verified(
         reference carries an error of its own passes the tolerance less that error).
     none_text
         the sentence when no candidate passes (default: that no setting of the sweep meets the tolerance).
+    error_words
+        what the error is, in the sentence ('error', 'error bound (discretization + integration)').
 
     Returns
     -------
@@ -501,7 +503,7 @@ def cheapest_verified(
         later = candidates[index + 1 :]
         ties = tuple(r.run.setting for r in later if _same(r.run.cost, cost))
         near = tuple(r.run.setting for r in later if not _same(r.run.cost, cost) and r.run.cost <= cost * TIMING_NOISE)
-        text = sentence(row.run, tolerance, check.error, ties, near, rejected, describe)
+        text = sentence(row.run, tolerance, check.error, ties, near, rejected, describe, error_words)
         return Recommendation(
             tolerance=tolerance,
             row=row,
@@ -538,13 +540,14 @@ def sentence(
     near: Sequence[Setting],
     rejected: int,
     describe: Callable[[Setting], str] = Setting.describe,
+    error_words: str = "error",
 ) -> str:
     """The recommendation in words, with units: the setting, its steps and counted work, its verified error,
     the settings that tie with it or are within TIMING_NOISE of its counted work, the cheaper ones that failed."""
     verified = "n/a" if error is None else f"{error:.2g}"
     parts = [
         f"{describe(run.setting)} is the cheapest setting within tol {tolerance:g}: {run.steps} steps,"
-        f" {run.cost:.4g} {COST_UNIT} of counted work; its verification run's error is {verified} (relative)."
+        f" {run.cost:.4g} {COST_UNIT} of counted work; its verification run's {error_words} is {verified} (relative)."
     ]
     if ties:
         parts.append(
