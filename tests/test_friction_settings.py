@@ -170,7 +170,7 @@ def test_the_command_prints_json_and_writes_its_files(tmp_path):
     )
     assert done.returncode == 0, done.stderr
     data = json.loads(done.stdout)
-    assert set(data) >= {"scene", "tol", "integrators", "dts", "mujoco_default", "runs", "cases"}
+    assert set(data) >= {"scene", "tol", "integrators", "dts", "mujoco_default", "runs", "cases", "cost_basis"}
     case = data["cases"][0]
     assert set(case) >= {"default_model_error", "model_errors", "pareto", "pick", "answer", "runs"}
     assert data["runs"] == len(case["runs"]) and all(math.isfinite(r["cpu_time_s"]) for r in case["runs"])

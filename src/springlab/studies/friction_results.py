@@ -15,7 +15,7 @@ from springlab import display, tables
 from springlab.files import json_ready
 from springlab.scenes.capabilities import FrictionMeasure, SolverSetting
 
-from .settings import Recommendation, Run, RunFields
+from .settings import COST_BASIS, Recommendation, Run, RunFields
 
 if TYPE_CHECKING:
     import pandas
@@ -345,7 +345,8 @@ class FrictionSettings(display.Shown):
         return display.plot(self)
 
     def to_dict(self) -> dict[str, Any]:
-        """friction_settings.json: scene, tol, integrators, dts, mujoco_default, runs, wall_time_s, cases."""
+        """friction_settings.json: scene, tol, integrators, dts, mujoco_default, runs, wall_time_s, cases,
+        cost_basis."""
         return json_ready(
             {
                 "scene": self.scene,
@@ -357,6 +358,7 @@ class FrictionSettings(display.Shown):
                 "runs": self.runs,
                 "wall_time_s": self.wall_time_s,
                 "cases": [c.to_dict() for c in self.cases],
+                "cost_basis": COST_BASIS,
             }
         )
 
