@@ -17,7 +17,7 @@ import numpy as np
 from springlab.render import scale as render_scale
 from springlab.runs.compare import Verdict
 from springlab.runs.run import Result, ValidationRow
-from springlab.scenes.base import Check
+from springlab.scenes.declarations import Check
 from springlab.studies import tradeoff
 
 if TYPE_CHECKING:  # annotations only: these load mujoco.batch, scipy or sysid, which the commands import lazily
