@@ -33,19 +33,23 @@ Positions [m], times [s], accelerations [m/s^2], omega [rad/s], zeta [-].
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
 from . import events
+from .shaping import Shaper, shape_command
 
 __all__ = [
     "bang_bang",
     "carriage_deviation",
+    "fastest_shaper",
     "last_exit_after",
     "peak_after",
     "positioning_time",
     "quietest_move_time",
     "residual_phasor",
+    "shaped_positioning_time",
     "undamped_quiet_time",
     "worst_case_envelope",
 ]
@@ -231,3 +235,44 @@ def positioning_time(omega: float, zeta: float, breaks: np.ndarray, acceleration
     if excess(low) > 0 >= excess(high):
         return float(scipy.optimize.brentq(excess, low, high, xtol=1e-15, rtol=4 * np.finfo(float).eps))
     return exit_time
+
+
+def shaped_positioning_time(
+    omega: float, zeta: float, shaper: Shaper, distance: float, duration: float, band: float
+) -> float:
+    """Positioning time [s] of the bang-bang move of D in T shaped by `shaper`, on a mode (omega, zeta) [rad/s], [-].
+
+    The shaped command (exact.shaping.shape_command) lasts T + t_N; the carriage's exact motion decides
+    (`positioning_time`), so a shaper designed for another frequency pays for its residual here.
+    """
+    return positioning_time(omega, zeta, *shape_command(*bang_bang(distance, duration), shaper), band)
+
+
+def fastest_shaper(
+    shapers: Sequence[Shaper],
+    frequencies_hz: Sequence[float],
+    zeta: float,
+    distance: float,
+    duration: float,
+    band: float,
+) -> tuple[Shaper, dict[str, float]]:
+    """The shaper whose worst positioning time over the possible belt frequencies is the shortest.
+
+    What a firmware engineer asks of a measured resonance: the frequency is known to an interval (the resonance
+    test's 95 % interval, widened by whatever drift is expected), so each candidate is judged by its worst
+    positioning time [s] over `frequencies_hz` [Hz] (e.g. the interval's ends and points between), not at the
+    estimate alone.
+
+    Returns
+    -------
+    tuple
+        (the chosen shaper, {shaper name: worst positioning time [s]}).
+    """
+    worst = {
+        shaper.name: max(
+            shaped_positioning_time(2 * math.pi * f, zeta, shaper, distance, duration, band) for f in frequencies_hz
+        )
+        for shaper in shapers
+    }
+    chosen = min(shapers, key=lambda shaper: worst[shaper.name])
+    return chosen, worst

@@ -132,7 +132,9 @@ def _spectral_guess(force: np.ndarray, acceleration: np.ndarray, dt: float, ever
     return 2 * math.pi * frequencies[peak], zeta, level
 
 
-def fit_resonance(force: np.ndarray, acceleration: np.ndarray, dt: float, every: int = 1) -> ResonanceFit:
+def fit_resonance(
+    force: np.ndarray, acceleration: np.ndarray, dt: float, every: int = 1, band_hz: tuple[float, float] | None = None
+) -> ResonanceFit:
     """Fit the belt mode to a resonance test's record (module docstring).
 
     Parameters
@@ -145,12 +147,14 @@ def fit_resonance(force: np.ndarray, acceleration: np.ndarray, dt: float, every:
         Simulation step [s].
     every
         Steps per accelerometer sample, >= 1.
+    band_hz
+        The swept band (low, high) [Hz]: a resonance found outside it was extrapolated, not measured.
 
     Raises
     ------
     ValueError
-        A record too short for three parameters, or a fit that leaves the physical range (no resonance in the
-        swept band).
+        A record too short for three parameters, a fit that leaves the physical range, or a resonance outside
+        the swept band (the band missed it).
     """
     import scipy.optimize  # here: scipy.optimize costs every command start-up time (tests/test_cli_usage.py)
 
@@ -172,6 +176,11 @@ def fit_resonance(force: np.ndarray, acceleration: np.ndarray, dt: float, every:
     if not (0 < zeta < 1 and omega > 0 and inverse > 0):
         raise ValueError(
             f"the resonance test found no belt mode in its band (fit: {omega / (2 * math.pi):.4g} Hz, zeta {zeta:.3g})"
+        )
+    if band_hz is not None and not (band_hz[0] <= omega / (2 * math.pi) <= band_hz[1]):
+        raise ValueError(
+            f"the resonance test's band {band_hz[0]:g}-{band_hz[1]:g} Hz misses the belt's resonance (the fit"
+            f" extrapolates to {omega / (2 * math.pi):.4g} Hz): sweep a band that contains it"
         )
     dof = acceleration.size - 3
     variance = float(solution.fun @ solution.fun) / dof

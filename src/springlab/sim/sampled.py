@@ -20,6 +20,7 @@ warning or non-finite state and says so (`SampledRun.diverged_at`), so an unstab
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable
 
 import mujoco
@@ -27,7 +28,33 @@ import numpy as np
 
 from .simulate import BAD_WARNINGS
 
-__all__ = ["SampledRun", "run_sampled"]
+__all__ = ["SampledRun", "run_sampled", "steps_per_sample"]
+
+
+def steps_per_sample(control_rate_hz: float, dt: float) -> int:
+    """MuJoCo steps of dt [s] in one controller period 1 / control_rate_hz [s].
+
+    Raises
+    ------
+    ValueError
+        A rate that is not a positive number, a period shorter than one step (the controller would update
+        faster than MuJoCo steps), or a period that is not a whole number of steps (to 1e-9 of a step: the
+        control must switch on step boundaries to be held exactly).
+    """
+    if not (math.isfinite(control_rate_hz) and control_rate_hz > 0):
+        raise ValueError(f"control rate must be a positive number of Hz, got {control_rate_hz!r}")
+    period = 1.0 / control_rate_hz
+    if period < dt * (1 - 1e-9):
+        raise ValueError(
+            f"control rate {control_rate_hz:g} Hz is faster than MuJoCo's step ({dt:g} s, {1 / dt:g} Hz):"
+            " use a rate of at most 1 / dt, or a smaller dt"
+        )
+    steps = round(period / dt)
+    if abs(steps * dt - period) > 1e-9 * dt:
+        raise ValueError(
+            f"the control period {period:g} s is not a whole number of MuJoCo steps of {dt:g} s: choose dt = period / n"
+        )
+    return steps
 
 
 @dataclasses.dataclass(frozen=True)
