@@ -19,7 +19,7 @@ OLD_NAMES = {"as_dict", "as_json", "report_json", "summary"}
 
 #: module -> its result classes: each a frozen dataclass with `to_dict()`; a new result joins here
 RESULTS = {
-    "scenes/base.py": {"Check"},
+    "scenes/declarations.py": {"Check"},
     "runs/compare.py": {"ColumnError", "EstimateRange"},
     "runs/run.py": {"Result", "ValidationRow"},
     "studies/settings.py": {"Setting", "Run", "Recommendation"},

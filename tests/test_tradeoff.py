@@ -34,21 +34,19 @@ def slider_free_sweep():
 
 
 def _scene_model(scenario, **overrides):
-    scene = scenes.get("slider")
-    chosen = scene.scenario(scenario)
-    params = scene.resolve(chosen, overrides)
-    return scene, chosen, params, scene.build(params, chosen)
+    case = scenes.get("slider").case(scenario, overrides)
+    return case, case.model
 
 
 @pytest.mark.parametrize("scenario", ["step", "harmonic"])
 def test_batched_runs_are_bit_identical_to_single_simulate_calls(scenario):
     # per-simulation timestep and integrator in one batch, runs of different lengths
-    scene, chosen, params, model = _scene_model(scenario)
+    case, model = _scene_model(scenario)
     configs = [("euler", 0.01), ("implicit", 0.004), ("implicitfast", 0.0025), ("rk4", 0.003), ("discrete", 0.02)]
     jobs = []
     for name, dt in configs:
         steps = round(1.0 / dt)
-        jobs.append(batch.Job(model, name, dt, steps, scene.setup(model, params, chosen, steps, dt)))
+        jobs.append(batch.Job(model, name, dt, steps, case.setup(steps, dt)))
     for job, batched in zip(jobs, batch.run_batched(jobs)):
         single = simulate(
             model,
@@ -68,9 +66,9 @@ def test_batched_runs_of_different_models_are_bit_identical_to_single_runs():
     # the extremes table batches sliders of different mass and stiffness (Batch.set_models)
     jobs, models = [], []
     for stiffness, name in ((100.0, "rk4"), (1e6, "euler"), (3.0, "discrete")):
-        scene, chosen, params, model = _scene_model("free", stiffness=stiffness)
+        case, model = _scene_model("free", stiffness=stiffness)
         models.append(model)
-        jobs.append(batch.Job(model, name, 1e-4, 700, scene.setup(model, params, chosen, 700, 1e-4)))
+        jobs.append(batch.Job(model, name, 1e-4, 700, case.setup(700, 1e-4)))
     for job, batched in zip(jobs, batch.run_batched(jobs)):
         single = simulate(
             job.model,
@@ -87,9 +85,9 @@ def test_batched_runs_of_different_models_are_bit_identical_to_single_runs():
 
 def test_a_batched_blow_up_is_reported_as_divergence_never_as_a_result():
     # euler at omega*dt = 3 > 2.1 blows up; MuJoCo would reset it silently
-    scene, chosen, params, model = _scene_model("free")
-    stable = batch.Job(model, "euler", 0.01, 2000, scene.setup(model, params, chosen, 2000, 0.01))
-    unstable = batch.Job(model, "euler", 0.3, 2000, scene.setup(model, params, chosen, 2000, 0.3))
+    case, model = _scene_model("free")
+    stable = batch.Job(model, "euler", 0.01, 2000, case.setup(2000, 0.01))
+    unstable = batch.Job(model, "euler", 0.3, 2000, case.setup(2000, 0.3))
     good, bad = batch.run_batched([stable, unstable])
     assert not isinstance(good, DivergedError)
     assert isinstance(bad, DivergedError)
@@ -261,15 +259,12 @@ def test_timestep_grid_spans_three_decades_below_omega_dt_1():
 
 
 def test_a_stop_condition_ends_batched_runs_exactly_where_simulate_ends_them():
-    scene, chosen, params, model = _scene_model("free")
+    case, model = _scene_model("free")
 
     def crossed(qpos, qvel):  # the block reaches the relaxed length
         return qpos[:, 0] <= 0.0
 
-    jobs = [
-        batch.Job(model, name, 0.01, 300, scene.setup(model, params, chosen, 300, 0.01), crossed)
-        for name in ("euler", "rk4")
-    ]
+    jobs = [batch.Job(model, name, 0.01, 300, case.setup(300, 0.01), crossed) for name in ("euler", "rk4")]
     for job, batched in zip(jobs, batch.run_batched(jobs)):
         single = simulate(
             model,
@@ -289,7 +284,7 @@ def test_a_scenario_without_an_exact_trajectory_cannot_be_swept():
     from springlab.scenes.slider import Slider
 
     class ChecksOnly(Slider):  # validated by scalar checks alone, like the non-linear scenes
-        def reference(self, model, params, scenario, time, *, dt):
+        def reference(self, case, time, *, dt):
             return None
 
     with pytest.raises(BadInputError, match="no exact reference trajectory.*valid: none in this scene"):

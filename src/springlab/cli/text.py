@@ -18,7 +18,7 @@ import numpy as np
 from springlab.render import scale as render_scale
 from springlab.runs.compare import Verdict
 from springlab.runs.run import Result, ValidationRow
-from springlab.scenes.base import Check
+from springlab.scenes.declarations import Check
 from springlab.studies import tradeoff
 from springlab.studies.settings import COST_BASIS, Recommendation
 

@@ -8,11 +8,45 @@ from __future__ import annotations
 
 import ast
 import dataclasses
-from collections.abc import Callable, Mapping
-from typing import Any, ClassVar, Protocol, TypeAlias
+from collections.abc import Callable, Hashable, Mapping
+from typing import Any, ClassVar, Protocol, TypeAlias, TypeVar
 
 import mujoco
 import numpy as np
+
+from springlab.sim.simulate import Trajectory
+
+from .declarations import Scenario
+
+T = TypeVar("T")
+
+
+class CaseView(Protocol):
+    """What a capability hook reads of the case it is given: a springlab.scenes.base.Case.
+
+    A Protocol, not the class: the scenes' base declares its capabilities with the types below, so this
+    module cannot import it back.
+    """
+
+    @property
+    def scenario(self) -> Scenario:
+        """The scenario."""
+        ...
+
+    @property
+    def params(self) -> dict[str, float]:
+        """Parameter name -> value (SI), resolved."""
+        ...
+
+    @property
+    def model(self) -> mujoco.MjModel:
+        """The compiled model."""
+        ...
+
+    def memo(self, key: Hashable, compute: Callable[[], T]) -> T:
+        """`compute()` once per case (Case.memo)."""
+        ...
+
 
 # -- fit: identification from a recorded signal (springlab.studies.fit) ----------------------------------
 
@@ -49,8 +83,8 @@ class OscillatorFit:
     mode_mass
         hook: the scene's parameters -> the mode's mass m [kg] (None: the parameter `mass`).
     initial_state
-        hook: (compiled model, the scene's parameters, x0 [m], v0 [m/s]) -> (qpos, qvel) with the
-        coordinate at x0, v0 (None: the joint set, the rest of the scene at qpos0 and at rest).
+        hook: (the candidate's Case, x0 [m], v0 [m/s]) -> (qpos, qvel) with the coordinate at x0, v0
+        (None: the joint set, the rest of the scene at qpos0 and at rest).
     release
         hook for a scene whose initial state is not its parameters x0, v0 (its runs start at rest):
         (the identified scene's run parameters, x0 [m]) -> the run parameters that start it at rest at
@@ -69,9 +103,7 @@ class OscillatorFit:
     rest: str | None = None
     step_forces: Mapping[str, str] = dataclasses.field(default_factory=dict)
     mode_mass: Callable[[Mapping[str, float]], float] | None = None
-    initial_state: (
-        Callable[[mujoco.MjModel, Mapping[str, float], float, float], tuple[np.ndarray, np.ndarray]] | None
-    ) = None
+    initial_state: Callable[[CaseView, float, float], tuple[np.ndarray, np.ndarray]] | None = None
     release: Callable[[Mapping[str, float], float], dict[str, float]] | None = None
 
     def __post_init__(self) -> None:
@@ -309,23 +341,14 @@ class DesignHooks(Protocol):
         ...
 
     def simulate(
-        self,
-        model: mujoco.MjModel,
-        base: Mapping[str, float],
-        values: Mapping[str, np.ndarray],
-        *,
-        omega_dt: float,
-        nthread: int,
-        max_duration: float,
+        self, case: CaseView, values: Mapping[str, np.ndarray], *, omega_dt: float, nthread: int, max_duration: float
     ) -> MoveRuns:
         """Simulate the move of every configuration (a module-level object: it runs on dask workers too).
 
         Parameters
         ----------
-        model
-            the scene's design scenario compiled at `base`.
-        base
-            the scene's parameters (SI).
+        case
+            the scene's design scenario at `base`, the scene's parameters (SI): `case.params`.
         values
             property -> (n,) values.
         omega_dt
@@ -729,8 +752,8 @@ class Panel:
     marks: tuple[tuple[float, str], ...] = ()
 
 
-#: hook: (compiled model, parameters, scenario name, trajectory) -> the panels of the run's own figure
-FigureHook: TypeAlias = Callable[[mujoco.MjModel, Mapping[str, float], str, Any], tuple[Panel, ...]]
+#: hook: (the case that ran, its trajectory) -> the panels of the run's own figure
+FigureHook: TypeAlias = Callable[[CaseView, Trajectory], tuple[Panel, ...]]
 
 
 # -- frequency: the frequency response of a scene (springlab.studies.frequency) ----------------------------

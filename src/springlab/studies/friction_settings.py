@@ -36,7 +36,7 @@ import itertools
 import math
 import time as _time
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -47,7 +47,7 @@ from springlab.runs import compare
 from springlab.runs.run import evaluate, prepare, run_scenario
 from springlab.scenes.base import Scene
 from springlab.scenes.capabilities import DryFrictionSpec, FrictionCase, FrictionMeasure
-from springlab.sim.simulate import INTEGRATORS, check_timing, integrator_id, simulate
+from springlab.sim.simulate import INTEGRATORS, check_timing, integrator_id
 
 from .executor import Executor, chunked, resolve
 from .friction_results import (
@@ -68,9 +68,6 @@ from .settings import (
     pareto_front,
     work_per_evaluation,
 )
-
-if TYPE_CHECKING:
-    pass
 
 #: runs per chunk (a few seconds of work each)
 CHUNK_RUNS = 48
@@ -161,9 +158,9 @@ def settings_chunk(payload: dict[str, Any], nthread: int = 0) -> list[dict[str, 
     wanted = {name for pair in payload["measures"] for name in pair if name}
     for group in payload["groups"]:
         settings, _, _ = group[0]
-        scene, chosen, params = prepare(payload["scene"], payload["scenario"], {**payload["overrides"], **settings})
-        model = scene.build(params, chosen)  # one model per setting: simulate steps a copy at each dt
-        work = work_per_evaluation(model)  # its NoSlip iterations count in its work per step
+        # one case per setting: its runs at every integrator and dt share its model (simulate steps a copy)
+        case = scenes.case(payload["scene"], payload["scenario"], {**payload["overrides"], **settings})
+        work = work_per_evaluation(case.model)  # its NoSlip iterations count in its work per step
         previous = None
         for _, integrator, dt in group:
             steps = check_timing(dt, payload["duration"])
@@ -176,14 +173,12 @@ def settings_chunk(payload: dict[str, Any], nthread: int = 0) -> list[dict[str, 
                 "detail": "",
                 "work": work,
             }
-            setup = scene.setup(model, params, chosen, steps, dt)
+            setup = case.setup(steps, dt)
             try:
                 start = _time.thread_time()
-                trajectory = simulate(
-                    model, integrator=integrator, dt=dt, duration=payload["duration"], qpos=setup.qpos, qvel=setup.qvel
-                )
+                trajectory = case.simulate(integrator, dt, payload["duration"], setup=setup)
                 row["cpu_time_s"] = _time.thread_time() - start
-                result = evaluate(scene, chosen, params, model, trajectory, checks=False)
+                result = evaluate(case, trajectory, checks=False)
             except DivergedError as blown:
                 row["detail"] = str(blown)
                 rows.append(row)
@@ -194,7 +189,7 @@ def settings_chunk(payload: dict[str, Any], nthread: int = 0) -> list[dict[str, 
             row["error"] = result.max_rel_error
             row["quantities"] = {
                 k: v
-                for k, v in {**params, **result.quantities}.items()
+                for k, v in {**case.params, **result.quantities}.items()
                 if k in wanted or k.removesuffix("_exact") in wanted
             }
             rows.append(row)

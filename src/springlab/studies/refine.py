@@ -38,10 +38,10 @@ from springlab import display, scenes, tables
 from springlab.errors import BadInputError, DivergedError
 from springlab.files import json_ready
 from springlab.runs import compare
-from springlab.runs.run import prepare, run_scenario
+from springlab.runs.run import run_scenario
 from springlab.scenes.base import Scene
-from springlab.sim.batch import TIMING_STEPS, Job, time_run
-from springlab.sim.simulate import INTEGRATORS, MAX_STEPS, check_timing, integrator_id, simulate
+from springlab.sim.batch import TIMING_STEPS, time_run
+from springlab.sim.simulate import INTEGRATORS, MAX_STEPS, check_timing, integrator_id
 
 from .executor import Executor
 from .settings import (
@@ -433,15 +433,12 @@ def refine(
 
     plans = []
     for size in sizes:
-        _, chosen, params = prepare(scene_obj, asked.scenario, {**parameters, spec.size: size})
-        model = scene_obj.build(params, chosen)
-        modes = scene_obj.modes(model, params, chosen)
+        case = scenes.case(scene_obj, asked.scenario, {**parameters, spec.size: size})
+        params, modes = case.params, case.modes()
         fastest = max(omega for omega, _ in modes)
         limits: dict[str, float | None] = {}
         for name in integrators:
-            ratio = min(
-                scene_obj.stability_limit(model, params, chosen, name, omega, zeta) / omega for omega, zeta in modes
-            )
+            ratio = min(case.stability_limit(name, omega, zeta) / omega for omega, zeta in modes)
             limits[name] = ratio if math.isfinite(ratio) else None
         dts = sorted({_on_grid(_round_sig(f / fastest), params.get(spec.switch_time)) for f in omega_dt}, reverse=True)
         dts = [dt for dt in dts if duration / dt <= min(MAX_REFINE_STEPS, MAX_STEPS) and dt <= duration / 4]
@@ -498,34 +495,24 @@ def refine_chunk(payload: dict[str, Any], nthread: int = 0) -> list[RefineRun]:
     """One chunk of one size: each (integrator, dt) run alone, its question's three values read from the
     scene's quantities, its counted cost from the model and its stability limit from payload["limits"] (a
     module-level function of plain data for dask workers; the model is rebuilt here)."""
-    scene_obj, chosen, params = prepare(payload["scene"], payload["scenario"], payload["parameters"])
-    model = scene_obj.build(params, chosen)
+    case = scenes.case(payload["scene"], payload["scenario"], payload["parameters"])
     name, exact_name, continuum_name = payload["question"]
     duration, size = payload["duration"], payload["size"]
-    work = work_per_evaluation(model)
+    work = work_per_evaluation(case.model)
     out = []
     for integrator, dt in payload["pairs"]:
         steps = check_timing(dt, duration)
         setting = Setting(integrator, dt, ((payload["size_parameter"], float(size)),))
         past = beyond(dt, payload["limits"][integrator])
-        setup = scene_obj.setup(model, params, chosen, steps, dt)
+        setup = case.setup(steps, dt)
         try:
-            trajectory = simulate(
-                model,
-                integrator=integrator,
-                dt=dt,
-                duration=duration,
-                qpos=setup.qpos,
-                qvel=setup.qvel,
-                act=setup.act,
-                control=setup.control,
-            )
+            trajectory = case.simulate(integrator, dt, duration, setup=setup)
         except DivergedError as error:
             cost = counted_cost(integrator, steps, work)
             run = Run(setting, steps, None, cost, diverged=True, beyond_limit=past, detail=str(error))
             out.append(RefineRun(run, size, None, None, None))
             continue
-        quantities = scene_obj.quantities(model, params, chosen, trajectory)
+        quantities = case.quantities(trajectory)
         value = quantities.get(name)
         value = float(value) if value is not None and math.isfinite(float(value)) else None
         exact, continuum = float(quantities[exact_name]), float(quantities[continuum_name])
@@ -534,7 +521,7 @@ def refine_chunk(payload: dict[str, Any], nthread: int = 0) -> list[RefineRun]:
             trajectory.steps,
             bound(exact, continuum, value),
             counted_cost(integrator, trajectory.steps, work),
-            time_run(Job(model, integrator, dt, steps, setup)),
+            time_run(case.job(integrator, dt, steps, setup=setup)),
             diverged=value is None,
             beyond_limit=past,
             detail="" if value is not None else f"the run measured no {name}",
@@ -608,8 +595,7 @@ def _recommend(
         error_bound = bound(exact, continuum, value)
         if value is None or error_bound is None or error_bound > tol:
             return Verification(False, error_bound)
-        setup = scene.setup(result.model, result.parameters, scene.scenario(asked.scenario), result.steps, result.dt)
-        wall = time_run(Job(result.model, candidate.integrator, candidate.dt, result.steps, setup))
+        wall = time_run(result.case.job(candidate.integrator, candidate.dt, result.steps))
         details = {
             "size": candidate.size,
             "error": abs(value - continuum) / abs(continuum),

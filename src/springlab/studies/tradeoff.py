@@ -20,7 +20,6 @@ import time as _time
 from collections.abc import Callable, Iterable, Sequence
 from typing import TYPE_CHECKING, Any
 
-import mujoco
 import numpy as np
 
 from springlab import display, scenes, tables
@@ -28,9 +27,9 @@ from springlab.errors import BadInputError, DivergedError
 from springlab.files import json_ready
 from springlab.runs import compare
 from springlab.runs.compare import Verdict
-from springlab.runs.run import evaluate, prepare, run_scenario
-from springlab.scenes.base import Scenario, Scene
-from springlab.sim.batch import TIMING_STEPS, Job, run_batched, time_run
+from springlab.runs.run import evaluate, run_scenario
+from springlab.scenes.base import Case, Scenario, Scene
+from springlab.sim.batch import TIMING_STEPS, run_batched, time_run
 from springlab.sim.simulate import INTEGRATORS, ORDERS, Setup, check_timing, integrator_id
 
 from .executor import Executor, chunked
@@ -239,19 +238,19 @@ class Tradeoff(display.Shown):
         return tables.to_pandas([{**r.to_dict(), "pareto": id(r) in front} for r in self.runs])
 
 
-def fastest_rate(scene: Scene, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> float | None:
-    """The largest |eigenvalue| [1/s] of the scenario's motion, or None if the scene knows none.
+def fastest_rate(case: Case) -> float | None:
+    """The largest |eigenvalue| [1/s] of the case's motion, or None if the scene knows none.
 
     From the scene's modes (an overdamped mode's fast root omega (zeta + sqrt(zeta^2 - 1))),
     else from the spectral radius of the exact reference's system matrix.
     """
     rates = []
-    for omega, zeta in scene.modes(model, params, scenario):
+    for omega, zeta in case.modes():
         rates.append(omega * (zeta + math.sqrt(zeta * zeta - 1)) if zeta > 1 else omega)
     if rates:
         return max(rates)
-    if scenario.exact:
-        reference = scene.reference(model, params, scenario, np.array([0.0]), dt=scenario.dt or scene.dt)
+    if case.scenario.exact:
+        reference = case.reference(np.array([0.0]), dt=case.scenario.dt or case.scene.dt)
         if reference is not None and reference.system is not None:
             radius = float(np.max(np.abs(np.linalg.eigvals(reference.system))))
             return radius if radius > 0 else None
@@ -343,10 +342,10 @@ def sweep(
         unknown names, non-physical values, a scenario without exact reference.
     """
     started = _time.perf_counter()
-    scene_obj, chosen, params = prepare(scene, scenario, parameters)
-    model = scene_obj.build(params, chosen)
-    if not sweepable(scene_obj, chosen, params, model):
-        valid = [s.name for s in scene_obj.scenarios.values() if sweepable(scene_obj, s, None)]
+    case = scenes.case(scene, scenario, parameters)
+    scene_obj, chosen, params = case.scene, case.scenario, case.params
+    if not sweepable(scene_obj, chosen, case):
+        valid = [s.name for s in scene_obj.scenarios.values() if sweepable(scene_obj, s)]
         raise BadInputError(
             f"scenario {chosen.name!r} of {scene_obj.name} has no exact reference trajectory to"
             f" measure errors against; valid: {', '.join(valid) or 'none in this scene'}"
@@ -357,8 +356,8 @@ def sweep(
     duration = chosen.duration if duration is None else duration
     check_timing(duration / 2, duration)
     if dts is None:
-        dts = timestep_grid(fastest_rate(scene_obj, model, params, chosen), duration)
-        dts = _accepted_grid(dts, lambda dt: _setup_or_none(scene_obj, model, params, chosen, dt, duration))
+        dts = timestep_grid(fastest_rate(case), duration)
+        dts = _accepted_grid(dts, lambda dt: _setup_or_none(case, dt, duration))
     pairs = [(name, float(dt)) for dt in dts for name in integrators]
     # a catalogue scene travels by name (workers rebuild it); another Scene object only runs locally
     reference = scene_obj.name if scenes.SCENES.get(scene_obj.name) is scene_obj else scene_obj
@@ -375,14 +374,11 @@ def sweep(
         for p in pieces
     ]
     outcomes = [o for part in runner.map(grid_chunk, payloads, description="tradeoff") for o in part]
-    stop = scene_obj.stop_condition(model, params, chosen)
-    limits = stability_limits(scene_obj, model, params, chosen, integrators)
-    work = work_per_evaluation(model)
+    limits = stability_limits(case, integrators)
+    work = work_per_evaluation(case.model)
     runs = []
     for (name, dt), (error, detail, steps, verdict) in zip(pairs, outcomes):
-        full = check_timing(dt, duration)
-        job = Job(model, name, dt, full, scene_obj.setup(model, params, chosen, full, dt), stop)
-        wall = time_run(job, repeats=timing_repeats)
+        wall = time_run(case.job(name, dt, check_timing(dt, duration)), repeats=timing_repeats)
         run = Run(
             Setting(name, dt),
             steps,
@@ -410,15 +406,13 @@ def sweep(
     )
 
 
-def stability_limits(
-    scene: Scene, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, integrators: Iterable[str]
-) -> dict[str, float | None]:
-    """integrator -> the largest stable dt [s] on the scenario's modes (the scene's `stability_limit` on each;
+def stability_limits(case: Case, integrators: Iterable[str]) -> dict[str, float | None]:
+    """integrator -> the largest stable dt [s] on the case's modes (the scene's `stability_limit` on each;
     None: the integrator has no limit, or the scene declares no modes)."""
-    modes = scene.modes(model, params, scenario)
+    modes = case.modes()
 
     def limit(name: str) -> float | None:
-        return limit_dt(modes, lambda omega, zeta: scene.stability_limit(model, params, scenario, name, omega, zeta))
+        return limit_dt(modes, lambda omega, zeta: case.stability_limit(name, omega, zeta))
 
     return {name: limit(name) for name in integrators}
 
@@ -430,14 +424,9 @@ def grid_chunk(payload: dict[str, Any], nthread: int = 0) -> list[tuple[float | 
     A module-level function of plain data for dask workers: the model is rebuilt here from the
     scene's MJCF and payload["parameters"], exactly as the caller built it.
     """
-    scene_obj, chosen, params = prepare(payload["scene"], payload["scenario"], payload["parameters"])
-    model = scene_obj.build(params, chosen)
-    stop = scene_obj.stop_condition(model, params, chosen)
+    case = scenes.case(payload["scene"], payload["scenario"], payload["parameters"])
     duration = payload["duration"]
-    jobs = []
-    for name, dt in payload["pairs"]:
-        steps = check_timing(dt, duration)
-        jobs.append(Job(model, name, dt, steps, scene_obj.setup(model, params, chosen, steps, dt), stop))
+    jobs = [case.job(name, dt, check_timing(dt, duration)) for name, dt in payload["pairs"]]
     out: list[tuple[float | None, str, int, Verdict | None]] = []
     for job, outcome in zip(jobs, run_batched(jobs, nthread=nthread)):
         if isinstance(outcome, DivergedError):
@@ -445,7 +434,7 @@ def grid_chunk(payload: dict[str, Any], nthread: int = 0) -> list[tuple[float | 
             continue
         try:
             # judged exactly as `springlab run` judges it: the reference is built for this run's own dt
-            result = evaluate(scene_obj, chosen, params, model, outcome)
+            result = evaluate(case, outcome)
         except DivergedError as blown:
             out.append((None, str(blown), outcome.steps, None))
             continue
@@ -454,23 +443,20 @@ def grid_chunk(payload: dict[str, Any], nthread: int = 0) -> list[tuple[float | 
     return out
 
 
-def sweepable(
-    scene: Scene, scenario: Scenario, params: dict[str, float] | None, model: mujoco.MjModel | None = None
-) -> bool:
+def sweepable(scene: Scene, scenario: Scenario, case: Case | None = None) -> bool:
     """Whether the scenario has an exact reference trajectory to sweep errors against (scenarios
-    validated by scalar checks alone, like the non-linear ones, have none)."""
+    validated by scalar checks alone, like the non-linear ones, have none), at `case` (None: the
+    scenario at its default parameters)."""
     if not scenario.exact:
         return False
-    if params is None:
-        params = scene.resolve(scenario, {})
-    model = scene.build(params, scenario) if model is None else model
-    return scene.reference(model, params, scenario, np.zeros(1), dt=scenario.dt or scene.dt) is not None
+    case = scene.case(scenario) if case is None else case
+    return case.reference(np.zeros(1), dt=scenario.dt or scene.dt) is not None
 
 
-def _setup_or_none(scene: Scene, model, params, scenario, dt: float, duration: float) -> Setup | None:
-    """The scenario's setup at dt [s], or None when the scene rejects that dt."""
+def _setup_or_none(case: Case, dt: float, duration: float) -> Setup | None:
+    """The case's setup at dt [s], or None when the scene rejects that dt."""
     try:
-        return scene.setup(model, params, scenario, check_timing(dt, duration), dt)
+        return case.setup(check_timing(dt, duration), dt)
     except BadInputError:
         return None
 
@@ -584,10 +570,7 @@ def recommend(result: Tradeoff, tol: float, *, timing_repeats: int = 3) -> Recom
             return Verification(False, None)
         if not run.passed:
             return Verification(False, run.max_rel_error)
-        scene_obj = scenes.get(result.scene)
-        chosen = scene_obj.scenario(result.scenario)
-        setup = scene_obj.setup(run.model, run.parameters, chosen, run.steps, candidate.dt)
-        job = Job(run.model, candidate.integrator, candidate.dt, run.steps, setup)
+        job = run.case.job(candidate.integrator, candidate.dt, run.steps)
         return Verification(True, run.max_rel_error, time_run(job, repeats=timing_repeats))
 
     return cheapest_verified(_candidates(result, tol), tol, verify)

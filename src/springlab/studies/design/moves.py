@@ -21,7 +21,7 @@ import numpy as np
 
 from springlab import scenes
 from springlab.errors import BadInputError, ParameterError, UnknownNameError
-from springlab.scenes.base import Parameter, Scene
+from springlab.scenes.base import Case, Parameter, Scene
 from springlab.scenes.capabilities import DesignProperty, DesignSpec, MoveRuns
 from springlab.studies.executor import Executor, chunked
 
@@ -151,8 +151,8 @@ def simulate(
         per configuration, in order.
     """
     scene, spec = declaration(scene)
-    model = scene.build(dict(base), scene.scenario(spec.scenario))
-    return spec.hooks.simulate(model, base, values, omega_dt=omega_dt, nthread=nthread, max_duration=max_duration)
+    case = Case.compiled(scene, scene.scenario(spec.scenario), base)
+    return spec.hooks.simulate(case, values, omega_dt=omega_dt, nthread=nthread, max_duration=max_duration)
 
 
 def moves_chunk(payload: Mapping[str, Any], nthread: int = 0) -> MoveRuns:
