@@ -42,16 +42,14 @@ from springlab.exact.limits import stability_limit
 from springlab.sim import model_files
 from springlab.sim.simulate import Setup, Trajectory, check_timing, quiet_mujoco, simulate
 
-from .capabilities import (
-    DesignSpec,
-    DryFrictionSpec,
-    FigureHook,
-    FitSpec,
-    FrequencySpec,
-    InteractiveSpec,
-    OscillatorSpec,
-    RefinableSpec,
-)
+from .capabilities.design import DesignSpec
+from .capabilities.figure import FigureHook
+from .capabilities.fit import FitSpec
+from .capabilities.frequency import FrequencySpec
+from .capabilities.friction import DryFrictionSpec
+from .capabilities.interactive import InteractiveSpec
+from .capabilities.oscillator import OscillatorSpec
+from .capabilities.refine import RefinableSpec
 from .declarations import Check, Parameter, Reference, Scenario
 
 if TYPE_CHECKING:
@@ -132,15 +130,15 @@ class Scene:
        `refinable`, the model's size is a parameter and which quantities converge to which continuum
        values (`RefinableSpec`; springlab.studies.refine); `figure`, the panels of the scene's own
        figure of a run (a `FigureHook`; springlab.plots.run.scene_figure).
-    11. Optionally, `oscillator` (springlab.scenes.capabilities.OscillatorSpec): the scene is the
+    11. Optionally, `oscillator` (springlab.scenes.capabilities.oscillator.OscillatorSpec): the scene is the
        textbook's one-mode mass-spring-damper, the unit oscillator of `springlab stability`.
-    12. Optionally, `dry_friction` (springlab.scenes.capabilities.DryFrictionSpec): the scene's dry
+    12. Optionally, `dry_friction` (springlab.scenes.capabilities.friction.DryFrictionSpec): the scene's dry
        friction has exact Coulomb answers and takes MuJoCo's friction settings as parameters, which
        `springlab friction-settings` sweeps (springlab.studies.friction_settings).
-    13. Optionally, `frequency` (springlab.scenes.capabilities.FrequencySpec, or a tuple of them, one per
+    13. Optionally, `frequency` (springlab.scenes.capabilities.frequency.FrequencySpec, or a tuple of them, one per
        scenario, the first the default): the default input and response of `springlab frequency SCENE`, an
        MjSpec edit that makes the input a control, and what the response means for the scene's question.
-    14. Optionally, `interactive` (springlab.scenes.capabilities.InteractiveSpec): the scenarios that run
+    14. Optionally, `interactive` (springlab.scenes.capabilities.interactive.InteractiveSpec): the scenarios that run
        in the browser with real MuJoCo and the MJCF attributes the page writes (`springlab interactive`).
 
     The module exposes the instance as `SCENE`; springlab.scenes discovers it. Tests check each

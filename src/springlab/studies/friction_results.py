@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 from springlab import display, tables
 from springlab.files import json_ready
-from springlab.scenes.capabilities import FrictionMeasure, SolverSetting
+from springlab.scenes.capabilities.friction import FrictionMeasure, SolverSetting
 
 from .settings import COST_BASIS, Recommendation, Run, RunFields
 

@@ -2,7 +2,7 @@
 
 MuJoCo's dry friction (a joint's `frictionloss`, a contact's friction cone) is a soft constraint: a
 block that should stick creeps, and one that should stop turns round a little early and never quite
-stops. A scene that declares `Scene.dry_friction` (springlab.scenes.capabilities.DryFrictionSpec)
+stops. A scene that declares `Scene.dry_friction` (springlab.scenes.capabilities.friction.DryFrictionSpec)
 has exact Coulomb answers and takes MuJoCo's friction settings as parameters; this study reads the
 declaration (it never names a scene) and, per declared case (a scenario),
 
@@ -46,7 +46,7 @@ from springlab.errors import BadInputError, DivergedError
 from springlab.runs import compare
 from springlab.runs.run import evaluate, prepare, run_scenario
 from springlab.scenes.base import Scene
-from springlab.scenes.capabilities import DryFrictionSpec, FrictionCase, FrictionMeasure
+from springlab.scenes.capabilities.friction import DryFrictionSpec, FrictionCase, FrictionMeasure
 from springlab.sim.simulate import INTEGRATORS, check_timing, integrator_id
 
 from .executor import Executor, chunked, resolve
