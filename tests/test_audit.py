@@ -115,6 +115,7 @@ AUDIT_KEYS = [
 def test_the_audit_json_is_the_objects_to_dict_and_its_facts_are_attributes(chain_audit, capsys, monkeypatch):
     from springlab import files
     from springlab.cli import main as cli_main
+    from springlab.cli.commands import audit as audit_command
 
     result = chain_audit
     data = result.to_dict()
@@ -171,7 +172,7 @@ def test_the_audit_json_is_the_objects_to_dict_and_its_facts_are_attributes(chai
     assert result.stability["rk4"].limit_dt_measured_s == data["stability"]["rk4"]["limit_dt_measured_s"]
     assert result.own_ok == (own.stable and own.error <= result.tol)
     # `springlab audit --json` prints exactly to_dict() (inf and nan as null), and the text is `message`
-    monkeypatch.setattr(cli_main, "run_audit", lambda *args, **options: result)
+    monkeypatch.setattr(audit_command, "run_audit", lambda *args, **options: result)
     code = cli_main.main(["audit", "chain.xml", "--json"])
     assert code == (0 if result.own_ok else 1)
     assert json.loads(capsys.readouterr().out) == files.json_ready(data)
@@ -215,15 +216,15 @@ def test_the_audit_to_pandas_is_its_sweep_one_row_per_setting(chain_audit):
 
 def test_pendulum_is_linear_for_a_small_swing_and_nonlinear_for_a_large_one():
     model = mujoco.MjModel.from_xml_string(pendulum_xml())
-    small = audit(model, keyframe="bottom", perturb=1e-4, integrators="rk4,euler", duration=1.0)
-    large = audit(model, keyframe="bottom", perturb=1.0, integrators="rk4,euler", duration=1.0)
+    small = audit(model, keyframe="bottom", perturb=1e-4, integrators=["rk4", "euler"], duration=1.0)
+    large = audit(model, keyframe="bottom", perturb=1.0, integrators=["rk4", "euler"], duration=1.0)
     assert small.is_linear and not large.is_linear
     assert large.reference.converged
 
 
 def test_an_upright_pendulum_is_reported_physically_unstable_not_numerically():
     model = mujoco.MjModel.from_xml_string(pendulum_xml())
-    result = audit(model, keyframe="top", perturb=1e-3, integrators="rk4", duration=1.0)
+    result = audit(model, keyframe="top", perturb=1e-3, integrators=["rk4"], duration=1.0)
     modes = result.to_dict()["modes"]
     assert any(m["physically_unstable"] for m in modes)
     rate = math.sqrt(9.81 / 0.5)
@@ -241,7 +242,7 @@ def test_a_sphere_bouncing_on_a_soft_contact_audits_and_its_recommendation_meets
     )
     model = mujoco.MjModel.from_xml_string(xml)
     tol = 1e-2
-    result = audit(model, tol=tol, duration=0.5, integrators="euler,rk4,implicitfast")
+    result = audit(model, tol=tol, duration=0.5, integrators=["euler", "rk4", "implicitfast"])
     assert not result.is_linear  # free fall, then contact
     pick = result.recommendation
     assert pick.verified
@@ -396,6 +397,33 @@ def test_kinematics_audit_has_no_limit_because_every_mode_is_rigid():
         assert row["error"] <= 10 * eps * row["steps"], row
 
 
+@pytest.mark.parametrize(
+    "option, message",
+    [
+        (
+            {"dts": "1e-3,2e-3"},
+            r"dts takes a sequence of timesteps in seconds, e.g. dts=\[0.002, 0.001\], not the string",
+        ),
+        ({"dts": "1e-3:1e-2:4"}, "the command line's --dt 'a,b,c' or 'LOW:HIGH:N'"),
+        ({"dts": 1e-3}, r"dts takes a sequence of timesteps in seconds, e.g. dts=\[0.002, 0.001\]; got 0.001"),
+        ({"integrators": "rk4,euler"}, r"integrators takes a sequence of names, e.g. integrators=\['rk4', 'euler'\]"),
+        ({"integrators": []}, "integrators needs at least one of euler"),
+    ],
+)
+def test_the_command_line_s_strings_are_refused_with_the_typed_form(option, message):
+    with pytest.raises(BadInputError, match=message):
+        audit("slider", **option)
+
+
+def test_typed_timesteps_and_integrators_are_the_audit_s_grid_largest_first_each_once():
+    result = audit(
+        mujoco.MjModel.from_xml_string(chain_xml(1)), integrators=("rk4", "euler", "rk4"), dts=[0.005, 0.02, 0.01, 0.02]
+    )
+    assert [(r.integrator, r.dt) for r in result.runs] == [
+        (name, dt) for name in ("rk4", "euler") for dt in (0.02, 0.01, 0.005)
+    ]
+
+
 def test_bad_input_is_one_error_before_any_work(tmp_path):
     with pytest.raises(BadInputError, match="no such model file or scene 'nowhere.xml'"):
         audit("nowhere.xml")
@@ -404,10 +432,20 @@ def test_bad_input_is_one_error_before_any_work(tmp_path):
     with pytest.raises(BadInputError, match="cannot load"):
         audit(str(broken))
     with pytest.raises(UnknownNameError, match="unknown integrator 'rk5'"):
-        audit("slider", integrators="rk4,rk5")
+        audit("slider", integrators=["rk4", "rk5"])
     with pytest.raises(BadInputError, match="tol must be"):
         audit("slider", tol=-1)
-    with pytest.raises(BadInputError, match="--dt must be"):
-        audit("slider", dt="1:2")
+    with pytest.raises(BadInputError, match="every dt must be a finite number > 0 s"):
+        audit("slider", dts=[0.01, 0.0])
     with pytest.raises(BadInputError, match="unknown keyframe"):
         audit("slider", keyframe="nope")
+
+
+def test_the_public_signature_types_every_input_without_any():
+    import typing
+
+    import springlab
+
+    hints = typing.get_type_hints(springlab.audit)
+    assert set(hints) >= {"model", "integrators", "dts", "tol", "duration", "perturb", "keyframe", "settle_s"}
+    assert all("Any" not in repr(hint) for hint in hints.values()), hints

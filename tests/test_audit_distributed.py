@@ -68,7 +68,7 @@ def _twice(cluster, model, **options):
 
 @pytest.mark.slow
 def test_slider_audit_on_two_workers_equals_the_local_audit(cluster, fixed_costs):
-    local, remote, ran = _twice(cluster, "slider", duration=1.0, dt="0.004,0.002,0.001")
+    local, remote, ran = _twice(cluster, "slider", duration=1.0, dts=[0.004, 0.002, 0.001])
     assert ran  # the confirmation runs and the sweep went to the workers
     assert _json_without_timings(remote) == _json_without_timings(local)
     assert [r.error for r in remote.runs] == [r.error for r in local.runs]
@@ -80,7 +80,7 @@ def test_dm_control_cartpole_with_its_included_files_audits_identically_on_two_w
     # cartpole.xml includes ./common/{visual,skybox,materials}.xml: the workers have only the shipped text;
     # a large push makes it nonlinear, so the converged RK4 reference's levels run on the workers too
     path = str(SUITE / "cartpole.xml")
-    local, remote, ran = _twice(cluster, path, duration=0.5, dt="0.01,0.005,0.0025", perturb=0.3, tol=1e-2)
+    local, remote, ran = _twice(cluster, path, duration=0.5, dts=[0.01, 0.005, 0.0025], perturb=0.3, tol=1e-2)
     assert not local.is_linear and local.reference.kind.startswith("RK4")
     assert ran
     assert _json_without_timings(remote) == _json_without_timings(local)
@@ -131,9 +131,9 @@ def test_an_in_memory_mjmodel_runs_locally_but_asks_for_a_path_on_workers():
     model = mujoco.MjModel.from_xml_string(PART_XML.replace('type="mesh" mesh="tetra"', 'type="sphere" size=".1"'))
     executor = Executor(workers=2, progress=False)  # never started: the error comes first
     with pytest.raises(BadInputError, match="MjModel passed in memory cannot be sent to dask workers"):
-        audit(model, duration=0.2, dt="0.004,0.002", integrators="euler", executor=executor)
+        audit(model, duration=0.2, dts=[0.004, 0.002], integrators=["euler"], executor=executor)
     assert executor._cluster is None
-    local = audit(model, duration=0.2, dt="0.004,0.002", integrators="euler", executor=Executor(progress=False))
+    local = audit(model, duration=0.2, dts=[0.004, 0.002], integrators=["euler"], executor=Executor(progress=False))
     assert local.runs and local.runs[0].error is not None
 
 

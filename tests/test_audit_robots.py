@@ -210,7 +210,7 @@ def _check_limits_honest(result, model):
 @pytest.mark.slow
 def test_joint_limits_active_at_the_start_are_reported_and_never_a_false_unstable():
     model = _model(ant_xml())
-    result = audit(model, duration=0.5, integrators="rk4,implicit")
+    result = audit(model, duration=0.5, integrators=["rk4", "implicit"])
     state = result.point_state
     assert state.at_point.counts == {"joint limit": 4}
     assert not state.linear_map and "the linear map is not the dynamics" in result.message
@@ -227,7 +227,7 @@ def test_joint_limits_active_at_the_start_are_reported_and_never_a_false_unstabl
 def test_an_equality_constraint_is_reported_and_the_recommendation_meets_tol_with_motion_excited():
     model = _model(coupled_xml())
     tol = 1e-3
-    result = audit(model, tol=tol, duration=0.5, integrators="euler,rk4")
+    result = audit(model, tol=tol, duration=0.5, integrators=["euler", "rk4"])
     assert result.point_state.at_point.counts == {"equality": 1}
     assert "equality 'tie'" in result.point_state.at_point.elements
     assert not result.point_state.linear_map
@@ -250,12 +250,12 @@ def test_an_equality_constraint_is_reported_and_the_recommendation_meets_tol_wit
 
 def test_a_keyframe_away_from_equilibrium_is_warned_and_settling_brings_it_to_rest():
     model = _model(pendulum_xml(damping=0.5, angle=1.0))
-    held = audit(model, duration=0.5, integrators="euler")
+    held = audit(model, duration=0.5, integrators=["euler"])
     # held at 1 rad the pendulum accelerates at g sin(1) / l = 16.5 rad/s^2: nowhere near rest
     assert held.point_state.at_point.max_abs_qacc == pytest.approx(9.81 * math.sin(1.0) / 0.5, rel=1e-6)
     assert not held.point_state.at_rest and "not at rest" in held.message
     # damped at c / (2 I) = 0.5 /s, 25 s leave 1 rad * e^-12.5 = 4e-6 rad: at rest at the bottom
-    settled = audit(model, duration=0.5, integrators="euler", settle_s=25.0)
+    settled = audit(model, duration=0.5, integrators=["euler"], settle_s=25.0)
     assert settled.point_state.at_rest and "not at rest" not in settled.message
     assert settled.point_state.settle_s == 25.0 and "settled for 25 s" in settled.linear.point.label
     assert abs(settled.linear.point.qpos[0]) < 1e-4
@@ -269,7 +269,7 @@ def test_a_keyframe_away_from_equilibrium_is_warned_and_settling_brings_it_to_re
 def test_a_model_with_no_position_dependent_force_is_excited_and_its_recommendation_meets_tol():
     model = _model(two_link_xml())
     tol = 1e-3
-    result = audit(model, tol=tol, duration=1.0, integrators="euler,rk4")
+    result = audit(model, tol=tol, duration=1.0, integrators=["euler", "rk4"])
     excitation = result.excitation
     assert excitation.qvel == pytest.approx(1e-3) and excitation.ctrl == pytest.approx(1e-3)
     assert excitation.moved == model.nv and not excitation.still
@@ -291,7 +291,7 @@ def test_a_model_with_no_position_dependent_force_is_excited_and_its_recommendat
 
 
 def test_a_model_that_does_not_move_verifies_nothing():
-    result = audit(_model(two_link_xml()), perturb=0.0, duration=0.5, integrators="euler")
+    result = audit(_model(two_link_xml()), perturb=0.0, duration=0.5, integrators=["euler"])
     assert not result.excitation.any_motion and result.excitation.moved == 0
     assert not result.recommendation.verified and result.recommendation.integrator is None
     assert "no motion: nothing was verified" in result.message and "verified by a run" not in result.message
@@ -308,7 +308,7 @@ def test_discrete_on_a_damped_pendulum_under_gravity_has_euler_s_limit():
     omega = math.sqrt(9.81 / 0.5)
     zeta = c / (2 * 2.0 * 0.5**2 * omega)
     closed = (2 * zeta + 2 * math.hypot(zeta, 1.0)) / omega
-    result = audit(model, keyframe="held", duration=1.0, integrators="discrete,euler")
+    result = audit(model, keyframe="held", duration=1.0, integrators=["discrete", "euler"])
     brute = _brute_limit(model, "discrete", closed)
     assert brute == pytest.approx(closed, rel=BRUTE_RELATIVE)
     for name in ("discrete", "euler"):
@@ -321,7 +321,7 @@ def test_discrete_on_a_damped_pendulum_under_gravity_has_euler_s_limit():
 @pytest.mark.slow
 def test_tendon_chain_predictions_are_conservative_or_marked_estimates_against_brute_force():
     model = _model(tendon_chain_xml())
-    result = audit(model, duration=1.0, integrators="euler,implicit,rk4,discrete")
+    result = audit(model, duration=1.0, integrators=["euler", "implicit", "rk4", "discrete"])
     for name in ("euler", "implicit", "rk4"):
         limit = result.stability[name]
         brute = _brute_limit(model, name, limit.limit_dt_s)

@@ -34,7 +34,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
 ORDER = list(LAYERS)
 #: the study packages: each answers its own question and none imports another (they share the
 #: modules at the root of studies/: the executor, convergence, tradeoff ...)
-STUDY_PACKAGES = ("audit", "design", "fit")
+STUDY_PACKAGES = ("audit", "design", "fit", "frequency")
 
 
 def layer_of(module: str) -> str:

@@ -79,7 +79,7 @@ def test_the_audit_linearizes_each_model_at_each_point_once(monkeypatch):
         return original(model, point, **kwargs)
 
     monkeypatch.setattr(model_at_point, "linearize", counted)
-    audit(mujoco.MjModel.from_xml_string(chain_xml(2)), integrators=["euler", "rk4", "discrete"], dt=[0.02, 0.01])
+    audit(mujoco.MjModel.from_xml_string(chain_xml(2)), integrators=["euler", "rk4", "discrete"], dts=[0.02, 0.01])
     assert seen and max(seen.values()) == 1, seen
     at_point = [key for key in seen if key[1] == "qpos0 (no keyframe)"]
     assert len(at_point) == 2  # the model and its copy without springs (discrete's explicit stiffness)

@@ -22,10 +22,12 @@ import scipy.linalg
 import scipy.stats
 from mujoco import rollout
 
+from springlab.errors import ParameterError
 from springlab.exact import cable as cb
 from springlab.exact import random_vibration as rv
 from springlab.exact.linearize import linearize, one_step_map, step_input_column
 from springlab.scenes.stay_cable import build
+from springlab.scenes.stay_cable.wind import wind_controls
 from springlab.sim.simulate import quiet_mujoco
 
 EPS = float(np.finfo(float).eps)
@@ -107,6 +109,17 @@ def test_the_wind_puts_its_load_times_the_spacing_on_every_node():
     data.ctrl[0] = 2.5  # [N/m]
     mujoco.mj_forward(model, data)
     assert np.allclose(data.qfrc_actuator, 2.5 * CABLE.spacing(9), rtol=4 * EPS, atol=0)
+
+
+def test_a_seeds_wind_is_the_same_in_any_batch_and_has_the_held_variance():
+    alone = wind_controls(30.0, 0.01, 20000, [7])
+    batch = wind_controls(30.0, 0.01, 20000, [3, 7, 11])
+    assert np.array_equal(alone[0], batch[1]) and not np.array_equal(batch[0], batch[1])
+    # p_k ~ N(0, S / dt): the sample variance of 20000 within 5 of its standard errors sqrt(2 / 20000)
+    assert abs(np.var(batch) / (30.0 / 0.01) - 1) <= 5 * math.sqrt(2 / batch.size)
+    for bad in ({"intensity": math.nan}, {"intensity": -1.0}, {"intensity": math.inf}):
+        with pytest.raises(ParameterError, match="wind_intensity must be a finite number >= 0"):
+            wind_controls(bad["intensity"], 0.01, 10, [0])
 
 
 def test_the_damper_sits_on_the_node_nearest_its_position():
@@ -249,7 +262,7 @@ def test_the_rms_of_40_seeds_falls_inside_its_own_interval_of_the_exact_held_val
     assert abs(bias) <= 0.01 * interval.spread
     rng = np.random.default_rng(20240615)
     x0 = rng.multivariate_normal(np.zeros(2 * n), held, size=seeds)  # stationary from the start
-    control = rng.standard_normal((seeds, steps, 1)) * math.sqrt(params["wind_intensity"] / dt)
+    control = wind_controls(params["wind_intensity"], dt, steps, range(seeds))
     states = _states(model, x0, steps, control)
     estimates = np.mean(states[:, 1:, n // 2] ** 2, axis=1)
     inside = sum(interval.contains(float(s)) for s in estimates)

@@ -66,8 +66,6 @@ _FULL = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
 class NoDisplayError(SpringlabError):
     """No display to open the viewer on, or GLFW cannot open a window there (exit 2)."""
 
-    exit_code = 2
-
 
 def check_display() -> None:
     """Raise NoDisplayError where no display server is named (Linux without DISPLAY or WAYLAND_DISPLAY)."""

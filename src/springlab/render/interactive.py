@@ -64,8 +64,6 @@ DT_RANGE = (1e-4, 0.5)
 class NodeUnavailableError(SpringlabError):
     """npm is not on PATH, or `npm pack` failed, and mujoco-js is not in the cache (exit 2)."""
 
-    exit_code = 2
-
 
 @dataclasses.dataclass(frozen=True)
 class InteractivePage:

@@ -116,7 +116,7 @@ class Result(display.Shown):
         whether the run is inside the range of its error estimate (None with a requested
         tolerance or without a linear reference).
     checks
-        the scenario's scalar claims (scenes.base.Check), tolerances capped as summary.json shows them.
+        the scenario's scalar claims (scenes.declarations.Check), tolerances capped as summary.json shows them.
     model_limits
         why the run left its scene's model (empty: it did not).
     time

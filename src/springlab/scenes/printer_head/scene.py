@@ -100,7 +100,9 @@ from springlab.exact.limits import stability_limit as joint_damping_stability_li
 from springlab.exact.linearize import one_step_map, operating_point
 from springlab.exact.shaping import SHAPERS
 from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Case, Parameter, Reference, Scenario, Scene
-from springlab.scenes.capabilities import CaseView, FrequencySpec, OscillatorFit
+from springlab.scenes.capabilities.case import CaseView
+from springlab.scenes.capabilities.fit import OscillatorFit
+from springlab.scenes.capabilities.frequency import FrequencySpec
 from springlab.sim.simulate import Setup, Trajectory, integrator_id
 
 from . import control

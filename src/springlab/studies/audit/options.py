@@ -11,8 +11,6 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
-import numpy as np
-
 from springlab.errors import BadInputError
 from springlab.runs import compare
 from springlab.sim.simulate import INTEGRATORS, integrator_id
@@ -53,16 +51,17 @@ def check_options(
     tol: float,
     perturb: float,
     settle_s: float | None,
-    integrators: Sequence[str] | str | None,
-    dts: Sequence[float] | str | None,
+    integrators: Sequence[str] | None,
+    dts: Sequence[float] | None,
 ) -> Options:
-    """The checked options (see `Options`).
+    """The checked options (see `Options`); `integrators` and `dts` are typed sequences (the command line parses
+    its "a,b" and "LOW:HIGH:N" strings itself: springlab.cli).
 
     Raises
     ------
     BadInputError
-        a tolerance outside (0, 1), a negative or non-finite perturbation or settling time, an empty list of
-        integrators, or timesteps that are not finite numbers > 0.
+        a tolerance outside (0, 1), a negative or non-finite perturbation or settling time, a string or an
+        empty list where a sequence of integrators is asked, or timesteps that are not finite numbers > 0.
     UnknownNameError
         an unknown integrator (the message lists the valid ones).
     """
@@ -72,9 +71,7 @@ def check_options(
     perturb = check_number("perturb", perturb, allow_zero=True)
     if settle_s is not None:
         settle_s = check_number("settle", settle_s, allow_zero=True)
-    names = _integrators(integrators)
-    steps = parse_dts(dts)
-    return Options(tol, perturb, settle_s, tuple(names), None if steps is None else tuple(steps))
+    return Options(tol, perturb, settle_s, _integrators(integrators), _timesteps(dts))
 
 
 def resolve_duration(duration: float | None, default: float | None) -> float:
@@ -89,33 +86,6 @@ def resolve_duration(duration: float | None, default: float | None) -> float:
     return check_number("duration", duration if duration is not None else default or DEFAULT_DURATION)
 
 
-def parse_dts(spec: Any) -> list[float] | None:
-    """--dt: None, a list of seconds, "a,b,c", or a range "LOW:HIGH:N" (N log-spaced values, each snapped to
-    HIGH / m for an integer m so that they share checkpoints); returned largest first."""
-    if spec is None:
-        return None
-    if isinstance(spec, str):
-        text = spec.strip()
-        try:
-            if ":" in text:
-                low_text, high_text, count_text = text.split(":")
-                low, high, count = float(low_text), float(high_text), int(count_text)
-                if not (0 < low < high and math.isfinite(high) and count >= 2):
-                    raise ValueError
-                values = sorted({high / round(high / v) for v in np.geomspace(low, high, count)}, reverse=True)
-            else:
-                values = [float(v) for v in text.split(",") if v.strip()]
-        except ValueError:
-            raise BadInputError(
-                f"--dt must be seconds 'a,b,c' or a range 'LOW:HIGH:N' with 0 < LOW < HIGH, N >= 2; got {spec!r}"
-            ) from None
-    else:
-        values = [float(v) for v in spec]
-    if not values or any(not (math.isfinite(v) and v > 0) for v in values):
-        raise BadInputError(f"every dt must be a finite number > 0 s, got {spec!r}")
-    return sorted(set(values), reverse=True)
-
-
 def check_number(name: str, value: Any, *, allow_zero: bool = False) -> float:
     """`value` as a float when it is a finite number > 0 (>= 0 with `allow_zero`), else BadInputError."""
     ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
@@ -125,14 +95,37 @@ def check_number(name: str, value: Any, *, allow_zero: bool = False) -> float:
     return float(value)
 
 
-def _integrators(names: Any) -> list[str]:
+def _integrators(names: Sequence[str] | None) -> tuple[str, ...]:
+    """The integrators to sweep, in the order given, each once (None: all five)."""
     if names is None:
-        return list(INTEGRATORS)
+        return tuple(INTEGRATORS)
     if isinstance(names, str):
-        names = [n.strip() for n in names.split(",") if n.strip()]
-    names = list(dict.fromkeys(names))
-    for name in names:
+        raise BadInputError(
+            f"integrators takes a sequence of names, e.g. integrators=['rk4', 'euler'], not the string {names!r}"
+        )
+    unique = tuple(dict.fromkeys(names))
+    for name in unique:
         integrator_id(name)
-    if not names:
-        raise BadInputError(f"--integrators needs at least one of {', '.join(INTEGRATORS)}")
-    return names
+    if not unique:
+        raise BadInputError(f"integrators needs at least one of {', '.join(INTEGRATORS)}")
+    return unique
+
+
+def _timesteps(dts: Sequence[float] | None) -> tuple[float, ...] | None:
+    """The timesteps to sweep [s], largest first, each once (None: the default grid)."""
+    if dts is None:
+        return None
+    if isinstance(dts, str):
+        raise BadInputError(
+            f"dts takes a sequence of timesteps in seconds, e.g. dts=[0.002, 0.001], not the string {dts!r}"
+            " (the command line's --dt 'a,b,c' or 'LOW:HIGH:N')"
+        )
+    try:
+        values = [float(dt) for dt in dts]
+    except (TypeError, ValueError):
+        raise BadInputError(
+            f"dts takes a sequence of timesteps in seconds, e.g. dts=[0.002, 0.001]; got {dts!r}"
+        ) from None
+    if not values or any(not (math.isfinite(v) and v > 0) for v in values):
+        raise BadInputError(f"every dt must be a finite number > 0 s, got {list(dts)!r}")
+    return tuple(sorted(set(values), reverse=True))
