@@ -460,3 +460,46 @@ def test_control_scenarios_write_their_answer_quantities(tmp_path):
     assert {"residual_amplitude_m", "residual_amplitude_m_exact", "positioning_time_s", "shaper_duration_s"} <= set(
         quantities
     )
+
+
+# -- the answer table -------------------------------------------------------------------------------------------
+
+
+@pytest.mark.slow
+def test_answer_tables_are_verified_and_shaping_wins_on_both_carriages():
+    from springlab.scenes.printer_head import answers
+
+    for preset in answers.PRESETS:
+        table = answers.positioning_table(preset)
+        assert all(row.verified for row in table.rows), [r for r in table.rows if not r.verified]
+        assert table.fastest.scenario == "move_zv"
+        data = table.to_dict()
+        assert data["question"].startswith("How fast") and data["answer"].startswith("Fastest: the minimum-time")
+        times = {row.scenario: row.positioning_time_s for row in table.rows if row.scenario.startswith("move_")}
+        # each shaper is positioned after the minimum-time move and within its own added time of it
+        minimum = 2 * math.sqrt(
+            table.parameters["move_distance"]
+            * (table.parameters["carriage_mass"] + table.parameters["motor_mass"])
+            / table.parameters["drive_force"]
+        )
+        assert all(minimum < t < minimum + 0.025 for t in times.values())
+    # the 3D-printer preset is what its docstring says: a 50 Hz belt at zeta 0.1, 5 m/s^2
+    frame = answers.preset_parameters("printer_frame")
+    mu = frame["carriage_mass"] * frame["motor_mass"] / (frame["carriage_mass"] + frame["motor_mass"])
+    assert math.sqrt(frame["belt_stiffness"] / mu) / (2 * math.pi) == pytest.approx(50.0, rel=0.01)
+    assert frame["belt_damping"] / (2 * math.sqrt(frame["belt_stiffness"] * mu)) == pytest.approx(0.1, rel=1e-12)
+    assert frame["drive_force"] / (frame["carriage_mass"] + frame["motor_mass"]) == pytest.approx(5.0, rel=1e-12)
+
+
+@pytest.mark.slow
+def test_answer_table_quiet_move_is_the_exact_quiet_time():
+    """The table's quietest move runs at the force that makes it last T_q = 0.0890 s (tests/test_printer_shaping.py
+    scans it), rounded up to whole steps, and is positioned by then."""
+    from springlab.scenes.printer_head import answers
+
+    table = answers.positioning_table("inkjet")
+    quiet = table.rows[1]
+    force = quiet.overrides["drive_force"]
+    duration = 2 * math.sqrt(DISTANCE * TOTAL / force)
+    assert round(duration, 4) == 0.0890
+    assert quiet.verified and quiet.positioning_time_s <= duration + 2 * DT
