@@ -206,6 +206,10 @@ class Scene:
             raise UnknownNameError(f"scenario of {self.name}", name, self.scenarios)
         return self.scenarios[name]
 
+    def setting(self, scenario: Scenario) -> tuple[str, float]:
+        """(integrator, dt [s]): the validated default setting of `scenario` (its own, else the scene's)."""
+        return scenario.integrator or self.integrator, scenario.dt or self.dt
+
     def model_spec(self) -> mujoco.MjSpec:
         """A fresh MjSpec of this scene's MJCF: a copy of the parsed file (parsed once per process)."""
         return parsed_spec(str(model_files.path(self.name))).copy()

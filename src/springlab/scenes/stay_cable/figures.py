@@ -1,0 +1,11 @@
+"""The stay cable's own figure of a run (`Scene.figure`)."""
+
+from __future__ import annotations
+
+from springlab.scenes.capabilities import CaseView, Panel
+from springlab.sim.simulate import Trajectory
+
+
+def panels(case: CaseView, trajectory: Trajectory) -> tuple[Panel, ...]:
+    """The panels of a run of the case's scenario."""
+    return ()
