@@ -31,7 +31,6 @@ from collections.abc import Sequence
 
 import numpy as np
 import scipy.linalg
-import scipy.stats
 
 from springlab.errors import BadInputError
 
@@ -324,6 +323,8 @@ def variance_interval(variance: float, spread: float, level: float) -> VarianceI
     """
     if not (0.0 < level < 1.0):
         raise BadInputError(f"the confidence level must lie in (0, 1), got {level!r}")
+    import scipy.stats  # on first use: the scene registry imports this module, and every command the registry
+
     nu = 2.0 * variance**2 / spread**2
     low = variance * float(scipy.stats.chi2.ppf((1.0 - level) / 2.0, nu)) / nu
     high = variance * float(scipy.stats.chi2.ppf((1.0 + level) / 2.0, nu)) / nu

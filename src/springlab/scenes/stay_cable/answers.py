@@ -12,12 +12,19 @@ from __future__ import annotations
 import dataclasses
 import math
 
-import scipy.optimize
-
 from springlab.exact import cable as cb
 
 from .modal import modes
 from .readback import CableModel
+
+
+
+def _optimize():  # noqa: ANN202 - the module
+    """scipy.optimize, imported on first use: every command imports the scene registry, which must stay light."""
+    import scipy.optimize
+
+    return scipy.optimize
+
 
 #: how far around the universal optimum the N-element model's best damper is searched (a factor either side)
 SEARCH_FACTOR = 30.0
@@ -65,7 +72,7 @@ def damper_optimum(cable: CableModel) -> DamperOptimum:
 
     guess = math.log(eta_u * cable.cable.impedance)
     span = math.log(SEARCH_FACTOR)
-    found = scipy.optimize.minimize_scalar(
+    found = _optimize().minimize_scalar(
         negative_ratio, bounds=(guess - span, guess + span), method="bounded", options={"xatol": SEARCH_XATOL}
     )
     impedance = cable.cable.impedance
