@@ -53,6 +53,7 @@ from .capabilities import (
     RefinableSpec,
 )
 from .declarations import Check, Parameter, Reference, Scenario
+from .random_load import RandomLoadSpec
 
 if TYPE_CHECKING:
     from springlab.sim.batch import Job
@@ -142,6 +143,9 @@ class Scene:
        MjSpec edit that makes the input a control, and what the response means for the scene's question.
     14. Optionally, `interactive` (springlab.scenes.capabilities.InteractiveSpec): the scenarios that run
        in the browser with real MuJoCo and the MJCF attributes the page writes (`springlab interactive`).
+    15. Optionally, `random_load` (springlab.scenes.random_load.RandomLoadSpec): a scenario under a seeded
+       stationary random load whose RMS has an exact value and scatter (`springlab rms`:
+       springlab.studies.random_load runs many seeds and finds the cheapest setting for an accurate RMS).
 
     The module exposes the instance as `SCENE`; springlab.scenes discovers it. Tests check each
     claim against a reference built in the test (closed form, expm, scipy's DOP853 at tight
@@ -186,6 +190,9 @@ class Scene:
     #: the scenarios that run in the browser and how the page edits the MJCF (None: none;
     #: springlab.render.interactive reads it)
     interactive: InteractiveSpec | None = None
+    #: a scenario under a seeded stationary random load: its RMS, exactly and from many seeds (None: none;
+    #: springlab.studies.random_load reads it)
+    random_load: RandomLoadSpec | None = None
 
     def question_and_answer(self, scenario: str, quantities: dict, parameters: dict) -> tuple[str, str] | None:
         """(question, answer sentence) of a scenario's run, or None where the scene states none."""

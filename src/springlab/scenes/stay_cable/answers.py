@@ -18,7 +18,6 @@ from .modal import modes
 from .readback import CableModel
 
 
-
 def _optimize():  # noqa: ANN202 - the module
     """scipy.optimize, imported on first use: every command imports the scene registry, which must stay light."""
     import scipy.optimize
@@ -76,9 +75,7 @@ def damper_optimum(cable: CableModel) -> DamperOptimum:
         negative_ratio, bounds=(guess - span, guess + span), method="bounded", options={"xatol": SEARCH_XATOL}
     )
     impedance = cable.cable.impedance
-    return DamperOptimum(
-        eta * impedance, zeta, math.exp(float(found.x)), -float(found.fun), eta_u * impedance, zeta_u
-    )
+    return DamperOptimum(eta * impedance, zeta, math.exp(float(found.x)), -float(found.fun), eta_u * impedance, zeta_u)
 
 
 def continuum_mode_1(cable: CableModel) -> complex:
@@ -90,7 +87,9 @@ def continuum_mode_1(cable: CableModel) -> complex:
 def universal_mode_1_ratio(cable: CableModel) -> float:
     """Mode 1's damping ratio [-] by the universal curve at the model's damper."""
     position = cable.damper_node * cable.cable.spacing(cable.size)
-    return cb.universal_damping_ratio(1, position / cable.cable.length, cable.damper_coefficient / cable.cable.impedance)
+    return cb.universal_damping_ratio(
+        1, position / cable.cable.length, cable.damper_coefficient / cable.cable.impedance
+    )
 
 
 @dataclasses.dataclass(frozen=True)

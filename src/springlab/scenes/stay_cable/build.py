@@ -31,7 +31,6 @@ No gravity, no contact, no sag: the string is straight between its anchors and m
 from __future__ import annotations
 
 import math
-
 from xml.etree import ElementTree
 
 import mujoco

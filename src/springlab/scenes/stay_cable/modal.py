@@ -76,7 +76,7 @@ class Mode:
 
     def system(self) -> np.ndarray:
         """[[0, 1], [-|lambda|^2, 2 Re(lambda)]] [1/s^2, 1/s]: every node's (q, q') in this mode."""
-        return np.array([[0.0, 1.0], [-abs(self.value) ** 2, 2.0 * self.value.real]])
+        return np.array([[0.0, 1.0], [-(abs(self.value) ** 2), 2.0 * self.value.real]])
 
     def start(self, node: int, amplitude: float) -> tuple[np.ndarray, np.ndarray, complex]:
         """(q0 [m], q0' [m/s], s): the state Re(s v) with q = `amplitude` [m] at `node` (1 ... N) at t = 0."""

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -26,8 +27,11 @@ from springlab.errors import BadInputError
 from springlab.exact import random_vibration as rv
 from springlab.exact.linearize import one_step_map, step_input_column
 from springlab.scenes.capabilities import CaseView
+from springlab.scenes.random_load import RandomExact
+from springlab.sim.simulate import Setup
 
 from .readback import WIND_ACTUATOR, CableModel, cable_model
+from .wind import wind_controls
 
 #: the confidence level a run's RMS is held to: a correct run falls outside with probability 1 %
 CHECK_LEVEL = 0.99
@@ -176,3 +180,49 @@ def sample_variance(series: np.ndarray) -> float:
     """(1/K) sum y_k^2 over the record's K steps after the start (zero mean: the wind's is) [unit^2]."""
     record = np.asarray(series, float)[1:]
     return float(np.mean(record * record))
+
+
+# -- the hooks springlab.studies.random_load reads (springlab.scenes.random_load.RandomLoadSpec) --------------------
+
+
+def midspan_output(case: CaseView) -> np.ndarray:
+    """c (nq + nv,): the deflection of the node nearest mid-span [m], y = c . (qpos, qvel)."""
+    cable = cable_model(case)
+    row = np.zeros(2 * cable.size)
+    row[cable.midspan - 1] = 1.0
+    return row
+
+
+def midspan_exact(case: CaseView, integrator: str, dt: float) -> RandomExact:
+    """The mid-span deflection's exact variances [m^2] at (integrator, dt [s]) and a record's scatter."""
+    exact = wind_exact(case, integrator, dt)
+    mid = cable_model(case).midspan - 1
+    row = midspan_output(case)
+
+    def spreads(samples: Sequence[int]) -> np.ndarray:
+        return np.sqrt(np.clip(rv.record_variances(exact.held, exact.transition, row, samples), 0.0, None))
+
+    return RandomExact(
+        float(exact.continuous[mid, mid]),
+        float(exact.held[mid, mid]),
+        float(exact.integrator_covariance[mid, mid]),
+        spreads,
+    )
+
+
+def midspan_continuous(case: CaseView) -> float:
+    """The mid-span deflection's variance [m^2] under white noise (continuous time)."""
+    cable = cable_model(case)
+    intensity = float(case.params["wind_intensity"])
+    covariance = case.memo("wind_continuous", lambda: continuous_covariance(cable, intensity))
+    mid = cable.midspan - 1
+    return float(covariance[mid, mid])
+
+
+def seeded_setup(case: CaseView, steps: int, dt: float, seed: int) -> Setup:
+    """The wind run of `seed`: started from the held stationary distribution, the held white load for `steps` steps
+    of dt [s] (springlab.scenes.stay_cable.wind.wind_controls): the same for a seed in any batch or worker."""
+    _, held, _ = held_exact(case, dt)
+    q0, v0 = stationary_start(held, seed)
+    control = wind_controls(float(case.params["wind_intensity"]), dt, steps, [seed])[0]
+    return Setup(qpos=q0, qvel=v0, control=control)
