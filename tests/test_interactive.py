@@ -34,7 +34,7 @@ from springlab.errors import BadInputError, DivergedError
 from springlab.render import interactive
 from springlab.runs import compare
 from springlab.runs.run import run_scenario
-from springlab.scenes.capabilities import formula
+from springlab.scenes.capabilities.interactive import formula
 from springlab.sim import model_files
 from test_report import CHROMIUM_FLAGS, _chromium
 

@@ -42,16 +42,15 @@ from springlab.exact.limits import stability_limit
 from springlab.sim import model_files
 from springlab.sim.simulate import Setup, Trajectory, check_timing, quiet_mujoco, simulate
 
-from .capabilities import (
-    DesignSpec,
-    DryFrictionSpec,
-    FigureHook,
-    FitSpec,
-    FrequencySpec,
-    InteractiveSpec,
-    OscillatorSpec,
-    RefinableSpec,
-)
+from .capabilities.design import DesignSpec
+from .capabilities.drawing import Drawing
+from .capabilities.figure import FigureHook
+from .capabilities.fit import FitSpec
+from .capabilities.frequency import FrequencySpec
+from .capabilities.friction import DryFrictionSpec
+from .capabilities.interactive import InteractiveSpec
+from .capabilities.oscillator import OscillatorSpec
+from .capabilities.refine import RefinableSpec
 from .declarations import Check, Parameter, Reference, Scenario
 from .random_load import RandomLoadSpec
 
@@ -125,7 +124,9 @@ class Scene:
        `stop_condition(case)` (an event that ends a run early as a result), `stability_limit(case,
        integrator, omega, zeta)` (damping MuJoCo treats differently from joint damping),
        `phase_field(case)`/`equilibria(case)`/`separatrices(case)` (one-joint phase planes),
-       `joint_columns(model, trajectory)` (joints that only some scenarios have).
+       `joint_columns(model, trajectory)` (joints that only some scenarios have), `drawing(case)` (what the
+       pictures of a run show beyond the model's geoms and its MJCF drawing texts, e.g. the road a quarter
+       car drives over: springlab.scenes.capabilities.drawing; the renderer never recognises a scene).
     10. Capabilities the studies read (springlab.scenes.capabilities): `fit`, how `springlab fit`
        identifies the scene from a record (an `OscillatorFit` or a `PolynomialFit`; None: it cannot);
        `design`, the design question the scene answers (`DesignSpec`: swept properties, fixed ones,
@@ -133,15 +134,15 @@ class Scene:
        `refinable`, the model's size is a parameter and which quantities converge to which continuum
        values (`RefinableSpec`; springlab.studies.refine); `figure`, the panels of the scene's own
        figure of a run (a `FigureHook`; springlab.plots.run.scene_figure).
-    11. Optionally, `oscillator` (springlab.scenes.capabilities.OscillatorSpec): the scene is the
+    11. Optionally, `oscillator` (springlab.scenes.capabilities.oscillator.OscillatorSpec): the scene is the
        textbook's one-mode mass-spring-damper, the unit oscillator of `springlab stability`.
-    12. Optionally, `dry_friction` (springlab.scenes.capabilities.DryFrictionSpec): the scene's dry
+    12. Optionally, `dry_friction` (springlab.scenes.capabilities.friction.DryFrictionSpec): the scene's dry
        friction has exact Coulomb answers and takes MuJoCo's friction settings as parameters, which
        `springlab friction-settings` sweeps (springlab.studies.friction_settings).
-    13. Optionally, `frequency` (springlab.scenes.capabilities.FrequencySpec, or a tuple of them, one per
+    13. Optionally, `frequency` (springlab.scenes.capabilities.frequency.FrequencySpec, or a tuple of them, one per
        scenario, the first the default): the default input and response of `springlab frequency SCENE`, an
        MjSpec edit that makes the input a control, and what the response means for the scene's question.
-    14. Optionally, `interactive` (springlab.scenes.capabilities.InteractiveSpec): the scenarios that run
+    14. Optionally, `interactive` (springlab.scenes.capabilities.interactive.InteractiveSpec): the scenarios that run
        in the browser with real MuJoCo and the MJCF attributes the page writes (`springlab interactive`).
     15. Optionally, `random_load` (springlab.scenes.random_load.RandomLoadSpec): a scenario under a seeded
        stationary random load whose RMS has an exact value and scatter (`springlab rms`:
@@ -361,6 +362,11 @@ class Scene:
         not validated (`passed` False, exit 1) and is reported in summary.json's `model_limits`.
         """
         return []
+
+    def drawing(self, case: Case) -> Drawing:
+        """What the pictures of a run of `case` show beyond the model's own geoms and its MJCF drawing texts
+        (springlab.scenes.capabilities.drawing; e.g. the road under a quarter car); nothing by default."""
+        return Drawing()
 
     def stop_condition(self, case: Case) -> StopCondition | None:
         """An event that ends a run early: (qpos (n, nq), qvel (n, nv)) -> (n,) bool, True once it
@@ -582,3 +588,7 @@ class Case:
     def separatrices(self) -> list[tuple[np.ndarray, np.ndarray]]:
         """Separatrix curves of the unforced phase plane: [(x [m], v [m/s]) arrays]."""
         return self.scene.separatrices(self)
+
+    def drawing(self) -> Drawing:
+        """What the pictures of a run of the case show beyond the model's own geoms (`Scene.drawing`)."""
+        return self.scene.drawing(self)

@@ -1,7 +1,7 @@
 """The one-mode oscillator at the extremes: stiff, light, undamped-long and hugely overdamped, near each stability limit.
 
 The oscillator is the scene that declares itself the textbook's mass-spring-damper
-(`Scene.oscillator`, springlab.scenes.capabilities.OscillatorSpec; `oscillator_scene`): the
+(`Scene.oscillator`, springlab.scenes.capabilities.oscillator.OscillatorSpec; `oscillator_scene`): the
 studies set its parameters by the names it declares and never name it.
 
 `extremes_table` runs every case x integrator at 0.5x, 0.99x and 1.01x its
@@ -28,7 +28,7 @@ from springlab.errors import DivergedError, SpringlabError
 from springlab.exact.limits import stability_limit
 from springlab.runs.run import evaluate
 from springlab.scenes.base import Case, Scene
-from springlab.scenes.capabilities import OscillatorSpec
+from springlab.scenes.capabilities.oscillator import OscillatorSpec
 from springlab.sim.batch import Job, run_batched, time_run
 from springlab.sim.simulate import INTEGRATORS, Trajectory, quiet_mujoco
 

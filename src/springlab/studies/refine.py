@@ -1,7 +1,7 @@
 """How much model does a question need? The three-axis trade: model size x integrator x timestep.
 
 For a scene that declares its model size a parameter (`Scene.refinable`, a
-springlab.scenes.capabilities.RefinableSpec) and a question (a quantity its runs measure, with the same
+springlab.scenes.capabilities.refine.RefinableSpec) and a question (a quantity its runs measure, with the same
 quantity of the discretized model solved exactly and of the continuum), the study runs every size x
 integrator x timestep and splits each run's error against the continuum into
 

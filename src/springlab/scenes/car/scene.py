@@ -90,7 +90,10 @@ import numpy as np
 
 from springlab.errors import ParameterError
 from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Case, Parameter, PhaseField, Reference, Scenario, Scene
-from springlab.scenes.capabilities import FrequencySpec, InteractiveSpec, MjcfEdit, OscillatorFit
+from springlab.scenes.capabilities.drawing import Drawing
+from springlab.scenes.capabilities.fit import OscillatorFit
+from springlab.scenes.capabilities.frequency import FrequencySpec
+from springlab.scenes.capabilities.interactive import InteractiveSpec, MjcfEdit
 from springlab.sim.simulate import Setup, Trajectory, quiet_mujoco
 
 from .frequency import isolation, name_modes, push_at_the_front, road_under_the_car
@@ -408,6 +411,9 @@ class Car(Scene):
 
     def model_limits(self, case: Case, trajectory: Trajectory) -> list[str]:
         return case.scenario.variant.model_limits(case, trajectory)
+
+    def drawing(self, case: Case) -> Drawing:
+        return case.scenario.variant.drawing(case)
 
 
 SCENE = Car()

@@ -17,7 +17,7 @@ import numpy as np
 import scipy.linalg
 
 from springlab.exact import events
-from springlab.scenes.capabilities import CaseView
+from springlab.scenes.capabilities.case import CaseView
 from springlab.sim.simulate import Trajectory
 
 from . import build, continuum

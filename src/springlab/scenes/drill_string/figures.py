@@ -1,6 +1,6 @@
 """The drill string's own figure of a run (`Scene.figure`): speeds with the exact events, twist, mode shapes.
 
-Each scenario gets two panels (springlab.scenes.capabilities.Panel), drawn by springlab.plots.run.scene_figure:
+Each scenario gets two panels (springlab.scenes.capabilities.figure.Panel), drawn by springlab.plots.run.scene_figure:
 
 * `modes`: the first three mode shapes of the N-element model (dashed) beside the continuum's sin(beta_n x)
   (dotted), each scaled to 1 at its largest; the twist along the string at a few instants of the run.
@@ -15,7 +15,8 @@ import math
 
 import numpy as np
 
-from springlab.scenes.capabilities import CaseView, Curve, Panel
+from springlab.scenes.capabilities.case import CaseView
+from springlab.scenes.capabilities.figure import Curve, Panel
 from springlab.sim.simulate import Trajectory
 
 from . import answers

@@ -44,7 +44,7 @@ from springlab.exact import analytic
 from springlab.exact.linear import state_matrix
 from springlab.scenes import checks as scene_checks
 from springlab.scenes.base import Case, Check, Parameter, Reference, Scenario, Scene
-from springlab.scenes.capabilities import RefinableSpec, RefinedQuestion
+from springlab.scenes.capabilities.refine import RefinableSpec, RefinedQuestion
 from springlab.sim.simulate import ORDERS, Setup, Trajectory
 
 from . import answers, build, continuum, figures

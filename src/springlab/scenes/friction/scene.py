@@ -60,7 +60,7 @@ from springlab.scenes.base import (
     Scenario,
     Scene,
 )
-from springlab.scenes.capabilities import (
+from springlab.scenes.capabilities.friction import (
     CONTACT_FRICTION,
     JOINT_FRICTION,
     DryFrictionSpec,

@@ -59,7 +59,7 @@ import numpy as np
 
 from springlab.exact import analytic
 from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Case, Parameter, PhaseField, Reference, Scenario, Scene
-from springlab.scenes.capabilities import PolynomialFit
+from springlab.scenes.capabilities.fit import PolynomialFit
 from springlab.sim.simulate import Setup, Trajectory
 
 from .tachograph import TACHOGRAPH_TIMES, TACHOGRAPH_VELOCITIES, Tachograph, reject_profile_parameters

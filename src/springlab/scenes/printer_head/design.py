@@ -65,7 +65,8 @@ import numpy as np
 
 from springlab.errors import DivergedError
 from springlab.exact import events
-from springlab.scenes.capabilities import CaseView, DesignProperty, DesignSpec, MoveEstimates, MoveRuns
+from springlab.scenes.capabilities.case import CaseView
+from springlab.scenes.capabilities.design import DesignProperty, DesignSpec, MoveEstimates, MoveRuns
 from springlab.sim.simulate import quiet_mujoco
 
 from .moves import (

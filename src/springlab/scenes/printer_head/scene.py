@@ -98,7 +98,9 @@ from springlab.exact import analytic
 from springlab.exact.limits import stability_limit as joint_damping_stability_limit
 from springlab.exact.linearize import one_step_map, operating_point
 from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Case, Parameter, Reference, Scenario, Scene
-from springlab.scenes.capabilities import CaseView, FrequencySpec, OscillatorFit
+from springlab.scenes.capabilities.case import CaseView
+from springlab.scenes.capabilities.fit import OscillatorFit
+from springlab.scenes.capabilities.frequency import FrequencySpec
 from springlab.sim.simulate import Setup, Trajectory, integrator_id
 
 from .design import DESIGN

@@ -37,7 +37,10 @@ import numpy as np
 from springlab.exact import analytic
 from springlab.exact.linear import generator_system, state_matrix
 from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Case, Parameter, PhaseField, Reference, Scenario, Scene
-from springlab.scenes.capabilities import FrequencySpec, InteractiveSpec, MjcfEdit, OscillatorFit, OscillatorSpec
+from springlab.scenes.capabilities.fit import OscillatorFit
+from springlab.scenes.capabilities.frequency import FrequencySpec
+from springlab.scenes.capabilities.interactive import InteractiveSpec, MjcfEdit
+from springlab.scenes.capabilities.oscillator import OscillatorSpec
 from springlab.sim import exciter
 from springlab.sim.simulate import Setup, Trajectory
 

@@ -36,7 +36,7 @@ from springlab import scenes
 from springlab.errors import BadInputError, UnknownNameError
 from springlab.exact import analytic
 from springlab.scenes.base import Case, Scene
-from springlab.scenes.capabilities import OscillatorFit, PolynomialFit
+from springlab.scenes.capabilities.fit import OscillatorFit, PolynomialFit
 
 from . import reductions
 from .data import Record

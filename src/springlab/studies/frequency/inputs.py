@@ -16,7 +16,7 @@ from springlab.errors import BadInputError, UnknownNameError
 from springlab.exact.linearize import Linearization
 from springlab.exact.model_at_point import ModelAtPoint
 from springlab.runs.run import prepare
-from springlab.scenes.capabilities import FrequencyInterpret, FrequencySpec
+from springlab.scenes.capabilities.frequency import FrequencyInterpret, FrequencySpec
 from springlab.sim.simulate import INTEGRATORS, quiet_mujoco
 
 #: response kinds: 'JOINT' (position), 'JOINT:vel', 'JOINT:acc'
