@@ -3,9 +3,9 @@
 Scenes are discovered, so a new scene is a new module (`scenes/<name>.py`) or folder
 (`scenes/<name>/`, its `__init__` handing on `SCENE`) with a module-level `SCENE` and a
 models/<name>.xml; nothing else needs editing. `base` (what every scene provides),
-`declarations` (parameters, scenarios, references, checks as plain data), `capabilities` and
-`random_load` (what a scene declares for the studies) and `checks` (scalar claims) are the scenes'
-shared machinery, not scenes.
+`declarations` (parameters, scenarios, references, checks as plain data), `capabilities` (what
+a scene declares for the studies) and `checks` (scalar claims) are the scenes' shared machinery,
+not scenes.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from springlab.errors import UnknownNameError
 from .base import Case, Scene
 
 #: modules of this package that serve the scenes and are none
-MACHINERY = ("base", "capabilities", "checks", "declarations", "random_load")
+MACHINERY = ("base", "capabilities", "checks", "declarations")
 #: the chapter's order; discovered scenes not listed here follow alphabetically
 CATALOGUE_ORDER = ("slider", "car", "printer_head", "kinematics", "nonlinear")
 

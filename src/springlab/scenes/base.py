@@ -50,9 +50,9 @@ from .capabilities.frequency import FrequencySpec
 from .capabilities.friction import DryFrictionSpec
 from .capabilities.interactive import InteractiveSpec
 from .capabilities.oscillator import OscillatorSpec
+from .capabilities.random_load import RandomLoadSpec
 from .capabilities.refine import RefinableSpec
 from .declarations import Check, Parameter, Reference, Scenario
-from .random_load import RandomLoadSpec
 
 if TYPE_CHECKING:
     from springlab.sim.batch import Job
@@ -144,7 +144,7 @@ class Scene:
        MjSpec edit that makes the input a control, and what the response means for the scene's question.
     14. Optionally, `interactive` (springlab.scenes.capabilities.interactive.InteractiveSpec): the scenarios that run
        in the browser with real MuJoCo and the MJCF attributes the page writes (`springlab interactive`).
-    15. Optionally, `random_load` (springlab.scenes.random_load.RandomLoadSpec): a scenario under a seeded
+    15. Optionally, `random_load` (springlab.scenes.capabilities.random_load.RandomLoadSpec): a scenario under a seeded
        stationary random load whose RMS has an exact value and scatter (`springlab rms`:
        springlab.studies.random_load runs many seeds and finds the cheapest setting for an accurate RMS).
 

@@ -34,7 +34,7 @@ from springlab.errors import BadInputError, DivergedError
 from springlab.exact import random_vibration as rv
 from springlab.files import json_ready
 from springlab.scenes.base import Scene
-from springlab.scenes.random_load import RandomExact, RandomLoadSpec
+from springlab.scenes.capabilities.random_load import RandomExact, RandomLoadSpec
 from springlab.sim.simulate import check_timing, configured, initial_state, integrator_id, quiet_mujoco
 
 from .executor import Executor, chunked, resolve

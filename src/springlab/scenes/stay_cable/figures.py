@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from springlab.scenes.capabilities import CaseView, Panel
+from springlab.scenes.capabilities.case import CaseView
+from springlab.scenes.capabilities.figure import Panel
 from springlab.sim.simulate import Trajectory
 
 

@@ -15,7 +15,7 @@ import mujoco
 import numpy as np
 
 from springlab.exact.cable import LumpedCable, TautCable
-from springlab.scenes.capabilities import CaseView
+from springlab.scenes.capabilities.case import CaseView
 
 #: the motor that carries the wind's load
 WIND_ACTUATOR = "wind"

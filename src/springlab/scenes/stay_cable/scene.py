@@ -42,7 +42,7 @@ import numpy as np
 from springlab.errors import ParameterError
 from springlab.exact.cable import whole_elements
 from springlab.scenes.base import Case, Check, Parameter, Reference, Scenario, Scene
-from springlab.scenes.random_load import RandomLoadSpec
+from springlab.scenes.capabilities.random_load import RandomLoadSpec
 from springlab.sim.simulate import Setup, Trajectory
 
 from . import answers, build, figures, modal, stationary

@@ -26,8 +26,8 @@ import numpy as np
 from springlab.errors import BadInputError
 from springlab.exact import random_vibration as rv
 from springlab.exact.linearize import one_step_map, step_input_column
-from springlab.scenes.capabilities import CaseView
-from springlab.scenes.random_load import RandomExact
+from springlab.scenes.capabilities.case import CaseView
+from springlab.scenes.capabilities.random_load import RandomExact
 from springlab.sim.simulate import Setup
 
 from .readback import WIND_ACTUATOR, CableModel, cable_model

@@ -16,7 +16,7 @@ import numpy as np
 
 from springlab.sim.simulate import Setup
 
-from .capabilities import CaseView
+from .case import CaseView
 
 
 @dataclasses.dataclass(frozen=True)
