@@ -1,7 +1,7 @@
 """How much does it vibrate under a random load? Many seeded records against the exact stationary RMS.
 
 For a scene that declares a scenario under a seeded stationary random load (`Scene.random_load`, a
-springlab.scenes.random_load.RandomLoadSpec) the study runs `seeds` records of the scenario at one setting, each
+springlab.scenes.capabilities.random_load.RandomLoadSpec) the study runs `seeds` records of the scenario at one setting, each
 started from the exact stationary distribution with its own load (seed k's load is the same whichever batch,
 worker or order runs it), and measures each record's sample variance of the declared output. It reports, beside
 them, the exact variance three ways (continuous time: the physical answer; under the held load MuJoCo applies;

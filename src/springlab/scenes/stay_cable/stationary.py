@@ -182,7 +182,7 @@ def sample_variance(series: np.ndarray) -> float:
     return float(np.mean(record * record))
 
 
-# -- the hooks springlab.studies.random_load reads (springlab.scenes.random_load.RandomLoadSpec) --------------------
+# -- the hooks springlab.studies.random_load reads (springlab.scenes.capabilities.random_load.RandomLoadSpec) --------------------
 
 
 def midspan_output(case: CaseView) -> np.ndarray:
