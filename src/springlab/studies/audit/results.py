@@ -31,7 +31,8 @@ STABILITY_CRITERION = (
 
 @dataclasses.dataclass(frozen=True, repr=False)
 class Audit(display.Shown):
-    """An audit of one model (see the module docstring); `to_dict()` is audit.json and `audit --json`.
+    """An audit of one model (springlab.studies.audit.audit says how it is made); `to_dict()` is audit.json and
+    `audit --json`.
 
     Attributes
     ----------
