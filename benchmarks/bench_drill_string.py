@@ -146,12 +146,10 @@ def cheapest_at_256(quick: bool) -> None:
         f"   cheapest: {pick.integrator} at dt = {pick.dt:.4g} s (discretization {pick.discretization_error:.2e},"
         f" integration {pick.integration_error:.2e}); study took {study.sweep_wall_time_s:.1f} s"
     )
-    scene = scenes.get("drill_string")
-    scenario = scene.scenario("modes")
-    params = scene.resolve(scenario, {"n_elements": size})
-    model = scene.build(params, scenario)
+    case = scenes.get("drill_string").case("modes", {"n_elements": size})
+    model = case.model
     steps = round(duration / pick.dt)
-    setup = scene.setup(model, params, scenario, steps, pick.dt)
+    setup = case.setup(steps, pick.dt)
 
     def springlab_simulate() -> None:
         simulate(

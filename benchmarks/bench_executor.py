@@ -94,9 +94,9 @@ def slider_sweep() -> None:
     steps = round(duration / dt)
     values = sweeps.configurations([sweeps.parse_axis(v) for v in vary])
     n = len(values["damping"])
-    params = [scene.resolve(chosen, {k: float(values[k][i]) for k in values}) for i in range(n)]
-    models = [scene.build(p, chosen) for p in params]
-    setups = [scene.setup(m, p, chosen, steps, dt) for m, p in zip(models, params)]
+    cases = [scene.case(chosen, {k: float(values[k][i]) for k in values}) for i in range(n)]
+    params, models = [case.params for case in cases], [case.model for case in cases]
+    setups = [case.setup(steps, dt) for case in cases]
     jobs = [Job(m, scene.integrator, dt, steps, s) for m, s in zip(models, setups)]
     print(f"3) slider sweep, {n} configurations x {steps} steps ({scene.integrator}, dt = {dt:g} s)")
 
@@ -157,12 +157,11 @@ def run_overhead() -> None:
     scene = scenes.get("slider")
     print("4) springlab.run over the bare simulation (same model, setting and steps)")
     for name in ("free", "harmonic"):
-        chosen = scene.scenario(name)
-        params = scene.resolve(chosen, {})
+        case = scene.case(name)
+        chosen, model = case.scenario, case.model
         dt = chosen.dt or scene.dt
-        model = scene.build(params, chosen)
         steps = round(chosen.duration / dt)
-        setup = scene.setup(model, params, chosen, steps, dt)
+        setup = case.setup(steps, dt)
         bare = best_of(
             lambda: simulate(
                 model, integrator=scene.integrator, dt=dt, duration=chosen.duration, qpos=setup.qpos,

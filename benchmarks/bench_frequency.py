@@ -103,7 +103,7 @@ def sinestream_of_the_printer_head() -> None:
 
 def sweep_of_the_duffing_spring() -> None:
     """The docs' Duffing jump: 31 frequencies up and down (continuation, rk4 at 1 ms), against a plain loop."""
-    args = dict(input="force", response="block", parameters={"k3": 1e4, "damping": 1.0}, band=(1.5, 3.0))
+    args = dict(input="force", response="block", k3=1e4, damping=1.0, band=(1.5, 3.0))
     found = {}
 
     def analysis_only():

@@ -21,7 +21,7 @@ import time
 import mujoco
 import numpy as np
 
-from springlab.runs.run import prepare
+from springlab import scenes
 from springlab.scenes import get
 from springlab.sim.simulate import INTEGRATORS, check_timing
 from springlab.studies import friction_settings
@@ -49,11 +49,11 @@ def _settings(scenario: str, last: bool) -> dict[str, float]:
 
 def _plain_loop(scenario: str, integrator: str, dt: float, settings: dict[str, float]):
     """The same run as a plain mj_step loop: build once (outside the timing), then step and record."""
-    scene, chosen, params = prepare("friction", scenario, settings)
-    model = scene.build(params, chosen)
+    case = scenes.case("friction", scenario, settings)
+    model, chosen = case.model, case.scenario
     model.opt.integrator, model.opt.timestep = INTEGRATORS[integrator], dt
     steps = check_timing(dt, chosen.duration)
-    setup = scene.setup(model, params, chosen, steps, dt)
+    setup = case.setup(steps, dt)
     data = mujoco.MjData(model)
 
     def run():

@@ -24,12 +24,11 @@ from timing import best_of
 
 def simulate_vs_rollout() -> None:
     scene = scenes.get("slider")
-    scenario = scene.scenario("free")
-    params = scene.resolve(scenario, {})
-    model = scene.build(params, scenario)
+    case = scene.case("free")
+    model = case.model
     duration, dt = 20.0, scene.dt
     steps = round(duration / dt)
-    setup = scene.setup(model, params, scenario, steps, dt)
+    setup = case.setup(steps, dt)
     print(f"1) simulate vs raw rollout, slider, {steps} steps per run")
     print(f"   {'integrator':<13}{'springlab steps/s':>20}{'raw rollout steps/s':>22}{'ratio':>8}")
     for integrator in ("rk4", "euler", "implicitfast"):
@@ -70,12 +69,10 @@ def default_setting_vs_scipy() -> None:
     springlab_error = result.errors["slider_pos"].max_rel
     whole_time = best_of(lambda: springlab.run("slider", "free"), repeat=15)
     # the simulate path on the compiled model: the counterpart of solve_ivp given its right-hand side
-    scene = scenes.get("slider")
-    scenario = scene.scenario("free")
-    params = scene.resolve(scenario, {})
-    model = scene.build(params, scenario)
+    case = scenes.get("slider").case("free")
+    model = case.model
     dt = result.dt
-    setup = scene.setup(model, params, scenario, result.steps, dt)
+    setup = case.setup(result.steps, dt)
     path_time = best_of(
         lambda: simulate(
             model, integrator="rk4", dt=dt, duration=duration, qpos=setup.qpos, qvel=setup.qvel, control=setup.control

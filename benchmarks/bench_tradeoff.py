@@ -25,16 +25,14 @@ from timing import best_of
 
 
 def sweep_jobs():
-    scene = scenes.get("slider")
-    chosen = scene.scenario("free")
-    params = scene.resolve(chosen, {})
-    model = scene.build(params, chosen)
-    dts = tradeoff.timestep_grid(tradeoff.fastest_rate(scene, model, params, chosen), chosen.duration)
+    case = scenes.get("slider").case("free")
+    chosen = case.scenario
+    dts = tradeoff.timestep_grid(tradeoff.fastest_rate(case), chosen.duration)
     jobs = []
     for dt in dts:
         steps = round(chosen.duration / dt)
-        setup = scene.setup(model, params, chosen, steps, dt)
-        jobs.extend(batch.Job(model, name, dt, steps, setup) for name in INTEGRATORS)
+        setup = case.setup(steps, dt)
+        jobs.extend(case.job(name, dt, steps, setup=setup) for name in INTEGRATORS)
     return jobs
 
 

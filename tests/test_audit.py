@@ -115,6 +115,7 @@ AUDIT_KEYS = [
 def test_the_audit_json_is_the_objects_to_dict_and_its_facts_are_attributes(chain_audit, capsys, monkeypatch):
     from springlab import files
     from springlab.cli import main as cli_main
+    from springlab.cli.commands import audit as audit_command
 
     result = chain_audit
     data = result.to_dict()
@@ -171,7 +172,7 @@ def test_the_audit_json_is_the_objects_to_dict_and_its_facts_are_attributes(chai
     assert result.stability["rk4"].limit_dt_measured_s == data["stability"]["rk4"]["limit_dt_measured_s"]
     assert result.own_ok == (own.stable and own.error <= result.tol)
     # `springlab audit --json` prints exactly to_dict() (inf and nan as null), and the text is `message`
-    monkeypatch.setattr(cli_main, "run_audit", lambda *args, **options: result)
+    monkeypatch.setattr(audit_command, "run_audit", lambda *args, **options: result)
     code = cli_main.main(["audit", "chain.xml", "--json"])
     assert code == (0 if result.own_ok else 1)
     assert json.loads(capsys.readouterr().out) == files.json_ready(data)

@@ -57,13 +57,10 @@ def test_rk4_error_of_the_switched_bump_is_predicted_not_just_bounded(dt):
 
 
 def test_input_error_is_zero_on_the_grid_and_exactly_the_realized_difference_off_it():
-    scene = scenes.get("car")
-    scenario = scene.scenario("road_bump")
-    params = scene.resolve(scenario, {})
-    model = scene.build(params, scenario)
-    on_grid = scene.reference(model, params, scenario, np.arange(2001) * 5e-4, dt=5e-4)
+    case = scenes.get("car").case("road_bump")
+    on_grid = case.reference(np.arange(2001) * 5e-4, dt=5e-4)
     assert all(value == 0.0 for value in on_grid.input_error.values())
     assert on_grid.tolerance_basis == ""
-    off_grid = scene.reference(model, params, scenario, np.arange(1429) * 7e-4, dt=7e-4)
+    off_grid = case.reference(np.arange(1429) * 7e-4, dt=7e-4)
     assert off_grid.input_error["wheel_vel"] > 0.0
     assert off_grid.switches[0][0] == pytest.approx(714 * 7e-4)

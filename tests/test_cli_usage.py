@@ -53,7 +53,7 @@ def test_an_extra_positional_is_still_refused_in_one_line(capsys):
         (["stability"], "springlab.studies.stability", "stability_report"),
         (["design", "printer_head"], "springlab.studies.design.study", "run_study"),
         (["sweep", "slider", "--vary", "mass=1:2:3"], "springlab.studies.sweeps", "sweep"),
-        (["audit", str(model_files.path("slider"))], "springlab.cli.main", "run_audit"),
+        (["audit", str(model_files.path("slider"))], "springlab.cli.commands.audit", "run_audit"),
         (["fit", "slider", str(EXAMPLE_CSV)], "springlab.studies.fit.fit", "fit"),
     ],
 )

@@ -19,7 +19,7 @@ import scipy.linalg
 from springlab import scenes
 from springlab.cli.main import main
 from springlab.errors import UnknownNameError
-from springlab.scenes.capabilities import DesignSpec
+from springlab.scenes.capabilities.design import DesignSpec
 from springlab.studies.design import study as design
 
 #: the printer head's swept properties, in grid order

@@ -23,8 +23,7 @@ def test_the_compressed_length_is_written_on_every_frame_as_the_model_declares()
 
 def test_the_breakaway_figure_marks_the_exact_breakaway_and_draws_the_three_bit_speeds():
     result = run_scenario("drill_string", "breakaway", duration=4.0, n_elements=8)
-    scene, chosen, _ = prepare("drill_string", "breakaway", {"n_elements": 8})
-    speeds, twist = scene.figure(result.model, result.parameters, "breakaway", result.trajectory)
+    speeds, twist = result.case.scene.figure(result.case, result.trajectory)
     labels = [curve.label for curve in speeds.curves]
     assert any("exact" in label for label in labels) and any("continuum" in label for label in labels)
     (mark, text), *_ = speeds.marks

@@ -21,7 +21,7 @@ import pytest
 from springlab import scenes
 from springlab.cli.main import build_parser, main
 from springlab.errors import BadInputError
-from springlab.scenes.capabilities import OscillatorFit, PolynomialFit
+from springlab.scenes.capabilities.fit import OscillatorFit, PolynomialFit
 from springlab.studies.fit import fit as fit_module
 from springlab.studies.fit.models import fittable
 

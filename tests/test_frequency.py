@@ -14,12 +14,14 @@ from __future__ import annotations
 
 import json
 import math
+import re
 
 import numpy as np
 import pytest
 
 import springlab
 from springlab.cli.main import main
+from springlab.errors import BadInputError
 from springlab.scenes import get as get_scene
 
 EPS = float(np.finfo(float).eps)
@@ -38,7 +40,9 @@ def _slider(zeta: float, **extra):
     d = 2.0 * zeta * math.sqrt(k * m)
     result = springlab.frequency(
         "slider",
-        parameters={"mass": m, "stiffness": k, "damping": d},
+        mass=m,
+        stiffness=k,
+        damping=d,
         band=(0.1, 40.0),
         points=120,
         integrators=(),
@@ -208,7 +212,7 @@ def test_an_unwritable_output_fails_before_any_computing(tmp_path, capsys, monke
     def must_not_run(*args, **kwargs):
         raise AssertionError("computed before checking --output")
 
-    monkeypatch.setattr("springlab.cli.main.run_frequency", must_not_run)
+    monkeypatch.setattr("springlab.cli.commands.frequency.run_frequency", must_not_run)
     blocker = tmp_path / "file"
     blocker.write_text("a file, not a folder")
     assert main(["frequency", "slider", "--output", str(blocker / "sub")]) == 2
@@ -233,3 +237,67 @@ def test_sinestream_in_mujoco_matches_the_discrete_response_within_its_stated_ac
 def test_sinestream_refuses_a_joint_acceleration_response():
     with pytest.raises(springlab.BadInputError, match="accelerometer"):
         springlab.frequency("slider", response="slider:acc", integrators=(), sines=4)
+
+
+@pytest.mark.parametrize(
+    "option, text, typed",
+    [
+        ("band", "0.1:10", "band=(0.1, 10.0)"),
+        ("amplitudes", "0.5,2", "amplitudes=(0.5, 2.0)"),
+        ("integrators", "rk4", "integrators=['rk4'"),
+    ],
+)
+def test_the_library_refuses_the_command_lines_strings_and_names_the_typed_form(option, text, typed):
+    with pytest.raises(BadInputError, match=re.escape(typed)):
+        springlab.frequency("slider", **{option: text})
+
+
+def test_no_scene_parameter_is_named_like_an_option():
+    """A scene's parameters reach `springlab.frequency` as keywords; one named like an option (`dt`, `tol`,
+    `band` ...) would be taken for the option, so no scene may declare one."""
+    import inspect
+
+    options = {
+        name for name, p in inspect.signature(springlab.frequency).parameters.items() if p.kind is not p.VAR_KEYWORD
+    }
+    clashes = {name: sorted(options & set(scene.parameters)) for name, scene in springlab.SCENES.items()}
+    assert not any(clashes.values()), clashes
+
+
+def test_one_linearization_and_one_map_per_setting_at_the_operating_point(monkeypatch):
+    """The model is held at its operating point once (springlab.exact.model_at_point): one linearization, one
+    eig(A), and each one-step map differenced once per (integrator, dt, step), though the band's bisection in
+    frequency, the sinestream (two amplitudes, and its uncertainty at twice the step) ask for them again.
+    Counted with cProfile, which sees every call whatever imported the function."""
+    import cProfile
+    import pstats
+
+    from springlab.exact import linearize as linearize_module
+    from springlab.exact import model_at_point
+
+    asked = []
+    differenced = model_at_point.one_step_map
+
+    def one_step_map(model, integrator, dt, point=None, **options):
+        asked.append((integrator, dt, options.get("step")))
+        return differenced(model, integrator, dt, point, **options)
+
+    monkeypatch.setattr(model_at_point, "one_step_map", one_step_map)
+    profile = cProfile.Profile()
+    profile.enable()
+    # euler at 0.5 ms misses tol inside the band: the band's edge is bisected in frequency at that one setting
+    result = springlab.frequency(
+        "slider", integrator="euler", dt=5e-4, band=(0.1, 3.0), points=20, integrators=(), sines=4, amplitudes=(0.5, 2)
+    )
+    profile.disable()
+    assert result.within_tol_hz is not None and result.within_tol_hz[1] < 3.0  # the bisection ran
+    calls: dict[str, int] = {}
+    for (filename, _, name), (count, *_) in pstats.Stats(profile).stats.items():
+        if filename == linearize_module.__file__ or ("numpy" in filename and "linalg" in filename and name == "eig"):
+            calls[name] = calls.get(name, 0) + count
+    assert calls["linearize"] == 1
+    assert calls["eig"] == 1  # the settling time of both sinestreams reads the one eigenbasis
+    assert calls["input_column"] == 1
+    step = linearize_module.FD_STEP
+    assert sorted(set(asked)) == sorted(asked) == [("euler", 5e-4, step), ("euler", 5e-4, 2 * step)]
+    assert calls["one_step_map"] == calls["step_input_column"] == len(asked)

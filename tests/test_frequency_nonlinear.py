@@ -95,7 +95,7 @@ def duffing_sweep():
         "nonlinear",
         input="force",
         response="block",
-        parameters=DUFFING,
+        **DUFFING,
         band=BAND,
         points=20,
         integrators=(),
@@ -155,6 +155,51 @@ def test_duffing_sweeps_jump_at_the_harmonic_balance_folds(duffing_sweep):
     assert "harmonic balance predicts the jump" in lines and "jumps between" in lines
 
 
+def _fold(d, force_at, bracket: tuple[float, float], upper: bool) -> float:
+    """The fold [Hz] inside `bracket` of the relation of the oscillator d (m, c, k, k3) under the force amplitude
+    force_at(f) [N]: where P(A) = [(k - m w^2 + 3/4 k3 A)^2 + (c w)^2] A - F^2 touches zero at one of its critical
+    points P'(A) = 0 (the upper fold at the larger one, a hardening spring's local minimum; the lower fold at the
+    smaller one), solved by brentq on P(A_crit(w), w): no discriminant, no root following."""
+    from scipy.optimize import brentq
+
+    kappa = 0.75 * d.k3
+
+    def touching(f: float) -> float:
+        omega = 2 * math.pi * f
+        k0 = d.k - d.m * omega**2
+        # P'(A) = 3 kappa^2 A^2 + 4 kappa k0 A + k0^2 + (c w)^2 = 0
+        disc = 16 * kappa**2 * k0**2 - 12 * kappa**2 * (k0**2 + (d.c * omega) ** 2)
+        a_crit = (-4 * kappa * k0 + (1 if upper else -1) * math.sqrt(max(disc, 0.0))) / (6 * kappa**2)
+        return ((k0 + kappa * a_crit) ** 2 + (d.c * omega) ** 2) * a_crit - force_at(f) ** 2
+
+    return brentq(touching, *bracket, xtol=1e-15, rtol=1e-15)
+
+
+def test_duffing_folds_take_the_held_force_at_their_own_frequency(duffing_sweep):
+    """Each branch's fold solves the harmonic-balance relation with the held sine's first harmonic,
+    F sinc(omega dt / 2), evaluated at the fold itself (issue 34: it was evaluated at the band's centre). The
+    reference, the relation's critical point touching zero, is solved here with the oscillator read back from
+    the model; both sides are brentq solutions to ~1e-13 relative, so 1e-10 tells the two evaluations apart:
+    the band-centre force moves these folds by 2.8e-6 and 2.0e-5 relative."""
+    d = duffing_sweep.duffing
+    up, down = duffing_sweep.sweeps
+    force = d.gain * FORCE
+    low, high = _fold_band(FORCE)  # the folds under the unheld force, 1e-5 Hz; the hold moves them ~1e-4 Hz
+
+    def held(f: float) -> float:
+        return force * np.sinc(f * DT)
+
+    def at_centre(f: float) -> float:
+        return force * np.sinc(math.sqrt(BAND[0] * BAND[1]) * DT)
+
+    for branch, upper, guess in ((up, True, high), (down, False, low)):
+        bracket = (guess - 1e-2, guess + 1e-2)
+        expected = _fold(d, held, bracket, upper)
+        assert branch.fold_hz is not None
+        assert branch.fold_hz[0] == pytest.approx(expected, rel=1e-10, abs=0)
+        assert abs(_fold(d, at_centre, bracket, upper) / expected - 1) > 1e-8
+
+
 def test_sinestream_amplitudes_coincide_on_the_linear_slider_and_part_on_the_duffing_spring():
     """The slider is linear: its estimates at 0.5 N and 2 N per newton agree within the sum of their stated
     demodulation accuracies. The hardening spring's, at its resonance, part by orders of magnitude more."""
@@ -167,7 +212,7 @@ def test_sinestream_amplitudes_coincide_on_the_linear_slider_and_part_on_the_duf
         "nonlinear",
         input="force",
         response="block",
-        parameters=DUFFING,
+        **DUFFING,
         band=(1.4, 1.8),
         integrators=(),
         points=10,
@@ -241,7 +286,7 @@ def test_a_jointpos_sensor_response_is_the_joint_position_and_an_accelerometer_i
 def test_a_joint_force_input_is_the_motor_with_gear_one():
     """The slider's motor has gear 1: a force on the joint (qfrc_applied) is the same input, in the
     linearization (exact and discrete) and in MuJoCo's sinestream."""
-    kwargs = {"band": (0.5, 20.0), "points": 30, "integrators": (), "sines": 4, "parameters": SLIDER}
+    kwargs = {"band": (0.5, 20.0), "points": 30, "integrators": (), "sines": 4, **SLIDER}
     motor = springlab.frequency("slider", input="force", **kwargs)
     joint = springlab.frequency("slider", input="slider:force", **kwargs)
     assert joint.units["input"] == motor.units["input"] == "N"

@@ -48,9 +48,7 @@ def test_single_mass_transmissibility_and_its_isolation_at_sqrt2_omega_n(zeta):
     c = 2 * zeta * math.sqrt(k * m)
     f_n = math.sqrt(k / m) / (2 * math.pi)
     band = (f_n / 20, f_n * 8)
-    result = springlab.frequency(
-        "car", "damped_release", parameters={"damping_ratio": zeta}, band=band, points=90, integrators=()
-    )
+    result = springlab.frequency("car", "damped_release", damping_ratio=zeta, band=band, points=90, integrators=())
     assert (result.input, result.response) == ("road_acceleration", "heave:acc")
     assert result.units == {"input": "m/s^2", "response": "m/s^2"}  # the transmissibility: per unit, dimensionless
     s = 2j * np.pi * result.frequencies_hz
@@ -136,7 +134,7 @@ def test_pitch_heave_both_resonances_are_the_two_modes_named_by_their_node():
         )
     )
     mass, damp, stiff = _pitch_plane(params)
-    result = springlab.frequency("car", "pitch_heave", parameters={"damping_ratio": zeta}, points=80, integrators=())
+    result = springlab.frequency("car", "pitch_heave", damping_ratio=zeta, points=80, integrators=())
     assert (result.input, result.response) == ("push", "pitch")
     # the exact response: pitch per push force at station p (generalized force (1, -p)), closed form
     p = params["push_position"]

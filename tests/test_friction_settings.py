@@ -12,7 +12,7 @@ import pytest
 
 import springlab
 from springlab.scenes import get
-from springlab.scenes.capabilities import CONTACT_FRICTION, JOINT_FRICTION
+from springlab.scenes.capabilities.friction import CONTACT_FRICTION, JOINT_FRICTION
 from springlab.studies import friction_settings as study_module
 from springlab.studies.friction_settings import friction_settings, grid, mujoco_defaults
 

@@ -34,7 +34,7 @@ from springlab.errors import BadInputError, DivergedError
 from springlab.render import interactive
 from springlab.runs import compare
 from springlab.runs.run import run_scenario
-from springlab.scenes.capabilities import formula
+from springlab.scenes.capabilities.interactive import formula
 from springlab.sim import model_files
 from test_report import CHROMIUM_FLAGS, _chromium
 
@@ -297,8 +297,8 @@ def test_declared_edits_write_what_scene_edit_sets(scene_name, overrides):
     spec = scene.interactive
     for name in spec.scenarios:
         scenario = scene.scenario(name)
-        params = scene.resolve(scenario, overrides)
-        built = scene.build(params, scenario)
+        case = scene.case(scenario, overrides)
+        params, built = case.params, case.model
         values = params | {"g": -float(built.opt.gravity[2])}
         root = ElementTree.fromstring(model_files.path(scene_name).read_text())
         for edit in spec.edits:
@@ -309,7 +309,7 @@ def test_declared_edits_write_what_scene_edit_sets(scene_name, overrides):
         page = mujoco.MjModel.from_xml_string(ElementTree.tostring(root, "unicode"))
         _assert_same_model(page, built)
         np.testing.assert_array_equal(page.qpos_spring, built.qpos_spring)
-        setup = scene.setup(built, params, scenario, 10, scenario.dt)
+        setup = case.setup(10, scenario.dt)
         joint = built.joint(spec.joint)
         assert formula(spec.x0, values) == setup.qpos[joint.qposadr[0]]
         assert formula(spec.v0, values) == setup.qvel[joint.dofadr[0]]
@@ -348,8 +348,8 @@ def test_javascript_exact_solution_tolerance_and_range_match_the_python(tmp_path
     for scene_name, scenario_name, overrides in GRID:
         scene = scenes.get(scene_name)
         spec, scenario = scene.interactive, scene.scenario(scenario_name)
-        params = scene.resolve(scenario, overrides)
-        model = scene.build(params, scenario)
+        case = scene.case(scenario, overrides)
+        params, model = case.params, case.model
         values = params | {"g": -float(model.opt.gravity[2])}
         p = {
             "m": params[spec.mass],
@@ -362,7 +362,7 @@ def test_javascript_exact_solution_tolerance_and_range_match_the_python(tmp_path
         }
         for integrator, dt, duration in SETTINGS:
             times = np.arange(round(duration / dt) + 1) * dt
-            reference = scene.reference(model, params, scenario, times, dt=dt)
+            reference = case.reference(times, dt=dt)
             cases.append(
                 dict(p=p, integrator=integrator, dt=dt, time=list(times), reference=reference, joint=spec.joint)
             )

@@ -167,20 +167,17 @@ def test_tachograph_refuses_parameters_its_profile_fixes():
 
 def test_constant_acceleration_phase_field_is_tangent_to_its_parabola():
     scene = scenes.get("kinematics")
-    scenario = scene.scenario("constant_acceleration")
-    params = scene.resolve(scenario, {})
-    model = scene.build(params, scenario)
-    field = scene.phase_field(model, params, scenario)
+    case = scene.case("constant_acceleration")
+    params = case.params
+    field = case.phase_field()
     # orbit v^2 = v0^2 + 2 a (x - x0): its tangent (dx, dv) is parallel to (v, a)
     x = np.linspace(0, 50, 7)
     v = np.sqrt(params["v0"] ** 2 + 2 * params["a0"] * (x - params["x0"]))
     dx, dv = field(x, v)
     np.testing.assert_allclose(dv / dx, params["a0"] / v, rtol=1e-14)
     for name in ("polynomial_position", "tachograph"):
-        other = scene.scenario(name)
-        p = scene.resolve(other, {})
-        assert scene.phase_field(scene.build(p, other), p, other) is None  # not autonomous
-    assert scene.equilibria(model, params, scenario) == []
+        assert scene.case(name).phase_field() is None  # not autonomous
+    assert case.equilibria() == []
 
 
 @pytest.mark.parametrize(

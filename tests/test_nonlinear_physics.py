@@ -21,9 +21,8 @@ EPS = np.finfo(float).eps
 
 
 def _built(scenario_name, **overrides):
-    scenario = SCENE.scenario(scenario_name)
-    params = SCENE.resolve(scenario, overrides)
-    return SCENE.build(params, scenario), params, scenario
+    case = SCENE.case(scenario_name, overrides)
+    return case.model, case.params, case
 
 
 def _energy(x, v, k1, k3, m=M):
@@ -54,7 +53,7 @@ def test_polynomial_joint_stiffness_gives_minus_k1_x_minus_k3_x_cubed():
 
 
 def test_softening_spring_force_peaks_at_sqrt_k1_over_3_abs_k3():
-    model, params, scenario = _built("softening")
+    model, params, case = _built("softening")
     result = springlab.run("nonlinear", "softening", duration=0.01)
     q = result.summary["quantities"]
     x_peak = math.sqrt(K1 / (3 * -K3))  # d/dx (k1 x + k3 x^3) = 0
@@ -90,11 +89,11 @@ def _transition_jacobian(model, x_e):
     ],
 )
 def test_equilibria_are_where_the_spring_force_vanishes_with_stability_from_the_jacobian(scenario_name, expected):
-    model, params, scenario = _built(scenario_name)
+    model, params, case = _built(scenario_name)
     model.opt.integrator = mujoco.mjtIntegrator.mjINT_RK4
     model.opt.timestep = 1e-3
-    found = SCENE.equilibria(model, params, scenario)
-    field = SCENE.phase_field(model, params, scenario)
+    found = case.equilibria()
+    field = case.phase_field()
     assert [(e["x"], e["stable"], e["kind"]) for e in found] == [
         (pytest.approx(x, rel=1e-15, abs=0), s, k) for x, s, k in expected
     ]
@@ -114,7 +113,7 @@ def test_equilibria_are_where_the_spring_force_vanishes_with_stability_from_the_
 
 
 def test_scene_linearization_agrees_with_mujocos_transition_derivatives():
-    model, params, scenario = _built("double_well")
+    model, params, case = _built("double_well")
     model.opt.integrator = mujoco.mjtIntegrator.mjINT_RK4
     model.opt.timestep = 1e-3
     for x_e in (-0.1, 0.0, 0.1):
@@ -136,11 +135,11 @@ def test_double_well_small_oscillation_frequency_is_sqrt_minus_2_k1_over_m():
 
 
 def test_damped_equilibria_are_stable_foci_or_nodes():
-    model, params, scenario = _built("double_well", damping=2.0)
-    kinds = [e["kind"] for e in SCENE.equilibria(model, params, scenario)]
+    model, params, case = _built("double_well", damping=2.0)
+    kinds = [e["kind"] for e in case.equilibria()]
     assert kinds == ["stable focus", "saddle", "stable focus"]  # d^2 = 4 < 4 m V'' = 800
-    model, params, scenario = _built("double_well", damping=40.0)
-    found = SCENE.equilibria(model, params, scenario)
+    model, params, case = _built("double_well", damping=40.0)
+    found = case.equilibria()
     assert [e["kind"] for e in found] == ["stable node", "saddle", "stable node"]
     # the reported eigenvalues are those of MuJoCo's own Jacobian (damping included)
     for e in found:
@@ -261,8 +260,8 @@ def test_bounded_motion_inside_the_separatrix_never_escapes():
 
 @pytest.mark.parametrize("scenario_name, k1, k3", [("softening", K1, K3), ("double_well", -100.0, 1e4)])
 def test_separatrices_lie_on_the_saddle_energy_level(scenario_name, k1, k3):
-    model, params, scenario = _built(scenario_name)
-    curves = SCENE.separatrices(model, params, scenario)
+    model, params, case = _built(scenario_name)
+    curves = case.separatrices()
     saddle = 0.1 if k1 > 0 else 0.0
     level = 0.5 * k1 * saddle**2 + 0.25 * k3 * saddle**4  # 0.25 J and 0 J by hand
     assert curves
@@ -281,17 +280,17 @@ def test_separatrices_lie_on_the_saddle_energy_level(scenario_name, k1, k3):
 
 
 def test_separatrix_leaves_the_saddle_with_slope_of_its_rate():
-    model, params, scenario = _built("softening")
+    model, params, case = _built("softening")
     rate = math.sqrt(2 * K1 / M)  # sqrt(-V''(x_s) / m) with V'' = -2 k1
-    for x, v in SCENE.separatrices(model, params, scenario):
+    for x, v in case.separatrices():
         near = (np.abs(np.abs(x) - 0.1) < 1e-4) & (np.abs(np.abs(x) - 0.1) > 1e-9)
         if near.any():
             np.testing.assert_allclose(np.abs(v[near]) / np.abs(np.abs(x[near]) - 0.1), rate, rtol=1e-3)
 
 
 def test_phase_field_is_mujocos_acceleration():
-    model, params, scenario = _built("double_well", damping=1.5)
-    field = SCENE.phase_field(model, params, scenario)
+    model, params, case = _built("double_well", damping=1.5)
+    field = case.phase_field()
     data = mujoco.MjData(model)
     rng = np.random.default_rng(7)
     for x, v in rng.uniform(-0.2, 0.2, size=(20, 2)):
@@ -425,9 +424,8 @@ def test_forced_duffing_separation_time_is_the_converged_one_of_the_exact_system
 
 def test_lyapunov_estimator_recovers_the_exact_exponent_of_a_damped_linear_oscillator():
     # linear, damped, forced: every perturbation decays like exp(-d t / 2m), so the exponent is -d / 2m
-    scenario = SCENE.scenario("forced_duffing")
-    params = SCENE.resolve(scenario, {"k1": 100.0, "k3": 0.0, "damping": 2.0})
-    exponent, _ = SCENE.lyapunov_exponent(params, scenario, "rk4", 1e-3, transient=1.0, total=20.0)
+    case = SCENE.case("forced_duffing", {"k1": 100.0, "k3": 0.0, "damping": 2.0})
+    exponent, _ = SCENE.lyapunov_exponent(case, "rk4", 1e-3, transient=1.0, total=20.0)
     assert exponent == pytest.approx(-1.0, abs=0.02)
 
 

@@ -31,12 +31,10 @@ I2 = np.eye(2)
 
 
 def _model_and_matrices(**overrides):
-    scene = scenes.get("printer_head")
-    scenario = scene.scenario("settle")
-    params = scene.resolve(scenario, overrides)
-    model = scene.build(params, scenario)
+    case = scenes.get("printer_head").case("settle", overrides)
+    scenario, params, model = case.scenario, case.params, case.model
     mass = np.diag([params["carriage_mass"], params["motor_mass"]])
-    return scene, scenario, params, model, mass, params["belt_damping"] * BELT, params["belt_stiffness"] * BELT
+    return case, scenario, params, model, mass, params["belt_damping"] * BELT, params["belt_stiffness"] * BELT
 
 
 def _belt_mode(params):
@@ -156,9 +154,9 @@ def test_discrete_makes_the_belt_spring_implicit(omega_dt):
 def test_euler_limit_on_the_belt_is_the_explicit_damping_bound(belt_damping):
     # explicit damping: trace 2 - a^2 - 2 zeta a, det 1 - 2 zeta a (a = omega dt) on the belt mode;
     # |trace| < 1 + det gives a < 2 sqrt(zeta^2 + 1) - 2 zeta, below joint damping's + 2 zeta
-    scene, scenario, params, model, *_ = _model_and_matrices(belt_damping=belt_damping)
+    case, scenario, params, model, *_ = _model_and_matrices(belt_damping=belt_damping)
     omega, zeta = _belt_mode(params)
-    limit = scene.stability_limit(model, params, scenario, "euler", omega, zeta)
+    limit = case.stability_limit("euler", omega, zeta)
     assert limit == pytest.approx(2 * math.sqrt(zeta * zeta + 1) - 2 * zeta, rel=1e-8)
     if zeta > 0:
         assert limit < joint_damping_limit("euler", zeta)
@@ -166,22 +164,22 @@ def test_euler_limit_on_the_belt_is_the_explicit_damping_bound(belt_damping):
 
 @pytest.mark.parametrize("belt_damping", [0.0, 2.45, 20.0])
 def test_rk4_limit_on_the_belt_is_rk4s_usual_limit(belt_damping):
-    scene, scenario, params, model, *_ = _model_and_matrices(belt_damping=belt_damping)
+    case, scenario, params, model, *_ = _model_and_matrices(belt_damping=belt_damping)
     omega, zeta = _belt_mode(params)
-    limit = scene.stability_limit(model, params, scenario, "rk4", omega, zeta)
+    limit = case.stability_limit("rk4", omega, zeta)
     assert limit == pytest.approx(joint_damping_limit("rk4", zeta), rel=1e-8)
 
 
 def test_discrete_has_no_limit_on_the_belt():
-    scene, scenario, params, model, *_ = _model_and_matrices()
-    assert math.isinf(scene.stability_limit(model, params, scenario, "discrete", *_belt_mode(params)))
+    case, scenario, params, model, *_ = _model_and_matrices()
+    assert math.isinf(case.stability_limit("discrete", *_belt_mode(params)))
 
 
 @pytest.mark.parametrize("integrator", ["euler", "implicit"])
 def test_runs_just_inside_the_measured_limit_stay_bounded_and_just_outside_diverge(integrator):
-    scene, scenario, params, model, *_ = _model_and_matrices(belt_damping=20.0)
+    case, scenario, params, model, *_ = _model_and_matrices(belt_damping=20.0)
     omega, zeta = _belt_mode(params)
-    limit = scene.stability_limit(model, params, scenario, integrator, omega, zeta)
+    limit = case.stability_limit(integrator, omega, zeta)
     if integrator == "implicit":  # between the explicit and the joint-damping bounds, as measured above
         assert 2 * math.sqrt(zeta * zeta + 1) - 2 * zeta < limit < joint_damping_limit("euler", zeta)
     inside = 0.97 * limit / omega

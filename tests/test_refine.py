@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import math
+import random
 
 import pytest
 
@@ -60,16 +61,47 @@ def test_every_runs_error_splits_into_its_two_parts(study):
 
 def test_the_recommendation_is_the_cheapest_run_within_tol_and_a_fresh_run_confirms_it(study):
     pick = study.recommendation
-    assert pick is not None and pick.verified
-    assert pick.discretization_error + pick.integration_error <= pick.tol
-    meeting = [r for r in study.runs if r.error_bound is not None and r.error_bound <= pick.tol]
-    assert (pick.size, pick.integrator, pick.dt) in {(r.size, r.integrator, r.dt) for r in meeting}
-    cheapest = min(meeting, key=lambda r: r.wall_time_s)
+    assert pick is not None and pick.verified and pick.found
+    details = pick.details
+    assert details["discretization_error"] + details["integration_error"] == pytest.approx(pick.error, rel=1e-12)
+    assert pick.error <= pick.tolerance
+    meeting = [r for r in study.runs if r.run.valid and r.error_bound <= pick.tolerance]
+    assert pick.row in meeting and details["size"] == pick.row.size
+    # the cheapest in counted work: steps x evaluations per step (rk4 4) x degrees of freedom (N + 1 here)
+    for run in study.runs:
+        assert run.cost == run.steps * (4 if run.integrator == "rk4" else 1) * (run.size + 1)
+    cheapest = min(meeting, key=lambda r: (r.cost, r.error_bound))
     # the first candidate verified (the recommendation may be a later one only if a verification failed)
-    assert (pick.size, pick.integrator, pick.dt) == (cheapest.size, cheapest.integrator, cheapest.dt)
-    again = run_scenario("drill_string", "modes", integrator=pick.integrator, dt=pick.dt, n_elements=pick.size)
+    assert pick.rejected == 0 and pick.row is cheapest
+    again = run_scenario("drill_string", "modes", integrator=pick.integrator, dt=pick.dt, n_elements=pick.row.size)
     q = again.quantities
-    assert abs(q["mode_1_frequency_hz"] / q["mode_1_frequency_hz_continuum"] - 1) <= pick.tol
+    assert abs(q["mode_1_frequency_hz"] / q["mode_1_frequency_hz_continuum"] - 1) <= pick.tolerance
+
+
+def test_no_run_beyond_its_stability_limit_is_on_the_front_or_recommended():
+    # issue 34: at N = 4, euler at dt = 1 s is 12x past its limit (0.0849 s) and ended before it blew up
+    study = refine.refine("drill_string", tol=0.2, sizes=(4, 8), integrators=("euler", "rk4"))
+    four = next(c for c in study.sizes if c.size == 4)
+    past = [r for r in study.runs if r.size == 4 and r.integrator == "euler" and r.dt == 1.0]
+    assert len(past) == 1 and not past[0].diverged and past[0].error_bound <= 0.2
+    assert past[0].beyond_limit and past[0].dt > four.stable_dt_s["euler"]
+    for run in study.runs:  # beyond_limit is exactly dt above the limit on the size's fastest mode
+        limit = next(c for c in study.sizes if c.size == run.size).stable_dt_s[run.integrator]
+        assert run.beyond_limit == (limit is not None and run.dt > limit * (1 + 1e-9))
+    assert study.pareto and not any(r.beyond_limit or r.diverged for r in study.pareto)
+    assert study.recommendation.found and not study.recommendation.row.beyond_limit
+    assert all(s["dt"] != 1.0 for s in study.to_dict()["pareto"])
+
+
+def test_the_recommendation_is_the_same_however_noisy_the_timer(monkeypatch):
+    noise = random.Random(7)
+    monkeypatch.setattr(refine, "time_run", lambda job, **options: noise.uniform(1e-6, 1.0))
+    options = dict(tol=1e-2, sizes=(2, 4), integrators=("euler", "rk4", "discrete"))
+    first, second = refine.refine("drill_string", **options), refine.refine("drill_string", **options)
+    assert first.recommendation.found and first.recommendation.setting == second.recommendation.setting
+    assert first.recommendation.text == second.recommendation.text
+    assert [r.setting for r in first.pareto] == [r.setting for r in second.pareto]
+    assert [r.wall_time_s for r in first.runs] != [r.wall_time_s for r in second.runs]
 
 
 def test_refining_costs_twice_the_stable_dt_of_an_explicit_integrator_falls_like_one_over_n(study):
@@ -104,6 +136,10 @@ def test_the_json_carries_the_documented_keys(study):
     }
     assert json.loads(json.dumps(data)) == data
     assert set(data["runs"][0]) >= {"size", "integrator", "dt", "error", "discretization_error", "integration_error"}
+    assert set(data["runs"][0]) >= {"cost", "beyond_limit"} and "cost_basis" in data
+    assert set(data["recommendation"]) >= {"tol", "size", "integrator", "dt", "error", "discretization_error"}
+    assert set(data["recommendation"]) >= {"integration_error", "wall_time_s", "verified", "verdict", "error_bound"}
+    assert set(data["recommendation"]) >= {"cost", "ties", "near", "rejected", "text"}
 
 
 @pytest.mark.parametrize(

@@ -106,9 +106,7 @@ def test_the_printer_move_is_slowed_to_many_frames_and_the_carriage_follows_its_
     info = media.render_run(result, tmp_path / "move.mp4", width=320, height=240, progress=False)
     assert info["frames"] >= 90
     # the 195 Hz belt gets frames per period enough to be seen ringing, not aliased
-    belt_hz = scenes.get("printer_head").modes(
-        result.model, result.parameters, scenes.get("printer_head").scenario("move")
-    )
+    belt_hz = result.case.modes()
     frequency = max(omega for omega, _ in belt_hz) / (2 * math.pi)
     assert info["fps"] * info["slow_motion"] / frequency >= render_scale.FRAMES_PER_PERIOD
     frames = _decode(tmp_path / "move.mp4")

@@ -19,11 +19,11 @@ OLD_NAMES = {"as_dict", "as_json", "report_json", "summary"}
 
 #: module -> its result classes: each a frozen dataclass with `to_dict()`; a new result joins here
 RESULTS = {
-    "scenes/base.py": {"Check"},
+    "scenes/declarations.py": {"Check"},
     "runs/compare.py": {"ColumnError", "EstimateRange"},
     "runs/run.py": {"Result", "ValidationRow"},
-    "studies/convergence.py": {"Run"},
-    "studies/tradeoff.py": {"Tradeoff", "Recommendation"},
+    "studies/settings.py": {"Setting", "Run", "Recommendation"},
+    "studies/tradeoff.py": {"Tradeoff", "TradeoffRun"},
     "studies/sweeps.py": {"Sweep", "SweepRow", "Axis"},
     "studies/families.py": {"Member", "PhaseFamily", "ZetaFamily"},
     "studies/fit/results.py": {"FitResult"},
@@ -40,7 +40,7 @@ RESULTS = {
     "studies/audit/limits.py": {"Limit", "ConstraintFlag"},
     "studies/stability.py": {"StabilityReport", "Boundary", "EnergyCheck", "EnergyHistories", "AmplificationMap"},
     "studies/extremes.py": {"ExtremeRun"},
-    "studies/frequency.py": {"FrequencyResponse", "Resonance", "IntegratorBand", "Sinestream"},
+    "studies/frequency/results.py": {"FrequencyResponse", "Resonance", "IntegratorBand", "Sinestream", "SweepBranch"},
     "studies/design/study.py": {"Study", "Plane"},
     "studies/design/sobol.py": {"SobolStudy"},
 }

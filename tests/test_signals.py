@@ -98,13 +98,14 @@ def test_a_signalled_demo_leaves_its_folder_marked_incomplete(tmp_path, signum, 
 def test_sigterm_in_process_unwinds_like_ctrl_c(tmp_path, capsys, monkeypatch):
     # the handler is installed only while main() runs, and the previous one comes back
     from springlab.cli import main as cli
+    from springlab.cli.commands import catalogue
 
     def command(args):
         os.kill(os.getpid(), signal.SIGTERM)
         time.sleep(5)  # the handler raises at once; never reached
         return 0
 
-    monkeypatch.setattr(cli, "cmd_list", command)
+    monkeypatch.setattr(catalogue, "main", command)
     before = signal.getsignal(signal.SIGTERM)
     assert cli.main(["list"]) == 143
     assert capsys.readouterr().err.strip() == "springlab: terminated"

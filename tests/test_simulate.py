@@ -14,18 +14,15 @@ from springlab.sim.simulate import INTEGRATORS, simulate
 
 
 def _slider_model(scenario="step"):
-    scene = scenes.get("slider")
-    chosen = scene.scenario(scenario)
-    params = scene.resolve(chosen, {})
-    model = scene.build(params, chosen)
-    return scene, chosen, params, model
+    case = scenes.get("slider").case(scenario)
+    return case, case.model
 
 
 @pytest.mark.parametrize("integrator", list(INTEGRATORS))
 @pytest.mark.parametrize("scenario", ["step", "harmonic"])
 def test_rollout_path_is_bit_identical_to_a_plain_mj_step_loop(integrator, scenario):
-    scene, chosen, params, model = _slider_model(scenario)
-    setup = scene.setup(model, params, chosen, 500, 1e-3)
+    case, model = _slider_model(scenario)
+    setup = case.setup(500, 1e-3)
     trajectory = simulate(
         model, integrator=integrator, dt=1e-3, duration=0.5, qpos=setup.qpos, qvel=setup.qvel, control=setup.control
     )
@@ -43,7 +40,7 @@ def test_rollout_path_is_bit_identical_to_a_plain_mj_step_loop(integrator, scena
 @pytest.mark.parametrize("integrator", list(INTEGRATORS))
 def test_simulate_never_modifies_its_callers_model(integrator):
     # as mujoco.rollout: one model may serve many runs (a sweep), so no run may leak its setting into it
-    scene, chosen, params, model = _slider_model("free")
+    _, model = _slider_model("free")
     before = (int(model.opt.integrator), float(model.opt.timestep), model.body_mass.copy(), model.qpos0.copy())
     simulate(model, integrator=integrator, dt=7e-4, duration=0.07)
     after = (int(model.opt.integrator), float(model.opt.timestep), model.body_mass.copy(), model.qpos0.copy())

@@ -30,9 +30,7 @@ def test_the_predicted_tolerance_bounds_the_measured_error(integrator, scenario)
     result = springlab.run("slider", scenario, integrator=integrator, dt=1e-3, duration=2.0)
     summary = result.summary
     assert summary["estimate_range"]["inside"] is True  # omega dt = 0.01: the prediction holds
-    scene = springlab.scenes.get("slider")
-    chosen = scene.scenario(scenario)
-    reference = scene.reference(result.model, result.parameters, chosen, result.time, dt=1e-3)
+    reference = result.case.reference(result.time, dt=1e-3)
     predicted = springlab.runs.compare.tolerances(reference, integrator, 1e-3, result.time)
     for column, error in summary["errors"].items():
         assert error["max_rel"] <= predicted[column], column

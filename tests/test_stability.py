@@ -246,10 +246,7 @@ def test_the_advised_settings_are_accurate_when_run_over_the_whole_case(report):
 
 def _fast_mode(scenario):
     scene = scenes.get("slider")
-    chosen = scene.scenario(scenario)
-    params = scene.resolve(chosen, {})
-    model = scene.build(params, chosen)
-    return scene.modes(model, params, chosen)
+    return scene.case(scenario).modes()
 
 
 @pytest.mark.parametrize("scenario", ["free", "undamped", "critical", "overdamped", "step", "harmonic"])
@@ -418,11 +415,11 @@ def test_the_declared_oscillator_is_the_textbook_mass_spring_damper():
     # at m, k, d, x0, v0 must move as m x'' + d x' + k x = 0 from (x0, v0), checked against expm
     mass, stiffness, damping, x0, v0 = 2.0, 800.0, 4.0, 0.05, 0.3
     oscillator = extremes.build_oscillator(mass=mass, stiffness=stiffness, damping=damping, x0=x0, v0=v0)
-    model, scene, chosen, params = oscillator.model, oscillator.scene, oscillator.scenario, oscillator.params
-    assert scene.oscillator == oscillator.spec and model.nv == 1
+    case, model = oscillator.case, oscillator.model
+    assert case.scene.oscillator == oscillator.spec and model.nv == 1
     assert oscillator.spec.constants(model) == (mass, stiffness, damping)
     dt, steps = 1e-4, 5000
-    setup = scene.setup(model, params, chosen, steps, dt)
+    setup = case.setup(steps, dt)
     run = simulate(
         model, integrator="rk4", dt=dt, duration=steps * dt, qpos=setup.qpos, qvel=setup.qvel, control=setup.control
     )
@@ -432,5 +429,5 @@ def test_the_declared_oscillator_is_the_textbook_mass_spring_damper():
     # RK4 at omega dt = 2e-3: its error, ~(omega dt)^4 omega t / 120 of the amplitude, is far below 1e-9
     np.testing.assert_allclose(run.qpos[every, 0], exact[:, 0], rtol=0, atol=1e-9 * x0)
     np.testing.assert_allclose(run.qvel[every, 0], exact[:, 1], rtol=0, atol=1e-9 * 20 * x0)
-    reference = scene.reference(model, params, chosen, run.time[every], dt=dt)
+    reference = case.reference(run.time[every], dt=dt)
     np.testing.assert_allclose(reference.pos[oscillator.spec.joint], exact[:, 0], rtol=0, atol=1e-12)

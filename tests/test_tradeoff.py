@@ -16,6 +16,15 @@ from springlab.sim.simulate import INTEGRATORS, simulate
 from springlab.studies import tradeoff
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+#: tradeoff.json's recommendation: the keys it always had, and the shared recommendation's (docs/json.md)
+RECOMMENDATION_KEYS = {"tol", "integrator", "dt", "max_rel_error", "wall_time_s"} | {
+    "verified",
+    "cost",
+    "ties",
+    "near",
+    "rejected",
+    "text",
+}
 
 
 @pytest.fixture(scope="module")
@@ -25,21 +34,19 @@ def slider_free_sweep():
 
 
 def _scene_model(scenario, **overrides):
-    scene = scenes.get("slider")
-    chosen = scene.scenario(scenario)
-    params = scene.resolve(chosen, overrides)
-    return scene, chosen, params, scene.build(params, chosen)
+    case = scenes.get("slider").case(scenario, overrides)
+    return case, case.model
 
 
 @pytest.mark.parametrize("scenario", ["step", "harmonic"])
 def test_batched_runs_are_bit_identical_to_single_simulate_calls(scenario):
     # per-simulation timestep and integrator in one batch, runs of different lengths
-    scene, chosen, params, model = _scene_model(scenario)
+    case, model = _scene_model(scenario)
     configs = [("euler", 0.01), ("implicit", 0.004), ("implicitfast", 0.0025), ("rk4", 0.003), ("discrete", 0.02)]
     jobs = []
     for name, dt in configs:
         steps = round(1.0 / dt)
-        jobs.append(batch.Job(model, name, dt, steps, scene.setup(model, params, chosen, steps, dt)))
+        jobs.append(batch.Job(model, name, dt, steps, case.setup(steps, dt)))
     for job, batched in zip(jobs, batch.run_batched(jobs)):
         single = simulate(
             model,
@@ -59,9 +66,9 @@ def test_batched_runs_of_different_models_are_bit_identical_to_single_runs():
     # the extremes table batches sliders of different mass and stiffness (Batch.set_models)
     jobs, models = [], []
     for stiffness, name in ((100.0, "rk4"), (1e6, "euler"), (3.0, "discrete")):
-        scene, chosen, params, model = _scene_model("free", stiffness=stiffness)
+        case, model = _scene_model("free", stiffness=stiffness)
         models.append(model)
-        jobs.append(batch.Job(model, name, 1e-4, 700, scene.setup(model, params, chosen, 700, 1e-4)))
+        jobs.append(batch.Job(model, name, 1e-4, 700, case.setup(700, 1e-4)))
     for job, batched in zip(jobs, batch.run_batched(jobs)):
         single = simulate(
             job.model,
@@ -78,9 +85,9 @@ def test_batched_runs_of_different_models_are_bit_identical_to_single_runs():
 
 def test_a_batched_blow_up_is_reported_as_divergence_never_as_a_result():
     # euler at omega*dt = 3 > 2.1 blows up; MuJoCo would reset it silently
-    scene, chosen, params, model = _scene_model("free")
-    stable = batch.Job(model, "euler", 0.01, 2000, scene.setup(model, params, chosen, 2000, 0.01))
-    unstable = batch.Job(model, "euler", 0.3, 2000, scene.setup(model, params, chosen, 2000, 0.3))
+    case, model = _scene_model("free")
+    stable = batch.Job(model, "euler", 0.01, 2000, case.setup(2000, 0.01))
+    unstable = batch.Job(model, "euler", 0.3, 2000, case.setup(2000, 0.3))
     good, bad = batch.run_batched([stable, unstable])
     assert not isinstance(good, DivergedError)
     assert isinstance(bad, DivergedError)
@@ -110,58 +117,34 @@ def test_sweep_errors_are_exactly_what_springlab_run_reports(slider_free_sweep):
         assert run.verdict is result.verdict
 
 
-def test_order_fit_ignores_round_off_and_pre_asymptotic_points():
-    # synthetic 4th-order data: err = 50 (dt)^4 exactly, plus a round-off plateau and a saturated top
-    dts = np.geomspace(0.3, 1e-4, 15)
-    runs = []
-    for dt in dts:
-        steps = round(5.0 / dt)
-        err = min(50 * dt**4, 0.9)
-        err = max(err, 1e-13 * steps)  # round-off grows with the number of steps
-        runs.append(tradeoff.Run("rk4", float(dt), steps, float(err), 1e-6 * steps))
-    assert tradeoff.observed_order(runs) == pytest.approx(4.0, abs=1e-9)
-    # two usable points are not enough to claim an order
-    assert tradeoff.observed_order(runs[4:6]) is None
-
-
-def test_order_fit_uses_the_finest_steps_and_refuses_errors_that_follow_no_power_law():
-    # second order at coarse steps, first order as dt -> 0 (symplectic Euler: phase error vs bounded O(dt) error)
-    dts = np.geomspace(0.03, 3e-5, 13)
-    mixed = [tradeoff.Run("euler", float(dt), round(1 / dt), float(40 * dt**2 + 0.4 * dt), 1.0) for dt in dts]
-    assert tradeoff.observed_order(mixed) == pytest.approx(1.0, abs=0.05)
-    # errors set by where an input switch falls on the step grid scatter around no line
-    scattered = [
-        tradeoff.Run("rk4", float(dt), round(1 / dt), float(e), 1.0)
-        for dt, e in zip(dts, [1e-2, 1e-3, 4e-4, 1e-5, 4e-5, 1e-4, 3e-6, 3e-8, 4e-6, 8e-7, 2e-7, 7e-9, 4e-8])
-    ]
-    assert tradeoff.observed_order(scattered) is None
-
-
 def test_pareto_front_is_exactly_the_non_dominated_runs(slider_free_sweep):
-    runs = [r for r in slider_free_sweep.runs if not r.diverged]
+    runs = [r for r in slider_free_sweep.runs if r.run.valid]
     front = slider_free_sweep.pareto
 
     def dominates(a, b):
         return (
-            a.wall_time_s <= b.wall_time_s
+            a.cost <= b.cost
             and a.max_rel_error <= b.max_rel_error
-            and (a.wall_time_s < b.wall_time_s or a.max_rel_error < b.max_rel_error)
+            and (a.cost < b.cost or a.max_rel_error < b.max_rel_error)
         )
 
     for r in runs:
         dominated = any(dominates(other, r) for other in runs)
-        assert (r in front) == (not dominated)
-    assert [r.wall_time_s for r in front] == sorted(r.wall_time_s for r in front)
+        # of runs equal in cost and error (euler, implicit and implicitfast on this slider) the first stands
+        twin = any(o is not r and o.cost == r.cost and o.max_rel_error == r.max_rel_error for o in front)
+        assert (r in front) == (not dominated and not twin)
+    assert [r.cost for r in front] == sorted(r.cost for r in front)
+    # counted work: steps x evaluations per step (rk4 4, the others 1) on a one-DOF model
+    assert all(r.cost == r.steps * (4 if r.integrator == "rk4" else 1) for r in slider_free_sweep.runs)
 
 
 def test_recommendation_for_1e_6_is_rk4_verified_and_at_least_as_coarse_as_any_passing_grid_run(slider_free_sweep):
     pick = tradeoff.recommend(slider_free_sweep, 1e-6, timing_repeats=1)
-    assert set(pick.to_dict()) == {"tol", "integrator", "dt", "max_rel_error", "wall_time_s"}
-    assert pick.found and pick.integrator == "rk4" and pick.tol == 1e-6
-    assert pick.dt is not None and pick.max_rel_error is not None
+    assert pick.found and pick.integrator == "rk4" and pick.tolerance == 1e-6
+    assert pick.dt is not None and pick.error is not None
     # verified: an independent run at that setting meets the tolerance
     again = springlab.run("slider", "free", integrator="rk4", dt=pick.dt, tol=1e-6)
-    assert again.passed and pick.max_rel_error <= 1e-6
+    assert again.passed and pick.error <= 1e-6 and again.max_rel_error == pick.error
     # cheapest in steps: no rk4 grid run with fewer steps meets 1e-6, and the pick is not finer than the grid's best
     rk4 = [r for r in slider_free_sweep.runs if r.integrator == "rk4"]
     passing = [r for r in rk4 if r.max_rel_error <= 1e-6]
@@ -223,7 +206,7 @@ def test_tradeoff_cli_json_and_outputs_follow_the_contract(tmp_path, capsys, mon
     for row in data["runs"] + data["pareto"]:
         assert {"integrator", "dt", "max_rel_error", "steps", "wall_time_s"} <= set(row)
     assert set(data["orders"]) == set(INTEGRATORS)
-    assert set(data["recommendation"]) == {"tol", "integrator", "dt", "max_rel_error", "wall_time_s"}
+    assert set(data["recommendation"]) == RECOMMENDATION_KEYS
     assert data["recommendation"]["max_rel_error"] <= 1e-4
     assert json.loads((tmp_path / "t" / "tradeoff.json").read_text())["runs"] == data["runs"]
     assert (tmp_path / "t" / "tradeoff.png").read_bytes()[:8] == PNG_SIGNATURE
@@ -231,7 +214,8 @@ def test_tradeoff_cli_json_and_outputs_follow_the_contract(tmp_path, capsys, mon
     (result,) = computed
     assert data == result.to_dict()
     pick = result.recommendation
-    assert pick is not None and pick.to_dict() == data["recommendation"] and pick.tol == 1e-4
+    assert pick is not None and pick.to_dict(tradeoff.RECOMMENDATION_NAMES) == data["recommendation"]
+    assert pick.tolerance == 1e-4 and data["recommendation"]["text"] == pick.text
     assert data["recommendation"]["integrator"] == pick.integrator and data["recommendation"]["dt"] == pick.dt
     # one row per run: the JSON's run rows, plus whether the run is on the Pareto front
     frame = result.to_pandas()
@@ -275,15 +259,12 @@ def test_timestep_grid_spans_three_decades_below_omega_dt_1():
 
 
 def test_a_stop_condition_ends_batched_runs_exactly_where_simulate_ends_them():
-    scene, chosen, params, model = _scene_model("free")
+    case, model = _scene_model("free")
 
     def crossed(qpos, qvel):  # the block reaches the relaxed length
         return qpos[:, 0] <= 0.0
 
-    jobs = [
-        batch.Job(model, name, 0.01, 300, scene.setup(model, params, chosen, 300, 0.01), crossed)
-        for name in ("euler", "rk4")
-    ]
+    jobs = [batch.Job(model, name, 0.01, 300, case.setup(300, 0.01), crossed) for name in ("euler", "rk4")]
     for job, batched in zip(jobs, batch.run_batched(jobs)):
         single = simulate(
             model,
@@ -303,7 +284,7 @@ def test_a_scenario_without_an_exact_trajectory_cannot_be_swept():
     from springlab.scenes.slider import Slider
 
     class ChecksOnly(Slider):  # validated by scalar checks alone, like the non-linear scenes
-        def reference(self, model, params, scenario, time, *, dt):
+        def reference(self, case, time, *, dt):
             return None
 
     with pytest.raises(BadInputError, match="no exact reference trajectory.*valid: none in this scene"):

@@ -122,18 +122,14 @@ def test_a_requested_tolerance_is_a_measurement_and_holds_at_any_dt():
 
 
 def _exact_scenarios():
-    return [(scene, scenario) for scene, scenario in exact_scenarios() if tradeoff.sweepable(scene, scenario, None)]
+    return [(scene, scenario) for scene, scenario in exact_scenarios() if tradeoff.sweepable(scene, scenario)]
 
 
 def _stability_dt(scene, scenario, integrator: str) -> float | None:
     """The largest stable dt [s] of the scenario's modes (the scene's own limit; euler's for discrete)."""
-    params = scene.resolve(scenario, {})
-    model = scene.build(params, scenario)
+    case = scene.case(scenario)
     limited = "euler" if integrator == "discrete" else integrator
-    limits = [
-        scene.stability_limit(model, params, scenario, limited, omega, zeta) / omega
-        for omega, zeta in scene.modes(model, params, scenario)
-    ]
+    limits = [case.stability_limit(limited, omega, zeta) / omega for omega, zeta in case.modes()]
     finite = [limit for limit in limits if math.isfinite(limit)]
     return min(finite) if finite else None
 

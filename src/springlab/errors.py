@@ -9,19 +9,40 @@ print them as they are.
 
 from __future__ import annotations
 
+import enum
+import signal
 from collections.abc import Iterable
+
+
+class ExitCode(enum.IntEnum):
+    """The `springlab` command's exit codes (docs/cli.md); each exception below carries its own."""
+
+    #: the run or study answered its question (and passed where it is validated)
+    OK = 0
+    #: a validation fell outside its tolerance (the outputs are still written)
+    FAILED = 1
+    #: usage, an unknown name, a non-physical value, an unwritable output, a lost cluster
+    BAD_INPUT = 2
+    #: the simulation diverged (nothing written)
+    DIVERGED = 3
+    #: the reader of stdout went away (`springlab list | head`): 128 + SIGPIPE, as Unix tools exit
+    BROKEN_PIPE = 128 + 13
+    #: Ctrl-C: 128 + SIGINT, as shells report a process a signal ended
+    INTERRUPTED = 128 + signal.SIGINT
+    #: SIGTERM (a timeout, a batch scheduler): 128 + SIGTERM
+    TERMINATED = 128 + signal.SIGTERM
 
 
 class SpringlabError(Exception):
     """Base class of every error springlab raises on purpose."""
 
-    exit_code = 2
+    exit_code = ExitCode.BAD_INPUT
 
 
 class BadInputError(SpringlabError, ValueError):
     """Usage error, unknown name, non-physical value or unwritable output (exit 2)."""
 
-    exit_code = 2
+    exit_code = ExitCode.BAD_INPUT
 
 
 class UnknownNameError(BadInputError):
@@ -39,11 +60,11 @@ class ParameterError(BadInputError):
 class DivergedError(SpringlabError):
     """The simulation blew up; nothing is reported or written for it (exit 3)."""
 
-    exit_code = 3
+    exit_code = ExitCode.DIVERGED
 
 
 class ClusterError(SpringlabError):
     """The dask cluster a study ran on was lost mid-run (scheduler gone, no workers left, a chunk's
     workers all died); the study stopped and returned nothing (exit 2, like an unreachable scheduler)."""
 
-    exit_code = 2
+    exit_code = ExitCode.BAD_INPUT

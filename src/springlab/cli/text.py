@@ -8,6 +8,7 @@ printed in seconds [s] or milliseconds [ms] as each header says; errors are rela
 from __future__ import annotations
 
 import collections
+import math
 import pathlib
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
@@ -17,8 +18,9 @@ import numpy as np
 from springlab.render import scale as render_scale
 from springlab.runs.compare import Verdict
 from springlab.runs.run import Result, ValidationRow
-from springlab.scenes.base import Check
+from springlab.scenes.declarations import Check
 from springlab.studies import tradeoff
+from springlab.studies.settings import COST_BASIS, Recommendation
 
 if TYPE_CHECKING:  # annotations only: these load mujoco.batch, scipy or sysid, which the commands import lazily
     from springlab.studies.audit.results import Audit
@@ -132,11 +134,21 @@ def print_render(info: dict) -> None:
     )
 
 
-def _run_verdict(run: tradeoff.Run) -> str:
-    """A sweep row's verdict in a word or two: pass, FAIL, not validated, or blank when diverged."""
+def _run_verdict(run: tradeoff.TradeoffRun) -> str:
+    """A sweep row's verdict in a word or two: pass, FAIL, not validated, beyond its stability limit, or blank
+    when diverged."""
     if run.verdict is None:
         return ""
-    return {Verdict.PASS: "pass", Verdict.FAIL: "FAIL"}.get(run.verdict, "not validated")
+    word = {Verdict.PASS: "pass", Verdict.FAIL: "FAIL"}.get(run.verdict, "not validated")
+    return f"{word}, beyond the stability limit" if run.beyond_limit else word
+
+
+def _recommendation_line(pick: Recommendation, time_s: float | None) -> str:
+    """The recommendation's sentence, its measured time beside it (never ranked on)."""
+    measured = (
+        f" Measured time of its run: {time_s * 1e3:.3g} ms." if time_s is not None and math.isfinite(time_s) else ""
+    )
+    return f"{pick.text}{measured}"
 
 
 def print_tradeoff(result: tradeoff.Tradeoff, output: str | None) -> None:
@@ -146,27 +158,22 @@ def print_tradeoff(result: tradeoff.Tradeoff, output: str | None) -> None:
         f" in {result.sweep_wall_time_s:.1f} s"
     )
     print(
-        f"  {'integrator':<13}{'dt [s]':>10}{'steps':>9}{'max rel err':>13}{'wall [ms]':>11}{'wall/sim s':>12}"
-        "  pareto  verdict"
+        f"  {'integrator':<13}{'dt [s]':>10}{'steps':>9}{'max rel err':>13}{'work':>10}{'wall [ms]':>11}"
+        f"{'wall/sim s':>12}  pareto  verdict"
     )
     front = {id(r) for r in result.pareto}
     for r in result.runs:
         error = "diverged" if r.diverged else f"{r.max_rel_error:.3e}"
         print(
-            f"  {r.integrator:<13}{r.dt:>10.3g}{r.steps:>9}{error:>13}{r.wall_time_s * 1e3:>11.3f}"
+            f"  {r.integrator:<13}{r.dt:>10.3g}{r.steps:>9}{error:>13}{r.cost:>10.4g}{r.wall_time_s * 1e3:>11.3f}"
             f"{r.wall_time_s / result.duration * 1e3:>10.3f}ms  {'*' if id(r) in front else ' ':<6}  {_run_verdict(r)}"
         )
     orders = ", ".join(f"{name} {p:.2f}" if p is not None else f"{name} -" for name, p in result.orders.items())
     print(f"  observed order: {orders}")
     pick = result.recommendation
     if pick is not None:
-        if pick.integrator is None or pick.dt is None or pick.max_rel_error is None or pick.wall_time_s is None:
-            print(f"  tol {pick.tol:g}: no setting of the sweep meets it")
-        else:
-            print(
-                f"  tol {pick.tol:g}: use {pick.integrator} at dt = {pick.dt:g} s (verified: error"
-                f" {pick.max_rel_error:.3e}, {pick.wall_time_s * 1e3:.3f} ms)"
-            )
+        print(f"  tol {pick.tolerance:g}: {_recommendation_line(pick, pick.time_s)}")
+    print(f"  work: {COST_BASIS}")
     print(f"  wall time: {tradeoff.WALL_TIME_BASIS}")
     if output:
         print(f"  wrote {pathlib.Path(output) / 'tradeoff.json'} and tradeoff.png")
@@ -411,23 +418,19 @@ def print_refine(result: Refinement, output: str | None) -> None:
         if step_growth is not None
         else f"  per simulated second at the stability limit: {growth}"
     )
-    print("  Pareto front (error bound = discretization + integration, vs wall time):")
+    print("  Pareto front (error bound = discretization + integration, vs counted work; wall time beside it):")
     for run in result.pareto:
         print(
             f"    {size} = {run.size:<5} {run.integrator:<13} dt = {run.dt:<9.3g} bound {run.error_bound:.3e}"
             f" (discretization {run.discretization_error:.1e}, integration {run.integration_error:.1e};"
-            f" error {run.error:.1e})"
-            f" {run.wall_time_s * 1e3:.3f} ms"
+            f" error {run.error:.1e}) work {run.cost:.4g}, {run.wall_time_s * 1e3:.3f} ms"
         )
     pick = result.recommendation
     if pick is not None:
-        if not pick.verified:
-            print(f"  tol {pick.tol:g}: no setting of the study meets it")
-        else:
-            print(
-                f"  tol {pick.tol:g}: use {size} = {pick.size}, {pick.integrator} at dt = {pick.dt:g} s (verified by a"
-                f" run: discretization {pick.discretization_error:.2e} + integration {pick.integration_error:.2e} <= tol;"
-                f" error {pick.error:.2e}; {(pick.wall_time_s or 0.0) * 1e3:.3f} ms)"
-            )
+        line = _recommendation_line(pick, pick.time_s)
+        if pick.found:
+            line += f" `springlab run` at that setting: {pick.details['verdict']}."
+        print(f"  tol {pick.tolerance:g}: {line}")
+    print(f"  work: {COST_BASIS}")
     if output:
         print(f"  wrote {pathlib.Path(output) / 'refine.json'} and refine.png")

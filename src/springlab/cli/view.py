@@ -45,7 +45,7 @@ from springlab.errors import BadInputError, SpringlabError
 from springlab.render import scale as render_scale
 from springlab.render.drawings import Drawings, RoadBump
 from springlab.render.stage import road_bump, stage
-from springlab.runs.run import Result, scene_and_scenario
+from springlab.runs.run import Result
 from springlab.sim.simulate import INTEGRATORS, check_timing, configured, initial_state, quiet_mujoco
 
 __all__ = ["NoDisplayError", "LiveRun", "Viewed", "live_run", "live_model", "check_display", "open_display", "show"]
@@ -65,8 +65,6 @@ _FULL = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
 
 class NoDisplayError(SpringlabError):
     """No display to open the viewer on, or GLFW cannot open a window there (exit 2)."""
-
-    exit_code = 2
 
 
 def check_display() -> None:
@@ -202,9 +200,8 @@ def live_run(result: Result, duration: float | None = None) -> LiveRun:
     duration
         the simulated time [s] the run was asked for (None: its scenario's), which its controls were built for.
     """
-    scene, scenario = scene_and_scenario(result)
-    asked = check_timing(result.dt, scenario.duration if duration is None else duration)
-    setup = scene.setup(result.model, dict(result.parameters), scenario, asked, result.dt)
+    asked = check_timing(result.dt, result.case.scenario.duration if duration is None else duration)
+    setup = result.case.setup(asked, result.dt)
     model = configured(result.model, result.integrator, result.dt)
     start = initial_state(model, setup.qpos, setup.qvel, setup.act)
     control = None

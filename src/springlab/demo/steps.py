@@ -261,7 +261,7 @@ def refine_step(state: DemoState) -> list[Artifact]:
         state.timings.append((f"refine {name} ({study.question})", study.sweep_wall_time_s))
         pick = study.recommendation
         answer = (
-            f"cheapest for {DEMO_REFINE_TOL:g}: {study.size_parameter} = {pick.size}, {pick.integrator} at dt ="
+            f"cheapest for {DEMO_REFINE_TOL:g}: {study.size_parameter} = {pick.details['size']}, {pick.integrator} at dt ="
             f" {pick.dt:.3g} s (verified)"
             if pick is not None and pick.verified
             else f"no setting meets {DEMO_REFINE_TOL:g}"

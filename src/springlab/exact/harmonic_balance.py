@@ -10,7 +10,9 @@ and gives the frequency-amplitude relation
 a cubic in A = a^2 (`amplitudes`: its positive real roots, numpy.roots). Where it has three roots the
 sweep up and the sweep down follow different branches; the band's ends are the fold points (`folds`: the
 cubic's discriminant is zero there), where a sweep jumps (`branch_end`: the fold where the branch a sweep
-starts on ends, followed root to root).
+starts on ends, followed root to root). A sine held over MuJoCo's steps of dt drives the oscillator with its
+first harmonic F sinc(omega dt / 2) (`held`): the folds take `hold_dt` and evaluate that force at every
+frequency they try, so each fold solves the relation with the force at its own frequency.
 
 What it neglects, derived (`third_harmonic_ratio`, `amplitude_bound`): the cubic's other part,
 1/4 k3 a^3 cos 3 theta, drives a third harmonic b3 cos 3 theta whose own balance, with the stiffness the
@@ -103,6 +105,13 @@ def amplitudes(duffing: Duffing, force: float, omega: float) -> np.ndarray:
     return np.sort(np.sqrt(real))
 
 
+def held(force: float, omega: float, hold_dt: float = 0.0) -> float:
+    """The first harmonic [N] of a sine of amplitude `force` [N] at omega [rad/s] held over steps of `hold_dt`
+    [s], force sinc(omega hold_dt / 2) (MuJoCo holds a control over each step); `force` itself when hold_dt is
+    0 (a continuous sine)."""
+    return force * float(np.sinc(omega * hold_dt / (2 * math.pi))) if hold_dt else force
+
+
 def _discriminant(duffing: Duffing, force: float, omega: float, k3: float) -> float:
     """The cubic's discriminant, normalized by its leading coefficient (> 0: three real roots)."""
     a, b, c, d = _coefficients(duffing, force, omega, k3)
@@ -110,20 +119,28 @@ def _discriminant(duffing: Duffing, force: float, omega: float, k3: float) -> fl
     return float(18 * b * c * d - 4 * b**3 * d + b**2 * c**2 - 4 * c**3 - 27 * d**2)
 
 
-def folds(duffing: Duffing, force: float, band_hz: tuple[float, float], k3: float | None = None) -> list[float]:
+def folds(
+    duffing: Duffing, force: float, band_hz: tuple[float, float], k3: float | None = None, *, hold_dt: float = 0.0
+) -> list[float]:
     """The fold frequencies [Hz] inside the band: where the relation's three roots begin or end
     (its discriminant changes sign, refined by scipy.optimize.brentq), ascending; `k3` [N/m^3] overrides
-    the oscillator's (None: its own)."""
+    the oscillator's (None: its own); the force [N] held over steps of `hold_dt` [s] (`held`)."""
     from scipy.optimize import brentq
 
     k3 = duffing.k3 if k3 is None else k3
     if k3 == 0:
         return []
     grid = 2 * math.pi * np.geomspace(band_hz[0], band_hz[1], FOLD_GRID)
-    values = np.array([_discriminant(duffing, force, w, k3) for w in grid])
+    values = np.array([_discriminant(duffing, held(force, w, hold_dt), w, k3) for w in grid])
     out = []
     for i in np.nonzero(np.sign(values[:-1]) * np.sign(values[1:]) < 0)[0]:
-        omega = brentq(lambda w: _discriminant(duffing, force, w, k3), grid[i], grid[i + 1], xtol=1e-14, rtol=1e-13)
+        omega = brentq(
+            lambda w: _discriminant(duffing, held(force, w, hold_dt), w, k3),
+            grid[i],
+            grid[i + 1],
+            xtol=1e-14,
+            rtol=1e-13,
+        )
         out.append(omega / (2 * math.pi))
     return out
 
@@ -150,56 +167,69 @@ def amplitude_bound(duffing: Duffing, force: float, a: float, omega: float) -> f
 
 
 def branch_end(
-    duffing: Duffing, force: float, start_hz: float, stop_hz: float, start_amplitude: float, k3: float | None = None
+    duffing: Duffing,
+    force: float,
+    start_hz: float,
+    stop_hz: float,
+    start_amplitude: float,
+    k3: float | None = None,
+    *,
+    hold_dt: float = 0.0,
 ) -> float | None:
     """Where the branch a sweep from `start_hz` to `stop_hz` [Hz] (up or down) rides ends [Hz]: the relation's root
     nearest `start_amplitude` [m] at the start, followed root to root (the nearest in log a) over FOLD_GRID
     frequencies until it merges with the middle root and vanishes (a fold, refined by scipy.optimize.brentq on
-    the discriminant); None: it reaches `stop_hz`. `k3` [N/m^3] overrides the oscillator's."""
+    the discriminant); None: it reaches `stop_hz`. `k3` [N/m^3] overrides the oscillator's; the force [N] is held
+    over steps of `hold_dt` [s] (`held`, evaluated at each frequency tried)."""
     from scipy.optimize import brentq
 
     k3 = duffing.k3 if k3 is None else k3
     model = dataclasses.replace(duffing, k3=k3)
     grid = np.geomspace(start_hz, stop_hz, FOLD_GRID)
-    roots = amplitudes(model, force, 2 * math.pi * grid[0])
+    omega0 = 2 * math.pi * grid[0]
+    roots = amplitudes(model, held(force, omega0, hold_dt), omega0)
     tracked = float(roots[np.argmin(np.abs(np.log(roots / start_amplitude)))])
     old = roots
     for before, after in zip(grid[:-1], grid[1:]):
-        new = amplitudes(model, force, 2 * math.pi * after)
+        omega = 2 * math.pi * after
+        new = amplitudes(model, held(force, omega, hold_dt), omega)
         if len(old) == 3 and len(new) == 1:
             # the two closest roots merged; if the tracked one was among them, its branch ends here
             merged = (0, 1) if old[1] - old[0] < old[2] - old[1] else (1, 2)
             index = int(np.argmin(np.abs(np.log(old / tracked))))
             if index in merged:
-                omega = brentq(
-                    lambda w: _discriminant(model, force, w, k3),
+                fold = brentq(
+                    lambda w: _discriminant(model, held(force, w, hold_dt), w, k3),
                     2 * math.pi * min(before, after),
                     2 * math.pi * max(before, after),
                     xtol=1e-14,
                     rtol=1e-13,
                 )
-                return omega / (2 * math.pi)
+                return fold / (2 * math.pi)
         tracked = float(new[np.argmin(np.abs(np.log(new / tracked)))])
         old = new
     return None
 
 
 def fold_bracket(
-    duffing: Duffing, force: float, start_hz: float, stop_hz: float, start_amplitude: float
+    duffing: Duffing, force: float, start_hz: float, stop_hz: float, start_amplitude: float, *, hold_dt: float = 0.0
 ) -> tuple[float, float, float] | None:
     """(f, lowest, highest) [Hz]: `branch_end`, and where it falls with k3 (1 +- 2 r3), r3 at the fold's own
-    amplitude and frequency: the jump first-order balance can promise (None: the branch does not end)."""
-    f = branch_end(duffing, force, start_hz, stop_hz, start_amplitude)
+    amplitude and frequency: the jump first-order balance can promise (None: the branch does not end); the
+    force [N] held over steps of `hold_dt` [s] (`held`)."""
+    f = branch_end(duffing, force, start_hz, stop_hz, start_amplitude, hold_dt=hold_dt)
     if f is None:
         return None
     omega = 2 * math.pi * f
-    near = amplitudes(duffing, force, omega * (1 + 1e-9))
-    near = near if near.size == 3 else amplitudes(duffing, force, omega * (1 - 1e-9))
+    near = amplitudes(duffing, held(force, omega * (1 + 1e-9), hold_dt), omega * (1 + 1e-9))
+    if near.size != 3:
+        near = amplitudes(duffing, held(force, omega * (1 - 1e-9), hold_dt), omega * (1 - 1e-9))
     a = float(np.median(near))  # the double root is the middle one just inside the three-root band
     r3 = third_harmonic_ratio(duffing, a, omega)
     moved = [f]
     for sign in (-1.0, 1.0):
-        other = branch_end(duffing, force, start_hz, stop_hz, start_amplitude, duffing.k3 * (1 + sign * 2 * r3))
+        k3 = duffing.k3 * (1 + sign * 2 * r3)
+        other = branch_end(duffing, force, start_hz, stop_hz, start_amplitude, k3, hold_dt=hold_dt)
         if other is not None:
             moved.append(other)
     return f, min(moved), max(moved)

@@ -19,6 +19,8 @@ from springlab.runs import compare
 from springlab.studies.stability import AmplificationMap, EnergyHistories, StabilityReport
 from springlab.studies.tradeoff import Tradeoff
 
+from .settings import Mark, Points, error_cost_panel, legend_beside
+
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
@@ -54,63 +56,56 @@ def plot_tradeoff(result: Tradeoff, path: str | pathlib.Path) -> pathlib.Path:
 
 
 def tradeoff_figure(result: Tradeoff) -> Figure:
-    """Two log-log panels: error vs dt (with the observed orders) and error vs wall time (Pareto front)."""
-    fig, (left, right) = _figure(2, (12, 5))
-    diverged = sum(r.diverged for r in result.runs)
+    """Two log-log panels: error vs dt (with the observed orders) and error vs counted work (Pareto front,
+    the recommendation; springlab.plots.settings.error_cost_panel)."""
+    fig, (left, right) = _figure(2, (14, 5), layout="constrained")
     floor = 1e-17
+    groups = []
     for name in dict.fromkeys(r.integrator for r in result.runs):
-        runs = [r for r in result.runs if r.integrator == name and not r.diverged]
+        rows = [r for r in result.runs if r.integrator == name]
+        runs = [r for r in rows if r.run.valid]
+        groups.append(Points(rows, name, dict(ls=_STYLES[name], marker="o", ms=3, color=_COLORS[name])))
         if not runs:
             continue
         order = result.orders.get(name)
         label = f"{name} (order {order:.2f})" if order is not None else name
         errors = [max(r.error, floor) for r in runs]
         left.loglog([r.dt for r in runs], errors, _STYLES[name], marker="o", ms=3, color=_COLORS[name], label=label)
-        right.loglog(
-            [r.wall_time_s for r in runs], errors, _STYLES[name], marker="o", ms=3, color=_COLORS[name], label=name
-        )
         # runs outside the range of their error estimate: `springlab run` calls them not validated
         outside = [(r, e) for r, e in zip(runs, errors) if not r.validated]
-        for axis, x in ((left, [r.dt for r, _ in outside]), (right, [r.wall_time_s for r, _ in outside])):
-            axis.plot(x, [e for _, e in outside], "x", ms=8, mew=1.5, color=_COLORS[name])
-    if any(not r.diverged and not r.validated for r in result.runs):
+        left.plot([r.dt for r, _ in outside], [e for _, e in outside], "x", ms=8, mew=1.5, color=_COLORS[name])
+    if any(r.run.valid and not r.validated for r in result.runs):
         left.plot([], [], "x", ms=8, mew=1.5, color="gray", label="not validated (outside the estimate's range)")
-    front = result.pareto
-    right.step(
-        [r.wall_time_s for r in front],
-        [max(r.error, floor) for r in front],
-        where="post",
-        color="black",
-        lw=1.2,
-        alpha=0.7,
-        label="Pareto front",
-    )
+    marks = []
     pick = result.recommendation
-    if pick is not None and pick.integrator and pick.dt is not None and pick.max_rel_error is not None:
-        right.axhline(pick.tol, color="gray", lw=0.8, ls="--")
-        right.plot(
-            [pick.wall_time_s],
-            [max(pick.max_rel_error, floor)],
-            "*",
-            ms=14,
-            color="gold",
-            markeredgecolor="black",
-            label=f"tol {pick.tol:g}: {pick.integrator}, dt = {pick.dt:g} s",
+    if pick is not None and pick.found and pick.cost is not None and pick.error is not None:
+        marks.append(
+            Mark(
+                pick.cost,
+                pick.error,
+                f"tol {pick.tolerance:g}: {pick.integrator}, dt = {pick.dt:g} s (verified)",
+                dict(marker="*", ms=14, color="gold", markeredgecolor="black"),
+            )
         )
+    error_cost_panel(
+        right,
+        groups,
+        result.pareto,
+        marks=marks,
+        tol=None if pick is None else pick.tolerance,
+        title="error vs cost (counted work: steps x evaluations)",
+        legend_size=8,
+    )
     left.set_xlabel("timestep dt [s]")
     left.set_ylabel("max relative error [-]")
     left.set_title("error vs timestep (slope = order)")
-    right.set_xlabel("wall time of the run [s]")
-    right.set_ylabel("max relative error [-]")
-    right.set_title("error vs cost")
-    for axis in (left, right):
-        axis.grid(True, which="both", alpha=0.3)
-        axis.legend(fontsize=8)
-    unvalidated = sum(not r.diverged and not r.validated for r in result.runs)
+    left.grid(True, which="both", alpha=0.3)
+    legend_beside(left, 8)
+    unvalidated = sum(r.run.valid and not r.validated for r in result.runs)
+    diverged = sum(r.diverged for r in result.runs)
     note = f"; {diverged} diverged runs not shown" if diverged else ""
     note += f"; x: {unvalidated} not validated" if unvalidated else ""
     fig.suptitle(f"{result.scene} / {result.scenario}: {len(result.runs)} runs over {result.duration:g} s{note}")
-    fig.tight_layout()
     return fig
 
 

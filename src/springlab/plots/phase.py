@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 from matplotlib.axes import Axes
 
-from springlab.runs.run import Result, scene_and_scenario
+from springlab.runs.run import Result
 from springlab.studies.families import separatrix_crossings
 
 #: the vector field's arrows (light grey) and the separatrices (red dashes)
@@ -43,17 +43,12 @@ def phase_limits(xs: Sequence[np.ndarray], vs: Sequence[np.ndarray], pad: float 
 
 def phase_extras(result: Result) -> tuple[Field | None, list[dict], Curves]:
     """(field, equilibria, separatrices) of a result's scene, or (None, [], []) for several joints."""
-    scene, scenario = scene_and_scenario(result)
     if len(result.pos) != 1:
         return None, [], []
-    field = scene.phase_field(result.model, result.parameters, scenario)
+    field = result.case.phase_field()
     if field is None:
         return None, [], []
-    return (
-        field,
-        scene.equilibria(result.model, result.parameters, scenario),
-        scene.separatrices(result.model, result.parameters, scenario),
-    )
+    return field, result.case.equilibria(), result.case.separatrices()
 
 
 def separatrix_window(curves: Curves, center_xs: Sequence[float]) -> tuple[list[np.ndarray], list[np.ndarray]]:

@@ -2,8 +2,9 @@
 
 Three log-log panels of a `Refinement`, never simulating:
 
-* error against the continuum vs wall time of every run (colour: the size, marker: the integrator), the
-  Pareto front, the tolerance and the verified recommendation;
+* the error bound (discretization + integration) vs counted work of every run (colour: the size, marker:
+  the integrator; springlab.plots.settings.error_cost_panel), the Pareto front, the tolerance and the
+  verified recommendation; runs beyond their stability limit hollow and apart;
 * the discretization error vs the size with its observed order, and each size's best integration error;
 * what refining costs: wall time per step and per simulated second at each integrator's stability limit.
 """
@@ -18,6 +19,7 @@ from springlab import files
 from springlab.studies.refine import Refinement
 
 from .charts import _COLORS, _figure, _save
+from .settings import Mark, Points, error_cost_panel, legend_beside
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -35,54 +37,46 @@ def refine_figure(result: Refinement) -> Figure:
     """The three panels (see the module docstring)."""
     from matplotlib import colormaps
 
-    fig, (left, middle, right) = _figure(3, (17, 5.2), layout="constrained")
+    fig, (left, middle, right) = _figure(3, (20, 5.4), layout="constrained")
     sizes = [c.size for c in result.sizes]
     cmap = colormaps["viridis"]
     shade = {size: cmap(i / max(len(sizes) - 1, 1)) for i, size in enumerate(sizes)}
-    seen = set()
-    for run in result.runs:
-        if run.error_bound is None:
-            continue
-        label = None
-        if run.integrator not in seen:
-            seen.add(run.integrator)
-            label = run.integrator
-        left.loglog(
-            run.wall_time_s,
-            max(run.error_bound, 1e-17),
-            _MARKERS.get(run.integrator, "o"),
-            color=shade[run.size],
-            ms=4,
-            alpha=0.8,
-            label=label,
-        )
-    front = [r for r in result.pareto if r.error is not None]
-    if front:
-        left.loglog(
-            [r.wall_time_s for r in front],
-            [max(r.error or 0.0, 1e-17) for r in front],
-            "k-",
-            lw=0.9,
-            label="Pareto front",
-        )
-    pick = result.recommendation
-    if pick is not None:
-        left.axhline(pick.tol, color="0.4", ls=":", lw=0.9, label=f"tol {pick.tol:g}")
-        if pick.verified and pick.wall_time_s is not None and pick.error is not None:
-            left.loglog(
-                pick.wall_time_s,
-                pick.error,
-                "*",
-                color="#d62728",
-                ms=14,
-                label=f"cheapest: {result.size_parameter} = {pick.size}, {pick.integrator}, dt = {pick.dt:g} s",
-            )
+    names = list(dict.fromkeys(r.integrator for r in result.runs))
+    # the legend's keys first: a marker per integrator, a colour per size (the groups draw unlabelled)
+    for name in names:
+        left.plot([], [], _MARKERS.get(name, "o"), color="0.3", ms=4, label=name)
     for size in sizes:
-        left.plot([], [], "o", color=shade[size], label=f"{result.size_parameter} = {size}")
-    left.set_xlabel("wall time of the run [s]")
-    left.set_ylabel(f"{result.question}: discretization + integration error [-]")
-    left.set_title(f"{result.description}: error vs cost")
-    left.legend(fontsize=6.5, loc="lower left", ncol=2)
+        left.plot([], [], "o", color=shade[size], ms=4, label=f"{result.size_parameter} = {size}")
+    groups = [
+        Points(
+            [r for r in result.runs if r.size == size and r.integrator == name],
+            None,
+            dict(marker=_MARKERS.get(name, "o"), color=shade[size], ms=4, alpha=0.8, ls="none"),
+        )
+        for size in sizes
+        for name in names
+    ]
+    marks = []
+    pick = result.recommendation
+    if pick is not None and pick.found and pick.cost is not None and pick.error is not None:
+        marks.append(
+            Mark(
+                pick.cost,
+                pick.error,
+                f"cheapest: {result.size_parameter} = {pick.details['size']}, {pick.integrator}, dt = {pick.dt:g} s",
+                dict(marker="*", color="#d62728", ms=14, markeredgecolor="k"),
+            )
+        )
+    error_cost_panel(
+        left,
+        groups,
+        result.pareto,
+        marks=marks,
+        tol=None if pick is None else pick.tolerance,
+        ylabel=f"{result.question}: discretization + integration error [-]",
+        title=f"{result.description}: error vs cost",
+        legend_size=6.5,
+    )
 
     discretization = [(c.size, c.discretization_error) for c in result.sizes if c.discretization_error]
     if discretization:
@@ -119,7 +113,7 @@ def refine_figure(result: Refinement) -> Figure:
     middle.set_title(f"discretization: observed order {order:.2f}" if order is not None else "discretization")
     middle.set_xlabel(f"{result.size_parameter} ({result.size_description})")
     middle.set_ylabel("relative error [-]")
-    middle.legend(fontsize=6.5)
+    legend_beside(middle, 6.5)
 
     step_cost = [(c.size, min(c.cost_per_step_s.values())) for c in result.sizes if c.cost_per_step_s]
     if step_cost:
@@ -145,7 +139,7 @@ def refine_figure(result: Refinement) -> Figure:
     right.set_xlabel(f"{result.size_parameter} ({result.size_description})")
     right.set_ylabel("wall time [s]")
     right.set_title("refining costs twice: per step x steps per second")
-    right.legend(fontsize=6.5)
+    legend_beside(right, 6.5)
     fig.suptitle(f"{result.scene} / {result.scenario}: how much model does {result.question} need?")
     return fig
 

@@ -40,7 +40,7 @@ from matplotlib.figure import Figure
 
 from springlab import files
 from springlab.errors import BadInputError
-from springlab.runs.run import Result, scene_and_scenario
+from springlab.runs.run import Result
 from springlab.studies.families import PhaseFamily, ZetaFamily
 
 from .phase import (
@@ -172,10 +172,10 @@ def scene_figure(result: Result) -> Figure:
     BadInputError
         the scene declares no figure of its own.
     """
-    scene, scenario = scene_and_scenario(result)
+    scene = result.case.scene
     if scene.figure is None:
         raise BadInputError(f"{result.scene} declares no figure of its own; use --kind time or --kind phase")
-    panels = scene.figure(result.model, result.parameters, scenario.name, result.trajectory)
+    panels = scene.figure(result.case, result.trajectory)
     figure = new_figure(5.6 * len(panels) + 1.0, 4.8)
     axes = figure.subplots(1, len(panels), squeeze=False)[0]
     for ax, panel in zip(axes, panels):

@@ -38,7 +38,6 @@ from springlab import files, scenes
 from springlab.errors import BadInputError, SpringlabError, UnknownNameError
 from springlab.scenes.base import Scenario, Scene
 from springlab.sim import model_files
-from springlab.sim.simulate import quiet_mujoco
 
 from .drawings import COIL_RADIUS, DAMPER_PREFIX, SPRING_PREFIX
 
@@ -64,8 +63,6 @@ DT_RANGE = (1e-4, 0.5)
 
 class NodeUnavailableError(SpringlabError):
     """npm is not on PATH, or `npm pack` failed, and mujoco-js is not in the cache (exit 2)."""
-
-    exit_code = 2
 
 
 @dataclasses.dataclass(frozen=True)
@@ -294,9 +291,8 @@ def page_config(scene_name: str, scenario_name: str | None = None) -> dict:
     scene, scenario = _choose(scene_name, scenario_name)
     spec = scene.interactive
     assert spec is not None
-    params = scene.resolve(scenario, {})
-    with quiet_mujoco():
-        model = scene.build(params, scenario)
+    case = scene.case(scenario)
+    params, model = case.params, case.model
     joint = model.joint(spec.joint)
     question = scene.questions.get(scenario.name, ("", ""))[0]
     camera = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, scene.camera) if scene.camera else -1

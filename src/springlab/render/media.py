@@ -113,9 +113,8 @@ def render_run(
 
 def default_slow_motion(result: Result, duration: float, fps: float) -> float:
     """render_scale.default_slow_motion for `duration` [s] of a run, from its scene's vibration modes [Hz]."""
-    scene = scenes.get(result.scene)
     try:
-        modes = scene.modes(result.model, result.parameters, scene.scenario(result.scenario))
+        modes = result.case.modes()
     except (BadInputError, NotImplementedError):
         modes = []
     return render_scale.default_slow_motion(duration, fps, [omega / (2 * math.pi) for omega, _ in modes])

@@ -37,7 +37,7 @@ import numpy as np
 from springlab import display, scenes, tables
 from springlab.errors import BadInputError, DivergedError, ParameterError, SpringlabError
 from springlab.files import csv_text, dumps, json_ready, write_text_files
-from springlab.scenes.base import Check, Scenario, Scene
+from springlab.scenes.base import Case, Check, Scenario, Scene
 from springlab.sim.simulate import (
     INTEGRATORS,
     MAX_STEPS,
@@ -46,7 +46,6 @@ from springlab.sim.simulate import (
     beyond_mujoco_limits,
     check_timing,
     integrator_id,
-    simulate,
 )
 
 from . import compare
@@ -117,7 +116,7 @@ class Result(display.Shown):
         whether the run is inside the range of its error estimate (None with a requested
         tolerance or without a linear reference).
     checks
-        the scenario's scalar claims (scenes.base.Check), tolerances capped as summary.json shows them.
+        the scenario's scalar claims (scenes.declarations.Check), tolerances capped as summary.json shows them.
     model_limits
         why the run left its scene's model (empty: it did not).
     time
@@ -126,8 +125,10 @@ class Result(display.Shown):
         joint -> simulated position [m] / velocity [m/s] series (hinges [rad], [rad/s]).
     ref_pos, ref_vel
         joint -> exact series (empty where no reference exists).
+    case
+        the scenario at its parameters with the compiled model that ran (springlab.scenes.base.Case).
     model
-        the compiled MjModel that ran.
+        the compiled MjModel that ran (`case.model`).
     trajectory
         the raw Trajectory.
     """
@@ -154,7 +155,7 @@ class Result(display.Shown):
     vel: dict[str, np.ndarray] = dataclasses.field(repr=False)
     ref_pos: dict[str, np.ndarray] = dataclasses.field(repr=False)
     ref_vel: dict[str, np.ndarray] = dataclasses.field(repr=False)
-    model: mujoco.MjModel = dataclasses.field(repr=False)
+    case: Case = dataclasses.field(repr=False)
     trajectory: Trajectory = dataclasses.field(repr=False)
     column_tolerances: dict[str, float] = dataclasses.field(default_factory=dict, repr=False)
 
@@ -162,6 +163,11 @@ class Result(display.Shown):
         object.__setattr__(self, "time", _read_only(self.time))
         for name in ("pos", "vel", "ref_pos", "ref_vel"):
             object.__setattr__(self, name, {joint: _read_only(v) for joint, v in getattr(self, name).items()})
+
+    @property
+    def model(self) -> mujoco.MjModel:
+        """The compiled MjModel that ran (`case.model`)."""
+        return self.case.model
 
     @property
     def max_rel_error(self) -> float | None:
@@ -513,25 +519,14 @@ def run_scenario(
     if tol is not None:
         tol = compare.check_tolerance(tol)
     with _within_double_precision(scene_obj, chosen, params):
-        model = scene_obj.build(params, chosen)
-        setup = scene_obj.setup(model, params, chosen, steps, dt)
+        case = Case.compiled(scene_obj, chosen, params)
+        setup = case.setup(steps, dt)
         try:
-            trajectory = simulate(
-                model,
-                integrator=integrator,
-                dt=dt,
-                duration=duration,
-                qpos=setup.qpos,
-                qvel=setup.qvel,
-                act=setup.act,
-                control=setup.control,
-                stop=scene_obj.stop_condition(model, params, chosen),
-            )
+            trajectory = case.simulate(integrator, dt, duration, setup=setup)
         except DivergedError as error:
-            beyond = beyond_mujoco_limits(model, setup.qpos, setup.qvel, setup.act, setup.control)
-            advice = _stability_advice(scene_obj, model, params, chosen, integrator, dt, duration, beyond)
-            raise DivergedError(f"{error}{advice}") from None
-        return evaluate(scene_obj, chosen, params, model, trajectory, tol)
+            beyond = beyond_mujoco_limits(case.model, setup.qpos, setup.qvel, setup.act, setup.control)
+            raise DivergedError(f"{error}{_stability_advice(case, integrator, dt, duration, beyond)}") from None
+        return evaluate(case, trajectory, tol)
 
 
 @contextlib.contextmanager
@@ -556,27 +551,19 @@ def _within_double_precision(scene: Scene, scenario: Scenario, params: dict[str,
         ) from None
 
 
-def evaluate(
-    scene: Scene,
-    scenario: Scenario,
-    params: dict[str, float],
-    model: mujoco.MjModel,
-    trajectory: Trajectory,
-    tol: float | None = None,
-    *,
-    checks: bool = True,
-) -> Result:
-    """Compare a finished run with its reference: errors, tolerance, checks, verdict -> Result.
+def evaluate(case: Case, trajectory: Trajectory, tol: float | None = None, *, checks: bool = True) -> Result:
+    """Compare a finished run of `case` with its reference: errors, tolerance, checks, verdict -> Result.
 
     Shared by `run` and the batched studies (springlab.studies.tradeoff, springlab.studies.extremes), so every path judges a run
     the same way. Raises DivergedError for a run whose error dwarfs its signal. `checks=False` leaves
     the scene's checks out (a study that measures the same claims itself over many runs, e.g.
     springlab.studies.friction_settings, verifies its pick with a full run).
     """
-    columns = scene.joint_columns(model, trajectory)
+    scene, scenario, params = case.scene, case.scenario, case.params
+    columns = case.joint_columns(trajectory)
     pos = {j: c[0] for j, c in columns.items()}
     vel = {j: c[1] for j, c in columns.items()}
-    reference = scene.reference(model, params, scenario, trajectory.time, dt=trajectory.dt) if scenario.exact else None
+    reference = case.reference(trajectory.time, dt=trajectory.dt) if scenario.exact else None
     errors: dict[str, ColumnError] = {}
     per_column: dict[str, float] = {}
     tolerance, basis, passed, validity = None, "", None, None
@@ -598,9 +585,7 @@ def evaluate(
         errors = compare.column_errors(simulated, exact, reference.scales)
         worst = max(e.max_rel for e in errors.values())
         if not math.isfinite(worst) or worst > BLOWUP_RATIO:
-            advice = _stability_advice(
-                scene, model, params, scenario, trajectory.integrator, trajectory.dt, trajectory.time[-1]
-            )
+            advice = _stability_advice(case, trajectory.integrator, trajectory.dt, trajectory.time[-1])
             raise DivergedError(
                 f"simulation diverged: error {worst:.3g} times the signal ({trajectory.integrator},"
                 f" dt = {trajectory.dt:g} s){advice}"
@@ -628,12 +613,12 @@ def evaluate(
         passed = all(errors[c].max_rel <= per_column[c] for c in errors)
         if validity is not None and not validity.inside:
             passed = False  # the tolerance is no tolerance here: nothing is certified
-    claims = scene.checks(model, params, scenario, trajectory) if scenario.exact and checks else []
+    claims = case.checks(trajectory) if scenario.exact and checks else []
     held = tuple(_capped(check, tol) for check in claims)
     if held:
         # a scenario without compared columns is held to its checks alone
         passed = all(c.passed for c in held) and passed is not False
-    limits = tuple(scene.model_limits(model, params, scenario, trajectory))
+    limits = tuple(case.model_limits(trajectory))
     if limits:
         passed = False  # matching the reference proves nothing once the equations no longer hold
     verdict: Verdict | None
@@ -654,7 +639,7 @@ def evaluate(
         steps=trajectory.steps,
         wall_time_s=trajectory.wall_time_s,
         parameters=dict(params),
-        quantities=scene.quantities(model, params, scenario, trajectory),
+        quantities=case.quantities(trajectory),
         errors=errors,
         tolerance=tolerance,
         tolerance_basis=basis,
@@ -668,7 +653,7 @@ def evaluate(
         vel=vel,
         ref_pos=dict(reference.pos) if reference else {},
         ref_vel=dict(reference.vel) if reference else {},
-        model=model,
+        case=case,
         trajectory=trajectory,
         column_tolerances=per_column,
     )
@@ -686,16 +671,7 @@ def _capped(check: Check, tol: float | None) -> Check:
     return dataclasses.replace(check, tolerance=compare.CERTIFIED_CAP, basis=basis)
 
 
-def _stability_advice(
-    scene: Scene,
-    model,
-    params,
-    scenario,
-    integrator: str,
-    dt: float,
-    duration: float,
-    beyond: str | None = None,
-) -> str:
+def _stability_advice(case: Case, integrator: str, dt: float, duration: float, beyond: str | None = None) -> str:
     """Why a run diverged and what would help, as ': ...'.
 
     Never contradicts itself: a state past MuJoCo's own cap (`beyond`, see
@@ -709,16 +685,16 @@ def _stability_advice(
             " (mjMAXVAL, SI units), so no timestep or integrator can run it; choose values that keep them below it"
         )
     worst = None
-    modes = scene.modes(model, params, scenario)
+    modes = case.modes()
     for omega, zeta in modes:
-        limit = scene.stability_limit(model, params, scenario, integrator, omega, zeta)
+        limit = case.stability_limit(integrator, omega, zeta)
         ratio = omega * dt / limit
         if worst is None or ratio > worst[0]:
             worst = (ratio, omega, zeta, limit)
     if worst is None:
         # no oscillating mode (a driven free mass): no timestep limit applies, only MuJoCo's cap
         return (
-            f": {scene.name} has no mode whose stability limits dt, so a position, velocity or acceleration"
+            f": {case.scene.name} has no mode whose stability limits dt, so a position, velocity or acceleration"
             f" passed MuJoCo's limit of {MAX_VALUE:g} (mjMAXVAL); choose values that keep them below it"
         )
     ratio, omega, zeta, limit = worst
@@ -734,11 +710,7 @@ def _stability_advice(
             f" values that reach MuJoCo's limit of {MAX_VALUE:g} (mjMAXVAL) on a position, velocity or"
             " acceleration during the run"
         )
-    stable = [
-        name
-        for name in INTEGRATORS
-        if all(w * dt < scene.stability_limit(model, params, scenario, name, w, z) for w, z in modes)
-    ]
+    stable = [name for name in INTEGRATORS if all(w * dt < case.stability_limit(name, w, z) for w, z in modes)]
     others = f"an integrator stable at this dt ({', '.join(stable)})" if stable else "integrator 'discrete'"
     smaller = limit / omega
     exceeds = f": omega*dt = {omega * dt:.4g} exceeds the {integrator} stability limit {limit:.4g} {mode}"
@@ -784,6 +756,5 @@ def write_run(directory: str | os.PathLike, result: Result, every: int = 1) -> l
 
 
 def scene_and_scenario(result: Result) -> tuple[Scene, Scenario]:
-    """(Scene, Scenario) objects of a Result."""
-    scene = scenes.get(result.scene)
-    return scene, scene.scenario(result.scenario)
+    """(Scene, Scenario) objects of a Result (its case's)."""
+    return result.case.scene, result.case.scenario

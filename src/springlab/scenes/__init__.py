@@ -3,21 +3,24 @@
 Scenes are discovered, so a new scene is a new module (`scenes/<name>.py`) or folder
 (`scenes/<name>/`, its `__init__` handing on `SCENE`) with a module-level `SCENE` and a
 models/<name>.xml; nothing else needs editing. `base` (what every scene provides),
-`capabilities` (what a scene declares for the studies) and `checks` (scalar claims) are the
-scenes' shared machinery, not scenes.
+`declarations` (parameters, scenarios, references, checks as plain data), `capabilities` (what
+a scene declares for the studies) and `checks` (scalar claims) are the scenes' shared machinery,
+not scenes.
 """
 
 from __future__ import annotations
 
 import importlib
 import pkgutil
+from collections.abc import Mapping
+from typing import Any
 
 from springlab.errors import UnknownNameError
 
-from .base import Scene
+from .base import Case, Scene
 
 #: modules of this package that serve the scenes and are none
-MACHINERY = ("base", "capabilities", "checks")
+MACHINERY = ("base", "capabilities", "checks", "declarations")
 #: the chapter's order; discovered scenes not listed here follow alphabetically
 CATALOGUE_ORDER = ("slider", "car", "printer_head", "kinematics", "nonlinear")
 
@@ -42,3 +45,25 @@ def get(name: str) -> Scene:
         return SCENES[name]
     except KeyError:
         raise UnknownNameError("scene", str(name), SCENES) from None
+
+
+def case(scene: str | Scene, scenario: str | None = None, parameters: Mapping[str, Any] | None = None) -> Case:
+    """A scene's scenario at these parameters, resolved and compiled once (`Scene.case`).
+
+    Parameters
+    ----------
+    scene
+        a scene or its name.
+    scenario
+        scenario name (None: the scene's default).
+    parameters
+        overrides, name -> value (SI).
+
+    Raises
+    ------
+    UnknownNameError
+        a scene, scenario or parameter that does not exist.
+    ParameterError
+        a value outside its valid range, or a non-physical combination.
+    """
+    return (get(scene) if isinstance(scene, str) else scene).case(scenario, parameters)

@@ -10,6 +10,19 @@ springlab/scenes/. The module subclasses `Scene` and says:
 * the initial state and the open-loop control sequence of a scenario;
 * the exact reference where one exists, and the scenario's named quantities.
 
+Its hooks take a `Case`: one scenario with its resolved parameters and its compiled model, the
+object every study and every hook shares. Everything a study repeats for "this scenario at these
+parameters" is a method of it: the initial state and controls of a run (`setup`), the run at an
+integrator, dt and duration (`simulate`, through springlab.sim), the exact reference, the checks,
+the quantities, the modes. What depends only on the case is computed once and kept on it
+(`Case.memo`): the parameters are resolved once, the model compiled once, and a scene's exact
+precomputations (its mode shapes, its read-back constants) are shared by its hooks.
+
+>>> from springlab import scenes
+>>> case = scenes.get("slider").case("free", {"mass": 2.0})
+>>> trajectory = case.simulate("rk4", 1e-3, 1.0)
+>>> reference = case.reference(trajectory.time, dt=1e-3)
+
 Data flows one way: parameters -> MjModel -> Trajectory -> (reference, errors)
 -> summary, plots and video.
 """
@@ -18,9 +31,8 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import math
-from collections.abc import Callable, Mapping
-from typing import Any
+from collections.abc import Callable, Hashable, Mapping
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import mujoco
 import numpy as np
@@ -28,18 +40,22 @@ import numpy as np
 from springlab.errors import ParameterError, UnknownNameError
 from springlab.exact.limits import stability_limit
 from springlab.sim import model_files
-from springlab.sim.simulate import Setup, Trajectory, quiet_mujoco
+from springlab.sim.simulate import Setup, Trajectory, check_timing, quiet_mujoco, simulate
 
-from .capabilities import (
-    DesignSpec,
-    DryFrictionSpec,
-    FigureHook,
-    FitSpec,
-    FrequencySpec,
-    InteractiveSpec,
-    OscillatorSpec,
-    RefinableSpec,
-)
+from .capabilities.design import DesignSpec
+from .capabilities.figure import FigureHook
+from .capabilities.fit import FitSpec
+from .capabilities.frequency import FrequencySpec
+from .capabilities.friction import DryFrictionSpec
+from .capabilities.interactive import InteractiveSpec
+from .capabilities.oscillator import OscillatorSpec
+from .capabilities.refine import RefinableSpec
+from .declarations import Check, Parameter, Reference, Scenario
+
+if TYPE_CHECKING:
+    from springlab.sim.batch import Job
+
+T = TypeVar("T")
 
 #: smallest body mass [kg] and principal inertia [kg m^2] MuJoCo compiles: its mjMINVAL
 #: (1e-15); a moving body below it fails `MjSpec.compile` ("must be larger than mjMINVAL")
@@ -59,204 +75,10 @@ def parsed_spec(path: str) -> mujoco.MjSpec:
         return mujoco.MjSpec.from_file(path)
 
 
-@dataclasses.dataclass(frozen=True)
-class Parameter:
-    """A scene parameter in SI units.
-
-    Attributes
-    ----------
-    name
-        as used by `--set NAME=VALUE` and keyword arguments.
-    unit
-        SI unit, e.g. 'kg', 'N/m', 'N s/m', 'm', 'm/s', 'Hz', '-' for none.
-    description
-        one line.
-    minimum
-        lowest valid value (None: unbounded).
-    minimum_inclusive
-        whether `minimum` itself is valid.
-    maximum
-        highest valid value (None: unbounded).
-    default
-        default value, or None when it is read back from the model.
-    reason
-        why the range is what it is (added to the error message), e.g. MIN_MASS_REASON.
-    """
-
-    name: str
-    unit: str
-    description: str
-    minimum: float | None = None
-    minimum_inclusive: bool = True
-    maximum: float | None = None
-    default: float | None = None
-    reason: str = ""
-
-    def valid_range(self) -> str:
-        """Human-readable valid range, e.g. '> 0 kg'."""
-        unit = "" if self.unit == "-" else f" {self.unit}"
-        parts = []
-        if self.minimum is not None:
-            parts.append(f"{'>=' if self.minimum_inclusive else '>'} {self.minimum:g}")
-        if self.maximum is not None:
-            parts.append(f"<= {self.maximum:g}")
-        return (" and ".join(parts) or "any finite value") + unit
-
-    def check(self, value: Any) -> float:
-        """Return `value` as a float, or raise ParameterError saying what is valid."""
-        try:
-            number = float(value)
-        except (TypeError, ValueError):
-            raise ParameterError(f"{self.name} must be a number {self.valid_range()}, got {value!r}") from None
-        low_ok = self.minimum is None or number > self.minimum or (self.minimum_inclusive and number == self.minimum)
-        high_ok = self.maximum is None or number <= self.maximum
-        if not math.isfinite(number) or not low_ok or not high_ok:
-            why = f" ({self.reason})" if self.reason else ""
-            raise ParameterError(f"{self.name} must be a finite number {self.valid_range()}{why}, got {value!r}")
-        return number
-
-
-@dataclasses.dataclass(frozen=True)
-class Scenario:
-    """A named question a scene answers.
-
-    Attributes
-    ----------
-    name
-        scenario name.
-    description
-        one line.
-    duration
-        default simulated time [s].
-    presets
-        parameter values this scenario sets (user overrides win).
-    derive
-        optional function(params, explicitly_set_names) -> extra values,
-        for presets that depend on other parameters (e.g. damping from a ratio).
-    exact
-        whether an exact reference exists (validated by `validate`).
-    dt
-        the scenario's validated timestep [s] (None: the scene's `dt`).
-    variant
-        for a scene whose scenarios differ in their model (e.g. the car: 1 DOF,
-        pitch/heave, quarter car), the object that carries what differs; the scene's
-        hooks delegate to it instead of dispatching on scenario names (None: unused).
-    """
-
-    name: str
-    description: str
-    duration: float
-    presets: Mapping[str, float] = dataclasses.field(default_factory=dict)
-    derive: Callable[[dict[str, float], set[str]], dict[str, float]] | None = None
-    exact: bool = True
-    dt: float | None = None
-    variant: Any = None
-
-
-@dataclasses.dataclass
-class Reference:
-    """The exact solution of a scenario at the trajectory's times.
-
-    Attributes
-    ----------
-    pos, vel
-        joint name -> exact position [m or rad] and velocity [m/s or rad/s].
-    system
-        for linear scenes, the matrix A [1/s] of the autonomous system
-        z' = A z that generated the reference (forcing included as generator
-        states); None otherwise. Used to derive the error bound.
-    states
-        (n, dim) exact z(t), or None.
-    rows
-        joint name -> (row of its position, row of its velocity) in z.
-    tolerance
-        for scenes without `system`, the relative tolerance [-] every
-        compared column is held to, and `tolerance_basis` says why.
-    switches
-        for a linear scene whose input is switched on a step boundary:
-        [(time [s], A after it)], in time order; `system` holds before the first.
-        The states z(t) stay continuous across a switch.
-    input_error
-        column -> exact max absolute difference [m or m/s] between the
-        responses to the input the model realizes and the true input, added to
-        that column's tolerance (`tolerance_basis` says where it comes from).
-    scales
-        column -> the scale [m or m/s] its max_rel is relative to where the exact motion
-        has none (max |ref| = 0: a block held at rest); otherwise max |ref| is.
-    """
-
-    pos: dict[str, np.ndarray]
-    vel: dict[str, np.ndarray]
-    system: np.ndarray | None = None
-    states: np.ndarray | None = None
-    rows: dict[str, tuple[int, int]] = dataclasses.field(default_factory=dict)
-    tolerance: float | None = None
-    tolerance_basis: str = ""
-    switches: list[tuple[float, np.ndarray]] = dataclasses.field(default_factory=list)
-    input_error: dict[str, float] = dataclasses.field(default_factory=dict)
-    scales: dict[str, float] = dataclasses.field(default_factory=dict)
-
-
-@dataclasses.dataclass(frozen=True)
-class Check:
-    """A validated scalar claim of a scenario: a measured value against an independent reference.
-
-    For scenes without an exact trajectory (non-linear ones), `validate` holds a
-    scenario to its checks instead of (or besides) the compared columns.
-
-    Attributes
-    ----------
-    name
-        what is checked, ending in its unit like a quantity, e.g. 'period_s'.
-    value
-        measured from the simulation (in the name's unit).
-    reference
-        the independent expectation (closed form, quadrature, ...).
-    tolerance
-        bound on `error` [-]: relative, or absolute in the name's unit
-        when the reference is 0.
-    basis
-        why the tolerance is what it is (one line).
-    certifies_error
-        whether `error` is an error of a physical result, which a PASS
-        without a requested tolerance certifies only up to springlab.runs.compare.CERTIFIED_CAP
-        (False for a diagnostic, e.g. an observed order of convergence against the
-        integrator's).
-    follows_tol
-        a relative error [-] held to the run's own tolerance: the requested tolerance when
-        there is one (`tolerance` then gives way to it), else `tolerance`.
-    """
-
-    name: str
-    value: float
-    reference: float
-    tolerance: float
-    basis: str
-    certifies_error: bool = True
-    follows_tol: bool = False
-
-    @property
-    def error(self) -> float:
-        """|value - reference| / |reference|, or |value - reference| when the reference is 0."""
-        difference = abs(float(self.value) - float(self.reference))
-        return difference / abs(float(self.reference)) if self.reference != 0 else difference
-
-    @property
-    def passed(self) -> bool:
-        """Whether the error is within the tolerance (False for a non-finite value)."""
-        return bool(math.isfinite(self.error) and self.error <= self.tolerance)
-
-    def to_dict(self) -> dict[str, Any]:
-        """The summary.json form: name, value, reference, error, tolerance, basis, passed."""
-        return {
-            "name": self.name,
-            "value": float(self.value),
-            "reference": float(self.reference),
-            "error": self.error,
-            "tolerance": float(self.tolerance),
-            "basis": self.basis,
-            "passed": self.passed,
-        }
+#: (qpos (n, nq), qvel (n, nv)) -> (n,) bool: an event that ends a run early (Scene.stop_condition)
+StopCondition = Callable[[np.ndarray, np.ndarray], np.ndarray]
+#: (x, v) -> (dx/dt, dv/dt) of a one-joint scene's unforced motion (Scene.phase_field)
+PhaseField = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 
 class Scene:
@@ -275,25 +97,32 @@ class Scene:
     3. `edit(spec, params, scenario)`: MjSpec edits that apply the parameters, so the physics
        stays in MJCF (no Python forces; time-varying inputs as MJCF-native generators or
        piecewise-constant controls switched on step boundaries, see springlab.sim.exciter).
-    4. `setup(model, params, scenario, steps, dt)`: the initial state and open-loop controls
-       (`Setup`); raise ParameterError for a motion the scene's equations cannot describe
-       when that is known before the run.
+
+    The hooks below take a `Case` : the scenario with its resolved parameters
+    (`case.params`) and compiled model (`case.model`), made once by `Scene.case` and shared by every hook
+    and run of it. What depends only on the case is computed once and kept on it (`case.memo`, and
+    `case.physical()` for the constants of 5); a study calls the case's methods (`case.setup`,
+    `case.simulate`, `case.reference`, ...), never the hooks directly.
+
+    4. `setup(case, steps, dt)`: the initial state and open-loop controls (`Setup`) of a run of `steps`
+       steps of `dt` [s]; raise ParameterError for a motion the scene's equations cannot describe when
+       that is known before the run.
     5. `physical(model)`: the physical constants the scene's equations use, read back from the
        compiled model (SI; the order is the scene's, documented in its override).
-    6. `modes(model, params, scenario)`: [(natural frequency [rad/s], damping ratio [-])] of every
-       mode the integrator must resolve (forcing generators included), for stability advice.
-    7. `reference(model, params, scenario, time)`: the exact solution at `time` [s] where one
-       exists (`Reference`; for a linear scene with its state matrix, so the tolerance is
-       derived), else None and `checks(...)`: scalar claims against independent references
-       (`Check`; builders in springlab.scenes.checks).
-    8. `quantities(model, params, scenario, trajectory)`: the scenario's named results, SI,
-       names ending in their unit; peaks and event times interpolated between the samples to
-       the run's order (springlab.exact.events).
-    9. Optionally: `check_consistency` (non-physical parameter combinations), `model_limits`
-       (where a finished run leaves the scene's equations), `stop_condition` (an event that
-       ends a run early as a result), `stability_limit` (damping MuJoCo treats differently from
-       joint damping), `phase_field`/`equilibria`/`separatrices` (one-joint phase planes),
-       `joint_columns` (joints that only some scenarios have).
+    6. `modes(case)`: [(natural frequency [rad/s], damping ratio [-])] of every mode the integrator must
+       resolve (forcing generators included), for stability advice.
+    7. `reference(case, time, *, dt)`: the exact solution at `time` [s] where one exists (`Reference`;
+       for a linear scene with its state matrix, so the tolerance is derived), else None and
+       `checks(case, trajectory)`: scalar claims against independent references (`Check`; builders in
+       springlab.scenes.checks).
+    8. `quantities(case, trajectory)`: the scenario's named results, SI, names ending in their unit;
+       peaks and event times interpolated between the samples to the run's order (springlab.exact.events).
+    9. Optionally: `check_consistency(params, scenario)` (non-physical parameter combinations),
+       `model_limits(case, trajectory)` (where a finished run leaves the scene's equations),
+       `stop_condition(case)` (an event that ends a run early as a result), `stability_limit(case,
+       integrator, omega, zeta)` (damping MuJoCo treats differently from joint damping),
+       `phase_field(case)`/`equilibria(case)`/`separatrices(case)` (one-joint phase planes),
+       `joint_columns(model, trajectory)` (joints that only some scenarios have).
     10. Capabilities the studies read (springlab.scenes.capabilities): `fit`, how `springlab fit`
        identifies the scene from a record (an `OscillatorFit` or a `PolynomialFit`; None: it cannot);
        `design`, the design question the scene answers (`DesignSpec`: swept properties, fixed ones,
@@ -301,15 +130,15 @@ class Scene:
        `refinable`, the model's size is a parameter and which quantities converge to which continuum
        values (`RefinableSpec`; springlab.studies.refine); `figure`, the panels of the scene's own
        figure of a run (a `FigureHook`; springlab.plots.run.scene_figure).
-    11. Optionally, `oscillator` (springlab.scenes.capabilities.OscillatorSpec): the scene is the
+    11. Optionally, `oscillator` (springlab.scenes.capabilities.oscillator.OscillatorSpec): the scene is the
        textbook's one-mode mass-spring-damper, the unit oscillator of `springlab stability`.
-    12. Optionally, `dry_friction` (springlab.scenes.capabilities.DryFrictionSpec): the scene's dry
+    12. Optionally, `dry_friction` (springlab.scenes.capabilities.friction.DryFrictionSpec): the scene's dry
        friction has exact Coulomb answers and takes MuJoCo's friction settings as parameters, which
        `springlab friction-settings` sweeps (springlab.studies.friction_settings).
-    13. Optionally, `frequency` (springlab.scenes.capabilities.FrequencySpec, or a tuple of them, one per
+    13. Optionally, `frequency` (springlab.scenes.capabilities.frequency.FrequencySpec, or a tuple of them, one per
        scenario, the first the default): the default input and response of `springlab frequency SCENE`, an
        MjSpec edit that makes the input a control, and what the response means for the scene's question.
-    14. Optionally, `interactive` (springlab.scenes.capabilities.InteractiveSpec): the scenarios that run
+    14. Optionally, `interactive` (springlab.scenes.capabilities.interactive.InteractiveSpec): the scenarios that run
        in the browser with real MuJoCo and the MJCF attributes the page writes (`springlab interactive`).
 
     The module exposes the instance as `SCENE`; springlab.scenes discovers it. Tests check each
@@ -437,15 +266,31 @@ class Scene:
                     f"MuJoCo cannot compile {self.name} {scenario.name} with these parameters: {reason}"
                 ) from None
 
-    def setup(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, steps: int, dt: float
-    ) -> Setup:
-        """Initial state and controls of a run (override)."""
+    def case(self, scenario: str | Scenario | None = None, parameters: Mapping[str, Any] | None = None) -> Case:
+        """The scenario at these parameters: resolved (`resolve`) and compiled (`build`) once, as a `Case`.
+
+        Parameters
+        ----------
+        scenario
+            a scenario or its name (None: the default one).
+        parameters
+            overrides, name -> value (SI); the rest are the scenario's and the MJCF's.
+
+        Raises
+        ------
+        UnknownNameError
+            a scenario or parameter this scene does not have.
+        ParameterError
+            a value outside its valid range, or a non-physical combination.
+        """
+        chosen = scenario if isinstance(scenario, Scenario) else self.scenario(scenario)
+        return Case.compiled(self, chosen, self.resolve(chosen, parameters or {}))
+
+    def setup(self, case: Case, steps: int, dt: float) -> Setup:
+        """Initial state and controls of a run of `steps` steps of `dt` [s] (override)."""
         return Setup()
 
-    def reference(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, time: np.ndarray, *, dt: float
-    ) -> Reference | None:
+    def reference(self, case: Case, time: np.ndarray, *, dt: float) -> Reference | None:
         """Exact solution at `time` [s] of a run with timestep `dt` [s], or None where none exists (override).
 
         `dt` is explicit, never read back from `model.opt.timestep`: an input switched on the
@@ -454,13 +299,7 @@ class Scene:
         """
         return None
 
-    def quantities(
-        self,
-        model: mujoco.MjModel,
-        params: dict[str, float],
-        scenario: Scenario,
-        trajectory: Trajectory,
-    ) -> dict[str, Any]:
+    def quantities(self, case: Case, trajectory: Trajectory) -> dict[str, Any]:
         """Named results of the scenario, SI, names ending in their unit (override)."""
         return {}
 
@@ -468,23 +307,15 @@ class Scene:
         """The physical constants the scene's equations use, read back from the compiled model (SI).
 
         The order is the scene's (e.g. the slider's (mass [kg], stiffness [N/m], damping [N s/m]));
-        none by default.
+        none by default. `Case.physical` keeps them for the case.
         """
         return ()
 
-    def modes(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[tuple[float, float]]:
+    def modes(self, case: Case) -> list[tuple[float, float]]:
         """[(natural frequency [rad/s], damping ratio [-])] of the run, for stability advice."""
         return []
 
-    def stability_limit(
-        self,
-        model: mujoco.MjModel,
-        params: dict[str, float],
-        scenario: Scenario,
-        integrator: str,
-        omega: float,
-        zeta: float,
-    ) -> float:
+    def stability_limit(self, case: Case, integrator: str, omega: float, zeta: float) -> float:
         """Largest omega*dt [-] at which `integrator` is stable on the mode (omega [rad/s], zeta [-]).
 
         Default: simulate.stability_limit, which assumes the damping is joint damping;
@@ -492,40 +323,24 @@ class Scene:
         """
         return stability_limit(integrator, zeta)
 
-    def phase_field(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario
-    ) -> Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None:
+    def phase_field(self, case: Case) -> PhaseField | None:
         """For a scene with one reported joint: (x [m], v [m/s]) -> (dx/dt [m/s], dv/dt [m/s^2])
         of the unforced equations of motion, for phase-plane vector fields (None: no plane)."""
         return None
 
-    def equilibria(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[dict]:
+    def equilibria(self, case: Case) -> list[dict]:
         """Equilibria of the unforced motion: [{"x": position [m], "stable": bool}]."""
         return []
 
-    def separatrices(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario
-    ) -> list[tuple[np.ndarray, np.ndarray]]:
+    def separatrices(self, case: Case) -> list[tuple[np.ndarray, np.ndarray]]:
         """Separatrix curves of the unforced phase plane: [(x [m], v [m/s]) arrays] (none by default)."""
         return []
 
-    def checks(
-        self,
-        model: mujoco.MjModel,
-        params: dict[str, float],
-        scenario: Scenario,
-        trajectory: Trajectory,
-    ) -> list[Check]:
+    def checks(self, case: Case, trajectory: Trajectory) -> list[Check]:
         """Scalar claims `validate` holds an exact scenario to, beyond its compared columns (override)."""
         return []
 
-    def model_limits(
-        self,
-        model: mujoco.MjModel,
-        params: dict[str, float],
-        scenario: Scenario,
-        trajectory: Trajectory,
-    ) -> list[str]:
+    def model_limits(self, case: Case, trajectory: Trajectory) -> list[str]:
         """Where this run leaves the range the scene's equations describe, one line each (override).
 
         E.g. a linear tire that would have to pull on the road: the simulation may still match its
@@ -534,9 +349,7 @@ class Scene:
         """
         return []
 
-    def stop_condition(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario
-    ) -> Callable[[np.ndarray, np.ndarray], np.ndarray] | None:
+    def stop_condition(self, case: Case) -> StopCondition | None:
         """An event that ends a run early: (qpos (n, nq), qvel (n, nv)) -> (n,) bool, True once it
         has happened (e.g. a mass escaping to infinity in finite time). The run is cut at the first
         such step and is a result, not a divergence. None: runs last their full duration."""
@@ -549,3 +362,210 @@ class Scene:
             j = model.joint(joint)
             columns[joint] = (trajectory.qpos[:, j.qposadr[0]], trajectory.qvel[:, j.dofadr[0]])
         return columns
+
+
+@dataclasses.dataclass(frozen=True, eq=False, repr=False)
+class Case:
+    """A scenario of a scene with its resolved parameters and its compiled model.
+
+    Immutable and cheap: a sweep builds thousands. Make one with `Scene.case` (names and overrides,
+    resolved and checked) or `Case.compiled` (parameters already resolved); runs at any integrator, dt
+    and duration share it, since `simulate` never modifies the model (it steps a copy).
+
+    Attributes
+    ----------
+    scene
+        the Scene.
+    scenario
+        the Scenario.
+    params
+        parameter name -> value (SI), resolved: MJCF defaults < scenario presets < overrides. Read, never
+        written (the case and what it keeps were computed from them).
+    model
+        the compiled model of `params` and `scenario` (`Scene.build`), or that model with additions that
+        leave its physics unchanged (e.g. the sensor a fit records).
+    """
+
+    scene: Scene
+    scenario: Scenario
+    params: dict[str, float]
+    model: mujoco.MjModel
+    #: what depends only on the case, computed once (`memo`)
+    _memo: dict[Hashable, Any] = dataclasses.field(default_factory=dict, init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "params", dict(self.params))  # the caller's dict stays the caller's
+
+    def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
+        # what is kept in the memo (closures, solutions) is recomputed where the case is unpickled
+        return (Case, (self.scene, self.scenario, self.params, self.model))
+
+    def __repr__(self) -> str:
+        return f"Case(scene={self.scene.name!r}, scenario={self.scenario.name!r}, params={self.params!r})"
+
+    @classmethod
+    def compiled(cls, scene: Scene, scenario: Scenario, params: Mapping[str, float]) -> Case:
+        """The case of parameters already resolved (`Scene.resolve`): its model compiled (`Scene.build`).
+
+        Parameters
+        ----------
+        scene
+            the Scene.
+        scenario
+            one of its scenarios.
+        params
+            every parameter the scenario uses, SI.
+
+        Raises
+        ------
+        ParameterError
+            MuJoCo cannot compile the model at these values.
+        """
+        values = dict(params)
+        return cls(scene, scenario, values, scene.build(values, scenario))
+
+    def memo(self, key: Hashable, compute: Callable[[], T]) -> T:
+        """`compute()` the first time `key` is asked for, the kept value after: what depends only on the case.
+
+        A scene keeps its exact precomputations here (e.g. the drill string's M, K and mode shapes), so its
+        reference, checks, quantities and figure of one case compute them once.
+
+        Parameters
+        ----------
+        key
+            a name unique within the scene's hooks (any hashable: a name with the arguments it was computed for).
+        compute
+            the computation, called at most once per case (it must not depend on anything but the case).
+        """
+        if key not in self._memo:
+            self._memo[key] = compute()
+        return self._memo[key]
+
+    # -- a run ------------------------------------------------------------------------
+
+    def setup(self, steps: int, dt: float) -> Setup:
+        """Initial state and open-loop controls of a run of `steps` steps of `dt` [s] (`Scene.setup`).
+
+        Raises
+        ------
+        ParameterError
+            a motion the scene's equations cannot describe, known before the run.
+        """
+        return self.scene.setup(self, steps, dt)
+
+    def stop_condition(self) -> StopCondition | None:
+        """The event that ends a run early (`Scene.stop_condition`; None: runs last their full duration)."""
+        return self.memo("stop_condition", lambda: self.scene.stop_condition(self))
+
+    def simulate(
+        self, integrator: str, dt: float, duration: float, *, setup: Setup | None = None, stop: bool = True
+    ) -> Trajectory:
+        """Run the case headless (springlab.sim.simulate): the model is not changed.
+
+        Parameters
+        ----------
+        integrator
+            one of MuJoCo's five ('euler', 'implicit', 'implicitfast', 'rk4', 'discrete').
+        dt
+            timestep [s].
+        duration
+            simulated time [s] (round(duration / dt) steps).
+        setup
+            initial state and controls (None: the scenario's own, `setup`).
+        stop
+            end the run at the scene's stop condition (False: run the full duration; a run that only
+            needs the trajectory up to an event the scene has none of).
+
+        Raises
+        ------
+        BadInputError
+            dt or duration not a positive number, or too many steps.
+        DivergedError
+            the simulation blew up.
+        """
+        steps = check_timing(dt, duration)
+        if setup is None:
+            setup = self.setup(steps, dt)
+        return simulate(
+            self.model,
+            integrator=integrator,
+            dt=dt,
+            duration=duration,
+            qpos=setup.qpos,
+            qvel=setup.qvel,
+            act=setup.act,
+            control=setup.control,
+            stop=self.stop_condition() if stop else None,
+        )
+
+    def job(self, integrator: str, dt: float, steps: int, *, setup: Setup | None = None) -> Job:
+        """One simulation of a batch (springlab.sim.batch): this case at a setting, its stop condition included.
+
+        Parameters
+        ----------
+        integrator
+            one of MuJoCo's five.
+        dt
+            timestep [s].
+        steps
+            physics steps.
+        setup
+            initial state and controls (None: the scenario's own).
+        """
+        from springlab.sim.batch import Job  # here: importing the scenes must not load mujoco.batch
+
+        return Job(
+            self.model, integrator, dt, steps, self.setup(steps, dt) if setup is None else setup, self.stop_condition()
+        )
+
+    def joint_columns(self, trajectory: Trajectory) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """Reported joint -> (position, velocity) series of a run of this case (`Scene.joint_columns`)."""
+        return self.scene.joint_columns(self.model, trajectory)
+
+    # -- the exact side ---------------------------------------------------------------
+
+    def physical(self) -> tuple[float, ...]:
+        """The physical constants the scene's equations use, read back from the model (`Scene.physical`)."""
+        return self.memo("physical", lambda: self.scene.physical(self.model))
+
+    def reference(self, time: np.ndarray, *, dt: float) -> Reference | None:
+        """The exact solution at `time` [s] of a run with timestep `dt` [s] (`Scene.reference`; None: none)."""
+        return self.scene.reference(self, time, dt=dt)
+
+    def checks(self, trajectory: Trajectory) -> list[Check]:
+        """The scalar claims a run of this case is held to (`Scene.checks`)."""
+        return self.scene.checks(self, trajectory)
+
+    def quantities(self, trajectory: Trajectory) -> dict[str, Any]:
+        """The scenario's named results of a run (`Scene.quantities`; SI, names ending in their unit)."""
+        return self.scene.quantities(self, trajectory)
+
+    def model_limits(self, trajectory: Trajectory) -> list[str]:
+        """Where a run leaves the scene's equations, one line each (`Scene.model_limits`; empty: nowhere)."""
+        return self.scene.model_limits(self, trajectory)
+
+    def modes(self) -> list[tuple[float, float]]:
+        """[(natural frequency [rad/s], damping ratio [-])] of every mode a run must resolve (`Scene.modes`)."""
+        return list(self.memo("modes", lambda: tuple(self.scene.modes(self))))
+
+    def stability_limit(self, integrator: str, omega: float, zeta: float) -> float:
+        """Largest omega dt [-] at which `integrator` is stable on the mode (omega [rad/s], zeta [-]).
+
+        Kept per (integrator, omega, zeta): a scene may measure it (the printer head bisects MuJoCo's step map).
+        """
+        return self.memo(
+            ("stability_limit", integrator, omega, zeta),
+            lambda: self.scene.stability_limit(self, integrator, omega, zeta),
+        )
+
+    def phase_field(self) -> PhaseField | None:
+        """(x, v) -> (dx/dt, dv/dt) of the unforced motion of a one-joint case (None: no phase plane)."""
+        return self.scene.phase_field(self)
+
+    def equilibria(self) -> list[dict]:
+        """Equilibria of the unforced motion: [{"x": position [m], "stable": bool, ...}]."""
+        return self.scene.equilibria(self)
+
+    def separatrices(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Separatrix curves of the unforced phase plane: [(x [m], v [m/s]) arrays]."""
+        return self.scene.separatrices(self)

@@ -1,6 +1,6 @@
 """Scalar claims a scene holds a run to when it has no exact trajectory (`Scene.checks`).
 
-Each builder returns a `springlab.scenes.base.Check` (measured value, independent reference,
+Each builder returns a `springlab.scenes.declarations.Check` (measured value, independent reference,
 tolerance, basis) for one joint named by the caller, so any scene can use them:
 
 * `linearization_check`: MuJoCo's own acceleration of a joint, finite-differenced at an
@@ -21,7 +21,7 @@ import numpy as np
 
 from springlab.exact import events
 
-from .base import Check
+from .declarations import Check
 
 #: safety factor on estimated errors (as in springlab.runs.compare)
 SAFETY = 2.0

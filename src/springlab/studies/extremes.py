@@ -1,7 +1,7 @@
 """The one-mode oscillator at the extremes: stiff, light, undamped-long and hugely overdamped, near each stability limit.
 
 The oscillator is the scene that declares itself the textbook's mass-spring-damper
-(`Scene.oscillator`, springlab.scenes.capabilities.OscillatorSpec; `oscillator_scene`): the
+(`Scene.oscillator`, springlab.scenes.capabilities.oscillator.OscillatorSpec; `oscillator_scene`): the
 studies set its parameters by the names it declares and never name it.
 
 `extremes_table` runs every case x integrator at 0.5x, 0.99x and 1.01x its
@@ -27,8 +27,8 @@ from springlab import scenes
 from springlab.errors import DivergedError, SpringlabError
 from springlab.exact.limits import stability_limit
 from springlab.runs.run import evaluate
-from springlab.scenes.base import Scenario, Scene
-from springlab.scenes.capabilities import OscillatorSpec
+from springlab.scenes.base import Case, Scene
+from springlab.scenes.capabilities.oscillator import OscillatorSpec
 from springlab.sim.batch import Job, run_batched, time_run
 from springlab.sim.simulate import INTEGRATORS, Trajectory, quiet_mujoco
 
@@ -199,21 +199,24 @@ class Oscillator:
 
     Attributes
     ----------
-    model
-        the compiled model (one degree of freedom).
-    scene, scenario
-        the declaring scene and its free scenario.
-    params
-        the resolved parameters (SI), by the scene's names.
+    case
+        the declaring scene's free scenario at the values, compiled (one degree of freedom).
     spec
         the scene's declaration (its parameter and joint names).
     """
 
-    model: mujoco.MjModel
-    scene: Scene
-    scenario: Scenario
-    params: dict[str, float]
+    case: Case
     spec: OscillatorSpec
+
+    @property
+    def model(self) -> mujoco.MjModel:
+        """The compiled model (one degree of freedom)."""
+        return self.case.model
+
+    @property
+    def params(self) -> dict[str, float]:
+        """The resolved parameters (SI), by the scene's names."""
+        return self.case.params
 
 
 def build_oscillator(
@@ -232,14 +235,13 @@ def build_oscillator(
         the declaring scene's free scenario has more than one degree of freedom.
     """
     scene, spec = oscillator_scene()
-    chosen = scene.scenario(spec.free)
-    params = scene.resolve(chosen, spec.parameters(mass=mass, stiffness=stiffness, damping=damping, x0=x0, v0=v0))
-    model = scene.build(params, chosen)
-    if model.nv != 1:
+    case = scene.case(spec.free, spec.parameters(mass=mass, stiffness=stiffness, damping=damping, x0=x0, v0=v0))
+    if case.model.nv != 1:
         raise SpringlabError(
-            f"{scene.name}'s scenario {chosen.name!r} declares a one-mode oscillator but has {model.nv} degrees of freedom"
+            f"{scene.name}'s scenario {spec.free!r} declares a one-mode oscillator but has {case.model.nv}"
+            " degrees of freedom"
         )
-    return Oscillator(model, scene, chosen, params, spec)
+    return Oscillator(case, spec)
 
 
 def _case_model(case: ExtremeCase) -> Oscillator:
@@ -269,7 +271,7 @@ def predicted_error(
     `_sample_steps` of the run, as max |sim - ref| / max |ref| per column (pos,
     vel); cheap for any length.
     """
-    model, scene, chosen, params = context.model, context.scene, context.scenario, context.params
+    model = context.model
     steps = max(1, round(case.duration / dt))
     work = copy.copy(model)
     work.opt.integrator = INTEGRATORS[integrator]
@@ -292,7 +294,7 @@ def predicted_error(
         states = ((vectors[None, :, :] * (powers * coefficients[None, :])[:, None, :]).sum(-1)).real
     if not np.isfinite(states).all():
         return math.inf
-    reference = scene.reference(model, params, chosen, n * dt, dt=dt)
+    reference = context.case.reference(n * dt, dt=dt)
     assert reference is not None, "the oscillator's free scenario has an exact reference"
     joint = context.spec.joint
     errors = []
@@ -429,7 +431,6 @@ def extremes_table(
     contexts: dict[str, Oscillator] = {}
     for case in cases:
         context = _case_model(case)
-        model, scene, chosen, params = context.model, context.scene, context.scenario, context.params
         contexts[case.name] = context
         for name in INTEGRATORS:
             limit_name = "euler" if name == "discrete" else name
@@ -437,15 +438,13 @@ def extremes_table(
             for fraction in LIMIT_FRACTIONS:
                 dt = fraction * limit / case.omega
                 steps = min(max(round(case.duration / dt), MIN_EXTREME_STEPS), MAX_EXTREME_STEPS)
-                setup = scene.setup(model, params, chosen, steps, dt)
-                jobs.append(Job(model, name, dt, steps, setup))
+                jobs.append(context.case.job(name, dt, steps))
                 meta.append(("limit", case, name, fraction, limit, limit_name))
     costs = {}
-    first = contexts[cases[0].name]
-    model, scene, chosen, params = first.model, first.scene, first.scenario, first.params
+    first = contexts[cases[0].name].case
     for name in ADVICE_INTEGRATORS:  # cost per step: the same for every case (one model structure)
-        setup = scene.setup(model, params, chosen, _CALIBRATION_STEPS, 1e-3)
-        calm = copy.copy(model)  # a calm model for timing: unit oscillator values, no MuJoCo resets
+        setup = first.setup(_CALIBRATION_STEPS, 1e-3)
+        calm = copy.copy(first.model)  # a calm model for timing: unit oscillator values, no MuJoCo resets
         calm.body_mass[:] = 1.0
         calm.jnt_stiffness[:] = 1.0
         calm.dof_damping[:] = 0.1
@@ -455,10 +454,7 @@ def extremes_table(
         pick = advice[case.name]
         if pick["integrator"] is None or pick["steps"] > verify_steps:
             continue
-        context = contexts[case.name]
-        model, scene, chosen, params = context.model, context.scene, context.scenario, context.params
-        setup = scene.setup(model, params, chosen, pick["steps"], pick["dt"])
-        jobs.append(Job(model, pick["integrator"], pick["dt"], pick["steps"], setup))
+        jobs.append(contexts[case.name].case.job(pick["integrator"], pick["dt"], pick["steps"]))
         meta.append(
             ("advised", case, pick["integrator"], None, _limit(pick["integrator"], case.zeta), pick["integrator"])
         )
@@ -498,7 +494,7 @@ def _classify(context: Oscillator, outcome: Trajectory | DivergedError) -> tuple
     if isinstance(outcome, DivergedError):
         return "diverged", None, str(outcome)
     try:
-        result = evaluate(context.scene, context.scenario, context.params, context.model, outcome)
+        result = evaluate(context.case, outcome)
     except DivergedError as error:
         return "diverged", None, str(error)
     worst = max(e["max_rel"] for e in result.summary["errors"].values())

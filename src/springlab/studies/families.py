@@ -24,8 +24,9 @@ import numpy as np
 from springlab import display, scenes, tables
 from springlab.errors import BadInputError, DivergedError
 from springlab.files import json_ready
-from springlab.runs.run import Result, prepare, run_scenario, scene_and_scenario
-from springlab.sim.simulate import simulate
+from springlab.runs.run import Result, run_scenario
+from springlab.scenes.base import Case
+from springlab.sim.simulate import Setup
 
 #: damping ratios of the zeta family (the chapter's slider from undamped to overdamped)
 ZETAS = (0.0, 0.1, 0.25, 0.5, 1.0, 2.0)
@@ -288,7 +289,7 @@ def _family_members(result: Result, starts: Sequence[float], fractions: Sequence
     needed, so members run through `simulate` without references or checks;
     a member that diverges has no series.
     """
-    scene, scenario = scene_and_scenario(result)
+    scene, scenario = result.case.scene, result.case.scenario
     joint = next(iter(result.pos))
     integrator, dt = result.integrator, result.dt
     steps = result.trajectory.steps
@@ -301,29 +302,20 @@ def _family_members(result: Result, starts: Sequence[float], fractions: Sequence
         if "x0" in scene.parameters:
             params["x0"] = start
         try:
-            model = scene.build(params, scenario)
-            setup = scene.setup(model, params, scenario, steps, dt)
-            qpos = np.array(setup.qpos if setup.qpos is not None else model.qpos0, float)
-            qvel = setup.qvel
+            case = Case.compiled(scene, scenario, params)
+            setup = case.setup(steps, dt)
             if "x0" not in scene.parameters:
+                model = case.model
+                qpos = np.array(setup.qpos if setup.qpos is not None else model.qpos0, float)
+                qvel = np.array(setup.qvel if setup.qvel is not None else np.zeros(model.nv), float)
                 qpos[model.joint(joint).qposadr[0]] = start
-                qvel = np.array(qvel if qvel is not None else np.zeros(model.nv), float)
                 qvel[model.joint(joint).dofadr[0]] = 0.0
-            trajectory = simulate(
-                model,
-                integrator=integrator,
-                dt=dt,
-                duration=duration,
-                qpos=qpos,
-                qvel=qvel,
-                act=setup.act,
-                control=setup.control,
-                stop=scene.stop_condition(model, params, scenario),
-            )
+                setup = Setup(qpos=qpos, qvel=qvel, act=setup.act, control=setup.control)
+            trajectory = case.simulate(integrator, dt, duration, setup=setup)
         except DivergedError:
             members.append(Member(start, None, None, False, fraction))
             continue
-        x, v = scene.joint_columns(model, trajectory)[joint]
+        x, v = case.joint_columns(trajectory)[joint]
         members.append(Member(start, x, v, trajectory.stopped, fraction))
     return tuple(members)
 
@@ -347,15 +339,14 @@ def run_phase_family(result: Result) -> PhaseFamily:
         The scene has no phase plane for this scenario (several joints or a
         time-dependent field) or no equilibrium to start from.
     """
-    scene, scenario = scene_and_scenario(result)
-    field = scene.phase_field(result.model, result.parameters, scenario) if len(result.pos) == 1 else None
-    equilibria = scene.equilibria(result.model, result.parameters, scenario) if field is not None else []
+    field = result.case.phase_field() if len(result.pos) == 1 else None
+    equilibria = result.case.equilibria() if field is not None else []
     if field is None or not equilibria:
         raise BadInputError(
             f"plot kind 'family' needs one joint, an autonomous phase field and an equilibrium; "
             f"{result.scene}/{result.scenario} has none (use --kind time or phase)"
         )
-    separatrices = scene.separatrices(result.model, result.parameters, scenario)
+    separatrices = result.case.separatrices()
     center, starts, fractions, straddles = _family_displacements(result, equilibria, separatrices)
     return PhaseFamily(
         result=result,
@@ -371,19 +362,18 @@ def run_phase_family(result: Result) -> PhaseFamily:
 def _damping_per_ratio(scene_name: str, scenario_name: str | None, parameters: dict[str, Any]) -> float:
     """Damping [N s/m] per unit damping ratio of the scene's single mode (zeta is linear in d)."""
     # the number of modes first: a two-mode scenario (car pitch_heave) may not even take 'damping'
-    scene, scenario, params = prepare(scene_name, scenario_name, parameters)
-    count = len(scene.modes(scene.build(params, scenario), params, scenario))
+    case = scenes.case(scene_name, scenario_name, parameters)
+    count = len(case.modes())
     if count != 1:
         raise BadInputError(
-            f"plot kind 'zeta' needs a one-mode scene; {scene.name}/{scenario.name} has {count} modes"
+            f"plot kind 'zeta' needs a one-mode scene; {case.scene.name}/{case.scenario.name} has {count} modes"
             " (use --kind time or phase)"
         )
-    scene, scenario, params = prepare(scene_name, scenario_name, {**parameters, "damping": 1.0})
-    model = scene.build(params, scenario)
-    modes = scene.modes(model, params, scenario)
+    modes = scenes.case(scene_name, scenario_name, {**parameters, "damping": 1.0}).modes()
     if len(modes) < 1 or modes[0][1] <= 0:
         raise BadInputError(
-            f"plot kind 'zeta' needs a single damped mode; {scene.name}/{scenario.name} has {len(modes)} modes"
+            f"plot kind 'zeta' needs a single damped mode; {case.scene.name}/{case.scenario.name} has {len(modes)}"
+            " modes"
         )
     return 1.0 / modes[0][1]
 

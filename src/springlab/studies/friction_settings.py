@@ -2,7 +2,7 @@
 
 MuJoCo's dry friction (a joint's `frictionloss`, a contact's friction cone) is a soft constraint: a
 block that should stick creeps, and one that should stop turns round a little early and never quite
-stops. A scene that declares `Scene.dry_friction` (springlab.scenes.capabilities.DryFrictionSpec)
+stops. A scene that declares `Scene.dry_friction` (springlab.scenes.capabilities.friction.DryFrictionSpec)
 has exact Coulomb answers and takes MuJoCo's friction settings as parameters; this study reads the
 declaration (it never names a scene) and, per declared case (a scenario),
 
@@ -45,8 +45,8 @@ from springlab.files import json_ready
 from springlab.runs import compare
 from springlab.runs.run import evaluate, prepare, run_scenario
 from springlab.scenes.base import Scene
-from springlab.scenes.capabilities import DryFrictionSpec, FrictionCase, FrictionMeasure, SolverSetting
-from springlab.sim.simulate import INTEGRATORS, check_timing, integrator_id, simulate
+from springlab.scenes.capabilities.friction import DryFrictionSpec, FrictionCase, FrictionMeasure, SolverSetting
+from springlab.sim.simulate import INTEGRATORS, check_timing, integrator_id
 
 from .executor import Executor, chunked, resolve
 
@@ -545,8 +545,8 @@ def settings_chunk(payload: dict[str, Any], nthread: int = 0) -> list[dict[str, 
     wanted = {name for pair in payload["measures"] for name in pair if name}
     for group in payload["groups"]:
         settings, _, _ = group[0]
-        scene, chosen, params = prepare(payload["scene"], payload["scenario"], {**payload["overrides"], **settings})
-        model = scene.build(params, chosen)  # one model per setting: simulate steps a copy at each dt
+        # one case per setting: its runs at every integrator and dt share its model (simulate steps a copy)
+        case = scenes.case(payload["scene"], payload["scenario"], {**payload["overrides"], **settings})
         previous = None
         for _, integrator, dt in group:
             steps = check_timing(dt, payload["duration"])
@@ -558,14 +558,12 @@ def settings_chunk(payload: dict[str, Any], nthread: int = 0) -> list[dict[str, 
                 "quantities": {},
                 "detail": "",
             }
-            setup = scene.setup(model, params, chosen, steps, dt)
+            setup = case.setup(steps, dt)
             try:
                 start = _time.thread_time()
-                trajectory = simulate(
-                    model, integrator=integrator, dt=dt, duration=payload["duration"], qpos=setup.qpos, qvel=setup.qvel
-                )
+                trajectory = case.simulate(integrator, dt, payload["duration"], setup=setup)
                 row["cpu_time_s"] = _time.thread_time() - start
-                result = evaluate(scene, chosen, params, model, trajectory, checks=False)
+                result = evaluate(case, trajectory, checks=False)
             except DivergedError as blown:
                 row["detail"] = str(blown)
                 rows.append(row)
@@ -576,7 +574,7 @@ def settings_chunk(payload: dict[str, Any], nthread: int = 0) -> list[dict[str, 
             row["error"] = result.max_rel_error
             row["quantities"] = {
                 k: v
-                for k, v in {**params, **result.quantities}.items()
+                for k, v in {**case.params, **result.quantities}.items()
                 if k in wanted or k.removesuffix("_exact") in wanted
             }
             rows.append(row)

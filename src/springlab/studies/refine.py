@@ -1,7 +1,7 @@
 """How much model does a question need? The three-axis trade: model size x integrator x timestep.
 
 For a scene that declares its model size a parameter (`Scene.refinable`, a
-springlab.scenes.capabilities.RefinableSpec) and a question (a quantity its runs measure, with the same
+springlab.scenes.capabilities.refine.RefinableSpec) and a question (a quantity its runs measure, with the same
 quantity of the discretized model solved exactly and of the continuum), the study runs every size x
 integrator x timestep and splits each run's error against the continuum into
 
@@ -38,12 +38,25 @@ from springlab import display, scenes, tables
 from springlab.errors import BadInputError, DivergedError
 from springlab.files import json_ready
 from springlab.runs import compare
-from springlab.runs.run import prepare, run_scenario
+from springlab.runs.run import run_scenario
 from springlab.scenes.base import Scene
-from springlab.sim.batch import TIMING_STEPS, Job, time_run
-from springlab.sim.simulate import INTEGRATORS, MAX_STEPS, check_timing, integrator_id, simulate
+from springlab.sim.batch import TIMING_STEPS, time_run
+from springlab.sim.simulate import INTEGRATORS, MAX_STEPS, check_timing, integrator_id
 
 from .executor import Executor
+from .settings import (
+    COST_BASIS,
+    Recommendation,
+    Run,
+    RunFields,
+    Setting,
+    Verification,
+    beyond,
+    cheapest_verified,
+    counted_cost,
+    pareto_front,
+    work_per_evaluation,
+)
 
 if TYPE_CHECKING:
     import pandas
@@ -64,37 +77,30 @@ WALL_TIME_BASIS = (
 
 
 @dataclasses.dataclass(frozen=True)
-class RefineRun:
-    """One (size, integrator, dt) of the study.
+class RefineRun(RunFields):
+    """One (size, integrator, dt) of the study: the shared row (`run`) and the question's three values.
 
     Attributes
     ----------
+    run
+        the shared row (springlab.studies.settings.Run): its setting holds the size as an option, its error is
+        `error_bound` (what the study ranks by), its cost the counted work, its time the measured wall time.
     size
         the model's size (e.g. elements).
-    integrator, dt
-        the setting [-, s].
-    steps
-        physics steps.
     value, exact, continuum
         the question's measured value, the discretized model's exact one and the continuum's (None: diverged).
-    wall_time_s
-        wall time of the run [s].
-    diverged
-        the run blew up (its error is None).
-    detail
-        how it diverged.
     """
 
+    run: Run
     size: int
-    integrator: str
-    dt: float
-    steps: int
     value: float | None
     exact: float | None
     continuum: float | None
-    wall_time_s: float
-    diverged: bool = False
-    detail: str = ""
+
+    @property
+    def wall_time_s(self) -> float:
+        """Wall time of the run [s] (WALL_TIME_BASIS), reported beside its counted cost."""
+        return self.run.time_s
 
     @property
     def error(self) -> float | None:
@@ -107,9 +113,7 @@ class RefineRun:
     def error_bound(self) -> float | None:
         """discretization_error + integration_error [-]: a bound on the error that does not count on the two
         parts cancelling (their signs depend on the integrator and the size; the study ranks runs by this)."""
-        if self.discretization_error is None or self.integration_error is None:
-            return None
-        return self.discretization_error + self.integration_error
+        return bound(self.exact, self.continuum, self.value)
 
     @property
     def discretization_error(self) -> float | None:
@@ -127,7 +131,8 @@ class RefineRun:
 
     def to_dict(self) -> dict[str, Any]:
         """refine.json's row: size, integrator, dt [s], steps, value, exact, continuum, error,
-        discretization_error, integration_error, error_bound, wall_time_s [s], diverged."""
+        discretization_error, integration_error, error_bound, wall_time_s [s], cost [DOF-evaluations], diverged,
+        beyond_limit."""
         return {
             "size": self.size,
             "integrator": self.integrator,
@@ -141,8 +146,18 @@ class RefineRun:
             "integration_error": self.integration_error,
             "error_bound": self.error_bound,
             "wall_time_s": self.wall_time_s,
+            "cost": self.cost,
             "diverged": self.diverged,
+            "beyond_limit": self.beyond_limit,
         }
+
+
+def bound(exact: float | None, continuum: float | None, value: float | None) -> float | None:
+    """|exact - continuum| / |continuum| + |value - exact| / |exact| [-]: the error bound of an answer (None:
+    a value missing or not finite)."""
+    if value is None or exact is None or continuum is None or not math.isfinite(value):
+        return None
+    return abs(exact - continuum) / abs(continuum) + abs(value - exact) / abs(exact)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -184,56 +199,11 @@ class SizeCost:
         }
 
 
-@dataclasses.dataclass(frozen=True)
-class RefineRecommendation:
-    """The cheapest (size, integrator, dt) whose answer meets the tolerance, verified by a run.
-
-    Attributes
-    ----------
-    tol
-        the relative tolerance [-] on the answer against the continuum.
-    size, integrator, dt
-        the setting (None: no run of the study meets tol).
-    error, discretization_error, integration_error
-        the verification run's error against the continuum and its two parts [-]; their sum is at most tol.
-    wall_time_s
-        the verification run's wall time [s].
-    verified
-        the verification run meets tol.
-    verdict
-        what `springlab run` says of that run (its own validation against the exact discretized model).
-    """
-
-    tol: float
-    size: int | None
-    integrator: str | None
-    dt: float | None
-    error: float | None
-    discretization_error: float | None
-    integration_error: float | None
-    wall_time_s: float | None
-    verified: bool
-    verdict: str | None
-
-    @property
-    def found(self) -> bool:
-        """Whether a verified setting meets tol."""
-        return self.verified
-
-    def to_dict(self) -> dict[str, Any]:
-        """refine.json's `recommendation`."""
-        return {
-            "tol": self.tol,
-            "size": self.size,
-            "integrator": self.integrator,
-            "dt": self.dt,
-            "error": self.error,
-            "discretization_error": self.discretization_error,
-            "integration_error": self.integration_error,
-            "wall_time_s": self.wall_time_s,
-            "verified": self.verified,
-            "verdict": self.verdict,
-        }
+#: refine.json's names for the recommendation's keys: its `error` is the error against the continuum (a detail),
+#: the kernel's error is the bound the tolerance holds
+RECOMMENDATION_NAMES = {"tolerance": "tol", "error": "error_bound", "time_s": "wall_time_s"}
+#: the recommendation's own numbers, null until a verification run gives them
+NO_DETAILS = dict.fromkeys(("size", "error", "discretization_error", "integration_error", "verdict"))
 
 
 @dataclasses.dataclass(frozen=True, repr=False)
@@ -259,7 +229,8 @@ class Refinement(display.Shown):
     sizes
         one SizeCost per size.
     pareto
-        the runs no other beats in both error (against the continuum) and wall time, cheapest first.
+        the runs no other beats in both error bound and counted cost, cheapest first (never a diverged run or
+        one beyond its integrator's stability limit).
     discretization_order
         observed order of the discretization error in the size (fitted; None: too few points).
     expected_order
@@ -289,7 +260,7 @@ class Refinement(display.Shown):
     expected_order: float
     cost_growth: dict[str, float | None]
     step_cost_growth: float | None
-    recommendation: RefineRecommendation | None = None
+    recommendation: Recommendation[RefineRun] | None = None
     sweep_wall_time_s: float = 0.0
 
     def _shown(self) -> display.Summary:
@@ -299,11 +270,12 @@ class Refinement(display.Shown):
         if pick is None:
             verdict, ok, message = "no tol", None, self.description
         elif pick.found:
-            verdict = f"{self.size_parameter} {pick.size}, {pick.integrator} at dt = {display.number(pick.dt)} s"
-            ok = pick.verified
-            message = f"the cheapest within tol {pick.tol:g}: error {display.number(pick.error)} ({pick.verdict})"
+            verdict = (
+                f"{self.size_parameter} {pick.details['size']}, {pick.integrator} at dt = {display.number(pick.dt)} s"
+            )
+            ok, message = pick.verified, f"{pick.text} (`springlab run`: {pick.details['verdict']})"
         else:
-            verdict, ok, message = "no setting meets tol", False, f"no run reached tol {pick.tol:g}"
+            verdict, ok, message = "no setting meets tol", False, pick.text
         return display.Summary(
             "Refinement",
             f"{self.scene} / {self.scenario}",
@@ -336,7 +308,8 @@ class Refinement(display.Shown):
     def to_dict(self) -> dict[str, Any]:
         """refine.json: scene, scenario, question, description, size_parameter, size_description, duration,
         parameters, runs, sizes, pareto, discretization_order, expected_order, cost_growth, step_cost_growth,
-        recommendation, wall_time_basis, sweep_wall_time_s (plain JSON values)."""
+        recommendation, cost_basis, wall_time_basis, sweep_wall_time_s (plain JSON values)."""
+        pick = self.recommendation
         return json_ready(
             {
                 "scene": self.scene,
@@ -354,7 +327,8 @@ class Refinement(display.Shown):
                 "expected_order": self.expected_order,
                 "cost_growth": dict(self.cost_growth),
                 "step_cost_growth": self.step_cost_growth,
-                "recommendation": None if self.recommendation is None else self.recommendation.to_dict(),
+                "recommendation": None if pick is None else {**NO_DETAILS, **pick.to_dict(RECOMMENDATION_NAMES)},
+                "cost_basis": COST_BASIS,
                 "wall_time_basis": WALL_TIME_BASIS,
                 "sweep_wall_time_s": self.sweep_wall_time_s,
             }
@@ -459,22 +433,19 @@ def refine(
 
     plans = []
     for size in sizes:
-        _, chosen, params = prepare(scene_obj, asked.scenario, {**parameters, spec.size: size})
-        model = scene_obj.build(params, chosen)
-        modes = scene_obj.modes(model, params, chosen)
+        case = scenes.case(scene_obj, asked.scenario, {**parameters, spec.size: size})
+        params, modes = case.params, case.modes()
         fastest = max(omega for omega, _ in modes)
         limits: dict[str, float | None] = {}
         for name in integrators:
-            ratio = min(
-                scene_obj.stability_limit(model, params, chosen, name, omega, zeta) / omega for omega, zeta in modes
-            )
+            ratio = min(case.stability_limit(name, omega, zeta) / omega for omega, zeta in modes)
             limits[name] = ratio if math.isfinite(ratio) else None
         dts = sorted({_on_grid(_round_sig(f / fastest), params.get(spec.switch_time)) for f in omega_dt}, reverse=True)
         dts = [dt for dt in dts if duration / dt <= min(MAX_REFINE_STEPS, MAX_STEPS) and dt <= duration / 4]
         plans.append((size, fastest, limits, dts))
     reference = scene_obj.name if scenes.SCENES.get(scene_obj.name) is scene_obj else scene_obj
     payloads = []
-    for size, _, _, dts in plans:
+    for size, _, limits, dts in plans:
         pairs = [(name, dt) for dt in dts for name in integrators]
         for start in range(0, len(pairs), CHUNK_RUNS):
             payloads.append(
@@ -484,6 +455,8 @@ def refine(
                     "question": (asked.name, asked.exact, asked.continuum),
                     "parameters": {**parameters, spec.size: size},
                     "size": size,
+                    "size_parameter": spec.size,
+                    "limits": limits,
                     "duration": duration,
                     "pairs": pairs[start : start + CHUNK_RUNS],
                 }
@@ -493,7 +466,7 @@ def refine(
     runs = [run for part in outcomes for run in part]
     runs.sort(key=lambda r: (r.size, integrators.index(r.integrator), -r.dt))
     costs = _size_costs(plans, runs, integrators)
-    front = _pareto(runs)
+    front = pareto_front(runs)
     recommendation = _recommend(scene_obj, asked, spec.size, runs, tol, duration, parameters) if tol else None
     return Refinement(
         scene=scene_obj.name,
@@ -520,46 +493,40 @@ def refine(
 
 def refine_chunk(payload: dict[str, Any], nthread: int = 0) -> list[RefineRun]:
     """One chunk of one size: each (integrator, dt) run alone, its question's three values read from the
-    scene's quantities (a module-level function of plain data for dask workers; the model is rebuilt here)."""
-    scene_obj, chosen, params = prepare(payload["scene"], payload["scenario"], payload["parameters"])
-    model = scene_obj.build(params, chosen)
+    scene's quantities, its counted cost from the model and its stability limit from payload["limits"] (a
+    module-level function of plain data for dask workers; the model is rebuilt here)."""
+    case = scenes.case(payload["scene"], payload["scenario"], payload["parameters"])
     name, exact_name, continuum_name = payload["question"]
-    duration = payload["duration"]
+    duration, size = payload["duration"], payload["size"]
+    work = work_per_evaluation(case.model)
     out = []
     for integrator, dt in payload["pairs"]:
         steps = check_timing(dt, duration)
-        setup = scene_obj.setup(model, params, chosen, steps, dt)
+        setting = Setting(integrator, dt, ((payload["size_parameter"], float(size)),))
+        past = beyond(dt, payload["limits"][integrator])
+        setup = case.setup(steps, dt)
         try:
-            trajectory = simulate(
-                model,
-                integrator=integrator,
-                dt=dt,
-                duration=duration,
-                qpos=setup.qpos,
-                qvel=setup.qvel,
-                act=setup.act,
-                control=setup.control,
-            )
+            trajectory = case.simulate(integrator, dt, duration, setup=setup)
         except DivergedError as error:
-            out.append(RefineRun(payload["size"], integrator, dt, steps, None, None, None, math.nan, True, str(error)))
+            cost = counted_cost(integrator, steps, work)
+            run = Run(setting, steps, None, cost, diverged=True, beyond_limit=past, detail=str(error))
+            out.append(RefineRun(run, size, None, None, None))
             continue
-        quantities = scene_obj.quantities(model, params, chosen, trajectory)
+        quantities = case.quantities(trajectory)
         value = quantities.get(name)
         value = float(value) if value is not None and math.isfinite(float(value)) else None
-        out.append(
-            RefineRun(
-                payload["size"],
-                integrator,
-                dt,
-                trajectory.steps,
-                value,
-                float(quantities[exact_name]),
-                float(quantities[continuum_name]),
-                time_run(Job(model, integrator, dt, steps, setup)),
-                value is None,
-                "" if value is not None else f"the run measured no {name}",
-            )
+        exact, continuum = float(quantities[exact_name]), float(quantities[continuum_name])
+        run = Run(
+            setting,
+            trajectory.steps,
+            bound(exact, continuum, value),
+            counted_cost(integrator, trajectory.steps, work),
+            time_run(case.job(integrator, dt, steps, setup=setup)),
+            diverged=value is None,
+            beyond_limit=past,
+            detail="" if value is not None else f"the run measured no {name}",
         )
+        out.append(RefineRun(run, size, value, exact, continuum))
     return out
 
 
@@ -568,18 +535,6 @@ def _on_grid(dt: float, period: float | None) -> float:
     if not period:
         return dt
     return period / math.ceil(period / dt * (1 - 1e-12))
-
-
-def _pareto(runs: Sequence[RefineRun]) -> list[RefineRun]:
-    """Runs no other run beats in both error and wall time, cheapest first."""
-    candidates = sorted((r for r in runs if r.error is not None), key=lambda r: (r.wall_time_s, r.error))
-    front, best = [], math.inf
-    for r in candidates:
-        assert r.error is not None
-        if r.error < best:
-            front.append(r)
-            best = r.error
-    return front
 
 
 def _size_costs(plans, runs: Sequence[RefineRun], integrators: Sequence[str]) -> list[SizeCost]:
@@ -618,12 +573,11 @@ def _order(points: Sequence[tuple[float, float | None]]) -> float | None:
 
 def _recommend(
     scene: Scene, asked, size_parameter: str, runs: Sequence[RefineRun], tol: float, duration: float, overrides
-) -> RefineRecommendation:
-    """The cheapest run whose error bound meets tol, verified by run_scenario at its setting (the next if it fails)."""
-    meeting = sorted(
-        (r for r in runs if r.error_bound is not None and r.error_bound <= tol), key=lambda r: r.wall_time_s
-    )
-    for candidate in meeting:
+) -> Recommendation[RefineRun]:
+    """The cheapest run (counted work) whose error bound meets tol, verified by run_scenario at its setting (the
+    next if it fails): springlab.studies.settings.cheapest_verified."""
+
+    def verify(candidate: RefineRun) -> Verification:
         try:
             result = run_scenario(
                 scene.name,
@@ -634,27 +588,26 @@ def _recommend(
                 **{**overrides, size_parameter: candidate.size},
             )
         except DivergedError:
-            continue
+            return Verification(False, None)
         value = result.quantities.get(asked.name)
-        setup = scene.setup(result.model, result.parameters, scene.scenario(asked.scenario), result.steps, result.dt)
-        wall = time_run(Job(result.model, candidate.integrator, candidate.dt, result.steps, setup))
         exact, continuum = result.quantities[asked.exact], result.quantities[asked.continuum]
-        if value is None or not math.isfinite(float(value)):
-            continue
-        error = abs(float(value) - continuum) / abs(continuum)
-        discretization, integration = abs(exact - continuum) / abs(continuum), abs(float(value) - exact) / abs(exact)
-        if discretization + integration > tol:
-            continue
-        return RefineRecommendation(
-            tol=tol,
-            size=candidate.size,
-            integrator=candidate.integrator,
-            dt=candidate.dt,
-            error=error,
-            discretization_error=discretization,
-            integration_error=integration,
-            wall_time_s=wall,
-            verified=True,
-            verdict=None if result.verdict is None else str(result.verdict),
-        )
-    return RefineRecommendation(tol, None, None, None, None, None, None, None, False, None)
+        value = float(value) if value is not None else None
+        error_bound = bound(exact, continuum, value)
+        if value is None or error_bound is None or error_bound > tol:
+            return Verification(False, error_bound)
+        wall = time_run(result.case.job(candidate.integrator, candidate.dt, result.steps))
+        details = {
+            "size": candidate.size,
+            "error": abs(value - continuum) / abs(continuum),
+            "discretization_error": abs(exact - continuum) / abs(continuum),
+            "integration_error": abs(value - exact) / abs(exact),
+            "verdict": None if result.verdict is None else str(result.verdict),
+        }
+        return Verification(True, error_bound, wall, details)
+
+    def describe(setting: Setting) -> str:
+        return f"{size_parameter} = {setting.option_values[size_parameter]:g}, {setting.integrator} at dt = {setting.dt:.3g} s"
+
+    return cheapest_verified(
+        runs, tol, verify, describe=describe, error_words="error bound (discretization + integration)"
+    )

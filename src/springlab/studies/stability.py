@@ -42,7 +42,7 @@ from mujoco import batch as _mjbatch
 from springlab import display, tables
 from springlab.errors import BadInputError, DivergedError
 from springlab.exact.limits import stability_limit
-from springlab.sim.batch import RECORD_SPEC, Job, run_batched
+from springlab.sim.batch import RECORD_SPEC, run_batched
 from springlab.sim.simulate import BAD_WARNINGS, INTEGRATORS, integrator_id, quiet_mujoco
 
 from .executor import Executor, resolve
@@ -441,19 +441,13 @@ def energy_histories(
     data.energy lags a step), with m and k read back from the compiled model.
     """
     oscillator = build_oscillator(damping=0.0)
-    model, scene, chosen, params, spec = (
-        oscillator.model,
-        oscillator.scene,
-        oscillator.scenario,
-        oscillator.params,
-        oscillator.spec,
-    )
-    m, k, _ = spec.constants(model)
+    case, params, spec = oscillator.case, oscillator.params, oscillator.spec
+    m, k, _ = spec.constants(case.model)
     omega = math.sqrt(k / m)
     dt = omega_dt / omega
     steps = round(periods * 2 * math.pi / omega_dt)
-    setup = scene.setup(model, params, chosen, steps, dt)
-    jobs = [Job(model, name, dt, steps, setup) for name in INTEGRATORS]
+    setup = case.setup(steps, dt)
+    jobs = [case.job(name, dt, steps, setup=setup) for name in INTEGRATORS]
     outcomes = run_batched(jobs, nthread=nthread)
     x0, v0 = params[spec.x0], params[spec.v0]
     energy0 = 0.5 * m * v0**2 + 0.5 * k * x0**2
@@ -492,7 +486,7 @@ def energy_histories(
             )
         )
     return EnergyHistories(
-        scene=scene.name,
+        scene=case.scene.name,
         omega_dt=omega_dt,
         periods=periods,
         time_periods=_read_only(n * omega_dt / (2 * math.pi)),

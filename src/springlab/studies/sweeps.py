@@ -30,7 +30,8 @@ from springlab.errors import BadInputError, DivergedError, UnknownNameError
 from springlab.files import json_ready
 from springlab.runs.compare import Verdict
 from springlab.runs.run import Result, evaluate, prepare
-from springlab.sim.batch import Job, run_rollout
+from springlab.scenes.base import Case
+from springlab.sim.batch import run_rollout
 from springlab.sim.simulate import check_timing, integrator_id
 
 from .executor import Executor, chunked, resolve
@@ -414,19 +415,20 @@ def run_chunk(payload: Mapping[str, Any], nthread: int = 0) -> list[dict[str, An
             "detail": "",
         }
         rows.append(row)
-        model = scene.build(params, chosen)
+        case = Case.compiled(scene, chosen, params)
         try:
-            setup = scene.setup(model, params, chosen, steps, dt)
+            job = case.job(integrator, dt, steps)
         except BadInputError as error:  # e.g. a bump that lifts the car off its springs: a row, not a failed sweep
             row.update(passed=False, detail=f"invalid: {error}")
             continue
-        prepared.append((row, params, model))
-        jobs.append(Job(model, integrator, dt, steps, setup, scene.stop_condition(model, params, chosen)))
-    for (row, params, model), outcome in zip(prepared, run_rollout(jobs, nthread=nthread, private_models=True)):
+        prepared.append((row, case))
+        jobs.append(job)
+    # each case is this chunk's own: the rollout sets its model's integrator and timestep in place
+    for (row, case), outcome in zip(prepared, run_rollout(jobs, nthread=nthread, private_models=True)):
         try:
             if isinstance(outcome, DivergedError):
                 raise outcome
-            result = evaluate(scene, chosen, params, model, outcome)
+            result = evaluate(case, outcome)
         except DivergedError as error:
             row.update(passed=False, diverged=True, detail=str(error))
         else:

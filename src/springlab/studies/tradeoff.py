@@ -20,7 +20,6 @@ import time as _time
 from collections.abc import Callable, Iterable, Sequence
 from typing import TYPE_CHECKING, Any
 
-import mujoco
 import numpy as np
 
 from springlab import display, scenes, tables
@@ -28,13 +27,27 @@ from springlab.errors import BadInputError, DivergedError
 from springlab.files import json_ready
 from springlab.runs import compare
 from springlab.runs.compare import Verdict
-from springlab.runs.run import evaluate, prepare, run_scenario
-from springlab.scenes.base import Scenario, Scene
-from springlab.sim.batch import TIMING_STEPS, Job, run_batched, time_run
+from springlab.runs.run import evaluate, run_scenario
+from springlab.scenes.base import Case, Scenario, Scene
+from springlab.sim.batch import TIMING_STEPS, run_batched, time_run
 from springlab.sim.simulate import INTEGRATORS, ORDERS, Setup, check_timing, integrator_id
 
-from .convergence import Run, observed_order, pareto_front
 from .executor import Executor, chunked
+from .settings import (
+    COST_BASIS,
+    Recommendation,
+    Run,
+    RunFields,
+    Setting,
+    Verification,
+    beyond,
+    cheapest_verified,
+    counted_cost,
+    limit_dt,
+    observed_order,
+    pareto_front,
+    work_per_evaluation,
+)
 
 if TYPE_CHECKING:
     import pandas
@@ -62,43 +75,62 @@ WALL_TIME_BASIS = (
 
 
 @dataclasses.dataclass(frozen=True)
-class Recommendation:
-    """The cheapest (integrator, dt) of a sweep that meets a tolerance, verified by running it (`recommend`).
+class TradeoffRun(RunFields):
+    """One (integrator, dt) of the sweep: the shared row (`run`: setting, steps, error, counted cost,
+    measured wall time, diverged, beyond the stability limit) and what `springlab run` says of it.
 
     Attributes
     ----------
-    tol
-        the relative tolerance [-] asked for.
-    integrator
-        the integrator to use (None: no setting of the sweep meets tol).
-    dt
-        the timestep to use [s] (None with integrator).
-    max_rel_error
-        the verification run's largest max_rel [-] (None with integrator).
-    wall_time_s
-        the verification run's wall time, measured as the sweep's [s] (None with integrator).
+    run
+        the shared row (springlab.studies.settings.Run): its error is max_rel_error.
+    verdict
+        what `springlab run` says of the same setting (a springlab.runs.compare.Verdict: PASS,
+        FAIL or NOT_VALIDATED); None if diverged or not run (a predicted setting).
     """
 
-    tol: float
-    integrator: str | None
-    dt: float | None
-    max_rel_error: float | None
-    wall_time_s: float | None
+    run: Run
+    verdict: Verdict | None = None
 
     @property
-    def found(self) -> bool:
-        """Whether a setting of the sweep meets tol."""
-        return self.integrator is not None
+    def max_rel_error(self) -> float | None:
+        """max over the compared columns of max |sim - ref| / max |ref| [-]; None if diverged."""
+        return self.run.error
+
+    @property
+    def wall_time_s(self) -> float:
+        """Wall time of the run alone [s] (WALL_TIME_BASIS), reported beside its counted cost."""
+        return self.run.time_s
+
+    @property
+    def error(self) -> float:
+        """max_rel_error of a run that did not diverge [-] (filter out diverged runs first)."""
+        if self.run.error is None:
+            raise ValueError(f"{self.integrator} at dt = {self.dt:g} s diverged: it has no error")
+        return self.run.error
+
+    @property
+    def validated(self) -> bool:
+        """Whether the run is inside the range of its error estimate (its verdict means something)."""
+        return self.verdict in (Verdict.PASS, Verdict.FAIL)
 
     def to_dict(self) -> dict[str, Any]:
-        """tradeoff.json's `recommendation`: tol, integrator, dt, max_rel_error, wall_time_s."""
+        """The JSON row: integrator, dt [s], max_rel_error [-], steps, wall_time_s [s], cost [DOF-evaluations],
+        diverged, beyond_limit, verdict."""
         return {
-            "tol": self.tol,
             "integrator": self.integrator,
             "dt": self.dt,
             "max_rel_error": self.max_rel_error,
+            "steps": self.steps,
             "wall_time_s": self.wall_time_s,
+            "cost": self.cost,
+            "diverged": self.diverged,
+            "beyond_limit": self.beyond_limit,
+            "verdict": None if self.verdict is None else str(self.verdict),
         }
+
+
+#: tradeoff.json's names for the recommendation's keys (the names it has always had)
+RECOMMENDATION_NAMES = {"tolerance": "tol", "error": "max_rel_error", "time_s": "wall_time_s"}
 
 
 @dataclasses.dataclass(frozen=True, repr=False)
@@ -123,9 +155,12 @@ class Tradeoff(display.Shown):
     orders
         integrator -> observed order of accuracy (None: too few asymptotic points).
     pareto
-        the runs no other run beats in both error and wall time, cheapest first.
+        the runs no other run beats in both error and counted cost, cheapest first (never a diverged run
+        or one beyond its integrator's stability limit).
     recommendation
         for a tolerance, the verified cheapest setting (see `recommend`); None without one.
+    limits
+        integrator -> its stability limit on the scenario's modes [s] (None: none known).
     sweep_wall_time_s
         wall time of the whole sweep, timing pass included [s].
     """
@@ -135,11 +170,12 @@ class Tradeoff(display.Shown):
     parameters: dict[str, float]
     overrides: dict[str, Any]
     duration: float
-    runs: tuple[Run, ...] = dataclasses.field(repr=False)
+    runs: tuple[TradeoffRun, ...] = dataclasses.field(repr=False)
     orders: dict[str, float | None]
-    pareto: tuple[Run, ...] = dataclasses.field(repr=False)
-    recommendation: Recommendation | None = None
+    pareto: tuple[TradeoffRun, ...] = dataclasses.field(repr=False)
+    recommendation: Recommendation[TradeoffRun] | None = None
     sweep_wall_time_s: float = 0.0
+    limits: dict[str, float | None] = dataclasses.field(default_factory=dict)
 
     def _shown(self) -> display.Summary:
         """The trade-off as a notebook shows it: the recommendation first, the orders, then the runs."""
@@ -147,10 +183,9 @@ class Tradeoff(display.Shown):
         if pick is None:
             verdict, ok, message = "no tol", None, "the trade alone (give tol for a recommendation)"
         elif pick.found:
-            verdict, ok = f"{pick.integrator} at dt = {display.number(pick.dt)} s", True
-            message = f"the cheapest setting within tol {pick.tol:g}: error {display.number(pick.max_rel_error)}"
+            verdict, ok, message = f"{pick.integrator} at dt = {display.number(pick.dt)} s", True, pick.text
         else:
-            verdict, ok, message = "no setting meets tol", False, f"no run reached tol {pick.tol:g}"
+            verdict, ok, message = "no setting meets tol", False, pick.text
         facts = [display.Fact("duration", self.duration, "s"), display.Fact("runs", len(self.runs))]
         facts += [display.Fact(f"order of {name}", order) for name, order in self.orders.items()]
         return display.Summary(
@@ -178,7 +213,8 @@ class Tradeoff(display.Shown):
 
     def to_dict(self) -> dict[str, Any]:
         """tradeoff.json: scene, scenario, duration, parameters, runs, orders, pareto, recommendation,
-        wall_time_basis, sweep_wall_time_s (plain JSON values)."""
+        stability_limits, cost_basis, wall_time_basis, sweep_wall_time_s (plain JSON values)."""
+        pick = self.recommendation
         return json_ready(
             {
                 "scene": self.scene,
@@ -188,7 +224,9 @@ class Tradeoff(display.Shown):
                 "runs": [r.to_dict() for r in self.runs],
                 "orders": dict(self.orders),
                 "pareto": [r.to_dict() for r in self.pareto],
-                "recommendation": None if self.recommendation is None else self.recommendation.to_dict(),
+                "recommendation": None if pick is None else pick.to_dict(RECOMMENDATION_NAMES),
+                "stability_limits": dict(self.limits),
+                "cost_basis": COST_BASIS,
                 "wall_time_basis": WALL_TIME_BASIS,
                 "sweep_wall_time_s": self.sweep_wall_time_s,
             }
@@ -200,19 +238,19 @@ class Tradeoff(display.Shown):
         return tables.to_pandas([{**r.to_dict(), "pareto": id(r) in front} for r in self.runs])
 
 
-def fastest_rate(scene: Scene, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> float | None:
-    """The largest |eigenvalue| [1/s] of the scenario's motion, or None if the scene knows none.
+def fastest_rate(case: Case) -> float | None:
+    """The largest |eigenvalue| [1/s] of the case's motion, or None if the scene knows none.
 
     From the scene's modes (an overdamped mode's fast root omega (zeta + sqrt(zeta^2 - 1))),
     else from the spectral radius of the exact reference's system matrix.
     """
     rates = []
-    for omega, zeta in scene.modes(model, params, scenario):
+    for omega, zeta in case.modes():
         rates.append(omega * (zeta + math.sqrt(zeta * zeta - 1)) if zeta > 1 else omega)
     if rates:
         return max(rates)
-    if scenario.exact:
-        reference = scene.reference(model, params, scenario, np.array([0.0]), dt=scenario.dt or scene.dt)
+    if case.scenario.exact:
+        reference = case.reference(np.array([0.0]), dt=case.scenario.dt or case.scene.dt)
         if reference is not None and reference.system is not None:
             radius = float(np.max(np.abs(np.linalg.eigvals(reference.system))))
             return radius if radius > 0 else None
@@ -304,10 +342,10 @@ def sweep(
         unknown names, non-physical values, a scenario without exact reference.
     """
     started = _time.perf_counter()
-    scene_obj, chosen, params = prepare(scene, scenario, parameters)
-    model = scene_obj.build(params, chosen)
-    if not sweepable(scene_obj, chosen, params, model):
-        valid = [s.name for s in scene_obj.scenarios.values() if sweepable(scene_obj, s, None)]
+    case = scenes.case(scene, scenario, parameters)
+    scene_obj, chosen, params = case.scene, case.scenario, case.params
+    if not sweepable(scene_obj, chosen, case):
+        valid = [s.name for s in scene_obj.scenarios.values() if sweepable(scene_obj, s)]
         raise BadInputError(
             f"scenario {chosen.name!r} of {scene_obj.name} has no exact reference trajectory to"
             f" measure errors against; valid: {', '.join(valid) or 'none in this scene'}"
@@ -318,8 +356,8 @@ def sweep(
     duration = chosen.duration if duration is None else duration
     check_timing(duration / 2, duration)
     if dts is None:
-        dts = timestep_grid(fastest_rate(scene_obj, model, params, chosen), duration)
-        dts = _accepted_grid(dts, lambda dt: _setup_or_none(scene_obj, model, params, chosen, dt, duration))
+        dts = timestep_grid(fastest_rate(case), duration)
+        dts = _accepted_grid(dts, lambda dt: _setup_or_none(case, dt, duration))
     pairs = [(name, float(dt)) for dt in dts for name in integrators]
     # a catalogue scene travels by name (workers rebuild it); another Scene object only runs locally
     reference = scene_obj.name if scenes.SCENES.get(scene_obj.name) is scene_obj else scene_obj
@@ -336,13 +374,22 @@ def sweep(
         for p in pieces
     ]
     outcomes = [o for part in runner.map(grid_chunk, payloads, description="tradeoff") for o in part]
-    stop = scene_obj.stop_condition(model, params, chosen)
+    limits = stability_limits(case, integrators)
+    work = work_per_evaluation(case.model)
     runs = []
     for (name, dt), (error, detail, steps, verdict) in zip(pairs, outcomes):
-        full = check_timing(dt, duration)
-        job = Job(model, name, dt, full, scene_obj.setup(model, params, chosen, full, dt), stop)
-        wall = time_run(job, repeats=timing_repeats)
-        runs.append(Run(name, dt, steps, error, wall, diverged=error is None, detail=detail, verdict=verdict))
+        wall = time_run(case.job(name, dt, check_timing(dt, duration)), repeats=timing_repeats)
+        run = Run(
+            Setting(name, dt),
+            steps,
+            error,
+            counted_cost(name, steps, work),
+            wall,
+            diverged=error is None,
+            beyond_limit=beyond(dt, limits[name]),
+            detail=detail,
+        )
+        runs.append(TradeoffRun(run, verdict))
     runs.sort(key=lambda r: (integrators.index(r.integrator), -r.dt))
     orders = {name: observed_order([r for r in runs if r.integrator == name]) for name in integrators}
     return Tradeoff(
@@ -355,7 +402,19 @@ def sweep(
         orders=orders,
         pareto=tuple(pareto_front(runs)),
         sweep_wall_time_s=_time.perf_counter() - started,
+        limits=limits,
     )
+
+
+def stability_limits(case: Case, integrators: Iterable[str]) -> dict[str, float | None]:
+    """integrator -> the largest stable dt [s] on the case's modes (the scene's `stability_limit` on each;
+    None: the integrator has no limit, or the scene declares no modes)."""
+    modes = case.modes()
+
+    def limit(name: str) -> float | None:
+        return limit_dt(modes, lambda omega, zeta: case.stability_limit(name, omega, zeta))
+
+    return {name: limit(name) for name in integrators}
 
 
 def grid_chunk(payload: dict[str, Any], nthread: int = 0) -> list[tuple[float | None, str, int, Verdict | None]]:
@@ -365,14 +424,9 @@ def grid_chunk(payload: dict[str, Any], nthread: int = 0) -> list[tuple[float | 
     A module-level function of plain data for dask workers: the model is rebuilt here from the
     scene's MJCF and payload["parameters"], exactly as the caller built it.
     """
-    scene_obj, chosen, params = prepare(payload["scene"], payload["scenario"], payload["parameters"])
-    model = scene_obj.build(params, chosen)
-    stop = scene_obj.stop_condition(model, params, chosen)
+    case = scenes.case(payload["scene"], payload["scenario"], payload["parameters"])
     duration = payload["duration"]
-    jobs = []
-    for name, dt in payload["pairs"]:
-        steps = check_timing(dt, duration)
-        jobs.append(Job(model, name, dt, steps, scene_obj.setup(model, params, chosen, steps, dt), stop))
+    jobs = [case.job(name, dt, check_timing(dt, duration)) for name, dt in payload["pairs"]]
     out: list[tuple[float | None, str, int, Verdict | None]] = []
     for job, outcome in zip(jobs, run_batched(jobs, nthread=nthread)):
         if isinstance(outcome, DivergedError):
@@ -380,7 +434,7 @@ def grid_chunk(payload: dict[str, Any], nthread: int = 0) -> list[tuple[float | 
             continue
         try:
             # judged exactly as `springlab run` judges it: the reference is built for this run's own dt
-            result = evaluate(scene_obj, chosen, params, model, outcome)
+            result = evaluate(case, outcome)
         except DivergedError as blown:
             out.append((None, str(blown), outcome.steps, None))
             continue
@@ -389,23 +443,20 @@ def grid_chunk(payload: dict[str, Any], nthread: int = 0) -> list[tuple[float | 
     return out
 
 
-def sweepable(
-    scene: Scene, scenario: Scenario, params: dict[str, float] | None, model: mujoco.MjModel | None = None
-) -> bool:
+def sweepable(scene: Scene, scenario: Scenario, case: Case | None = None) -> bool:
     """Whether the scenario has an exact reference trajectory to sweep errors against (scenarios
-    validated by scalar checks alone, like the non-linear ones, have none)."""
+    validated by scalar checks alone, like the non-linear ones, have none), at `case` (None: the
+    scenario at its default parameters)."""
     if not scenario.exact:
         return False
-    if params is None:
-        params = scene.resolve(scenario, {})
-    model = scene.build(params, scenario) if model is None else model
-    return scene.reference(model, params, scenario, np.zeros(1), dt=scenario.dt or scene.dt) is not None
+    case = scene.case(scenario) if case is None else case
+    return case.reference(np.zeros(1), dt=scenario.dt or scene.dt) is not None
 
 
-def _setup_or_none(scene: Scene, model, params, scenario, dt: float, duration: float) -> Setup | None:
-    """The scenario's setup at dt [s], or None when the scene rejects that dt."""
+def _setup_or_none(case: Case, dt: float, duration: float) -> Setup | None:
+    """The case's setup at dt [s], or None when the scene rejects that dt."""
     try:
-        return scene.setup(model, params, scenario, check_timing(dt, duration), dt)
+        return case.setup(check_timing(dt, duration), dt)
     except BadInputError:
         return None
 
@@ -442,24 +493,21 @@ def _accepted_grid(dts: Sequence[float], setup: Callable[[float], Setup | None])
 # -- the recommendation ------------------------------------------------------------
 
 
-def _candidates(result: Tradeoff, tol: float) -> list[tuple[float, str, float, bool]]:
-    """(predicted wall time [s], integrator, dt [s], refined) settings expected to meet tol.
+def _candidates(result: Tradeoff, tol: float) -> list[TradeoffRun]:
+    """The settings expected to meet tol, as rows (springlab.studies.settings.cheapest_verified ranks them).
 
-    Per integrator: its cheapest grid run within tol, and a larger dt predicted
-    from that run's error and the integrator's order, err ~ dt^p, with margin
-    REFINE_SAFETY, kept below the next larger grid dt (which failed). The
-    cheapest run is the one with the fewest steps: an integrator's cost per
-    step does not depend on dt, while the measured wall times of two short
-    runs can swap order on a loaded machine.
+    Per integrator: its cheapest grid run within tol (the fewest steps), and a larger dt predicted from that
+    run's error and the integrator's order, err ~ dt^p, with margin REFINE_SAFETY, kept below the next larger
+    grid dt (which failed): a row not run, its error the prediction, its cost counted as the grid's.
     """
     out = []
     for name in dict.fromkeys(r.integrator for r in result.runs):
         runs = sorted((r for r in result.runs if r.integrator == name), key=lambda r: r.dt)
-        passing = [r for r in runs if not r.diverged and r.error <= tol]
+        passing = [r for r in runs if r.run.valid and r.error <= tol]
         if not passing:
             continue
         grid = min(passing, key=lambda r: (r.steps, -r.dt))
-        out.append((grid.wall_time_s, name, grid.dt, False))
+        out.append(grid)
         larger = [r for r in runs if r.dt > grid.dt]
         order = result.orders.get(name)
         order = order if order is not None and abs(order - ORDERS[name]) <= 0.5 else ORDERS[name]
@@ -471,16 +519,24 @@ def _candidates(result: Tradeoff, tol: float) -> list[tuple[float, str, float, b
         refined = round_down(min(predicted, ceiling * REFINE_SAFETY))
         if refined > grid.dt:
             steps = check_timing(refined, result.duration)
-            out.append((grid.wall_time_s * steps / grid.steps, name, refined, True))
-    return sorted(out)
+            run = Run(
+                Setting(name, refined),
+                steps,
+                grid.error * (refined / grid.dt) ** order,
+                grid.cost * steps / grid.steps,
+                beyond_limit=beyond(refined, result.limits.get(name)),
+                detail=f"predicted from dt = {grid.dt:g} s at order {order:g}",
+            )
+            out.append(TradeoffRun(run))
+    return out
 
 
-def recommend(result: Tradeoff, tol: float, *, timing_repeats: int = 3) -> Recommendation:
+def recommend(result: Tradeoff, tol: float, *, timing_repeats: int = 3) -> Recommendation[TradeoffRun]:
     """The cheapest (integrator, dt) meeting `tol`, verified by running it with `runs.run.run_scenario`.
 
-    Candidates come from the sweep (`_candidates`), cheapest predicted first;
-    the first one whose verification run meets tol wins, and its error and
-    wall time (measured as the sweep's) are reported.
+    Candidates come from the sweep (`_candidates`), ranked by counted cost (steps x evaluations per step,
+    springlab.studies.settings): the first one whose verification run passes `springlab run`'s check at tol
+    wins, and its error and wall time (measured as the sweep's, reported beside the cost) are kept.
 
     Parameters
     ----------
@@ -494,36 +550,30 @@ def recommend(result: Tradeoff, tol: float, *, timing_repeats: int = 3) -> Recom
     Returns
     -------
     Recommendation
-        integrator, dt, max_rel_error and wall_time_s are None when no setting of the sweep
+        the verified setting; `found` False (integrator, dt and error None) when no setting of the sweep
         meets tol.
     """
     tol = compare.check_tolerance(tol)
-    for _, name, dt, _refined in _candidates(result, tol):
+
+    def verify(candidate: TradeoffRun) -> Verification:
         try:
             run = run_scenario(
                 result.scene,
                 result.scenario,
-                integrator=name,
-                dt=dt,
+                integrator=candidate.integrator,
+                dt=candidate.dt,
                 duration=result.duration,
                 tol=tol,
                 **result.overrides,
             )
         except DivergedError:
-            continue
+            return Verification(False, None)
         if not run.passed:
-            continue
-        scene_obj = scenes.get(result.scene)
-        chosen = scene_obj.scenario(result.scenario)
-        job = Job(run.model, name, dt, run.steps, scene_obj.setup(run.model, run.parameters, chosen, run.steps, dt))
-        return Recommendation(
-            tol=tol,
-            integrator=name,
-            dt=dt,
-            max_rel_error=run.max_rel_error,
-            wall_time_s=time_run(job, repeats=timing_repeats),
-        )
-    return Recommendation(tol=tol, integrator=None, dt=None, max_rel_error=None, wall_time_s=None)
+            return Verification(False, run.max_rel_error)
+        job = run.case.job(candidate.integrator, candidate.dt, run.steps)
+        return Verification(True, run.max_rel_error, time_run(job, repeats=timing_repeats))
+
+    return cheapest_verified(_candidates(result, tol), tol, verify)
 
 
 def tradeoff(

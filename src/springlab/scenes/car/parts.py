@@ -8,13 +8,11 @@ instead of dispatching on scenario names.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import mujoco
 import numpy as np
 
 from springlab.errors import ParameterError
-from springlab.scenes.base import Reference
+from springlab.scenes.base import Case, PhaseField, Reference
 from springlab.sim.simulate import Setup, Trajectory
 
 
@@ -39,33 +37,31 @@ class Variant:
     def edit(self, spec: mujoco.MjSpec, params: dict[str, float], g: float) -> None:
         """MjSpec edits beyond the body's clearance and mass."""
 
-    def setup(self, model: mujoco.MjModel, params: dict[str, float], steps: int, dt: float) -> Setup:
+    def setup(self, case: Case, steps: int, dt: float) -> Setup:
         """Initial state and controls (qpos0 and rest: the static equilibrium)."""
         raise NotImplementedError
 
-    def reference(self, model: mujoco.MjModel, params: dict[str, float], time: np.ndarray, dt: float) -> Reference:
+    def reference(self, case: Case, time: np.ndarray, dt: float) -> Reference:
         """The exact solution at `time` [s] of a run with timestep `dt` [s] (Scene.reference)."""
         raise NotImplementedError
 
-    def modes(self, model: mujoco.MjModel, params: dict[str, float]) -> list[tuple[float, float]]:
+    def modes(self, case: Case) -> list[tuple[float, float]]:
         """[(natural frequency [rad/s], damping ratio [-])], for stability advice."""
         raise NotImplementedError
 
-    def quantities(self, model: mujoco.MjModel, params: dict[str, float], trajectory: Trajectory) -> dict:
+    def quantities(self, case: Case, trajectory: Trajectory) -> dict:
         """Named results, SI, names ending in their unit."""
         raise NotImplementedError
 
-    def phase_field(
-        self, model: mujoco.MjModel, params: dict[str, float]
-    ) -> Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None:
+    def phase_field(self, case: Case) -> PhaseField | None:
         """(x, v) -> (x', v') of a one-joint variant, else None."""
         return None
 
-    def equilibria(self, model: mujoco.MjModel, params: dict[str, float]) -> list[dict]:
+    def equilibria(self, case: Case) -> list[dict]:
         """Equilibria of a one-joint variant: [{"x": position [m], "stable": bool}]."""
         return []
 
-    def model_limits(self, model: mujoco.MjModel, params: dict[str, float], trajectory: Trajectory) -> list[str]:
+    def model_limits(self, case: Case, trajectory: Trajectory) -> list[str]:
         """Where the run leaves the variant's equations (see Scene.model_limits)."""
         return []
 

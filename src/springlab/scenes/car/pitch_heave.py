@@ -16,7 +16,7 @@ from springlab.exact import analytic
 from springlab.exact.linear import generator_system
 from springlab.exact.linearize import OperatingPoint, operating_point
 from springlab.exact.linearize import linearize as shared_linearize
-from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Reference
+from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Case, Reference
 from springlab.sim.simulate import Setup, Trajectory
 
 from .parts import Variant, damped_modes, gravity, refuse_motion, tendon
@@ -178,17 +178,19 @@ class PitchHeave(Variant):
             spring.wrap_joint("heave", 1.0)
             spring.wrap_joint("pitch", coef)
 
-    def setup(self, model: mujoco.MjModel, params: dict[str, float], steps: int, dt: float) -> Setup:
+    def setup(self, case: Case, steps: int, dt: float) -> Setup:
+        model, params = case.model, case.params
         qpos = model.qpos0.copy()
         linear = Linear2Dof(model)
         q0 = linear.equilibrium + np.linalg.solve(linear.stiffness, push_force(model, params))
         qpos[model.joint("heave").qposadr[0]], qpos[model.joint("pitch").qposadr[0]] = q0
-        self._check_motion(model, params, np.arange(steps + 1) * dt, dt)
+        self._check_motion(case, np.arange(steps + 1) * dt, dt)
         return Setup(qpos=qpos, qvel=np.zeros(model.nv))
 
-    def _check_motion(self, model, params, time: np.ndarray, dt: float) -> None:
+    def _check_motion(self, case: Case, time: np.ndarray, dt: float) -> None:
         """ParameterError if the exact motion puts the bottom below ground or makes an axle's springs pull."""
-        reference = self.reference(model, params, time, dt)
+        reference = self.reference(case, time, dt)
+        model, params = case.model, case.params
         linear = Linear2Dof(model)
         x, theta = reference.pos["heave"], reference.pos["pitch"]
         stations = {"front axle": linear.a, "rear axle": -linear.b, "push position": params["push_position"]}
@@ -203,7 +205,8 @@ class PitchHeave(Variant):
             },
         )
 
-    def reference(self, model: mujoco.MjModel, params: dict[str, float], time: np.ndarray, dt: float) -> Reference:
+    def reference(self, case: Case, time: np.ndarray, dt: float) -> Reference:
+        model, params = case.model, case.params
         linear = Linear2Dof(model)
         q0 = linear.equilibrium + np.linalg.solve(linear.stiffness, push_force(model, params))
         q, v = analytic.linear_response(
@@ -222,11 +225,13 @@ class PitchHeave(Variant):
             rows={"heave": (0, 2), "pitch": (1, 3)},
         )
 
-    def modes(self, model: mujoco.MjModel, params: dict[str, float]) -> list[tuple[float, float]]:
+    def modes(self, case: Case) -> list[tuple[float, float]]:
+        model = case.model
         linear = Linear2Dof(model)
         return damped_modes(analytic.state_matrix(linear.mass, linear.damping, linear.stiffness))
 
-    def quantities(self, model: mujoco.MjModel, params: dict[str, float], trajectory: Trajectory) -> dict:
+    def quantities(self, case: Case, trajectory: Trajectory) -> dict:
+        model, params = case.model, case.params
         linear = Linear2Dof(model)
         measured = linearize(model, linear.equilibrium)
         analytic_modes = undamped_modes(linear.mass, linear.stiffness)

@@ -6,14 +6,13 @@ m x'' + d x' + k (x - springref) = -m g,   springref = clearance + m g / k
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 
 import mujoco
 import numpy as np
 
 from springlab.errors import ParameterError
 from springlab.exact import analytic, events, linear
-from springlab.scenes.base import Reference
+from springlab.scenes.base import Case, PhaseField, Reference
 from springlab.sim.simulate import Setup, Trajectory
 
 from .parts import Variant, gravity
@@ -77,13 +76,15 @@ class Release(Variant):
         heave.damping = [params["damping"], 0.0, 0.0]
         heave.springref = params["clearance"] + m * g / k  # static equilibrium at the clearance
 
-    def setup(self, model: mujoco.MjModel, params: dict[str, float], steps: int, dt: float) -> Setup:
+    def setup(self, case: Case, steps: int, dt: float) -> Setup:
+        model, params = case.model, case.params
         qpos = model.qpos0.copy()
         m, k, d, springref, g = one_dof(model)
         qpos[model.joint("heave").qposadr[0]] = springref - (m + params["push_mass"]) * g / k  # pushed down
         return Setup(qpos=qpos, qvel=np.zeros(model.nv))
 
-    def reference(self, model: mujoco.MjModel, params: dict[str, float], time: np.ndarray, dt: float) -> Reference:
+    def reference(self, case: Case, time: np.ndarray, dt: float) -> Reference:
+        model, params = case.model, case.params
         m, k, d, springref, g = one_dof(model)
         rest = springref - m * g / k
         x0 = springref - (m + params["push_mass"]) * g / k
@@ -95,22 +96,24 @@ class Release(Variant):
             pos={"heave": x + rest}, vel={"heave": v}, system=system, states=states, rows={"heave": (0, 1)}
         )
 
-    def modes(self, model: mujoco.MjModel, params: dict[str, float]) -> list[tuple[float, float]]:
+    def modes(self, case: Case) -> list[tuple[float, float]]:
+        model = case.model
         m, k, d, _, _ = one_dof(model)
         return [(math.sqrt(k / m), analytic.damping_ratio(m, k, d))]
 
-    def phase_field(
-        self, model: mujoco.MjModel, params: dict[str, float]
-    ) -> Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None:
+    def phase_field(self, case: Case) -> PhaseField | None:
+        model = case.model
         m, k, d, springref, g = one_dof(model)
         rest = springref - m * g / k
         return lambda x, v: (v, -(k * (x - rest) + d * v) / m)
 
-    def equilibria(self, model: mujoco.MjModel, params: dict[str, float]) -> list[dict]:
+    def equilibria(self, case: Case) -> list[dict]:
+        model = case.model
         m, k, d, springref, g = one_dof(model)
         return [{"x": springref - m * g / k, "stable": True}]
 
-    def quantities(self, model: mujoco.MjModel, params: dict[str, float], trajectory: Trajectory) -> dict:
+    def quantities(self, case: Case, trajectory: Trajectory) -> dict:
+        model, params = case.model, case.params
         m, k, d, springref, g = one_dof(model)
         rest = springref - m * g / k
         sag = params["push_mass"] * g / k

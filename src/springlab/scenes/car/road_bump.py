@@ -14,7 +14,7 @@ import numpy as np
 
 from springlab.errors import ParameterError
 from springlab.exact import analytic, events
-from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Reference
+from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Case, Reference
 from springlab.sim.simulate import Setup, Trajectory
 
 from .parts import Variant, damped_modes, gravity, refuse_motion, tendon
@@ -240,7 +240,8 @@ class RoadBump(Variant):
             ctrllimited=0,
         )
 
-    def setup(self, model: mujoco.MjModel, params: dict[str, float], steps: int, dt: float) -> Setup:
+    def setup(self, case: Case, steps: int, dt: float) -> Setup:
+        model, params = case.model, case.params
         qvel = np.zeros(model.nv)
         quarter = QuarterCar(model, params)
         qvel[model.joint("road").dofadr[0]] = quarter.height * quarter.omega
@@ -248,13 +249,14 @@ class RoadBump(Variant):
         control = np.zeros((steps, 2))
         control[:switch_step, 0] = 1.0  # tire on the bump exciter
         control[switch_step:, 1] = 1.0  # tire on the flat road
-        self._check_motion(model, params, np.arange(steps + 1) * dt, dt)
+        self._check_motion(case, np.arange(steps + 1) * dt, dt)
         # qpos0: the static equilibrium (clearance; wheel at its loaded height)
         return Setup(qpos=model.qpos0.copy(), qvel=qvel, control=control)
 
-    def _check_motion(self, model, params, time: np.ndarray, dt: float) -> None:
+    def _check_motion(self, case: Case, time: np.ndarray, dt: float) -> None:
         """ParameterError if the exact motion puts the bottom below ground or makes the suspension pull."""
-        reference = self.reference(model, params, time, dt)
+        reference = self.reference(case, time, dt)
+        model, params = case.model, case.params
         quarter = QuarterCar(model, params)
         x = reference.pos["heave"]
         refuse_motion(
@@ -269,7 +271,8 @@ class RoadBump(Variant):
             },
         )
 
-    def reference(self, model: mujoco.MjModel, params: dict[str, float], time: np.ndarray, dt: float) -> Reference:
+    def reference(self, case: Case, time: np.ndarray, dt: float) -> Reference:
+        model, params = case.model, case.params
         quarter = QuarterCar(model, params)
         z0 = quarter.initial_state()
         true = piecewise_lti(time, z0, [(0.0, quarter.on_bump), (quarter.bump_time, quarter.on_road)])
@@ -297,11 +300,13 @@ class RoadBump(Variant):
             tolerance_basis=basis,
         )
 
-    def modes(self, model: mujoco.MjModel, params: dict[str, float]) -> list[tuple[float, float]]:
+    def modes(self, case: Case) -> list[tuple[float, float]]:
+        model, params = case.model, case.params
         quarter = QuarterCar(model, params)
         return damped_modes(quarter.on_road[:4, :4]) + [(quarter.omega, 0.0)]
 
-    def quantities(self, model: mujoco.MjModel, params: dict[str, float], trajectory: Trajectory) -> dict:
+    def quantities(self, case: Case, trajectory: Trajectory) -> dict:
+        model, params = case.model, case.params
         quarter = QuarterCar(model, params)
         peaks = quarter.measured(model, trajectory)
         body_modes = damped_modes(quarter.on_road[:4, :4])
@@ -326,7 +331,8 @@ class RoadBump(Variant):
             out["tire_lift_off_time_s"] = peaks["lift_off_time"]
         return out
 
-    def model_limits(self, model: mujoco.MjModel, params: dict[str, float], trajectory: Trajectory) -> list[str]:
+    def model_limits(self, case: Case, trajectory: Trajectory) -> list[str]:
+        model, params = case.model, case.params
         quarter = QuarterCar(model, params)
         peaks = quarter.measured(model, trajectory)
         if peaks["min_tire_force"] >= 0.0:

@@ -82,15 +82,17 @@ presets the softer springs.
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from typing import Any
 
 import mujoco
 import numpy as np
 
 from springlab.errors import ParameterError
-from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene
-from springlab.scenes.capabilities import FrequencySpec, InteractiveSpec, MjcfEdit, OscillatorFit
+from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Case, Parameter, PhaseField, Reference, Scenario, Scene
+from springlab.scenes.capabilities.fit import OscillatorFit
+from springlab.scenes.capabilities.frequency import FrequencySpec
+from springlab.scenes.capabilities.interactive import InteractiveSpec, MjcfEdit
 from springlab.sim.simulate import Setup, Trajectory, quiet_mujoco
 
 from .frequency import isolation, name_modes, push_at_the_front, road_under_the_car
@@ -386,38 +388,28 @@ class Car(Scene):
         car.mass = params["mass"]
         scenario.variant.edit(spec, params, g)
 
-    def setup(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, steps: int, dt: float
-    ) -> Setup:
-        return scenario.variant.setup(model, params, steps, dt)
+    def setup(self, case: Case, steps: int, dt: float) -> Setup:
+        return case.scenario.variant.setup(case, steps, dt)
 
     # -- exact references, modes, results (the scenario's variant) -------------
 
-    def reference(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, time: np.ndarray, *, dt: float
-    ) -> Reference:
-        return scenario.variant.reference(model, params, time, dt)
+    def reference(self, case: Case, time: np.ndarray, *, dt: float) -> Reference:
+        return case.scenario.variant.reference(case, time, dt)
 
-    def modes(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[tuple[float, float]]:
-        return scenario.variant.modes(model, params)
+    def modes(self, case: Case) -> list[tuple[float, float]]:
+        return case.scenario.variant.modes(case)
 
-    def phase_field(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario
-    ) -> Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None:
-        return scenario.variant.phase_field(model, params)
+    def phase_field(self, case: Case) -> PhaseField | None:
+        return case.scenario.variant.phase_field(case)
 
-    def equilibria(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[dict]:
-        return scenario.variant.equilibria(model, params)
+    def equilibria(self, case: Case) -> list[dict]:
+        return case.scenario.variant.equilibria(case)
 
-    def quantities(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, trajectory: Trajectory
-    ) -> dict:
-        return scenario.variant.quantities(model, params, trajectory)
+    def quantities(self, case: Case, trajectory: Trajectory) -> dict:
+        return case.scenario.variant.quantities(case, trajectory)
 
-    def model_limits(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, trajectory: Trajectory
-    ) -> list[str]:
-        return scenario.variant.model_limits(model, params, trajectory)
+    def model_limits(self, case: Case, trajectory: Trajectory) -> list[str]:
+        return case.scenario.variant.model_limits(case, trajectory)
 
 
 SCENE = Car()

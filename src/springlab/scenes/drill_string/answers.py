@@ -17,6 +17,7 @@ import numpy as np
 import scipy.linalg
 
 from springlab.exact import events
+from springlab.scenes.capabilities.case import CaseView
 from springlab.sim.simulate import Trajectory
 
 from . import build, continuum
@@ -75,6 +76,28 @@ def rod_of(model: mujoco.MjModel) -> continuum.Rod:
     # the bit's node carries half an element of pipe besides the BHA
     half = numbers["density"] * jp * numbers["length"] / elements / 2.0
     return continuum.Rod(numbers["length"], numbers["shear_modulus"], numbers["density"], jp, lumped.mass[-1] - half)
+
+
+def lumped_of(case: CaseView) -> LumpedString:
+    """The case's N-element model (M, K, friction, drive), read back once per case."""
+    return case.memo("lumped", lambda: LumpedString.of(case.model))
+
+
+def modes_of(case: CaseView) -> tuple[np.ndarray, np.ndarray]:
+    """(w [rad/s], shapes) of the case's flexible modes (`LumpedString.modes`), solved once per case."""
+
+    def solve() -> tuple[np.ndarray, np.ndarray]:
+        omega, shapes = lumped_of(case).modes()
+        for array in (omega, shapes):
+            array.setflags(write=False)  # shared by the case's reference, checks, quantities and figure
+        return omega, shapes
+
+    return case.memo("lumped_modes", solve)
+
+
+def rod_of_case(case: CaseView) -> continuum.Rod:
+    """The continuum the case's model discretizes (`rod_of`), read back once per case."""
+    return case.memo("rod", lambda: rod_of(case.model))
 
 
 def drive_of(model: mujoco.MjModel, dt: float) -> Drive:

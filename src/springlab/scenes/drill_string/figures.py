@@ -1,6 +1,6 @@
 """The drill string's own figure of a run (`Scene.figure`): speeds with the exact events, twist, mode shapes.
 
-Each scenario gets two panels (springlab.scenes.capabilities.Panel), drawn by springlab.plots.run.scene_figure:
+Each scenario gets two panels (springlab.scenes.capabilities.figure.Panel), drawn by springlab.plots.run.scene_figure:
 
 * `modes`: the first three mode shapes of the N-element model (dashed) beside the continuum's sin(beta_n x)
   (dotted), each scaled to 1 at its largest; the twist along the string at a few instants of the run.
@@ -12,17 +12,15 @@ Each scenario gets two panels (springlab.scenes.capabilities.Panel), drawn by sp
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from typing import Any
 
-import mujoco
 import numpy as np
 
-from springlab.scenes.capabilities import Curve, Panel
+from springlab.scenes.capabilities.case import CaseView
+from springlab.scenes.capabilities.figure import Curve, Panel
 from springlab.sim.simulate import Trajectory
 
 from . import answers
-from .lumped import LumpedString, ModalFlow
+from .lumped import ModalFlow
 
 #: mode shapes drawn by the `modes` panel
 SHAPES = 3
@@ -30,31 +28,27 @@ SHAPES = 3
 SAMPLES = 1500
 
 
-def panels(model: mujoco.MjModel, params: Mapping[str, float], scenario: str, trajectory: Any) -> tuple[Panel, ...]:
-    """The panels of a run of `scenario` (see the module docstring).
+def panels(case: CaseView, trajectory: Trajectory) -> tuple[Panel, ...]:
+    """The panels of a run of the case's scenario (see the module docstring).
 
     Parameters
     ----------
-    model
-        the compiled model that ran.
-    params
-        the run's parameters (SI).
-    scenario
-        the scenario's name.
+    case
+        the case that ran.
     trajectory
-        the run's springlab.sim.simulate.Trajectory.
+        the run.
 
     Returns
     -------
     tuple[Panel, ...]
         two panels.
     """
-    assert isinstance(trajectory, Trajectory)
-    rod = answers.rod_of(model)
-    lumped = LumpedString.of(model)
+    model, scenario = case.model, case.scenario.name
+    rod = answers.rod_of_case(case)
+    lumped = answers.lumped_of(case)
     depth = np.linspace(0.0, rod.length, lumped.size)
     if scenario == "modes":
-        _, shapes = lumped.modes()
+        _, shapes = answers.modes_of(case)
         continuum_shapes = rod.shapes(SHAPES, depth)
         curves = []
         for k in range(min(SHAPES, shapes.shape[1])):
@@ -63,7 +57,7 @@ def panels(model: mujoco.MjModel, params: Mapping[str, float], scenario: str, tr
             exact *= math.copysign(1.0, float(exact[-1] * discrete[-1])) if exact[-1] * discrete[-1] != 0 else 1.0
             curves.append(Curve(f"mode {k + 1}: {lumped.size - 1} elements", depth, discrete, "exact"))
             curves.append(Curve(f"mode {k + 1}: continuum", depth, exact, "continuum"))
-        omega, _ = lumped.modes()
+        omega, _ = answers.modes_of(case)
         period = 2 * math.pi / float(omega[0])
         instants = [0.0, period / 8, period / 4 * 0.9, period / 2]
         return (

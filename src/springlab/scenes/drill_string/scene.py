@@ -43,9 +43,9 @@ from springlab.errors import ParameterError
 from springlab.exact import analytic
 from springlab.exact.linear import state_matrix
 from springlab.scenes import checks as scene_checks
-from springlab.scenes.base import Check, Parameter, Reference, Scenario, Scene
-from springlab.scenes.capabilities import RefinableSpec, RefinedQuestion
-from springlab.sim.simulate import ORDERS, Setup, Trajectory, simulate
+from springlab.scenes.base import Case, Check, Parameter, Reference, Scenario, Scene
+from springlab.scenes.capabilities.refine import RefinableSpec, RefinedQuestion
+from springlab.sim.simulate import ORDERS, Setup, Trajectory
 
 from . import answers, build, continuum, figures
 from .answers import Drive
@@ -246,32 +246,30 @@ class DrillString(Scene):
         """The top drive's start-up on a step grid of dt [s]."""
         return answers.drive_of(model, dt)
 
-    def modes(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[tuple[float, float]]:
-        return [(float(w), 0.0) for w in answers.frequencies(LumpedString.of(model))]
+    def modes(self, case: Case) -> list[tuple[float, float]]:
+        return [(float(w), 0.0) for w in answers.frequencies(answers.lumped_of(case))]
 
     # -- a run ------------------------------------------------------------------------
 
-    def setup(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, steps: int, dt: float
-    ) -> Setup:
-        lumped = LumpedString.of(model)
+    def setup(self, case: Case, steps: int, dt: float) -> Setup:
+        model, scenario = case.model, case.scenario
+        lumped = answers.lumped_of(case)
         if scenario.name == "modes":
-            _, shapes = lumped.modes()
+            _, shapes = answers.modes_of(case)
             return Setup(qpos=MODE_AMPLITUDE * shapes[:, 0], qvel=np.zeros(model.nv), control=np.zeros(model.nu))
         drive = self.drive(model, dt)
         control = np.zeros((steps, model.nu))
         control[: drive.ramp_steps, 0] = lumped.drive_control(drive.acceleration)
         return Setup(qpos=np.zeros(model.nq), qvel=np.zeros(model.nv), control=control)
 
-    def reference(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, time: np.ndarray, *, dt: float
-    ) -> Reference | None:
-        lumped = LumpedString.of(model)
+    def reference(self, case: Case, time: np.ndarray, *, dt: float) -> Reference | None:
+        model, scenario = case.model, case.scenario
+        lumped = answers.lumped_of(case)
         n = lumped.size
         mass = np.diag(lumped.mass)
         rows = {TOP: (0, n), BIT: (n - 1, 2 * n - 1)}
         if scenario.name == "modes":
-            omega, shapes = lumped.modes()
+            omega, shapes = answers.modes_of(case)
             shape = MODE_AMPLITUDE * shapes[:, 0]
             q = np.outer(np.cos(omega[0] * time), shape)
             v = np.outer(-omega[0] * np.sin(omega[0] * time), shape)
@@ -308,11 +306,10 @@ class DrillString(Scene):
 
     # -- results ----------------------------------------------------------------------
 
-    def quantities(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, trajectory: Trajectory
-    ) -> dict[str, Any]:
-        rod = self.rod(model)
-        lumped = LumpedString.of(model)
+    def quantities(self, case: Case, trajectory: Trajectory) -> dict[str, Any]:
+        model, scenario = case.model, case.scenario
+        rod = answers.rod_of_case(case)
+        lumped = answers.lumped_of(case)
         out: dict[str, Any] = {
             "n_elements": lumped.size - 1,
             "polar_moment_m4": rod.polar_moment,
@@ -322,7 +319,7 @@ class DrillString(Scene):
             "rod_inertia_kg_m2": rod.rod_inertia,
             "inertia_ratio": float(rod.mu),
         }
-        omega, _ = lumped.modes()
+        omega, _ = answers.modes_of(case)
         count = min(answers.REPORTED_MODES, len(omega))
         exact_hz = omega[:count] / (2 * math.pi)
         continuum_hz = rod.frequencies(count) / (2 * math.pi)
@@ -331,7 +328,7 @@ class DrillString(Scene):
             out[f"mode_{k + 1}_frequency_hz_continuum"] = float(continuum_hz[k])
             out[f"mode_{k + 1}_discretization_error"] = float(abs(exact_hz[k] / continuum_hz[k] - 1))
         out["mode_1_period_s"] = float(1.0 / continuum_hz[0])
-        top, bit = (self.joint_columns(model, trajectory)[j] for j in (TOP, BIT))
+        top, bit = (case.joint_columns(trajectory)[j] for j in (TOP, BIT))
         if scenario.name == "modes":
             measured = answers.measured_frequency(trajectory.time, bit[0], bit[1])
             out["mode_1_frequency_hz"] = measured
@@ -348,13 +345,10 @@ class DrillString(Scene):
         out.update(answers.breakaway(rod, lumped, drive, trajectory, top, bit, twist))
         return out
 
-    def checks(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, trajectory: Trajectory
-    ) -> list[Check]:
-        if scenario.name == "modes":
-            lumped = LumpedString.of(model)
-            omega, _ = lumped.modes()
-            bit = self.joint_columns(model, trajectory)[BIT]
+    def checks(self, case: Case, trajectory: Trajectory) -> list[Check]:
+        if case.scenario.name == "modes":
+            omega, _ = answers.modes_of(case)
+            bit = case.joint_columns(trajectory)[BIT]
             measured = answers.measured_frequency(trajectory.time, bit[0], bit[1])
             order = ORDERS[trajectory.integrator]
             constant = 1.0 / 120.0 if order == 4 else 0.5
@@ -371,40 +365,29 @@ class DrillString(Scene):
                     " from its M and K",
                 )
             ]
-        if scenario.name != "breakaway":
+        if case.scenario.name != "breakaway":
             return []
-        return _breakaway_checks(self, model, params, scenario, trajectory)
+        return _breakaway_checks(case, trajectory)
 
 
 # -- checks ---------------------------------------------------------------------------------
 
 
-def _breakaway_checks(
-    scene: DrillString, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, trajectory: Trajectory
-) -> list[Check]:
+def _breakaway_checks(case: Case, trajectory: Trajectory) -> list[Check]:
     """The breakaway time, the bit's peak speed and the re-stick time against the N-element model's exact ones.
 
     The run's own error is estimated by Richardson from a second run at dt/2 with order 1: MuJoCo's
     friction constraint is regularized over a time constant of 2 dt, a first-order effect whatever the
     integrator (taking order 1 over-estimates an error that falls faster).
     """
-    lumped = LumpedString.of(model)
-    drive = scene.drive(model, trajectory.dt)
+    lumped = answers.lumped_of(case)
+    drive = answers.drive_of(case.model, trajectory.dt)
     half_dt = trajectory.dt / 2
     duration = float(trajectory.time[-1])
-    setup = scene.setup(model, params, scenario, round(duration / half_dt), half_dt)
-    finer = simulate(
-        model,
-        integrator=trajectory.integrator,
-        dt=half_dt,
-        duration=duration,
-        qpos=setup.qpos,
-        qvel=setup.qvel,
-        control=setup.control,
-    )
-    columns = [scene.joint_columns(model, run) for run in (trajectory, finer)]
+    finer = case.simulate(trajectory.integrator, half_dt, duration)
+    columns = [case.joint_columns(run) for run in (trajectory, finer)]
     coarse, fine = (
-        answers.simulated_events(lumped, scene.drive(model, run.dt), run, cols[TOP], cols[BIT])
+        answers.simulated_events(lumped, answers.drive_of(case.model, run.dt), run, cols[TOP], cols[BIT])
         for run, cols in zip((trajectory, finer), columns)
     )
     exact = answers.stick_slip(lumped, duration, drive)

@@ -42,15 +42,25 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from typing import Any
 
 import mujoco
 import numpy as np
 
 from springlab.errors import ParameterError
-from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Check, Parameter, Reference, Scenario, Scene
-from springlab.scenes.capabilities import (
+from springlab.scenes.base import (
+    MIN_MASS,
+    MIN_MASS_REASON,
+    Case,
+    Check,
+    Parameter,
+    PhaseField,
+    Reference,
+    Scenario,
+    Scene,
+)
+from springlab.scenes.capabilities.friction import (
     CONTACT_FRICTION,
     JOINT_FRICTION,
     DryFrictionSpec,
@@ -58,7 +68,7 @@ from springlab.scenes.capabilities import (
     FrictionMeasure,
     SolverSetting,
 )
-from springlab.sim.simulate import Setup, Trajectory, simulate
+from springlab.sim.simulate import Setup, Trajectory
 
 from . import measure
 from .coulomb import CoulombMotion
@@ -434,9 +444,8 @@ class Friction(Scene):
             mujoco.mjtCone.mjCONE_ELLIPTIC if params["elliptic_cone"] else mujoco.mjtCone.mjCONE_PYRAMIDAL
         )
 
-    def setup(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, steps: int, dt: float
-    ) -> Setup:
+    def setup(self, case: Case, steps: int, dt: float) -> Setup:
+        model, params = case.model, case.params
         qpos, qvel = np.zeros(model.nq), np.zeros(model.nv)
         along = model.joint(ALONG)
         qpos[along.qposadr[0]], qvel[along.dofadr[0]] = params["x0"], params["v0"]
@@ -465,25 +474,24 @@ class Friction(Scene):
             friction += mu * mass * gravity * math.cos(theta)
         return mass, float(model.jnt_stiffness[joint.id]), friction, mass * gravity * math.sin(theta)
 
-    def motion(self, model: mujoco.MjModel, params: dict[str, float], horizon: float) -> CoulombMotion:
-        """The exact motion of this run's block (springlab.scenes.friction.coulomb), followed to `horizon` [s]."""
-        m, k, friction, slope = self.physical(model)
-        return CoulombMotion(m, k, friction, slope, params["x0"], params["v0"], horizon)
+    def motion(self, case: Case, horizon: float) -> CoulombMotion:
+        """The exact motion of this case's block (springlab.scenes.friction.coulomb), followed to `horizon` [s]."""
+        m, k, friction, slope = case.physical()
+        return CoulombMotion(m, k, friction, slope, case.params["x0"], case.params["v0"], horizon)
 
     def block_length(self, model: mujoco.MjModel) -> float:
         """The block's length along the surface [m] (the scale of a hold's creep)."""
         return 2.0 * float(model.geom("block").size[0])
 
-    def modes(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[tuple[float, float]]:
-        m, k, _, _ = self.physical(model)
+    def modes(self, case: Case) -> list[tuple[float, float]]:
+        m, k, _, _ = case.physical()
         return [(math.sqrt(k / m), 0.0)] if k > 0 else []
 
     # -- exact reference -------------------------------------------------------------
 
-    def reference(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, time: np.ndarray, *, dt: float
-    ) -> Reference:
-        x, v = self.motion(model, params, float(time[-1])).state(time)
+    def reference(self, case: Case, time: np.ndarray, *, dt: float) -> Reference:
+        model = case.model
+        x, v = self.motion(case, float(time[-1])).state(time)
         length = self.block_length(model)
         span = max(float(time[-1] - time[0]), dt)
         return Reference(
@@ -498,13 +506,12 @@ class Friction(Scene):
             scales={f"{ALONG}_pos": length, f"{ALONG}_vel": length / span},
         )
 
-    def checks(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, trajectory: Trajectory
-    ) -> list[Check]:
-        x, v = self.joint_columns(model, trajectory)[ALONG]
-        exact = self.motion(model, params, float(trajectory.time[-1]))
-        half = self.rerun(model, params, scenario, trajectory.integrator, trajectory.dt / 2, float(trajectory.time[-1]))
-        xh, vh = self.joint_columns(model, half)[ALONG]
+    def checks(self, case: Case, trajectory: Trajectory) -> list[Check]:
+        model, scenario = case.model, case.scenario
+        x, v = case.joint_columns(trajectory)[ALONG]
+        exact = self.motion(case, float(trajectory.time[-1]))
+        half = case.simulate(trajectory.integrator, trajectory.dt / 2, float(trajectory.time[-1]))
+        xh, vh = case.joint_columns(half)[ALONG]
         n = min(len(x), (len(xh) + 1) // 2)
         ref_x, ref_v = exact.state(trajectory.time)
         length = self.block_length(model)
@@ -540,28 +547,14 @@ class Friction(Scene):
             )
         return out
 
-    def rerun(
-        self,
-        model: mujoco.MjModel,
-        params: dict[str, float],
-        scenario: Scenario,
-        integrator: str,
-        dt: float,
-        duration: float,
-    ) -> Trajectory:
-        """The same run at another setting (the model is not changed: simulate steps a copy)."""
-        setup = self.setup(model, params, scenario, round(duration / dt), dt)
-        return simulate(model, integrator=integrator, dt=dt, duration=duration, qpos=setup.qpos, qvel=setup.qvel)
-
     # -- results ---------------------------------------------------------------------
 
-    def quantities(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, trajectory: Trajectory
-    ) -> dict:
-        m, k, friction, slope = self.physical(model)
+    def quantities(self, case: Case, trajectory: Trajectory) -> dict:
+        model, params, scenario = case.model, case.params, case.scenario
+        m, k, friction, slope = case.physical()
         time = trajectory.time
-        x, v = self.joint_columns(model, trajectory)[ALONG]
-        exact = self.motion(model, params, float(time[-1]))
+        x, v = case.joint_columns(trajectory)[ALONG]
+        exact = self.motion(case, float(time[-1]))
         variant: Variant = scenario.variant
         out: dict = {"friction_force_N": friction, "slope_force_N": slope}
         if variant.friction == CONTACT_FRICTION:
@@ -617,10 +610,8 @@ class Friction(Scene):
 
     # -- phase plane ------------------------------------------------------------------
 
-    def phase_field(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario
-    ) -> Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None:
-        m, k, friction, slope = self.physical(model)
+    def phase_field(self, case: Case) -> PhaseField | None:
+        m, k, friction, slope = case.physical()
 
         def field(x: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             x, v = np.asarray(x, float), np.asarray(v, float)
@@ -631,10 +622,10 @@ class Friction(Scene):
 
         return field
 
-    def equilibria(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[dict]:
+    def equilibria(self, case: Case) -> list[dict]:
         """The stick zone |x - f_c/k| <= F/k: every point of it an equilibrium, given as its two ends with
         "to" naming the other (k = 0: none, or everywhere)."""
-        m, k, friction, slope = self.physical(model)
+        m, k, friction, slope = case.physical()
         if k <= 0:
             return []
         low, high = (slope - friction) / k, (slope + friction) / k

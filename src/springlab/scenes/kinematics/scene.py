@@ -58,8 +58,8 @@ import mujoco
 import numpy as np
 
 from springlab.exact import analytic
-from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene
-from springlab.scenes.capabilities import PolynomialFit
+from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Case, Parameter, PhaseField, Reference, Scenario, Scene
+from springlab.scenes.capabilities.fit import PolynomialFit
 from springlab.sim.simulate import Setup, Trajectory
 
 from .tachograph import TACHOGRAPH_TIMES, TACHOGRAPH_VELOCITIES, Tachograph, reject_profile_parameters
@@ -253,17 +253,13 @@ class Kinematics(Scene):
         """Mass of the vehicle in `model` [kg]."""
         return float(model.body("vehicle").mass[0])
 
-    def setup(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, steps: int, dt: float
-    ) -> Setup:
-        return scenario.variant.setup(self.mass(model), params, steps, dt)
+    def setup(self, case: Case, steps: int, dt: float) -> Setup:
+        return case.scenario.variant.setup(self.mass(case.model), case.params, steps, dt)
 
     # -- exact reference (the scenario's variant) ----------------------------------
 
-    def reference(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, time: np.ndarray, *, dt: float
-    ) -> Reference:
-        x, v, system, states = scenario.variant.exact(self.mass(model), params, time)
+    def reference(self, case: Case, time: np.ndarray, *, dt: float) -> Reference:
+        x, v, system, states = case.scenario.variant.exact(self.mass(case.model), case.params, time)
         return Reference(
             pos={"vehicle": np.asarray(x, float)},
             vel={"vehicle": np.asarray(v, float)},
@@ -274,26 +270,22 @@ class Kinematics(Scene):
 
     # -- phase plane -------------------------------------------------------------
 
-    def phase_field(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario
-    ) -> Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None:
+    def phase_field(self, case: Case) -> PhaseField | None:
         """(x, v) -> (v, a): autonomous only for a constant acceleration (None otherwise).
 
         With a(t) varying in time the phase plane has no fixed vector field; under a
         constant a the orbits are the parabolas v^2 = v0^2 + 2 a (x - x0).
         """
-        return scenario.variant.phase_field(params)
+        return case.scenario.variant.phase_field(case.params)
 
     # -- results -------------------------------------------------------------
 
-    def quantities(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, trajectory: Trajectory
-    ) -> dict:
+    def quantities(self, case: Case, trajectory: Trajectory) -> dict:
         # the nominal end time; MuJoCo's accumulated time differs from it by round-off only
         t_end = trajectory.steps * trajectory.dt
         x_sim = float(trajectory.qpos[-1, 0])
         v_sim = float(trajectory.qvel[-1, 0])
-        return scenario.variant.quantities(self.mass(model), params, trajectory, t_end, x_sim, v_sim)
+        return case.scenario.variant.quantities(self.mass(case.model), case.params, trajectory, t_end, x_sim, v_sim)
 
 
 SCENE = Kinematics()

@@ -14,7 +14,7 @@ import mujoco
 import numpy as np
 
 from springlab.exact import events
-from springlab.scenes.base import Scenario
+from springlab.scenes.base import Case
 from springlab.sim.simulate import ORDERS, Trajectory
 
 from .orbits import curvature
@@ -37,70 +37,61 @@ class ChaosScene(Protocol):
     @property
     def joints(self) -> tuple[str, ...]: ...
 
-    def build(self, params: dict[str, float], scenario: Scenario) -> mujoco.MjModel: ...
-
-    def physical(self, model: mujoco.MjModel) -> tuple[float, float, float, float]: ...
-
     def block(self, model: mujoco.MjModel, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]: ...
 
-    def well_size(self, params: dict[str, float], model: mujoco.MjModel) -> float: ...
+    def well_size(self, case: Case) -> float: ...
 
     def rerun(
         self,
-        params: dict[str, float],
-        scenario: Scenario,
+        case: Case,
         integrator: str,
         dt: float,
         duration: float,
         x0: float | None = None,
         v0: float | None = None,
         state: tuple | None = None,
-        model: mujoco.MjModel | None = None,
     ) -> Trajectory: ...
 
 
-def separation(
-    scene: ChaosScene, model: mujoco.MjModel, params: dict[str, float], lead: Trajectory, twin: Trajectory
-) -> tuple[float, float]:
+def separation(scene: ChaosScene, case: Case, lead: Trajectory, twin: Trajectory) -> tuple[float, float]:
     """(time [s] the pair's positions first lie the well size apart, finite-time Lyapunov exponent [1/s]).
 
     The crossing of |x_twin - x| = well is located by cubic Hermite interpolation of the gap with its
     rate (springlab.exact.events, O(dt^4)). The exponent is the gap's mean growth rate up to then,
     ln(well / PERTURBATION) / t. (inf, nan): never that far apart.
     """
-    x, v = scene.block(model, lead)
-    x2, v2 = scene.block(model, twin)
+    x, v = scene.block(case.model, lead)
+    x2, v2 = scene.block(case.model, twin)
     n = min(len(x), len(x2))
-    well = scene.well_size(params, model)
+    well = scene.well_size(case)
     t_sep = events.first_crossing(lead.time[:n], x2[:n] - x[:n], v2[:n] - v[:n], well)
     if not math.isfinite(t_sep):
         return math.inf, math.nan
     return float(t_sep), math.log(well / PERTURBATION) / float(t_sep)
 
 
-def chaos(
-    scene: ChaosScene, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, trajectory: Trajectory
-) -> dict:
+def chaos(scene: ChaosScene, case: Case, trajectory: Trajectory) -> dict:
     """Sensitivity to initial conditions: a second run from x0 + PERTURBATION, refined until the
     separation time converges (a claim about the physics needs a run converged for it)."""
+    model, params = case.model, case.params
     x = scene.block(model, trajectory)[0]
     integrator, duration = trajectory.integrator, float(trajectory.time[-1])
-    well = scene.well_size(params, model)
+    well = scene.well_size(case)
     out: dict = {"perturbation_m": PERTURBATION, "well_size_m": well}
     # level k: the pair at dt / 2^k; level 0 is this run and its twin
     leads = [trajectory]
-    twin = scene.rerun(params, scenario, integrator, trajectory.dt, duration, x0=params["x0"] + PERTURBATION)
-    found = [separation(scene, model, params, trajectory, twin)]
+    twin = scene.rerun(case, integrator, trajectory.dt, duration, x0=params["x0"] + PERTURBATION)
+    found = [separation(scene, case, trajectory, twin)]
     converged = False
     for k in range(1, SEPARATION_MAX_HALVINGS + 1):
         dt_k = trajectory.dt / 2**k
         # the finer pair need not run far past the coarser one's separation
         previous = found[-1][0]
         span = duration if not math.isfinite(previous) else min(duration, 2.0 * previous)
-        lead = scene.rerun(params, scenario, integrator, dt_k, span)
-        twin = scene.rerun(params, scenario, integrator, dt_k, span, x0=params["x0"] + PERTURBATION)
+        lead = scene.rerun(case, integrator, dt_k, span)
+        twin = scene.rerun(case, integrator, dt_k, span, x0=params["x0"] + PERTURBATION)
         leads.append(lead)
-        found.append(separation(scene, model, params, lead, twin))
+        found.append(separation(scene, case, lead, twin))
         (coarse, _), (fine, _) = found[-2], found[-1]
         if (not math.isfinite(coarse) and not math.isfinite(fine)) or (
             math.isfinite(coarse) and abs(fine - coarse) <= SEPARATION_RTOL * fine
@@ -125,7 +116,7 @@ def chaos(
     wrong = np.flatnonzero(estimate > ACCURACY_FRACTION * well)
     out["accurate_until_s"] = float(trajectory.time[wrong[0]]) if wrong.size else float(trajectory.time[n - 1])
     out["lyapunov_exponent_per_s"], out["lyapunov_standard_error_per_s"] = lyapunov_exponent(
-        scene, params, scenario, integrator, trajectory.dt
+        scene, case, integrator, trajectory.dt
     )
     out["lyapunov_exponent_basis"] = (
         f"estimate: mean log growth of a pair renormalized every {LYAPUNOV_INTERVAL:g} s over"
@@ -138,8 +129,7 @@ def chaos(
 
 def lyapunov_exponent(
     scene: ChaosScene,
-    params: dict[str, float],
-    scenario: Scenario,
+    case: Case,
     integrator: str,
     dt: float,
     transient: float = LYAPUNOV_TRANSIENT,
@@ -153,20 +143,20 @@ def lyapunov_exponent(
     over `total` [s] after `transient` [s]. The standard error treats the segments' growth
     rates as independent, so it is a statistical uncertainty of a finite average, not a bound.
     """
-    model = scene.build(params, scenario)
-    m, k1, k3, d = scene.physical(model)
-    omega = math.sqrt(abs(float(curvature(scene.well_size(params, model), k1, k3))) / m) or 1.0
+    model = case.model
+    m, k1, k3, d = case.physical()
+    omega = math.sqrt(abs(float(curvature(scene.well_size(case), k1, k3))) / m) or 1.0
     joint = model.joint(scene.joints[0])
     qpos_adr, dof = joint.qposadr[0], joint.dofadr[0]
-    lead = scene.rerun(params, scenario, integrator, dt, transient)
+    lead = scene.rerun(case, integrator, dt, transient)
     state = (lead.qpos[-1].copy(), lead.qvel[-1].copy())
     twin = (state[0].copy(), state[1].copy())
     twin[0][qpos_adr] += PERTURBATION
     rates: list[float] = []
     segments = max(1, round(total / interval))
     for _ in range(segments):
-        lead = scene.rerun(params, scenario, integrator, dt, interval, state=state, model=model)
-        follow = scene.rerun(params, scenario, integrator, dt, interval, state=twin, model=model)
+        lead = scene.rerun(case, integrator, dt, interval, state=state)
+        follow = scene.rerun(case, integrator, dt, interval, state=twin)
         state = (lead.qpos[-1].copy(), lead.qvel[-1].copy())
         dx = follow.qpos[-1][qpos_adr] - state[0][qpos_adr]
         dv = follow.qvel[-1][dof] - state[1][dof]

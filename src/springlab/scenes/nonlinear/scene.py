@@ -88,7 +88,7 @@ import numpy as np
 
 from springlab.errors import ParameterError
 from springlab.exact import events
-from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Check, Parameter, Scenario, Scene
+from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Case, Check, Parameter, PhaseField, Scenario, Scene
 from springlab.scenes.checks import (
     energy_drift_check,
     joint_jacobian,
@@ -97,7 +97,7 @@ from springlab.scenes.checks import (
     richardson_check,
 )
 from springlab.sim import exciter
-from springlab.sim.simulate import ORDERS, Setup, Trajectory, simulate
+from springlab.sim.simulate import ORDERS, Setup, Trajectory
 
 from . import chaos
 from .chaos import (
@@ -334,12 +334,12 @@ class Nonlinear(Scene):
         """sqrt(|k1/k3|) [m], the distance of the non-trivial equilibria (0 when k1 or k3 is 0)."""
         return math.sqrt(abs(params["k1"] / params["k3"])) if params["k3"] and params["k1"] else 0.0
 
-    def setup(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, steps: int, dt: float
-    ) -> Setup:
-        return self._setup(model, params, params["x0"], params["v0"])
+    def setup(self, case: Case, steps: int, dt: float) -> Setup:
+        params = case.params
+        return self._setup(case, params["x0"], params["v0"])
 
-    def _setup(self, model, params, x0: float, v0: float) -> Setup:
+    def _setup(self, case: Case, x0: float, v0: float) -> Setup:
+        model, params = case.model, case.params
         qpos = np.zeros(model.nq)
         qvel = np.zeros(model.nv)
         qpos[model.joint(self.joints[0]).qposadr[0]] = x0
@@ -365,45 +365,47 @@ class Nonlinear(Scene):
             raise ParameterError("the nonlinear scene's spring has no x^2 term (jnt_stiffnesspoly[0] must be 0)")
         return float(model.body("block").mass[0]), k1, k3, float(model.dof_damping[joint.dofadr[0]])
 
-    def escape_radius(self, model: mujoco.MjModel, params: dict[str, float]) -> float:
+    def escape_radius(self, case: Case) -> float:
         """|x| [m] at which a softening spring's block counts as escaped (inf: it cannot escape)."""
-        m, k1, k3, d = self.physical(model)
+        params = case.params
+        m, k1, k3, d = case.physical()
         if k3 >= 0:
             return math.inf
         reach = max(self._length_scale({"k1": k1, "k3": k3}), abs(params["x0"]))
         return ESCAPE_FACTOR * reach if reach > 0 else math.inf
 
-    def can_escape(self, model: mujoco.MjModel, params: dict[str, float]) -> bool:
+    def can_escape(self, case: Case) -> bool:
         """Whether the block can physically reach the escape radius: not if the run is unforced
         and the undamped orbit through (x0, v0) is bounded (damping only lowers the energy)."""
-        if not math.isfinite(self.escape_radius(model, params)):
+        params = case.params
+        if not math.isfinite(self.escape_radius(case)):
             return False
         if self._forcing(params) != "none":
             return True
-        m, k1, k3, d = self.physical(model)
+        m, k1, k3, d = case.physical()
         a, b = turning_points(params["x0"], params["v0"], m, k1, k3)
         return not (math.isfinite(a) and math.isfinite(b))
 
-    def stop_condition(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario
-    ) -> Callable[[np.ndarray, np.ndarray], np.ndarray] | None:
+    def stop_condition(self, case: Case) -> Callable[[np.ndarray, np.ndarray], np.ndarray] | None:
         # a bounded orbit that reaches the radius is a numerical blow-up, left to divergence detection
-        if not self.can_escape(model, params):
+        model = case.model
+        if not self.can_escape(case):
             return None
-        radius = self.escape_radius(model, params)
+        radius = self.escape_radius(case)
         column = model.joint(self.joints[0]).qposadr[0]
         return lambda qpos, qvel: np.abs(qpos[:, column]) >= radius
 
-    def modes(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[tuple[float, float]]:
-        m, k1, k3, d = self.physical(model)
+    def modes(self, case: Case) -> list[tuple[float, float]]:
+        params = case.params
+        m, k1, k3, d = case.physical()
         modes = []
         for x_e in equilibrium_positions(k1, k3):
             stiffness = abs(float(curvature(x_e, k1, k3)))
             if stiffness > 0:
                 modes.append((math.sqrt(stiffness / m), d / (2 * math.sqrt(stiffness * m))))
         # the stiffest point the block can reach: the escape radius, or the bounded orbit's turning points
-        if self.can_escape(model, params):
-            reach = self.escape_radius(model, params)
+        if self.can_escape(case):
+            reach = self.escape_radius(case)
         else:
             a, b = turning_points(params["x0"], params["v0"], m, k1, k3)
             bounded = math.isfinite(a) and math.isfinite(b)
@@ -417,10 +419,8 @@ class Nonlinear(Scene):
 
     # -- phase plane -----------------------------------------------------------
 
-    def phase_field(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario
-    ) -> Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None:
-        m, k1, k3, d = self.physical(model)
+    def phase_field(self, case: Case) -> PhaseField | None:
+        m, k1, k3, d = case.physical()
 
         def field(x, v):
             x, v = np.asarray(x, float), np.asarray(v, float)
@@ -428,16 +428,14 @@ class Nonlinear(Scene):
 
         return field
 
-    def equilibria(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[dict]:
+    def equilibria(self, case: Case) -> list[dict]:
         """Every equilibrium with its linearization (springlab.scenes.nonlinear.orbits.equilibria)."""
-        m, k1, k3, d = self.physical(model)
+        m, k1, k3, d = case.physical()
         return equilibria(m, k1, k3, d)
 
-    def separatrices(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, points: int = 401
-    ) -> list[tuple[np.ndarray, np.ndarray]]:
+    def separatrices(self, case: Case, points: int = 401) -> list[tuple[np.ndarray, np.ndarray]]:
         """The saddles' energy levels as (x [m], v [m/s]) curves (springlab.scenes.nonlinear.orbits.separatrices)."""
-        m, k1, k3, d = self.physical(model)
+        m, k1, k3, d = case.physical()
         return separatrices(m, k1, k3, points)
 
     # -- linearization through MuJoCo ---------------------------------------------
@@ -446,8 +444,9 @@ class Nonlinear(Scene):
         """[[0, 1], [da/dx, da/dv]] [1/s^2, 1/s] of the block at (x_e [m], v = 0): springlab.scenes.checks.joint_jacobian."""
         return joint_jacobian(model, self.joints[0], x_e, step)
 
-    def _linearization_checks(self, model, params) -> list[Check]:
-        m, k1, k3, d = self.physical(model)
+    def _linearization_checks(self, case: Case) -> list[Check]:
+        model, params = case.model, case.params
+        m, k1, k3, d = case.physical()
         scale = max(self._length_scale({"k1": k1, "k3": k3}), abs(params["x0"]), 1e-3)
         step = LINEARIZATION_STEP * scale
         checks = []
@@ -477,34 +476,23 @@ class Nonlinear(Scene):
 
     def rerun(
         self,
-        params: dict[str, float],
-        scenario: Scenario,
+        case: Case,
         integrator: str,
         dt: float,
         duration: float,
         x0: float | None = None,
         v0: float | None = None,
         state: tuple | None = None,
-        model: mujoco.MjModel | None = None,
     ) -> Trajectory:
-        """Another run of the same scene, optionally from another block state or from a full
-        (qpos, qvel) state; on a fresh model unless one is given (simulate sets its timestep)."""
-        model = self.build(params, scenario) if model is None else model
+        """Another run of the case at another setting, optionally from another block state or from a full
+        (qpos, qvel) state (the case's model is not changed: simulate steps a copy)."""
+        params = case.params
         if state is not None:
             qpos, qvel = state
-            setup = Setup(qpos=qpos, qvel=qvel, control=self._setup(model, params, 0.0, 0.0).control)
+            setup = Setup(qpos=qpos, qvel=qvel, control=self._setup(case, 0.0, 0.0).control)
         else:
-            setup = self._setup(model, params, params["x0"] if x0 is None else x0, params["v0"] if v0 is None else v0)
-        return simulate(
-            model,
-            integrator=integrator,
-            dt=dt,
-            duration=duration,
-            qpos=setup.qpos,
-            qvel=setup.qvel,
-            control=setup.control,
-            stop=self.stop_condition(model, params, scenario),
-        )
+            setup = self._setup(case, params["x0"] if x0 is None else x0, params["v0"] if v0 is None else v0)
+        return case.simulate(integrator, dt, duration, setup=setup)
 
     def block(self, model: mujoco.MjModel, trajectory: Trajectory) -> tuple[np.ndarray, np.ndarray]:
         j = model.joint(self.joints[0])
@@ -512,17 +500,16 @@ class Nonlinear(Scene):
 
     # -- results -------------------------------------------------------------
 
-    def _orbit(self, model, params) -> dict:
+    def _orbit(self, case: Case) -> dict:
         """The unforced, undamped motion through (x0, v0) (springlab.scenes.nonlinear.orbits.orbit)."""
-        m, k1, k3, d = self.physical(model)
-        return orbit(m, k1, k3, params["x0"], params["v0"])
+        m, k1, k3, d = case.physical()
+        return orbit(m, k1, k3, case.params["x0"], case.params["v0"])
 
-    def quantities(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, trajectory: Trajectory
-    ) -> dict:
-        m, k1, k3, d = self.physical(model)
+    def quantities(self, case: Case, trajectory: Trajectory) -> dict:
+        model, params = case.model, case.params
+        m, k1, k3, d = case.physical()
         x, v = self.block(model, trajectory)
-        equilibria = self.equilibria(model, params, scenario)
+        equilibria = self.equilibria(case)
         out: dict = {
             "equilibria_m": [e["x"] for e in equilibria],
             "equilibrium_kinds": [e["kind"] for e in equilibria],
@@ -542,15 +529,15 @@ class Nonlinear(Scene):
             out["peak_force_stretch_m"] = x_peak
         unforced = d == 0 and self._forcing(params) == "none"
         if unforced:
-            out.update(self._orbit(model, params))
+            out.update(self._orbit(case))
             if out["motion"] == "bounded":
-                out["period_simulated_s"] = measured_period(trajectory.time, x, v, self._acceleration(model, x, v))
+                out["period_simulated_s"] = measured_period(trajectory.time, x, v, self._acceleration(case, x, v))
             energy_j = energy(x, v, m, k1, k3)
             out["energy_drift_relative"] = float(
                 np.max(np.abs(energy_j - energy_j[0])) / max(np.max(0.5 * m * v**2), 1e-300)
             )
         out["max_displacement_m"] = float(np.max(np.abs(x)))
-        radius = self.escape_radius(model, params)
+        radius = self.escape_radius(case)
         if math.isfinite(radius):
             out["escape_radius_m"] = radius
             out["escaped"] = bool(trajectory.stopped)
@@ -564,26 +551,25 @@ class Nonlinear(Scene):
                     except ValueError:
                         pass
         if self._forcing(params) == "harmonic" and d > 0:
-            out.update(self._chaos(model, params, scenario, trajectory))
+            out.update(self._chaos(case, trajectory))
         return out
 
-    def _acceleration(self, model, x, v):
-        m, k1, k3, d = self.physical(model)
+    def _acceleration(self, case: Case, x: np.ndarray, v: np.ndarray) -> np.ndarray:
+        m, k1, k3, d = case.physical()
         return (spring_force(x, k1, k3) - d * v) / m
 
-    def well_size(self, params: dict[str, float], model: mujoco.MjModel) -> float:
+    def well_size(self, case: Case) -> float:
         """The distance from the saddle to a well [m] (or the largest displacement without wells)."""
-        m, k1, k3, d = self.physical(model)
-        return self._length_scale({"k1": k1, "k3": k3}) or max(abs(params["x0"]), 1e-3)
+        m, k1, k3, d = case.physical()
+        return self._length_scale({"k1": k1, "k3": k3}) or max(abs(case.params["x0"]), 1e-3)
 
-    def _chaos(self, model, params, scenario, trajectory: Trajectory) -> dict:
+    def _chaos(self, case: Case, trajectory: Trajectory) -> dict:
         """Sensitivity to initial conditions (springlab.scenes.nonlinear.chaos.chaos)."""
-        return chaos.chaos(self, model, params, scenario, trajectory)
+        return chaos.chaos(self, case, trajectory)
 
     def lyapunov_exponent(
         self,
-        params: dict[str, float],
-        scenario: Scenario,
+        case: Case,
         integrator: str,
         dt: float,
         transient: float = LYAPUNOV_TRANSIENT,
@@ -592,15 +578,14 @@ class Nonlinear(Scene):
     ) -> tuple[float, float]:
         """Largest Lyapunov exponent [1/s] and its standard error [1/s], an estimate by Benettin's
         renormalization (springlab.scenes.nonlinear.chaos.lyapunov_exponent)."""
-        return chaos.lyapunov_exponent(self, params, scenario, integrator, dt, transient, total, interval)
+        return chaos.lyapunov_exponent(self, case, integrator, dt, transient, total, interval)
 
     # -- validation ------------------------------------------------------------------
 
-    def checks(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, trajectory: Trajectory
-    ) -> list[Check]:
-        m, k1, k3, d = self.physical(model)
-        out = self._linearization_checks(model, params)
+    def checks(self, case: Case, trajectory: Trajectory) -> list[Check]:
+        model, params = case.model, case.params
+        m, k1, k3, d = case.physical()
+        out = self._linearization_checks(case)
         integrator, dt = trajectory.integrator, trajectory.dt
         order = ORDERS[integrator]
         unforced = d == 0 and self._forcing(params) == "none"
@@ -616,13 +601,13 @@ class Nonlinear(Scene):
                     " 1e-6 x the largest kinetic energy",
                 )
             )
-            orbit = self._orbit(model, params)
+            orbit = self._orbit(case)
             duration = float(trajectory.time[-1])
             if orbit["motion"] == "bounded":
-                period = measured_period(trajectory.time, x, v, self._acceleration(model, x, v))
-                half = self.rerun(params, scenario, integrator, dt / 2, duration)
+                period = measured_period(trajectory.time, x, v, self._acceleration(case, x, v))
+                half = self.rerun(case, integrator, dt / 2, duration)
                 xh, vh = self.block(model, half)
-                period_half = measured_period(half.time, xh, vh, self._acceleration(model, xh, vh))
+                period_half = measured_period(half.time, xh, vh, self._acceleration(case, xh, vh))
                 if not math.isfinite(period):  # fewer than two maxima in the run: nothing to measure
                     return out
                 out.append(
@@ -639,9 +624,9 @@ class Nonlinear(Scene):
                     )
                 )
             if trajectory.stopped:
-                radius = self.escape_radius(model, params)
+                radius = self.escape_radius(case)
                 escape = crossing_time(trajectory.time, x, v, radius)
-                half = self.rerun(params, scenario, integrator, dt / 2, duration)
+                half = self.rerun(case, integrator, dt / 2, duration)
                 xh, vh = self.block(model, half)
                 escape_half = crossing_time(half.time, xh, vh, radius)
                 try:
@@ -664,15 +649,14 @@ class Nonlinear(Scene):
                     )
                 )
         elif self._forcing(params) != "none":
-            out.append(self._convergence_check(params, scenario, integrator, dt, float(trajectory.time[-1])))
+            out.append(self._convergence_check(case, integrator, dt, float(trajectory.time[-1])))
         return out
 
-    def _convergence_check(self, params, scenario, integrator: str, dt: float, duration: float) -> Check:
+    def _convergence_check(self, case: Case, integrator: str, dt: float, duration: float) -> Check:
         """Observed order of convergence from runs at dt, dt/2 and dt/4 over CONVERGENCE_WINDOW."""
         window = min(CONVERGENCE_WINDOW, duration)
-        runs = [self.rerun(params, scenario, integrator, dt / 2**i, window) for i in range(3)]
-        model = self.build(params, scenario)
-        positions = [self.block(model, run)[0][:: 2**i] for i, run in enumerate(runs)]
+        runs = [self.rerun(case, integrator, dt / 2**i, window) for i in range(3)]
+        positions = [self.block(case.model, run)[0][:: 2**i] for i, run in enumerate(runs)]
         return observed_order_check(positions, ORDERS[integrator], window)
 
 

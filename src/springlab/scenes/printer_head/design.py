@@ -55,6 +55,7 @@ static stretch F m_c / (M k)), so
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Mapping
 from typing import Any
@@ -64,7 +65,8 @@ import numpy as np
 
 from springlab.errors import DivergedError
 from springlab.exact import events
-from springlab.scenes.capabilities import DesignProperty, DesignSpec, MoveEstimates, MoveRuns
+from springlab.scenes.capabilities.case import CaseView
+from springlab.scenes.capabilities.design import DesignProperty, DesignSpec, MoveEstimates, MoveRuns
 from springlab.sim.simulate import quiet_mujoco
 
 from .moves import (
@@ -165,7 +167,7 @@ def simulate_moves(
     Parameters
     ----------
     model
-        the `move` scenario compiled at `base` (its integrator is set to RK4 here).
+        the `move` scenario compiled at `base` (not changed: the batch runs a copy set to RK4).
     base
         scene parameters (move_distance [m], positioning_band [m], motor_mass [kg], ...).
     values
@@ -192,6 +194,7 @@ def simulate_moves(
     from mujoco import batch as mjbatch  # here: importing the scenes must not load mujoco.batch
 
     params = dict(base)
+    model = copy.copy(model)
     model.opt.integrator = mujoco.mjtIntegrator.mjINT_RK4
     n = len(values["belt_stiffness"])
     m_m = params["motor_mass"]
@@ -345,17 +348,12 @@ class PrinterHeadDesign:
         return {"belt_damping": 2.0 * value * math.sqrt(base["belt_stiffness"] * reduced)}
 
     def simulate(
-        self,
-        model: mujoco.MjModel,
-        base: Mapping[str, float],
-        values: Mapping[str, np.ndarray],
-        *,
-        omega_dt: float,
-        nthread: int,
-        max_duration: float,
+        self, case: CaseView, values: Mapping[str, np.ndarray], *, omega_dt: float, nthread: int, max_duration: float
     ) -> MoveRuns:
-        """`simulate_moves` (module docstring)."""
-        return simulate_moves(model, base, values, omega_dt=omega_dt, nthread=nthread, max_duration=max_duration)
+        """`simulate_moves` of the case's model at its parameters (module docstring)."""
+        return simulate_moves(
+            case.model, case.params, values, omega_dt=omega_dt, nthread=nthread, max_duration=max_duration
+        )
 
     def estimates(self, base: Mapping[str, float], values: Mapping[str, np.ndarray], dt: np.ndarray) -> MoveEstimates:
         """`estimates` (module docstring)."""

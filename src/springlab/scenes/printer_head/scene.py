@@ -97,8 +97,10 @@ import numpy as np
 from springlab.exact import analytic
 from springlab.exact.limits import stability_limit as joint_damping_stability_limit
 from springlab.exact.linearize import one_step_map, operating_point
-from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene
-from springlab.scenes.capabilities import FrequencySpec, OscillatorFit
+from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Case, Parameter, Reference, Scenario, Scene
+from springlab.scenes.capabilities.case import CaseView
+from springlab.scenes.capabilities.fit import OscillatorFit
+from springlab.scenes.capabilities.frequency import FrequencySpec
 from springlab.sim.simulate import Setup, Trajectory, integrator_id
 
 from .design import DESIGN
@@ -126,13 +128,12 @@ def _belt_mode_mass(params: Mapping[str, float]) -> float:
     return m_c * m_m / (m_c + m_m)
 
 
-def _carriage_at(
-    model: mujoco.MjModel, params: Mapping[str, float], x0: float, v0: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """(qpos, qvel) with the carriage at x0 [m], v0 [m/s] about the centre of mass at rest at 0.
+def _carriage_at(case: CaseView, x0: float, v0: float) -> tuple[np.ndarray, np.ndarray]:
+    """(qpos, qvel) of `case` with the carriage at x0 [m], v0 [m/s] about the centre of mass at rest at 0.
 
     The carriage moves as -(m_m / M) of the belt's stretch, so the motor is at -(m_c / m_m) x0.
     """
+    model, params = case.model, case.params
     qpos, qvel = model.qpos0.copy(), np.zeros(model.nv)
     ratio = params["carriage_mass"] / params["motor_mass"]
     for joint, q, v in (("carriage", x0, v0), ("motor", -ratio * x0, -ratio * v0)):
@@ -310,9 +311,8 @@ class PrinterHead(Scene):
         s0 = params["deflection"]
         return np.array([-m_m * s0, m_c * s0]) / (m_c + m_m), np.zeros(2)
 
-    def setup(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, steps: int, dt: float
-    ) -> Setup:
+    def setup(self, case: Case, steps: int, dt: float) -> Setup:
+        model, params, scenario = case.model, case.params, case.scenario
         q0, v0 = self._initial(params)
         qpos, qvel = np.zeros(model.nq), np.zeros(model.nv)
         for joint, q, v in zip(self.joints, q0, v0):
@@ -328,9 +328,8 @@ class PrinterHead(Scene):
 
     # -- exact solution ------------------------------------------------------
 
-    def reference(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, time: np.ndarray, *, dt: float
-    ) -> Reference:
+    def reference(self, case: Case, time: np.ndarray, *, dt: float) -> Reference:
+        model, params, scenario = case.model, case.params, case.scenario
         mass, damping, stiffness = self.matrices(model)
         q0, v0 = self._initial(params)
         breaks, forces = scenario.variant.segments(params, dt)  # the move switches on the run's own grid
@@ -362,24 +361,18 @@ class PrinterHead(Scene):
         reduced = m_c * m_m / (m_c + m_m)
         return analytic.natural_frequency(reduced, k), analytic.damping_ratio(reduced, k, c)
 
-    def modes(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[tuple[float, float]]:
+    def modes(self, case: Case) -> list[tuple[float, float]]:
+        model = case.model
         return [self.belt_mode(model)]
 
-    def stability_limit(
-        self,
-        model: mujoco.MjModel,
-        params: dict[str, float],
-        scenario: Scenario,
-        integrator: str,
-        omega: float,
-        zeta: float,
-    ) -> float:
+    def stability_limit(self, case: Case, integrator: str, omega: float, zeta: float) -> float:
         """Largest omega_n dt [-] at which `integrator` is stable on this model's belt mode.
 
         Measured from MuJoCo's own step map (see `linearized_mode`) by bisection,
         because MuJoCo's integrators treat tendon damping differently from joint
         damping (module docstring). inf where no step up to omega dt = 100 is unstable.
         """
+        model = case.model
         integrator_id(integrator)
 
         def unstable(omega_dt: float) -> bool:
@@ -397,9 +390,8 @@ class PrinterHead(Scene):
 
     # -- results -------------------------------------------------------------
 
-    def quantities(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, trajectory: Trajectory
-    ) -> dict:
+    def quantities(self, case: Case, trajectory: Trajectory) -> dict:
+        model, params, scenario = case.model, case.params, case.scenario
         m_c, m_m, k, c = self.physical(model)
         total, reduced = m_c + m_m, m_c * m_m / (m_c + m_m)
         omega_n, zeta = self.belt_mode(model)
@@ -415,7 +407,7 @@ class PrinterHead(Scene):
         out["total_mass_kg"] = total
         out["reduced_mass_kg"] = reduced
         out["vibration_share"] = m_m / total  # carriage deviation per metre of belt stretch
-        columns = self.joint_columns(model, trajectory)
+        columns = case.joint_columns(trajectory)
         (q_c, v_c), (q_m, v_m) = columns["carriage"], columns["motor"]
         run = BeltRun(params, m_c, m_m, k, omega_n, zeta, dt, trajectory.time, q_c, v_c, q_m, v_m)
         return scenario.variant.quantities(out, run)

@@ -36,8 +36,11 @@ import numpy as np
 
 from springlab.exact import analytic
 from springlab.exact.linear import generator_system, state_matrix
-from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Parameter, Reference, Scenario, Scene
-from springlab.scenes.capabilities import FrequencySpec, InteractiveSpec, MjcfEdit, OscillatorFit, OscillatorSpec
+from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Case, Parameter, PhaseField, Reference, Scenario, Scene
+from springlab.scenes.capabilities.fit import OscillatorFit
+from springlab.scenes.capabilities.frequency import FrequencySpec
+from springlab.scenes.capabilities.interactive import InteractiveSpec, MjcfEdit
+from springlab.scenes.capabilities.oscillator import OscillatorSpec
 from springlab.sim import exciter
 from springlab.sim.simulate import Setup, Trajectory
 
@@ -261,14 +264,13 @@ class Slider(Scene):
             driven_stiffness=params["stiffness"] + params["mass"] * omega**2 + params["damping"] * omega,
         )
 
-    def setup(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, steps: int, dt: float
-    ) -> Setup:
+    def setup(self, case: Case, steps: int, dt: float) -> Setup:
+        model, params = case.model, case.params
         qpos = np.zeros(model.nq)
         qvel = np.zeros(model.nv)
         qpos[model.joint("slider").qposadr[0]] = params["x0"]
         qvel[model.joint("slider").dofadr[0]] = params["v0"]
-        forcing = self._forcing(params, scenario)
+        forcing = self._forcing(params, case.scenario)
         if forcing == "harmonic":
             exciter.start(model, qvel, params["force_frequency"])
         control = np.array([params["force_amplitude"] if forcing == "step" else 0.0])
@@ -288,12 +290,11 @@ class Slider(Scene):
         stiffness = float(joint.stiffness[0]) + exciter.coupling_stiffness(model)
         return float(model.body("block").mass[0]), stiffness, float(model.dof_damping[dof])
 
-    def reference(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, time: np.ndarray, *, dt: float
-    ) -> Reference:
-        m, k, d = self.physical(model)
+    def reference(self, case: Case, time: np.ndarray, *, dt: float) -> Reference:
+        m, k, d = case.physical()
+        params = case.params
         x0, v0, f0 = params["x0"], params["v0"], params["force_amplitude"]
-        forcing = self._forcing(params, scenario)
+        forcing = self._forcing(params, case.scenario)
         omega = 2 * math.pi * params["force_frequency"]
         # the autonomous system z' = A z behind the reference, forcing as generator states
         if forcing == "harmonic":
@@ -311,31 +312,28 @@ class Slider(Scene):
             states = np.column_stack([x, v])
         return Reference(pos={"slider": x}, vel={"slider": v}, system=system, states=states, rows={"slider": (0, 1)})
 
-    def modes(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[tuple[float, float]]:
-        m, k, d = self.physical(model)
+    def modes(self, case: Case) -> list[tuple[float, float]]:
+        m, k, d = case.physical()
         modes = []
         if k > 0:
             modes.append((math.sqrt(k / m), analytic.damping_ratio(m, k, d)))
-        if self._forcing(params, scenario) == "harmonic":
-            modes.append((2 * math.pi * params["force_frequency"], 0.0))  # the exciter
+        if self._forcing(case.params, case.scenario) == "harmonic":
+            modes.append((2 * math.pi * case.params["force_frequency"], 0.0))  # the exciter
         return modes
 
-    def phase_field(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario
-    ) -> Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None:
-        m, k, d = self.physical(model)
+    def phase_field(self, case: Case) -> PhaseField | None:
+        m, k, d = case.physical()
         return lambda x, v: (v, -(k * x + d * v) / m)
 
-    def equilibria(self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario) -> list[dict]:
-        m, k, d = self.physical(model)
+    def equilibria(self, case: Case) -> list[dict]:
+        m, k, d = case.physical()
         return [{"x": 0.0, "stable": k > 0}]
 
     # -- results -------------------------------------------------------------
 
-    def quantities(
-        self, model: mujoco.MjModel, params: dict[str, float], scenario: Scenario, trajectory: Trajectory
-    ) -> dict:
-        m, k, d = self.physical(model)
+    def quantities(self, case: Case, trajectory: Trajectory) -> dict:
+        m, k, d = case.physical()
+        params = case.params
         out: dict = {"regime": analytic.regime(m, k, d), "damping_ratio": analytic.damping_ratio(m, k, d)}
         if k > 0:
             omega_n = analytic.natural_frequency(m, k)
@@ -354,7 +352,7 @@ class Slider(Scene):
                 x0, v0 = params["x0"], params["v0"]
                 out["coefficient_A_m"] = (v0 - lam2 * x0) / (lam1 - lam2)
                 out["coefficient_B_m"] = (lam1 * x0 - v0) / (lam1 - lam2)
-        forcing = self._forcing(params, scenario)
+        forcing = self._forcing(params, case.scenario)
         if forcing == "step" and k > 0:
             out["static_deflection_m"] = params["force_amplitude"] / k
         if forcing == "harmonic":
@@ -366,7 +364,7 @@ class Slider(Scene):
             out["steady_state_exists"] = bool(math.isfinite(amplitude))
             out["steady_state_amplitude_m"] = amplitude
             out["phase_lag_rad"] = phase
-        x = trajectory.qpos[:, model.joint("slider").qposadr[0]]
+        x = trajectory.qpos[:, case.model.joint("slider").qposadr[0]]
         out["max_displacement_m"] = float(np.max(np.abs(x)))
         return out
 

@@ -35,8 +35,8 @@ from xml.etree import ElementTree
 import mujoco
 import numpy as np
 
+from springlab import scenes
 from springlab.errors import BadInputError, DivergedError
-from springlab.runs.run import prepare
 from springlab.sim.batch import Job, run_batched
 from springlab.sim.simulate import Setup, Trajectory, quiet_mujoco
 from springlab.studies.executor import Executor
@@ -103,8 +103,7 @@ def _digest(xml: str, assets: dict[str, bytes]) -> str:
 
 def _scene_model(name: str) -> mujoco.MjModel:
     """A shipped scene with its default scenario and parameters, built as `audit.load` builds it."""
-    scene, chosen, params = prepare(name, None, {})
-    return scene.build(params, chosen)
+    return scenes.case(name).model
 
 
 def compiled(payload: dict[str, Any]) -> mujoco.MjModel:

@@ -14,7 +14,6 @@ import mujoco
 
 from springlab import scenes
 from springlab.errors import BadInputError
-from springlab.runs.run import prepare
 from springlab.sim.simulate import Setup, quiet_mujoco
 
 
@@ -61,10 +60,9 @@ def load(model: mujoco.MjModel | str | os.PathLike[str]) -> Source:
     text = os.fspath(model)
     path = pathlib.Path(text)
     if not path.exists() and text in scenes.SCENES:
-        scene, chosen, params = prepare(text, None, {})
-        built = scene.build(params, chosen)
-        steps = max(1, round(chosen.duration / built.opt.timestep))
-        setup = scene.setup(built, params, chosen, steps, built.opt.timestep)
+        case = scenes.case(text)
+        chosen, built = case.scenario, case.model
+        setup = case.setup(max(1, round(chosen.duration / built.opt.timestep)), built.opt.timestep)
         return Source(f"scene {text!r} (scenario {chosen.name!r})", built, setup, chosen.duration, ("scene", text))
     if not path.is_file():
         raise BadInputError(f"no such model file or scene {text!r}; scenes: {', '.join(sorted(scenes.SCENES))}")

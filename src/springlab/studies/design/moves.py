@@ -2,7 +2,7 @@
 from, and the scene's batched move simulations cut into chunks on an executor.
 
 A scene answers a design question by declaring it (`Scene.design`, a
-springlab.scenes.capabilities.DesignSpec); this package reads the declaration and never names a scene.
+springlab.scenes.capabilities.design.DesignSpec); this package reads the declaration and never names a scene.
 The simulation of a configuration is the scene's (`DesignSpec.hooks.simulate`, e.g. one
 `mujoco.batch.Batch` per chunk, each simulation stopped once its settling is certified); here the
 configurations are cut into chunks of plain data that run locally or on dask workers, and the chunks'
@@ -21,8 +21,8 @@ import numpy as np
 
 from springlab import scenes
 from springlab.errors import BadInputError, ParameterError, UnknownNameError
-from springlab.scenes.base import Parameter, Scene
-from springlab.scenes.capabilities import DesignProperty, DesignSpec, MoveRuns
+from springlab.scenes.base import Case, Parameter, Scene
+from springlab.scenes.capabilities.design import DesignProperty, DesignSpec, MoveRuns
 from springlab.studies.executor import Executor, chunked
 
 #: omega_n * dt of every simulation
@@ -151,8 +151,8 @@ def simulate(
         per configuration, in order.
     """
     scene, spec = declaration(scene)
-    model = scene.build(dict(base), scene.scenario(spec.scenario))
-    return spec.hooks.simulate(model, base, values, omega_dt=omega_dt, nthread=nthread, max_duration=max_duration)
+    case = Case.compiled(scene, scene.scenario(spec.scenario), base)
+    return spec.hooks.simulate(case, values, omega_dt=omega_dt, nthread=nthread, max_duration=max_duration)
 
 
 def moves_chunk(payload: Mapping[str, Any], nthread: int = 0) -> MoveRuns:

@@ -1,7 +1,7 @@
 """The design study: how fast can a scene's move be made, and which of its properties matter?
 
 A scene declares the design question it answers (`Scene.design`, a
-springlab.scenes.capabilities.DesignSpec); this study reads the declaration and
+springlab.scenes.capabilities.design.DesignSpec); this study reads the declaration and
 never names a scene. The printer head's is the chapter's (section 5.7): the
 `move` scenario (a bang-bang point-to-point move at the motor's force limit,
 then the residual belt vibration) for every combination of four properties,
@@ -46,7 +46,7 @@ import numpy as np
 from springlab import display, files, tables
 from springlab.errors import BadInputError
 from springlab.scenes.base import Scene
-from springlab.scenes.capabilities import DesignSpec
+from springlab.scenes.capabilities.design import DesignSpec
 from springlab.studies.executor import Executor
 
 from . import moves

@@ -60,7 +60,7 @@ import numpy as np
 
 from springlab.errors import BadInputError
 from springlab.runs import compare
-from springlab.scenes.base import Reference, Scenario
+from springlab.scenes.base import Case, Reference, Scenario
 from springlab.sim.simulate import quiet_mujoco
 
 from . import reductions
@@ -260,9 +260,10 @@ class Problem:
 
     def initial(self, model: mujoco.MjModel, values: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
         """(full physics state at t = 0, (steps + 1, nu) controls) of a candidate."""
-        params = self.how.scene_params(values, self.base, self.modal)
-        setup = self.scene.setup(model, params, self.scenario, self.steps, self.dt)
-        qpos, qvel = self.how.initial(model, params, values["x0"], values["v0"])
+        # the candidate's model carries the fit's sensor besides the scene's physics
+        case = Case(self.scene, self.scenario, self.how.scene_params(values, self.base, self.modal), model)
+        setup = case.setup(self.steps, self.dt)
+        qpos, qvel = self.how.initial(case, values["x0"], values["v0"])
         data = mujoco.MjData(model)
         data.qpos[:], data.qvel[:] = qpos, qvel
         if setup.act is not None:

@@ -30,14 +30,13 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-import mujoco
 import numpy as np
 
 from springlab import scenes
 from springlab.errors import BadInputError, UnknownNameError
 from springlab.exact import analytic
-from springlab.scenes.base import Scene
-from springlab.scenes.capabilities import OscillatorFit, PolynomialFit
+from springlab.scenes.base import Case, Scene
+from springlab.scenes.capabilities.fit import OscillatorFit, PolynomialFit
 
 from . import reductions
 from .data import Record
@@ -158,10 +157,10 @@ class FitModel:
         """Scene parameters for fit values."""
         raise NotImplementedError
 
-    def initial(
-        self, model: mujoco.MjModel, params: dict[str, float], x0: float, v0: float
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """(qpos, qvel) with the observed coordinate at x0 [m], v0 [m/s] (the rest of the scene at rest)."""
+    def initial(self, case: Case, x0: float, v0: float) -> tuple[np.ndarray, np.ndarray]:
+        """(qpos, qvel) of the candidate `case` with the observed coordinate at x0 [m], v0 [m/s] (the rest of the
+        scene at rest)."""
+        model = case.model
         qpos, qvel = model.qpos0.copy(), np.zeros(model.nv)
         qpos[model.joint(self.joint).qposadr[0]] = x0
         qvel[model.joint(self.joint).dofadr[0]] = v0
@@ -332,13 +331,11 @@ class OscillatorModel(FitModel):
                 params[name] = values[name]
         return params
 
-    def initial(
-        self, model: mujoco.MjModel, params: dict[str, float], x0: float, v0: float
-    ) -> tuple[np.ndarray, np.ndarray]:
+    def initial(self, case: Case, x0: float, v0: float) -> tuple[np.ndarray, np.ndarray]:
         """(qpos, qvel) with the observed coordinate at x0 [m], v0 [m/s]: the declaration's hook, or the joint set."""
         if self.declared.initial_state is not None:
-            return self.declared.initial_state(model, params, x0, v0)
-        return super().initial(model, params, x0, v0)
+            return self.declared.initial_state(case, x0, v0)
+        return super().initial(case, x0, v0)
 
     def run_parameters(
         self, params: dict[str, float], values: dict[str, float], moving: bool

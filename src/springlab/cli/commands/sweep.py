@@ -1,0 +1,65 @@
+"""`springlab sweep`: a scenario over a grid (or random samples) of parameters, batched."""
+
+from __future__ import annotations
+
+import argparse
+
+from springlab.cli import options
+from springlab.cli import text as cli_text
+from springlab.errors import ExitCode
+from springlab.sim.simulate import INTEGRATORS
+
+NAME = "sweep"
+HELP = "run a scenario over a grid (or random samples) of parameters, batched"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    options.scene_arguments(parser)
+    parser.add_argument(
+        "--vary",
+        action="append",
+        default=[],
+        required=True,
+        metavar="NAME=LOW:HIGH:N[:log]",
+        help="vary a parameter over N values from LOW to HIGH, SI units (repeatable; :log for log spacing)",
+    )
+    parser.add_argument("--samples", type=int, metavar="N", help="N random points in the box instead of the full grid")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the random points (default 0)")
+    parser.add_argument("--integrator", metavar="NAME", help=f"one of {', '.join(INTEGRATORS)} (default: the scene's)")
+    parser.add_argument("--dt", type=float, metavar="SECONDS", help="timestep [s] (default: the scene's validated one)")
+    parser.add_argument(
+        "--duration", type=float, metavar="SECONDS", help="simulated time [s] (default: the scenario's)"
+    )
+    parser.add_argument(
+        "--quantity", metavar="NAME", help="what sweep.png shows (default: the scenario's headline quantity)"
+    )
+    options.executor_arguments(parser)
+    parser.add_argument("--output", metavar="DIR", help="write DIR/sweep.csv and DIR/sweep.png")
+    parser.add_argument("--json", action="store_true", help="print the sweep (setting, counts, every row) as JSON")
+
+
+def main(args: argparse.Namespace) -> int:
+    from springlab.plots import sweep as sweep_plot
+    from springlab.studies import sweeps
+
+    options.check_output(args)
+    with options.executor(args) as executor:
+        result = sweeps.sweep(
+            args.scene,
+            args.scenario,
+            vary=args.vary,
+            samples=args.samples,
+            seed=args.seed,
+            integrator=args.integrator,
+            dt=args.dt,
+            duration=args.duration,
+            executor=executor,
+            **options.parse_sets(args.set),
+        )
+    if args.output:
+        sweep_plot.write(result, args.output, args.quantity)
+    if args.json:
+        options.print_json(result.to_dict())
+        return ExitCode.OK
+    cli_text.print_sweep(result, args.quantity, args.output)
+    return ExitCode.OK
