@@ -168,10 +168,10 @@ def audit(
         constraints=limits.flags,
         is_linear=judged.is_linear,
         linearity=judged.linearity,
-        reference=_reference_used(judged.reference, options.tol, swept.spacing),
+        reference=judged.used,
         runs=scored.runs,
         orders=MappingProxyType(scored.orders),
-        pareto=tuple(pareto_front(scored.runs)),
+        pareto=scored.pareto,
         recommendation=scored.recommendation,
         timings=clock.timings(),
         point_state=limits.point_state,
@@ -272,6 +272,7 @@ class _Judged:
     linearity: Linearity
     is_linear: bool
     reference: Reference
+    used: ReferenceUsed
 
 
 def _reference(
@@ -291,7 +292,8 @@ def _reference(
         step = reference_step(list(swept.dts), swept.spacing)
         coarse = probe if isinstance(probe, Trajectory) else None
         reference = converged_reference(at, start.setup, step, swept.duration, options.tol, coarse=coarse, run=run)
-    return _Judged(moved, Linearity(change, threshold), is_linear, reference)
+    used = _reference_used(reference, options.tol, swept.spacing)
+    return _Judged(moved, Linearity(change, threshold), is_linear, reference, used)
 
 
 def _reference_used(reference: Reference, tol: float, spacing: float) -> ReferenceUsed:
@@ -313,6 +315,7 @@ class _Scored:
     runs: tuple[Run, ...]
     orders: dict[str, float | None]
     own: OwnSetting
+    pareto: tuple[Run, ...]
     recommendation: Recommendation[Run]
 
 
@@ -352,11 +355,12 @@ def _score(
         margin_confirmed=None if own_limit.limit_dt_s is None else bool(own_limit.confirmed),
         cost=counted_cost(own_name, own_steps, work),
     )
+    front = tuple(pareto_front(runs))
     if judged.excitation.any_motion:
         recommendation = _recommend(at, start.setup, runs, limits.limits, options.tol, swept.duration, reference)
     else:  # every setting reproduces a model that does not move: nothing to verify
         recommendation = Recommendation(options.tol, None, None, False, None, NO_MOTION)
-    return _Scored(tuple(runs), orders, own, recommendation)
+    return _Scored(tuple(runs), orders, own, front, recommendation)
 
 
 def _blows_up(model: mujoco.MjModel, limit: Limit, own_dt: float, probe: RunProbe, run: Runner) -> bool:
