@@ -143,8 +143,8 @@ def cheapest_at_256(quick: bool) -> None:
     pick = study.recommendation
     assert pick is not None and pick.verified and pick.integrator and pick.dt, "no setting meets the tolerance"
     print(
-        f"   cheapest: {pick.integrator} at dt = {pick.dt:.4g} s (discretization {pick.discretization_error:.2e},"
-        f" integration {pick.integration_error:.2e}); study took {study.sweep_wall_time_s:.1f} s"
+        f"   cheapest: {pick.integrator} at dt = {pick.dt:.4g} s (discretization {pick.details['discretization_error']:.2e},"
+        f" integration {pick.details['integration_error']:.2e}); study took {study.sweep_wall_time_s:.1f} s"
     )
     case = scenes.get("drill_string").case("modes", {"n_elements": size})
     model = case.model

@@ -116,8 +116,8 @@ def full_sweep() -> None:
     for case in study.cases:
         pick = case.pick
         found = (
-            f"{case.describe(pick.run.settings)}, {pick.run.integrator} at {pick.run.dt:g} s"
-            if pick and pick.run
+            f"{case.describe(pick.row.settings)}, {pick.row.integrator} at {pick.row.dt:g} s"
+            if pick and pick.row
             else "none"
         )
         print(f"   {case.scenario:<14} pick for 1e-2: {found}")

@@ -73,7 +73,7 @@ def full_tradeoff() -> None:
     pick = result.recommendation
     print(
         f"2) tradeoff slider free --tol 1e-6: {len(result.runs)} runs in {elapsed:.2f} s (budget 10 s);"
-        f" recommendation {pick.integrator} dt = {pick.dt:g} s, error {pick.max_rel_error:.2e}"
+        f" recommendation {pick.integrator} dt = {pick.dt:g} s, error {pick.error:.2e}"
     )
 
 

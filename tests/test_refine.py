@@ -93,6 +93,14 @@ def test_no_run_beyond_its_stability_limit_is_on_the_front_or_recommended():
     assert all(s["dt"] != 1.0 for s in study.to_dict()["pareto"])
 
 
+def test_the_same_study_twice_gives_the_same_recommendation_and_front():
+    options = dict(tol=0.2, sizes=(4, 8), integrators=("euler", "rk4"))
+    first, second = refine.refine("drill_string", **options), refine.refine("drill_string", **options)
+    assert first.recommendation.found and first.recommendation.text == second.recommendation.text
+    assert first.recommendation.setting == second.recommendation.setting
+    assert [r.setting for r in first.pareto] == [r.setting for r in second.pareto]
+
+
 def test_the_recommendation_is_the_same_however_noisy_the_timer(monkeypatch):
     noise = random.Random(7)
     monkeypatch.setattr(refine, "time_run", lambda job, **options: noise.uniform(1e-6, 1.0))

@@ -8,12 +8,14 @@ import mujoco
 import numpy as np
 import pytest
 
+from springlab import scenes
 from springlab.cli.main import main
 from springlab.errors import BadInputError
 from springlab.plots import panel as plots_panel
-from springlab.render import media
+from springlab.render import media, stage
 from springlab.render import video as render
-from springlab.runs.run import run_scenario
+from springlab.runs.run import evaluate, run_scenario
+from springlab.scenes.capabilities.drawing import Drawing
 
 
 def _decode(path):
@@ -320,3 +322,30 @@ def test_multisampling_only_when_asked_and_the_model_keeps_its_own_setting(undam
         colours[multisample] = len(np.unique(frame.reshape(-1, 3), axis=0))
         assert (model.vis.global_.offwidth, model.vis.global_.offheight, model.vis.quality.offsamples) == before
     assert colours[True] > colours[False]
+
+
+def test_the_road_a_run_draws_is_the_one_its_scene_declares_and_no_other():
+    # the renderer recognises no scene by its parts: what it draws beyond the model comes from Scene.drawing
+    for scene in scenes.SCENES.values():
+        for name in scene.scenarios:
+            case = scene.case(name)
+            road = case.drawing().road
+            if road is not None:  # the wheels it is drawn under are the case's own geoms
+                for geom in filter(None, (road.wheel_geom, road.other_axle_geom)):
+                    assert mujoco.mj_name2id(case.model, mujoco.mjtObj.mjOBJ_GEOM, geom) >= 0, (scene.name, name)
+    result = run_scenario("car", "road_bump", duration=0.05)
+    road = stage.road_bump(result)
+    p = result.parameters
+    assert road is not None and (road.height, road.length, road.speed) == (
+        p["bump_height"],
+        p["bump_length"],
+        p["speed"],
+    )
+    assert stage.road_bump(run_scenario("car", "push_release", duration=0.05)) is None
+
+    class Undeclared(type(scenes.get("car"))):  # the same parameters and model, no road declared
+        def drawing(self, case):
+            return Drawing()
+
+    case = Undeclared().case("road_bump")
+    assert stage.road_bump(evaluate(case, case.simulate("rk4", 1e-3, 0.05))) is None

@@ -324,12 +324,15 @@ def print_friction_settings(study: FrictionSettings, output: str | None) -> None
         print(f"\n{case.answer()}")
         # the settings column as wide as its longest entry: four changed settings run past 58 characters
         width = max([58, *(len(case.describe(r.settings)) + 2 for r in case.pareto)])
-        print(f"  {'Pareto front':<{width}}{'integrator':<13}{'dt [s]':>9}{'error':>10}{'cpu [ms]':>10}")
+        print(f"  {'Pareto front':<{width}}{'integrator':<13}{'dt [s]':>9}{'error':>10}{'work':>10}{'cpu [ms]':>10}")
         for r in case.pareto:
             print(
                 f"  {case.describe(r.settings):<{width}}{r.integrator:<13}{r.dt:>9.3g}{r.error:>10.2e}"
-                f"{r.cpu_time_s * 1e3:>10.2f}"
+                f"{r.cost:>10.4g}{r.cpu_time_s * 1e3:>10.2f}"
             )
+        if case.pick is not None and case.pick.found:
+            print(f"  pick: {_recommendation_line(case.pick, case.pick.time_s)}")
+    print(f"\nwork: {COST_BASIS}")
     if output:
         print(
             f"\nwrote {pathlib.Path(output) / 'friction_settings.json'}, friction_settings.csv and friction_settings.png"

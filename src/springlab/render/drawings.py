@@ -23,8 +23,9 @@ video, and MuJoCo computes nothing for them at each physics step:
 
 Besides the declared pictures (:class:`Drawings`):
 
-* :class:`RoadBump`: the road profile under a quarter car, a half-sine bump
-  travelling backwards under the wheel at the driving speed;
+* a road bump (``RoadBump``), declared by the scene for a case (``Scene.drawing``,
+  springlab.scenes.capabilities.drawing): the road profile under a wheel, a half-sine
+  bump travelling backwards under it at the driving speed;
 * distance marks every few metres, labelled, along a world plane named
   ``road`` (the kinematics scene's vehicle on its road);
 * :func:`covering_guides`: world geoms named ``rail`` are stretched along
@@ -34,11 +35,12 @@ Besides the declared pictures (:class:`Drawings`):
 from __future__ import annotations
 
 import copy
-import dataclasses
 import math
 
 import mujoco
 import numpy as np
+
+from springlab.scenes.capabilities.drawing import RoadBump
 
 __all__ = [
     "SPRING_PREFIX",
@@ -146,33 +148,6 @@ def covering_guides(model: mujoco.MjModel, states: np.ndarray, margin: float = 0
         covered.geom_rbound[g] = float(np.linalg.norm(covered.geom_size[g]))
         covered.geom_aabb[g][3 + axis] = covered.geom_size[g][half]
     return covered
-
-
-@dataclasses.dataclass(frozen=True)
-class RoadBump:
-    """A half-sine bump r(t) = height sin(pi speed t / length) reaching the wheel at t = 0.
-
-    Attributes
-    ----------
-    height, length:
-        Bump height and length along the road [m].
-    speed:
-        Driving speed [m/s]: the bump travels backwards under the car at it.
-    wheel_geom:
-        Name of the wheel geom the bump passes under (its centre x is where r(t) is read).
-    other_axle_geom:
-        Optional wheel geom of the other axle: a quarter car models one
-        corner, so the bump is not drawn past the middle between the axles.
-    exaggeration:
-        Factor the bump's height is drawn at [-] (the video's exaggeration).
-    """
-
-    height: float
-    length: float
-    speed: float
-    wheel_geom: str
-    other_axle_geom: str | None = None
-    exaggeration: float = 1.0
 
 
 def _nice_spacing(length: float) -> float:

@@ -5,7 +5,7 @@ stretched over the whole travel (:func:`drawings.covering_guides`), the drawn
 springs, dampers, belts and road (:class:`drawings.Drawings`, appended to any
 ``MjvScene`` each frame: the video's off-screen scene or the live viewer's
 ``user_scn``) and the fixed camera framed on the motion (:func:`framing.frame_camera`).
-:func:`road_bump` is the road a run's quarter car drives over. Drawing only: the
+:func:`road_bump` is the road a run drives over, as its scene declares it. Drawing only: the
 physics model passed in is never changed.
 """
 
@@ -59,13 +59,5 @@ def stage(
 
 
 def road_bump(result: Result) -> RoadBump | None:
-    """The road a run's quarter car drives over (None: the run has no road input).
-
-    The scene whose parameters include a bump (``bump_height``, ``bump_length`` [m], ``speed`` [m/s])
-    and whose model has a ``road`` joint: the exciter that realizes the road is not drawn, the road is.
-    """
-    joints = {result.model.joint(j).name for j in range(result.model.njnt)}
-    if not ({"bump_height", "bump_length", "speed"} <= set(result.parameters) and "road" in joints):
-        return None
-    p = result.parameters
-    return RoadBump(p["bump_height"], p["bump_length"], p["speed"], "wheel_front_right", "wheel_rear_right")
+    """The road a run drives over, as its scene declares it for the run's case (`Scene.drawing`; None: none)."""
+    return result.case.drawing().road

@@ -43,6 +43,7 @@ from springlab.sim import model_files
 from springlab.sim.simulate import Setup, Trajectory, check_timing, quiet_mujoco, simulate
 
 from .capabilities.design import DesignSpec
+from .capabilities.drawing import Drawing
 from .capabilities.figure import FigureHook
 from .capabilities.fit import FitSpec
 from .capabilities.frequency import FrequencySpec
@@ -122,7 +123,9 @@ class Scene:
        `stop_condition(case)` (an event that ends a run early as a result), `stability_limit(case,
        integrator, omega, zeta)` (damping MuJoCo treats differently from joint damping),
        `phase_field(case)`/`equilibria(case)`/`separatrices(case)` (one-joint phase planes),
-       `joint_columns(model, trajectory)` (joints that only some scenarios have).
+       `joint_columns(model, trajectory)` (joints that only some scenarios have), `drawing(case)` (what the
+       pictures of a run show beyond the model's geoms and its MJCF drawing texts, e.g. the road a quarter
+       car drives over: springlab.scenes.capabilities.drawing; the renderer never recognises a scene).
     10. Capabilities the studies read (springlab.scenes.capabilities): `fit`, how `springlab fit`
        identifies the scene from a record (an `OscillatorFit` or a `PolynomialFit`; None: it cannot);
        `design`, the design question the scene answers (`DesignSpec`: swept properties, fixed ones,
@@ -349,6 +352,11 @@ class Scene:
         """
         return []
 
+    def drawing(self, case: Case) -> Drawing:
+        """What the pictures of a run of `case` show beyond the model's own geoms and its MJCF drawing texts
+        (springlab.scenes.capabilities.drawing; e.g. the road under a quarter car); nothing by default."""
+        return Drawing()
+
     def stop_condition(self, case: Case) -> StopCondition | None:
         """An event that ends a run early: (qpos (n, nq), qvel (n, nv)) -> (n,) bool, True once it
         has happened (e.g. a mass escaping to infinity in finite time). The run is cut at the first
@@ -569,3 +577,7 @@ class Case:
     def separatrices(self) -> list[tuple[np.ndarray, np.ndarray]]:
         """Separatrix curves of the unforced phase plane: [(x [m], v [m/s]) arrays]."""
         return self.scene.separatrices(self)
+
+    def drawing(self) -> Drawing:
+        """What the pictures of a run of the case show beyond the model's own geoms (`Scene.drawing`)."""
+        return self.scene.drawing(self)

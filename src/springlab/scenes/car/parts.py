@@ -13,6 +13,7 @@ import numpy as np
 
 from springlab.errors import ParameterError
 from springlab.scenes.base import Case, PhaseField, Reference
+from springlab.scenes.capabilities.drawing import Drawing
 from springlab.sim.simulate import Setup, Trajectory
 
 
@@ -64,6 +65,10 @@ class Variant:
     def model_limits(self, case: Case, trajectory: Trajectory) -> list[str]:
         """Where the run leaves the variant's equations (see Scene.model_limits)."""
         return []
+
+    def drawing(self, case: Case) -> Drawing:
+        """What the pictures of a run show beyond the model (see Scene.drawing): nothing by default."""
+        return Drawing()
 
 
 def gravity(model: mujoco.MjModel) -> float:

@@ -15,6 +15,8 @@ import numpy as np
 from springlab.errors import ParameterError
 from springlab.exact import analytic, events
 from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Case, Reference
+from springlab.scenes.capabilities.drawing import Drawing
+from springlab.scenes.capabilities.drawing import RoadBump as BumpDrawing
 from springlab.sim.simulate import Setup, Trajectory
 
 from .parts import Variant, damped_modes, gravity, refuse_motion, tendon
@@ -330,6 +332,13 @@ class RoadBump(Variant):
             # a real tire cannot pull: from this instant on the linear model no longer describes the car
             out["tire_lift_off_time_s"] = peaks["lift_off_time"]
         return out
+
+    def drawing(self, case: Case) -> Drawing:
+        """The bump drawn under the front right wheel, travelling at the driving speed; a quarter car models one
+        corner, so it is not drawn past the middle between the axles (the rear wheel does not feel it)."""
+        p = case.params
+        bump = BumpDrawing(p["bump_height"], p["bump_length"], p["speed"], "wheel_front_right", "wheel_rear_right")
+        return Drawing(road=bump)
 
     def model_limits(self, case: Case, trajectory: Trajectory) -> list[str]:
         model, params = case.model, case.params

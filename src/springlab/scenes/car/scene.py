@@ -90,6 +90,7 @@ import numpy as np
 
 from springlab.errors import ParameterError
 from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Case, Parameter, PhaseField, Reference, Scenario, Scene
+from springlab.scenes.capabilities.drawing import Drawing
 from springlab.scenes.capabilities.fit import OscillatorFit
 from springlab.scenes.capabilities.frequency import FrequencySpec
 from springlab.scenes.capabilities.interactive import InteractiveSpec, MjcfEdit
@@ -410,6 +411,9 @@ class Car(Scene):
 
     def model_limits(self, case: Case, trajectory: Trajectory) -> list[str]:
         return case.scenario.variant.model_limits(case, trajectory)
+
+    def drawing(self, case: Case) -> Drawing:
+        return case.scenario.variant.drawing(case)
 
 
 SCENE = Car()

@@ -1,0 +1,391 @@
+"""The friction-settings study's results (springlab.studies.friction_settings): its rows, each setting's model
+error, each case's sweep with its front and pick, and the study; `to_dict()` of `FrictionSettings` is
+friction_settings.json. The rows hold the shared row of springlab.studies.settings (`run`), the fronts and
+picks are its Pareto front and Recommendation.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any
+
+from springlab import display, tables
+from springlab.files import json_ready
+from springlab.scenes.capabilities.friction import FrictionMeasure, SolverSetting
+
+from .settings import COST_BASIS, Recommendation, Run, RunFields
+
+if TYPE_CHECKING:
+    import pandas
+    from matplotlib.figure import Figure
+
+#: the integrator whose error at the smallest timestep is a setting's model error (the highest order)
+MODEL_INTEGRATOR = "rk4"
+
+#: the pick's JSON keys under the names friction_settings.json has always used
+PICK_NAMES = {"tolerance": "tol", "error": "verified_error", "time_s": "cpu_time_s"}
+
+
+@dataclasses.dataclass(frozen=True)
+class SettingRun(RunFields):
+    """One run of the sweep: a case at one combination of settings, one integrator and timestep.
+
+    Attributes
+    ----------
+    run
+        the shared row (springlab.studies.settings.Run): the settings as options, steps, max_rel_error as its
+        error, counted work as its cost, the CPU time as its time.
+    scenario
+        the case's scenario.
+    settings
+        scene parameter -> value of every swept setting.
+    integration_error
+        SAFETY x max |x(dt) - x(dt/2)| over the compared columns' scales [-]: this run's integration error,
+        measured against the same setting's run at dt/2 (None: the sweep has no run at dt/2).
+    measures
+        declared quantity -> its error (relative, or absolute in its unit; FrictionMeasure).
+    values
+        declared quantity -> the run's value of it (SI).
+    """
+
+    run: Run
+    scenario: str
+    settings: dict[str, float]
+    integration_error: float | None
+    measures: dict[str, float | None]
+    values: dict[str, float | None]
+
+    @property
+    def cpu_time_s(self) -> float:
+        """The CPU time of the simulation on its one thread [s] (`time.thread_time` around its `mujoco.rollout`
+        call), reported beside its counted work."""
+        return self.run.time_s
+
+    @property
+    def max_rel_error(self) -> float | None:
+        """max over the compared columns of max |sim - exact| / scale [-] (None: diverged)."""
+        return self.run.error
+
+    @property
+    def error(self) -> float:
+        """max_rel_error of a run that did not diverge [-] (for the Pareto front)."""
+        if self.run.error is None:
+            raise ValueError(f"{self.integrator} at dt = {self.dt:g} s diverged: it has no error")
+        return self.run.error
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON row: scenario, settings, integrator, dt [s], steps, cpu_time_s [s], cost [DOF-evaluations],
+        max_rel_error, integration_error, measures, values, diverged, detail."""
+        return json_ready(
+            {
+                "scenario": self.scenario,
+                "settings": dict(self.settings),
+                "integrator": self.integrator,
+                "dt": self.dt,
+                "steps": self.steps,
+                "cpu_time_s": self.cpu_time_s,
+                "cost": self.cost,
+                "max_rel_error": self.max_rel_error,
+                "integration_error": self.integration_error,
+                "measures": dict(self.measures),
+                "values": dict(self.values),
+                "diverged": self.diverged,
+                "detail": self.detail,
+            }
+        )
+
+    def row(self) -> dict[str, Any]:
+        """The flat CSV/DataFrame row: settings, measures (`error_<quantity>`) and values as columns."""
+        out: dict[str, Any] = {"scenario": self.scenario, **self.settings, "integrator": self.integrator, "dt": self.dt}
+        out.update(steps=self.steps, cpu_time_s=self.cpu_time_s, cost=self.cost, max_rel_error=self.max_rel_error)
+        out["integration_error"] = self.integration_error
+        out.update({f"error_{k}": v for k, v in self.measures.items()})
+        out.update(dict(self.values))
+        out["diverged"] = self.diverged
+        return json_ready(out)
+
+
+@dataclasses.dataclass(frozen=True)
+class ModelError:
+    """What one combination of settings leaves as dt -> 0: MuJoCo's model error at those settings.
+
+    Attributes
+    ----------
+    settings
+        scene parameter -> value.
+    dts
+        the timesteps [s], largest first.
+    errors
+        MODEL_INTEGRATOR's max_rel_error at each timestep (None: diverged).
+    model_error
+        the error at the smallest timestep [-] (None: diverged there).
+    converged
+        whether the two smallest timesteps agree within CONVERGED: the error no longer depends on dt.
+    values
+        declared quantity -> its value at the smallest timestep (SI).
+    """
+
+    settings: dict[str, float]
+    dts: tuple[float, ...]
+    errors: tuple[float | None, ...]
+    model_error: float | None
+    converged: bool
+    values: dict[str, float | None]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON: settings, dts [s], errors, model_error, converged, values."""
+        return json_ready(
+            {
+                "settings": dict(self.settings),
+                "dts": list(self.dts),
+                "errors": list(self.errors),
+                "model_error": self.model_error,
+                "converged": self.converged,
+                "values": dict(self.values),
+            }
+        )
+
+
+@dataclasses.dataclass(frozen=True)
+class CaseStudy:
+    """The sweep of one case and what it says.
+
+    Attributes
+    ----------
+    scenario, friction, question
+        the declared case (FrictionCase).
+    measures
+        the declared measures (FrictionMeasure), in order.
+    settings
+        the swept settings (SolverSetting) of this case's friction.
+    runs
+        every run, in sweep order.
+    default
+        MuJoCo's defaults: its settings, integrator and timestep (None: not swept or diverged).
+    model_errors
+        one per combination of settings (ModelError), in sweep order.
+    pareto
+        the runs no other beats in both error and counted work, cheapest first.
+    pick
+        for a tolerance, the verified cheapest run (springlab.studies.settings.Recommendation: its `row`, the
+        verification's `error`, `text`; `details` its `speedup` over MuJoCo's defaults in CPU time and its
+        `work_vs_default` in counted work); None without one.
+    """
+
+    scenario: str
+    friction: str
+    question: str
+    measures: tuple[FrictionMeasure, ...]
+    settings: tuple[SolverSetting, ...]
+    runs: tuple[SettingRun, ...] = dataclasses.field(repr=False)
+    default: SettingRun | None
+    model_errors: tuple[ModelError, ...] = dataclasses.field(repr=False)
+    pareto: tuple[SettingRun, ...] = dataclasses.field(repr=False)
+    pick: Recommendation[SettingRun] | None = None
+
+    @property
+    def default_model(self) -> ModelError | None:
+        """The model error of MuJoCo's default settings."""
+        defaults = {s.name: s.mujoco_default for s in self.settings}
+        return next((m for m in self.model_errors if m.settings == defaults), None)
+
+    @property
+    def best_model(self) -> ModelError | None:
+        """The combination of settings with the smallest model error."""
+        finite = [m for m in self.model_errors if m.model_error is not None]
+        return min(finite, key=lambda m: m.model_error or 0.0) if finite else None
+
+    def describe(self, settings: Mapping[str, float]) -> str:
+        """Settings in words: only those that differ from MuJoCo's defaults ('MuJoCo's defaults' if none)."""
+        changed = [
+            f"{s.name} {s.word(settings[s.name])}" for s in self.settings if settings.get(s.name) != s.mujoco_default
+        ]
+        return ", ".join(changed) or "MuJoCo's defaults"
+
+    def answer(self) -> str:
+        """What the case says, in a few sentences (the demo's report and the terminal print it)."""
+        parts = [f"{self.scenario} ({self.question})"]
+        default, model = self.default, self.default_model
+        if default is not None and default.max_rel_error is not None:
+            values = _values_text(self.measures, default.values)
+            parts.append(
+                f"at MuJoCo's defaults ({default.integrator}, dt = {default.dt:g} s) its error is"
+                f" {default.max_rel_error:.2g}{values}."
+            )
+        if model is not None and model.model_error is not None:
+            trend = f"{MODEL_INTEGRATOR} gives {', '.join(error_text(e) for e in model.errors)} at dt = {', '.join(f'{d:g}' for d in model.dts)} s"
+            if model.converged:
+                parts.append(f"That is MuJoCo's model error, not the integration's: {trend}, the same as dt -> 0.")
+            else:
+                parts.append(
+                    f"Part of it is integration error even at the smallest dt: {trend}, still falling as dt -> 0."
+                )
+        if self.pick is not None:
+            pick = self.pick
+            if pick.row is not None:
+                ratio = pick.details.get("work_vs_default")
+                cost = f"{ratio:.2g}x the counted work of MuJoCo's defaults" if ratio else "work unknown"
+                values = _values_text(self.measures, pick.row.values)
+                ties = f"; {len(pick.ties)} other settings tie with it in counted work" if pick.ties else ""
+                parts.append(
+                    f"Cheapest setting meeting {pick.tolerance:g}: {self.describe(pick.row.settings)} with"
+                    f" {pick.row.integrator} at dt = {pick.row.dt:g} s, error {error_text(pick.error)}{values}"
+                    f" (verified by a run), {cost}{ties}."
+                )
+            else:
+                parts.append(pick.text)
+        return " ".join(parts)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON: scenario, friction_model, question, measures, default, model_errors, pareto, pick, answer, runs."""
+        return json_ready(
+            {
+                "scenario": self.scenario,
+                "friction_model": self.friction,
+                "question": self.question,
+                "measures": [{"quantity": m.quantity, "label": m.label, "scale": m.scale} for m in self.measures],
+                "default": None if self.default is None else self.default.to_dict(),
+                "default_model_error": None if self.default_model is None else self.default_model.to_dict(),
+                "best_model_error": None if self.best_model is None else self.best_model.to_dict(),
+                "model_errors": [m.to_dict() for m in self.model_errors],
+                "pareto": [r.to_dict() for r in self.pareto],
+                "pick": None if self.pick is None else _pick_dict(self.pick),
+                "answer": self.answer(),
+                "runs": [r.to_dict() for r in self.runs],
+            }
+        )
+
+
+@dataclasses.dataclass(frozen=True, repr=False)
+class FrictionSettings(display.Shown):
+    """The friction-settings study of one scene (`friction_settings`).
+
+    `to_dict()` is friction_settings.json (what `springlab friction-settings --json` prints),
+    `to_pandas()` one row per run.
+
+    Attributes
+    ----------
+    scene
+        the scene's name.
+    overrides
+        the parameters the caller set (SI).
+    tol
+        the tolerance the picks meet (None: no picks).
+    integrators
+        the integrators swept.
+    dts
+        the timesteps swept [s], largest first.
+    mujoco_default
+        (integrator, dt [s]) of MuJoCo's own defaults, the baseline.
+    cases
+        one CaseStudy per case.
+    wall_time_s
+        the study's wall time [s].
+    """
+
+    scene: str
+    overrides: dict[str, Any]
+    tol: float | None
+    integrators: tuple[str, ...]
+    dts: tuple[float, ...]
+    mujoco_default: tuple[str, float]
+    cases: tuple[CaseStudy, ...]
+    wall_time_s: float = 0.0
+
+    @property
+    def runs(self) -> int:
+        """Runs in the sweep."""
+        return sum(len(c.runs) for c in self.cases)
+
+    def answer(self) -> str:
+        """How much MuJoCo's friction drifts and what it costs to make it stop, one paragraph per case."""
+        return "\n".join(case.answer() for case in self.cases)
+
+    def _shown(self) -> display.Summary:
+        """The study as a notebook shows it: the picks first (or that none was asked for), then the runs."""
+        picks = [c.pick for c in self.cases]
+        if self.tol is None:
+            verdict, ok = "measured (no tol)", None
+        elif all(p is not None and p.found for p in picks):
+            verdict, ok = f"a verified setting for tol {self.tol:g} in every case", True
+        else:
+            verdict, ok = f"no verified setting for tol {self.tol:g} in some case", False
+        return display.Summary(
+            "FrictionSettings",
+            f"{self.scene}: {', '.join(c.scenario for c in self.cases)}",
+            verdict,
+            ok,
+            self.answer(),
+            (
+                display.Fact("runs", self.runs),
+                display.Fact("integrators", ", ".join(self.integrators)),
+                display.Fact("MuJoCo default", f"{self.mujoco_default[0]} at dt = {self.mujoco_default[1]:g} s"),
+                display.Fact("wall time", self.wall_time_s, "s"),
+            ),
+            display.table(
+                ("scenario", "settings", "integrator", "dt [s]", "max rel error [-]", "CPU time [s]"),
+                [
+                    (c.scenario, c.describe(r.settings), r.integrator, r.dt, r.max_rel_error, r.cpu_time_s)
+                    for c in self.cases
+                    for r in c.runs
+                ],
+            ),
+        )
+
+    def plot(self) -> Figure:
+        """Per case, error against cost and against dt, the pick marked (`springlab.plots.friction_settings.friction_figure`).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            a bare Figure (no pyplot): Jupyter shows it inline; `.savefig(path)` writes it.
+        """
+        return display.plot(self)
+
+    def to_dict(self) -> dict[str, Any]:
+        """friction_settings.json: scene, tol, integrators, dts, mujoco_default, runs, wall_time_s, cases,
+        cost_basis."""
+        return json_ready(
+            {
+                "scene": self.scene,
+                "parameters": dict(self.overrides),
+                "tol": self.tol,
+                "integrators": list(self.integrators),
+                "dts": list(self.dts),
+                "mujoco_default": {"integrator": self.mujoco_default[0], "dt": self.mujoco_default[1]},
+                "runs": self.runs,
+                "wall_time_s": self.wall_time_s,
+                "cases": [c.to_dict() for c in self.cases],
+                "cost_basis": COST_BASIS,
+            }
+        )
+
+    def to_pandas(self) -> pandas.DataFrame:
+        """One row per run of every case: settings, integrator, dt, steps, wall time, errors (needs pandas)."""
+        return tables.to_pandas([r.row() for c in self.cases for r in c.runs])
+
+
+def error_text(value: float | None) -> str:
+    """An error [-] in two digits, or 'diverged' for None."""
+    return "diverged" if value is None else f"{value:.2g}"
+
+
+def _values_text(measures: Sequence[FrictionMeasure], values: Mapping[str, float | None]) -> str:
+    """'; creep velocity ... 1.8e-03' for the measures with a value."""
+    shown = [
+        f"{m.label.split(' (')[0].split(' [')[0]} {values[m.quantity]:.3g}"
+        for m in measures
+        if values.get(m.quantity) is not None and math.isfinite(values[m.quantity] or math.nan)
+    ]
+    return f" ({'; '.join(shown)})" if shown else ""
+
+
+def _pick_dict(pick: Recommendation[SettingRun]) -> dict[str, Any]:
+    """friction_settings.json's `pick`: tol, run (the row or null), verified_error, speedup, floor (the words where
+    none meets tol, else ''), and the shared recommendation's keys."""
+    out = {"run": None, "speedup": None, "work_vs_default": None, **pick.to_dict(PICK_NAMES)}
+    out["run"] = None if pick.row is None else pick.row.to_dict()
+    out["floor"] = "" if pick.found else pick.text
+    return json_ready(out)
