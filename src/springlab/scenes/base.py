@@ -416,8 +416,8 @@ class Case:
         object.__setattr__(self, "params", dict(self.params))  # the caller's dict stays the caller's
 
     def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
-        # what is kept in the memo (closures, solutions) is recomputed where the case is unpickled
-        return (Case, (self.scene, self.scenario, self.params, self.model))
+        # the scenario travels by name (its presets may be closures); what the memo kept is recomputed there
+        return (_case_of, (self.scene, self.scenario.name, self.params, self.model))
 
     def __repr__(self) -> str:
         return f"Case(scene={self.scene.name!r}, scenario={self.scenario.name!r}, params={self.params!r})"
@@ -592,3 +592,8 @@ class Case:
     def drawing(self) -> Drawing:
         """What the pictures of a run of the case show beyond the model's own geoms (`Scene.drawing`)."""
         return self.scene.drawing(self)
+
+
+def _case_of(scene: Scene, scenario: str, params: dict[str, float], model: mujoco.MjModel) -> Case:
+    """A case unpickled (`Case.__reduce__`): its scenario found again by name on its scene."""
+    return Case(scene, scene.scenario(scenario), params, model)
