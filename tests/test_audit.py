@@ -13,6 +13,7 @@ stability/tradeoff within 0.5 % (limits) and 0.1 (orders).
 from __future__ import annotations
 
 import dataclasses
+import importlib
 import json
 import math
 
@@ -108,6 +109,7 @@ AUDIT_KEYS = [
     "orders",
     "pareto",
     "recommendation",
+    "cost_basis",
     "timings_s",
 ]
 
@@ -128,6 +130,7 @@ def test_the_audit_json_is_the_objects_to_dict_and_its_facts_are_attributes(chai
         "margin",
         "wall_time_s",
         "margin_confirmed",
+        "cost",
     ]
     assert list(data["operating_point_state"]) == [
         "settle_s",
@@ -145,7 +148,19 @@ def test_the_audit_json_is_the_objects_to_dict_and_its_facts_are_attributes(chai
         "max_abs_qacc",
     ]
     assert list(data["excitation"]) == ["qpos", "qvel", "ctrl", "moved", "still", "source"]
-    assert list(data["recommendation"]) == ["integrator", "dt", "error", "tolerance", "verified", "wall_time_s"]
+    assert list(data["recommendation"]) == [
+        "integrator",
+        "dt",
+        "error",
+        "tolerance",
+        "verified",
+        "cost",
+        "wall_time_s",
+        "ties",
+        "near",
+        "rejected",
+        "text",
+    ]
     assert list(data["linearity"]) == ["change", "tolerance"]
     assert list(data["stability"]["rk4"]) == [
         "limit_dt_predicted_s",
@@ -159,7 +174,16 @@ def test_the_audit_json_is_the_objects_to_dict_and_its_facts_are_attributes(chai
         "runs_bounded_dt_s",
         "runs_blew_up_dt_s",
     ]
-    assert list(data["sweep"][0]) == ["integrator", "dt", "steps", "error", "wall_time_s", "diverged"]
+    assert list(data["sweep"][0]) == [
+        "integrator",
+        "dt",
+        "steps",
+        "error",
+        "wall_time_s",
+        "cost",
+        "diverged",
+        "beyond_limit",
+    ]
     # the attributes are the JSON's facts, and they hang together: the margin is the limit over the own dt
     pick, own = result.recommendation, result.own
     assert (pick.integrator, pick.dt, pick.error, pick.verified) == tuple(
@@ -178,6 +202,33 @@ def test_the_audit_json_is_the_objects_to_dict_and_its_facts_are_attributes(chai
     assert json.loads(capsys.readouterr().out) == files.json_ready(data)
     cli_main.main(["audit", "chain.xml"])
     assert capsys.readouterr().out == result.message + "\n"
+
+
+def test_the_pick_is_the_cheapest_in_counted_work_and_no_timer_moves_it(chain_audit, monkeypatch):
+    # counted work: steps x evaluations per step (rk4 4, the others 1) x degrees of freedom (the chain's 4)
+    result = chain_audit
+    for run in result.runs:
+        evaluations = 4 if run.integrator == "rk4" else 1
+        assert run.cost == run.steps * evaluations * 4 and run.steps == round(result.duration / run.dt)
+    pick = result.recommendation
+    budget = result.tol - result.reference.error_estimate
+    inside = [
+        r
+        for r in result.runs
+        if r.error is not None
+        and r.error <= budget
+        and r.dt <= 0.9 * result.stability[r.integrator].limit_dt_s  # RECOMMEND_LIMIT_FRACTION
+    ]
+    assert pick.found and pick.cost == min(r.cost for r in inside)
+    assert [r.cost for r in result.pareto] == sorted(r.cost for r in result.pareto)
+    # measured times reversed between the integrators (rk4 the cheapest per step): the same pick and front
+    audit_module = importlib.import_module("springlab.studies.audit.audit")
+    fake = {"euler": 5e-6, "implicit": 4e-6, "implicitfast": 3e-6, "rk4": 1e-7, "discrete": 2e-6}
+    monkeypatch.setattr(audit_module, "cost_per_step", lambda model, start, name, dt: fake[name])
+    again = audit(mujoco.MjModel.from_xml_string(chain_xml(4, 100.0, 1.0, 0.0)), tol=1e-3)
+    assert (again.recommendation.setting, again.recommendation.error) == (pick.setting, pick.error)
+    assert [r.setting for r in again.pareto] == [r.setting for r in result.pareto]
+    assert again.runs[0].time_s == fake[again.runs[0].integrator] * again.runs[0].steps  # reported beside
 
 
 def test_the_audit_cannot_be_changed_once_returned(chain_audit):

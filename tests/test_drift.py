@@ -24,6 +24,7 @@ TEXTS = sorted(
         ROOT / "CONTRIBUTING.md",
         *(ROOT / "scenarios").glob("*.py"),
         *(ROOT / "benchmarks").glob("*.py"),
+        *(ROOT / "tools").glob("*.py"),
     ]
 )
 DOTTED = re.compile(r"\bspringlab(?:\.[A-Za-z_]\w*)+")

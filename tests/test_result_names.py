@@ -32,7 +32,6 @@ RESULTS = {
         "OwnSetting",
         "Excitation",
         "PointReport",
-        "Recommendation",
         "Linearity",
         "ReferenceUsed",
         "Timings",

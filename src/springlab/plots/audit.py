@@ -8,8 +8,9 @@ audit.png has three panels:
           labelled UNCONFIRMED when runs did not confirm it; "map" or "runs" says which method gave it;
           an arrow where no run blew up up to the largest tried), the closed-form prediction (black
           tick; dashed when it is an estimate) and the model's own timestep (dashed line);
-  right:  error vs wall time of every swept setting (log-log), the Pareto front (black), --tol (dotted),
-          the model's own setting (star) and the verified recommendation (ringed).
+  right:  error vs counted work of every swept setting (log-log; springlab.plots.settings.error_cost_panel,
+          the panel every settings study draws), the Pareto front (black steps), --tol (dashed), the model's
+          own setting (star) and the verified recommendation (ringed); runs beyond a confirmed limit hollow.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from springlab import files
 from springlab.studies.audit.results import Audit
 
 from .charts import _COLORS, _figure, _save
+from .settings import Mark, Points, error_cost_panel
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -128,48 +130,48 @@ def _limits_panel(result: Audit, ax) -> None:
 
 
 def _cost_panel(result: Audit, ax) -> None:
-    floor = 1e-17
+    """Error against counted work (springlab.plots.settings.error_cost_panel, as tradeoff.png and refine.png
+    draw it), with the model's own setting and the verified recommendation marked."""
+    groups = []
     for name in dict.fromkeys(r.integrator for r in result.runs):
-        # (wall time [s], error [-]) of the runs that finished (a diverged run has no error)
-        points = [
-            (r.wall_time_s, r.error)
-            for r in result.runs
-            if r.integrator == name and not r.diverged and r.error is not None
-        ]
-        if not points:
-            continue
         order = result.orders.get(name)
         label = f"{name} (order {order:.2f})" if order is not None else name
-        ax.loglog(
-            [wall for wall, _ in points],
-            [max(error, floor) for _, error in points],
-            marker="o",
-            ms=3,
-            color=_COLORS.get(name, "grey"),
-            label=label,
+        rows = [r for r in result.runs if r.integrator == name]
+        groups.append(Points(rows, label, dict(marker="o", ms=3, ls="-", color=_COLORS.get(name, "grey"))))
+    marks = []
+    own = result.own
+    if own.error is not None and math.isfinite(own.cost):
+        marks.append(
+            Mark(
+                own.cost,
+                own.error,
+                f"own setting: {own.integrator}, dt = {own.dt:g} s",
+                dict(marker="*", ms=14, color="gold", markeredgecolor="black"),
+            )
         )
-    front = [(r.wall_time_s, r.error) for r in result.pareto if r.error is not None]
-    if front:
-        ax.loglog([wall for wall, _ in front], [max(error, floor) for _, error in front], "k-", lw=2, alpha=0.4)
-    ax.axhline(result.tol, color="k", ls=":", lw=1, label=f"tol {result.tol:g}")
+    pick = result.recommendation
+    if pick.found and pick.cost is not None and pick.error is not None:
+        marks.append(
+            Mark(
+                pick.cost,
+                pick.error,
+                f"cheapest within tol: {pick.integrator}, dt = {pick.dt:.3g} s (verified)",
+                dict(marker="o", ms=14, mfc="none", mec="black", mew=1.5),
+            )
+        )
+    error_cost_panel(
+        ax,
+        groups,
+        result.pareto,
+        marks=marks,
+        tol=result.tol,
+        ylabel=f"error vs {result.reference.kind} [-]",
+        title=f"error vs cost over {result.duration:g} s (counted work: steps x evaluations)",
+    )
     low, high = ax.get_ylim()
     if high > 1e3:  # a run that left the physics (error 1e30) would flatten every other curve
         ax.set_ylim(low, 1e3)
         ax.annotate("errors above 1e3 off the top", (0.02, 0.97), xycoords="axes fraction", fontsize=7, va="top")
-    own = result.own
-    if own.error is not None:
-        where = (own.wall_time_s, max(own.error, floor))
-        ax.scatter(*where, marker="*", s=200, color="gold", edgecolors="k", zorder=5)
-        ax.annotate(" own setting", where, fontsize=8)
-    pick = result.recommendation
-    if pick.integrator is not None and pick.dt is not None and pick.error is not None:
-        ax.scatter(pick.wall_time_s, max(pick.error, floor), s=200, facecolors="none", edgecolors="k", zorder=5)
-        ax.annotate(f" {pick.integrator} {pick.dt:.3g} s", (pick.wall_time_s, max(pick.error, floor)), fontsize=8)
-    ax.set_xlabel("wall time [s] (steps x measured cost per step, one thread)")
-    ax.set_ylabel(f"error vs {result.reference.kind} [-]")
-    ax.set_title(f"error vs cost over {result.duration:g} s\nblack: Pareto front", fontsize=10)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
 
 
 def write_audit(result: Audit, directory: str | pathlib.Path) -> list[pathlib.Path]:

@@ -50,6 +50,7 @@ from .capabilities.frequency import FrequencySpec
 from .capabilities.friction import DryFrictionSpec
 from .capabilities.interactive import InteractiveSpec
 from .capabilities.oscillator import OscillatorSpec
+from .capabilities.random_load import RandomLoadSpec
 from .capabilities.refine import RefinableSpec
 from .declarations import Check, Parameter, Reference, Scenario
 
@@ -147,6 +148,9 @@ class Scene:
        MjSpec edit that makes the input a control, and what the response means for the scene's question.
     14. Optionally, `interactive` (springlab.scenes.capabilities.interactive.InteractiveSpec): the scenarios that run
        in the browser with real MuJoCo and the MJCF attributes the page writes (`springlab interactive`).
+    15. Optionally, `random_load` (springlab.scenes.capabilities.random_load.RandomLoadSpec): a scenario under a seeded
+       stationary random load whose RMS has an exact value and scatter (`springlab rms`:
+       springlab.studies.random_load runs many seeds and finds the cheapest setting for an accurate RMS).
 
     The module exposes the instance as `SCENE`; springlab.scenes discovers it. Tests check each
     claim against a reference built in the test (closed form, expm, scipy's DOP853 at tight
@@ -191,6 +195,9 @@ class Scene:
     #: the scenarios that run in the browser and how the page edits the MJCF (None: none;
     #: springlab.render.interactive reads it)
     interactive: InteractiveSpec | None = None
+    #: a scenario under a seeded stationary random load: its RMS, exactly and from many seeds (None: none;
+    #: springlab.studies.random_load reads it)
+    random_load: RandomLoadSpec | None = None
 
     def question_and_answer(self, scenario: str, quantities: dict, parameters: dict) -> tuple[str, str] | None:
         """(question, answer sentence) of a scenario's run, or None where the scene states none."""
@@ -210,6 +217,10 @@ class Scene:
         if name not in self.scenarios:
             raise UnknownNameError(f"scenario of {self.name}", name, self.scenarios)
         return self.scenarios[name]
+
+    def setting(self, scenario: Scenario) -> tuple[str, float]:
+        """(integrator, dt [s]): the validated default setting of `scenario` (its own, else the scene's)."""
+        return scenario.integrator or self.integrator, scenario.dt or self.dt
 
     def model_spec(self) -> mujoco.MjSpec:
         """A fresh MjSpec of this scene's MJCF: a copy of the parsed file (parsed once per process)."""
@@ -409,8 +420,8 @@ class Case:
         object.__setattr__(self, "params", dict(self.params))  # the caller's dict stays the caller's
 
     def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
-        # what is kept in the memo (closures, solutions) is recomputed where the case is unpickled
-        return (Case, (self.scene, self.scenario, self.params, self.model))
+        # the scenario travels by name (its presets may be closures); what the memo kept is recomputed there
+        return (_case_of, (self.scene, self.scenario.name, self.params, self.model))
 
     def __repr__(self) -> str:
         return f"Case(scene={self.scene.name!r}, scenario={self.scenario.name!r}, params={self.params!r})"
@@ -586,3 +597,8 @@ class Case:
     def drawing(self) -> Drawing:
         """What the pictures of a run of the case show beyond the model's own geoms (`Scene.drawing`)."""
         return self.scene.drawing(self)
+
+
+def _case_of(scene: Scene, scenario: str, params: dict[str, float], model: mujoco.MjModel) -> Case:
+    """A case unpickled (`Case.__reduce__`): its scenario found again by name on its scene."""
+    return Case(scene, scene.scenario(scenario), params, model)

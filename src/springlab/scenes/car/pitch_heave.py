@@ -74,6 +74,12 @@ class Linear2Dof:
         self.preload = jac.T @ (np.array(stiff) * np.array(rest)) + np.array([-m * g, 0.0])
         self.equilibrium = np.linalg.solve(self.stiffness, self.preload)
 
+    @classmethod
+    def of(cls, case: Case) -> Linear2Dof:
+        """The case's linear equations, read back once per case (its setup, reference, modes and quantities share
+        them)."""
+        return case.memo("linear_2dof", lambda: cls(case.model))
+
 
 def push_force(model: mujoco.MjModel, params: dict[str, float]) -> np.ndarray:
     """Generalized force (heave [N], pitch [N m]) of the passers-by's weight pushing down at push_position."""
@@ -181,7 +187,7 @@ class PitchHeave(Variant):
     def setup(self, case: Case, steps: int, dt: float) -> Setup:
         model, params = case.model, case.params
         qpos = model.qpos0.copy()
-        linear = Linear2Dof(model)
+        linear = Linear2Dof.of(case)
         q0 = linear.equilibrium + np.linalg.solve(linear.stiffness, push_force(model, params))
         qpos[model.joint("heave").qposadr[0]], qpos[model.joint("pitch").qposadr[0]] = q0
         self._check_motion(case, np.arange(steps + 1) * dt, dt)
@@ -190,8 +196,8 @@ class PitchHeave(Variant):
     def _check_motion(self, case: Case, time: np.ndarray, dt: float) -> None:
         """ParameterError if the exact motion puts the bottom below ground or makes an axle's springs pull."""
         reference = self.reference(case, time, dt)
-        model, params = case.model, case.params
-        linear = Linear2Dof(model)
+        params = case.params
+        linear = Linear2Dof.of(case)
         x, theta = reference.pos["heave"], reference.pos["pitch"]
         stations = {"front axle": linear.a, "rear axle": -linear.b, "push position": params["push_position"]}
         refuse_motion(
@@ -207,7 +213,7 @@ class PitchHeave(Variant):
 
     def reference(self, case: Case, time: np.ndarray, dt: float) -> Reference:
         model, params = case.model, case.params
-        linear = Linear2Dof(model)
+        linear = Linear2Dof.of(case)
         q0 = linear.equilibrium + np.linalg.solve(linear.stiffness, push_force(model, params))
         q, v = analytic.linear_response(
             time, linear.mass, linear.damping, linear.stiffness, q0, np.zeros(2), force=linear.preload
@@ -226,13 +232,12 @@ class PitchHeave(Variant):
         )
 
     def modes(self, case: Case) -> list[tuple[float, float]]:
-        model = case.model
-        linear = Linear2Dof(model)
+        linear = Linear2Dof.of(case)
         return damped_modes(analytic.state_matrix(linear.mass, linear.damping, linear.stiffness))
 
     def quantities(self, case: Case, trajectory: Trajectory) -> dict:
         model, params = case.model, case.params
-        linear = Linear2Dof(model)
+        linear = Linear2Dof.of(case)
         measured = linearize(model, linear.equilibrium)
         analytic_modes = undamped_modes(linear.mass, linear.stiffness)
         mujoco_modes = undamped_modes(measured["M"], measured["K"])

@@ -60,6 +60,11 @@ class QuarterCar:
         self.on_bump = a.copy()
         self.on_bump[3, 4] = kt / mu  # the tire follows the bump
 
+    @classmethod
+    def of(cls, case: Case) -> QuarterCar:
+        """The case's quarter car, read back once per case (its setup, reference, modes and quantities share it)."""
+        return case.memo("quarter_car", lambda: cls(case.model, case.params))
+
     def initial_state(self) -> np.ndarray:
         """Static equilibrium, with the generator started at e = 0, e' = H omega."""
         a = self.on_road[:4, :4]
@@ -243,9 +248,9 @@ class RoadBump(Variant):
         )
 
     def setup(self, case: Case, steps: int, dt: float) -> Setup:
-        model, params = case.model, case.params
+        model = case.model
         qvel = np.zeros(model.nv)
-        quarter = QuarterCar(model, params)
+        quarter = QuarterCar.of(case)
         qvel[model.joint("road").dofadr[0]] = quarter.height * quarter.omega
         switch_step = quarter.switch_step(dt)
         control = np.zeros((steps, 2))
@@ -258,8 +263,8 @@ class RoadBump(Variant):
     def _check_motion(self, case: Case, time: np.ndarray, dt: float) -> None:
         """ParameterError if the exact motion puts the bottom below ground or makes the suspension pull."""
         reference = self.reference(case, time, dt)
-        model, params = case.model, case.params
-        quarter = QuarterCar(model, params)
+        params = case.params
+        quarter = QuarterCar.of(case)
         x = reference.pos["heave"]
         refuse_motion(
             f"bump_height = {params['bump_height']:g} m at speed = {params['speed']:g} m/s",
@@ -274,8 +279,7 @@ class RoadBump(Variant):
         )
 
     def reference(self, case: Case, time: np.ndarray, dt: float) -> Reference:
-        model, params = case.model, case.params
-        quarter = QuarterCar(model, params)
+        quarter = QuarterCar.of(case)
         z0 = quarter.initial_state()
         true = piecewise_lti(time, z0, [(0.0, quarter.on_bump), (quarter.bump_time, quarter.on_road)])
         switch = quarter.switch_step(dt) * dt
@@ -303,13 +307,12 @@ class RoadBump(Variant):
         )
 
     def modes(self, case: Case) -> list[tuple[float, float]]:
-        model, params = case.model, case.params
-        quarter = QuarterCar(model, params)
+        quarter = QuarterCar.of(case)
         return damped_modes(quarter.on_road[:4, :4]) + [(quarter.omega, 0.0)]
 
     def quantities(self, case: Case, trajectory: Trajectory) -> dict:
-        model, params = case.model, case.params
-        quarter = QuarterCar(model, params)
+        model = case.model
+        quarter = QuarterCar.of(case)
         peaks = quarter.measured(model, trajectory)
         body_modes = damped_modes(quarter.on_road[:4, :4])
         static_tire = quarter.static_tire_force()
@@ -342,7 +345,7 @@ class RoadBump(Variant):
 
     def model_limits(self, case: Case, trajectory: Trajectory) -> list[str]:
         model, params = case.model, case.params
-        quarter = QuarterCar(model, params)
+        quarter = QuarterCar.of(case)
         peaks = quarter.measured(model, trajectory)
         if peaks["min_tire_force"] >= 0.0:
             return []

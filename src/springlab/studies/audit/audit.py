@@ -33,11 +33,22 @@ from springlab.exact.model_at_point import ModelAtPoint
 from springlab.sim.batch import Job
 from springlab.sim.simulate import INTEGRATORS, Setup, Trajectory, simulate
 from springlab.studies.executor import Executor
-from springlab.studies.settings import Run, Setting, observed_order, pareto_front
+from springlab.studies.settings import (
+    Recommendation,
+    Run,
+    Setting,
+    Verification,
+    beyond,
+    cheapest_verified,
+    counted_cost,
+    observed_order,
+    pareto_front,
+    work_per_evaluation,
+)
 
 from .limits import ConstraintFlag, Limit, RunProbe, constraint_flags, stability_limits, watch
 from .options import DEFAULT_PERTURB, DEFAULT_TOL, Options, check_options, resolve_duration
-from .parts import Excitation, Linearity, OwnSetting, PointReport, Recommendation, ReferenceUsed, Timings
+from .parts import Excitation, Linearity, OwnSetting, PointReport, ReferenceUsed, Timings
 from .results import Audit
 from .ship import Runner, ship
 from .source import Source, load
@@ -47,7 +58,6 @@ from .sweep import (
     REFERENCE_FRACTION,
     ExactReference,
     Reference,
-    SweepRun,
     checkpoint_spacing,
     converged_reference,
     cost_per_step,
@@ -58,6 +68,7 @@ from .sweep import (
     run_error,
     sweep_runs,
 )
+from .text import NO_MOTION, NO_PICK
 
 #: a recommended timestep keeps this fraction of its integrator's measured stability limit
 RECOMMEND_LIMIT_FRACTION = 0.9
@@ -157,10 +168,10 @@ def audit(
         constraints=limits.flags,
         is_linear=judged.is_linear,
         linearity=judged.linearity,
-        reference=_reference_used(judged.reference, options.tol, swept.spacing),
+        reference=judged.used,
         runs=scored.runs,
         orders=MappingProxyType(scored.orders),
-        pareto=tuple(_pareto(list(scored.runs))),
+        pareto=scored.pareto,
         recommendation=scored.recommendation,
         timings=clock.timings(),
         point_state=limits.point_state,
@@ -261,6 +272,7 @@ class _Judged:
     linearity: Linearity
     is_linear: bool
     reference: Reference
+    used: ReferenceUsed
 
 
 def _reference(
@@ -280,7 +292,8 @@ def _reference(
         step = reference_step(list(swept.dts), swept.spacing)
         coarse = probe if isinstance(probe, Trajectory) else None
         reference = converged_reference(at, start.setup, step, swept.duration, options.tol, coarse=coarse, run=run)
-    return _Judged(moved, Linearity(change, threshold), is_linear, reference)
+    used = _reference_used(reference, options.tol, swept.spacing)
+    return _Judged(moved, Linearity(change, threshold), is_linear, reference, used)
 
 
 def _reference_used(reference: Reference, tol: float, spacing: float) -> ReferenceUsed:
@@ -299,31 +312,38 @@ def _reference_used(reference: Reference, tol: float, spacing: float) -> Referen
 class _Scored:
     """Step 5's scores: every run's error and cost, the orders, the own setting, the recommendation."""
 
-    runs: tuple[SweepRun, ...]
+    runs: tuple[Run, ...]
     orders: dict[str, float | None]
     own: OwnSetting
-    recommendation: Recommendation
+    pareto: tuple[Run, ...]
+    recommendation: Recommendation[Run]
 
 
 def _score(
     at: ModelAtPoint, start: Start, options: Options, limits: _Limits, swept: _Swept, judged: _Judged, run: Runner
 ) -> _Scored:
-    """Step 5: each run's error against the reference and its cost (steps x the integrator's measured cost
-    per step), the observed orders, the own setting's verdict, and the cheapest setting meeting tol."""
+    """Step 5: each run's error against the reference, its counted cost (springlab.studies.settings: what ranks)
+    and its measured time (steps x the integrator's measured time per step: reported beside), the observed
+    orders, the own setting's verdict, and the cheapest verified setting meeting tol."""
     model, reference = at.model, judged.reference
     own_name, own_dt = _NAMES[int(model.opt.integrator)], float(model.opt.timestep)
     names, dts = options.integrators, swept.dts
     middle = sorted(dts)[len(dts) // 2]
-    costs = {name: cost_per_step(model, start.setup, name, middle) for name in dict.fromkeys([*names, own_name])}
+    per_step = {name: cost_per_step(model, start.setup, name, middle) for name in dict.fromkeys([*names, own_name])}
+    work = work_per_evaluation(model)
     runs = []
     for name in names:
+        confirmed = limits.limits[name].confirmed_limit_s  # only a confirmed limit makes a run beyond it
         for dt in dts:
             error = run_error(at, swept.outcomes[(name, dt)], reference)
             steps = round(swept.duration / dt)
-            runs.append(SweepRun(name, dt, steps, error, costs[name] * steps, error is None))
+            setting = Setting(name, dt)
+            cost = counted_cost(name, steps, work)
+            runs.append(Run(setting, steps, error, cost, per_step[name] * steps, error is None, beyond(dt, confirmed)))
     orders = {name: _order([r for r in runs if r.integrator == name], reference.error_estimate) for name in names}
     own_outcome = swept.outcomes[(own_name, own_dt)]
     own_limit = limits.limits[own_name]
+    own_steps = round(swept.duration / own_dt)
     own = OwnSetting(
         integrator=own_name,
         dt=own_dt,
@@ -331,14 +351,16 @@ def _score(
         and not _blows_up(model, own_limit, own_dt, limits.probe, run),
         error=run_error(at, own_outcome, reference),
         margin=own_limit.margin,
-        wall_time_s=costs[own_name] * round(swept.duration / own_dt),
+        wall_time_s=per_step[own_name] * own_steps,
         margin_confirmed=None if own_limit.limit_dt_s is None else bool(own_limit.confirmed),
+        cost=counted_cost(own_name, own_steps, work),
     )
+    front = tuple(pareto_front(runs))
     if judged.excitation.any_motion:
         recommendation = _recommend(at, start.setup, runs, limits.limits, options.tol, swept.duration, reference)
     else:  # every setting reproduces a model that does not move: nothing to verify
-        recommendation = Recommendation(None, None, None, options.tol, False, None)
-    return _Scored(tuple(runs), orders, own, recommendation)
+        recommendation = Recommendation(options.tol, None, None, False, None, NO_MOTION)
+    return _Scored(tuple(runs), orders, own, front, recommendation)
 
 
 def _blows_up(model: mujoco.MjModel, limit: Limit, own_dt: float, probe: RunProbe, run: Runner) -> bool:
@@ -354,16 +376,8 @@ def _blows_up(model: mujoco.MjModel, limit: Limit, own_dt: float, probe: RunProb
     return probe.blew_up(outcome, own_dt)
 
 
-def _as_runs(runs: list[SweepRun]) -> list[Run]:
-    # the audit ranks by its measured wall time until it adopts the kernel's counted cost (its own change)
-    return [
-        Run(Setting(r.integrator, r.dt), r.steps, r.error, r.wall_time_s, r.wall_time_s, diverged=r.diverged)
-        for r in runs
-    ]
-
-
-def _order(runs: list[SweepRun], reference_error: float) -> float | None:
-    """springlab.studies.tradeoff's observed order over the runs clear of the error floor.
+def _order(runs: list[Run], reference_error: float) -> float | None:
+    """springlab.studies.settings' observed order over the runs clear of the error floor.
 
     The floor: the reference's own error estimate, or where the errors stop falling at the fine end (from
     the finest run, coarser runs whose error is not at least sqrt(dt ratio) above the next finer one's: a
@@ -377,45 +391,35 @@ def _order(runs: list[SweepRun], reference_error: float) -> float | None:
         if coarser_error > finer_error * math.sqrt(coarser_dt / finer_dt):
             break
         floor = max(floor, finer_error, coarser_error)
-    return observed_order([r for r in _as_runs(runs) if r.error is None or r.error > 10 * floor])
-
-
-def _pareto(runs: list[SweepRun]) -> list[SweepRun]:
-    front = {(r.integrator, r.dt) for r in pareto_front(_as_runs(runs))}
-    chosen = [r for r in runs if (r.integrator, r.dt) in front]
-    return sorted(chosen, key=lambda r: r.wall_time_s)
+    return observed_order([r for r in runs if r.error is None or r.error > 10 * floor])
 
 
 def _recommend(
     at: ModelAtPoint,
     start: Setup,
-    runs: list[SweepRun],
+    runs: list[Run],
     limits: Mapping[str, Limit],
     tol: float,
     duration: float,
     reference: Reference,
-) -> Recommendation:
-    """The cheapest swept setting meeting tol within RECOMMEND_LIMIT_FRACTION of its stability limit,
-    verified by a run of its own (springlab.sim.simulate, not the batch). Meeting tol means error + the
-    reference's own error estimate <= tol, so a reference that did not fully converge cannot pass a
-    setting that misses tol."""
+) -> Recommendation[Run]:
+    """springlab.studies.settings.cheapest_verified over the swept settings within RECOMMEND_LIMIT_FRACTION of
+    their integrator's stability limit: ranked by counted work (no timer: the same audit gives the same pick),
+    each verified by a run of its own (springlab.sim.simulate, not the batch). Meeting tol means error + the
+    reference's own error estimate <= tol, so a reference that did not fully converge cannot pass a setting
+    that misses tol."""
     budget = tol - reference.error_estimate
-    candidates = sorted(
-        (
-            r
-            for r in runs
-            if r.error is not None
-            and r.error <= budget
-            and ((limit := limits[r.integrator].limit_dt_s) is None or r.dt <= RECOMMEND_LIMIT_FRACTION * limit)
-        ),
-        key=lambda r: r.wall_time_s,
-    )
-    for run in candidates:
+
+    def inside(row: Run) -> bool:
+        limit = limits[row.integrator].limit_dt_s
+        return limit is None or row.dt <= RECOMMEND_LIMIT_FRACTION * limit
+
+    def verify(row: Run) -> Verification:
         try:
             trajectory = simulate(
                 at.model.__copy__(),
-                integrator=run.integrator,
-                dt=run.dt,
+                integrator=row.integrator,
+                dt=row.dt,
                 duration=duration,
                 qpos=start.qpos,
                 qvel=start.qvel,
@@ -423,8 +427,14 @@ def _recommend(
                 control=start.control,
             )
         except DivergedError:
-            continue
+            return Verification(False, None)
         error = run_error(at, trajectory, reference)
-        if error is not None and error <= budget:
-            return Recommendation(run.integrator, run.dt, error, tol, True, run.wall_time_s)
-    return Recommendation(None, None, None, tol, False, None)
+        return Verification(error is not None and error <= budget, error)
+
+    return cheapest_verified(
+        [r for r in runs if inside(r)],
+        tol,
+        verify,
+        budget=budget,
+        none_text=NO_PICK.format(tol=tol),
+    )

@@ -1,11 +1,12 @@
 """The facts an audit is made of, each a frozen object with its `to_dict()` (its entry in audit.json): the
-model's own setting, how the start excites the model, the operating point's state, the recommendation, the
-linearity verdict's measure, the reference and the timings. `results.Audit` holds them.
+model's own setting, how the start excites the model, the operating point's state, the linearity verdict's
+measure, the reference and the timings. `results.Audit` holds them.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import Any
 
 from springlab.exact.constraints import ConstraintState
@@ -30,9 +31,12 @@ class OwnSetting:
     margin
         its integrator's `limit_dt_s` / dt [-] (None: no limit).
     wall_time_s
-        steps x its integrator's measured cost per step [s].
+        steps x its integrator's measured time per step [s] (reported, never ranked on).
     margin_confirmed
         whether runs confirm the limit behind `margin` (None: no limit).
+    cost
+        its counted work [DOF-evaluations] (springlab.studies.settings.counted_cost), what the
+        recommendation's cost is compared with.
     """
 
     integrator: str
@@ -42,10 +46,11 @@ class OwnSetting:
     margin: float | None
     wall_time_s: float
     margin_confirmed: bool | None = None
+    cost: float = math.nan
 
     def to_dict(self) -> dict[str, Any]:
         """audit.json's "own_setting": {"integrator", "dt", "stable", "error", "margin", "wall_time_s",
-        "margin_confirmed"}."""
+        "margin_confirmed", "cost"}."""
         return dataclasses.asdict(self)
 
 
@@ -134,39 +139,6 @@ class PointReport:
             "drift_m": self.drift_m,
             "linear_map": self.linear_map,
         }
-
-
-@dataclasses.dataclass(frozen=True)
-class Recommendation:
-    """The cheapest swept setting meeting the tolerance, verified by a run of its own (all None but
-    `tolerance` and `verified` = False where none does).
-
-    Attributes
-    ----------
-    integrator
-        its integrator (None: no swept setting meets the tolerance).
-    dt
-        its timestep [s].
-    error
-        the verification run's error [-].
-    tolerance
-        the tolerance it meets [-].
-    verified
-        whether a run of its own met the tolerance.
-    wall_time_s
-        steps x its integrator's measured cost per step [s].
-    """
-
-    integrator: str | None
-    dt: float | None
-    error: float | None
-    tolerance: float
-    verified: bool
-    wall_time_s: float | None
-
-    def to_dict(self) -> dict[str, Any]:
-        """audit.json's "recommendation": {"integrator", "dt", "error", "tolerance", "verified", "wall_time_s"}."""
-        return dataclasses.asdict(self)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -12,15 +12,18 @@ from typing import TYPE_CHECKING, Any
 from springlab import display, tables
 from springlab.exact.linearize import Linearization
 from springlab.sim.simulate import Setup
+from springlab.studies.settings import COST_BASIS, Recommendation, Run
 
 from . import text
 from .limits import ConstraintFlag, Limit
-from .parts import Excitation, Linearity, OwnSetting, PointReport, Recommendation, ReferenceUsed, Timings
-from .sweep import SweepRun
+from .parts import Excitation, Linearity, OwnSetting, PointReport, ReferenceUsed, Timings
 
 if TYPE_CHECKING:
     import pandas
     from matplotlib.figure import Figure
+
+#: audit.json's names for the recommendation's keys (the names it has always had)
+RECOMMENDATION_NAMES = {"time_s": "wall_time_s"}
 
 #: what audit.json says counts as numerically unstable
 STABILITY_CRITERION = (
@@ -31,7 +34,8 @@ STABILITY_CRITERION = (
 
 @dataclasses.dataclass(frozen=True, repr=False)
 class Audit(display.Shown):
-    """An audit of one model (see the module docstring); `to_dict()` is audit.json and `audit --json`.
+    """An audit of one model (springlab.studies.audit.audit says how it is made); `to_dict()` is audit.json and
+    `audit --json`.
 
     Attributes
     ----------
@@ -58,13 +62,16 @@ class Audit(display.Shown):
     reference
         the reference of the sweep (`ReferenceUsed`).
     runs
-        the sweep, per integrator, largest dt first (`SweepRun`; `to_pandas()` is their table).
+        the sweep, per integrator, largest dt first (springlab.studies.settings.Run: the setting, steps, error
+        [-], counted cost [DOF-evaluations], measured time [s]; `to_pandas()` is their table).
     orders
         integrator -> observed order (None: no clean power law, e.g. contacts).
     pareto
-        runs no other beats in both error and wall time.
+        runs no other beats in both error and counted cost, cheapest first (springlab.studies.settings
+        .pareto_front: never a diverged run or one beyond its integrator's confirmed limit).
     recommendation
-        the cheapest setting meeting tol, verified (`Recommendation`).
+        the cheapest setting in counted work meeting tol, verified by a run of its own
+        (springlab.studies.settings.Recommendation: the same audit gives the same pick).
     timings
         wall time of each stage [s] (`Timings`).
     point_state
@@ -85,10 +92,10 @@ class Audit(display.Shown):
     is_linear: bool
     linearity: Linearity
     reference: ReferenceUsed
-    runs: tuple[SweepRun, ...]
+    runs: tuple[Run, ...]
     orders: Mapping[str, float | None]
-    pareto: tuple[SweepRun, ...]
-    recommendation: Recommendation
+    pareto: tuple[Run, ...]
+    recommendation: Recommendation[Run]
     timings: Timings
     point_state: PointReport
     excitation: Excitation
@@ -166,14 +173,32 @@ class Audit(display.Shown):
             "own_setting": self.own.to_dict(),
             "constraints_broken": [c.to_dict() for c in self.constraints],
             "reference": self.reference.to_dict(),
-            "sweep": [r.to_dict() for r in self.runs],
+            "sweep": [sweep_row(r) for r in self.runs],
             "orders": dict(self.orders),
-            "pareto": [r.to_dict() for r in self.pareto],
-            "recommendation": self.recommendation.to_dict(),
+            "pareto": [sweep_row(r) for r in self.pareto],
+            "recommendation": self.recommendation.to_dict(RECOMMENDATION_NAMES),
+            "cost_basis": COST_BASIS,
             "timings_s": self.timings.to_dict(),
         }
 
     def to_pandas(self) -> pandas.DataFrame:
         """The sweep as a DataFrame, one row per (integrator, dt): the rows of `to_dict()["sweep"]`
-        (integrator, dt [s], steps, error [-], wall_time_s [s], diverged); pandas is optional."""
-        return tables.to_pandas([r.to_dict() for r in self.runs])
+        (integrator, dt [s], steps, error [-], wall_time_s [s], cost [DOF-evaluations], diverged, beyond_limit);
+        pandas is optional."""
+        return tables.to_pandas([sweep_row(r) for r in self.runs])
+
+
+def sweep_row(run: Run) -> dict[str, Any]:
+    """A run as a row of audit.json's "sweep" and "pareto": {"integrator", "dt" [s], "steps", "error" [-],
+    "wall_time_s" [s] (measured, reported), "cost" [DOF-evaluations] (counted, ranked on), "diverged",
+    "beyond_limit"}."""
+    return {
+        "integrator": run.integrator,
+        "dt": run.dt,
+        "steps": run.steps,
+        "error": run.error,
+        "wall_time_s": run.time_s,
+        "cost": run.cost,
+        "diverged": run.diverged,
+        "beyond_limit": run.beyond_limit,
+    }

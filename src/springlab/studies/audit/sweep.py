@@ -25,7 +25,6 @@ import dataclasses
 import math
 from collections.abc import Callable, Mapping, Sequence
 from fractions import Fraction
-from typing import Any
 
 import mujoco
 import numpy as np
@@ -66,38 +65,6 @@ RunJobs = Callable[[Sequence[Job]], list[Trajectory | DivergedError]]
 TIMING_STEPS = 1000
 #: ... or as many more as take at least this long [s]
 TIMING_MIN_S = 0.02
-
-
-@dataclasses.dataclass(frozen=True)
-class SweepRun:
-    """One (integrator, dt) of the sweep; `to_dict()` is its row in audit.json's "sweep".
-
-    Attributes
-    ----------
-    integrator
-        name.
-    dt
-        timestep [s].
-    steps
-        number of steps.
-    error
-        error [-] against the reference (module docstring; None if diverged).
-    wall_time_s
-        steps x the integrator's measured cost per step [s].
-    diverged
-        whether the run blew up.
-    """
-
-    integrator: str
-    dt: float
-    steps: int
-    error: float | None
-    wall_time_s: float
-    diverged: bool = False
-
-    def to_dict(self) -> dict[str, Any]:
-        """{"integrator", "dt", "steps", "error", "wall_time_s", "diverged"}."""
-        return dataclasses.asdict(self)
 
 
 def checkpoint_spacing(dts: list[float], duration: float) -> float:

@@ -14,9 +14,15 @@ from collections.abc import Mapping, Sequence
 from typing import Protocol
 
 from springlab.exact.linearize import Linearization, Mode
+from springlab.studies.settings import Recommendation, Run
 
 from .limits import ConstraintFlag, Limit
-from .parts import Excitation, OwnSetting, PointReport, Recommendation, ReferenceUsed
+from .parts import Excitation, OwnSetting, PointReport, ReferenceUsed
+
+#: the line (and the recommendation's text) when the start moves nothing
+NO_MOTION = "no motion: nothing was verified (the fine run from the start barely moves)"
+#: the recommendation's text when no swept setting meets tol
+NO_PICK = "no swept setting meets tol {tol:g} (verified runs); try --dt lower or a longer grid"
 
 
 class AuditFacts(Protocol):
@@ -43,7 +49,7 @@ class AuditFacts(Protocol):
     @property
     def reference(self) -> ReferenceUsed: ...
     @property
-    def recommendation(self) -> Recommendation: ...
+    def recommendation(self) -> Recommendation[Run]: ...
     @property
     def point_state(self) -> PointReport: ...
     @property
@@ -147,7 +153,7 @@ def own_stability(audit: AuditFacts) -> str:
 def excitation_lines(excitation: Excitation) -> list[str]:
     """Nothing moved (nothing verified), or which degrees of freedom the start left still."""
     if not excitation.any_motion:
-        return ["no motion: nothing was verified (the fine run from the start barely moves)"]
+        return [NO_MOTION]
     if not excitation.still:
         return []
     names = ", ".join(excitation.still[:3]) + (" ..." if len(excitation.still) > 3 else "")
@@ -159,13 +165,13 @@ def excitation_lines(excitation: Excitation) -> list[str]:
 
 
 def recommendation_lines(audit: AuditFacts) -> list[str]:
-    """The cheapest setting meeting tol and its cost beside the own setting's, or that none does."""
+    """The cheapest setting meeting tol and its counted work beside the own setting's, or that none does."""
     pick, own = audit.recommendation, audit.own
     if not audit.excitation.any_motion:
         return []
-    if pick.integrator is None or pick.dt is None or pick.error is None or pick.wall_time_s is None:
-        return [f"no swept setting meets tol {audit.tol:g} (verified runs); try --dt lower or a longer grid"]
-    ratio = f" at {pick.wall_time_s / own.wall_time_s:.2g}x the cost of yours" if own.wall_time_s else ""
+    if pick.integrator is None or pick.dt is None or pick.error is None or pick.cost is None:
+        return [pick.text]
+    ratio = f" at {pick.cost / own.cost:.2g}x the counted work of yours" if own.cost > 0 else ""
     return [
         f"cheapest meeting tol {audit.tol:g}: {pick.integrator} at {pick.dt * 1e3:.3g} ms, error"
         f" {pick.error:.2g}{ratio} (verified by a run)"
