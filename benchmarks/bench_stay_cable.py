@@ -9,19 +9,33 @@
 2. The universal curve against the transcendental equation: the exact optimum damper and the largest damping
    ratio of modes 1-3 over a / L = 0.005 ... 0.1, the relative errors of the curve's a / (2L) and
    sqrt(T m) L / (n pi a).
+3. The wind's records (issue 36): N = 100, 40 seeds x 600 s at the cheapest setting whose variance bias (the
+   hold's and the integrator's, exact) is under 1 % (springlab.studies.settings ranks the candidate settings by
+   counted work; the 40 records verify the pick: at least 38 inside their 99 % interval), run by
+   springlab.studies.random_load on both cores, against a plain Python mj_step loop over the same steps, the
+   same controls and starts (one core: what a user would write). Then the per-step overhead apart from the
+   threads: 4 seeds on one thread each way, alternately, best of 2.
 
-Run: python benchmarks/bench_stay_cable.py
+Run: python benchmarks/bench_stay_cable.py [--records-only | --exact-only]
 """
 
 from __future__ import annotations
 
+import argparse
 import math
+import time
 
+import mujoco
 import numpy as np
 import scipy.linalg
 
+from springlab import scenes
 from springlab.exact import cable as cb
 from springlab.exact import random_vibration as rv
+from springlab.scenes.stay_cable import stationary
+from springlab.sim.simulate import configured
+from springlab.studies import random_load, settings
+from springlab.studies.executor import Executor
 from timing import best_of
 
 CABLE = cb.TautCable(300.0, 6.1e6, 70.0)
@@ -93,7 +107,97 @@ def universal_range() -> None:
             )
 
 
+#: the records' cable, count and length (issue 36)
+RECORD_NODES, RECORD_SEEDS, RECORD_S = 100, 40, 600.0
+#: the candidate timesteps: these fractions of each integrator's stability limit on the cable's modes
+RECORD_FRACTIONS = (0.95, 0.9, 0.85, 0.8, 0.75, 0.7, 0.65, 0.6, 0.5, 0.4, 0.3, 0.2)
+#: the bias the setting must stay under [-] (the hold's and the integrator's, on the mid-span variance)
+RECORD_BIAS = 0.01
+
+
+def cheapest_unbiased(case) -> settings.Run:
+    """The cheapest (integrator, dt) whose exact variance bias at mid-span is under RECORD_BIAS, by counted work."""
+    rows = []
+    mid = stationary.cable_model(case).midspan - 1
+    for integrator in ("euler", "implicitfast", "implicit", "rk4"):
+        limit = settings.limit_dt(case.modes(), lambda w, z, i=integrator: case.stability_limit(i, w, z))
+        for fraction in RECORD_FRACTIONS:
+            dt = RECORD_S / math.ceil(RECORD_S / (limit * fraction))
+            steps = round(RECORD_S / dt)
+            exact = stationary.wind_exact(case, integrator, dt)
+            bias = abs(float(exact.integrator_covariance[mid, mid] / exact.continuous[mid, mid]) - 1)
+            cost = settings.counted_cost(integrator, steps * RECORD_SEEDS, case.model.nv)
+            rows.append(settings.Run(settings.Setting(integrator, dt), steps * RECORD_SEEDS, bias, cost))
+    return min((r for r in rows if r.error is not None and r.error < RECORD_BIAS), key=lambda r: (r.cost, r.error))
+
+
+def plain_loop(case, integrator: str, dt: float, steps: int, seeds) -> list[float]:
+    """Each seed's sample variance at mid-span by a Python mj_step loop (the same starts and controls)."""
+    model = configured(case.model, integrator, dt)
+    data = mujoco.MjData(model)
+    mid = stationary.cable_model(case).midspan - 1
+    out = []
+    for seed in seeds:
+        setup = stationary.seeded_setup(case, steps, dt, seed)
+        mujoco.mj_resetData(model, data)
+        data.qpos[:], data.qvel[:] = setup.qpos, setup.qvel
+        control = np.asarray(setup.control)[:, 0]
+        total = 0.0
+        for k in range(steps):
+            data.ctrl[0] = control[k]
+            mujoco.mj_step(model, data)
+            total += data.qpos[mid] ** 2
+        out.append(total / steps)
+    return out
+
+
+def wind_records() -> None:
+    scene = scenes.get("stay_cable")
+    params = {"n_elements": RECORD_NODES}
+    case = scene.case("wind", params)
+    start = time.perf_counter()
+    pick = cheapest_unbiased(case)
+    choose = time.perf_counter() - start
+    integrator, dt = pick.integrator, pick.dt
+    steps = round(RECORD_S / dt)
+    print(
+        f"\nthe wind's records: N = {RECORD_NODES}, {RECORD_SEEDS} seeds x {RECORD_S:g} s; the cheapest setting whose"
+        f" variance bias is under {RECORD_BIAS:.0%}: {integrator} at dt = {dt:.4g} s (bias {pick.error:.3%}, chosen"
+        f" in {choose:.1f} s from the exact biases)"
+    )
+    start = time.perf_counter()
+    study = random_load.ensemble("stay_cable", seeds=RECORD_SEEDS, integrator=integrator, dt=dt, **params)
+    study_s = time.perf_counter() - start
+    print(
+        f"  springlab (random_load.ensemble, 2 threads): {study_s:.1f} s in all ({study.wall_time_s:.1f} s of records,"
+        f" {study.exact_time_s:.1f} s of exact answers); {study.inside} of {RECORD_SEEDS} inside their 99 % interval"
+    )
+    start = time.perf_counter()
+    looped = plain_loop(case, integrator, dt, steps, range(RECORD_SEEDS))
+    loop_s = time.perf_counter() - start
+    same = max(abs(a / b - 1) for a, b in zip(looped, study.variances))
+    print(
+        f"  plain mj_step loop (one core): {loop_s:.1f} s; ratio springlab / loop = {study_s / loop_s:.2f}"
+        f" (the records agree to {same:.1e})"
+    )
+    few = range(4)
+    with Executor(progress=False, nthread=1) as one:
+        threads = best_of(
+            lambda: random_load.records(scene, "wind", params, integrator, dt, steps, list(few), one), repeat=2
+        )
+    loop = best_of(lambda: plain_loop(case, integrator, dt, steps, few), repeat=2)
+    print(f"  one thread each, 4 seeds: springlab {threads:.1f} s, loop {loop:.1f} s, ratio {threads / loop:.2f}")
+
+
 if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--records-only", action="store_true", help="only the wind's records (part 3)")
+    parser.add_argument("--exact-only", action="store_true", help="only the exact layer (parts 1 and 2)")
+    args = parser.parse_args()
+    if not args.exact_only:
+        wind_records()
+    if args.records_only:
+        raise SystemExit(0)
     covariance_timings()
     universal_range()
     print(

@@ -37,7 +37,6 @@ import math
 
 import numpy as np
 import scipy.linalg
-import scipy.optimize
 
 from springlab.errors import ParameterError
 
@@ -46,6 +45,13 @@ _EPS = float(np.finfo(float).eps)
 _NEWTON_STEPS = 60
 #: continuation points from a tiny damper up to the asked one (geometric in eta)
 _CONTINUATION_POINTS = 48
+
+
+def _optimize():  # noqa: ANN202 - the module
+    """scipy.optimize, imported on first use: the scene registry imports this module, and every command the registry."""
+    import scipy.optimize
+
+    return scipy.optimize
 
 
 def _positive(name: str, value: float) -> float:
@@ -314,14 +320,14 @@ def stabilising_damper(model: LumpedCable, node: int, *, rtol: float = 1e-12) ->
 
     # the damper's scale: sqrt(k m) of a node, times N (the impedance sqrt(T m) is (N + 1) of these)
     scale = math.sqrt(float(model.stiffness[0, 0]) * float(model.mass[0])) * model.size
-    best = scipy.optimize.minimize_scalar(
+    best = _optimize().minimize_scalar(
         growth, bounds=(math.log(scale) - 12.0, math.log(scale) + 8.0), method="bounded", options={"xatol": 1e-6}
     )
     c_best = math.exp(float(best.x))
     if float(best.fun) > 0.0:
         return math.nan, c_best
     low = math.log(scale) - 40.0
-    root = scipy.optimize.brentq(growth, low, float(best.x), xtol=1e-14, rtol=max(rtol, 4 * _EPS))
+    root = _optimize().brentq(growth, low, float(best.x), xtol=1e-14, rtol=max(rtol, 4 * _EPS))
     return math.exp(root), c_best
 
 
@@ -430,7 +436,7 @@ def exact_optimum(mode: int, ratio: float, *, xatol: float = 1e-9) -> tuple[floa
         return -damping_ratio_of(damped_wavenumber(mode, ratio, math.exp(log_eta)))
 
     span = math.log(30.0)
-    found = scipy.optimize.minimize_scalar(
+    found = _optimize().minimize_scalar(
         negative_ratio,
         bounds=(math.log(guess) - span, math.log(guess) + span),
         method="bounded",

@@ -27,10 +27,10 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 
 import numpy as np
 import scipy.linalg
-import scipy.stats
 
 from springlab.errors import BadInputError
 
@@ -231,14 +231,26 @@ def record_variance(covariance: np.ndarray, transition: np.ndarray, output: np.n
     samples
         K, the record's length in steps.
     """
+    return float(record_variances(covariance, transition, output, [samples])[0])
+
+
+def record_variances(
+    covariance: np.ndarray, transition: np.ndarray, output: np.ndarray, samples: Sequence[int]
+) -> np.ndarray:
+    """`record_variance` [output^4] for each record length K in `samples` (ascending or not), the two discrete
+    Lyapunov solutions shared: (len(samples),)."""
     c = np.asarray(output, float)
     v = covariance @ c
     r0 = float(c @ v)
     x = scipy.linalg.solve_discrete_lyapunov(transition, np.outer(v, v))
     z = scipy.linalg.solve_discrete_lyapunov(transition, x - np.outer(v, v))
-    c_k = np.linalg.matrix_power(transition.T, int(samples)) @ c
-    total = samples * (2.0 * float(c @ x @ c) - r0**2) - 2.0 * float(c @ z @ c) + 2.0 * float(c_k @ z @ c_k)
-    return 2.0 * total / samples**2
+    s0, s1 = float(c @ x @ c), float(c @ z @ c)
+    out = np.empty(len(samples))
+    for i, count in enumerate(samples):
+        c_k = np.linalg.matrix_power(transition.T, int(count)) @ c
+        total = count * (2.0 * s0 - r0**2) - 2.0 * s1 + 2.0 * float(c_k @ z @ c_k)
+        out[i] = 2.0 * total / count**2
+    return out
 
 
 def record_variance_continuous(covariance: np.ndarray, a: np.ndarray, output: np.ndarray, duration: float) -> float:
@@ -311,6 +323,8 @@ def variance_interval(variance: float, spread: float, level: float) -> VarianceI
     """
     if not (0.0 < level < 1.0):
         raise BadInputError(f"the confidence level must lie in (0, 1), got {level!r}")
+    import scipy.stats  # on first use: the scene registry imports this module, and every command the registry
+
     nu = 2.0 * variance**2 / spread**2
     low = variance * float(scipy.stats.chi2.ppf((1.0 - level) / 2.0, nu)) / nu
     high = variance * float(scipy.stats.chi2.ppf((1.0 + level) / 2.0, nu)) / nu

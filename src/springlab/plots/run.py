@@ -160,6 +160,7 @@ CURVE_STYLES: dict[str, dict[str, Any]] = {
     "simulated": dict(lw=1.5),
     "exact": dict(lw=1.1, ls=(0, (4, 3))),
     "continuum": dict(lw=1.3, ls=(0, (1, 1.5))),
+    "points": dict(ls="none", marker="o", ms=6, mfc="none", mew=1.5),
 }
 
 
@@ -193,6 +194,8 @@ def scene_figure(result: Result) -> Figure:
                 fontsize=7,
                 color="0.25",
             )
+        if panel.log_x:
+            ax.set_xscale("log")
         ax.set_title(panel.title)
         ax.set_xlabel(panel.xlabel)
         ax.set_ylabel(panel.ylabel)

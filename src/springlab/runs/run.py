@@ -511,9 +511,10 @@ def run_scenario(
     if integrator == "auto":
         raise BadInputError(_AUTO_ELSEWHERE)
     scene_obj, chosen, params = prepare(scene, scenario, parameters)
-    integrator = scene_obj.integrator if integrator is None else integrator
+    default_integrator, default_dt = scene_obj.setting(chosen)
+    integrator = default_integrator if integrator is None else integrator
     integrator_id(integrator)
-    dt = (chosen.dt or scene_obj.dt) if dt is None else dt
+    dt = default_dt if dt is None else dt
     duration = chosen.duration if duration is None else duration
     steps = check_timing(dt, duration)
     if tol is not None:

@@ -50,6 +50,7 @@ from .capabilities.frequency import FrequencySpec
 from .capabilities.friction import DryFrictionSpec
 from .capabilities.interactive import InteractiveSpec
 from .capabilities.oscillator import OscillatorSpec
+from .capabilities.random_load import RandomLoadSpec
 from .capabilities.refine import RefinableSpec
 from .declarations import Check, Parameter, Reference, Scenario
 
@@ -143,6 +144,9 @@ class Scene:
        MjSpec edit that makes the input a control, and what the response means for the scene's question.
     14. Optionally, `interactive` (springlab.scenes.capabilities.interactive.InteractiveSpec): the scenarios that run
        in the browser with real MuJoCo and the MJCF attributes the page writes (`springlab interactive`).
+    15. Optionally, `random_load` (springlab.scenes.capabilities.random_load.RandomLoadSpec): a scenario under a seeded
+       stationary random load whose RMS has an exact value and scatter (`springlab rms`:
+       springlab.studies.random_load runs many seeds and finds the cheapest setting for an accurate RMS).
 
     The module exposes the instance as `SCENE`; springlab.scenes discovers it. Tests check each
     claim against a reference built in the test (closed form, expm, scipy's DOP853 at tight
@@ -187,6 +191,9 @@ class Scene:
     #: the scenarios that run in the browser and how the page edits the MJCF (None: none;
     #: springlab.render.interactive reads it)
     interactive: InteractiveSpec | None = None
+    #: a scenario under a seeded stationary random load: its RMS, exactly and from many seeds (None: none;
+    #: springlab.studies.random_load reads it)
+    random_load: RandomLoadSpec | None = None
 
     def question_and_answer(self, scenario: str, quantities: dict, parameters: dict) -> tuple[str, str] | None:
         """(question, answer sentence) of a scenario's run, or None where the scene states none."""
@@ -206,6 +213,10 @@ class Scene:
         if name not in self.scenarios:
             raise UnknownNameError(f"scenario of {self.name}", name, self.scenarios)
         return self.scenarios[name]
+
+    def setting(self, scenario: Scenario) -> tuple[str, float]:
+        """(integrator, dt [s]): the validated default setting of `scenario` (its own, else the scene's)."""
+        return scenario.integrator or self.integrator, scenario.dt or self.dt
 
     def model_spec(self) -> mujoco.MjSpec:
         """A fresh MjSpec of this scene's MJCF: a copy of the parsed file (parsed once per process)."""

@@ -92,6 +92,10 @@ class Scenario:
         whether an exact reference exists (validated by `validate`).
     dt
         the scenario's validated timestep [s] (None: the scene's `dt`).
+    integrator
+        the scenario's validated integrator (None: the scene's `integrator`), for a scenario whose model
+        another integrator runs more cheaply (e.g. a stiff damper that only an implicit one steps at a
+        useful dt).
     variant
         for a scene whose scenarios differ in their model (e.g. the car: 1 DOF,
         pitch/heave, quarter car), the object that carries what differs; the scene's
@@ -105,6 +109,7 @@ class Scenario:
     derive: Callable[[dict[str, float], set[str]], dict[str, float]] | None = None
     exact: bool = True
     dt: float | None = None
+    integrator: str | None = None
     variant: Any = None
 
 

@@ -547,9 +547,10 @@ def sweep(
             raise BadInputError(f"{axis.name} is both varied (--vary) and fixed (--set); choose one")
     if integrator == "auto":
         raise BadInputError("a sweep runs one setting for every configuration; name an integrator, not 'auto'")
-    integrator = scene_obj.integrator if integrator is None else integrator
+    default_integrator, default_dt = scene_obj.setting(chosen)
+    integrator = default_integrator if integrator is None else integrator
     integrator_id(integrator)
-    dt = (chosen.dt or scene_obj.dt) if dt is None else dt
+    dt = default_dt if dt is None else dt
     duration = chosen.duration if duration is None else duration
     check_timing(dt, duration)
     values = configurations(axes, samples, seed)

@@ -31,7 +31,7 @@ def main(args: argparse.Namespace) -> int:
                 "scenarios": {s.name: s.description for s in scene.scenarios.values()},
                 # the setting `run` and `validate` use for each scenario (a scenario may validate its own dt)
                 "scenario_settings": {
-                    s.name: {"integrator": scene.integrator, "dt": s.dt or scene.dt, "duration": s.duration}
+                    s.name: {"integrator": scene.setting(s)[0], "dt": scene.setting(s)[1], "duration": s.duration}
                     for s in scene.scenarios.values()
                 },
                 "parameters": {

@@ -12,6 +12,8 @@ study's contract is one module:
 * `figure`: the panels of the scene's own figure of a run (`Scene.figure`);
 * `frequency`: the default input and response of its frequency response (`Scene.frequency`);
 * `interactive`: the scenarios that run in the browser (`Scene.interactive`);
+* `random_load`: a scenario under a seeded stationary random load and its exact RMS (`Scene.random_load`,
+  springlab.studies.random_load and springlab.studies.rms_settings);
 * `drawing`: what the videos, the viewer and the pages draw for a case beyond the model's geoms (`Scene.drawing`);
 * `case`: what a capability hook reads of the case it is given (`CaseView`).
 

@@ -24,7 +24,8 @@ class Curve:
     x, y
         the points, in the panel's units.
     kind
-        'simulated' (solid), 'exact' (dashed) or 'continuum' (dotted).
+        'simulated' (solid), 'exact' (dashed), 'continuum' (dotted) or 'points' (markers, no line: runs at
+        chosen values, e.g. simulated points on an exact curve).
     """
 
     label: str
@@ -47,6 +48,8 @@ class Panel:
         what is drawn.
     marks
         vertical lines: (x, label), e.g. an exact event time.
+    log_x
+        a logarithmic x axis (e.g. a damper coefficient over decades).
     """
 
     title: str
@@ -54,6 +57,7 @@ class Panel:
     ylabel: str
     curves: tuple[Curve, ...]
     marks: tuple[tuple[float, str], ...] = ()
+    log_x: bool = False
 
 
 #: hook: (the case that ran, its trajectory) -> the panels of the run's own figure

@@ -115,11 +115,11 @@ def load_source(
         with quiet_mujoco():
             model = model_spec.compile()
         label = f"scene {text!r} (scenario {chosen.name!r})"
-        dt = chosen.dt if chosen.dt is not None else scene.dt
+        integrator, dt = scene.setting(chosen)
         return Source(
             label,
             model,
-            scene.integrator,
+            integrator,
             float(dt),
             spec.input if spec else None,
             spec.response if spec else None,
