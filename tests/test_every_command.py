@@ -85,12 +85,14 @@ def _cases(scene) -> dict[str, list[tuple[list[str], tuple[str, ...]]]]:
                 ("friction_settings.json", "friction_settings.csv", "friction_settings.png"),
             )
         ]
+    if scene.random_load is not None:
+        out["rms"] = [(["rms", name, "--seeds", "2", "--record", "20", "--json", "--output", "OUT"], ())]
     return out
 
 
 #: the commands whose exit code 1 is an answer, not a failure: no setting of the sweep meets the tolerance, or
 #: the integrator does not reproduce the whole band (the run commands must pass: 0)
-ANSWERS_WITH_ONE = {"tradeoff", "frequency", "refine", "friction-settings", "design"}
+ANSWERS_WITH_ONE = {"tradeoff", "frequency", "refine", "friction-settings", "design", "rms"}
 
 
 #: the study commands take seconds each on a scene: `make test` runs them, the quick loop does not
@@ -131,6 +133,7 @@ def test_every_scene_serves_every_command_it_declares(scene_name, command, tmp_p
 def test_every_declared_capability_has_a_command_in_this_test():
     # a new capability slot on Scene must be added to `_cases` (or this test says which is missing)
     served = {"fit", "oscillator", "design", "dry_friction", "refinable", "figure", "frequency", "interactive"}
+    served |= {"random_load"}
     served |= {"drawing"}  # drawn by render (its case runs for every scene)
     declared = {
         name
