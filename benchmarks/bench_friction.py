@@ -76,14 +76,9 @@ def per_run() -> float:
         for last in (False, True):
             settings = _settings(scenario, last)
             loop, steps = _plain_loop(scenario, integrator, dt, settings)
-            payload = {
-                "scene": "friction",
-                "scenario": scenario,
-                "overrides": {},
-                "duration": get("friction").scenario(scenario).duration,
-                "measures": [(m.quantity, m.scale) for m in get("friction").dry_friction.case(scenario).measures],
-                "groups": [[(settings, integrator, dt)]],
-            }
+            duration = get("friction").scenario(scenario).duration
+            case = get("friction").dry_friction.case(scenario)
+            payload = friction_settings.chunk_of("friction", case, {}, duration, [[(settings, integrator, dt)]])
             # alternately: one of each, three times, the best of each kept
             study_times, loop_times = [], []
             for _ in range(3):

@@ -25,7 +25,7 @@ from springlab.sim.batch import Job, run_batched
 from springlab.sim.simulate import Setup
 from springlab.studies.audit import ship as audit_ship
 from springlab.studies.audit.audit import audit
-from springlab.studies.audit.ship import Runner, cut, runs_chunk, ship
+from springlab.studies.audit.ship import AuditRun, Runner, RunsChunk, cut, runs_chunk, ship
 from springlab.studies.executor import Executor
 
 pytest.importorskip("distributed", reason="the distributed extra (make test installs it)")
@@ -103,13 +103,13 @@ def test_a_model_with_an_include_and_a_mesh_travels_as_text_and_bytes_and_runs_i
     (tmp_path / "robot.xml").write_text(MAIN_XML)
     model = mujoco.MjModel.from_xml_path(str(tmp_path / "robot.xml"))
     payload = pickle.loads(pickle.dumps(ship(("path", str(tmp_path / "robot.xml")), model)))
-    assert set(payload["assets"]) >= {"meshes/tetra.obj", "parts/arm.xml"}
-    assert all(isinstance(v, bytes) for v in payload["assets"].values())
+    assert set(payload.assets) >= {"meshes/tetra.obj", "parts/arm.xml"}
+    assert all(isinstance(v, bytes) for v in payload.assets.values())
     start = Setup(np.array([0.3]), np.array([0.0]), np.zeros(0), np.zeros(0))
     runs = [("euler", 0.002, 200), ("rk4", 0.004, 100), ("implicitfast", 0.001, 400)]
     audit_ship._COMPILED.clear()  # compiled from the payload alone, as on a fresh worker
     shipped = runs_chunk(
-        {"model": payload, "runs": [(n, dt, s, (start.qpos, start.qvel, None, None)) for n, dt, s in runs]}
+        RunsChunk(payload, tuple(AuditRun(n, dt, s, start.qpos, start.qvel, None, None) for n, dt, s in runs))
     )
     local = run_batched([Job(model, n, dt, s, start) for n, dt, s in runs])
     for a, b in zip(shipped, local):

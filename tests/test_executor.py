@@ -8,12 +8,18 @@ the caller reduces the chunks in submission order.
 
 from __future__ import annotations
 
+import dataclasses
+import importlib
+import inspect
 import os
 import pathlib
+import pickle
+import pkgutil
 import signal
 import socket
 import threading
 import time
+import typing
 
 import numpy as np
 import pytest
@@ -165,6 +171,44 @@ def test_a_scheduler_that_never_answers_gives_up_after_the_stated_timeout():
         worker.join(30.0)
     assert "error" in outcome and address in outcome["error"]
     assert outcome["elapsed"] < 2.0 + 8.0
+
+
+def test_the_amplification_map_and_the_ishigami_check_on_two_workers_equal_the_local_ones(cluster):
+    zetas, omega_dts = np.array([0.0, 0.5]), np.geomspace(0.1, 10.0, 7)
+    local = stability.amplification_map(["euler", "rk4"], zetas, omega_dts)
+    remote = stability.amplification_map(["euler", "rk4"], zetas, omega_dts, executor=cluster)
+    assert all(np.array_equal(local.radius[name], remote.radius[name]) for name in ("euler", "rk4"))
+    assert sobol.ishigami(64, executor=cluster) == sobol.ishigami(64)
+
+
+def _chunk_functions():
+    """Every study's chunk function: module-level, first parameter `payload`, then `nthread` (executor.ping,
+    the overhead probe that returns whatever it gets, aside)."""
+    import springlab.studies
+
+    found = {}
+    for info in pkgutil.walk_packages(springlab.studies.__path__, "springlab.studies."):
+        module = importlib.import_module(info.name)
+        for name, function in vars(module).items():
+            if not inspect.isfunction(function) or function.__module__ != info.name or name == "ping":
+                continue
+            parameters = list(inspect.signature(function).parameters)
+            if parameters[:2] == ["payload", "nthread"]:
+                found[f"{info.name}.{name}"] = function
+    return found
+
+
+def test_every_chunk_takes_a_frozen_dataclass_of_plain_data():
+    # a payload's keys are written down (its fields, typed), it cannot change between submission and a
+    # rerun on another worker (frozen), and a worker finds its class by name (module level); the tests
+    # above send each study's chunks to two workers and get the local numbers back
+    chunks = _chunk_functions()
+    assert len(chunks) >= 13, sorted(chunks)  # the eleven of issue 32, the sinestream's, the random load's
+    for name, function in chunks.items():
+        payload = typing.get_type_hints(function)["payload"]
+        assert dataclasses.is_dataclass(payload), f"{name} takes {payload!r}, not a dataclass"
+        assert payload.__dataclass_params__.frozen, f"{name}'s {payload.__name__} is not frozen"
+        assert pickle.loads(pickle.dumps(payload)) is payload, f"{name}'s payload class is not importable"
 
 
 def test_workers_and_scheduler_together_are_refused(capsys):

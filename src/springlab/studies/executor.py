@@ -2,8 +2,9 @@
 
 Every heavy study springlab has (a `sweep`, the tradeoff grid, the stability
 map, the printer-head design study and its Sobol analysis) is many independent
-simulations. The study cuts them into *chunks*: plain-data payloads (scene
-names, parameter values, timesteps; never a pickled MjModel or MjData), each
+simulations. The study cuts them into *chunks*: plain-data payloads, each a
+frozen dataclass beside its chunk function (scene names, parameter values,
+timesteps; never a pickled MjModel or MjData), each
 turned into one batched MuJoCo call (`mujoco.batch.Batch` / `mujoco.rollout`
 on threads) by a module-level function of the study. The executor only runs
 chunks and hands their results back **in submission order**:
@@ -39,11 +40,24 @@ import pathlib
 import socket
 import time
 from collections.abc import Callable, Iterator, Sequence
-from typing import Any
+from typing import Any, Protocol, TypeVar
 from urllib.parse import urlsplit
 
 from springlab import progress
 from springlab.errors import BadInputError, ClusterError, SpringlabError
+
+#: a chunk's payload (a frozen dataclass of plain data) and its result
+Payload = TypeVar("Payload")
+Result = TypeVar("Result")
+_PayloadIn = TypeVar("_PayloadIn", contravariant=True)
+_ResultOut = TypeVar("_ResultOut", covariant=True)
+
+
+class ChunkFunction(Protocol[_PayloadIn, _ResultOut]):
+    """A study's chunk: a module-level function of its payload, run as one batched call on `nthread` threads."""
+
+    def __call__(self, payload: _PayloadIn, /, nthread: int = ...) -> _ResultOut: ...
+
 
 #: seconds to wait for a scheduler to answer before giving up (exit 2)
 CONNECT_TIMEOUT_S = 10.0
@@ -243,13 +257,13 @@ class Executor:
 
     def map(
         self,
-        function: Callable[..., Any],
-        payloads: Sequence[Any],
+        function: ChunkFunction[Payload, Result],
+        payloads: Sequence[Payload],
         *,
         description: str = "chunks",
         sizes: Sequence[int] | None = None,
         unit: str = "run",
-    ) -> list[Any]:
+    ) -> list[Result]:
         """[function(payload, nthread=...) for payload in payloads], in order.
 
         Locally `nthread` is the executor's (0: every CPU); on dask it is 1 (one task per worker thread).
@@ -260,7 +274,8 @@ class Executor:
             a module-level (importable) function of plain data; it runs its chunk as one
             batched MuJoCo call on `nthread` threads (0: every CPU) and returns plain data.
         payloads
-            one per chunk (picklable plain data: names, numbers, numpy arrays).
+            one per chunk, picklable plain data: a frozen dataclass of names, numbers, tuples and numpy
+            arrays (e.g. springlab.studies.tradeoff.GridChunk).
         description
             the progress bar's label.
         sizes
@@ -273,7 +288,7 @@ class Executor:
             Whatever a chunk raised (SpringlabErrors pass through unchanged).
         """
         sizes = [1] * len(payloads) if sizes is None else list(sizes)
-        results: list[Any] = [None] * len(payloads)
+        results: list[Any] = [None] * len(payloads)  # filled in submission order
         with progress.bar(sum(sizes), description=description, unit=unit, enabled=self.progress) as bar:
             if not self.distributed:
                 for index, payload in enumerate(payloads):

@@ -143,11 +143,59 @@ def _change(coarse, fine) -> float:
     return worst
 
 
-def settings_chunk(payload: dict[str, Any], nthread: int = 0) -> list[dict[str, Any]]:
+#: one run of a chunk: ((setting, value) pairs, integrator, dt [s])
+SettingJob = tuple[tuple[tuple[str, float], ...], str, float]
+
+
+@dataclasses.dataclass(frozen=True)
+class SettingsChunk:
+    """A chunk of one case's runs: plain data, the worker rebuilds each model from the scene's MJCF.
+
+    Attributes
+    ----------
+    scene
+        the scene's name (a Scene object outside the catalogue runs only locally).
+    scenario
+        the case's scenario.
+    overrides
+        (name, value) pairs: the scene's parameters given, SI (not the swept settings).
+    duration
+        simulated time of every run [s].
+    measures
+        (quantity, scale) of each of the case's measures (FrictionMeasure).
+    groups
+        runs of one setting and integrator, dt halving (`grid`).
+    """
+
+    scene: str | Scene
+    scenario: str
+    overrides: tuple[tuple[str, Any], ...]
+    duration: float
+    measures: tuple[tuple[str, str | None], ...]
+    groups: tuple[tuple[SettingJob, ...], ...]
+
+
+def chunk_of(
+    scene: str | Scene,
+    case: FrictionCase,
+    overrides: Mapping[str, Any],
+    duration: float,
+    groups: Sequence[Sequence[tuple[dict[str, float], str, float]]],
+) -> SettingsChunk:
+    """The payload that runs `groups` (`grid`'s) of a case."""
+    return SettingsChunk(
+        scene,
+        case.scenario,
+        tuple(overrides.items()),
+        duration,
+        tuple((m.quantity, m.scale) for m in case.measures),
+        tuple(tuple((tuple(settings.items()), name, dt) for settings, name, dt in group) for group in groups),
+    )
+
+
+def settings_chunk(payload: SettingsChunk, nthread: int = 0) -> list[dict[str, Any]]:
     """One chunk of runs (module-level, plain data: it runs on dask workers too).
 
-    payload: scene (name), scenario, overrides, duration [s], measures ((quantity, scale) pairs),
-    groups (lists of (settings, integrator, dt) triples of one setting and integrator, dt halving).
     Each run is built from the scene's MJCF, set up and stepped as `springlab run` does (one
     `mujoco.rollout` call, alone on this thread: its CPU time, reported beside its counted work) and compared
     with its exact
@@ -155,15 +203,15 @@ def settings_chunk(payload: dict[str, Any], nthread: int = 0) -> list[dict[str, 
     integration error estimate, SAFETY x their largest difference over the compared columns' scales.
     """
     rows = []
-    wanted = {name for pair in payload["measures"] for name in pair if name}
-    for group in payload["groups"]:
+    wanted = {name for pair in payload.measures for name in pair if name}
+    for group in payload.groups:
         settings, _, _ = group[0]
         # one case per setting: its runs at every integrator and dt share its model (simulate steps a copy)
-        case = scenes.case(payload["scene"], payload["scenario"], {**payload["overrides"], **settings})
+        case = scenes.case(payload.scene, payload.scenario, {**dict(payload.overrides), **dict(settings)})
         work = work_per_evaluation(case.model)  # its NoSlip iterations count in its work per step
         previous = None
         for _, integrator, dt in group:
-            steps = check_timing(dt, payload["duration"])
+            steps = check_timing(dt, payload.duration)
             row: dict[str, Any] = {
                 "steps": steps,
                 "cpu_time_s": math.nan,
@@ -176,7 +224,7 @@ def settings_chunk(payload: dict[str, Any], nthread: int = 0) -> list[dict[str, 
             setup = case.setup(steps, dt)
             try:
                 start = _time.thread_time()
-                trajectory = case.simulate(integrator, dt, payload["duration"], setup=setup)
+                trajectory = case.simulate(integrator, dt, payload.duration, setup=setup)
                 row["cpu_time_s"] = _time.thread_time() - start
                 result = evaluate(case, trajectory, checks=False)
             except DivergedError as blown:
@@ -287,17 +335,7 @@ def friction_settings(
         groups = grid(spec, case, integrators, dts, values)
         configs = [config for group in groups for config in group]
         pieces = chunked(len(groups), max(1, CHUNK_RUNS // len(dts)))
-        payloads = [
-            {
-                "scene": reference,
-                "scenario": case.scenario,
-                "overrides": dict(parameters),
-                "duration": scenario.duration,
-                "measures": [(m.quantity, m.scale) for m in case.measures],
-                "groups": groups[p.start : p.stop],
-            }
-            for p in pieces
-        ]
+        payloads = [chunk_of(reference, case, parameters, scenario.duration, groups[p.start : p.stop]) for p in pieces]
         sizes = [sum(len(g) for g in groups[p.start : p.stop]) for p in pieces]
         outcomes = [
             row

@@ -449,20 +449,20 @@ def refine(
         pairs = [(name, dt) for dt in dts for name in integrators]
         for start in range(0, len(pairs), CHUNK_RUNS):
             payloads.append(
-                {
-                    "scene": reference,
-                    "scenario": asked.scenario,
-                    "question": (asked.name, asked.exact, asked.continuum),
-                    "parameters": {**parameters, spec.size: size},
-                    "size": size,
-                    "size_parameter": spec.size,
-                    "limits": limits,
-                    "duration": duration,
-                    "pairs": pairs[start : start + CHUNK_RUNS],
-                }
+                RefineChunk(
+                    scene=reference,
+                    scenario=asked.scenario,
+                    question=(asked.name, asked.exact, asked.continuum),
+                    parameters=tuple({**parameters, spec.size: size}.items()),
+                    size=size,
+                    size_parameter=spec.size,
+                    limits=tuple(limits.items()),
+                    duration=duration,
+                    pairs=tuple(pairs[start : start + CHUNK_RUNS]),
+                )
             )
     runner = Executor(progress=False) if executor is None else executor
-    outcomes = runner.map(refine_chunk, payloads, description="refine", sizes=[len(p["pairs"]) for p in payloads])
+    outcomes = runner.map(refine_chunk, payloads, description="refine", sizes=[len(p.pairs) for p in payloads])
     runs = [run for part in outcomes for run in part]
     runs.sort(key=lambda r: (r.size, integrators.index(r.integrator), -r.dt))
     costs = _size_costs(plans, runs, integrators)
@@ -491,19 +491,57 @@ def refine(
     )
 
 
-def refine_chunk(payload: dict[str, Any], nthread: int = 0) -> list[RefineRun]:
+@dataclasses.dataclass(frozen=True)
+class RefineChunk:
+    """A chunk of one model size: plain data, the worker rebuilds the model from the scene's MJCF.
+
+    Attributes
+    ----------
+    scene
+        the scene's name (a Scene object outside the catalogue runs only locally).
+    scenario
+        the scenario's name.
+    question
+        (quantity, its exact value, its continuum value): the names of the three in the scene's quantities.
+    parameters
+        (name, value) pairs: the scene's overrides with the size, SI.
+    size
+        the model size [-].
+    size_parameter
+        the parameter that sets it.
+    limits
+        (integrator, largest stable dt [s] or None) pairs at this size.
+    duration
+        simulated time of every run [s].
+    pairs
+        (integrator, dt [s]) of each run.
+    """
+
+    scene: str | Scene
+    scenario: str
+    question: tuple[str, str, str]
+    parameters: tuple[tuple[str, Any], ...]
+    size: int
+    size_parameter: str
+    limits: tuple[tuple[str, float | None], ...]
+    duration: float
+    pairs: tuple[tuple[str, float], ...]
+
+
+def refine_chunk(payload: RefineChunk, nthread: int = 0) -> list[RefineRun]:
     """One chunk of one size: each (integrator, dt) run alone, its question's three values read from the
-    scene's quantities, its counted cost from the model and its stability limit from payload["limits"] (a
+    scene's quantities, its counted cost from the model and its stability limit from the payload's limits (a
     module-level function of plain data for dask workers; the model is rebuilt here)."""
-    case = scenes.case(payload["scene"], payload["scenario"], payload["parameters"])
-    name, exact_name, continuum_name = payload["question"]
-    duration, size = payload["duration"], payload["size"]
+    case = scenes.case(payload.scene, payload.scenario, dict(payload.parameters))
+    name, exact_name, continuum_name = payload.question
+    duration, size = payload.duration, payload.size
+    limits = dict(payload.limits)
     work = work_per_evaluation(case.model)
     out = []
-    for integrator, dt in payload["pairs"]:
+    for integrator, dt in payload.pairs:
         steps = check_timing(dt, duration)
-        setting = Setting(integrator, dt, ((payload["size_parameter"], float(size)),))
-        past = beyond(dt, payload["limits"][integrator])
+        setting = Setting(integrator, dt, ((payload.size_parameter, float(size)),))
+        past = beyond(dt, limits[integrator])
         setup = case.setup(steps, dt)
         try:
             trajectory = case.simulate(integrator, dt, duration, setup=setup)

@@ -209,9 +209,28 @@ def measure_boundaries(
     return rows
 
 
-def boundaries_chunk(payload: dict[str, Any], nthread: int = 0) -> list[Boundary]:
+@dataclasses.dataclass(frozen=True)
+class BoundariesChunk:
+    """A chunk of `map_boundaries`: one integrator's boundary searches (plain data, for dask workers).
+
+    Attributes
+    ----------
+    integrator
+        MuJoCo's integrator name.
+    zetas
+        damping ratios [-] searched.
+    steps
+        steps per growth test.
+    """
+
+    integrator: str
+    zetas: tuple[float, ...]
+    steps: int
+
+
+def boundaries_chunk(payload: BoundariesChunk, nthread: int = 0) -> list[Boundary]:
     """measure_boundaries for one integrator (a chunk of the map; plain data in, frozen rows out, for dask workers)."""
-    return measure_boundaries([payload["integrator"]], payload["zetas"], steps=payload["steps"], nthread=nthread)
+    return measure_boundaries([payload.integrator], payload.zetas, steps=payload.steps, nthread=nthread)
 
 
 def map_boundaries(
@@ -223,8 +242,8 @@ def map_boundaries(
 ) -> list[Boundary]:
     """measure_boundaries with one chunk per integrator on `executor` (None: locally); the same rows
     in the same order (each pair's search is independent of the others)."""
-    zetas = [float(z) for z in zetas]
-    payloads = [{"integrator": name, "zetas": zetas, "steps": steps} for name in integrators]
+    zetas = tuple(float(z) for z in zetas)
+    payloads = [BoundariesChunk(name, zetas, steps) for name in integrators]
     return [row for part in resolve(executor).map(boundaries_chunk, payloads, description="stability") for row in part]
 
 
@@ -291,7 +310,7 @@ def amplification_map(
     zetas = np.concatenate([[0.0], np.geomspace(1e-2, 100.0, 40)]) if zetas is None else np.asarray(zetas)
     omega_dts = np.geomspace(1e-2, 1e3, 120) if omega_dts is None else np.asarray(omega_dts)
     integrators = list(integrators)
-    payloads = [{"integrator": name, "zetas": zetas, "omega_dts": omega_dts} for name in integrators]
+    payloads = [RadiusChunk(name, zetas, omega_dts) for name in integrators]
     radii = resolve(executor).map(radius_chunk, payloads, description="stability map")
     return AmplificationMap(
         _read_only(zetas),
@@ -300,9 +319,28 @@ def amplification_map(
     )
 
 
-def radius_chunk(payload: dict[str, Any], nthread: int = 0) -> np.ndarray:
+@dataclasses.dataclass(frozen=True, eq=False)  # arrays: compare fields, not results
+class RadiusChunk:
+    """A chunk of `amplification_map`: one integrator's one-step maps over a grid (plain data, for dask workers).
+
+    Attributes
+    ----------
+    integrator
+        MuJoCo's integrator name.
+    zetas
+        damping ratios [-] (n,).
+    omega_dts
+        omega*dt [-] (m,).
+    """
+
+    integrator: str
+    zetas: np.ndarray
+    omega_dts: np.ndarray
+
+
+def radius_chunk(payload: RadiusChunk, nthread: int = 0) -> np.ndarray:
     """Spectral radius [-] of one integrator's one-step maps over payload's (zetas, omega_dts) grid."""
-    maps = one_step_maps(payload["integrator"], payload["zetas"], payload["omega_dts"], nthread=nthread)
+    maps = one_step_maps(payload.integrator, payload.zetas, payload.omega_dts, nthread=nthread)
     return np.max(np.abs(np.linalg.eigvals(maps)), axis=-1)
 
 

@@ -385,7 +385,35 @@ def configurations(axes: Sequence[Axis], samples: int | None = None, seed: int =
     return {a.name: m.ravel() for a, m in zip(axes, mesh)}
 
 
-def run_chunk(payload: Mapping[str, Any], nthread: int = 0) -> list[dict[str, Any]]:
+@dataclasses.dataclass(frozen=True)
+class SweepChunk:
+    """A chunk of a sweep: plain data, the worker rebuilds every model from the scene's MJCF.
+
+    Attributes
+    ----------
+    scene
+        the scene's name.
+    scenario
+        the scenario's name.
+    integrator
+        MuJoCo's integrator name.
+    dt
+        timestep [s].
+    duration
+        simulated time of every run [s].
+    configurations
+        each configuration's parameter overrides, (name, value) pairs, SI.
+    """
+
+    scene: str
+    scenario: str
+    integrator: str
+    dt: float
+    duration: float
+    configurations: tuple[tuple[tuple[str, Any], ...], ...]
+
+
+def run_chunk(payload: SweepChunk, nthread: int = 0) -> list[dict[str, Any]]:
     """Run one chunk of a sweep as one batched MuJoCo call; the sweep's rows for it.
 
     A module-level function of plain data, so dask ships it to workers: the
@@ -395,17 +423,17 @@ def run_chunk(payload: Mapping[str, Any], nthread: int = 0) -> list[dict[str, An
     Parameters
     ----------
     payload
-        {"scene", "scenario", "integrator", "dt" [s], "duration" [s], "configurations": [overrides]}.
+        the chunk.
     nthread
         batch threads (0: one per CPU).
     """
-    scene = scenes.get(payload["scene"])
-    chosen = scene.scenario(payload["scenario"])
-    dt, duration, integrator = payload["dt"], payload["duration"], payload["integrator"]
+    scene = scenes.get(payload.scene)
+    chosen = scene.scenario(payload.scenario)
+    dt, duration, integrator = payload.dt, payload.duration, payload.integrator
     steps = check_timing(dt, duration)
     prepared, jobs, rows = [], [], []
-    for overrides in payload["configurations"]:
-        params = scene.resolve(chosen, overrides)
+    for overrides in payload.configurations:
+        params = scene.resolve(chosen, dict(overrides))
         row: dict[str, Any] = {
             "parameters": params,
             "quantities": {},
@@ -568,14 +596,14 @@ def sweep(
     runner = resolve(executor)
     pieces = chunked(count, chunk_size)
     payloads = [
-        {
-            "scene": scene_obj.name,
-            "scenario": chosen.name,
-            "integrator": integrator,
-            "dt": float(dt),
-            "duration": float(duration),
-            "configurations": [overrides[i] for i in piece],
-        }
+        SweepChunk(
+            scene_obj.name,
+            chosen.name,
+            integrator,
+            float(dt),
+            float(duration),
+            tuple(tuple(overrides[i].items()) for i in piece),
+        )
         for piece in pieces
     ]
     results = runner.map(run_chunk, payloads, description="sweep", sizes=[len(p) for p in pieces], unit="run")

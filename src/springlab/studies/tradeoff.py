@@ -364,13 +364,7 @@ def sweep(
     runner = Executor(nthread=nthread, progress=False) if executor is None else executor
     pieces = chunked(len(pairs), CHUNK_RUNS)
     payloads = [
-        {
-            "scene": reference,
-            "scenario": chosen.name,
-            "parameters": dict(parameters),
-            "duration": duration,
-            "pairs": pairs[p.start : p.stop],
-        }
+        GridChunk(reference, chosen.name, tuple(parameters.items()), duration, tuple(pairs[p.start : p.stop]))
         for p in pieces
     ]
     outcomes = [o for part in runner.map(grid_chunk, payloads, description="tradeoff") for o in part]
@@ -417,16 +411,41 @@ def stability_limits(case: Case, integrators: Iterable[str]) -> dict[str, float 
     return {name: limit(name) for name in integrators}
 
 
-def grid_chunk(payload: dict[str, Any], nthread: int = 0) -> list[tuple[float | None, str, int, Verdict | None]]:
-    """One chunk of the grid as one batched call: per (integrator, dt) of payload["pairs"],
+@dataclasses.dataclass(frozen=True)
+class GridChunk:
+    """A chunk of the tradeoff grid: plain data, the worker rebuilds the model from the scene's MJCF.
+
+    Attributes
+    ----------
+    scene
+        the scene's name (a Scene object outside the catalogue runs only locally).
+    scenario
+        the scenario's name.
+    parameters
+        (name, value) pairs: the scene's overrides, SI.
+    duration
+        simulated time of every run [s].
+    pairs
+        (integrator, dt [s]) of each run.
+    """
+
+    scene: str | Scene
+    scenario: str
+    parameters: tuple[tuple[str, Any], ...]
+    duration: float
+    pairs: tuple[tuple[str, float], ...]
+
+
+def grid_chunk(payload: GridChunk, nthread: int = 0) -> list[tuple[float | None, str, int, Verdict | None]]:
+    """One chunk of the grid as one batched call: per (integrator, dt) of the payload's pairs,
     (max relative error [-] or None if it diverged, why it diverged, steps taken, the run's verdict).
 
     A module-level function of plain data for dask workers: the model is rebuilt here from the
-    scene's MJCF and payload["parameters"], exactly as the caller built it.
+    scene's MJCF and the payload's parameters, exactly as the caller built it.
     """
-    case = scenes.case(payload["scene"], payload["scenario"], payload["parameters"])
-    duration = payload["duration"]
-    jobs = [case.job(name, dt, check_timing(dt, duration)) for name, dt in payload["pairs"]]
+    case = scenes.case(payload.scene, payload.scenario, dict(payload.parameters))
+    duration = payload.duration
+    jobs = [case.job(name, dt, check_timing(dt, duration)) for name, dt in payload.pairs]
     out: list[tuple[float | None, str, int, Verdict | None]] = []
     for job, outcome in zip(jobs, run_batched(jobs, nthread=nthread)):
         if isinstance(outcome, DivergedError):

@@ -4,10 +4,12 @@
 confirmation runs, the integrator x timestep sweep, the converged RK4 reference's levels) to
 springlab.studies.executor. A compiled MjModel never travels; what does is one of
 
-* ``{"kind": "scene", "name": ...}``: a shipped scene, rebuilt on the worker as `audit.load` builds it;
-* ``{"kind": "mjcf", "xml": ..., "assets": {name: bytes}}``: the text of the model file and the bytes of
-  every file it names (includes, meshes, textures, height fields, skins, nested models), keyed as
-  MuJoCo looks them up, compiled on the worker by ``mujoco.MjModel.from_xml_string(xml, assets)``.
+* `SceneModel(name)`: a shipped scene, rebuilt on the worker as `audit.load` builds it;
+* `MjcfModel(name, xml, assets, digest)`: the text of the model file and the bytes of every file it
+  names (includes, meshes, textures, height fields, skins, nested models), keyed as MuJoCo looks them
+  up, compiled on the worker by ``mujoco.MjModel.from_xml_string(xml, assets)``.
+
+A chunk (`RunsChunk`) is that model and its runs (`AuditRun`: integrator, dt, steps and start).
 
 Before anything is sent, the caller compiles that payload itself and checks that every numeric field of
 the result equals the model it loaded from the path (only the recorded asset paths may differ): a file
@@ -23,13 +25,14 @@ Either way every run's trajectory is bit-identical: a run depends only on its ow
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import math
 import os
 import pathlib
 import posixpath
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, TypeAlias
 from xml.etree import ElementTree
 
 import mujoco
@@ -94,6 +97,73 @@ def _gather(path: pathlib.Path) -> dict[str, bytes]:
     return assets
 
 
+@dataclasses.dataclass(frozen=True)
+class SceneModel:
+    """A shipped scene by name: the worker rebuilds it with its default scenario and parameters."""
+
+    name: str
+
+
+@dataclasses.dataclass(frozen=True, eq=False)  # a mapping of bytes: compare fields, not payloads
+class MjcfModel:
+    """A model file as plain data: its text and the bytes of every file it names.
+
+    Attributes
+    ----------
+    name
+        the path it was loaded from (for messages).
+    xml
+        the file's text.
+    assets
+        file name as MuJoCo looks it up -> its bytes.
+    digest
+        SHA-256 of the text and the assets (the worker's cache key).
+    """
+
+    name: str
+    xml: str
+    assets: dict[str, bytes]
+    digest: str
+
+
+#: what `ship` sends: the model a worker rebuilds
+Shipped: TypeAlias = SceneModel | MjcfModel
+
+
+@dataclasses.dataclass(frozen=True, eq=False)  # arrays: compare fields, not results
+class AuditRun:
+    """One run of a chunk: integrator, timestep dt [s], steps, and the start (qpos, qvel, act, control; None:
+    the model's, as in `Setup`)."""
+
+    integrator: str
+    dt: float
+    steps: int
+    qpos: np.ndarray | None
+    qvel: np.ndarray | None
+    act: np.ndarray | None
+    control: np.ndarray | None
+
+    @classmethod
+    def of(cls, job: Job) -> AuditRun:
+        """A job's run as plain data (its model travels once per chunk)."""
+        setup = job.setup
+        qpos, qvel, act, control = (
+            None if a is None else np.asarray(a, float) for a in (setup.qpos, setup.qvel, setup.act, setup.control)
+        )
+        return cls(job.integrator, job.dt, job.steps, qpos, qvel, act, control)
+
+    def setup(self) -> Setup:
+        return Setup(self.qpos, self.qvel, self.act, self.control)
+
+
+@dataclasses.dataclass(frozen=True)
+class RunsChunk:
+    """A chunk of audit runs: the model a worker rebuilds and the runs on it."""
+
+    model: Shipped
+    runs: tuple[AuditRun, ...]
+
+
 def _digest(xml: str, assets: dict[str, bytes]) -> str:
     digest = hashlib.sha256(xml.encode())
     for key in sorted(assets):
@@ -106,14 +176,14 @@ def _scene_model(name: str) -> mujoco.MjModel:
     return scenes.case(name).model
 
 
-def compiled(payload: dict[str, Any]) -> mujoco.MjModel:
+def compiled(payload: Shipped) -> mujoco.MjModel:
     """The model a payload of `ship` describes (a scene rebuilt, an MJCF compiled), cached per process."""
-    if payload["kind"] == "scene":
-        return _scene_model(payload["name"])
-    key = payload["digest"]
+    if isinstance(payload, SceneModel):
+        return _scene_model(payload.name)
+    key = payload.digest
     if key not in _COMPILED:
         with quiet_mujoco():
-            model = mujoco.MjModel.from_xml_string(payload["xml"], payload["assets"])
+            model = mujoco.MjModel.from_xml_string(payload.xml, payload.assets)
         _COMPILED.clear()  # one audit at a time: keep the newest only
         _COMPILED[key] = model
     return _COMPILED[key]
@@ -139,7 +209,7 @@ def _same_model(a: Any, b: Any, depth: int = 0) -> bool:
     return True
 
 
-def ship(origin: tuple[str, str] | None, model: mujoco.MjModel) -> dict[str, Any]:
+def ship(origin: tuple[str, str] | None, model: mujoco.MjModel) -> Shipped:
     """The plain-data payload that rebuilds `model` on a dask worker (module docstring).
 
     Parameters
@@ -162,11 +232,11 @@ def ship(origin: tuple[str, str] | None, model: mujoco.MjModel) -> dict[str, Any
         )
     kind, where = origin
     if kind == "scene":
-        return {"kind": "scene", "name": where}
+        return SceneModel(where)
     path = pathlib.Path(where)
     xml = path.read_text(encoding="utf-8")
     assets = _gather(path)
-    payload = {"kind": "mjcf", "name": where, "xml": xml, "assets": assets, "digest": _digest(xml, assets)}
+    payload = MjcfModel(where, xml, assets, _digest(xml, assets))
     try:
         rebuilt = compiled(payload)
     except Exception as error:  # MuJoCo's ValueError: a file it names was not gathered
@@ -182,20 +252,13 @@ def ship(origin: tuple[str, str] | None, model: mujoco.MjModel) -> dict[str, Any
     return payload
 
 
-def _setup_data(setup: Setup) -> tuple[Any, ...]:
-    return tuple(
-        None if a is None else np.asarray(a, float) for a in (setup.qpos, setup.qvel, setup.act, setup.control)
-    )
-
-
-def runs_chunk(payload: dict[str, Any], nthread: int = 0) -> list[Trajectory | DivergedError]:
+def runs_chunk(payload: RunsChunk, nthread: int = 0) -> list[Trajectory | DivergedError]:
     """One chunk of audit runs as one batched MuJoCo call (a module-level function of plain data for dask).
 
-    payload: {"model": a `ship` payload, "runs": [(integrator, dt [s], steps, (qpos, qvel, act, control))]}.
     Returns per run its Trajectory or DivergedError, as `batch.run_batched`.
     """
-    model = compiled(payload["model"])
-    jobs = [Job(model, name, dt, steps, Setup(*setup)) for name, dt, steps, setup in payload["runs"]]
+    model = compiled(payload.model)
+    jobs = [Job(model, run.integrator, run.dt, run.steps, run.setup()) for run in payload.runs]
     return run_batched(jobs, nthread=nthread)
 
 
@@ -230,7 +293,7 @@ class Runner:
         threads of a local batch (0: one per CPU) when no executor is given.
     """
 
-    def __init__(self, executor: Executor | None, shipped: dict[str, Any] | None, nthread: int = 0):
+    def __init__(self, executor: Executor | None, shipped: Shipped | None, nthread: int = 0):
         self.executor, self.shipped = executor, shipped
         self.nthread = executor.nthread if executor is not None else nthread
 
@@ -244,13 +307,8 @@ class Runner:
         assert self.executor is not None and self.shipped is not None, "a distributed runner ships its model"
         assert all(job.stop is None for job in jobs), "audit runs have no stop condition"
         pieces = cut([job.steps for job in jobs])
-        payloads = [
-            {
-                "model": self.shipped,
-                "runs": [(j.integrator, j.dt, j.steps, _setup_data(j.setup)) for j in (jobs[i] for i in piece)],
-            }
-            for piece in pieces
-        ]
+        shipped = self.shipped
+        payloads = [RunsChunk(shipped, tuple(AuditRun.of(jobs[i]) for i in piece)) for piece in pieces]
         sizes = [len(piece) for piece in pieces]
         results = self.executor.map(runs_chunk, payloads, description=description, sizes=sizes, unit="run")
         return [outcome for part in results for outcome in part]

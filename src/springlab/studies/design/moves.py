@@ -155,10 +155,32 @@ def simulate(
     return spec.hooks.simulate(case, values, omega_dt=omega_dt, nthread=nthread, max_duration=max_duration)
 
 
-def moves_chunk(payload: Mapping[str, Any], nthread: int = 0) -> MoveRuns:
+@dataclasses.dataclass(frozen=True, eq=False)  # arrays: compare fields, not results
+class MovesChunk:
+    """A chunk of a design study: plain data, the worker rebuilds the scene's model (`simulate`).
+
+    Attributes
+    ----------
+    scene
+        the scene's name.
+    base
+        (name, value) pairs: the scene's parameters, SI.
+    values
+        (property, (n,) values) pairs: this chunk's configurations.
+    omega_dt
+        omega_n dt [-] of every simulation.
+    """
+
+    scene: str
+    base: tuple[tuple[str, float], ...]
+    values: tuple[tuple[str, np.ndarray], ...]
+    omega_dt: float
+
+
+def moves_chunk(payload: MovesChunk, nthread: int = 0) -> MoveRuns:
     """One chunk of a design study (a module-level function of plain data, for dask workers):
-    `simulate` of payload["scene"] on payload["base"], payload["values"] and payload["omega_dt"]."""
-    return simulate(payload["scene"], payload["base"], payload["values"], omega_dt=payload["omega_dt"], nthread=nthread)
+    `simulate` of the payload's scene on its base, values and omega_dt."""
+    return simulate(payload.scene, dict(payload.base), dict(payload.values), omega_dt=payload.omega_dt, nthread=nthread)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -205,12 +227,12 @@ def run_moves(
     n = len(next(iter(values.values())))
     pieces = chunked(n, chunk_size)
     payloads = [
-        {
-            "scene": scene.name,
-            "base": dict(base),
-            "values": {name: np.asarray(v)[piece.start : piece.stop] for name, v in values.items()},
-            "omega_dt": omega_dt,
-        }
+        MovesChunk(
+            scene.name,
+            tuple(base.items()),
+            tuple((name, np.asarray(v)[piece.start : piece.stop]) for name, v in values.items()),
+            omega_dt,
+        )
         for piece in pieces
     ]
     start = _time.perf_counter()

@@ -115,16 +115,17 @@ def analyze(spec: Mapping[str, Any], output: np.ndarray, seed: int = 0) -> dict[
 def evaluate(
     function: Callable[..., np.ndarray],
     rows: np.ndarray,
-    payload: Mapping[str, Any] | None = None,
+    chunk_of: Callable[[np.ndarray], Any],
     *,
     executor: Executor | None = None,
     chunk_size: int = CHUNK_CONFIGURATIONS,
     description: str = "sobol",
 ) -> np.ndarray:
-    """function({**payload, "rows": chunk}, nthread) over `rows` cut into chunks on the executor; (n,) outputs in order."""
+    """function(chunk_of(part), nthread) over the parts of `rows` cut into chunks on the executor; (n,) outputs
+    in order (`chunk_of` makes a part's payload, e.g. IshigamiChunk with its constants bound)."""
     runner = resolve(executor)
     pieces = chunked(len(rows), chunk_size)
-    payloads = [{**(payload or {}), "rows": np.asarray(rows[p.start : p.stop])} for p in pieces]
+    payloads = [chunk_of(np.asarray(rows[p.start : p.stop])) for p in pieces]
     parts = runner.map(function, payloads, description=description, sizes=[len(p) for p in pieces], unit="run")
     return np.concatenate(parts) if parts else np.empty(0)
 
@@ -132,10 +133,19 @@ def evaluate(
 # -- a function with known indices: the check that the pipeline is right ------------------------
 
 
-def ishigami_chunk(payload: Mapping[str, Any], nthread: int = 0) -> np.ndarray:
-    """Ishigami function sin x1 + a sin^2 x2 + b x3^4 sin x1 of payload["rows"] (n, 3), x in [-pi, pi]^3."""
-    x = np.asarray(payload["rows"], float)
-    a, b = payload["a"], payload["b"]
+@dataclasses.dataclass(frozen=True, eq=False)  # arrays: compare fields, not results
+class IshigamiChunk:
+    """A chunk of the Ishigami check: rows (n, 3) of x in [-pi, pi]^3 and the function's constants a, b [-]."""
+
+    rows: np.ndarray
+    a: float
+    b: float
+
+
+def ishigami_chunk(payload: IshigamiChunk, nthread: int = 0) -> np.ndarray:
+    """Ishigami function sin x1 + a sin^2 x2 + b x3^4 sin x1 of the payload's rows (n, 3), x in [-pi, pi]^3."""
+    x = np.asarray(payload.rows, float)
+    a, b = payload.a, payload.b
     return np.sin(x[:, 0]) + a * np.sin(x[:, 1]) ** 2 + b * x[:, 2] ** 4 * np.sin(x[:, 0])
 
 
@@ -145,18 +155,49 @@ def ishigami(
     """Sobol indices of the Ishigami function through the same sampling, executor and analysis."""
     spec = {"num_vars": 3, "names": ["x1", "x2", "x3"], "bounds": [[-math.pi, math.pi]] * 3}
     rows = sample(spec, base_samples, seed)
-    output = evaluate(ishigami_chunk, rows, {"a": a, "b": b}, executor=executor, chunk_size=4096)
+    output = evaluate(
+        ishigami_chunk, rows, functools.partial(IshigamiChunk, a=a, b=b), executor=executor, chunk_size=4096
+    )
     return analyze(spec, output, seed)
 
 
 # -- a scene's design question ------------------------------------------------------------------
 
 
-def positioning_chunk(payload: Mapping[str, Any], nthread: int = 0) -> np.ndarray:
-    """Positioning time [s] of each row of exponents u (n, D) in payload["rows"] (one batched call)."""
-    _, spec = moves.declaration(payload["scene"])
-    values = properties(spec.hooks.defaults(payload["base"]), payload["spans"], payload["names"], payload["rows"])
-    runs = moves.simulate(payload["scene"], payload["base"], values, omega_dt=payload["omega_dt"], nthread=nthread)
+@dataclasses.dataclass(frozen=True, eq=False)  # arrays: compare fields, not results
+class PositioningChunk:
+    """A chunk of a scene's Sobol study: plain data, the worker rebuilds the scene's model.
+
+    Attributes
+    ----------
+    rows
+        (n, D) exponents u [-] of `names`.
+    scene
+        the scene's name.
+    base
+        (name, value) pairs: the scene's parameters, SI.
+    names
+        the D sampled properties.
+    spans
+        (property, span) pairs [-]: a property is default x span^u.
+    omega_dt
+        omega_n dt [-] of every simulation.
+    """
+
+    rows: np.ndarray
+    scene: str
+    base: tuple[tuple[str, float], ...]
+    names: tuple[str, ...]
+    spans: tuple[tuple[str, float], ...]
+    omega_dt: float
+
+
+def positioning_chunk(payload: PositioningChunk, nthread: int = 0) -> np.ndarray:
+    """Positioning time [s] of each row of exponents u (n, D) in the payload's rows (one batched call)."""
+    _, spec = moves.declaration(payload.scene)
+    base = dict(payload.base)
+    values = properties(spec.hooks.defaults(base), dict(payload.spans), list(payload.names), payload.rows)
+    runs = moves.simulate(payload.scene, base, values, omega_dt=payload.omega_dt, nthread=nthread)
     return runs.positioning_time_s
 
 
@@ -436,7 +477,14 @@ def run_sobol(
     times = evaluate(
         positioning_chunk,
         rows,
-        {"scene": found.name, "base": dict(base), "names": names, "spans": spans, "omega_dt": omega_dt},
+        functools.partial(
+            PositioningChunk,
+            scene=found.name,
+            base=tuple(base.items()),
+            names=tuple(names),
+            spans=tuple(spans.items()),
+            omega_dt=omega_dt,
+        ),
         executor=executor,
         chunk_size=chunk_size,
         description="sobol",

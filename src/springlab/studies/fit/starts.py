@@ -17,8 +17,8 @@ cycles and misses the rest. `fit(..., starts=N)` therefore runs N independent
   sets them in its first step wherever the nonlinear ones start.
 
 Each start is one chunk on springlab's Executor (springlab.studies.executor): the
-payload is plain data (scene and scenario names, the scene's parameters, the
-record's arrays, the start's values, the bounds, the grid) and `run_start`
+payload is plain data (`StartChunk`: scene and scenario names, the scene's parameters, the
+record, the start's values, the bounds, the grid) and `run_start`
 rebuilds the scene's MjSpec on whichever process runs it. Every start runs on
 the same simulation grid so the final costs compare like for like: start 1's
 grid (chosen for the fit's accuracy at its values, springlab.studies.fit.engine), made finer where needed
@@ -142,15 +142,59 @@ def grid_rate(problem: Problem, bounds: dict[str, tuple[float, float]]) -> float
     return fastest
 
 
-def run_start(payload: dict[str, Any], nthread: int = 0) -> dict[str, Any]:
+@dataclasses.dataclass(frozen=True)
+class StartChunk:
+    """One start of a multi-start fit: plain data, the worker rebuilds the scene's model.
+
+    Attributes
+    ----------
+    scene
+        the scene's name.
+    scenario
+        the scenario's name.
+    base
+        (name, value) pairs: the scene's parameters, SI.
+    record
+        the measured record (its arrays travel with it).
+    free
+        the fitted names, in order.
+    grid_start
+        (name, value) pairs: start 1's values, which set every start's simulation grid.
+    bounds
+        (name, (low, high)) box bounds of the free names [the name's unit].
+    modal
+        whether the fit is in modal names (omega_n, zeta).
+    force
+        the step force of a forced record [N].
+    rate
+        the fastest pole in the box the grid keeps stable [1/s].
+    index
+        this start's place, 0 for start 1.
+    start
+        (name, value) pairs: this start's values.
+    """
+
+    scene: str
+    scenario: str
+    base: tuple[tuple[str, float], ...]
+    record: fit_data.Record
+    free: tuple[str, ...]
+    grid_start: tuple[tuple[str, float], ...]
+    bounds: tuple[tuple[str, tuple[float, float]], ...]
+    modal: bool
+    force: float
+    rate: float
+    index: int = 0
+    start: tuple[tuple[str, float], ...] = ()
+
+
+def run_start(payload: StartChunk, nthread: int = 0) -> dict[str, Any]:
     """One start's optimization; a module-level function of plain data (dask ships it to workers).
 
     Parameters
     ----------
     payload
-        {"index", "scene", "scenario", "base" (scene parameters, SI), "record" (springlab.studies.fit.data.Record's
-        fields), "free", "grid_start" (start 1's values: the grid), "start" (this start's values), "bounds",
-        "modal", "force" [N], "rate" (the fastest pole in the box the grid keeps stable, 1/s)}.
+        the start.
     nthread
         rollout threads (1 on a dask worker; otherwise the fit's own choice).
 
@@ -162,16 +206,15 @@ def run_start(payload: dict[str, Any], nthread: int = 0) -> dict[str, Any]:
         `status`, `iterations`, `scale`, `cost` (half the sum of squared scaled residuals, inf if not finite),
         `residual_rms` [signal unit], `rollouts`, `rollout_time_s`, `wall_time_s` [s].
     """
-    how = model_of(scenes.get(payload["scene"]))
-    chosen = how.scene.scenario(payload["scenario"])
-    record = fit_data.Record(**payload["record"])
-    free = list(payload["free"])
-    problem = Problem(
-        how, chosen, dict(payload["base"]), record, free, payload["grid_start"], payload["modal"], payload["force"]
-    )
-    problem.set_grid(payload["grid_start"], stable_rate=payload["rate"])
-    problem.start = dict(payload["start"])
-    problem.bounds = {name: tuple(b) for name, b in payload["bounds"].items()}
+    how = model_of(scenes.get(payload.scene))
+    chosen = how.scene.scenario(payload.scenario)
+    record = payload.record
+    free = list(payload.free)
+    grid_start = dict(payload.grid_start)
+    problem = Problem(how, chosen, dict(payload.base), record, free, grid_start, payload.modal, payload.force)
+    problem.set_grid(grid_start, stable_rate=payload.rate)
+    problem.start = dict(payload.start)
+    problem.bounds = {name: (low, high) for name, (low, high) in payload.bounds}
     if nthread == 1:
         problem.threads = 1
     try:
@@ -179,7 +222,7 @@ def run_start(payload: dict[str, Any], nthread: int = 0) -> dict[str, Any]:
     except (ValueError, ArithmeticError) as error:  # a candidate MuJoCo could not simulate: this start failed
         x = np.array([problem.start[n] for n in free])
         return {
-            "index": payload["index"],
+            "index": payload.index,
             "start": dict(problem.start),
             "x": x,
             "failed": f"{type(error).__name__}: {error}",
@@ -195,7 +238,7 @@ def run_start(payload: dict[str, Any], nthread: int = 0) -> dict[str, Any]:
     residual = np.concatenate(solved["residuals"])
     cost = 0.5 * float(residual @ residual)
     return {
-        "index": payload["index"],
+        "index": payload.index,
         "start": dict(problem.start),
         "x": np.asarray(solved["x"], float),
         "failed": "",
@@ -231,22 +274,22 @@ def run(problem: Problem, count: int, executor: Executor | None = None) -> tuple
     """
     free, record = problem.free, problem.record
     bounds = {name: problem.how.bounds(name, problem.start[name], record) for name in free}
-    common = {
-        "scene": problem.how.name,
-        "scenario": problem.scenario.name,
-        "base": dict(problem.base),
-        "record": {f.name: getattr(record, f.name) for f in dataclasses.fields(record)},
-        "free": list(free),
-        "grid_start": dict(problem.start),
-        "bounds": bounds,
-        "modal": problem.modal,
-        "force": problem.force,
-    }
     rate = grid_rate(problem, bounds)
+    common = StartChunk(
+        scene=problem.how.name,
+        scenario=problem.scenario.name,
+        base=tuple(problem.base.items()),
+        record=record,
+        free=tuple(free),
+        grid_start=tuple(problem.start.items()),
+        bounds=tuple(bounds.items()),
+        modal=problem.modal,
+        force=problem.force,
+        rate=rate,
+    )
     problem.set_grid(problem.start, stable_rate=rate)
-    common["rate"] = rate
     starts = sample(problem.start, bounds, free, count)
-    payloads = [dict(common, index=i, start=values) for i, values in enumerate(starts)]
+    payloads = [dataclasses.replace(common, index=i, start=tuple(values.items())) for i, values in enumerate(starts)]
     runner = resolve(executor)
     results = runner.map(run_start, payloads, description="fit starts", unit="start")
     costs = np.array([r["cost"] for r in results])
