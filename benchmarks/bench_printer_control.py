@@ -8,6 +8,10 @@
    (springlab.sim.sampled.run_sampled: mj_forward, a Python law and mj_step(nstep=2) per sample), of MuJoCo's own
    position actuator doing the continuous PD in one rollout, and of the open-loop force move in one rollout,
    all at dt = 0.1 ms. Best of several, measured alternately.
+3. The same through the scene (issue 35's scenarios): `springlab.run("printer_head", "resonance_test")` end to
+   end (the chirp run, the exact held reference and its tolerance, the fit, the choice, the verifying move_<shaper>
+   run), and the stepping of one simulated second of `feedback_motor` (the controller in Case.simulate's loop,
+   every step recorded) against `move`'s (one rollout).
 
 Run: PYTHONPATH=src python benchmarks/bench_printer_control.py
 """
@@ -21,6 +25,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
+import springlab
 import springlab.sim.model_files
 from springlab.exact import positioning, resonance, sampled_loop, shaping
 from springlab.scenes.printer_head import control
@@ -104,6 +109,14 @@ def one_second(kind: str) -> float:
     return time.perf_counter() - start
 
 
+def scene_second(scenario: str) -> float:
+    """Wall time [s] of the stepping alone (Trajectory.wall_time_s) of one simulated second of a printer_head case."""
+    from springlab import scenes
+
+    case = scenes.get("printer_head").case(scenario)
+    return case.simulate("rk4", DT, 1.0).wall_time_s
+
+
 def main() -> None:
     elapsed, chosen, residual = resonance_test_to_verified_move()
     print(
@@ -120,6 +133,20 @@ def main() -> None:
     print(
         f"the sampled loop costs {best['sampled'] / best['open loop']:.1f}x the open-loop move and"
         f" {best['sampled'] / best['position actuator']:.1f}x MuJoCo's position actuator"
+    )
+    start = time.perf_counter()
+    result = springlab.run("printer_head", "resonance_test")
+    elapsed = time.perf_counter() - start
+    q = result.quantities
+    print(
+        f"springlab run printer_head resonance_test (chirp, exact reference, fit, choice, verifying run):"
+        f" {elapsed:.2f} s; measured {q['belt_frequency_hz_measured']:.4f} Hz"
+        f" (+-{q['belt_frequency_ci95_width_hz'] / 2:.4f}), chose {q['chosen_shaper']}, {result.verdict}"
+    )
+    scene = {name: min(scene_second(name) for _ in range(5)) for name in ("feedback_motor", "move")}
+    print(
+        f"one simulated second through the scene: feedback_motor {scene['feedback_motor'] * 1e3:.1f} ms,"
+        f" move {scene['move'] * 1e3:.1f} ms: the closed loop costs {scene['feedback_motor'] / scene['move']:.1f}x"
     )
 
 

@@ -2,7 +2,8 @@
 
 One bang-bang move of the default carriage through the scene (validated against the exact 2-DOF
 solution), split into the move and the settling, beside the analytic estimate and the
-phase-independent worst case 2 sqrt(D M / F) + ln(4 F m_c m_m / (M^2 k band)) / (zeta omega_n).
+phase-independent worst case 2 sqrt(D M / F) + ln(A_w / band) / (zeta omega_n), A_w the damped belt's largest
+ring-down after the move whatever its phase.
 The second question is scenarios/printer_which_properties.py.
 
 Run: python scenarios/printer_how_fast.py
@@ -29,10 +30,12 @@ print(
     f"positioned in {q['positioning_time_s'] * 1e3:.1f} ms (estimate {q['positioning_time_estimate_s'] * 1e3:.1f} ms)"
 )
 
-# the worst case over the vibration's phase: residual envelope 4 F m_c m_m / (M^2 k)
-m_c, m_m, k, force = p["carriage_mass"], p["motor_mass"], p["belt_stiffness"], p["drive_force"]
+# the worst case over the vibration's phase: the damped belt's envelope after a move of T = 2 sqrt(D M / F),
+# (F / M) (1 + e^(-zeta omega_n T / 2))^2 / (omega_n^2 sqrt(1 - zeta^2)) (undamped: 4 F m_c m_m / (M^2 k))
+m_c, m_m, force = p["carriage_mass"], p["motor_mass"], p["drive_force"]
 total = m_c + m_m
 omega, zeta = 2 * math.pi * q["natural_frequency_hz"], q["damping_ratio"]
-envelope = 4 * force * m_c * m_m / (total**2 * k)
-worst = q["minimum_move_time_s"] + math.log(envelope / p["positioning_band"]) / (zeta * omega)
-print(f"worst case over the vibration's phase (envelope {envelope * 1e6:.0f} um): {worst * 1e3:.1f} ms")
+shortest = q["minimum_move_time_s"]
+envelope = force / total * (1 + math.exp(-zeta * omega * shortest / 2)) ** 2 / (omega**2 * math.sqrt(1 - zeta**2))
+worst = shortest + math.log(envelope / p["positioning_band"]) / (zeta * omega)
+print(f"worst case over the vibration's phase (envelope {envelope * 1e6:.1f} um): {worst * 1e3:.1f} ms")

@@ -16,6 +16,7 @@ import dataclasses
 import importlib
 import json
 import math
+import random
 
 import mujoco
 import numpy as np
@@ -229,6 +230,24 @@ def test_the_pick_is_the_cheapest_in_counted_work_and_no_timer_moves_it(chain_au
     assert (again.recommendation.setting, again.recommendation.error) == (pick.setting, pick.error)
     assert [r.setting for r in again.pareto] == [r.setting for r in result.pareto]
     assert again.runs[0].time_s == fake[again.runs[0].integrator] * again.runs[0].steps  # reported beside
+
+
+def test_the_pick_and_front_do_not_move_when_the_timer_returns_noise(monkeypatch):
+    # every measured cost per step is drawn at random over four decades: the ranking reads counted work only
+    audit_module = importlib.import_module("springlab.studies.audit.audit")
+    noise = random.Random(11)
+    monkeypatch.setattr(audit_module, "cost_per_step", lambda model, start, name, dt: noise.uniform(1e-7, 1e-3))
+    options = dict(integrators=["euler", "implicitfast", "discrete", "rk4"], tol=1e-3)
+    first, second = (audit(mujoco.MjModel.from_xml_string(chain_xml(2, 100.0, 1.0, 0.0)), **options) for _ in "12")
+    assert first.recommendation.found and first.recommendation.setting == second.recommendation.setting
+    assert first.recommendation.text == second.recommendation.text
+    assert (first.recommendation.ties, first.recommendation.near) == (
+        second.recommendation.ties,
+        second.recommendation.near,
+    )
+    assert [r.setting for r in first.pareto] == [r.setting for r in second.pareto]
+    # the noise reached the measured times: they differ, the answer does not
+    assert [r.time_s for r in first.runs] != [r.time_s for r in second.runs]
 
 
 def test_the_audit_cannot_be_changed_once_returned(chain_audit):

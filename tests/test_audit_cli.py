@@ -37,6 +37,24 @@ def test_a_setting_that_misses_tol_is_a_finding_exit_1_with_outputs(tmp_path, ca
     assert "misses tol" in capsys.readouterr().out
 
 
+def test_the_same_audit_command_twice_gives_the_same_recommendation_and_front(tmp_path, capsys):
+    # a real audit, real timers: in the slider's sweep euler, implicit and implicitfast are equal in error
+    # and in counted work at every dt, so only their measured times told them apart when the front read them
+    picks = []
+    for out in (tmp_path / "first", tmp_path / "second"):
+        assert main(["audit", "slider", "--duration", "1", "--output", str(out)]) == 0
+        data = json.loads((out / "audit.json").read_text())
+        picks.append(
+            (
+                {k: v for k, v in data["recommendation"].items() if k != "wall_time_s"},
+                [(r["integrator"], r["dt"], r["cost"]) for r in data["pareto"]],
+                capsys.readouterr().out.splitlines()[3],  # "cheapest meeting tol ...": the pick in words
+            )
+        )
+    assert picks[0][0]["verified"] and picks[0][1]
+    assert picks[0] == picks[1]
+
+
 @pytest.mark.parametrize(
     "args, message",
     [

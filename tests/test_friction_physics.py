@@ -184,3 +184,14 @@ def test_the_default_scenarios_exact_quantities_are_the_textbook_numbers():
     a = 9.81 * (math.sin(math.radians(30)) - 0.3 * math.cos(math.radians(30)))
     assert slide["acceleration_m_s2_exact"] == pytest.approx(a, rel=1e-15)
     assert slide["distance_m_exact"] == pytest.approx(0.5 * a * 0.5**2, rel=1e-12)  # in the 0.5 s run
+
+
+def test_a_run_cut_before_the_first_turn_counts_no_exact_half_cycle_and_passes():
+    # 0.04 s of the coulomb decay: the block is still on its first slide (half a period is pi / omega = 0.314 s),
+    # so neither MuJoCo's block nor the exact one has turned yet
+    from springlab import run
+
+    result = run("friction", "coulomb_decay", duration=0.04)
+    assert result.quantities["half_cycles_exact"] == 0 == result.quantities["half_cycles"]
+    assert result.quantities["half_period_s"] > 0.04
+    assert result.passed

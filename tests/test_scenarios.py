@@ -10,8 +10,9 @@ SCRIPTS = sorted((pathlib.Path(__file__).parents[1] / "scenarios").glob("*.py"))
 #: scripts that take more than ~5 s on one core (a chaotic run)
 SLOW = {"nonlinear_forced_duffing"}
 #: arguments that keep a script's run short where its default is a whole study: the design study's 3^4
-#: grid instead of 7^4 (the same code path; its physics is tested in tests/test_design.py)
-ARGS = {"printer_which_properties": ["--levels", "3"]}
+#: grid instead of 7^4 (the same code path; its physics is tested in tests/test_design.py), one carriage's
+#: answer table instead of two (tests/test_printer_control_scene.py runs both)
+ARGS = {"printer_which_properties": ["--levels", "3"], "printer_positioning_table": ["--preset", "inkjet"]}
 
 
 @pytest.mark.parametrize(

@@ -240,6 +240,84 @@ def design_step(state: DemoState) -> list[Artifact]:
     ]
 
 
+#: the printer head's control section: where it writes, and the side-by-side video's length [s of simulation]
+CONTROL_FOLDER = pathlib.Path("printer_head") / "control"
+CONTROL_CLIP_S = 0.1
+
+
+def control_step(state: DemoState) -> list[Artifact]:
+    """The printer head with control (issue 35): the answer table for the inkjet and a 3D-printer axis, the
+    shapers' residual vibration with MuJoCo's points, the loops' step responses against the exact sampled loop,
+    and the unshaped and ZV-shaped moves side by side in one video."""
+    from springlab.plots import control as control_plots  # here: matplotlib, GL only when this step runs
+    from springlab.render import scale as render_scale
+    from springlab.render.video import render_video
+    from springlab.scenes.printer_head import answers, figures
+
+    folder = state.out / CONTROL_FOLDER
+    start = time.perf_counter()
+    tables = [answers.positioning_table(name) for name in answers.PRESETS]
+    files.write_text_files(folder, {f"answers_{t.preset}.json": files.dumps(t.to_dict()) + "\n" for t in tables})
+    written = [
+        Artifact(
+            str(CONTROL_FOLDER / f"answers_{table.preset}.json"),
+            "data",
+            table.question,
+            "printer_head",
+            answer="\n".join(table.sentences()),
+        )
+        for table in tables
+    ]
+    state.timings.append(("printer head control: the answer tables", time.perf_counter() - start))
+    start = time.perf_counter()
+    curves, responses = figures.shaper_curves(), figures.step_responses()
+    control_plots.write(curves, responses, folder)
+    written += [
+        Artifact(
+            str(CONTROL_FOLDER / "shapers.png"),
+            "plot",
+            "How much of the belt's vibration does each input shaper leave when the belt's frequency is off by up"
+            " to 30 %? (exact curves, MuJoCo's runs as points)",
+            "printer_head",
+        ),
+        Artifact(
+            str(CONTROL_FOLDER / "step_response.png"),
+            "plot",
+            "Does MuJoCo run the sampled PD loop as the exact sampled-data loop says? (a 1 mm step, each encoder)",
+            "printer_head",
+        ),
+    ]
+    state.timings.append(("printer head control: the figures", time.perf_counter() - start))
+    start = time.perf_counter()
+    film = figures.side_by_side(duration=CONTROL_CLIP_S)
+    slow = render_scale.default_slow_motion(CONTROL_CLIP_S, DEMO_VIDEO["fps"], [200.0])
+    render_video(
+        film.model,
+        film.time,
+        film.qpos,
+        folder / "shaped_vs_unshaped.mp4",
+        fps=DEMO_VIDEO["fps"],
+        width=DEMO_VIDEO["width"],
+        height=DEMO_VIDEO["height"],
+        label=film.label,
+        progress=False,
+        slow_motion=slow,
+        exaggerate=1.0,
+    )
+    written.append(
+        Artifact(
+            str(CONTROL_FOLDER / "shaped_vs_unshaped.mp4"),
+            "video",
+            f"the minimum-time move (top) and the ZV-shaped move (bottom) side by side: each carriage's and"
+            f" motor's deviation from their centre of mass (the belt's ringing) drawn {film.exaggeration:g} times"
+            f" larger (the ±10 µm band is ±{film.exaggeration * 1e-2:g} mm), 1/{slow:g} speed",
+            "printer_head",
+        )
+    )
+    state.timings.append(("printer head control: the video", time.perf_counter() - start))
+    return written
+
+
 #: the demo's refine study: the first sizes a scene declares (the rest take minutes) and this tolerance
 DEMO_REFINE_SIZES = 5
 DEMO_REFINE_TOL = 1e-3
@@ -458,6 +536,7 @@ STEPS: tuple[Callable[[DemoState], list[Artifact]], ...] = (
     refine_step,
     frequency_step,
     random_load_step,
+    control_step,
     interactive_step,
 )
 #: steps that run after every step in STEPS (the report lists everything)

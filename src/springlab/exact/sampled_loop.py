@@ -9,14 +9,16 @@ Controller, the difference equation a firmware runs at each sample k (no computa
 from t_k to t_{k+1}):
 
     e_k = r_k - y_k
-    I_k = I_{k-1} + T e_k                               integral: rectangle rule including the current error
-    u_k = kp e_k - kd (y_k - y_{k-1}) / T + ki I_k      derivative: backward difference, on the measurement
+    I_k = I_{k-1} + T e_k                                      integral: rectangle rule including the current error
+    u_k = F_k + kp e_k + kd (v_k - (y_k - y_{k-1}) / T) + ki I_k   derivative: backward difference of y
 
-The derivative acts on the measurement, not the error, so a step of the reference does not kick the force
-(y_{-1} = y_0: the first difference is 0). Its transfer from -y to u is
-K(z) = kp + kd (z - 1) / (T z) + ki T z / (z - 1), and the loop transfer is L(z) = K(z) P(z) with
-P(z) = C (z I - Phi)^-1 Gamma; the closed loop's characteristic equation 1 + L(z) = 0 is the state-space
-closed loop's (`closed_loop`) eigenvalue problem.
+with y_{-1} = y_0 (the first difference is 0). The derivative acts on the measurement, not on the error, so a
+step of the reference does not kick the force; a reference that moves (a planner's path) brings its own rate
+v_k and force F_k, fed forward (`PidLaw`, which may also clip u_k to the motor's limit). For a reference that
+stands still (v = F = 0) the law is the classic one, and `closed_loop`, `step_response` and the margins
+describe it. From -y to u it is K(z) = kp + kd (z - 1) / (T z) + ki T z / (z - 1), and the loop transfer is
+L(z) = K(z) P(z) with P(z) = C (z I - Phi)^-1 Gamma; the closed loop's characteristic equation 1 + L(z) = 0 is
+the state-space closed loop's (`closed_loop`) eigenvalue problem.
 
 Gain margin: the factor g by which kp, kd and ki together can grow before a closed-loop pole leaves the unit
 circle (`critical_gain`, by bisection on the spectral radius, to 1e-12 relative), cross-checked by
@@ -29,6 +31,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -42,6 +45,8 @@ __all__ = [
     "PidLaw",
     "closed_loop",
     "critical_gain",
+    "held_run",
+    "held_run_error",
     "loop_response",
     "loop_transfer",
     "margins",
@@ -135,23 +140,31 @@ class Pid:
 class PidLaw:
     """The PID difference equation run sample by sample on measurements (a MuJoCo loop's controller).
 
-    `update(y, r)` takes the measurement y_k [m] and the reference r_k [m] and returns u_k [N]; the first call
-    takes y_{-1} = y_0.
+    `update(y, r, feedforward, rate)` takes the measurement y_k [m], the reference r_k [m], the force F_k [N]
+    and the reference's rate v_k [m/s] fed forward, and returns u_k [N], the module docstring's law, clipped to
+    +-`limit` [N] (the motor's force limit, as MuJoCo's ctrlrange clips; no anti-windup: the integral keeps
+    integrating the error). The first call takes y_{-1} = y_0. `saturated` says whether the last update was
+    clipped.
     """
 
-    def __init__(self, pid: Pid) -> None:
+    def __init__(self, pid: Pid, limit: float = math.inf) -> None:
         self.pid = pid
+        self.limit = limit
         self.previous: float | None = None
         self.integral = 0.0
+        self.saturated = False
 
-    def update(self, measurement: float, reference: float) -> float:
-        """u_k [N] of the measurement y_k [m] and reference r_k [m] (module docstring's law)."""
+    def update(self, measurement: float, reference: float, feedforward: float = 0.0, rate: float = 0.0) -> float:
+        """u_k [N] of y_k [m], r_k [m], F_k [N] and v_k [m/s] (class docstring)."""
         pid = self.pid
         previous = measurement if self.previous is None else self.previous
         error = reference - measurement
         self.integral += pid.period * error
         self.previous = measurement
-        return pid.kp * error - pid.kd * (measurement - previous) / pid.period + pid.ki * self.integral
+        velocity = (measurement - previous) / pid.period
+        force = feedforward + pid.kp * error + pid.kd * (rate - velocity) + pid.ki * self.integral
+        self.saturated = abs(force) > self.limit
+        return float(np.clip(force, -self.limit, self.limit))
 
 
 def closed_loop(
@@ -309,3 +322,94 @@ def critical_gain(phi: np.ndarray, gamma: np.ndarray, output: np.ndarray, pid: P
         else:
             high = middle
     return 0.5 * (low + high)
+
+
+def held_run(
+    a: np.ndarray,
+    b: np.ndarray,
+    dt: float,
+    steps: int,
+    x0: np.ndarray,
+    control: Callable[[int, np.ndarray], float],
+    steps_per_sample: int = 1,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The exact motion of x' = A x + B u with u held: set from the exact state at each sample, held between.
+
+    Every `steps_per_sample` steps of dt [s] from step 0, u_k = control(k, x) [input units] of the exact state
+    x at that sample; one step is the exact map (`zoh` at dt), so the motion is exact at every step whatever
+    the controller (a clipped law, a feedforward, an open-loop sequence).
+
+    Returns
+    -------
+    tuple
+        (x at steps 0..steps, (steps + 1, n); u held over each step, (steps,)).
+    """
+    phi, gamma = zoh(a, b, dt)
+    x = np.empty((steps + 1, len(a)))
+    u = np.empty(steps)
+    x[0] = x0
+    force = 0.0
+    for j in range(steps):
+        if j % steps_per_sample == 0:
+            force = float(control(j // steps_per_sample, x[j]))
+        u[j] = force
+        x[j + 1] = phi @ x[j] + gamma[:, 0] * force
+    return x, u
+
+
+def held_run_error(
+    a: np.ndarray,
+    b: np.ndarray,
+    dt: float,
+    order: int,
+    constant: float,
+    states: np.ndarray,
+    forces: np.ndarray,
+    steps_per_sample: int = 1,
+    response: Callable[[int, np.ndarray], float] | None = None,
+) -> np.ndarray:
+    """The leading-order global error [state units] of an order-p integrator on a `held_run`, loop included.
+
+    An order-p one-step method commits the local error -C h^(p+1) A_z^(p+1) z_j on the autonomous system
+    z = (x, u), A_z = [[A, B], [0, 0]] (u held over the step: a generator state with u' = 0), C the
+    integrator's constant (RK4 1/120, first-order methods 1/2; springlab.sim.simulate.ERROR_CONSTANTS). The
+    errors are carried by the exact step map, e_(j+1) = Phi e_j + Gamma du_j + delta_j, and where the control
+    is set from a measurement the error comes back through the law: du_k = response(k, e) [input units] at
+    each sample (the law's linear response to the state error e, including its memory; 0 where it is
+    clipped). Without `response` the control is open-loop (du = 0), and e is compare's C h^p t A^(p+1) z(t)
+    summed exactly across the held input's switches.
+
+    Parameters
+    ----------
+    a, b
+        A [1/s] (n, n) and B (n, 1).
+    dt
+        Step h [s].
+    order, constant
+        The integrator's order p and local-error constant C [-].
+    states, forces
+        The exact run (`held_run`): x (m + 1, n) and u (m,).
+    steps_per_sample
+        Steps per sample of the law.
+    response
+        du_k = response(k, e_k) of the law at sample k, or None.
+
+    Returns
+    -------
+    np.ndarray
+        (m + 1, n) signed error vectors, 0 at step 0.
+    """
+    n = len(a)
+    phi, gamma = zoh(a, b, dt)
+    generator = np.zeros((n + 1, n + 1))
+    generator[:n, :n], generator[:n, n] = a, np.asarray(b, dtype=float).reshape(-1)
+    power = np.linalg.matrix_power(generator * dt, order + 1)[:n]  # (h A_z)^(p+1), its x rows
+    augmented = np.column_stack([states[:-1], forces])
+    local = -constant * augmented @ power.T
+    error = np.zeros_like(states)
+    change = 0.0
+    for j in range(len(forces)):
+        if j % steps_per_sample == 0:
+            change = 0.0 if response is None else float(response(j // steps_per_sample, error[j]))
+        error[j + 1] = phi @ error[j] + gamma[:, 0] * change + local[j]
+    return error

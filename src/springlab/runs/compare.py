@@ -81,14 +81,8 @@ import scipy.linalg
 
 from springlab.errors import BadInputError
 from springlab.scenes.base import Reference
-from springlab.sim.simulate import ORDERS
+from springlab.sim.simulate import ERROR_CONSTANTS, ORDERS, ROUNDOFF_PER_STEP, SAFETY
 
-#: safety factor on the predicted leading-order error
-SAFETY = 2.0
-#: leading local-error constants C: first-order methods 1/2, RK4 1/120
-ERROR_CONSTANTS = {name: (1.0 / 120.0 if order == 4 else 0.5) for name, order in ORDERS.items()}
-#: round-off allowance per step, relative
-ROUNDOFF_PER_STEP = 100 * np.finfo(float).eps
 #: the most relative error [-] a PASS certifies without a requested tolerance
 CERTIFIED_CAP = 1e-2
 

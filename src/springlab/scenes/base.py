@@ -108,7 +108,11 @@ class Scene:
 
     4. `setup(case, steps, dt)`: the initial state and open-loop controls (`Setup`) of a run of `steps`
        steps of `dt` [s]; raise ParameterError for a motion the scene's equations cannot describe when
-       that is known before the run.
+       that is known before the run. A closed-loop scenario returns a `Setup` whose `controller`
+       (springlab.sim.controller.Controller) reads the model's sensors every few steps and sets the controls,
+       held in between, instead of open-loop controls: every runner (`Case.simulate`, the batched studies,
+       the timing) runs it in MuJoCo's loop, so nothing else in a scene or study changes for it (the
+       printer head's `feedback_motor`). Its sensors are the scene's own MjSpec edit (`edit`).
     5. `physical(model)`: the physical constants the scene's equations use, read back from the
        compiled model (SI; the order is the scene's, documented in its override).
     6. `modes(case)`: [(natural frequency [rad/s], damping ratio [-])] of every mode the integrator must
@@ -515,6 +519,7 @@ class Case:
             act=setup.act,
             control=setup.control,
             stop=self.stop_condition() if stop else None,
+            controller=setup.controller,
         )
 
     def job(self, integrator: str, dt: float, steps: int, *, setup: Setup | None = None) -> Job:

@@ -132,6 +132,13 @@ class Reference:
     tolerance
         for scenes without `system`, the relative tolerance [-] every
         compared column is held to, and `tolerance_basis` says why.
+    tolerance_of
+        instead of `tolerance`, where it depends on the run's integrator:
+        integrator name -> that relative tolerance [-] (e.g. the printer
+        head's closed loop, whose error the scene carries through its law).
+        With a `system` beside it, that is only where the run must lie inside
+        the range of a leading-order estimate (compare.estimate_range), not
+        the tolerance's source.
     switches
         for a linear scene whose input is switched on a step boundary:
         [(time [s], A after it)], in time order; `system` holds before the first.
@@ -152,6 +159,7 @@ class Reference:
     rows: dict[str, tuple[int, int]] = dataclasses.field(default_factory=dict)
     tolerance: float | None = None
     tolerance_basis: str = ""
+    tolerance_of: Callable[[str], float] | None = None
     switches: list[tuple[float, np.ndarray]] = dataclasses.field(default_factory=list)
     input_error: dict[str, float] = dataclasses.field(default_factory=dict)
     scales: dict[str, float] = dataclasses.field(default_factory=dict)

@@ -39,6 +39,7 @@ from .simulate import (
     initial_state,
     integrator_id,
     quiet_mujoco,
+    simulate,
 )
 
 _STATE = mujoco.mjtState
@@ -119,6 +120,8 @@ def run_batched(jobs: Sequence[Job], *, nthread: int = 0) -> list[Trajectory | D
     """
     if not jobs:
         return []
+    if any(job.setup.controller is not None for job in jobs):
+        return _with_loops_alone(jobs, lambda open_loop: run_batched(open_loop, nthread=nthread))
     for job in jobs:
         integrator_id(job.integrator)
     base = jobs[0].model
@@ -189,6 +192,34 @@ def run_batched(jobs: Sequence[Job], *, nthread: int = 0) -> list[Trajectory | D
     return results
 
 
+def _alone(job: Job) -> Trajectory | DivergedError:
+    """One job through `simulate` (a controller in the loop: MuJoCo steps it from Python, it cannot be batched)."""
+    setup = job.setup
+    try:
+        return simulate(
+            job.model,
+            integrator=job.integrator,
+            dt=job.dt,
+            duration=job.steps * job.dt,
+            qpos=setup.qpos,
+            qvel=setup.qvel,
+            act=setup.act,
+            stop=job.stop,
+            controller=setup.controller,
+        )
+    except DivergedError as error:
+        return error
+
+
+def _with_loops_alone(
+    jobs: Sequence[Job], batched: Callable[[list[Job]], list[Trajectory | DivergedError]]
+) -> list[Trajectory | DivergedError]:
+    """The jobs' results in their order: the closed-loop ones each run alone, the others by `batched`."""
+    open_loop = [job for job in jobs if job.setup.controller is None]
+    results = iter(batched(open_loop) if open_loop else [])
+    return [next(results) if job.setup.controller is None else _alone(job) for job in jobs]
+
+
 def _same_structure(models: Sequence[mujoco.MjModel]) -> bool:
     """Whether one MjData fits every model (same sizes), as threaded `mujoco.rollout` needs."""
     fields = ("nq", "nv", "na", "nu", "nbody", "njnt", "ngeom", "ntendon", "nsensordata", "narena", "nbuffer")
@@ -218,6 +249,8 @@ def run_rollout(
     """
     if not jobs:
         return []
+    if any(job.setup.controller is not None for job in jobs):
+        return _with_loops_alone(jobs, lambda open_loop: run_rollout(open_loop, nthread=nthread))
     steps = {job.steps for job in jobs}
     if private_models and len({id(job.model) for job in jobs}) == len(jobs):
         models = [job.model for job in jobs]
@@ -285,6 +318,8 @@ def time_run(job: Job, *, repeats: int = 3, max_steps: int = TIMING_STEPS) -> fl
     `max_steps` steps and scaled by steps (MuJoCo's cost per step does not
     depend on dt or on the state).
     """
+    if job.setup.controller is not None:
+        return _time_alone(job, repeats=repeats, max_steps=max_steps)
     model = configured(job.model, job.integrator, job.dt)  # the job's model is left as it was
     timed = max(1, min(job.steps, max_steps))
     state0 = initial_state(model, job.setup.qpos, job.setup.qvel, job.setup.act)
@@ -310,4 +345,16 @@ def time_run(job: Job, *, repeats: int = 3, max_steps: int = TIMING_STEPS) -> fl
                 skip_checks=True,
             )
             best = min(best, _time.perf_counter() - start)
+    return best * job.steps / timed
+
+
+def _time_alone(job: Job, *, repeats: int, max_steps: int) -> float:
+    """Wall time [s] of a closed-loop job (`time_run`): its `simulate` stepping, best of `repeats`, scaled by steps."""
+    timed = max(1, min(job.steps, max_steps))
+    shorter = dataclasses.replace(job, steps=timed, stop=None)
+    best = math.inf
+    for _ in range(max(1, repeats)):
+        result = _alone(shorter)
+        if isinstance(result, Trajectory):
+            best = min(best, result.wall_time_s)
     return best * job.steps / timed

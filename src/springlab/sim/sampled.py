@@ -11,7 +11,8 @@ over each step: exact for every integrator's order, see simulate's docstring). S
 4. `mj_step(model, data, nstep=T / dt)`.
 
 The cost per sample is one forward pass and one Python call on top of the steps; `mujoco.rollout` cannot
-run this loop (it takes open-loop controls only).
+run this loop (it takes open-loop controls only). `run_sampled` records the samples; springlab.sim.controller.closed_loop records
+every step, for a scene's run (`Setup.controller`, a springlab.sim.controller.Controller: springlab.sim.simulate steps it).
 
 Blow-ups: MuJoCo resets a diverging state silently; the run stops at the first BADQPOS/BADQVEL/BADQACC
 warning or non-finite state and says so (`SampledRun.diverged_at`), so an unstable loop reads as unstable.
@@ -26,7 +27,7 @@ from collections.abc import Callable
 import mujoco
 import numpy as np
 
-from .simulate import BAD_WARNINGS
+from .controller import BAD_WARNINGS
 
 __all__ = ["SampledRun", "run_sampled", "steps_per_sample"]
 

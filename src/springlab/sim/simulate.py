@@ -3,7 +3,10 @@
 One run is one call to `mujoco.rollout` on the calling thread: no Python work
 per step. Inputs are open-loop control sequences (one row per step, held over
 the step) and MJCF-native generators, so RK4 keeps its order wherever the scene
-says so.
+says so. A run may instead carry a sampled-data controller (`Setup.controller`,
+springlab.sim.controller.Controller): it reads the model's sensors every few steps
+and holds its controls in between, so MuJoCo steps it from Python
+(controller.closed_loop); its controls are still constant over each step.
 
 MuJoCo resets a blown-up simulation *silently* (time jumps back, qpos zeroed).
 `simulate` checks every run for that, for non-finite values and for MuJoCo's
@@ -27,6 +30,9 @@ from mujoco import rollout as _rollout
 
 from springlab.errors import BadInputError, DivergedError, UnknownNameError
 
+from .controller import BAD_WARNINGS as BAD_WARNINGS  # re-exported: where the studies read it
+from .controller import Controller, closed_loop
+
 #: MuJoCo's five integrators by springlab name.
 INTEGRATORS: Mapping[str, int] = {
     "euler": int(mujoco.mjtIntegrator.mjINT_EULER),
@@ -44,15 +50,16 @@ ORDERS: Mapping[str, int] = {
     "rk4": 4,
     "discrete": 1,
 }
+#: Leading local-error constant C of each integrator (local error C h^(p+1) A^(p+1) z on z' = A z): RK4's
+#: 1/120 from R(hA) = e^(hA) - (hA)^5 / 120 + ..., the first-order methods' 1/2 (springlab.runs.compare)
+ERROR_CONSTANTS: Mapping[str, float] = {name: (1.0 / 120.0 if order == 4 else 0.5) for name, order in ORDERS.items()}
+#: safety factor on a predicted leading-order error, where a tolerance is derived from it
+SAFETY = 2.0
+#: round-off allowance per step, relative
+ROUNDOFF_PER_STEP = 100 * np.finfo(float).eps
 
 _FULL = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
 _CTRL = int(mujoco.mjtState.mjSTATE_CTRL)
-#: MuJoCo's warnings that mean a blow-up (it then resets the state silently)
-BAD_WARNINGS = [
-    int(mujoco.mjtWarning.mjWARN_BADQPOS),
-    int(mujoco.mjtWarning.mjWARN_BADQVEL),
-    int(mujoco.mjtWarning.mjWARN_BADQACC),
-]
 
 #: Most steps one run may take (memory: 8 bytes x state size per step).
 MAX_STEPS = 20_000_000
@@ -80,6 +87,12 @@ class Trajectory:
         wall time of the stepping itself [s].
     stopped
         True when a stop condition ended the run before its duration.
+    sensordata
+        (n, nsensordata) the model's sensors at each recorded state [sensor units] (None: not recorded, as
+        in batched runs).
+    control
+        (n - 1, nu) the controls held over each step [actuator units] of a run with a controller in the loop
+        (None otherwise: the open-loop controls are the caller's).
     """
 
     time: np.ndarray
@@ -90,6 +103,8 @@ class Trajectory:
     dt: float
     wall_time_s: float
     stopped: bool = False
+    sensordata: np.ndarray | None = None
+    control: np.ndarray | None = None
 
     @property
     def steps(self) -> int:
@@ -191,6 +206,7 @@ def simulate(
     control: np.ndarray | None = None,
     data: mujoco.MjData | None = None,
     stop: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
+    controller: Controller | None = None,
 ) -> Trajectory:
     """Run `model` headless and record every step.
 
@@ -217,11 +233,14 @@ def simulate(
         trajectory ends at the first step where it is True (`stopped` set), and
         whatever MuJoCo did after that step (e.g. a finite-time escape hitting
         its 1e10 limit) is discarded, not reported as a divergence.
+    controller
+        a sampled-data controller in the loop (springlab.sim.controller.Controller) instead of `control`:
+        every `controller.steps_per_sample` steps it reads the sensors and sets the controls, held in between.
 
     Returns
     -------
     Trajectory
-        The Trajectory, t = 0 included.
+        The Trajectory, t = 0 included, with the sensors at every state.
 
     Raises
     ------
@@ -232,6 +251,17 @@ def simulate(
     model = configured(model, integrator, dt)
     data = mujoco.MjData(model) if data is None else data
     state0 = initial_state(model, qpos, qvel, act, data)
+    if controller is not None:
+        if control is not None:
+            raise BadInputError("a run takes open-loop controls or a controller in the loop, not both")
+        with quiet_mujoco() as messages:
+            start = _time.perf_counter()
+            states, sensordata, applied, flagged = closed_loop(model, data, state0, controller, steps)
+            wall = _time.perf_counter() - start
+        trajectory = dataclasses.replace(
+            _split(model, states, integrator, dt, wall), sensordata=sensordata, control=applied
+        )
+        return _finished(trajectory, dt, stop, messages + (["unstable"] if flagged else []))
     controls = None
     if model.nu:
         controls = np.zeros((1, model.nu)) if control is None else np.asarray(control, float)
@@ -254,7 +284,35 @@ def simulate(
         )
         wall = _time.perf_counter() - start
     states = np.concatenate([state0[None], out[0]])
-    trajectory = _split(model, states, integrator, dt, wall)
+    # rollout records the sensors of the state each step starts from; the last state's are computed here
+    last = _sensors_at(model, data, states[-1], controls[0, -1] if controls is not None else None)
+    trajectory = dataclasses.replace(
+        _split(model, states, integrator, dt, wall), sensordata=np.concatenate([sensors[0], last[None]])
+    )
+    return _finished(trajectory, dt, stop, messages)
+
+
+def _sensors_at(
+    model: mujoco.MjModel, data: mujoco.MjData, state: np.ndarray, control: np.ndarray | None
+) -> np.ndarray:
+    """The sensors [sensor units] at a full physics state (and controls), by one forward pass on `data`."""
+    if not model.nsensordata:
+        return np.empty(0)
+    mujoco.mj_setState(model, data, state, _FULL)
+    if control is not None:
+        data.ctrl[:] = control
+    with np.errstate(all="ignore"):
+        mujoco.mj_forward(model, data)
+    return data.sensordata.copy()
+
+
+def _finished(
+    trajectory: Trajectory,
+    dt: float,
+    stop: Callable[[np.ndarray, np.ndarray], np.ndarray] | None,
+    messages: list[str],
+) -> Trajectory:
+    """The run cut at its stop condition, checked for a blow-up (DivergedError)."""
     if stop is not None:
         trajectory, stopped = cut_at_stop(trajectory, stop)
         if stopped:
@@ -283,6 +341,8 @@ def cut_at_stop(
         qvel=trajectory.qvel[:keep],
         act=trajectory.act[:keep],
         stopped=True,
+        sensordata=None if trajectory.sensordata is None else trajectory.sensordata[:keep],
+        control=None if trajectory.control is None else trajectory.control[: keep - 1],
     ), True
 
 
@@ -366,9 +426,13 @@ class Setup:
         initial state (None: the model's rest state).
     control
         (nu,) or (steps, nu) open-loop controls, held over each step.
+    controller
+        a sampled-data controller in the loop instead of `control` (springlab.sim.controller.Controller; None:
+        open loop). Batched runners run such a job on its own (a closed loop cannot be batched).
     """
 
     qpos: np.ndarray | None = None
     qvel: np.ndarray | None = None
     act: np.ndarray | None = None
     control: np.ndarray | None = None
+    controller: Controller | None = None

@@ -186,8 +186,9 @@ class CoulombMotion:
 
     @property
     def turning_times(self) -> list[float]:
-        """Times [s] at which a slide ends at rest (the velocity reaches 0), in order."""
-        return [s.end for s in self.segments if s.direction != 0 and math.isfinite(s.end)]
+        """Times [s] at which a slide ends at rest (the velocity reaches 0) within the followed motion, in order:
+        a slide still under way at the horizon has not turned yet (its end lies beyond the run)."""
+        return [s.end for s, _ in zip(self.segments, self.segments[1:]) if s.direction != 0]
 
     @property
     def turning_points(self) -> list[float]:

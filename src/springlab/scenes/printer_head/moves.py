@@ -1,20 +1,32 @@
 """printer_head's inputs and what follows them: the scenarios' variants, the move, the settling.
 
 Each scenario carries its variant (`Scenario.variant`), as the car's do: `Move` (the bang-bang
-move, then settling), `StepForce` (a held force) and `Settle` (a release from a stretched belt).
-A variant gives the motor's force segments and the quantities that differ. The formulas of the
-move and of the residual vibration live here too; the design study shares them.
+move, then settling), `ShapedMove` (the same move convolved with an input shaper), `StepForce` (a
+held force) and `Settle` (a release from a stretched belt); feedback.py and resonance_test.py hold
+the closed-loop and the resonance test's. A variant gives the run's setup, its exact reference and
+the quantities that differ; these open-loop ones share `Segmented`, which builds both from the
+motor's force segments. The formulas of the move and of the residual vibration live here too; the
+design study shares them.
 Masses [kg], stiffness [N/m], damping [N s/m], forces [N], times [s], positions [m].
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
+from typing import TYPE_CHECKING
 
+import mujoco
 import numpy as np
 
-from springlab.exact import analytic, events
+from springlab.errors import ParameterError
+from springlab.exact import analytic, events, positioning, shaping
+from springlab.scenes.declarations import Reference
+from springlab.sim.simulate import Setup, Trajectory
+
+if TYPE_CHECKING:
+    from springlab.scenes.base import Case
 
 
 def move_profile(params: dict[str, float], dt: float) -> tuple[int, float]:
@@ -34,7 +46,8 @@ def move_profile(params: dict[str, float], dt: float) -> tuple[int, float]:
 class BeltRun:
     """What a variant's quantities read of one run: its parameters, the belt mode and the joints' columns.
 
-    Masses [kg], stiffness [N/m], omega_n [rad/s], zeta [-], dt and time [s], positions [m], velocities [m/s].
+    Masses [kg], stiffness [N/m], omega_n [rad/s], zeta [-], dt and time [s], positions [m], velocities [m/s];
+    the case and the trajectory for what a variant reads beyond them (its sensors, its exact loop).
     """
 
     params: dict[str, float]
@@ -49,9 +62,117 @@ class BeltRun:
     v_c: np.ndarray
     q_m: np.ndarray
     v_m: np.ndarray
+    case: Case | None = None
+    trajectory: Trajectory | None = None
 
 
-class StepForce:
+def belt_matrices(model: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Mass [kg], damping [N s/m] and stiffness [N/m] matrices in (q_c, q_m) of `model`."""
+    belt = model.tendon("belt").id  # (MjModel's tendon view names these _stiffness, _damping)
+    m_c, m_m = float(model.body("carriage").mass[0]), float(model.body("motor").mass[0])
+    k, c = float(model.tendon_stiffness[belt]), float(model.tendon_damping[belt])
+    coupling = np.array([[1.0, -1.0], [-1.0, 1.0]])  # the belt stretches by q_m - q_c
+    return np.diag([m_c, m_m]), c * coupling, k * coupling
+
+
+def initial_state(params: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
+    """(q0 [m], v0 [m/s]) in (q_c, q_m): belt stretched by `deflection`, centre of mass at rest at 0."""
+    m_c, m_m = params["carriage_mass"], params["motor_mass"]
+    s0 = params["deflection"]
+    return np.array([-m_m * s0, m_c * s0]) / (m_c + m_m), np.zeros(2)
+
+
+def initial_qpos_qvel(case: Case) -> tuple[np.ndarray, np.ndarray]:
+    """The model's (qpos, qvel) of `initial_state` (the joints `carriage` and `motor`)."""
+    model = case.model
+    q0, v0 = initial_state(case.params)
+    qpos, qvel = np.zeros(model.nq), np.zeros(model.nv)
+    for joint, q, v in zip(("carriage", "motor"), q0, v0):
+        qpos[model.joint(joint).qposadr[0]] = q
+        qvel[model.joint(joint).dofadr[0]] = v
+    return qpos, qvel
+
+
+class Variant:
+    """What a printer_head scenario's variant gives (PrinterHead delegates to it).
+
+    `parameters`: the scene parameters only this variant reads (others' are refused, check_consistency);
+    `instruments`: whether its model carries the encoders and the accelerometer (control.add_instruments);
+    `derive(params, explicit)`: presets computed from the other parameters (Scenario.derive);
+    `check(params)`: non-physical combinations (ParameterError); `setup`, `reference`, `quantities`.
+    """
+
+    parameters: frozenset[str] = frozenset()
+    instruments = False
+
+    def derive(self, params: dict[str, float], explicit: set[str]) -> dict[str, float]:
+        """Presets from the other parameters (none by default)."""
+        return {}
+
+    def check(self, params: dict[str, float]) -> None:
+        """Raise ParameterError for a combination the variant cannot run (none by default)."""
+
+    def setup(self, case: Case, steps: int, dt: float) -> Setup:
+        """The run's initial state and inputs."""
+        raise NotImplementedError
+
+    def reference(self, case: Case, time: np.ndarray, dt: float) -> Reference:
+        """The exact solution at `time` [s] of a run with timestep dt [s]."""
+        raise NotImplementedError
+
+    def quantities(self, out: dict, run: BeltRun) -> dict:
+        """The variant's quantities added to the scene's `out`."""
+        raise NotImplementedError
+
+
+class Segmented(Variant):
+    """An open-loop variant: the motor's force is piecewise constant, switched on step boundaries (`segments`).
+
+    Its run holds segment i from step round(breaks[i] / dt) on (exact for every integrator's order), and its
+    reference is the two-mass model's exact response (analytic.linear_response), with the state matrix of
+    z = (q_c, q_m, v_c, v_m, F) for the derived tolerance (the force a generator state, constant within each step).
+    """
+
+    def segments(self, params: dict[str, float], dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """(breakpoints [s], motor force per segment [N])."""
+        raise NotImplementedError
+
+    def setup(self, case: Case, steps: int, dt: float) -> Setup:
+        """The initial state (`initial_state`) and the force segments as per-step controls."""
+        qpos, qvel = initial_qpos_qvel(case)
+        breaks, forces = self.segments(case.params, dt)
+        # segment i holds from step round(breaks[i]/dt): switches on step boundaries are exact
+        first = np.round(breaks / dt).astype(int)
+        control = np.zeros((steps, case.model.nu))
+        for start, force in zip(first, forces):
+            control[min(start, steps) :, 0] = force
+        return Setup(qpos=qpos, qvel=qvel, control=control)
+
+    def reference(self, case: Case, time: np.ndarray, dt: float) -> Reference:
+        """The exact response to the segments from `initial_state` (class docstring)."""
+        mass, damping, stiffness = belt_matrices(case.model)
+        q0, v0 = initial_state(case.params)
+        breaks, forces = self.segments(case.params, dt)  # the move switches on the run's own grid
+        values = np.column_stack([np.zeros_like(forces), forces])  # the motor joint carries the force
+        q, v = analytic.linear_response(time, mass, damping, stiffness, q0, v0, force=(breaks, values))
+        inverse = np.linalg.inv(mass)
+        system = np.zeros((5, 5))
+        system[0:2, 2:4] = np.eye(2)
+        system[2:4, 0:2] = -inverse @ stiffness
+        system[2:4, 2:4] = -inverse @ damping
+        system[2:4, 4] = inverse @ np.array([0.0, 1.0])
+        segment = np.clip(np.searchsorted(breaks, time, side="right") - 1, 0, len(forces) - 1)
+        states = np.column_stack([q, v, forces[segment]])
+        return Reference(
+            pos={"carriage": q[:, 0], "motor": q[:, 1]},
+            vel={"carriage": v[:, 0], "motor": v[:, 1]},
+            system=system,
+            states=states,
+            rows={"carriage": (0, 2), "motor": (1, 3)},
+        )
+
+
+class StepForce(Segmented):
     """step_force's variant (Scenario.variant): drive_force [N] from rest, held; no settling."""
 
     def segments(self, params: dict[str, float], dt: float) -> tuple[np.ndarray, np.ndarray]:
@@ -68,7 +189,7 @@ class StepForce:
         return out
 
 
-class _Settling:
+class _Settling(Segmented):
     """A variant whose force ends, after which the carriage settles about a target (move, settle).
 
     `quantities` measures the settling into +-positioning_band from the step `release` returns,
@@ -160,6 +281,110 @@ class Move(_Settling):
         return out["move_time_s"] + settling
 
 
+#: the shaped moves' own parameters: the shaper's design point (defaults: the belt mode's own)
+SHAPER_PARAMETERS = frozenset({"shaper_frequency_hz", "shaper_damping_ratio"})
+
+
+@functools.lru_cache(maxsize=64)
+def applied_shaper(name: str, frequency_hz: float, damping_ratio: float, dt: float) -> shaping.Shaper:
+    """The shaper `name` designed at (frequency_hz [Hz], damping_ratio [-]) as a command held over steps of dt [s]
+    applies it (shaping.on_grid: impulses split onto the step grid, its defining equations restored)."""
+    return shaping.on_grid(shaping.make_shaper(name, frequency_hz, damping_ratio), dt)
+
+
+class ShapedMove(Move):
+    """move_zv, move_mzv, move_zvd, move_ei's variant: the bang-bang move convolved with an input shaper.
+
+    The shaper is designed at `shaper_frequency_hz` and `shaper_damping_ratio` (defaults: the belt mode's own,
+    from the masses and the belt) and applied on the step grid (`applied_shaper`): the shaped force
+    (shaping.shape_command) switches on step boundaries, so every integrator keeps its order, and the
+    quantities report the shaper actually applied (`shaper_times_s`, `shaper_amplitudes`).
+
+    Exact, per run: the carriage rings after the shaped command as Re(Z S e^(s tau)), Z the unshaped move's
+    phasor and S = sum_i A_i e^(s (t_N - t_i)) the shaper's factor on the true belt mode (|S| = V, its residual
+    vibration): `residual_amplitude_m_exact` is the largest deviation of that ring-down (positioning.peak_after)
+    beside MuJoCo's `residual_amplitude_m`, `residual_vibration` is V, and `positioning_time_s` (the carriage
+    inside +-band for good, from t = 0: a shaped move is often inside before its command ends) has its exact
+    `positioning_time_s_exact` (positioning.positioning_time of the same command).
+    """
+
+    parameters = SHAPER_PARAMETERS
+
+    def __init__(self, shaper: str) -> None:
+        self.shaper = shaper
+
+    def derive(self, params: dict[str, float], explicit: set[str]) -> dict[str, float]:
+        """The shaper's design point: the belt mode's natural frequency [Hz] and damping ratio [-]."""
+        m_c, m_m, k = params["carriage_mass"], params["motor_mass"], params["belt_stiffness"]
+        return {
+            "shaper_frequency_hz": float(belt_omega(k, m_c, m_m)) / (2 * math.pi),
+            "shaper_damping_ratio": belt_damping_ratio(params["belt_damping"], k, m_c, m_m),
+        }
+
+    def check(self, params: dict[str, float]) -> None:
+        """The design point must give a shaper (shaping's ranges: zeta < 1, EI's zeta <= 0.3)."""
+        try:
+            shaping.make_shaper(self.shaper, params["shaper_frequency_hz"], params["shaper_damping_ratio"])
+        except ValueError as error:
+            raise ParameterError(str(error)) from None
+
+    def applied(self, params: dict[str, float], dt: float) -> shaping.Shaper:
+        """The shaper on the grid of dt [s] (ParameterError: a dt too coarse for it)."""
+        try:
+            return applied_shaper(self.shaper, params["shaper_frequency_hz"], params["shaper_damping_ratio"], dt)
+        except ValueError as error:
+            raise ParameterError(str(error)) from None
+
+    def segments(self, params: dict[str, float], dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """The bang-bang move's segments convolved with the applied shaper (all on the step grid)."""
+        breaks, forces = shaping.shape_command(*super().segments(params, dt), self.applied(params, dt))
+        return np.round(breaks / dt) * dt, forces  # on the grid to round-off, as the run switches them
+
+    def release(self, out: dict, run: BeltRun) -> tuple[float, int]:
+        """The move's quantities, the shaper's, and the command's end: 2 n steps plus the shaper's last impulse."""
+        target, end = super().release(out, run)
+        shaper = self.applied(run.params, run.dt)
+        delay = int(round(shaper.duration / run.dt))
+        out["shaper"] = self.shaper
+        out["shaper_frequency_hz"] = shaper.frequency_hz
+        out["shaper_damping_ratio"] = shaper.damping_ratio
+        out["shaper_duration_s"] = delay * run.dt
+        out["shaper_times_s"] = [float(t) for t in shaper.times]
+        out["shaper_amplitudes"] = [float(a) for a in shaper.amplitudes]
+        out["command_time_s"] = end * run.dt + delay * run.dt
+        out["residual_vibration"] = float(
+            shaping.residual_vibration(shaper.amplitudes, shaper.times, run.omega_n, run.zeta)
+        )
+        return target, end + delay
+
+    def residual_stretch(self, run: BeltRun, start: int) -> tuple[float, float]:
+        """The measured stretch [m] and rate [m/s] at the command's end (the estimate's starting point)."""
+        return _Settling.residual_stretch(self, run, start)
+
+    def positioning(self, out: dict, settling: float) -> float | None:
+        """The shaped command's time + settling time [s]."""
+        return out["command_time_s"] + settling
+
+    def quantities(self, out: dict, run: BeltRun) -> dict:
+        """Move's quantities, the exact ring-down of the shaped command, and positioning counted from t = 0."""
+        out = super().quantities(out, run)
+        breaks, forces = self.segments(run.params, run.dt)
+        total = run.m_c + run.m_m
+        accelerations = forces / total
+        if run.zeta < 1.0:
+            phasor = positioning.residual_phasor(run.omega_n, run.zeta, breaks, accelerations)
+            out["residual_amplitude_m_exact"] = positioning.peak_after(phasor, run.omega_n, run.zeta)
+            out["residual_envelope_m_exact"] = abs(phasor)
+            band = run.params["positioning_band"]
+            out["positioning_time_s_exact"] = positioning.positioning_time(
+                run.omega_n, run.zeta, breaks, accelerations, band
+            )
+            if out["settled_for_good"]:
+                deviation = run.q_c - run.params["move_distance"]
+                out["positioning_time_s"] = events.last_exit(run.time, deviation, run.v_c, band)
+        return out
+
+
 class Settle(_Settling):
     """settle's variant (Scenario.variant): no force; released at rest from the belt stretch `deflection`."""
 
@@ -214,16 +439,6 @@ def residual_envelope(
     omega_d = omega_n * math.sqrt(1 - zeta * zeta)
     share = motor_mass / (carriage_mass + motor_mass)
     return share * math.hypot(stretch, (stretch_rate + zeta * omega_n * stretch) / omega_d)
-
-
-def worst_case_envelope(force: float, carriage_mass: float, motor_mass: float, stiffness: float) -> float:
-    """Largest residual envelope [m] any bang-bang move at `force` [N] can leave: 4 F m_c m_m / (M^2 k).
-
-    The residual stretch of an undamped belt is 4 sin^2(omega_n T / 4) <= 4 times the static
-    stretch F m_c / (M k), and the carriage moves m_m / M of it.
-    """
-    total = carriage_mass + motor_mass
-    return 4 * force * carriage_mass * motor_mass / (total**2 * stiffness)
 
 
 def minimum_move_time(distance: float, mass: float, force: float) -> float:

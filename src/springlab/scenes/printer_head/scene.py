@@ -94,18 +94,23 @@ from collections.abc import Mapping
 import mujoco
 import numpy as np
 
+from springlab.errors import ParameterError
 from springlab.exact import analytic
 from springlab.exact.limits import stability_limit as joint_damping_stability_limit
 from springlab.exact.linearize import one_step_map, operating_point
+from springlab.exact.shaping import SHAPERS
 from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Case, Parameter, Reference, Scenario, Scene
 from springlab.scenes.capabilities.case import CaseView
 from springlab.scenes.capabilities.fit import OscillatorFit
 from springlab.scenes.capabilities.frequency import FrequencySpec
 from springlab.sim.simulate import Setup, Trajectory, integrator_id
 
+from . import control
 from .design import DESIGN
+from .feedback import Feedback
 from .frequency import positioning
-from .moves import BeltRun, Move, Settle, StepForce, move_profile
+from .moves import BeltRun, Move, Settle, ShapedMove, StepForce, belt_matrices, move_profile
+from .resonance_test import ResonanceTest
 
 __all__ = ["SCENE", "PrinterHead", "linearized_mode", "step_matrix"]
 
@@ -147,6 +152,24 @@ def _released_at(params: Mapping[str, float], x0: float) -> dict[str, float]:
     return dict(params) | {"deflection": -x0 * total / params["motor_mass"]}
 
 
+#: the loops' default gains and rate: the motor's (collocated) as in tests/test_printer_feedback.py; the
+#: carriage's lower, because across the belt the motor's gains are unstable (its boundary is 0.59 of them)
+_LOOP_GAINS = {
+    "motor": {"kp": 2000.0, "kd": 30.0, "ki": 0.0, "control_rate_hz": 5000.0},
+    "carriage": {"kp": 500.0, "kd": 15.0, "ki": 0.0, "control_rate_hz": 5000.0},
+}
+#: the resonance test's defaults: a 50-400 Hz chirp of 1 N around the 195 Hz belt, an accelerometer read at
+#: 2.5 kHz (an ADXL345 runs up to 3.2 kHz) with 0.5 m/s^2 of noise per reading, seed 0
+_RESONANCE_TEST = {
+    "sweep_low_hz": 50.0,
+    "sweep_high_hz": 400.0,
+    "sweep_force": 1.0,
+    "accelerometer_rate_hz": 2500.0,
+    "accelerometer_noise": 0.5,
+    "seed": 0.0,
+}
+
+
 class PrinterHead(Scene):
     name = "printer_head"
     title = "inkjet carriage driven through a flexible belt: how fast can it be positioned?"
@@ -182,6 +205,35 @@ class PrinterHead(Scene):
         "settle": (
             "Released from the belt stretch of full acceleration, how long does the carriage take to settle?",
             "It rings at {natural_frequency_hz:.4g} Hz with ζ = {damping_ratio:.3g} and stays within the band after {settling_time_s:.3g} s.",
+        ),
+        **{
+            f"move_{name}": (
+                f"How fast is the print head positioned one inch away, to ±10 µm, when the move is shaped by a"
+                f" {name.upper()} input shaper?",
+                "The shaper adds {shaper_duration_s:.3g} s and leaves {residual_vibration:.3g} of the belt's"
+                " vibration ({residual_amplitude_m:.3g} m, exact {residual_amplitude_m_exact:.3g} m): positioned in"
+                " {positioning_time_s:.4g} s (exact {positioning_time_s_exact:.4g} s).",
+            )
+            for name in SHAPERS
+        },
+        **{
+            f"feedback_{encoder}": (
+                f"How fast does a sampled PD/PID loop on the {encoder} encoder position the print head, and how"
+                " much gain margin does it have?",
+                "At {control_period_s:.3g} s per sample the loop has {gain_margin_db:.3g} dB of gain margin and"
+                " {phase_margin_deg:.3g}° of phase margin (it loses stability at {critical_gain:.4g} times its"
+                " gains); the carriage is positioned in {positioning_time_s:.4g} s (exact"
+                " {positioning_time_s_exact:.4g} s).",
+            )
+            for encoder in control.ENCODERS
+        },
+        "resonance_test": (
+            "What belt frequency does a resonance test with the carriage accelerometer measure, and which shaper"
+            " does it choose?",
+            "The belt resonates at {belt_frequency_hz_measured:.6g} Hz (95 % interval"
+            " {belt_frequency_ci95_width_hz:.3g} Hz wide; the model's {natural_frequency_hz:.6g} Hz), ζ ="
+            " {belt_damping_ratio_measured:.3g}; it chooses {chosen_shaper}, whose move MuJoCo positions in"
+            " {chosen_shaper_positioning_time_s:.4g} s.",
         ),
     }
     parameters = {
@@ -219,6 +271,31 @@ class PrinterHead(Scene):
                 minimum_inclusive=False,
             ),
             Parameter("deflection", "m", "belt stretch at t = 0 (centre of mass at rest at 0)", default=0.0),
+            # the shaped moves' (default: the belt mode's own, Scenario.derive)
+            Parameter(
+                "shaper_frequency_hz", "Hz", "input shaper's design frequency", minimum=0.0, minimum_inclusive=False
+            ),
+            Parameter("shaper_damping_ratio", "-", "input shaper's design damping ratio", minimum=0.0, maximum=0.99),
+            # the feedback loops'
+            Parameter("kp", "N/m", "proportional gain of the sampled loop", minimum=0.0),
+            Parameter("kd", "N s/m", "derivative gain (backward difference on the encoder)", minimum=0.0),
+            Parameter("ki", "N/(m s)", "integral gain", minimum=0.0),
+            Parameter("control_rate_hz", "Hz", "controller sample rate", minimum=0.0, minimum_inclusive=False),
+            Parameter(
+                "planned_move_time",
+                "s",
+                "the set point's bang-bang path to move_distance, its force fed forward (0: a step)",
+                minimum=0.0,
+            ),
+            # the resonance test's
+            Parameter("sweep_low_hz", "Hz", "chirp start frequency", minimum=0.0, minimum_inclusive=False),
+            Parameter("sweep_high_hz", "Hz", "chirp end frequency", minimum=0.0, minimum_inclusive=False),
+            Parameter("sweep_force", "N", "chirp force amplitude", minimum=0.0, minimum_inclusive=False),
+            Parameter("accelerometer_rate_hz", "Hz", "accelerometer sample rate", minimum=0.0, minimum_inclusive=False),
+            Parameter(
+                "accelerometer_noise", "m/s^2", "accelerometer noise, standard deviation per reading", minimum=0.0
+            ),
+            Parameter("seed", "-", "seed of the accelerometer noise's generator", minimum=0.0),
         )
     }
     #: `springlab fit`: the carriage rings with the belt mode of mass mu about the resting centre of mass (x_eq = 0)
@@ -255,6 +332,34 @@ class PrinterHead(Scene):
                 derive=_quasi_static_deflection,
                 variant=Settle(),
             ),
+            *(
+                Scenario(
+                    f"move_{name}",
+                    f"the move shaped by a {name.upper()} input shaper designed at the belt mode (default)",
+                    0.3,
+                    derive=ShapedMove(name).derive,
+                    variant=ShapedMove(name),
+                )
+                for name in SHAPERS
+            ),
+            *(
+                Scenario(
+                    f"feedback_{encoder}",
+                    f"sampled PD loop on the {encoder} encoder along the planned shortest path, feedforward",
+                    0.3,
+                    presets=gains,
+                    derive=Feedback(encoder).derive,
+                    variant=Feedback(encoder),
+                )
+                for encoder, gains in _LOOP_GAINS.items()
+            ),
+            Scenario(
+                "resonance_test",
+                "chirp through the motor, the carriage accelerometer's record fitted: the belt mode measured",
+                2.0,
+                presets=_RESONANCE_TEST,
+                variant=ResonanceTest(),
+            ),
         )
     }
 
@@ -281,6 +386,28 @@ class PrinterHead(Scene):
         spec.actuator("drive").ctrlrange = [-params["drive_force"], params["drive_force"]]
         spec.numeric("move_distance").data = [params["move_distance"]]
         spec.numeric("positioning_band").data = [params["positioning_band"]]
+        if scenario.variant.instruments:
+            control.add_instruments(spec)  # sensors: no change to the physics
+
+    def check_consistency(self, params: dict[str, float], scenario: Scenario) -> None:
+        """Refuse parameters that belong to other scenarios' variants, and what the variant cannot run."""
+        variant = scenario.variant
+        others = {
+            name for s in self.scenarios.values() for name in s.variant.parameters if name not in variant.parameters
+        }
+        stray = sorted(others & set(params))
+        if stray:
+            users = sorted(s.name for s in self.scenarios.values() if stray[0] in s.variant.parameters)
+            raise ParameterError(
+                f"{stray[0]} is a parameter of {', '.join(users)}, not of {scenario.name}"
+                f" (its parameters: {', '.join(self.scenario_parameters(scenario))})"
+            )
+        variant.check(params)
+
+    def scenario_parameters(self, scenario: Scenario) -> list[str]:
+        """The parameters a scenario reads: the scene's own and its variant's."""
+        shared = {name for s in self.scenarios.values() for name in s.variant.parameters}
+        return [name for name in self.parameters if name not in shared or name in scenario.variant.parameters]
 
     @staticmethod
     def physical(model: mujoco.MjModel) -> tuple[float, float, float, float]:
@@ -296,61 +423,18 @@ class PrinterHead(Scene):
     @staticmethod
     def matrices(model: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Mass [kg], damping [N s/m] and stiffness [N/m] matrices in (q_c, q_m) of `model`."""
-        m_c, m_m, k, c = PrinterHead.physical(model)
-        coupling = np.array([[1.0, -1.0], [-1.0, 1.0]])  # the belt stretches by q_m - q_c
-        return np.diag([m_c, m_m]), c * coupling, k * coupling
-
-    # -- the force profile (each scenario's variant gives its segments) -----------
+        return belt_matrices(model)
 
     #: (steps per half-move n, force [N]) of the bang-bang move on a grid of dt [s] (moves.py)
     move_profile = staticmethod(move_profile)
 
-    def _initial(self, params) -> tuple[np.ndarray, np.ndarray]:
-        """(q0, v0) in (q_c, q_m): belt stretched by `deflection`, centre of mass at rest at 0."""
-        m_c, m_m = params["carriage_mass"], params["motor_mass"]
-        s0 = params["deflection"]
-        return np.array([-m_m * s0, m_c * s0]) / (m_c + m_m), np.zeros(2)
+    # -- the run and its exact solution: each scenario's variant gives them ---------------------
 
     def setup(self, case: Case, steps: int, dt: float) -> Setup:
-        model, params, scenario = case.model, case.params, case.scenario
-        q0, v0 = self._initial(params)
-        qpos, qvel = np.zeros(model.nq), np.zeros(model.nv)
-        for joint, q, v in zip(self.joints, q0, v0):
-            qpos[model.joint(joint).qposadr[0]] = q
-            qvel[model.joint(joint).dofadr[0]] = v
-        breaks, forces = scenario.variant.segments(params, dt)
-        # segment i holds from step round(breaks[i]/dt): switches on step boundaries are exact
-        first = np.round(breaks / dt).astype(int)
-        control = np.zeros((steps, model.nu))
-        for start, force in zip(first, forces):
-            control[min(start, steps) :, 0] = force
-        return Setup(qpos=qpos, qvel=qvel, control=control)
-
-    # -- exact solution ------------------------------------------------------
+        return case.scenario.variant.setup(case, steps, dt)
 
     def reference(self, case: Case, time: np.ndarray, *, dt: float) -> Reference:
-        model, params, scenario = case.model, case.params, case.scenario
-        mass, damping, stiffness = self.matrices(model)
-        q0, v0 = self._initial(params)
-        breaks, forces = scenario.variant.segments(params, dt)  # the move switches on the run's own grid
-        values = np.column_stack([np.zeros_like(forces), forces])  # the motor joint carries the force
-        q, v = analytic.linear_response(time, mass, damping, stiffness, q0, v0, force=(breaks, values))
-        # z = (q_c, q_m, v_c, v_m, F): the force is a generator state, constant within each step
-        inverse = np.linalg.inv(mass)
-        system = np.zeros((5, 5))
-        system[0:2, 2:4] = np.eye(2)
-        system[2:4, 0:2] = -inverse @ stiffness
-        system[2:4, 2:4] = -inverse @ damping
-        system[2:4, 4] = inverse @ np.array([0.0, 1.0])
-        segment = np.clip(np.searchsorted(breaks, time, side="right") - 1, 0, len(forces) - 1)
-        states = np.column_stack([q, v, forces[segment]])
-        return Reference(
-            pos={"carriage": q[:, 0], "motor": q[:, 1]},
-            vel={"carriage": v[:, 0], "motor": v[:, 1]},
-            system=system,
-            states=states,
-            rows={"carriage": (0, 2), "motor": (1, 3)},
-        )
+        return case.scenario.variant.reference(case, time, dt)
 
     # -- the belt mode -------------------------------------------------------
 
@@ -409,7 +493,7 @@ class PrinterHead(Scene):
         out["vibration_share"] = m_m / total  # carriage deviation per metre of belt stretch
         columns = case.joint_columns(trajectory)
         (q_c, v_c), (q_m, v_m) = columns["carriage"], columns["motor"]
-        run = BeltRun(params, m_c, m_m, k, omega_n, zeta, dt, trajectory.time, q_c, v_c, q_m, v_m)
+        run = BeltRun(params, m_c, m_m, k, omega_n, zeta, dt, trajectory.time, q_c, v_c, q_m, v_m, case, trajectory)
         return scenario.variant.quantities(out, run)
 
 
