@@ -219,6 +219,11 @@ def test_forty_seeded_records_fall_inside_their_own_99_percent_interval():
     assert abs(result.integrated / result.held - 1) <= 0.1 * result.spread / result.held
     # pooled: 40 independent records within 3 standard errors of the held variance
     assert abs(result.mean_variance - result.held) <= 3 * result.spread / math.sqrt(40)
+    # and the exact continuous value inside the reported biases (the hold's, the integrator's) and that scatter
+    reported = abs(result.held / result.continuous - 1) + abs(result.integrated / result.held - 1)
+    assert (
+        abs(result.mean_variance / result.continuous - 1) <= reported + 3 * result.spread / math.sqrt(40) / result.held
+    )
 
 
 @pytest.mark.slow

@@ -34,7 +34,7 @@ from springlab.errors import BadInputError, DivergedError
 from springlab.exact import random_vibration as rv
 from springlab.files import json_ready
 from springlab.scenes.base import Scene
-from springlab.scenes.capabilities.random_load import RandomExact, RandomLoadSpec
+from springlab.scenes.capabilities.random_load import RandomLoadSpec
 from springlab.sim.simulate import check_timing, configured, initial_state, integrator_id, quiet_mujoco
 
 from .executor import Executor, chunked, resolve
@@ -462,9 +462,3 @@ def _seeds(seeds: int | Sequence[int]) -> list[int]:
     if not listed or any(isinstance(s, bool) or int(s) != s or s < 0 for s in listed):
         raise BadInputError(f"seeds must be a whole number >= 1 or a list of whole numbers >= 0, got {seeds!r}")
     return [int(s) for s in listed]
-
-
-def exact_of(scene: Scene, scenario: str, parameters: Mapping[str, float], integrator: str, dt: float) -> RandomExact:
-    """The declared exact variances of a case at a setting (for studies built on this one)."""
-    _, spec = declared(scene)
-    return spec.exact(scene.case(scenario, dict(parameters)), integrator, dt)

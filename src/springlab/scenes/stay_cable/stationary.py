@@ -167,11 +167,22 @@ def record_interval(exact: WindExact, index: int, steps: int, level: float) -> r
 
 
 def stationary_start(covariance: np.ndarray, seed: int) -> tuple[np.ndarray, np.ndarray]:
-    """(q0 [m], q0' [m/s]): a draw from N(0, covariance) with the seed's own stream (PCG64 seeded by (seed, 1),
-    apart from the wind's, which is seeded by the seed alone): the same start in any batch or worker."""
-    values, vectors = np.linalg.eigh(0.5 * (covariance + covariance.T))
-    normal = np.random.default_rng([int(seed), 1]).standard_normal(len(values))
-    state = vectors @ (np.sqrt(np.clip(values, 0.0, None)) * normal)
+    """(q0 [m], q0' [m/s]): a draw from N(0, covariance), D^(1/2) C^(1/2) z with C the correlation matrix, C^(1/2)
+    its symmetric square root and z standard normal from the seed's own stream (PCG64 seeded by (seed, 1), apart
+    from the wind's, seeded by the seed alone).
+
+    The symmetric square root V sqrt(Lambda) V^T, not V sqrt(Lambda) or a Cholesky factor: the held covariance is
+    singular to working precision (the uniform load barely reaches the antisymmetric modes; condition 1e17 at the
+    defaults), so its eigenbasis within clusters of eigenvalues, and a Cholesky factor's later columns, follow the
+    round-off of the solver (another BLAS or thread count gave another start); the symmetric root does not depend
+    on the basis of a cluster and moves only as much as the covariance does.
+    """
+    symmetric = 0.5 * (covariance + covariance.T)
+    scale = np.sqrt(np.clip(np.diag(symmetric), 0.0, None))
+    scale[scale == 0.0] = 1.0
+    values, vectors = np.linalg.eigh(symmetric / np.outer(scale, scale))
+    normal = np.random.default_rng([int(seed), 1]).standard_normal(len(symmetric))
+    state = scale * (vectors @ (np.sqrt(np.clip(values, 0.0, None)) * (vectors.T @ normal)))
     n = len(state) // 2
     return state[:n], state[n:]
 
