@@ -13,11 +13,13 @@ a cycle (the studies); the command line, the demo and users call `run` and `vali
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
 from typing import Any
 
 from springlab.errors import BadInputError
 from springlab.runs.run import Result, ValidationRow, exact_scenarios, run_scenario
 from springlab.scenes.base import Scene
+from springlab.scenes.declarations import keyword_parameters
 
 from .tradeoff import sweepable, tradeoff
 
@@ -59,14 +61,14 @@ def auto_setting(
 
 
 def run(
-    scene: str,
+    model: str,
     scenario: str | None = None,
     *,
     integrator: str | None = None,
     dt: float | None = None,
     duration: float | None = None,
     tol: float | None = None,
-    **parameters: Any,
+    **parameters: float,
 ) -> Result:
     """Simulate a scenario headless in MuJoCo and compare it with its exact solution (`springlab.run`).
 
@@ -75,7 +77,7 @@ def run(
 
     Parameters
     ----------
-    scene
+    model
         scene name (see `springlab list`).
     scenario
         scenario name (None: the scene's default).
@@ -91,7 +93,8 @@ def run(
         relative accuracy [-] to hold the run to instead of the integrator's
         predicted error (see springlab.runs.compare); needed by 'auto'.
     **parameters
-        scene parameters in SI units, e.g. mass=2.0 [kg].
+        scene parameters in SI units, e.g. mass=2.0 [kg] (numbers; none is named like an option,
+        springlab.scenes.declarations.STUDY_OPTIONS).
 
     Returns
     -------
@@ -102,18 +105,21 @@ def run(
     Raises
     ------
     BadInputError
-        unknown names, non-physical values, bad dt/duration; for
+        unknown names, non-physical values (a string where a number goes), bad dt/duration; for
         'auto' no tol, a dt given, or no setting meeting tol.
     DivergedError
         the simulation blew up (nothing is returned for it).
+    TypeError
+        an old keyword spelling (`scene=`, `parameters={...}`) or another study's option.
     """
+    parameters = keyword_parameters("run", parameters)
     if integrator == "auto":
-        integrator, dt = auto_setting(scene, scenario, tol=tol, dt=dt, duration=duration, **parameters)
-    return run_scenario(scene, scenario, integrator=integrator, dt=dt, duration=duration, tol=tol, **parameters)
+        integrator, dt = auto_setting(model, scenario, tol=tol, dt=dt, duration=duration, **parameters)
+    return run_scenario(model, scenario, integrator=integrator, dt=dt, duration=duration, tol=tol, **parameters)
 
 
 def validate(
-    scene_names: list[str] | None = None,
+    model: str | Sequence[str] | None = None,
     *,
     integrator: str | None = None,
     dt: float | None = None,
@@ -126,8 +132,8 @@ def validate(
 
     Parameters
     ----------
-    scene_names
-        scenes to validate (None: all).
+    model
+        a scene name, or scene names, to validate (None or empty: all).
     integrator
         integrator name, None (the scenes' own) or 'auto'.
     dt
@@ -151,8 +157,9 @@ def validate(
     DivergedError
         a run blew up.
     """
+    names = [model] if isinstance(model, str) else None if model is None else list(model)
     rows = []
-    for scene, scenario in exact_scenarios(scene_names):
+    for scene, scenario in exact_scenarios(names):
         if integrator == "auto" and not sweepable(scene, scenario, None):
             row = ValidationRow.of(run_scenario(scene.name, scenario.name))
             rows.append(dataclasses.replace(row, note=NO_SWEEP_NOTE))
