@@ -28,6 +28,7 @@ import dataclasses
 import math
 import os
 import pathlib
+import warnings
 from collections.abc import Iterator
 from typing import TYPE_CHECKING, Any
 
@@ -207,10 +208,21 @@ class Result(display.Shown):
 
     @property
     def summary(self) -> dict[str, Any]:
-        """The facts as summary.json's dict, in Python values (inf where summary.json has null).
+        """Deprecated: `to_dict()` (summary.json) or the attributes (`quantities`, `errors`, `passed` ...).
 
-        Kept for scripts written against it; `to_dict()` is summary.json itself.
+        The facts as summary.json's dict in Python values (inf where summary.json has null), kept for
+        scripts written against it; it warns (DeprecationWarning) since issue 32.
         """
+        warnings.warn(
+            "Result.summary is deprecated: use Result.to_dict() (summary.json, what `springlab run --json`"
+            " prints) or the attributes (result.quantities, result.errors, result.passed)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self._facts()
+
+    def _facts(self) -> dict[str, Any]:
+        """summary.json's dict in Python values (inf where summary.json has null)."""
         return {
             "scene": self.scene,
             "scenario": self.scenario,
@@ -292,7 +304,7 @@ class Result(display.Shown):
         quantities, errors, tolerance, tolerance_basis, passed, verdict, estimate_range, checks,
         model_limits (see docs/runs.md).
         """
-        return json_ready(self.summary)
+        return json_ready(self._facts())
 
     def columns(self) -> dict[str, np.ndarray]:
         """The series in trajectory.csv's order: time (MuJoCo's clock), <joint>_pos/_vel, then the references."""
