@@ -35,6 +35,7 @@ from springlab.plots import friction_settings as plots_friction
 from springlab.plots import sweep as plots_sweep
 from springlab.runs.run import ValidationRow, run_scenario, write_run
 from springlab.scenes import get
+from springlab.studies import random_load, rms_settings
 from springlab.studies.design import run_study
 from springlab.studies.design import study as design_study
 from springlab.studies.families import run_phase_family, run_zeta_family
@@ -43,6 +44,9 @@ from springlab.studies.refine import refine
 from springlab.studies.tradeoff import tradeoff
 from test_layers import layer_of
 from test_report import _browse_until, _chromium
+
+#: a nine-node stay cable with a damper: a random-load ensemble and its settings study in about a second
+SHORT_CABLE = {"n_elements": 9, "damper_position": 30.0, "damper_coefficient": 4e4, "structural_damping_ratio": 0.01}
 
 #: lines of a plain repr at most: the verdict, its reason, the figures
 REPR_LINES = 3
@@ -82,6 +86,10 @@ def results(stability_report, shipped_audit):
         "Refinement": refine("drill_string", tol=1e-2, sizes=(2, 4), integrators=("rk4",), omega_dt=(0.5, 1.0)),
         "ZetaFamily": run_zeta_family("slider", "free", zetas=(0.0, 0.5), duration=1.0),
         "PhaseFamily": run_phase_family(result),
+        "Ensemble": random_load.ensemble("stay_cable", seeds=2, record=20.0, **SHORT_CABLE),
+        "RmsSettings": rms_settings.rms_settings(
+            "stay_cable", tol=0.5, integrators=("implicitfast",), seed_counts=(1,), record=20.0, sizes=(9,)
+        ),
     }
     assert {type(r).__name__ for r in built.values()} == set(built)
     return built
@@ -105,7 +113,7 @@ def test_every_top_level_result_shows_itself_and_this_test_builds_each(results):
     shown = {cls.__name__ for cls in _shown_classes()}
     returned = {"Result", "ValidationRow", "Sweep", "Tradeoff", "FitResult", "Audit", "StabilityReport"}
     returned |= {"FrequencyResponse", "Study", "SobolStudy", "FrictionSettings", "Refinement"}
-    returned |= {"ZetaFamily", "PhaseFamily"}
+    returned |= {"ZetaFamily", "PhaseFamily", "Ensemble", "RmsSettings"}
     assert returned <= shown, "a result the public functions return has no display"
     assert shown == set(results), "a new Shown class joins the `results` fixture"
 

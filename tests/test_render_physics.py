@@ -136,6 +136,11 @@ def _inside_masks():
         r, g, b = _rgb(f)
         return (b > 120) & (b > 1.5 * r) & (g > 70) & (g < 0.8 * b)
 
+    def cable(f):  # the stay cable's dark strand (0.15 0.2 0.3), below the three overlay lines of text
+        dark = f.max(axis=-1) < 110
+        dark[:, : f.shape[1] * 55 // 240, :] = False
+        return dark
+
     return {
         "slider": orange,
         "kinematics": orange,
@@ -144,6 +149,7 @@ def _inside_masks():
         "printer_head": carriage,
         "friction": orange,  # the box has the slider's block colour
         "drill_string": orange,  # the orange stripes along its rotors, which turn with them
+        "stay_cable": cable,
     }
 
 

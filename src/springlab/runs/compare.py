@@ -32,7 +32,10 @@ new segment adds its own, so on segment j (from s_j, matrix A_j)
 which reduces to the formula above when nothing switches. A scene whose model
 can only approximate its true input states the exact size of the difference
 (`Reference.input_error`, absolute per column); it is added to the tolerance
-as it is (it is computed exactly, not estimated).
+as it is (it is computed exactly, not estimated). A column that is a small
+difference of large terms (a node's velocity in a stiff chain, whose spring
+forces nearly cancel) states the round-off one step may add to it
+(`Reference.roundoff`, absolute per column), added once per step.
 
 The range of the estimate (`estimate_range`). The formula keeps the first
 term of two expansions and drops the rest; it is a tolerance only where the
@@ -214,7 +217,7 @@ def tolerances(reference: Reference, integrator: str, dt: float, time: np.ndarra
             column = f"{joint}_{kind}"
             scale = float(np.max(np.abs(series)))
             rel = predicted[column] / scale if scale > 0 else predicted[column]
-            known = reference.input_error.get(column, 0.0)
+            known = reference.input_error.get(column, 0.0) + reference.roundoff.get(column, 0.0) * (len(time) - 1)
             out[column] = SAFETY * rel + (known / scale if scale > 0 else known) + floor
     return out
 

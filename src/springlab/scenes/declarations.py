@@ -324,6 +324,10 @@ class Reference:
         column -> exact max absolute difference [m or m/s] between the
         responses to the input the model realizes and the true input, added to
         that column's tolerance (`tolerance_basis` says where it comes from).
+    roundoff
+        column -> the absolute round-off [m or m/s] one step may add to it beyond the relative floor of 100 eps
+        per step, added times the number of steps to that column's tolerance: where the column is a small
+        difference of large terms (the velocity of a node of a stiff chain, whose spring forces nearly cancel).
     scales
         column -> the scale [m or m/s] its max_rel is relative to where the exact motion
         has none (max |ref| = 0: a block held at rest); otherwise max |ref| is.
@@ -339,6 +343,7 @@ class Reference:
     tolerance_of: Callable[[str], float] | None = None
     switches: list[tuple[float, np.ndarray]] = dataclasses.field(default_factory=list)
     input_error: dict[str, float] = dataclasses.field(default_factory=dict)
+    roundoff: dict[str, float] = dataclasses.field(default_factory=dict)
     scales: dict[str, float] = dataclasses.field(default_factory=dict)
 
 

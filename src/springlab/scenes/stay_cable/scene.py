@@ -43,7 +43,7 @@ from springlab.errors import ParameterError
 from springlab.exact.cable import whole_elements
 from springlab.scenes.base import Case, Check, Parameter, Reference, Scenario, Scene
 from springlab.scenes.capabilities.random_load import RandomLoadSpec
-from springlab.sim.simulate import Setup, Trajectory
+from springlab.sim.simulate import ROUNDOFF_PER_STEP, Setup, Trajectory
 
 from . import answers, build, figures, modal, stationary
 from .readback import CableModel, cable_model
@@ -295,7 +295,7 @@ class StayCable(Scene):
         for i, block in enumerate(blocks):
             system[2 * i : 2 * i + 2, 2 * i : 2 * i + 2] = block
         states = np.column_stack([series for joint in joints for series in (pos[joint], vel[joint])])
-        return Reference(pos=pos, vel=vel, system=system, states=states, rows=rows)
+        return Reference(pos=pos, vel=vel, system=system, states=states, rows=rows, roundoff=_roundoff(case, pos, dt))
 
     # -- results ----------------------------------------------------------------------
 
@@ -352,6 +352,21 @@ class StayCable(Scene):
 
 
 # -- helpers ----------------------------------------------------------------------------------------
+
+
+def _roundoff(case: Case, pos: dict[str, np.ndarray], dt: float) -> dict[str, float]:
+    """Round-off [m/s] one step may add to a reported node's velocity (`Reference.roundoff`).
+
+    A node's acceleration is the sum of its springs' forces, (T / dx) (q[i-1] - 2 q[i] + q[i+1]) / (m dx):
+    terms up to 4 T / (m dx^2) max|q| [m/s^2] that nearly cancel in a smooth mode, so each step's velocity carries
+    ROUNDOFF_PER_STEP of their absolute sum times dt, whatever the velocity's own size (a short run from rest,
+    whose velocities are still small, sees it first). The largest node's max|q| stands for every node's.
+    """
+    lumped = cable_model(case).lumped
+    force_rate = float(np.max(np.abs(lumped.stiffness).sum(axis=1) / lumped.mass))  # [1/s^2]
+    largest = max(float(np.max(np.abs(series))) for series in pos.values())
+    per_step = ROUNDOFF_PER_STEP * force_rate * largest * dt
+    return {f"{joint}_vel": per_step for joint in pos}
 
 
 def _free_mode(case: Case) -> tuple[modal.Mode, int]:
