@@ -167,3 +167,11 @@ def test_importing_springlab_imports_no_scene():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split("\n")
     assert out[:2] == ["[]", "True"]
+
+
+@pytest.mark.parametrize("name", springlab.STUDIES)
+def test_no_user_input_of_a_study_is_typed_any(name):
+    """Typed values in, checked by mypy: a user input typed `Any` would hide the command line's strings."""
+    signature = inspect.signature(_study(name), eval_str=True)
+    untyped = [p.name for p in signature.parameters.values() if "Any" in str(p.annotation)]
+    assert not untyped, f"springlab.{name}: {untyped} typed Any"
