@@ -46,13 +46,14 @@ from springlab.studies.settings import (
     work_per_evaluation,
 )
 
+from .creep import creep_at
 from .limits import ConstraintFlag, Limit, RunProbe, constraint_flags, stability_limits, watch
 from .options import DEFAULT_PERTURB, DEFAULT_TOL, Options, check_options, resolve_duration
 from .parts import Excitation, Linearity, OwnSetting, PointReport, ReferenceUsed, Timings
 from .results import Audit
 from .ship import Runner, ship
 from .source import Source, load
-from .start import Start, excitation, point_report, start_of
+from .start import REST_FRACTION, Start, excitation, point_report, start_of
 from .sweep import (
     MAX_SAMPLES,
     REFERENCE_FRACTION,
@@ -226,6 +227,9 @@ def _limits(at: ModelAtPoint, start: Start, options: Options, duration: float, r
     flags = tuple(constraint_flags(model, float(model.opt.timestep)))
     seen = watch(model, start.setup, duration)
     point_state = point_report(at, seen, options.settle_s, options.perturb, duration)
+    if not point_state.at_rest:  # what keeps it moving: creep under dry friction, or motion that dies out
+        creep, helps = creep_at(at, duration, REST_FRACTION * options.perturb)
+        point_state = dataclasses.replace(point_state, creep=creep, settling_helps=helps)
     qvel = start.setup.qvel
     start_speed = float(abs(qvel).max(initial=0.0)) if qvel is not None else 0.0
     gravity = float(math.hypot(*model.opt.gravity))

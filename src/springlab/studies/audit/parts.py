@@ -119,6 +119,12 @@ class PointReport:
     linear_map
         whether MuJoCo's one-step map is the dynamics (nothing of `along_motion` is active), so the
         limits come from it; otherwise they come from nonlinear runs.
+    creep
+        the bodies dry friction holds (Coulomb margin above 1) that creep at the point
+        (springlab.studies.audit.creep.CreepFinding): MuJoCo's soft-friction model error.
+    settling_helps
+        whether a run from the point moves at most half as much over its second half as over its first, so
+        settling longer would bring it closer to rest (None: not measured).
     """
 
     settle_s: float | None
@@ -127,10 +133,12 @@ class PointReport:
     at_rest: bool
     drift_m: float
     linear_map: bool
+    creep: tuple[Any, ...] = ()
+    settling_helps: bool | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """audit.json's "operating_point_state": {"settle_s", "at_point", "along_motion", "at_rest",
-        "drift_m", "linear_map"}."""
+        "drift_m", "linear_map", "creep", "settling_helps"}."""
         return {
             "settle_s": self.settle_s,
             "at_point": self.at_point.to_dict(),
@@ -138,6 +146,8 @@ class PointReport:
             "at_rest": self.at_rest,
             "drift_m": self.drift_m,
             "linear_map": self.linear_map,
+            "creep": [c.to_dict() for c in self.creep],
+            "settling_helps": self.settling_helps,
         }
 
 
