@@ -11,6 +11,12 @@ from typing import Any
 
 from springlab.exact.constraints import ConstraintState
 
+#: what a run of a setting shows, one word each: "stable" (bounded, below any confirmed limit), and past a
+#: confirmed limit "blows up" (MuJoCo flags it or its speed runs away), "spins" (a hinge turns over and keeps
+#: turning), "saturates" (it grows, then stops growing: a nonlinear model's amplitude is bounded), "grows" (still
+#: growing at the run's end) or "bounded" (the run did not grow within its steps, though runs just above the limit do)
+BEHAVIOURS = ("stable", "blows up", "spins", "saturates", "grows", "bounded")
+
 
 @dataclasses.dataclass(frozen=True)
 class OwnSetting:
@@ -37,6 +43,13 @@ class OwnSetting:
     cost
         its counted work [DOF-evaluations] (springlab.studies.settings.counted_cost), what the
         recommendation's cost is compared with.
+    behaviour
+        what a run of it shows, one word (BEHAVIOURS): "stable" below its limit (or with none), else "blows up",
+        "spins", "saturates", "grows" or "bounded" (past a confirmed limit, the run did not grow within its steps).
+        Only "stable" is stable.
+    growth
+        how many times its start's deviation from the operating point the run reached [-] (None: not measured,
+        or it blew up).
     """
 
     integrator: str
@@ -47,10 +60,12 @@ class OwnSetting:
     wall_time_s: float
     margin_confirmed: bool | None = None
     cost: float = math.nan
+    behaviour: str = "stable"
+    growth: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """audit.json's "own_setting": {"integrator", "dt", "stable", "error", "margin", "wall_time_s",
-        "margin_confirmed", "cost"}."""
+        "margin_confirmed", "cost", "behaviour", "growth"}."""
         return dataclasses.asdict(self)
 
 

@@ -173,7 +173,15 @@ def own_stability(audit: AuditFacts) -> str:
     how = f"{limit.method}, {'confirmed by runs' if limit.confirmed else 'UNCONFIRMED'}"
     if not own.stable:
         confirmed = f" (limit {figure:.3g} s, {how})" if figure is not None and limit.confirmed else ""
-        return f"is UNSTABLE: a run of it blows up{confirmed}"
+        shown = {
+            "blows up": "blows up",
+            "spins": "spins (a hinge turns over and keeps turning)",
+            "saturates": f"saturates (it grows {own.growth or 0:.3g}-fold from its start, then stops growing)",
+            "grows": f"grows ({own.growth or 0:.3g}-fold from its start, still growing at its end)",
+            "bounded": "stays bounded over its steps, though runs just above the limit grow",
+        }[own.behaviour]
+        past = f", {own.dt / figure:.3g}x its limit" if figure is not None and limit.confirmed else ""
+        return f"is UNSTABLE{past}: a run of it {shown}{confirmed}"
     if figure is None:
         bounded = limit.runs_bounded_dt_s
         text = "has no stability limit up to the duration"
