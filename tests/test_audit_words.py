@@ -14,10 +14,10 @@ import math
 import mujoco
 import numpy as np
 import pytest
-from test_linearize import chain_frequencies, chain_xml, pendulum_xml
 
 from springlab.studies.audit.audit import audit
 from springlab.studies.audit.parts import BEHAVIOURS
+from test_linearize import chain_frequencies, chain_xml, pendulum_xml
 
 #: RK4's stability limit on an undamped mode: omega dt < 2 sqrt(2)
 RK4_LIMIT = 2 * math.sqrt(2)
