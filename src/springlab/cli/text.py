@@ -34,6 +34,12 @@ if TYPE_CHECKING:  # annotations only: these load mujoco.batch, scipy or sysid, 
     from springlab.studies.sweeps import Sweep
 
 
+def print_question_answer(question: str, answer: str) -> None:
+    """A study's question and its answer, the first lines it prints (the same words as its JSON's)."""
+    print(f"Question: {question}")
+    print(f"Answer: {answer}")
+
+
 def check_line(check: Check) -> str:
     """'period_s  value 1.234  ref 1.234  error 1.0e-09 <= 1.0e-06 pass' for a Check."""
     return (
@@ -152,7 +158,9 @@ def _recommendation_line(pick: Recommendation, time_s: float | None) -> str:
 
 
 def print_tradeoff(result: tradeoff.Tradeoff, output: str | None) -> None:
-    """`springlab tradeoff`: every (integrator, dt) run, the observed orders and the recommendation."""
+    """`springlab tradeoff`: the question and answer, every (integrator, dt) run, the observed orders and the
+    recommendation."""
+    print_question_answer(result.question, result.answer)
     print(
         f"{result.scene} / {result.scenario}: {len(result.runs)} runs over {result.duration:g} s"
         f" in {result.sweep_wall_time_s:.1f} s"
@@ -200,6 +208,7 @@ def print_frequency(result: FrequencyResponse, output: str | None) -> None:
 
 def print_stability(report: StabilityReport, output: str | None) -> None:
     """`springlab stability`: boundaries omega*dt [-] against theory, the extremes table, undamped energy."""
+    print_question_answer(report.question, report.answer)
     print("stability boundary omega*dt (measured by a growth test vs theory)")
     print(f"  {'integrator':<13}{'zeta':>7}{'measured':>12}{'theory':>12}{'rel diff':>10}")
     for b in report.boundaries:
@@ -236,7 +245,8 @@ def print_stability(report: StabilityReport, output: str | None) -> None:
 
 
 def print_design(study: Study, output: str | None) -> None:
-    """`springlab design`: the study's size and speed, ranked elasticities [-] and the answer."""
+    """`springlab design`: the question and answer, the study's size and speed, ranked elasticities [-]."""
+    print_question_answer(study.question, study.answer)
     where = f" on {study.nthread} threads" if study.executor == "local" else f" on {study.executor}"
     print(
         f"{study.scene} design study: {study.size} configurations ({study.levels} levels of "
@@ -257,13 +267,13 @@ def print_design(study: Study, output: str | None) -> None:
         f"  log-log fit R^2 {study.regression_r2:.3f}; analytic estimate / simulation: median"
         f" {float(np.median(ratio)):.3f}, 5-95% {float(np.percentile(ratio, 5)):.3f}-{float(np.percentile(ratio, 95)):.3f}"
     )
-    print(study.answer)
     if output:
         print(f"  wrote {pathlib.Path(output) / 'design.json'}, configurations.csv and design.png")
 
 
 def print_sobol(indices: SobolStudy, output: str | None) -> None:
     """`springlab design --sobol`: first-order and total Sobol indices [-] with their 95% half-widths."""
+    print_question_answer(indices.question, indices.answer)
     print(
         f"Sobol indices of {indices.merit}: {indices.runs} runs in {indices.wall_time_s:.1f} s on {indices.executor}"
         f" ({indices.runs / indices.wall_time_s:.0f}/s), {indices.unsettled} unsettled"
@@ -278,7 +288,6 @@ def print_sobol(indices: SobolStudy, output: str | None) -> None:
             f"{st[name]:>8.3f}+-{st_conf[name]:<4.2f}{indices.interactions[name]:>8.3f}"
             f"{indices.elasticities[name]:>+12.3f}"
         )
-    print(indices.answer)
     if output:
         print(f"  wrote {pathlib.Path(output) / 'sobol.png'} and the sobol entry of design.json")
 
@@ -287,6 +296,7 @@ def print_sweep(result: Sweep, quantity: str | None, output: str | None) -> None
     """`springlab sweep`: counts by outcome and the range of `quantity` (default: the scenario's headline)."""
     from springlab.plots import sweep as sweep_plot  # mujoco.batch only for the command that sweeps
 
+    print_question_answer(result.question, result.answer)
     print(
         f"{result.scene} / {result.scenario}: {result.size} configurations ({result.integrator},"
         f" dt = {result.dt:g} s, {result.duration:g} s each) in {result.wall_time_s:.2f} s on {result.executor}"

@@ -94,10 +94,10 @@ def refine_figure(result: Refinement) -> Figure:
     for name in dict.fromkeys(r.integrator for r in result.runs):
         best = []
         for size in sizes:
-            errors = [
+            errors = [  # valid runs only: one beyond its stability limit ended before its blow-up showed
                 r.integration_error
                 for r in result.runs
-                if r.size == size and r.integrator == name and r.integration_error
+                if r.size == size and r.integrator == name and r.integration_error and r.run.valid
             ]
             if errors:
                 best.append((size, min(errors)))

@@ -45,6 +45,7 @@ from springlab.exact.limits import stability_limit
 from springlab.sim.batch import RECORD_SPEC, run_batched
 from springlab.sim.simulate import BAD_WARNINGS, INTEGRATORS, integrator_id, quiet_mujoco
 
+from . import answers
 from .executor import Executor, resolve
 from .extremes import (
     ACCURACY,
@@ -591,6 +592,30 @@ class StabilityReport(display.Shown):
                 return row
         raise KeyError(f"no boundary measured for {integrator!r} at zeta = {zeta:g}")
 
+    @property
+    def question(self) -> str:
+        """What the report asks, in words."""
+        return (
+            "At which omega*dt does each of MuJoCo's integrators go unstable on the damped oscillator, and does"
+            " the measured boundary agree with the theory?"
+        )
+
+    @property
+    def answer(self) -> str:
+        """The undamped boundaries and the agreement with theory, in one or two sentences."""
+        undamped = [b for b in self.boundaries if b.zeta == 0.0 and math.isfinite(b.measured_omega_dt)]
+        measured = ", ".join(f"{b.integrator} {b.measured_omega_dt:.4g}" for b in undamped)
+        within = sum(b.within_tolerance for b in self.boundaries)
+        worst = max((b.relative_difference for b in self.boundaries), default=math.nan)
+        head = (
+            f"Undamped (zeta = 0), the measured limits of omega*dt are {measured}" if measured else "No limit measured"
+        )
+        agree = "agree" if self.passed else "do not all agree"
+        return (
+            f"{head}. {within} of {len(self.boundaries)} measured boundaries {agree} with the theory, the largest"
+            f" relative difference {worst:.2g}."
+        )
+
     def _shown(self) -> display.Summary:
         """The report as a notebook shows it: every boundary within tolerance or not, then the boundaries."""
         worst = max((b.relative_difference for b in self.boundaries), default=None)
@@ -630,6 +655,7 @@ class StabilityReport(display.Shown):
         """stability.json and `springlab stability --json`: {"boundaries", "extremes", "energy", "growth_test",
         "accuracy_threshold", "wall_time_s"} (the energy series and the map are drawn, not stored)."""
         return {
+            **answers.question_answer(self.question, self.answer),
             "boundaries": [row.to_dict() for row in self.boundaries],
             "extremes": [row.to_dict() for row in self.extremes],
             "energy": [row.to_dict() for row in self.energy],

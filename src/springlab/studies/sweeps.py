@@ -34,6 +34,7 @@ from springlab.scenes.base import Case
 from springlab.sim.batch import run_rollout
 from springlab.sim.simulate import check_timing, integrator_id
 
+from . import answers
 from .executor import Executor, chunked, resolve
 
 if TYPE_CHECKING:
@@ -257,6 +258,63 @@ class Sweep(display.Shown):
                     names.append(name)
         return names
 
+    @property
+    def headline(self) -> str | None:
+        """The quantity the sweep answers by default: the scenario's last numeric quantity that every
+        configuration that ran has (its headline result, e.g. max_displacement_m), else the first error column
+        ('<col>_max_rel'); None when nothing ran."""
+        ran = [row for row in self.rows if row.quantities]
+        names = [n for n in self.quantity_names() if all(n in row.quantities for row in ran)]
+        if names:
+            return names[-1]
+        errors = [c for row in self.rows for c in row.errors]
+        return f"{errors[0]}_max_rel" if errors else None
+
+    @property
+    def question(self) -> str:
+        """What the sweep asks, in words."""
+        varied = ", ".join(a.name for a in self.axes)
+        what = self.headline or "the result"
+        return (
+            f"How does {what} of {self.scene} / {self.scenario} vary with {varied} over {self.size} configurations"
+            f" ({self.integrator}, {answers.dt_text(self.dt)}), and which pass their check?"
+        )
+
+    @property
+    def answer(self) -> str:
+        """The counts and the headline's range over the passed configurations, with units."""
+        counts = (
+            f"{self.passed} of {self.size} configurations passed, {self.failed} failed, {self.diverged} diverged"
+            + (f", {self.invalid} invalid" if self.invalid else "")
+        )
+        name = self.headline
+        if name is None:
+            return f"{counts}."
+        values = self.column(name)
+        passed = np.array([row.passed is True for row in self.rows])
+        shown = passed & np.isfinite(values)
+        if not shown.any():
+            return f"{counts}; no passed configuration has a value of {name}."
+        low, high = (
+            int(np.flatnonzero(shown)[np.argmin(values[shown])]),
+            int(np.flatnonzero(shown)[np.argmax(values[shown])]),
+        )
+        unit = "" if name.endswith("_max_rel") else answers.unit_of(name)
+        if answers.amount(float(values[low]), unit) == answers.amount(float(values[high]), unit):
+            return f"{counts}. {name} is {answers.amount(float(values[low]), unit)} in every passed one."
+        return (
+            f"{counts}. Over the passed ones {name} ranges from {answers.amount(float(values[low]), unit)}"
+            f" ({self._where(low)}) to {answers.amount(float(values[high]), unit)} ({self._where(high)})."
+        )
+
+    def _where(self, index: int) -> str:
+        """'damping = 0.5 N s/m, stiffness = 200 N/m': the varied values of configuration `index`, with units."""
+        known = scenes.SCENES.get(self.scene)
+        units = {name: (p.unit if p.unit != "-" else "") for name, p in known.parameters.items()} if known else {}
+        return ", ".join(
+            f"{name} = {answers.amount(float(self.values[name][index]), units.get(name, ''))}" for name in self.values
+        )
+
     def column(self, name: str) -> np.ndarray:
         """(n,) values of a varied parameter, a quantity, or an error column ('<col>_max_rel') [their units]."""
         if name in self.values:
@@ -331,6 +389,7 @@ class Sweep(display.Shown):
         """What `springlab sweep --json` prints: setting, axes, counts, timings and every row (plain JSON values)."""
         return json_ready(
             {
+                **answers.question_answer(self.question, self.answer),
                 "scene": self.scene,
                 "scenario": self.scenario,
                 "integrator": self.integrator,

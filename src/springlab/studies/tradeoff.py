@@ -32,9 +32,11 @@ from springlab.scenes.base import Case, Scenario, Scene
 from springlab.sim.batch import TIMING_STEPS, run_batched, time_run
 from springlab.sim.simulate import INTEGRATORS, ORDERS, Setup, check_timing, integrator_id
 
+from . import answers
 from .executor import Executor, chunked
 from .settings import (
     COST_BASIS,
+    COST_UNIT,
     Recommendation,
     Run,
     RunFields,
@@ -177,6 +179,35 @@ class Tradeoff(display.Shown):
     sweep_wall_time_s: float = 0.0
     limits: dict[str, float | None] = dataclasses.field(default_factory=dict)
 
+    @property
+    def question(self) -> str:
+        """What the trade-off asks, in words (with a tolerance: the cheapest setting that meets it)."""
+        pick = self.recommendation
+        over = f"{self.scene} / {self.scenario} over {answers.amount(self.duration, 's')}"
+        if pick is None:
+            return (
+                f"How does the error of {over} fall with the timestep, and what does each integrator's accuracy cost?"
+            )
+        return f"Which integrator and timestep simulate {over} within {pick.tolerance:g} (relative) for the least work?"
+
+    @property
+    def answer(self) -> str:
+        """The answer in one or two sentences with units: the verified pick (or why none), the observed orders."""
+        orders = ", ".join(f"{name} {p:.2f}" for name, p in self.orders.items() if p is not None)
+        orders = f"observed orders of accuracy: {orders}" if orders else "no observed order (too few accurate runs)"
+        pick = self.recommendation
+        if pick is None:
+            valid = sum(r.run.valid for r in self.runs)
+            return f"Of {len(self.runs)} settings {valid} ran valid and {sum(r.diverged for r in self.runs)} diverged; {orders}."
+        if not pick.found or pick.row is None or pick.dt is None:
+            return f"No setting meets {pick.tolerance:g}: {pick.text} {orders[:1].upper()}{orders[1:]}."
+        row = pick.row
+        return (
+            f"{pick.integrator} at {answers.dt_text(pick.dt)} ({row.steps} steps, {row.cost:.4g} {COST_UNIT} of work)"
+            f" is the cheapest setting within {pick.tolerance:g}: its verification run's max relative error is"
+            f" {answers.error_text(pick.error)}. {orders[:1].upper()}{orders[1:]}."
+        )
+
     def _shown(self) -> display.Summary:
         """The trade-off as a notebook shows it: the recommendation first, the orders, then the runs."""
         pick = self.recommendation
@@ -217,6 +248,7 @@ class Tradeoff(display.Shown):
         pick = self.recommendation
         return json_ready(
             {
+                **answers.question_answer(self.question, self.answer),
                 "scene": self.scene,
                 "scenario": self.scenario,
                 "duration": self.duration,

@@ -322,6 +322,11 @@ class SobolStudy(display.Shown):
         return float(sum(self.indices["S1"].values()))
 
     @property
+    def question(self) -> str:
+        """What the Sobol study asks, in words."""
+        return f"Which properties drive the variance of the {self.merit}, alone and through their interactions?"
+
+    @property
     def answer(self) -> str:
         """Which properties matter, in words, with the study's numbers."""
         s1, st, conf = self.indices["S1"], self.indices["ST"], self.indices["ST_conf"]
@@ -378,6 +383,8 @@ class SobolStudy(display.Shown):
         runs (docs/sweeps.md), and more; JSON-ready (inf and nan as None)."""
         return files.json_ready(
             {
+                "question": self.question,
+                "answer": self.answer,
                 "parameters": {
                     n: {"unit": self.units[n], "range": list(self.ranges[n]), "log_uniform": True} for n in self.names
                 },

@@ -342,7 +342,12 @@ class Study(display.Shown):
 
     def to_dict(self) -> dict[str, Any]:
         """What `springlab design --json` prints and design.json holds (JSON-ready: inf and nan as None)."""
-        return files.json_ready(self._facts())
+        return files.json_ready({"question": self.question, "answer": self.answer, **self._facts()})
+
+    @property
+    def question(self) -> str:
+        """The design question the scene declares (`DesignSpec.question`)."""
+        return self.design.question
 
     def _facts(self) -> dict[str, Any]:
         """to_dict's entries before JSON (an unsettled time still inf), for the answer's words."""
