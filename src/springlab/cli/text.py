@@ -190,6 +190,7 @@ def print_tradeoff(result: tradeoff.Tradeoff, output: str | None) -> None:
 def print_audit(result: Audit, output: str | None) -> None:
     """`springlab audit`: the audit's message (modes, your setting's margin and error, the cheapest setting
     meeting tol) and what was written."""
+    print_question_answer(result.question, result.answer)
     print(result.message)
     if output:
         print(f"wrote {pathlib.Path(output) / 'audit.json'} and audit.png")
@@ -198,6 +199,7 @@ def print_audit(result: Audit, output: str | None) -> None:
 def print_frequency(result: FrequencyResponse, output: str | None) -> None:
     """`springlab frequency`: a few lines, the band the setting reproduces, resonances, the dt each integrator
     needs, and what was written."""
+    print_question_answer(result.question, result.answer)
     print(f"{result.description} ({result.source})")
     for line in result.verdict():
         print(f"  {line}")
@@ -326,6 +328,7 @@ def print_sweep(result: Sweep, quantity: str | None, output: str | None) -> None
 def print_friction_settings(study: FrictionSettings, output: str | None) -> None:
     """`springlab friction-settings`: per case MuJoCo's default, the model errors, the Pareto front and the pick."""
     integrator, dt = study.mujoco_default
+    print_question_answer(study.question, study.answer)
     print(
         f"{study.scene}: {study.runs} runs in {study.wall_time_s:.1f} s ({', '.join(study.integrators)};"
         f" dt = {', '.join(f'{d:g}' for d in study.dts)} s); baseline MuJoCo's defaults ({integrator}, dt = {dt:g} s)"
@@ -350,7 +353,9 @@ def print_friction_settings(study: FrictionSettings, output: str | None) -> None
 
 
 def print_fit(result: FitResult, output: str | None) -> None:
-    """`springlab fit`: the record used, each estimate with its 95% interval (in its unit), the verdict."""
+    """`springlab fit`: the question and answer (the verdict), the record used, each estimate with its 95%
+    interval (in its unit)."""
+    print_question_answer(result.question, result.answer)
     record = result.record
     print(
         f"{result.scene} / {result.scenario} from {record.column} ({record.time.size} samples,"
@@ -385,7 +390,6 @@ def print_fit(result: FitResult, output: str | None) -> None:
         print(f"  convergence: {judged['reason']}")
     if result.run_note:
         print(f"  note: {result.run_note}")
-    print(result.verdict)
     if output:
         wrote = "fit.json, fit.png" + (", trajectory.csv and summary.json" if result.run is not None else "")
         print(f"  wrote {wrote} under {output}")
@@ -400,9 +404,10 @@ def print_demo(rows: Sequence[ValidationRow], artifacts: int, out: pathlib.Path 
 
 def print_refine(result: Refinement, output: str | None) -> None:
     """`springlab refine`: per size the discretization error and the costs, the Pareto front, the recommendation."""
+    print_question_answer(result.question, result.answer)
     size = result.size_parameter
     print(
-        f"{result.scene} / {result.scenario}: {result.description} ({result.question}), {len(result.runs)} runs"
+        f"{result.scene} / {result.scenario}: {result.description} ({result.quantity}), {len(result.runs)} runs"
         f" over {result.duration:g} s in {result.sweep_wall_time_s:.1f} s"
     )
     names = list(result.cost_growth)

@@ -20,7 +20,6 @@ SCALES: dict[str, tuple[tuple[str, float], ...]] = {
     "m/s": (("m/s", 1.0), ("mm/s", 1e-3), ("µm/s", 1e-6), ("nm/s", 1e-9)),
     "m/s^2": (("m/s²", 1.0), ("mm/s²", 1e-3), ("µm/s²", 1e-6)),
     "rad/s": (("rpm", 2.0 * math.pi / 60.0),),
-    "Hz": (("kHz", 1e3), ("Hz", 1.0), ("mHz", 1e-3)),
 }
 
 #: a quantity's name ends in its SI unit (DESIGN: `omega_rad_s`, `static_sag_m`): suffix -> unit

@@ -15,6 +15,7 @@ from springlab import display, tables
 from springlab.files import json_ready
 from springlab.scenes.capabilities.friction import FrictionMeasure, SolverSetting
 
+from . import answers
 from .settings import COST_BASIS, Recommendation, Run, RunFields
 
 if TYPE_CHECKING:
@@ -211,7 +212,7 @@ class CaseStudy:
         if default is not None and default.max_rel_error is not None:
             values = _values_text(self.measures, default.values)
             parts.append(
-                f"at MuJoCo's defaults ({default.integrator}, dt = {default.dt:g} s) its error is"
+                f"at MuJoCo's defaults ({default.integrator}, {answers.dt_text(default.dt)}) its error is"
                 f" {default.max_rel_error:.2g}{values}."
             )
         if model is not None and model.model_error is not None:
@@ -231,7 +232,7 @@ class CaseStudy:
                 ties = f"; {len(pick.ties)} other settings tie with it in counted work" if pick.ties else ""
                 parts.append(
                     f"Cheapest setting meeting {pick.tolerance:g}: {self.describe(pick.row.settings)} with"
-                    f" {pick.row.integrator} at dt = {pick.row.dt:g} s, error {error_text(pick.error)}{values}"
+                    f" {pick.row.integrator} at {answers.dt_text(pick.row.dt)}, error {error_text(pick.error)}{values}"
                     f" (verified by a run), {cost}{ties}."
                 )
             else:
@@ -299,9 +300,42 @@ class FrictionSettings(display.Shown):
         """Runs in the sweep."""
         return sum(len(c.runs) for c in self.cases)
 
-    def answer(self) -> str:
+    def answer_by_case(self) -> str:
         """How much MuJoCo's friction drifts and what it costs to make it stop, one paragraph per case."""
         return "\n".join(case.answer() for case in self.cases)
+
+    @property
+    def question(self) -> str:
+        """What the study asks, in words."""
+        integrator, dt = self.mujoco_default
+        within = f", and which solver setting is the cheapest within {self.tol:g}" if self.tol is not None else ""
+        return (
+            f"How far from the exact Coulomb answer is MuJoCo's dry friction in {', '.join(c.scenario for c in self.cases)}"
+            f" at its defaults ({integrator}, {answers.dt_text(dt)}){within}?"
+        )
+
+    @property
+    def answer(self) -> str:
+        """Per case, the error at MuJoCo's defaults and the verified cheapest setting, in one sentence each."""
+        parts = []
+        for case in self.cases:
+            default, pick = case.default, case.pick
+            at_default = (
+                "diverged at the defaults"
+                if default is None or default.max_rel_error is None
+                else f"error {error_text(default.max_rel_error)} at the defaults"
+            )
+            if pick is None:
+                parts.append(f"{case.scenario}: {at_default}")
+            elif pick.row is not None and pick.found:
+                parts.append(
+                    f"{case.scenario}: {at_default}; cheapest within {pick.tolerance:g}:"
+                    f" {case.describe(pick.row.settings)} with {pick.row.integrator} at {answers.dt_text(pick.row.dt)},"
+                    f" error {error_text(pick.error)}"
+                )
+            else:
+                parts.append(f"{case.scenario}: {at_default}; no verified setting within {pick.tolerance:g}")
+        return ". ".join(parts) + "."
 
     def _shown(self) -> display.Summary:
         """The study as a notebook shows it: the picks first (or that none was asked for), then the runs."""
@@ -317,7 +351,7 @@ class FrictionSettings(display.Shown):
             f"{self.scene}: {', '.join(c.scenario for c in self.cases)}",
             verdict,
             ok,
-            self.answer(),
+            self.answer,
             (
                 display.Fact("runs", self.runs),
                 display.Fact("integrators", ", ".join(self.integrators)),
@@ -349,6 +383,7 @@ class FrictionSettings(display.Shown):
         cost_basis."""
         return json_ready(
             {
+                **answers.question_answer(self.question, self.answer),
                 "scene": self.scene,
                 "parameters": dict(self.overrides),
                 "tol": self.tol,
@@ -373,9 +408,10 @@ def error_text(value: float | None) -> str:
 
 
 def _values_text(measures: Sequence[FrictionMeasure], values: Mapping[str, float | None]) -> str:
-    """'; creep velocity ... 1.8e-03' for the measures with a value."""
+    """' (stop position -5.34 mm; creep velocity 1.8 mm/s)' for the measures with a value, each in the unit its
+    name ends in (springlab.studies.answers)."""
     shown = [
-        f"{m.label.split(' (')[0].split(' [')[0]} {values[m.quantity]:.3g}"
+        f"{m.label.split(' (')[0].split(' [')[0]} {answers.quantity(m.quantity, values[m.quantity] or 0.0)}"
         for m in measures
         if values.get(m.quantity) is not None and math.isfinite(values[m.quantity] or math.nan)
     ]

@@ -43,6 +43,7 @@ from springlab.scenes.base import Scene
 from springlab.sim.batch import TIMING_STEPS, time_run
 from springlab.sim.simulate import INTEGRATORS, MAX_STEPS, check_timing, integrator_id
 
+from . import answers
 from .executor import Executor
 from .settings import (
     COST_BASIS,
@@ -216,8 +217,8 @@ class Refinement(display.Shown):
     ----------
     scene, scenario
         names.
-    question, description
-        the measured quantity and the question in words.
+    quantity, description
+        the measured quantity's name and what it is in words (`question`: the study's question).
     size_parameter, size_description
         the parameter that sets the size and what it counts.
     duration
@@ -247,7 +248,7 @@ class Refinement(display.Shown):
 
     scene: str
     scenario: str
-    question: str
+    quantity: str
     description: str
     size_parameter: str
     size_description: str
@@ -262,6 +263,38 @@ class Refinement(display.Shown):
     step_cost_growth: float | None
     recommendation: Recommendation[RefineRun] | None = None
     sweep_wall_time_s: float = 0.0
+
+    @property
+    def question(self) -> str:
+        """What the study asks, in words."""
+        pick = self.recommendation
+        within = f" within {pick.tolerance:g} (relative) of the continuum's value" if pick is not None else ""
+        return (
+            f"How large a model ({self.size_parameter}), which integrator and which timestep does {self.description}"
+            f" of {self.scene} / {self.scenario} need{within}, for the least work?"
+        )
+
+    @property
+    def answer(self) -> str:
+        """The verified pick (or why none) and the discretization's order, with units."""
+        order = self.discretization_order
+        trend = (
+            f"the discretization error falls as {self.size_parameter}^-{order:.2f} (expected {self.expected_order:g})"
+            if order is not None
+            else "too few sizes for the discretization's order"
+        )
+        pick = self.recommendation
+        if pick is None:
+            return f"{trend[:1].upper()}{trend[1:]}; the Pareto front has {len(self.pareto)} settings (no tolerance asked)."
+        if not pick.found or pick.row is None or pick.dt is None:
+            return f"No setting meets {pick.tolerance:g}: {pick.text} {trend[:1].upper()}{trend[1:]}."
+        row = pick.row
+        return (
+            f"{self.size_parameter} = {row.size} with {pick.integrator} at {answers.dt_text(pick.dt)} is the cheapest"
+            f" setting within {pick.tolerance:g}: error bound {row.error_bound:.2g} (discretization"
+            f" {row.discretization_error:.2g}, integration {row.integration_error:.2g}), verified by a run with error"
+            f" {answers.error_text(pick.error)}. {trend[:1].upper()}{trend[1:]}."
+        )
 
     def _shown(self) -> display.Summary:
         """The refinement as a notebook shows it: the recommendation first, the orders, then the sizes."""
@@ -283,7 +316,7 @@ class Refinement(display.Shown):
             ok,
             message,
             (
-                display.Fact("question", self.question),
+                display.Fact("quantity", self.quantity),
                 display.Fact("discretization order", self.discretization_order),
                 display.Fact("expected order", self.expected_order),
                 display.Fact("step cost growth", self.step_cost_growth),
@@ -306,7 +339,7 @@ class Refinement(display.Shown):
         return display.plot(self)
 
     def to_dict(self) -> dict[str, Any]:
-        """refine.json: scene, scenario, question, description, size_parameter, size_description, duration,
+        """refine.json: question, answer, scene, scenario, quantity, description, size_parameter, size_description, duration,
         parameters, runs, sizes, pareto, discretization_order, expected_order, cost_growth, step_cost_growth,
         recommendation, cost_basis, wall_time_basis, sweep_wall_time_s (plain JSON values)."""
         pick = self.recommendation
@@ -314,7 +347,8 @@ class Refinement(display.Shown):
             {
                 "scene": self.scene,
                 "scenario": self.scenario,
-                "question": self.question,
+                **answers.question_answer(self.question, self.answer),
+                "quantity": self.quantity,
                 "description": self.description,
                 "size_parameter": self.size_parameter,
                 "size_description": self.size_description,
@@ -471,7 +505,7 @@ def refine(
     return Refinement(
         scene=scene_obj.name,
         scenario=asked.scenario,
-        question=asked.name,
+        quantity=asked.name,
         description=asked.description,
         size_parameter=spec.size,
         size_description=spec.description,

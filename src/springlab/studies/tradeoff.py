@@ -197,13 +197,19 @@ class Tradeoff(display.Shown):
         orders = f"observed orders of accuracy: {orders}" if orders else "no observed order (too few accurate runs)"
         pick = self.recommendation
         if pick is None:
-            valid = sum(r.run.valid for r in self.runs)
-            return f"Of {len(self.runs)} settings {valid} ran valid and {sum(r.diverged for r in self.runs)} diverged; {orders}."
+            valid = [r for r in self.runs if r.run.valid]
+            if not valid:
+                return f"No setting ran valid (each diverged or ran beyond its stability limit); {orders}."
+            best = min(valid, key=lambda r: r.run.error or 0.0)  # valid: a finite error
+            return (
+                f"{orders[:1].upper()}{orders[1:]}; the most accurate valid run, {best.integrator} at"
+                f" {answers.dt_text(best.dt)}, has a max relative error of {answers.error_text(best.max_rel_error)}."
+            )
         if not pick.found or pick.row is None or pick.dt is None:
             return f"No setting meets {pick.tolerance:g}: {pick.text} {orders[:1].upper()}{orders[1:]}."
         row = pick.row
         return (
-            f"{pick.integrator} at {answers.dt_text(pick.dt)} ({row.steps} steps, {row.cost:.4g} {COST_UNIT} of work)"
+            f"{pick.integrator} at {answers.dt_text(pick.dt)} ({row.cost:.4g} {COST_UNIT} of counted work)"
             f" is the cheapest setting within {pick.tolerance:g}: its verification run's max relative error is"
             f" {answers.error_text(pick.error)}. {orders[:1].upper()}{orders[1:]}."
         )

@@ -380,7 +380,7 @@ class PrinterHeadDesign:
             f"{d['move_time_s'] * 1e3:.1f} ms of bang-bang move (the minimum at this force) and "
             f"{d['settling_time_s'] * 1e3:.1f} ms of settling (estimate {d['estimate_s'] * 1e3:.1f} ms total, "
             f"worst case {d['worst_case_estimate_s'] * 1e3:.1f} ms). Over the {summary['configurations']} "
-            f"configurations it ranges {summary['positioning_time_s']['min'] * 1e3:.1f}-"
+            f"configurations it ranges from {summary['positioning_time_s']['min'] * 1e3:.1f} ms to "
             f"{summary['positioning_time_s']['max'] * 1e3:.0f} ms. Which properties? By elasticity d ln T / d ln p: "
             + ", ".join(f"{p} {e[p]:+.2f}" for p in summary["ranking"])
             + "."

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 from springlab import display, tables
 from springlab.exact.linearize import Linearization
 from springlab.sim.simulate import Setup
+from springlab.studies import answers
 from springlab.studies.settings import COST_BASIS, Recommendation, Run
 
 from . import text
@@ -117,6 +118,39 @@ class Audit(display.Shown):
         rest, no motion, broken constraints, an unconverged reference)."""
         return text.message(self)
 
+    @property
+    def question(self) -> str:
+        """What the audit asks, in words."""
+        own = self.own
+        return (
+            f"Is {self.model}'s own setting ({own.integrator}, {answers.dt_text(own.dt)}) stable and within"
+            f" {self.tol:g} over {answers.amount(self.duration, 's')}, and which setting is the cheapest that is?"
+        )
+
+    @property
+    def answer(self) -> str:
+        """The own setting's stability and error, and the verified cheapest setting, with units."""
+        own, pick = self.own, self.recommendation
+        limit = self.stability[own.integrator]
+        if not own.stable:
+            state = "is unstable (a run of it blows up)"
+        elif limit.limit_dt_s is not None and limit.confirmed and own.margin is not None:
+            state = f"is stable with margin {own.margin:.3g}x (its limit {answers.dt_text(limit.limit_dt_s)})"
+        else:
+            state = "is stable (its run stays bounded)"
+        error = (
+            "not compared"
+            if own.error is None
+            else f"{answers.error_text(own.error)}, {'within' if own.error <= self.tol else 'outside'} {self.tol:g}"
+        )
+        head = f"Its own setting {state}; its error is {error}."
+        if not pick.found or pick.dt is None:
+            return f"{head} No verified setting meets {self.tol:g}."
+        return (
+            f"{head} The cheapest verified setting within {self.tol:g} is {pick.integrator} at"
+            f" {answers.dt_text(pick.dt)}, error {answers.error_text(pick.error)}."
+        )
+
     def _shown(self) -> display.Summary:
         """The audit as a notebook shows it: whether the model's own setting meets tol, then the numbers."""
         own, pick = self.own, self.recommendation
@@ -158,6 +192,7 @@ class Audit(display.Shown):
         own setting, sweep and recommendation, plus linearity, orders, pareto, reference, constraints and timings."""
         fastest = self.linear.fastest
         return {
+            **answers.question_answer(self.question, self.answer),
             "model": self.model,
             "operating_point": self.linear.point.to_dict(),
             "operating_point_state": self.point_state.to_dict(),

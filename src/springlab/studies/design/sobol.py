@@ -331,7 +331,7 @@ class SobolStudy(display.Shown):
         """Which properties matter, in words, with the study's numbers."""
         s1, st, conf = self.indices["S1"], self.indices["ST"], self.indices["ST_conf"]
         alone = ", ".join(f"{n} {s1[n]:.2f}" for n in self.ranking)
-        total = ", ".join(f"{n} {st[n]:.2f}+-{conf[n]:.2f}" for n in self.ranking)
+        total = ", ".join(f"{n} {st[n]:.2f} ± {conf[n]:.2f}" for n in self.ranking)
         inter = self.interactions
         through = [n for n in self.ranking if inter[n] > max(0.05, self.indices["ST_conf"][n])]
         elastic = self.elasticity_ranking

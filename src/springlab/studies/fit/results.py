@@ -145,6 +145,20 @@ class FitResult(display.Shown):
         """The one-line answer (see `verdict`)."""
         return verdict(self)
 
+    @property
+    def question(self) -> str:
+        """What the fit asks, in words: which values of the free parameters reproduce the record."""
+        record = self.record
+        return (
+            f"Which {', '.join(self.free)} of {self.scene} / {self.scenario} reproduce the record {record.column}"
+            f" ({record.time.size} samples from {record.time[0]:.4g} s to {record.time[-1]:.4g} s)?"
+        )
+
+    @property
+    def answer(self) -> str:
+        """The answer in words with units: the estimates with their 95% intervals, the residual (`verdict`)."""
+        return self.verdict
+
     def _shown(self) -> display.Summary:
         """The fit as a notebook shows it: converged or not with the one-line answer, then the estimates."""
         rows = [
@@ -184,6 +198,8 @@ class FitResult(display.Shown):
         r = self.record
         return files.json_ready(
             {
+                "question": self.question,
+                "answer": self.answer,
                 "scene": self.scene,
                 "scenario": self.scenario,
                 "signal": r.name,

@@ -12,6 +12,7 @@ import numpy as np
 
 from springlab import display, tables
 from springlab.exact.harmonic_balance import Duffing
+from springlab.studies import answers
 
 if TYPE_CHECKING:
     import pandas
@@ -315,6 +316,43 @@ class FrequencyResponse(display.Shown):
             "hold_error": self.hold_error,
         }
 
+    @property
+    def question(self) -> str:
+        """What the analysis asks, in words."""
+        lo, hi = self.band_hz
+        return (
+            f"What is the frequency response of {self.description} ({self.input} -> {self.response}) from"
+            f" {answers.amount(lo, 'Hz', 4)} to {answers.amount(hi, 'Hz', 4)}, and does {self.integrator} at"
+            f" {answers.dt_text(self.dt)} reproduce it within {self.tol:g}?"
+        )
+
+    @property
+    def answer(self) -> str:
+        """The band the setting reproduces, the resonances and the cheapest setting for the band, with units."""
+        lo, hi = self.band_hz
+        setting = f"{self.integrator} at {answers.dt_text(self.dt)}"
+        if self.within_tol_hz is None:
+            head = f"{setting} misses {self.tol:g} already at {answers.amount(lo, 'Hz', 4)}"
+        else:
+            word = "the whole band" if self.covers_band else "not the whole band"
+            head = (
+                f"{setting} reproduces it within {self.tol:g} from {answers.amount(lo, 'Hz', 4)} to"
+                f" {answers.amount(self.within_tol_hz[1], 'Hz', 4)} ({word})"
+            )
+        peaks = [
+            answers.amount(r.frequency_hz, "Hz", 4)
+            + ("" if r.damping_ratio is None else f" (damping ratio {r.damping_ratio:.3g})")
+            for r in self.resonances
+        ]
+        found = f"; it resonates at {', '.join(peaks)}" if peaks else "; no resonance in the band"
+        best = self.cheapest
+        cheapest = (
+            f" The cheapest setting covering the band: {best.integrator} at {answers.dt_text(best.max_dt_s)}."
+            if best is not None and best.max_dt_s is not None
+            else ""
+        )
+        return f"{head}{found}.{cheapest}"
+
     def verdict(self) -> list[str]:
         """A few lines for the terminal: the band the setting reproduces and the cheapest setting for the band."""
         lo, hi = self.band_hz
@@ -451,6 +489,7 @@ class FrequencyResponse(display.Shown):
         """frequency.json (docs/json.md lists the keys)."""
         rows = {name: column.tolist() for name, column in self.rows().items()}
         return {
+            **answers.question_answer(self.question, self.answer),
             "source": self.source,
             "description": self.description,
             "input": self.input,
