@@ -1,93 +1,105 @@
-"""Every study's question and its answer in words, with each number in the unit a reader expects.
+"""How a study writes its answer: the sentence and the SI numbers it quotes, as one `springlab.answer.Answer`.
 
-A study's result states its question and answers it in one or two sentences (`question`, `answer`): the
-command prints them first, `to_dict()` carries them as `question` and `answer` beside the numbers they quote
-(in SI), and both come from the one property, so the terminal and the JSON cannot disagree. The numbers in
-the words come from the same fields `to_dict()` writes, through the functions below: a length in m, mm or µm,
-a time in s, ms or µs, a speed in m/s, mm/s or µm/s, an angular speed in rpm, whichever keeps the mantissa
-between 1 and 1000 (tests/test_study_answers.py reads the numbers back out of the words and finds each in
-the JSON).
+Every study's result has `question_answer` (an Answer: its question, the answer in one or two sentences, and
+the numbers the sentence quotes, name -> SI value); `question` and `answer` are its two strings, the command
+prints `Answer.text()` first and `to_dict()` starts with `Answer.to_dict()` (`question`, `answer`,
+`answer_numbers`), so the terminal and the JSON cannot disagree. A study's sentence has parts that depend on
+its data (a pick or none, one resonance or three), so it is written with a `Quoter` rather than one template:
+each number goes through the quoter, which writes it in the unit a reader expects (springlab.answer's units:
+`~s` gives 2 ms, `~m/s` 1.8 mm/s, `rpm` from rad/s) and records it under its name.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
-#: SI unit -> the scaled units a sentence may use, largest first: (name, factor to SI)
-SCALES: dict[str, tuple[tuple[str, float], ...]] = {
-    "m": (("m", 1.0), ("mm", 1e-3), ("µm", 1e-6), ("nm", 1e-9)),
-    "s": (("s", 1.0), ("ms", 1e-3), ("µs", 1e-6)),
-    "m/s": (("m/s", 1.0), ("mm/s", 1e-3), ("µm/s", 1e-6), ("nm/s", 1e-9)),
-    "m/s^2": (("m/s²", 1.0), ("mm/s²", 1e-3), ("µm/s²", 1e-6)),
-    "rad/s": (("rpm", 2.0 * math.pi / 60.0),),
-}
+from springlab.answer import FAMILIES, UNITS, Answer, Quoted, quantity
 
-#: a quantity's name ends in its SI unit (DESIGN: `omega_rad_s`, `static_sag_m`): suffix -> unit
+#: a quantity's name ends in its SI unit (DESIGN: `omega_rad_s`, `static_sag_m`): suffix -> the unit (or
+#: family) a sentence writes it in
 SUFFIXES = (
-    ("_m_s2", "m/s^2"),
-    ("_m_s", "m/s"),
-    ("_rad_s", "rad/s"),
+    ("_m_s2", "m/s²"),
+    ("_m_s", "~m/s"),
+    ("_rad_s", "rpm"),
     ("_hz", "Hz"),
-    ("_m", "m"),
-    ("_s", "s"),
+    ("_m", "~m"),
+    ("_s", "~s"),
 )
 
 
 def unit_of(name: str) -> str:
-    """The SI unit a quantity's name ends in ('' if none: a ratio or a count).
+    """The unit a quantity called `name` is written in ('' if its name ends in none: a ratio or a count).
 
     Parameters
     ----------
     name
-        e.g. 'stop_position_m', 'creep_velocity_m_s', 'damping_ratio'.
+        e.g. 'stop_position_m' ('~m': m, mm, µm or nm), 'creep_velocity_m_s' ('~m/s'), 'damping_ratio' ('').
     """
     return next((unit for suffix, unit in SUFFIXES if name.endswith(suffix)), "")
 
 
-def amount(value: float, unit: str, digits: int = 3) -> str:
-    """`value` [unit, SI] in words with the scaled unit that keeps it readable: amount(0.0018, 'm/s') is
-    '1.8 mm/s', amount(-0.00534, 'm') '-5.34 mm', amount(1.61, 's') '1.61 s'; a unit without scales is written
-    as given ('800 N/m'), '' as a bare number.
+class Quoter:
+    """Writes the numbers of one answer and records each (name -> SI value) for `Answer.numbers`."""
 
-    Parameters
-    ----------
-    value
-        the value in SI.
-    unit
-        its SI unit ('m', 's', 'm/s', 'm/s^2', 'rad/s', 'Hz', or any other, written as is).
-    digits
-        significant digits.
-    """
-    if not math.isfinite(value):
-        return f"{value} {unit}".strip()
-    scales = SCALES.get(unit)
-    if not scales:
-        return f"{value:.{digits}g} {unit}".strip()
-    name, factor = scales[-1]
-    for name_, factor_ in scales:
-        if abs(value) >= factor_ * (1.0 - 0.5 * 10.0 ** (1 - digits)):  # 0.9995 mm reads as 1 mm, not 1e+03 µm
-            name, factor = name_, factor_
-            break
-    if value == 0.0:
-        name, factor = scales[0]
-    return f"{value / factor:.{digits}g} {name}"
+    def __init__(self) -> None:
+        self.numbers: dict[str, Quoted] = {}
 
+    def __call__(self, name: str, value: float, unit: str = "", spec: str = ".3g") -> str:
+        """`value` [SI] in words, recorded as `name`: with a unit of springlab.answer ('~s', 'mm/s', 'rpm', ...)
+        or without one (a ratio, an error, a count).
 
-def quantity(name: str, value: float, digits: int = 3) -> str:
-    """A named quantity's value in words, its unit read from its name (`unit_of`, `amount`)."""
-    return amount(value, unit_of(name), digits)
+        Parameters
+        ----------
+        name
+            the number's name in `answer_numbers` (ending in its SI unit where it has one).
+        value
+            the value [SI].
+        unit
+            the unit or '~family' to write it in ('': the bare number).
+        spec
+            the number format.
+        """
+        value = float(value) if not isinstance(value, int) else value
+        self.numbers[name] = value
+        return written(value, unit, spec)
 
+    def dt(self, name: str, value: float) -> str:
+        """A timestep [s] in words, recorded as `name`: 'dt = 2 ms'."""
+        return f"dt = {self(name, value, '~s')}"
 
-def dt_text(dt: float) -> str:
-    """A timestep [s] in words: 'dt = 2 ms'."""
-    return f"dt = {amount(dt, 's')}"
+    def named(self, name: str, value: float, spec: str = ".3g") -> str:
+        """A named quantity's value in the unit its name ends in (`unit_of`), recorded under its name."""
+        return self(name, value, unit_of(name), spec)
 
-
-def error_text(value: float | None, digits: int = 2) -> str:
-    """A relative error [-] in words: '3.1e-05' (or 'diverged' for None)."""
-    return "diverged" if value is None else f"{value:.{digits}g}"
+    def answer(self, question: str, text: str) -> Answer:
+        """The Answer: `question`, `text` and the numbers quoted."""
+        return Answer(question, text, dict(self.numbers))
 
 
-def question_answer(question: str, answer: str) -> dict[str, str]:
-    """{"question", "answer"}: the two keys every study's JSON starts with."""
-    return {"question": question, "answer": answer}
+def written(value: float, unit: str = "", spec: str = ".3g") -> str:
+    """`value` [SI] in words in `unit` (springlab.answer's units and '~families'; '': the bare number)."""
+    if unit and math.isfinite(value):
+        return quantity(value, unit, spec)
+    return format(value, spec)
+
+
+def unit_words(unit: str) -> tuple[str, str]:
+    """(the unit springlab.answer writes a value of SI `unit` in, words after a bare number): 'm' -> ('~m', ''),
+    'N s/m' (not converted) -> ('', ' N s/m'), '-' -> ('', '')."""
+    if unit in FAMILIES:
+        return f"~{unit}", ""
+    if unit in UNITS:
+        return unit, ""
+    return "", "" if unit in ("-", "") else f" {unit}"
+
+
+def of_words(question: str, text: str, numbers: Mapping[str, Quoted]) -> Answer:
+    """An Answer whose sentence an older part of the study writes itself (e.g. the fit's verdict), with the
+    numbers it quotes named by the caller."""
+    return Answer(question, text, dict(numbers))
+
+
+def capital(text: str) -> str:
+    """`text` with its first letter in upper case (a clause that starts a sentence)."""
+    return text[:1].upper() + text[1:]

@@ -35,6 +35,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from springlab import display, scenes, tables
+from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError
 from springlab.files import json_ready
 from springlab.runs import compare
@@ -265,36 +266,54 @@ class Refinement(display.Shown):
     sweep_wall_time_s: float = 0.0
 
     @property
-    def question(self) -> str:
-        """What the study asks, in words."""
+    def question_answer(self) -> Answer:
+        """The question and its answer: the verified pick (or why none) and the discretization's order."""
+        say = answers.Quoter()
         pick = self.recommendation
         within = f" within {pick.tolerance:g} (relative) of the continuum's value" if pick is not None else ""
-        return (
+        question = (
             f"How large a model ({self.size_parameter}), which integrator and which timestep does {self.description}"
             f" of {self.scene} / {self.scenario} need{within}, for the least work?"
         )
-
-    @property
-    def answer(self) -> str:
-        """The verified pick (or why none) and the discretization's order, with units."""
         order = self.discretization_order
         trend = (
-            f"the discretization error falls as {self.size_parameter}^-{order:.2f} (expected {self.expected_order:g})"
+            f"the discretization error falls as {self.size_parameter}^-{say('discretization_order', order, spec='.2f')}"
+            f" (expected {self.expected_order:g})"
             if order is not None
             else "too few sizes for the discretization's order"
         )
-        pick = self.recommendation
         if pick is None:
-            return f"{trend[:1].upper()}{trend[1:]}; the Pareto front has {len(self.pareto)} settings (no tolerance asked)."
+            front = say("pareto", len(self.pareto), spec="d")
+            return say.answer(
+                question, f"{answers.capital(trend)}; the Pareto front has {front} settings (no tolerance asked)."
+            )
+        tolerance = say("tolerance", pick.tolerance, spec="g")
         if not pick.found or pick.row is None or pick.dt is None:
-            return f"No setting meets {pick.tolerance:g}: {pick.text} {trend[:1].upper()}{trend[1:]}."
-        row = pick.row
-        return (
-            f"{self.size_parameter} = {row.size} with {pick.integrator} at {answers.dt_text(pick.dt)} is the cheapest"
-            f" setting within {pick.tolerance:g}: error bound {row.error_bound:.2g} (discretization"
-            f" {row.discretization_error:.2g}, integration {row.integration_error:.2g}), verified by a run with error"
-            f" {answers.error_text(pick.error)}. {trend[:1].upper()}{trend[1:]}."
+            return say.answer(question, f"No setting meets {tolerance}: {pick.text} {answers.capital(trend)}.")
+        details = pick.details
+        parts = ", ".join(
+            f"{words} {say(key, details[key], spec='.2g')}"
+            for words, key in (("discretization", "discretization_error"), ("integration", "integration_error"))
+            if details.get(key) is not None
         )
+        return say.answer(
+            question,
+            f"{self.size_parameter} = {say('size', pick.row.size, spec='g')} with {pick.integrator} at"
+            f" {say.dt('dt_s', pick.dt)} is the cheapest setting within {tolerance}: its verification run's error"
+            f" bound is {say('error_bound', pick.error or 0.0, spec='.2g')}"
+            + (f" ({parts})" if parts else "")
+            + f". {answers.capital(trend)}.",
+        )
+
+    @property
+    def question(self) -> str:
+        """What the study asks, in words (`question_answer`)."""
+        return self.question_answer.question
+
+    @property
+    def answer(self) -> str:
+        """The answer in words with units (`question_answer`)."""
+        return self.question_answer.answer
 
     def _shown(self) -> display.Summary:
         """The refinement as a notebook shows it: the recommendation first, the orders, then the sizes."""
@@ -347,7 +366,7 @@ class Refinement(display.Shown):
             {
                 "scene": self.scene,
                 "scenario": self.scenario,
-                **answers.question_answer(self.question, self.answer),
+                **self.question_answer.to_dict(),
                 "quantity": self.quantity,
                 "description": self.description,
                 "size_parameter": self.size_parameter,

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from springlab import display, scenes, tables
+from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError
 from springlab.files import json_ready
 from springlab.runs import compare
@@ -180,39 +181,53 @@ class Tradeoff(display.Shown):
     limits: dict[str, float | None] = dataclasses.field(default_factory=dict)
 
     @property
-    def question(self) -> str:
-        """What the trade-off asks, in words (with a tolerance: the cheapest setting that meets it)."""
+    def question_answer(self) -> Answer:
+        """The question (with a tolerance: the cheapest setting that meets it) and its answer in one or two
+        sentences with units: the verified pick (or why none), the observed orders."""
+        say = answers.Quoter()
         pick = self.recommendation
-        over = f"{self.scene} / {self.scenario} over {answers.amount(self.duration, 's')}"
+        over = f"{self.scene} / {self.scenario} over {answers.written(self.duration, '~s', '.4g')}"
         if pick is None:
-            return (
+            question = (
                 f"How does the error of {over} fall with the timestep, and what does each integrator's accuracy cost?"
             )
-        return f"Which integrator and timestep simulate {over} within {pick.tolerance:g} (relative) for the least work?"
-
-    @property
-    def answer(self) -> str:
-        """The answer in one or two sentences with units: the verified pick (or why none), the observed orders."""
-        orders = ", ".join(f"{name} {p:.2f}" for name, p in self.orders.items() if p is not None)
-        orders = f"observed orders of accuracy: {orders}" if orders else "no observed order (too few accurate runs)"
-        pick = self.recommendation
+        else:
+            question = f"Which integrator and timestep simulate {over} within {pick.tolerance:g} (relative) for the least work?"
+        said = [f"{name} {say(f'order_{name}', p, spec='.2f')}" for name, p in self.orders.items() if p is not None]
+        orders = (
+            f"observed orders of accuracy: {', '.join(said)}" if said else "no observed order (too few accurate runs)"
+        )
         if pick is None:
             valid = [r for r in self.runs if r.run.valid]
             if not valid:
-                return f"No setting ran valid (each diverged or ran beyond its stability limit); {orders}."
+                return say.answer(
+                    question, f"No setting ran valid (each diverged or ran beyond its stability limit); {orders}."
+                )
             best = min(valid, key=lambda r: r.run.error or 0.0)  # valid: a finite error
-            return (
-                f"{orders[:1].upper()}{orders[1:]}; the most accurate valid run, {best.integrator} at"
-                f" {answers.dt_text(best.dt)}, has a max relative error of {answers.error_text(best.max_rel_error)}."
+            return say.answer(
+                question,
+                f"{answers.capital(orders)}; the most accurate valid run, {best.integrator} at {say.dt('best_dt_s', best.dt)},"
+                f" has a max relative error of {say('best_max_rel_error', best.run.error or 0.0, spec='.2g')}.",
             )
+        tolerance = say("tolerance", pick.tolerance, spec="g")
         if not pick.found or pick.row is None or pick.dt is None:
-            return f"No setting meets {pick.tolerance:g}: {pick.text} {orders[:1].upper()}{orders[1:]}."
-        row = pick.row
-        return (
-            f"{pick.integrator} at {answers.dt_text(pick.dt)} ({row.cost:.4g} {COST_UNIT} of counted work)"
-            f" is the cheapest setting within {pick.tolerance:g}: its verification run's max relative error is"
-            f" {answers.error_text(pick.error)}. {orders[:1].upper()}{orders[1:]}."
+            return say.answer(question, f"No setting meets {tolerance}: {pick.text} {answers.capital(orders)}.")
+        return say.answer(
+            question,
+            f"{pick.integrator} at {say.dt('dt_s', pick.dt)} ({say('cost', pick.row.cost, spec='.4g')} {COST_UNIT} of"
+            f" counted work) is the cheapest setting within {tolerance}: its verification run's max relative error is"
+            f" {say('max_rel_error', pick.error or 0.0, spec='.2g')}. {answers.capital(orders)}.",
         )
+
+    @property
+    def question(self) -> str:
+        """What the trade-off asks, in words (`question_answer`)."""
+        return self.question_answer.question
+
+    @property
+    def answer(self) -> str:
+        """The answer in words with units (`question_answer`)."""
+        return self.question_answer.answer
 
     def _shown(self) -> display.Summary:
         """The trade-off as a notebook shows it: the recommendation first, the orders, then the runs."""
@@ -254,7 +269,7 @@ class Tradeoff(display.Shown):
         pick = self.recommendation
         return json_ready(
             {
-                **answers.question_answer(self.question, self.answer),
+                **self.question_answer.to_dict(),
                 "scene": self.scene,
                 "scenario": self.scenario,
                 "duration": self.duration,

@@ -10,6 +10,7 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 from springlab import display, tables
+from springlab.answer import Answer
 from springlab.exact.linearize import Linearization
 from springlab.sim.simulate import Setup
 from springlab.studies import answers
@@ -119,37 +120,48 @@ class Audit(display.Shown):
         return text.message(self)
 
     @property
-    def question(self) -> str:
-        """What the audit asks, in words."""
-        own = self.own
-        return (
-            f"Is {self.model}'s own setting ({own.integrator}, {answers.dt_text(own.dt)}) stable and within"
-            f" {self.tol:g} over {answers.amount(self.duration, 's')}, and which setting is the cheapest that is?"
-        )
-
-    @property
-    def answer(self) -> str:
-        """The own setting's stability and error, and the verified cheapest setting, with units."""
+    def question_answer(self) -> Answer:
+        """The question and its answer: the own setting's stability and error, the verified cheapest setting."""
+        say = answers.Quoter()
         own, pick = self.own, self.recommendation
+        tolerance = f"{self.tol:g}"
+        question = (
+            f"Is {self.model}'s own setting ({own.integrator}, dt = {answers.written(own.dt, '~s')}) stable and within"
+            f" {tolerance} over {answers.written(self.duration, '~s')}, and which setting is the cheapest that is?"
+        )
         limit = self.stability[own.integrator]
         if not own.stable:
             state = "is unstable (a run of it blows up)"
         elif limit.limit_dt_s is not None and limit.confirmed and own.margin is not None:
-            state = f"is stable with margin {own.margin:.3g}x (its limit {answers.dt_text(limit.limit_dt_s)})"
+            state = (
+                f"is stable with margin {say('own_margin', own.margin, spec='.3g')}x (its limit"
+                f" {say.dt('limit_dt_s', limit.limit_dt_s)})"
+            )
         else:
             state = "is stable (its run stays bounded)"
         error = (
             "not compared"
             if own.error is None
-            else f"{answers.error_text(own.error)}, {'within' if own.error <= self.tol else 'outside'} {self.tol:g}"
+            else f"{say('own_error', own.error, spec='.2g')}, {'within' if own.error <= self.tol else 'outside'} {tolerance}"
         )
         head = f"Its own setting {state}; its error is {error}."
         if not pick.found or pick.dt is None:
-            return f"{head} No verified setting meets {self.tol:g}."
-        return (
-            f"{head} The cheapest verified setting within {self.tol:g} is {pick.integrator} at"
-            f" {answers.dt_text(pick.dt)}, error {answers.error_text(pick.error)}."
+            return say.answer(question, f"{head} No verified setting meets {tolerance}.")
+        return say.answer(
+            question,
+            f"{head} The cheapest verified setting within {tolerance} is {pick.integrator} at"
+            f" {say.dt('dt_s', pick.dt)}, error {say('error', pick.error or 0.0, spec='.2g')}.",
         )
+
+    @property
+    def question(self) -> str:
+        """What the audit asks, in words (`question_answer`)."""
+        return self.question_answer.question
+
+    @property
+    def answer(self) -> str:
+        """The answer in words with units (`question_answer`)."""
+        return self.question_answer.answer
 
     def _shown(self) -> display.Summary:
         """The audit as a notebook shows it: whether the model's own setting meets tol, then the numbers."""
@@ -192,7 +204,7 @@ class Audit(display.Shown):
         own setting, sweep and recommendation, plus linearity, orders, pareto, reference, constraints and timings."""
         fastest = self.linear.fastest
         return {
-            **answers.question_answer(self.question, self.answer),
+            **self.question_answer.to_dict(),
             "model": self.model,
             "operating_point": self.linear.point.to_dict(),
             "operating_point_state": self.point_state.to_dict(),
