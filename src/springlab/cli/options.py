@@ -165,7 +165,7 @@ def check_output(args: argparse.Namespace) -> None:
 def run(args: argparse.Namespace) -> Result:
     """springlab.run from the scene, timing and --set arguments that run, render and plot share (a scene's run:
     a model file was refused before, springlab.cli.main)."""
-    return auto.run_scene(
+    result = auto.run(
         args.scene,
         args.scenario,
         integrator=args.integrator,
@@ -174,6 +174,9 @@ def run(args: argparse.Namespace) -> Result:
         tol=args.tol,
         **parse_sets(args.set),
     )
+    if not isinstance(result, Result):  # a model file reached a command that takes a scene
+        raise BadInputError(f"{args.scene} is a model file; this command takes a scene (see 'springlab list')")
+    return result
 
 
 def report_model_limits(result: Result) -> None:

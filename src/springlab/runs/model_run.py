@@ -7,7 +7,7 @@ position and velocity (trajectory.csv, one named column per coordinate, its unit
 what a reader asks of any motion (`measures`: final positions, largest excursions, energy).
 
 >>> import springlab
->>> run = springlab.run("tests/data/gripper.xml", duration=0.5)
+>>> run = springlab.run("tests/data/pinch_gripper.xml", duration=0.5)
 >>> run.verdict
 'not validated'
 """
