@@ -74,12 +74,16 @@ ATTRIBUTES: dict[str, dict[str, tuple[str, str, float | None]]] = {
         "armature": ("dof_armature", "dof", 0.0),
         "margin": ("jnt_margin", "joint", 0.0),
     },
+    # a geom's MJCF attribute is its compiled field without the "geom_" prefix
     "geom": {
-        "friction": ("geom_friction", "geom", 0.0),
-        "solref": ("geom_solref", "geom", None),
-        "solimp": ("geom_solimp", "geom", 0.0),
-        "margin": ("geom_margin", "geom", 0.0),
-        "gap": ("geom_gap", "geom", 0.0),
+        field.removeprefix("geom_"): (field, "geom", floor)
+        for field, floor in (
+            ("geom_friction", 0.0),
+            ("geom_solref", None),
+            ("geom_solimp", 0.0),
+            ("geom_margin", 0.0),
+            ("geom_gap", 0.0),
+        )
     },
     "body": {"mass": ("body_mass", "body", 0.0)},
     "tendon": {
