@@ -194,8 +194,10 @@ def test_tradeoff_of_the_dm_control_cheetah_says_what_its_errors_are_against(tmp
     out = tmp_path / "out"
     # 0.1 s: the cheetah falls without touching the floor (first contact at 0.13 s)
     assert main(["tradeoff", str(SUITE / "cheetah.xml"), "--duration", "0.1", "--output", str(out)]) == 0
-    lines = capsys.readouterr().out.splitlines()
-    assert "against RK4 at dt" in lines[0] and "of the same model" in lines[1] and "invisible to it" in lines[1]
+    question, answer, first, second, *_ = capsys.readouterr().out.splitlines()
+    assert question.startswith("Question: ") and "converged run of the same model" in question
+    assert answer.startswith("Answer: ") and "integration error only" in answer and "invisible to it" in answer
+    assert "against RK4 at dt" in first and "of the same model" in second and "invisible to it" in second
     data = json.loads((out / "tradeoff.json").read_text())
     assert "same model" in data["reference"]["note"] and data["reference"]["integrator"] == "rk4"
     assert data["reference"]["converged"] is True

@@ -13,12 +13,13 @@ import numpy as np
 
 if TYPE_CHECKING:  # annotations only: the commands import the studies lazily
     from springlab.runs.model_run import ModelRun
+    from springlab.studies.model_sweep import ModelSweep
     from springlab.studies.model_tradeoff import ModelTradeoff
-    from springlab.studies.sweeps import Sweep
 
 
 def print_model_run(run: ModelRun, output: str | None) -> None:
     """`springlab run MODEL.xml`: the setting, what the motion measured, and that nothing was validated."""
+    print(run.question_answer.text())
     print(
         f"{run.model_path} from {run.start.label}: {run.integrator}, dt = {run.dt:g} s,"
         f" {run.steps} steps ({run.duration:g} s) in {run.wall_time_s * 1e3:.1f} ms"
@@ -30,8 +31,9 @@ def print_model_run(run: ModelRun, output: str | None) -> None:
         print(f"  wrote {pathlib.Path(output) / 'trajectory.csv'} ({len(run.columns)} columns) and summary.json")
 
 
-def print_model_sweep(result: Sweep, quantity: str, output: str | None) -> None:
+def print_model_sweep(result: ModelSweep, quantity: str, output: str | None) -> None:
     """`springlab sweep MODEL.xml`: the configurations run, how many blew up, and the range of `quantity`."""
+    print(result.question_answer.text())
     print(
         f"{result.scene} from {result.scenario}: {result.size} configurations ({result.integrator},"
         f" dt = {result.dt:g} s unless varied, {result.duration:g} s each) in {result.wall_time_s:.2f} s on"
@@ -58,6 +60,7 @@ def print_model_sweep(result: Sweep, quantity: str, output: str | None) -> None:
 def print_model_tradeoff(result: ModelTradeoff, output: str | None) -> None:
     """`springlab tradeoff MODEL.xml`: what the errors are against (first, always), the model's own setting, the
     Pareto front and the recommendation."""
+    print(result.question_answer.text())
     from springlab.studies.model_tradeoff import REFERENCE_NOTE
 
     reference = result.reference

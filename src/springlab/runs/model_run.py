@@ -24,6 +24,7 @@ import mujoco
 import numpy as np
 
 from springlab import display, tables
+from springlab.answer import Answer, compose
 from springlab.errors import BadInputError, DivergedError
 from springlab.exact.operating_point import OperatingPoint, operating_point
 from springlab.files import csv_text, dumps, json_ready, write_text_files
@@ -219,6 +220,29 @@ class ModelRun(display.Shown):
     message: str = NO_REFERENCE
 
     @property
+    def question_answer(self) -> Answer:
+        """The question and its answer in words: how far the joint that moves most goes, the energy at the end
+        against the start, the largest speed at the end, and that nothing was validated."""
+        excursions = {k: v for k, v in self.measures.items() if "_max_excursion_" in k}
+        values = dict(self.measures) | {"duration_s": self.duration, "dt_s": self.dt}
+        question = (
+            f"How does {self.model_path} move from {self.start.label} over {{duration_s:.4g ~s}} ({self.integrator},"
+            " dt = {dt_s:.3g ~s})?"
+        )
+        moves = ""
+        if excursions:
+            name = max(excursions, key=lambda k: abs(excursions[k]))
+            unit = "~m" if name.endswith("_m") else "rad"
+            moves = f"{name.split('_max_excursion_')[0]} moves most, at most {{{name}:.3g {unit}}} from its start; "
+        template = (
+            moves + "its energy goes from {energy_initial_J:.4g} J to {energy_final_J:.4g} J and its largest speed at"
+            " the end is {max_speed_final:.3g} (m/s or rad/s). Not validated: a model file has no exact solution."
+        )
+        asked = compose("", question, values)  # the question's own numbers in words too
+        told = compose("", template, values)
+        return Answer(asked.answer, told.answer, {**asked.numbers, **told.numbers})
+
+    @property
     def time(self) -> np.ndarray:
         """(n,) k dt [s] for step k, t = 0 included."""
         return np.arange(self.steps + 1) * self.dt
@@ -233,12 +257,13 @@ class ModelRun(display.Shown):
     def to_dict(self) -> dict[str, Any]:
         """summary.json of a model file's run (what `springlab run MODEL.xml --json` prints).
 
-        Keys: model, start, integrator, dt [s], duration [s], steps, wall_time_s [s], options, columns (name ->
+        Keys: question, answer, answer_numbers, model, start, integrator, dt [s], duration [s], steps, wall_time_s [s], options, columns (name ->
         unit), quantities (`measures`), errors ({}: nothing compared), tolerance (null), passed (null),
         verdict ("not validated"), message (see docs/json.md).
         """
         return json_ready(
             {
+                **self.question_answer.to_dict(),
                 "model": self.model_path,
                 "start": self.start.label,
                 "integrator": self.integrator,

@@ -39,6 +39,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError, UnknownNameError
 from springlab.exact.operating_point import operating_point
 from springlab.runs.model_run import DEFAULT_DURATION, integrator_name, measures
@@ -46,6 +47,7 @@ from springlab.sim import model_files
 from springlab.sim.batch import Job, run_rollout
 from springlab.sim.simulate import INTEGRATORS, Setup, check_timing, integrator_id
 
+from . import answers
 from .executor import Executor, chunked, resolve
 from .sweeps import CHUNK_CONFIGURATIONS, MAX_CONFIGURATIONS, Axis, Sweep, SweepRow, make_axis
 
@@ -315,7 +317,7 @@ def model_sweep(
     duration: float | None = None,
     chunk_size: int = CHUNK_CONFIGURATIONS,
     executor: Executor | None = None,
-) -> Sweep:
+) -> ModelSweep:
     """Run a model file over a grid (or random samples) of its options and named attributes; one row each.
 
     Parameters
@@ -342,8 +344,8 @@ def model_sweep(
 
     Returns
     -------
-    Sweep
-        the rows in configuration order: `scene` is the model file, `scenario` the start, each row's
+    ModelSweep
+        a Sweep, the rows in configuration order: `scene` is the model file, `scenario` the start, each row's
         quantities what `springlab run MODEL.xml` measures (and the name of a named option), `passed` None.
 
     Raises
@@ -393,7 +395,7 @@ def model_sweep(
         SweepRow(values={name: float(values[name][i]) for name in names}, **row)
         for i, row in enumerate(r for chunk in results for r in chunk)
     )
-    return Sweep(
+    return ModelSweep(
         scene=text,
         scenario=start.label,
         integrator=integrator,
@@ -435,6 +437,47 @@ def _configurations(
         raise BadInputError(f"the grid has {total} configurations, more than {MAX_CONFIGURATIONS}; use --samples")
     mesh = np.meshgrid(*grids, indexing="ij")
     return {axis.name: m.ravel() for axis, m in zip(axes, mesh)}
+
+
+@dataclasses.dataclass(frozen=True, repr=False)
+class ModelSweep(Sweep):
+    """A model file's sweep: a `Sweep` whose `scene` is the file and `scenario` the start, whose rows are measured,
+    never validated (`passed` None), and whose answer says so."""
+
+    @property
+    def headline(self) -> str | None:
+        """What the answer and sweep.png quote by default (`default_quantity`)."""
+        return default_quantity(self)
+
+    @property
+    def question_answer(self) -> Answer:
+        """The question and its answer: how the headline quantity ranges over the configurations that ran, and
+        how many diverged; nothing passes or fails."""
+        say = answers.Quoter()
+        varied = ", ".join(a.name for a in self.axes)
+        name = self.headline or "energy_final_J"
+        question = (
+            f"How does {name} of {self.scene} from {self.scenario} vary with {varied} over {self.size}"
+            f" configurations ({self.integrator}, dt = {answers.written(self.dt, '~s')} unless varied)?"
+        )
+        counts = (
+            f"{say('configurations', self.size, spec='d')} configurations ran, {say('diverged', self.diverged, spec='d')}"
+            " diverged; measured, not validated (a model file has no exact solution)"
+        )
+        values = self.column(name)
+        finite = np.flatnonzero(np.isfinite(values))
+        if not finite.size:
+            return say.answer(question, f"{counts}; no configuration has a value of {name}.")
+        low, high = int(finite[np.argmin(values[finite])]), int(finite[np.argmax(values[finite])])
+        unit = answers.unit_of(name)
+        words = {
+            i: ", ".join(f"{n} = {answers.written(float(self.values[n][i]))}" for n in self.values) for i in (low, high)
+        }
+        return say.answer(
+            question,
+            f"{counts}. {name} ranges from {say(f'{name}_min', float(values[low]), unit)} ({words[low]}) to"
+            f" {say(f'{name}_max', float(values[high]), unit)} ({words[high]}).",
+        )
 
 
 def default_quantity(sweep: Sweep) -> str:

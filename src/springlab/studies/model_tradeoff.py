@@ -28,6 +28,7 @@ from typing import Any
 import mujoco
 
 from springlab import display
+from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError
 from springlab.exact.model_at_point import ModelAtPoint
 from springlab.exact.operating_point import operating_point
@@ -37,6 +38,7 @@ from springlab.runs.model_run import DEFAULT_DURATION, integrator_name
 from springlab.sim import model_files
 from springlab.sim.simulate import INTEGRATORS, Setup, Trajectory, check_timing, integrator_id, simulate
 
+from . import answers
 from .audit.ship import Runner, ship
 from .audit.sweep import (
     MIN_CHECKPOINTS,
@@ -125,10 +127,42 @@ class ModelTradeoff(display.Shown):
     wall_time_s: float
     executor: str
 
+    @property
+    def question_answer(self) -> Answer:
+        """The question and its answer: the pick (or the own setting's error), against what it is measured."""
+        say = answers.Quoter()
+        question = (
+            f"Which integrator and timestep reproduce {self.model} from {self.start} over"
+            f" {answers.written(self.duration, '~s')}"
+            + (f" within tol {self.tolerance:g}" if self.tolerance is not None else "")
+            + ", measured against a converged run of the same model?"
+        )
+        own = self.own
+        mine = f"Your setting, {own.integrator} at {say.dt('own_dt_s', own.dt)}, " + (
+            "diverges" if own.error is None else f"has error {say('own_error', own.error)}"
+        )
+        pick = self.recommendation
+        if pick is None:
+            chosen = ""
+        elif pick.found and pick.integrator is not None and pick.dt is not None and pick.error is not None:
+            chosen = (
+                f"; the cheapest within tol is {pick.integrator} at {say.dt('pick_dt_s', pick.dt)}, error"
+                f" {say('pick_error', pick.error)} (verified by a run)"
+            )
+        else:
+            chosen = "; no setting of the sweep meets tol"
+        basis = "" if self.converged else " The reference did NOT converge: errors near its own are not resolved."
+        return say.answer(
+            question,
+            f"{mine}{chosen}. This is integration error only: MuJoCo's model error (soft contacts, regularised"
+            f" friction) is in the reference too and invisible to it.{basis}",
+        )
+
     def to_dict(self) -> dict[str, Any]:
         """tradeoff.json of a model file (what `springlab tradeoff MODEL.xml --json` prints; docs/json.md)."""
         return json_ready(
             {
+                **self.question_answer.to_dict(),
                 "model": self.model,
                 "start": self.start,
                 "duration": self.duration,
