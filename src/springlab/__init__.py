@@ -11,6 +11,7 @@
 from springlab.exact import analytic
 from springlab.render.inline import Video, video
 from springlab.runs.compare import Verdict
+from springlab.runs.model_run import ModelRun
 from springlab.runs.run import Result, ValidationRow
 from springlab.studies.audit.audit import audit
 from springlab.studies.audit.results import Audit
@@ -82,6 +83,7 @@ __all__ = [
     "FrequencyResponse",
     "audit",
     "Audit",
+    "ModelRun",
     "Verdict",
     "SCENES",
     "SpringlabError",

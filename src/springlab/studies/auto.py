@@ -17,9 +17,11 @@ from collections.abc import Sequence
 from typing import Any
 
 from springlab.errors import BadInputError
+from springlab.runs.model_run import ModelRun, run_model
 from springlab.runs.run import Result, ValidationRow, exact_scenarios, run_scenario
 from springlab.scenes.base import Scene
 from springlab.scenes.declarations import keyword_parameters
+from springlab.sim import model_files
 
 from .tradeoff import sweepable, tradeoff
 
@@ -68,19 +70,22 @@ def run(
     dt: float | None = None,
     duration: float | None = None,
     tol: float | None = None,
+    keyframe: str | int | None = None,
     **parameters: float,
-) -> Result:
-    """Simulate a scenario headless in MuJoCo and compare it with its exact solution (`springlab.run`).
+) -> Result | ModelRun:
+    """Simulate a scenario headless in MuJoCo and compare it with its exact solution (`springlab.run`),
+    or run a model file (nothing to compare with: a `ModelRun`, "not validated").
 
     The explicit-setting run (springlab.runs.run.run_scenario), where `integrator='auto'` first
-    picks the cheapest setting meeting `tol` (`auto_setting`).
+    picks the cheapest setting meeting `tol` (`auto_setting`); a model file's run is
+    springlab.runs.model_run.run_model (its own integrator and timestep unless given).
 
     Parameters
     ----------
     model
-        scene name (see `springlab list`).
+        scene name (see `springlab list`), or a model file (MJCF, a path ending in .xml).
     scenario
-        scenario name (None: the scene's default).
+        scenario name (None: the scene's default); not for a model file.
     integrator
         one of 'euler', 'implicit', 'implicitfast', 'rk4', 'discrete'
         (None: the scene's validated default), or 'auto': the cheapest setting
@@ -91,16 +96,19 @@ def run(
         simulated time [s] (None: the scenario's).
     tol
         relative accuracy [-] to hold the run to instead of the integrator's
-        predicted error (see springlab.runs.compare); needed by 'auto'.
+        predicted error (see springlab.runs.compare); needed by 'auto'; not for a model file.
+    keyframe
+        a model file's start: a keyframe name or index (None: the first keyframe, else qpos0 at rest).
     **parameters
         scene parameters in SI units, e.g. mass=2.0 [kg] (numbers; none is named like an option,
-        springlab.scenes.declarations.STUDY_OPTIONS).
+        springlab.scenes.declarations.STUDY_OPTIONS); not for a model file.
 
     Returns
     -------
-    Result
-        The Result: `passed`, `verdict` and `message` say how the run compares with its exact
-        solution; `to_dict()` is summary.json, `to_pandas()` trajectory.csv.
+    Result or ModelRun
+        A scene's Result: `passed`, `verdict` and `message` say how the run compares with its exact
+        solution; `to_dict()` is summary.json, `to_pandas()` trajectory.csv. A model file's ModelRun:
+        the same files, `verdict` "not validated", `passed` None.
 
     Raises
     ------
@@ -113,9 +121,32 @@ def run(
         an old keyword spelling (`scene=`, `parameters={...}`) or another study's option.
     """
     parameters = keyword_parameters("run", parameters)
+    if model_files.is_model_file(model):
+        given = [
+            name for name, value in (("scenario", scenario), ("tol", tol), *parameters.items()) if value is not None
+        ]
+        if given:
+            raise BadInputError(f"{given[0]} applies to a scene, not to a model file ({model})")
+        return run_model(model, keyframe=keyframe, integrator=integrator, dt=dt, duration=duration)
+    if keyframe is not None:
+        raise BadInputError(f"keyframe applies to a model file (MODEL.xml), not to the scene {model!r}")
+    return run_scene(model, scenario, integrator=integrator, dt=dt, duration=duration, tol=tol, **parameters)
+
+
+def run_scene(
+    scene: str,
+    scenario: str | None = None,
+    *,
+    integrator: str | None = None,
+    dt: float | None = None,
+    duration: float | None = None,
+    tol: float | None = None,
+    **parameters: float,
+) -> Result:
+    """`run` on a scene (its arguments): the explicit-setting run, or 'auto''s verified cheapest setting."""
     if integrator == "auto":
-        integrator, dt = auto_setting(model, scenario, tol=tol, dt=dt, duration=duration, **parameters)
-    return run_scenario(model, scenario, integrator=integrator, dt=dt, duration=duration, tol=tol, **parameters)
+        integrator, dt = auto_setting(scene, scenario, tol=tol, dt=dt, duration=duration, **parameters)
+    return run_scenario(scene, scenario, integrator=integrator, dt=dt, duration=duration, tol=tol, **parameters)
 
 
 def validate(
@@ -164,5 +195,5 @@ def validate(
             row = ValidationRow.of(run_scenario(scene.name, scenario.name))
             rows.append(dataclasses.replace(row, note=NO_SWEEP_NOTE))
             continue
-        rows.append(ValidationRow.of(run(scene.name, scenario.name, integrator=integrator, dt=dt, tol=tol)))
+        rows.append(ValidationRow.of(run_scene(scene.name, scenario.name, integrator=integrator, dt=dt, tol=tol)))
     return rows
