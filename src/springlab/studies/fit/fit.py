@@ -78,11 +78,9 @@ def fit(
     scenario
         The scene's scenario the record shows (None: the fit's default for the scene).
     map
-        Column -> springlab name, e.g. {'t': 'time', 'x_mm': 'slider_pos'} (the command line's
-        COLUMN=NAME is `springlab fit --map`'s to parse).
+        Column -> springlab name, e.g. {'t': 'time', 'x_mm': 'slider_pos'}.
     free
-        Names to fit, e.g. ['omega_n', 'zeta'] (None: the scene's declared default; see
-        springlab.studies.fit.models).
+        Names to fit, e.g. ['omega_n', 'zeta'] (None: the scene's declared default; see springlab.studies.fit.models).
     scale
         Factor [SI per unit of the data] applied to the signal, e.g. 0.001 for mm (None: the unit the
         column states, else SI). Given, it wins over the column's unit.
@@ -122,13 +120,11 @@ def fit(
     TypeError
         an old keyword spelling (`scene=`, `parameters={...}`) or another study's option.
     """
-    scene = model
-    parameters = keyword_parameters("fit", parameters)
-    _refuse_command_line_strings(map, free)
+    parameters = _typed(parameters, map, free)
     starts = fit_starts.check_count(starts)
     if executor is not None and (workers is not None or scheduler is not None):
         raise BadInputError("give an executor or workers/scheduler, not both")
-    scene_obj, how = _fitted_scene(scene)
+    scene_obj, how = _fitted_scene(model)
     scenario = how.scenarios[0] if scenario is None else scenario
     chosen = _fitted_scenario(scene_obj, how, scenario)
     nuisance = _nuisance(scene_obj, parameters)
@@ -397,9 +393,9 @@ def _free_names(how: FitModel, free: Sequence[str] | None, degree: int | None, r
     return names
 
 
-def _refuse_command_line_strings(mapping: object, free: object) -> None:
-    """The library takes a mapping and a sequence of names; `springlab fit` parses --map's COLUMN=NAME and
-    --free's NAME,NAME."""
+def _typed(parameters: Mapping[str, Any], mapping: object, free: object) -> dict[str, Any]:
+    """The scene's parameters (old spellings refused), after refusing the command line's strings: the library
+    takes a mapping and a sequence of names; `springlab fit` parses --map's COLUMN=NAME and --free's NAME,NAME."""
     if mapping is not None and not isinstance(mapping, Mapping):
         raise BadInputError(
             f"map takes a mapping of file column -> springlab name, e.g. map={{'t': 'time'}}, not {mapping!r}"
@@ -409,6 +405,7 @@ def _refuse_command_line_strings(mapping: object, free: object) -> None:
         raise BadInputError(
             f"free takes a sequence of names, e.g. free=['omega_n', 'zeta'], not the command line's {free!r}"
         )
+    return keyword_parameters("fit", parameters)
 
 
 def _finish(
