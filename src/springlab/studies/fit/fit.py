@@ -115,15 +115,11 @@ def fit(
     Raises
     ------
     BadInputError
-        Bad file or names, a free set the record cannot identify, the command line's strings for `map`
-        or `free`.
-    TypeError
-        an old keyword spelling (`scene=`, `parameters={...}`) or another study's option.
+        Bad file or names, a free set the record cannot identify, the command line's strings, an
+        executor and workers/scheduler. (TypeError: an old keyword spelling or another study's option.)
     """
-    parameters = _typed(parameters, map, free)
+    parameters = _typed(parameters, map, free, executor is not None and (workers, scheduler) != (None, None))
     starts = fit_starts.check_count(starts)
-    if executor is not None and (workers is not None or scheduler is not None):
-        raise BadInputError("give an executor or workers/scheduler, not both")
     scene_obj, how = _fitted_scene(model)
     scenario = how.scenarios[0] if scenario is None else scenario
     chosen = _fitted_scenario(scene_obj, how, scenario)
@@ -393,9 +389,12 @@ def _free_names(how: FitModel, free: Sequence[str] | None, degree: int | None, r
     return names
 
 
-def _typed(parameters: Mapping[str, Any], mapping: object, free: object) -> dict[str, Any]:
-    """The scene's parameters (old spellings refused), after refusing the command line's strings: the library
-    takes a mapping and a sequence of names; `springlab fit` parses --map's COLUMN=NAME and --free's NAME,NAME."""
+def _typed(parameters: Mapping[str, Any], mapping: object, free: object, two_executors: bool) -> dict[str, Any]:
+    """The scene's parameters (old spellings refused), after refusing the command line's strings (the library
+    takes a mapping and a sequence of names; `springlab fit` parses --map's COLUMN=NAME and --free's NAME,NAME)
+    and an executor given beside workers or a scheduler."""
+    if two_executors:
+        raise BadInputError("give an executor or workers/scheduler, not both")
     if mapping is not None and not isinstance(mapping, Mapping):
         raise BadInputError(
             f"map takes a mapping of file column -> springlab name, e.g. map={{'t': 'time'}}, not {mapping!r}"
