@@ -260,3 +260,10 @@ def test_a_model_sweep_on_two_dask_workers_equals_the_local_one():
         shipped = model_sweep(GRIPPER, vary=vary, duration=0.1, chunk_size=2, executor=executor)
     assert shipped.chunks == 3 and "dask" in shipped.executor
     assert [row.to_dict() for row in shipped.rows] == [row.to_dict() for row in local.rows]
+
+
+def test_a_tradeoff_of_a_model_at_rest_says_it_measured_nothing():
+    # dm_control's cartpole starts upright at rest with no keyframe: an equilibrium, nothing moves
+    study = model_tradeoff(SUITE / "cartpole.xml", duration=0.2, integrators=["euler", "rk4"])
+    assert study.moves is False and all(run.error == 0 for run in study.runs)
+    assert "does not move from qpos0 (no keyframe): nothing was measured" in study.question_answer.answer
