@@ -348,18 +348,22 @@ def track(model: mujoco.MjModel, trajectory: Trajectory, plan: HoldPlan) -> list
     bodies = list(plan.bodies)
     positions = np.empty((len(rows), len(bodies), 3))
     held = np.ones((len(rows), len(bodies)), bool)
-    holder_sets = [set(h) for h in plan.holder_geoms]
-    own_sets = [set(g) for g in plan.body_geoms]
+    # per held body, every geom's role: 1 its own, 2 a holder's (a contact of a 1 with a 2 holds it)
+    roles = np.zeros((len(bodies), model.ngeom), np.int8)
+    for j, (mine, theirs) in enumerate(zip(plan.body_geoms, plan.holder_geoms)):
+        roles[j, list(mine)] = 1
+        roles[j, list(theirs)] = 2
+    gripped = [j for j, theirs in enumerate(plan.holder_geoms) if theirs]
     for k, row in enumerate(rows):
         data.qpos[:] = trajectory.qpos[row]
         mujoco.mj_kinematics(model, data)
         positions[k] = data.xipos[bodies]
-        if any(holder_sets):
+        if gripped:
             mujoco.mj_collision(model, data)
-            pairs = [tuple(int(g) for g in data.contact[i].geom) for i in range(data.ncon)]
-            for j, (mine, theirs) in enumerate(zip(own_sets, holder_sets)):
-                if theirs:
-                    held[k, j] = any((a in mine and b in theirs) or (b in mine and a in theirs) for a, b in pairs)
+            pairs = data.contact.geom  # (ncon, 2) geom ids
+            for j in gripped:
+                role = roles[j][pairs]
+                held[k, j] = bool(np.any(role[:, 0] * role[:, 1] == 2))
     times = trajectory.time[rows]
     out = []
     for j in range(len(bodies)):
