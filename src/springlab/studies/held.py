@@ -320,7 +320,8 @@ class Track:
     Attributes
     ----------
     slip_m
-        max distance of its centre of mass from where the hold started, over the run [m].
+        max distance of its centre of mass from where the hold started while it was held [m] (a lost body: up to
+        the first sample that finds it out of the grip).
     creep_velocity_m_s
         its mean speed over the second half of the time it was held [m/s].
     lost_at_s
@@ -376,7 +377,7 @@ def track(model: mujoco.MjModel, trajectory: Trajectory, plan: HoldPlan) -> list
         margin_row = rows[min(int(np.searchsorted(times, min(MARGIN_AT_S, times[end] / 2))), end)]
         out.append(
             Track(
-                slip_m=float(slip.max()),
+                slip_m=float(slip[: end + 1].max()),  # what it slid while held: once out of the grip it falls
                 creep_velocity_m_s=creep,
                 lost_at_s=float(times[end]) if lost.size else None,
                 held_s=float(times[end]),
