@@ -220,3 +220,11 @@ def test_noslip_with_the_pyramidal_cone_stops_the_grippers_creep():
     creeping = creep_of(times, where, lost)
     times, where, _, lost = plain_hold({"noslip_iterations": 3.0}, hold_s=10.0)
     assert lost is None and creep_of(times, where, lost) < 2e-3 * creeping
+
+
+def test_a_model_files_options_on_a_scene_and_a_scenes_on_a_model_file_are_bad_input(tmp_path):
+    done = _cli("friction", "--hold", "0", cwd=tmp_path)
+    assert done.returncode == 2 and "--hold applies to a model file" in done.stderr
+    done = _cli(str(GRIPPER), "--set", "mass=1", cwd=tmp_path)
+    assert done.returncode == 2 and "--set applies to a scene" in done.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == []

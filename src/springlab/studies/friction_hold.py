@@ -229,6 +229,10 @@ def friction_hold(
         raise BadInputError(
             f"the study needs at least two timesteps to show the creep does not depend on dt, got {steps_of}"
         )
+    for name, chosen in (values or {}).items():
+        if name not in {s.name for s in settings} or not chosen:
+            valid = ", ".join(s.name for s in settings)
+            raise BadInputError(f"values: {name!r} is no swept setting of this hold (valid: {valid}) or has no values")
     friction = CONTACT_FRICTION if any(plan.holder_geoms) else JOINT_FRICTION
     question = f"does dry friction hold {_listed(compiled_model, plan)} for {hold_s:g} s?"
     case = FrictionCase(CASE, friction, question, MEASURES)
@@ -238,10 +242,6 @@ def friction_hold(
     carried = ship(("path", label), compiled_model) if runner.distributed else compiled_model
     baseline = dict(plan.baseline)
     own = _own_run(compiled_model, plan, baseline, own_integrator, own_dt)
-    for name, chosen in (values or {}).items():
-        if name not in {s.name for s in settings} or not chosen:
-            valid = ", ".join(s.name for s in settings)
-            raise BadInputError(f"values: {name!r} is no swept setting of this hold (valid: {valid}) or has no values")
     groups = grid(spec, case, names, steps_of, values)
     configs = [config for group in groups for config in group]
     pieces = chunked(len(groups), max(1, CHUNK_RUNS // len(steps_of)))
@@ -490,7 +490,11 @@ def friction_settings(
     0.00835
     """
     if not model_files.is_model_file(model):
-        given = [name for name, value in (("bodies", bodies), ("hold_s", hold_s), ("keyframe", keyframe)) if value]
+        given = [
+            name
+            for name, value in (("bodies", bodies), ("hold_s", hold_s), ("keyframe", keyframe))
+            if value not in (None, (), [])
+        ]
         if given:
             raise BadInputError(f"{given[0]} applies to a model file (MODEL.xml), not to the scene {model!r}")
         return scene_study.friction_settings(
