@@ -17,6 +17,8 @@ from springlab import files
 from springlab.errors import BadInputError
 from springlab.studies.sweeps import Sweep
 
+from .settings import legend_beside
+
 if TYPE_CHECKING:  # matplotlib is imported only when a figure is drawn
     from matplotlib.cm import ScalarMappable
     from matplotlib.figure import Figure
@@ -25,14 +27,9 @@ if TYPE_CHECKING:  # matplotlib is imported only when a figure is drawn
 def default_quantity(sweep: Sweep) -> str:
     """The quantity sweep.png shows by default: the scenario's last numeric quantity that every
     configuration that ran has (its headline result, e.g. max_displacement_m), else the first error column."""
-    ran = [row for row in sweep.rows if row.quantities]
-    names = [n for n in sweep.quantity_names() if all(n in row.quantities for row in ran)]
-    if names:
-        return names[-1]
-    errors = [c for row in sweep.rows for c in row.errors]
-    if errors:
-        return f"{errors[0]}_max_rel"
-    raise BadInputError("the sweep has no numeric quantity to plot (every configuration diverged?)")
+    if sweep.headline is None:
+        raise BadInputError("the sweep has no numeric quantity to plot (every configuration diverged?)")
+    return sweep.headline
 
 
 def csv_text(sweep: Sweep) -> str:
@@ -90,7 +87,7 @@ def sweep_figure(sweep: Sweep, quantity: str | None = None) -> Figure:
         ax.plot(x[order], z[order], ".-" if sweep.samples is None else ".", label=quantity)
         if diverged.any():
             ax.plot(x[diverged], np.zeros(diverged.sum()), "rx", label="diverged")
-            ax.legend(fontsize=8)
+            legend_beside(ax, 8)
         ax.set_xlabel(axes[0].name)
         ax.set_ylabel(quantity)
         if axes[0].log:
@@ -117,7 +114,7 @@ def sweep_figure(sweep: Sweep, quantity: str | None = None) -> Figure:
         bad = keep & diverged
         if bad.any():
             ax.plot(x[bad], y[bad], "rx", markersize=5, label="diverged")
-            ax.legend(fontsize=8)
+            legend_beside(ax, 8)
         ax.set_xlabel(b.name)
         ax.set_ylabel(a.name)
         if b.log:

@@ -376,11 +376,11 @@ class PrinterHeadDesign:
             f"{fixed['motor_mass']:.3g} kg, belt {d['properties']['belt_stiffness']:.3g} N/m at zeta = "
             f"{d['properties']['damping_ratio']:.3g}, belt mode {d['natural_frequency_hz']:.0f} Hz, "
             f"{d['properties']['drive_force']:.3g} N) a {fixed['move_distance'] * 1e3:.4g} mm move to "
-            f"+-{fixed['positioning_band'] * 1e6:.3g} um takes {d['positioning_time_s'] * 1e3:.1f} ms: "
+            f"±{fixed['positioning_band'] * 1e6:.3g} µm takes {d['positioning_time_s'] * 1e3:.1f} ms: "
             f"{d['move_time_s'] * 1e3:.1f} ms of bang-bang move (the minimum at this force) and "
             f"{d['settling_time_s'] * 1e3:.1f} ms of settling (estimate {d['estimate_s'] * 1e3:.1f} ms total, "
             f"worst case {d['worst_case_estimate_s'] * 1e3:.1f} ms). Over the {summary['configurations']} "
-            f"configurations it ranges {summary['positioning_time_s']['min'] * 1e3:.1f}-"
+            f"configurations it ranges from {summary['positioning_time_s']['min'] * 1e3:.1f} ms to "
             f"{summary['positioning_time_s']['max'] * 1e3:.0f} ms. Which properties? By elasticity d ln T / d ln p: "
             + ", ".join(f"{p} {e[p]:+.2f}" for p in summary["ranking"])
             + "."
