@@ -97,7 +97,7 @@ def full_study() -> None:
         f" 300 s); {cpu:.0f} s of CPU in the sweep's simulations ({cpu / study.runs * 1e3:.1f} ms a run);"
         f" load average {load:.1f} before, {os.getloadavg()[0]:.1f} after, on {os.cpu_count()} CPUs"
     )
-    print(f"   {study.answer()}")
+    print(f"   {study.answer}")
 
 
 if __name__ == "__main__":

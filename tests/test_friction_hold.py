@@ -110,7 +110,7 @@ def test_the_recommended_settings_hold_the_box_within_1_mm_over_60_s_in_a_plain_
     # integrator or NoSlip changed
     default = hold_study.cases[0].default
     assert pick.details["work_vs_default"] == pytest.approx(pick.row.cost / default.cost)
-    assert f"{pick.details['work_vs_default']:.3g}x the counted work" in hold_study.answer()
+    assert f"{pick.details['work_vs_default']:.3g}x the counted work" in hold_study.answer
 
 
 @pytest.mark.slow
@@ -125,7 +125,7 @@ def test_integrator_and_timestep_do_not_remove_the_creep(hold_study):
     for r in own:
         assert r.values["creep_velocity_m_s"] == pytest.approx(creep_of(times, where, None), rel=0.25)
     assert plain > 0.03
-    assert "integrator and timestep do not remove" in hold_study.answer()
+    assert "integrator and timestep do not remove" in hold_study.answer
 
 
 def test_the_coulomb_margin_is_the_servos_squeeze_over_the_weight():
