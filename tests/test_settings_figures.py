@@ -137,3 +137,24 @@ def test_a_flat_model_error_is_titled_flat():
     case = study.cases[0]
     assert case.default_model.converged and case.best_model.converged  # the joint decay's model error is flat
     assert figure.axes[1].get_title() == "flat as dt → 0: what is left is MuJoCo's model error"
+
+
+def test_the_sweep_figure_draws_a_configuration_that_failed_its_check_apart():
+    """rk4 at 10 ms over the slider's stiffness: the stiffest configuration (omega dt = 0.71) misses its
+    tolerance; it is a hollow grey circle labelled not valid, off the curve of the valid ones."""
+    from springlab.plots import sweep as sweep_chart
+    from springlab.studies.sweeps import sweep
+
+    result = sweep(
+        "slider", "free", vary={"stiffness": (50.0, 5000.0, 7, "log")}, integrator="rk4", dt=0.01, duration=0.5
+    )
+    failed = [i for i, row in enumerate(result.rows) if row.passed is False and not row.diverged]
+    assert failed and len(failed) < result.size
+    figure = sweep_chart.sweep_figure(result, "max_displacement_m")
+    _assert_legends_clear(figure)
+    axis = figure.axes[0]
+    (curve,) = [line for line in axis.get_lines() if line.get_label() == "max_displacement_m"]
+    (apart,) = [line for line in axis.get_lines() if line.get_label().startswith("failed its check")]
+    stiffness = result.values["stiffness"]
+    assert sorted(curve.get_xdata()) == sorted(stiffness[i] for i in range(result.size) if i not in failed)
+    assert list(apart.get_xdata()) == [stiffness[i] for i in failed] and apart.get_mfc() == "none"
