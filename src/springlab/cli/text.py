@@ -203,6 +203,8 @@ def print_frequency(result: FrequencyResponse, output: str | None) -> None:
     print(f"{result.description} ({result.source})")
     for line in result.verdict():
         print(f"  {line}")
+    for warning in result.warnings:
+        print(f"  warning: {warning}")
     if output:
         extra = ", sinestream.csv" if result.sinestreams or result.sweeps else ""
         print(f"wrote {pathlib.Path(output) / 'frequency.json'}, frequency.csv{extra} and bode.png")

@@ -31,7 +31,7 @@ def core_step(state: DemoState) -> list[Artifact]:
     written = []
     for scene in scenes.SCENES.values():
         for scenario in scene.scenarios.values():
-            result = auto.run(scene.name, scenario.name)
+            result = auto.run_scene(scene.name, scenario.name)
             state.results[(scene.name, scenario.name)] = result
             if scenario.exact:
                 state.validation.append(ValidationRow.of(result))

@@ -41,6 +41,7 @@ from springlab.files import json_ready
 from springlab.runs import compare
 from springlab.runs.run import run_scenario
 from springlab.scenes.base import Scene
+from springlab.scenes.capabilities.refine import RefinableSpec
 from springlab.sim.batch import TIMING_STEPS, time_run
 from springlab.sim.simulate import INTEGRATORS, MAX_STEPS, check_timing, integrator_id
 
@@ -411,6 +412,47 @@ def _spec_of(scene: Scene):
     return spec
 
 
+def _checked_sizes(scene: Scene, spec: RefinableSpec, sizes: Sequence[int] | None) -> list[int]:
+    """The model sizes to sweep, sorted and distinct (BadInputError for none, or one that is not a whole
+    number within the size parameter's range)."""
+    sizes = list(spec.sizes if sizes is None else sizes)
+    size_parameter = scene.parameters[spec.size]
+    if not sizes:
+        raise BadInputError(f"give at least one {spec.size}")
+    for size in sizes:
+        checked = size_parameter.check(size)
+        if checked != round(checked):
+            raise BadInputError(f"{spec.size} must be whole numbers, got {size!r}")
+    return sorted({int(round(s)) for s in sizes})
+
+
+def _plans(
+    scene: Scene,
+    spec: RefinableSpec,
+    scenario: str,
+    sizes: list[int],
+    integrators: list[str],
+    omega_dt: Sequence[float],
+    duration: float,
+    parameters: dict[str, Any],
+) -> list[tuple[int, float, dict[str, float | None], list[float]]]:
+    """Per size: (size, its fastest mode [rad/s], integrator -> stability limit of w dt [-] (None: none),
+    the timesteps [s] of the grid that fit the run's step budget)."""
+    plans = []
+    for size in sizes:
+        case = scenes.case(scene, scenario, {**parameters, spec.size: size})
+        params, modes = case.params, case.modes()
+        fastest = max(omega for omega, _ in modes)
+        limits: dict[str, float | None] = {}
+        for name in integrators:
+            ratio = min(case.stability_limit(name, omega, zeta) / omega for omega, zeta in modes)
+            limits[name] = ratio if math.isfinite(ratio) else None
+        dts = sorted({_on_grid(_round_sig(f / fastest), params.get(spec.switch_time)) for f in omega_dt}, reverse=True)
+        dts = [dt for dt in dts if duration / dt <= min(MAX_REFINE_STEPS, MAX_STEPS) and dt <= duration / 4]
+        plans.append((size, fastest, limits, dts))
+    return plans
+
+
 def refine(
     scene: str | Scene,
     question: str | None = None,
@@ -471,31 +513,12 @@ def refine(
     integrators = list(integrators)
     for name in integrators:
         integrator_id(name)
-    sizes = list(spec.sizes if sizes is None else sizes)
-    size_parameter = scene_obj.parameters[spec.size]
-    if not sizes:
-        raise BadInputError(f"give at least one {spec.size}")
-    for size in sizes:
-        checked = size_parameter.check(size)
-        if checked != round(checked):
-            raise BadInputError(f"{spec.size} must be whole numbers, got {size!r}")
-    sizes = sorted({int(round(s)) for s in sizes})
+    sizes = _checked_sizes(scene_obj, spec, sizes)
     scenario = scene_obj.scenario(asked.scenario)
     duration = scenario.duration if duration is None else duration
     check_timing(duration / 2, duration)
 
-    plans = []
-    for size in sizes:
-        case = scenes.case(scene_obj, asked.scenario, {**parameters, spec.size: size})
-        params, modes = case.params, case.modes()
-        fastest = max(omega for omega, _ in modes)
-        limits: dict[str, float | None] = {}
-        for name in integrators:
-            ratio = min(case.stability_limit(name, omega, zeta) / omega for omega, zeta in modes)
-            limits[name] = ratio if math.isfinite(ratio) else None
-        dts = sorted({_on_grid(_round_sig(f / fastest), params.get(spec.switch_time)) for f in omega_dt}, reverse=True)
-        dts = [dt for dt in dts if duration / dt <= min(MAX_REFINE_STEPS, MAX_STEPS) and dt <= duration / 4]
-        plans.append((size, fastest, limits, dts))
+    plans = _plans(scene_obj, spec, asked.scenario, sizes, integrators, omega_dt, duration, parameters)
     reference = scene_obj.name if scenes.SCENES.get(scene_obj.name) is scene_obj else scene_obj
     payloads = []
     for size, _, limits, dts in plans:

@@ -15,6 +15,8 @@ if TYPE_CHECKING:
 
 NAME = "rms"
 HELP = "the RMS under a random load: many seeded records against the exact value; --tol: the cheapest accurate setting"
+#: what to run on a model file instead (this command takes a scene: springlab.cli.main refuses a model file)
+MODEL_FILE_INSTEAD = "'springlab frequency MODEL.xml' (its frequency response)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

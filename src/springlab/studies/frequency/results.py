@@ -205,6 +205,9 @@ class FrequencyResponse(display.Shown):
     answers, answer_lines
         what the response means for the scene's question (`FrequencySpec.interpret`: named values, SI, and
         their verdict lines), e.g. the single-mass car's isolation frequency; empty for a model file.
+    warnings
+        what the linearization cannot say at this operating point (springlab.studies.frequency.caveats: not at
+        rest, contacts, dry friction, constraints; valid only for small motions keeping the contact state).
     """
 
     source: str
@@ -234,6 +237,7 @@ class FrequencyResponse(display.Shown):
 
     answers: Mapping[str, Any] = dataclasses.field(default_factory=dict)
     answer_lines: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
 
     @property
     def amplitude_spread(self) -> np.ndarray | None:
@@ -533,6 +537,7 @@ class FrequencyResponse(display.Shown):
             "sweeps": [b.to_dict() for b in self.sweeps],
             "harmonic_balance": None if self.duffing is None else self.duffing.to_dict(),
             "answers": dict(self.answers),
+            "warnings": list(self.warnings),
             "wall_time_s": self.wall_time_s,
         }
 
