@@ -273,6 +273,6 @@ def test_the_random_load_studies_print_their_json_question_and_answer_first(caps
 
 def test_friction_settings_says_when_mujocos_defaults_were_not_swept():
     ends = {s.name: (s.mujoco_default,) for s in get("friction").dry_friction.settings}
-    study = friction_settings("friction", ["coulomb_decay"], integrators=("rk4",), dts=(1e-3,), values=ends)
+    study = friction_settings("friction", ["coulomb_decay"], integrators=("rk4",), dts=(1e-3, 5e-4), values=ends)
     assert study.cases[0].default is None  # MuJoCo's default is euler at 2 ms
     assert "coulomb_decay: MuJoCo's defaults not in the sweep" in study.answer and "diverged" not in study.answer
