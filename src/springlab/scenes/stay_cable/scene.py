@@ -167,7 +167,7 @@ class StayCable(Scene):
     questions = {
         "modes": (
             "What are the stay's natural frequencies, and how close is the N-element model to the cable?",
-            "f1 = {mode_1_frequency_hz_continuum:.5g} Hz for the cable (period {mode_1_period_s:.4g} s; f_n = n f1);"
+            "f1 = {mode_1_frequency_hz_continuum:.5g} Hz for the cable (period {mode_1_period_s_continuum:.4g} s; f_n = n f1);"
             " the {n_elements:.0f}-node model gives {mode_1_frequency_hz_exact:.7g} Hz (low by"
             " {mode_1_discretization_error:.2g}, (pi / (N + 1))^2 / 24) and the run measures"
             " {mode_1_frequency_hz:.7g} Hz.",
@@ -307,7 +307,7 @@ class StayCable(Scene):
             "impedance_n_s_m": cable.cable.impedance,
             "damper_node_position_m": cable.damper_node * cable.cable.spacing(cable.size),
             "mode_1_frequency_hz_continuum": float(cable.cable.frequencies_hz(1)[0]),
-            "mode_1_period_s": float(1.0 / cable.cable.frequencies_hz(1)[0]),
+            "mode_1_period_s_continuum": float(1.0 / cable.cable.frequencies_hz(1)[0]),
         }
         name = case.scenario.name
         if name == "wind":
