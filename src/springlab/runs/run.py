@@ -257,16 +257,23 @@ def evaluate(case: Case, trajectory: Trajectory, tol: float | None = None, *, ch
         verdict = Verdict.NOT_VALIDATED
     else:
         verdict = Verdict.PASS if passed else Verdict.FAIL
+    quantities = case.quantities(trajectory)
+    duration = trajectory.steps * trajectory.dt  # MuJoCo's time accumulates dt: rounding
+    # what an answer may quote besides the parameters and quantities: the run's own facts
+    facts: dict[str, Any] = {"integrator": trajectory.integrator, "dt_s": trajectory.dt, "duration_s": duration}
+    if errors:
+        facts["max_rel_error"] = max(e.max_rel for e in errors.values())
+        facts["tolerance"] = tolerance
     return Result(
         scene=scene.name,
         scenario=scenario.name,
         integrator=trajectory.integrator,
         dt=trajectory.dt,
-        duration=trajectory.steps * trajectory.dt,  # MuJoCo's time accumulates dt: rounding
+        duration=duration,
         steps=trajectory.steps,
         wall_time_s=trajectory.wall_time_s,
         parameters=dict(params),
-        quantities=case.quantities(trajectory),
+        quantities=quantities,
         errors=errors,
         tolerance=tolerance,
         tolerance_basis=basis,
@@ -283,6 +290,8 @@ def evaluate(case: Case, trajectory: Trajectory, tol: float | None = None, *, ch
         case=case,
         trajectory=trajectory,
         column_tolerances=per_column,
+        answer=scene.answer(scenario.name, {**facts, **params, **quantities}),
+        grid_notes=tuple(case.grid_notes(trajectory.dt)),
     )
 
 
