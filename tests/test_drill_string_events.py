@@ -20,7 +20,6 @@ import scipy.optimize
 from springlab.runs.run import run_scenario
 from springlab.scenes.drill_string import answers
 
-
 _RUNS: dict = {}
 
 

@@ -357,6 +357,55 @@ def held_run(
     return x, u
 
 
+def held_maximum(
+    a: np.ndarray, b: np.ndarray, dt: float, states: np.ndarray, forces: np.ndarray, row: np.ndarray
+) -> float:
+    """The largest row . x(t) of a held motion (`held_run`) over continuous time, not only at its steps.
+
+    Between steps the motion is exact with its held input, x(t_j + s) = Phi(s) x_j + Gamma(s) u_j; the best
+    sample's two neighbouring steps are searched by a bounded Brent method on that map (a smooth peak sampled
+    at many steps per oscillation lies next to its best sample).
+
+    Parameters
+    ----------
+    a, b
+        the plant x' = A x + B u [1/s], [state units / (input units s)].
+    dt
+        the step [s].
+    states
+        (steps + 1, n) the exact states at the steps.
+    forces
+        (steps,) the input held over each step [input units].
+    row
+        (n,) the output read, e.g. the carriage's position.
+
+    Returns
+    -------
+    float
+        the continuous maximum [output units].
+    """
+    values = states @ row
+    best_step = int(np.argmax(values))
+    best = float(values[best_step])
+    import scipy.optimize
+
+    for step in (best_step - 1, best_step):
+        if step < 0 or step >= len(forces):
+            continue
+
+        def output(s: float, step: int = step) -> float:
+            if s <= 0.0:
+                return float(states[step] @ row)
+            phi, gamma = zoh(a, b, s)
+            return float(row @ (phi @ states[step] + gamma[:, 0] * forces[step]))
+
+        found = scipy.optimize.minimize_scalar(
+            lambda s: -output(s), bounds=(0.0, dt), method="bounded", options={"xatol": 1e-9 * dt}
+        )
+        best = max(best, -float(found.fun))
+    return best
+
+
 def held_run_error(
     a: np.ndarray,
     b: np.ndarray,

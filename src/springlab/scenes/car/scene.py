@@ -89,7 +89,17 @@ import mujoco
 import numpy as np
 
 from springlab.errors import ParameterError
-from springlab.scenes.base import FOLLOWS_EXACT, MIN_MASS, MIN_MASS_REASON, Case, Parameter, PhaseField, Reference, Scenario, Scene
+from springlab.scenes.base import (
+    FOLLOWS_EXACT,
+    MIN_MASS,
+    MIN_MASS_REASON,
+    Case,
+    Parameter,
+    PhaseField,
+    Reference,
+    Scenario,
+    Scene,
+)
 from springlab.scenes.capabilities.drawing import Drawing
 from springlab.scenes.capabilities.fit import OscillatorFit
 from springlab.scenes.capabilities.frequency import FrequencySpec

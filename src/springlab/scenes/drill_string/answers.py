@@ -223,7 +223,9 @@ def spin_up(
     peak = events.peak_magnitude(time, bit[1], np.gradient(bit[1], time))
     spacing = 2 * math.pi / float(flow.omega[-1]) / GRID_PER_PERIOD
     bit_rows, twist_rows = np.array([lumped.size - 1]), np.array([0, lumped.size - 1])
-    _, peak_exact = maximum(lambda t: np.abs(linear_samples(lumped, flow, drive, t, bit_rows)[1][:, 0]), 0.0, duration, spacing)
+    _, peak_exact = maximum(
+        lambda t: np.abs(linear_samples(lumped, flow, drive, t, bit_rows)[1][:, 0]), 0.0, duration, spacing
+    )
 
     def twist(t: np.ndarray) -> np.ndarray:
         q, _ = linear_samples(lumped, flow, drive, t, twist_rows)

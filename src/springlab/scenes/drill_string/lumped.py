@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 
 import mujoco
 import numpy as np
@@ -377,7 +378,9 @@ def _first_root(function, start: float, end: float, spacing: float) -> float | N
     return float(_optimize().brentq(lambda s: float(function(np.array([s]))[0]), low, high, xtol=1e-15, rtol=1e-15))
 
 
-def maximum(function, start: float, end: float, spacing: float) -> tuple[float, float]:  # noqa: ANN001
+def maximum(
+    function: Callable[[np.ndarray], np.ndarray], start: float, end: float, spacing: float
+) -> tuple[float, float]:
     """(t [s], value) of the largest value of `function` (vectorized in t) on [start, end] [s].
 
     A grid of `spacing` [s] (finer than a quarter of the fastest oscillation, so no peak falls between two

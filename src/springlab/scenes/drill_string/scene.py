@@ -89,7 +89,9 @@ def _breakaway_answer(values: Mapping[str, Any]) -> str:
             " {restick_time_s:.6g} s (exact {restick_time_s_exact:.6g} s)"
         )
     else:
-        text += " and has not slowed below 1 % of the top drive's speed ({restick_speed_rad_s:.2g rpm}) by the run's end"
+        text += (
+            " and has not slowed below 1 % of the top drive's speed ({restick_speed_rad_s:.2g rpm}) by the run's end"
+        )
     return text + (
         ": stick-slip, with a perfectly steady top drive (MuJoCo's dry friction is Coulomb; the velocity-weakening"
         " friction of real bits is not a MuJoCo model)."

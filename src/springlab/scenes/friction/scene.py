@@ -238,7 +238,7 @@ class Friction(Scene):
             " damping. It stops for good after {half_cycles_exact} half cycles, at t = {stop_time_s_exact:.4g} s and"
             " x = {stop_position_m_exact:.4g ~m}, inside the stick zone ±F/k = ±{stick_zone_m:.3g ~m}."
             " MuJoCo: {half_cycles} half cycles, stop at {stop_time_s:.4g} s and x = {stop_position_m:.4g ~m}, then"
-            " a creep of {creep_velocity_m_s:.3g ~m/s} (exactly none).",
+            " a creep of {creep_velocity_m_s:.3g ~m/s} (exact: {creep_velocity_m_s_exact:.3g ~m/s}).",
         ),
         "contact_decay": (
             "The same block slides on a plane with contact friction μ: how does it come to a stop?",
@@ -246,13 +246,14 @@ class Friction(Scene):
             " {amplitude_drop_per_half_cycle_m:.3g ~m} per half cycle; the block stops after {half_cycles_exact} half"
             " cycles at t = {stop_time_s_exact:.4g} s, x = {stop_position_m_exact:.4g ~m}. MuJoCo: {half_cycles}"
             " half cycles, stop at {stop_time_s:.4g} s and x = {stop_position_m:.4g ~m}, then a creep of"
-            " {creep_velocity_m_s:.3g ~m/s} (exactly none).",
+            " {creep_velocity_m_s:.3g ~m/s} (exact: {creep_velocity_m_s_exact:.3g ~m/s}).",
         ),
         "incline_hold": (
             "Does friction hold a block on an incline below its friction angle?",
             "Yes: the incline ({incline_deg:.3g}°) is below the friction angle atan μ = {friction_angle_deg:.3g}°,"
-            " so exactly nothing moves. MuJoCo's block creeps at {creep_velocity_m_s:.3g ~m/s}:"
-            " {crept_distance_m:.3g ~m} over the run.",
+            " so exactly nothing moves (exact creep {creep_velocity_m_s_exact:.3g ~m/s}). MuJoCo's block creeps at"
+            " {creep_velocity_m_s:.3g ~m/s}: {crept_distance_m:.3g ~m} over the run (exact"
+            " {crept_distance_m_exact:.3g ~m}).",
         ),
         "incline_slide": (
             "How fast does a block slide down an incline steeper than its friction angle?",

@@ -235,7 +235,7 @@ class Nonlinear(Scene):
         "forced_duffing": (
             "A damped, forced double well: is the motion predictable?",
             "No, it is chaotic: nearby starts separate at about {lyapunov_exponent_per_s:.3g} 1/s (± "
-            "{lyapunov_standard_error_per_s:.2g} 1/s), so a start known to {perturbation_m:.0e} m is lost after"
+            "{lyapunov_standard_error_per_s:.2g} 1/s), so a start known to {perturbation_m:.3g ~m} is lost after"
             " {separation_time_s:.3g} s and the computed path is accurate only up to {accurate_until_s:.3g} s.",
         ),
     }

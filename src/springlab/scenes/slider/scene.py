@@ -36,7 +36,17 @@ import numpy as np
 
 from springlab.exact import analytic
 from springlab.exact.linear import generator_system, state_matrix
-from springlab.scenes.base import FOLLOWS_EXACT, MIN_MASS, MIN_MASS_REASON, Case, Parameter, PhaseField, Reference, Scenario, Scene
+from springlab.scenes.base import (
+    FOLLOWS_EXACT,
+    MIN_MASS,
+    MIN_MASS_REASON,
+    Case,
+    Parameter,
+    PhaseField,
+    Reference,
+    Scenario,
+    Scene,
+)
 from springlab.scenes.capabilities.fit import OscillatorFit
 from springlab.scenes.capabilities.frequency import FrequencySpec
 from springlab.scenes.capabilities.interactive import InteractiveSpec, MjcfEdit
