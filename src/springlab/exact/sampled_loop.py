@@ -406,6 +406,45 @@ def held_maximum(
     return best
 
 
+def held_last_exit(
+    a: np.ndarray,
+    b: np.ndarray,
+    dt: float,
+    states: np.ndarray,
+    forces: np.ndarray,
+    row: np.ndarray,
+    level: float,
+    offset: float = 0.0,
+) -> float:
+    """The time [s] after which |row . x(t) - offset| stays <= level for good, within the held motion's record.
+
+    Located on the cubic Hermite interpolant of the steps (springlab.exact.events.last_exit), then found by
+    Brent's method on the exact map of the step it falls in, x(t_j + s) = Phi(s) x_j + Gamma(s) u_j: a root of
+    the exact motion, not of its interpolant. Arguments as `held_maximum`; 0 if it never leaves the band.
+    """
+    import scipy.optimize
+
+    from springlab.exact import events
+
+    time = dt * np.arange(len(states))
+    held = np.append(forces, forces[-1] if len(forces) else 0.0)
+    rates = (states @ a.T + np.outer(held, b[:, 0])) @ row
+    estimate = events.last_exit(time, states @ row - offset, rates, level)
+    if not math.isfinite(estimate) or estimate <= 0.0:
+        return estimate
+    for step in dict.fromkeys(min(max(k, 0), len(forces) - 1) for k in (int(estimate // dt), int(estimate // dt) - 1)):
+
+        def excess(s: float, step: int = step) -> float:
+            if s <= 0.0:
+                return abs(float(states[step] @ row) - offset) - level
+            phi, gamma = zoh(a, b, s)
+            return abs(float(row @ (phi @ states[step] + gamma[:, 0] * forces[step])) - offset) - level
+
+        if excess(0.0) > 0.0 >= excess(dt):
+            return step * dt + float(scipy.optimize.brentq(excess, 0.0, dt, xtol=1e-15, rtol=1e-15))
+    return estimate
+
+
 def held_run_error(
     a: np.ndarray,
     b: np.ndarray,

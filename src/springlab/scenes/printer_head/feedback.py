@@ -363,9 +363,8 @@ class Feedback(Variant):
         peak = sampled_loop.held_maximum(a, b, run.dt, exact.states, exact.forces, carriage)
         out["overshoot_m_exact"] = max(0.0, peak - target)
         out["final_error_m"] = abs(float(run.q_c[-1]) - target)
-        exact_exit = events.last_exit(
-            run.dt * np.arange(len(exact.states)), exact.states[:, 0] - target, exact.states[:, 2], band
-        )
+        # a root of the exact held motion, not of an interpolant of its steps
+        exact_exit = sampled_loop.held_last_exit(a, b, run.dt, exact.states, exact.forces, carriage, band, target)
         # for good: the exact loop, continued until its decay certifies it, leaves the band no more after the run
         out["settled_for_good"] = bool(exact.settled and exact_exit <= run.time[-1])
         out["positioning_time_s_exact"] = exact_exit if exact.settled else math.inf
