@@ -102,7 +102,9 @@ class Scene:
        (name -> `Parameter`, SI with units and valid ranges), `scenarios` (name -> `Scenario`,
        each with its duration, presets and validated `dt`; a scene whose scenarios differ in their
        model gives each its `variant` instead of dispatching on names), `default_scenario`, and
-       the validated default setting `integrator` and `dt` [s]; optionally `camera`.
+       the validated default setting `integrator` and `dt` [s]; optionally `camera`; and `questions`
+       (scenario -> the question it asks and its answer's template, `Scene.answer`: units a reader expects,
+       the exact value beside MuJoCo's; `grid_notes(case, dt)` says what a step grid changes in the input).
     2. `model_defaults(model)`: the parameters whose defaults live in the MJCF, read back from the
        compiled model (the physics values have one home, the MJCF).
     3. `edit(spec, params, scenario)`: MjSpec edits that apply the parameters, so the physics
