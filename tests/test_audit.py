@@ -132,6 +132,8 @@ def test_the_audit_json_is_the_objects_to_dict_and_its_facts_are_attributes(chai
         "wall_time_s",
         "margin_confirmed",
         "cost",
+        "behaviour",
+        "growth",
     ]
     assert list(data["operating_point_state"]) == [
         "settle_s",
@@ -140,6 +142,8 @@ def test_the_audit_json_is_the_objects_to_dict_and_its_facts_are_attributes(chai
         "at_rest",
         "drift_m",
         "linear_map",
+        "creep",
+        "settling_helps",
     ]
     assert list(data["operating_point_state"]["at_point"]) == [
         "elements",

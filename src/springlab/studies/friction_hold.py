@@ -76,6 +76,9 @@ DT_FRACTIONS = (1.0, 0.5)
 MAX_VERIFIED = 20
 #: runs per chunk of the executor
 CHUNK_RUNS = 24
+#: the settings that also change how stiff the contact is (how far the grip's surfaces press into each other),
+#: not only its friction: the study also names the cheapest setting that leaves them as they are
+STIFFNESS = ("solref_timeconst", "solimp_d")
 #: the case's name in the study's rows and JSON
 CASE = "hold"
 
@@ -263,6 +266,10 @@ def friction_hold(
     )
     pick, verified = _pick(compiled_model, plan, study, tol, default)
     study = dataclasses.replace(study, pick=pick)
+    alternative: Recommendation[SettingRun] | None = None
+    alternative_bodies: tuple[HeldBody, ...] = ()
+    if pick.found and pick.row is not None and any(pick.row.settings.get(n) != baseline.get(n) for n in STIFFNESS):
+        alternative, alternative_bodies = _pick(compiled_model, plan, study, tol, default, keep=STIFFNESS)
     report = HoldReport(
         model=label,
         operating_point=point.label,
@@ -272,6 +279,8 @@ def friction_hold(
         bodies=own.bodies,
         skipped=skipped,
         pick_bodies=verified,
+        friction_only=alternative,
+        friction_only_bodies=alternative_bodies,
     )
     return FrictionSettings(
         scene=label,
@@ -340,11 +349,16 @@ def _own_run(model: mujoco.MjModel, plan: HoldPlan, baseline: dict[str, float], 
 
 
 def _pick(
-    model: mujoco.MjModel, plan: HoldPlan, study: CaseStudy, tol: float, default: SettingRun | None
+    model: mujoco.MjModel,
+    plan: HoldPlan,
+    study: CaseStudy,
+    tol: float,
+    default: SettingRun | None,
+    keep: Sequence[str] = (),
 ) -> tuple[Recommendation[SettingRun], tuple[HeldBody, ...]]:
     """The cheapest setting whose slip over the hold stays within tol body sizes, verified by a run of the whole
     hold (springlab.studies.settings.cheapest_verified: counted work, then slip; no timer decides), and the held
-    bodies through that run (empty: no pick)."""
+    bodies through that run (empty: no pick). Settings named in `keep` stay at the model's own values."""
     passed: list[tuple[HeldBody, ...]] = []
 
     def verify(candidate: SettingRun) -> Verification:
@@ -369,7 +383,19 @@ def _pick(
     def describe(setting: Setting) -> str:
         return f"{study.describe(setting.option_values)} with {setting.integrator} at dt = {setting.dt:g} s"
 
-    candidates = [r for r in study.runs if r.run.valid and r.error <= tol]
+    def changed(row: SettingRun) -> float:
+        """How many of the model's own settings, integrator and timestep the row changes."""
+        settings = sum(row.settings.get(s.name) != s.mujoco_default for s in study.settings)
+        if default is None:
+            return float(settings)
+        return float(settings + (row.integrator != default.integrator) + (row.dt != default.dt))
+
+    own = {s.name: s.mujoco_default for s in study.settings}
+    candidates = [
+        r
+        for r in study.runs
+        if r.run.valid and r.error <= tol and all(r.settings.get(name, own.get(name)) == own.get(name) for name in keep)
+    ]
     pick = cheapest_verified(
         candidates,
         tol,
@@ -377,6 +403,8 @@ def _pick(
         describe=describe,
         max_tries=MAX_VERIFIED,
         error_words="slip over the hold in body sizes",
+        prefer=changed,  # of equal counted work, the fewest changes to the model's own settings
+        tie_words="ranked after it as they change more settings, slip more or are listed later in the sweep",
     )
     if pick.found:
         return pick, passed[-1]

@@ -325,6 +325,11 @@ class HoldReport:
         settings not swept, and why.
     pick_bodies
         the held bodies through the pick's verification run (empty: no pick).
+    friction_only
+        where the pick changes how stiff the contact is (solref, solimp), the cheapest verified setting that
+        leaves those as they are (None: the pick already does, or there is no pick).
+    friction_only_bodies
+        the held bodies through its verification run.
     """
 
     model: str
@@ -335,6 +340,8 @@ class HoldReport:
     bodies: tuple[HeldBody, ...]
     skipped: tuple[str, ...] = ()
     pick_bodies: tuple[HeldBody, ...] = ()
+    friction_only: Recommendation[SettingRun] | None = None
+    friction_only_bodies: tuple[HeldBody, ...] = ()
 
     def allowed(self) -> str:
         """'1 mm (0.025 of the 40 mm body)': tol in metres and body sizes."""
@@ -374,6 +381,16 @@ class HoldReport:
             )
         elif pick is not None:
             parts.append(pick.text)
+        other = self.friction_only
+        if other is not None and other.row is not None:
+            ratio = other.details.get("work_vs_default")
+            held = "; ".join(f"{b.name!r} {b.state(self.hold_s)}" for b in self.friction_only_bodies)
+            parts.append(
+                f"Without changing how stiff the contact is (solref, solimp): {case.describe(other.row.settings)}"
+                f" with {other.row.integrator} at dt = {other.row.dt:g} s, {ratio:.3g}x the counted work ({held})."
+            )
+        elif other is not None:
+            parts.append(f"Nothing cheaper holds it without changing how stiff the contact is: {other.text}")
         return " ".join(parts)
 
     def creep_spread(self, case: CaseStudy) -> str:
@@ -395,7 +412,7 @@ class HoldReport:
 
     def to_dict(self) -> dict[str, Any]:
         """friction_settings.json's "hold": model, operating_point, hold_s, window_s, tol, allowed_slip_m, bodies,
-        skipped, pick_bodies."""
+        skipped, pick_bodies, friction_only (a pick's shape, or null), friction_only_bodies."""
         return json_ready(
             {
                 "model": self.model,
@@ -407,6 +424,8 @@ class HoldReport:
                 "bodies": [b.to_dict() for b in self.bodies],
                 "skipped": list(self.skipped),
                 "pick_bodies": [b.to_dict() for b in self.pick_bodies],
+                "friction_only": None if self.friction_only is None else _pick_dict(self.friction_only),
+                "friction_only_bodies": [b.to_dict() for b in self.friction_only_bodies],
             }
         )
 

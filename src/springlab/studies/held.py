@@ -242,6 +242,21 @@ def find_hold(
         an unknown keyframe or body, a body without joints or without dry friction, a model without dry friction.
     """
     point = operating_point(model, keyframe)
+    plan, settings, skipped = plan_at(model, label, point, bodies=bodies, hold_s=hold_s)
+    return plan, settings, skipped, point
+
+
+def plan_at(
+    model: mujoco.MjModel, label: str, point: OperatingPoint, *, bodies: Sequence[str] = (), hold_s: float
+) -> tuple[HoldPlan, tuple[SolverSetting, ...], tuple[str, ...]]:
+    """`find_hold` at a given operating point (a keyframe, or where the audit let the model settle): the plan,
+    the settings to sweep and those not swept (why).
+
+    Raises
+    ------
+    BadInputError
+        an unknown body, a body without joints or without dry friction, a model without dry friction there.
+    """
     data = mujoco.MjData(model)
     point.load(model, data)
     mujoco.mj_forward(model, data)
@@ -268,7 +283,7 @@ def find_hold(
         baseline=tuple((s.name, s.mujoco_default) for s in settings),
         hold_s=float(hold_s),
     )
-    return plan, settings, skipped, point
+    return plan, settings, skipped
 
 
 def configure(model: mujoco.MjModel, settings: Mapping[str, float], plan: HoldPlan) -> mujoco.MjModel:
