@@ -92,6 +92,8 @@ def test_one_element_slips_as_the_two_body_closed_form_says():
         lambda s: -bit_speed(s), bounds=(0.25 * period, 0.75 * period), method="bounded", options={"xatol": 1e-12}
     )
     assert q["breakaway_time_s_exact"] == pytest.approx(t_b, abs=1e-11)
+    # the twist as it breaks free is the top's angle (the bit still at 0): T_f / k
+    assert q["windup_turns_exact"] == pytest.approx(r0 / (2 * math.pi), rel=1e-12)
     # the exact values are roots found to about 1e-13 s (answers' EVENT_ROOT_ERROR) on a two-segment solution
     assert q["restick_time_s_exact"] == pytest.approx(t_b + restick, abs=1e-11)
     assert q["peak_bit_speed_rad_s_exact"] == pytest.approx(-peak.fun, rel=1e-12)

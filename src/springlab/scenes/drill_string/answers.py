@@ -192,6 +192,12 @@ def _continuum_restick(solver: continuum.WaveSolution, solution: continuum.Stick
     )
 
 
+def _breakaway_twist(exact: Any) -> float:
+    """The twist top - bit [rad] of the exact stick-slip solution as its bit first breaks free (nan: never)."""
+    slip = next((phase for phase in exact.phases if phase.kind == "slip"), None)
+    return math.nan if slip is None else float(slip.q0[0] - slip.q0[-1])
+
+
 def restick_exact(lumped: LumpedString, exact: Any, drive: Drive) -> float:
     """The exact N-element re-stick [s] (`RESTICK_FRACTION`; nan: none within the solution)."""
     control = lumped.drive_control(drive.acceleration)
@@ -340,7 +346,8 @@ def breakaway(
         "breakaway_time_s_exact": exact_b,
         "breakaway_time_s_continuum": continuum_b,
         "windup_turns": (top_angle - bit_angle) / (2 * math.pi),
-        "windup_turns_exact": top_angle_at(exact_b) / (2 * math.pi),
+        # the exact solution's own twist top - bit as the bit breaks free (the top drive's inertia is finite)
+        "windup_turns_exact": _breakaway_twist(exact) / (2 * math.pi),
         "windup_turns_continuum": top_angle_at(continuum_b) / (2 * math.pi),
         "windup_turns_static": lumped.friction / rod.stiffness / (2 * math.pi),
         "peak_bit_speed_rad_s": measured["peak"],
