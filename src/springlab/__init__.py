@@ -11,6 +11,7 @@
 from springlab.exact import analytic
 from springlab.render.inline import Video, video
 from springlab.runs.compare import Verdict
+from springlab.runs.model_run import ModelRun
 from springlab.runs.run import Result, ValidationRow
 from springlab.studies.audit.audit import audit
 from springlab.studies.audit.results import Audit
@@ -35,6 +36,7 @@ __all__ = [
     "FrequencyResponse",
     "fit",
     "Result",
+    "ModelRun",
     "Verdict",
     "ValidationRow",
     "SCENES",

@@ -211,10 +211,7 @@ def friction_hold(
     """
     started = _time.perf_counter()
     label = os.fspath(model)
-    if not (isinstance(hold_s, (int, float)) and math.isfinite(hold_s) and hold_s > 0):
-        raise BadInputError(f"--hold must be a number of seconds > 0, got {hold_s!r}")
-    if not (isinstance(tol, (int, float)) and math.isfinite(tol) and tol > 0):
-        raise BadInputError(f"--tol is the slip allowed over the hold in body sizes, a number > 0; got {tol!r}")
+    _check_hold(hold_s, tol)
     compiled_model = model_files.load(label)
     own_integrator, own_dt = _NAMES[int(compiled_model.opt.integrator)], float(compiled_model.opt.timestep)
     names = tuple(dict.fromkeys(integrators or (*HOLD_INTEGRATORS, own_integrator)))
@@ -242,16 +239,7 @@ def friction_hold(
             valid = ", ".join(s.name for s in settings)
             raise BadInputError(f"values: {name!r} is no swept setting of this hold (valid: {valid}) or has no values")
     groups = grid(spec, case, names, steps_of, values)
-    configs = [config for group in groups for config in group]
-    pieces = chunked(len(groups), max(1, CHUNK_RUNS // len(steps_of)))
-    payloads = [HoldChunk(carried, plan, window, tuple(_jobs(groups[p.start : p.stop]))) for p in pieces]
-    sizes = [sum(len(g) for g in groups[p.start : p.stop]) for p in pieces]
-    outcomes = [
-        row
-        for part in runner.map(hold_chunk, payloads, description="friction settings: hold", sizes=sizes)
-        for row in part
-    ]
-    runs = tuple(_row(plan, config, outcome, window) for config, outcome in zip(configs, outcomes))
+    runs = _swept(runner, carried, plan, window, groups, len(steps_of))
     default = own.row
     study = CaseStudy(
         scenario=CASE,
@@ -293,6 +281,36 @@ def friction_hold(
         wall_time_s=_time.perf_counter() - started,
         hold=report,
     )
+
+
+def _check_hold(hold_s: float, tol: float) -> None:
+    """BadInputError unless the hold [s] and the slip allowed [body sizes] are finite numbers > 0."""
+    if not (isinstance(hold_s, (int, float)) and math.isfinite(hold_s) and hold_s > 0):
+        raise BadInputError(f"--hold must be a number of seconds > 0, got {hold_s!r}")
+    if not (isinstance(tol, (int, float)) and math.isfinite(tol) and tol > 0):
+        raise BadInputError(f"--tol is the slip allowed over the hold in body sizes, a number > 0; got {tol!r}")
+
+
+def _swept(
+    runner: Executor,
+    carried: Any,
+    plan: HoldPlan,
+    window: float,
+    groups: list[list[tuple[dict[str, float], str, float]]],
+    n_steps: int,
+) -> tuple[SettingRun, ...]:
+    """The sweep's runs, one per configuration of `groups` in order: chunks of whole groups (about CHUNK_RUNS
+    runs each, `n_steps` timesteps per group) run by `runner` on the model as `carried`, over `window` [s]."""
+    configs = [config for group in groups for config in group]
+    pieces = chunked(len(groups), max(1, CHUNK_RUNS // n_steps))
+    payloads = [HoldChunk(carried, plan, window, tuple(_jobs(groups[p.start : p.stop]))) for p in pieces]
+    sizes = [sum(len(g) for g in groups[p.start : p.stop]) for p in pieces]
+    outcomes = [
+        row
+        for part in runner.map(hold_chunk, payloads, description="friction settings: hold", sizes=sizes)
+        for row in part
+    ]
+    return tuple(_row(plan, config, outcome, window) for config, outcome in zip(configs, outcomes))
 
 
 def _listed(model: mujoco.MjModel, plan: HoldPlan) -> str:

@@ -12,9 +12,11 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 from springlab import display, tables
+from springlab.answer import Answer
 from springlab.files import json_ready
 from springlab.scenes.capabilities.friction import FrictionMeasure, SolverSetting
 
+from . import answers
 from .settings import COST_BASIS, Recommendation, Run, RunFields
 
 if TYPE_CHECKING:
@@ -211,7 +213,7 @@ class CaseStudy:
         if default is not None and default.max_rel_error is not None:
             values = _values_text(self.measures, default.values)
             parts.append(
-                f"at MuJoCo's defaults ({default.integrator}, dt = {default.dt:g} s) its error is"
+                f"at MuJoCo's defaults ({default.integrator}, dt = {answers.written(default.dt, '~s')}) its error is"
                 f" {default.max_rel_error:.2g}{values}."
             )
         if model is not None and model.model_error is not None:
@@ -231,7 +233,7 @@ class CaseStudy:
                 ties = f"; {len(pick.ties)} other settings tie with it in counted work" if pick.ties else ""
                 parts.append(
                     f"Cheapest setting meeting {pick.tolerance:g}: {self.describe(pick.row.settings)} with"
-                    f" {pick.row.integrator} at dt = {pick.row.dt:g} s, error {error_text(pick.error)}{values}"
+                    f" {pick.row.integrator} at dt = {answers.written(pick.row.dt, '~s')}, error {error_text(pick.error)}{values}"
                     f" (verified by a run), {cost}{ties}."
                 )
             else:
@@ -484,13 +486,66 @@ class FrictionSettings(display.Shown):
         """Runs in the sweep."""
         return sum(len(c.runs) for c in self.cases)
 
-    def answer(self) -> str:
+    def answer_by_case(self) -> str:
         """How much MuJoCo's friction drifts and what it costs to make it stop, one paragraph per case."""
         return "\n".join(self.case_answer(case) for case in self.cases)
 
     def case_answer(self, case: CaseStudy) -> str:
         """One case's answer: a model file's hold in its own words, a scene's case as `CaseStudy.answer`."""
         return case.answer() if self.hold is None else self.hold.answer(case)
+
+    @property
+    def question_answer(self) -> Answer:
+        """The question and its answer: per case, the error at MuJoCo's defaults and the verified cheapest
+        setting, one clause each (a model file's hold: its own words, `HoldReport.answer`)."""
+        say = answers.Quoter()
+        integrator, dt = self.mujoco_default
+        within = f", and which solver setting is the cheapest within {self.tol:g}" if self.tol is not None else ""
+        if self.hold is not None:
+            hold = self.hold
+            question = (
+                f"How fast do the bodies dry friction holds in {hold.model} creep over {answers.written(hold.hold_s, '~s')}"
+                f" at its own settings, and which settings keep the slip within {hold.allowed()}?"
+            )
+            numbers = {
+                f"{b.name}_creep_velocity_m_s": b.creep_velocity_m_s
+                for b in hold.bodies
+                if b.creep_velocity_m_s is not None
+            }
+            return answers.of_words(question, " ".join(hold.answer(case) for case in self.cases), numbers)
+        question = (
+            f"How far from the exact Coulomb answer is MuJoCo's dry friction in {', '.join(c.scenario for c in self.cases)}"
+            f" at its defaults ({integrator}, dt = {answers.written(dt, '~s')}){within}?"
+        )
+        parts = []
+        for case in self.cases:
+            default, pick, name = case.default, case.pick, case.scenario
+            at_default = (
+                "diverged at the defaults"
+                if default is None or default.max_rel_error is None
+                else f"error {say(f'{name}_default_error', default.max_rel_error, spec='.2g')} at the defaults"
+            )
+            if pick is None:
+                parts.append(f"{name}: {at_default}")
+            elif pick.row is not None and pick.found:
+                parts.append(
+                    f"{name}: {at_default}; cheapest within {pick.tolerance:g}: {case.describe(pick.row.settings)} with"
+                    f" {pick.row.integrator} at {say.dt(f'{name}_pick_dt_s', pick.row.dt)}, error"
+                    f" {say(f'{name}_pick_error', pick.error or 0.0, spec='.2g')}"
+                )
+            else:
+                parts.append(f"{name}: {at_default}; no verified setting within {pick.tolerance:g}")
+        return say.answer(question, ". ".join(parts) + ".")
+
+    @property
+    def question(self) -> str:
+        """What the study asks, in words (`question_answer`)."""
+        return self.question_answer.question
+
+    @property
+    def answer(self) -> str:
+        """The answer in words with units (`question_answer`)."""
+        return self.question_answer.answer
 
     def _shown(self) -> display.Summary:
         """The study as a notebook shows it: the picks first (or that none was asked for), then the runs."""
@@ -506,7 +561,7 @@ class FrictionSettings(display.Shown):
             f"{self.scene}: {', '.join(c.scenario for c in self.cases)}",
             verdict,
             ok,
-            self.answer(),
+            self.answer,
             (
                 display.Fact("runs", self.runs),
                 display.Fact("integrators", ", ".join(self.integrators)),
@@ -538,6 +593,7 @@ class FrictionSettings(display.Shown):
         cost_basis."""
         return json_ready(
             {
+                **self.question_answer.to_dict(),
                 "scene": self.scene,
                 "parameters": dict(self.overrides),
                 "tol": self.tol,
@@ -563,9 +619,10 @@ def error_text(value: float | None) -> str:
 
 
 def _values_text(measures: Sequence[FrictionMeasure], values: Mapping[str, float | None]) -> str:
-    """'; creep velocity ... 1.8e-03' for the measures with a value."""
+    """' (stop position -5.34 mm; creep velocity 1.8 mm/s)' for the measures with a value, each in the unit its
+    name ends in (springlab.studies.answers)."""
     shown = [
-        f"{m.label.split(' (')[0].split(' [')[0]} {values[m.quantity]:.3g}"
+        f"{m.label.split(' (')[0].split(' [')[0]} {answers.written(values[m.quantity] or 0.0, answers.unit_of(m.quantity))}"
         for m in measures
         if values.get(m.quantity) is not None and math.isfinite(values[m.quantity] or math.nan)
     ]
