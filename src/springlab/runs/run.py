@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from springlab import scenes
+from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError, ParameterError, SpringlabError
 from springlab.files import csv_text, dumps, write_text_files
 from springlab.scenes.base import Case, Check, Scenario, Scene
@@ -259,11 +260,6 @@ def evaluate(case: Case, trajectory: Trajectory, tol: float | None = None, *, ch
         verdict = Verdict.PASS if passed else Verdict.FAIL
     quantities = case.quantities(trajectory)
     duration = trajectory.steps * trajectory.dt  # MuJoCo's time accumulates dt: rounding
-    # what an answer may quote besides the parameters and quantities: the run's own facts
-    facts: dict[str, Any] = {"integrator": trajectory.integrator, "dt_s": trajectory.dt, "duration_s": duration}
-    if errors:
-        facts["max_rel_error"] = max(e.max_rel for e in errors.values())
-        facts["tolerance"] = tolerance
     return Result(
         scene=scene.name,
         scenario=scenario.name,
@@ -290,9 +286,25 @@ def evaluate(case: Case, trajectory: Trajectory, tol: float | None = None, *, ch
         case=case,
         trajectory=trajectory,
         column_tolerances=per_column,
-        answer=scene.answer(scenario.name, {**facts, **params, **quantities}),
+        answer=_answer(case, trajectory, quantities, errors, tolerance),
         grid_notes=tuple(case.grid_notes(trajectory.dt)),
     )
+
+
+def _answer(
+    case: Case, trajectory: Trajectory, quantities: dict[str, Any], errors: dict[str, ColumnError], tol: float | None
+) -> Answer | None:
+    """The scenario's question and this run's answer (`Scene.answer`), from its parameters, quantities and facts."""
+    # what an answer may quote besides the parameters and quantities: the run's own facts
+    facts: dict[str, Any] = {
+        "integrator": trajectory.integrator,
+        "dt_s": trajectory.dt,
+        "duration_s": trajectory.steps * trajectory.dt,
+    }
+    if errors:
+        facts["max_rel_error"] = max(e.max_rel for e in errors.values())
+        facts["tolerance"] = tol
+    return case.scene.answer(case.scenario.name, {**facts, **case.params, **quantities})
 
 
 def _capped(check: Check, tol: float | None) -> Check:
