@@ -18,6 +18,8 @@ from springlab.studies.audit.results import Audit
 from springlab.studies.auto import run, validate
 from springlab.studies.fit.fit import fit
 from springlab.studies.frequency import FrequencyResponse, frequency
+from springlab.studies.friction_hold import friction_settings
+from springlab.studies.friction_results import FrictionSettings
 from springlab.studies.sweeps import sweep
 
 from . import errors
@@ -34,6 +36,8 @@ __all__ = [
     "Audit",
     "frequency",
     "FrequencyResponse",
+    "friction_settings",
+    "FrictionSettings",
     "fit",
     "Result",
     "ModelRun",

@@ -278,7 +278,8 @@ class HeldBody:
     creep_velocity_m_s
         its mean speed over the second half of the time it was held [m/s] (None: the run diverged).
     slip_m
-        the largest distance of its centre of mass from where the hold started [m] (None: diverged).
+        the largest distance of its centre of mass from where the hold started while it was held [m] (None:
+        diverged).
     lost_at_s
         when it first touched none of its holders [s] (None: held throughout).
     """
