@@ -20,8 +20,8 @@ from springlab.studies.design import SobolStudy, Study, design
 from springlab.studies.fit.fit import fit
 from springlab.studies.fit.results import FitResult
 from springlab.studies.frequency import FrequencyResponse, frequency
+from springlab.studies.friction_hold import friction_settings
 from springlab.studies.friction_results import FrictionSettings
-from springlab.studies.friction_settings import friction_settings
 from springlab.studies.random_load import Ensemble
 from springlab.studies.random_load import ensemble as rms
 from springlab.studies.refine import Refinement, refine

@@ -69,6 +69,8 @@ STUDY_OPTIONS: frozenset[str] = frozenset(
         "sizes",
         "scenarios",
         "values",
+        "bodies",
+        "hold_s",
         # rms, rms_settings
         "seeds",
         "record",
@@ -82,7 +84,7 @@ STUDY_OPTIONS: frozenset[str] = frozenset(
         "sines",
         "amplitudes",
         "sweep",
-        # audit
+        # audit, and a model file's run, sweep and friction settings
         "keyframe",
         "settle_s",
         "perturb",
