@@ -487,6 +487,9 @@ class Nonlinear(Scene):
         """Another run of the case at another setting, optionally from another block state or from a full
         (qpos, qvel) state (the case's model is not changed: simulate steps a copy)."""
         params = case.params
+        if state is None and x0 is None and v0 is None:
+            # the scenario's own start: a verification run (dt/2, dt/4), kept on the case for the next verdict
+            return case.simulate(integrator, dt, duration, keep=True)
         if state is not None:
             qpos, qvel = state
             setup = Setup(qpos=qpos, qvel=qvel, control=self._setup(case, 0.0, 0.0).control)
