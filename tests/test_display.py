@@ -35,11 +35,11 @@ from springlab.plots import friction_settings as plots_friction
 from springlab.plots import sweep as plots_sweep
 from springlab.runs.run import ValidationRow, run_scenario, write_run
 from springlab.scenes import get
+from springlab.studies import random_load, rms_settings
 from springlab.studies.design import run_study
 from springlab.studies.design import study as design_study
 from springlab.studies.families import run_phase_family, run_zeta_family
 from springlab.studies.friction_settings import friction_settings
-from springlab.studies import random_load, rms_settings
 from springlab.studies.refine import refine
 from springlab.studies.tradeoff import tradeoff
 from test_layers import layer_of

@@ -301,3 +301,43 @@ def test_one_linearization_and_one_map_per_setting_at_the_operating_point(monkey
     step = linearize_module.FD_STEP
     assert sorted(set(asked)) == sorted(asked) == [("euler", 5e-4, step), ("euler", 5e-4, 2 * step)]
     assert calls["one_step_map"] == calls["step_input_column"] == len(asked)
+
+
+_TWO_MASSES = """<mujoco>
+  <worldbody>
+    <body name="a"><joint name="near" type="slide" axis="1 0 0" stiffness="100"/>
+      <inertial pos="0 0 0" mass="1" diaginertia="1 1 1"/>
+      <body name="b"><joint name="far" type="slide" axis="1 0 0" stiffness="50"/>
+        <inertial pos="0 0 0" mass="1" diaginertia="1 1 1"/></body></body>
+  </worldbody>
+  <actuator><motor name="push" joint="near"/></actuator>
+  <sensor><jointpos name="gauge" joint="far"/><framepos name="where" objtype="body" objname="b"/></sensor>
+</mujoco>"""
+
+
+@pytest.mark.parametrize(
+    "names, missing, listed",
+    [
+        (
+            [],
+            "--input, one of: push, near:force, far:force; and --response, one of:",
+            "far:acc, gauge, gauge[0], where[0]",
+        ),
+        (["--input", "push"], "--response, one of: near, near:vel, near:acc, far,", "where[2]"),
+        (["--response", "far"], "--input, one of: push, near:force, far:force", ""),
+    ],
+)
+def test_a_model_without_declared_names_lists_its_inputs_and_responses(names, missing, listed, tmp_path, capsys):
+    """A model file declares no input or response: the one-line error lists the names the model takes (its
+    actuators, each joint's force; each joint's position, velocity, acceleration and every sensor component)."""
+    model = tmp_path / "two.xml"
+    model.write_text(_TWO_MASSES)
+    assert main(["frequency", str(model), *names]) == 2
+    captured = capsys.readouterr()
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1 and captured.out == ""
+    assert "declares no default" in lines[0] and missing in lines[0] and listed in lines[0]
+    assert ("--input" in lines[0]) == ("--input" not in names) and ("--response" in lines[0]) == (
+        "--response" not in names
+    )
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["two.xml"]

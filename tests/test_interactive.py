@@ -19,6 +19,7 @@ import http.server
 import json
 import math
 import os
+import re
 import shutil
 import subprocess
 import threading
@@ -245,6 +246,10 @@ def test_slider_moves_agree_with_python_and_a_dt_past_the_stability_limit_diverg
     assert blown["verdict"] == "diverged" and float(blown["dt"]) > 0.45
     with pytest.raises(DivergedError):
         _python(blown)
+    # the error axis is log10 |x - x_exact|: its ends read as powers of ten (10⁻¹⁷ .. 10ᵏ), not bare exponents
+    ends = json.loads(browser.evaluate(session, "document.getElementById('error').dataset.yLabels"))
+    assert ends[0] == "10\u207b\u00b9\u2077"
+    assert re.fullmatch("10[\u2070\u00b9\u00b2\u00b3\u2074-\u2079]+", ends[1]), ends
 
 
 def test_car_release_moves_agree_with_python(pages, browser):
@@ -427,8 +432,16 @@ def test_scenes_without_a_browser_page_and_bad_scenarios_are_one_line_errors(tmp
         interactive.write_interactive("kinematics", None, tmp_path)
     with pytest.raises(BadInputError, match="pitch_heave"):
         interactive.write_interactive("car", "pitch_heave", tmp_path)
-    with pytest.raises(BadInputError, match="harmonic"):
+    # a known scenario without a page is named as such (not 'unknown'), with every scenario that has one
+    with pytest.raises(BadInputError) as known:
         interactive.write_interactive("slider", "harmonic", tmp_path)
+    message = str(known.value)
+    assert "slider / harmonic has no interactive page" in message and "unknown" not in message
+    for scene, names in interactive.interactive_scenes().items():
+        assert f"{scene}: {', '.join(names)}" in message
+    # a name the scene does not know stays an unknown scenario, with the scene's scenarios
+    with pytest.raises(BadInputError, match="unknown scenario of slider 'harmonix'; valid: .*harmonic"):
+        interactive.write_interactive("slider", "harmonix", tmp_path)
     assert not any(tmp_path.iterdir())
 
 

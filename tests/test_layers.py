@@ -21,7 +21,7 @@ PACKAGE = pathlib.Path(__file__).resolve().parents[1] / "src" / "springlab"
 #: layer's packages or any layer below. A new top-level package or root module adds its name here and to
 #: CONTRIBUTING.md's table (tests/test_style.py checks the two agree).
 LAYERS: dict[str, tuple[str, ...]] = {
-    "foundation": ("display", "errors", "files", "progress", "tables"),
+    "foundation": ("answer", "display", "errors", "files", "progress", "tables"),
     "simulation": ("sim",),
     "exact": ("exact",),
     "scenes": ("scenes",),

@@ -1,15 +1,18 @@
 """Every example notebook in docs/examples/ executes top to bottom (one test each) and fails on any error.
 
 The notebooks are jupytext percent-format .py files: their diffs read like code and they hold no outputs by
-construction. Each is turned into a notebook here (jupytext) and run by nbclient on a fresh ipykernel, in a
-temporary folder, so nothing is written into the checkout. Each asserts physical claims against closed forms
-in its own cells, so a notebook that runs but computes nonsense fails too.
+construction. Each is turned into a notebook here (jupytext) and run by nbclient on a fresh ipykernel in the
+folder it lives in, as a reader who opens it from the checkout runs it: its files must go to a folder of its own
+(a temporary one, here under the test's), never beside it, and the checkout's `git status` is the same after it.
+`jupytext --to ipynb --execute`, the other way people run them, is run on one of them. Each asserts physical
+claims against closed forms in its own cells, so a notebook that runs but computes nonsense fails too.
 """
 
 from __future__ import annotations
 
 import os
 import pathlib
+import subprocess
 import sys
 import tempfile
 import time
@@ -78,16 +81,73 @@ def _execute(path: pathlib.Path, folder: pathlib.Path):
         return client.execute()
 
 
+CHECKOUT = EXAMPLES.parents[1]
+#: the notebooks that write files, and the files each writes into its own folder
+WRITES = {
+    "audit_your_model": {"two_blocks.xml", "audit.png"},
+    "fit_a_measurement": {"decay.csv", "fit.png"},
+    "sweep_on_dask": {"sweep.png"},
+}
+
+
+def _untouched() -> tuple:
+    """What running a notebook must not change: every file of the examples folder (name, size, modification
+    time) and the checkout's `git status` (ignored files included)."""
+    files = sorted((str(p.relative_to(EXAMPLES)), p.stat().st_size, p.stat().st_mtime_ns) for p in EXAMPLES.rglob("*"))
+    status = subprocess.run(
+        ["git", "-C", str(CHECKOUT), "status", "--porcelain", "--ignored", "--untracked-files=all"],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
+    return files, status
+
+
+def _written(folder: pathlib.Path, stem: str) -> set[str]:
+    """The files in the notebook's own temporary folder(s) under `folder` ('audit-your-model-*': Dask's scratch
+    space beside it is not the notebook's)."""
+    return {p.name for own in folder.glob(f"{stem.replace('_', '-')}-*") for p in own.rglob("*") if p.is_file()}
+
+
 @pytest.mark.parametrize(
     "path", [pytest.param(p, marks=pytest.mark.slow) if p.stem in SLOW else p for p in NOTEBOOKS], ids=lambda p: p.stem
 )
-def test_notebook_runs_top_to_bottom(path, tmp_path):
-    notebook = _execute(path, tmp_path)
+def test_notebook_runs_top_to_bottom_and_writes_nothing_into_the_checkout(path, tmp_path, monkeypatch):
+    # run where it lives (the checkout), its temporary folder under the test's so the test can see it and
+    # pytest removes it
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
+    before = _untouched()
+    notebook = _execute(path, EXAMPLES)
+    assert _untouched() == before, f"{path.name} wrote into the checkout"
+    assert _written(tmp_path, path.stem) == WRITES.get(path.stem, set())
     code = [cell for cell in notebook.cells if cell.cell_type == "code"]
     assert code and all(cell.execution_count for cell in code), "a code cell did not run"
     assert any("assert " in cell.source for cell in code), f"{path.name} checks no claim"
     errors = [out for cell in code for out in cell.get("outputs", []) if out.output_type == "error"]
     assert not errors
+
+
+@pytest.mark.slow
+def test_jupytext_execute_runs_a_notebook_as_the_docs_say(tmp_path, monkeypatch):
+    """`jupytext --to ipynb --execute` (nbconvert, from the notebooks extra) on the audit notebook: the .ipynb it
+    writes has every cell run without an error, and the notebook's own files are in their own folder."""
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
+    copy = tmp_path / "audit_your_model.py"
+    copy.write_text((EXAMPLES / "audit_your_model.py").read_text())
+    done = subprocess.run(
+        [sys.executable, "-m", "jupytext", "--to", "ipynb", "--execute", copy.name],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=CELL_TIMEOUT_S,
+    )
+    assert done.returncode == 0, done.stderr
+    notebook = jupytext.read(tmp_path / "audit_your_model.ipynb")
+    code = [cell for cell in notebook.cells if cell.cell_type == "code"]
+    assert code and all(cell.execution_count for cell in code)
+    assert not [out for cell in code for out in cell.get("outputs", []) if out.output_type == "error"]
+    assert {p.name for p in tmp_path.iterdir() if p.is_file()} == {"audit_your_model.py", "audit_your_model.ipynb"}
+    assert _written(tmp_path, "audit_your_model") == WRITES["audit_your_model"]
 
 
 def test_a_failing_claim_fails_the_notebook(tmp_path):

@@ -21,7 +21,7 @@ OLD_NAMES = {"as_dict", "as_json", "report_json", "summary"}
 RESULTS = {
     "scenes/declarations.py": {"Check"},
     "runs/compare.py": {"ColumnError", "EstimateRange"},
-    "runs/run.py": {"Result", "ValidationRow"},
+    "runs/result.py": {"Result", "ValidationRow"},
     "studies/settings.py": {"Setting", "Run", "Recommendation"},
     "studies/tradeoff.py": {"Tradeoff", "TradeoffRun"},
     "studies/sweeps.py": {"Sweep", "SweepRow", "Axis"},

@@ -22,6 +22,7 @@
 # %matplotlib inline
 import math
 import pathlib
+import tempfile
 
 import numpy as np
 import pandas as pd
@@ -45,9 +46,12 @@ MJCF = """
   </worldbody>
 </mujoco>
 """
-model = pathlib.Path("two_blocks.xml")
+# the files this notebook writes go to a folder of their own, never into the folder it runs in (a checkout,
+# opened as the README says): a fresh temporary one, or name yours, e.g. pathlib.Path("my-results")
+output = pathlib.Path(tempfile.mkdtemp(prefix="audit-your-model-"))
+model = output / "two_blocks.xml"
 model.write_text(MJCF)
-print(f"{model}: {len(MJCF.splitlines())} lines of MJCF")
+print(f"{model.name}: {len(MJCF.splitlines())} lines of MJCF, in {output}")
 
 # %%
 audit = springlab.audit(model, tol=1e-3, duration=1.0)
@@ -58,8 +62,8 @@ print(
 )
 
 # %%
-plot_audit(audit, "audit.png")
-Image("audit.png")
+plot_audit(audit, output / "audit.png")
+Image(output / "audit.png")
 
 # %%
 pd.DataFrame(

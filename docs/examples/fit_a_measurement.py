@@ -23,6 +23,7 @@
 # %matplotlib inline
 import math
 import pathlib
+import tempfile
 
 import numpy as np
 from IPython.display import Image
@@ -37,7 +38,10 @@ rng = np.random.default_rng(2)
 time = np.cumsum(rng.uniform(0.004, 0.006, 600))  # [s]
 x, _ = free_response(np.clip(time - 0.3, 0, None), MASS, STIFFNESS, DAMPING, 0.05, 0.0)  # [m]
 position_mm = 1e3 * x + rng.normal(0, NOISE_MM, time.size)
-record = pathlib.Path("decay.csv")
+# the files this notebook writes go to a folder of their own, never into the folder it runs in (a checkout,
+# opened as the README says): a fresh temporary one, or name yours, e.g. pathlib.Path("my-results")
+output = pathlib.Path(tempfile.mkdtemp(prefix="fit-a-measurement-"))
+record = output / "decay.csv"
 record.write_text("t,x_mm\n" + "".join(f"{t:.6f},{p:.4f}\n" for t, p in zip(time, position_mm)))
 print(record.read_text()[:60])
 
@@ -56,8 +60,8 @@ fit.to_pandas()
 {name: fit.derived[name] for name in ("stiffness", "damping")}
 
 # %%
-plot_fit(fit, "fit.png")
-Image("fit.png")
+plot_fit(fit, output / "fit.png")
+Image(output / "fit.png")
 
 # %% [markdown]
 # *Check* against what the record was made from. The residual is the sensor's noise: its RMS over n

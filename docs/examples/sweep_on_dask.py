@@ -19,6 +19,9 @@
 
 # %%
 # %matplotlib inline
+import pathlib
+import tempfile
+
 import numpy as np
 from distributed import Client, LocalCluster
 from IPython.display import Image
@@ -43,8 +46,11 @@ frame = on_dask.to_pandas()
 frame[["damping", "stiffness", "damping_ratio", "regime", "slider_pos_max_rel", "passed"]]
 
 # %%
-sweep_plots.plot(on_dask, "sweep.png", quantity="damping_ratio")
-Image("sweep.png")
+# the files this notebook writes go to a folder of their own, never into the folder it runs in (a checkout,
+# opened as the README says): a fresh temporary one, or name yours, e.g. pathlib.Path("my-results")
+output = pathlib.Path(tempfile.mkdtemp(prefix="sweep-on-dask-"))
+sweep_plots.plot(on_dask, output / "sweep.png", quantity="damping_ratio")
+Image(output / "sweep.png")
 
 # %% [markdown]
 # *Check*: every configuration's damping ratio is d / (2 √(k m)), every run met its

@@ -321,7 +321,7 @@ def print_friction_settings(study: FrictionSettings, output: str | None) -> None
         f" dt = {', '.join(f'{d:g}' for d in study.dts)} s); baseline MuJoCo's defaults ({integrator}, dt = {dt:g} s)"
     )
     for case in study.cases:
-        print(f"\n{case.answer()}")
+        print(f"\n{study.case_answer(case)}")
         # the settings column as wide as its longest entry: four changed settings run past 58 characters
         width = max([58, *(len(case.describe(r.settings)) + 2 for r in case.pareto)])
         print(f"  {'Pareto front':<{width}}{'integrator':<13}{'dt [s]':>9}{'error':>10}{'work':>10}{'cpu [ms]':>10}")

@@ -35,7 +35,7 @@ import tempfile
 import mujoco
 
 from springlab import files, scenes
-from springlab.errors import BadInputError, SpringlabError, UnknownNameError
+from springlab.errors import BadInputError, SpringlabError
 from springlab.scenes.base import Scenario, Scene
 from springlab.sim import model_files
 
@@ -265,14 +265,20 @@ def _choose(scene_name: str, scenario_name: str | None) -> tuple[Scene, Scenario
     spec = scene.interactive
     if spec is None:
         raise BadInputError(
-            f"{scene.name} has no interactive page (it declares no Scene.interactive); scenes that run in the"
-            f" browser: {', '.join(interactive_scenes())}"
+            f"{scene.name} has no interactive page (it declares no Scene.interactive); scenarios that have one:"
+            f" {_pages_named()}"
         )
     name = spec.scenarios[0] if scenario_name is None else scenario_name
-    scenario = scene.scenario(name)
+    scenario = scene.scenario(name)  # a name the scene does not know: the scene's own 'unknown scenario' line
     if name not in spec.scenarios:
-        raise UnknownNameError(f"scenario of {scene.name} that runs in the browser", name, spec.scenarios)
+        # a known scenario without a page is not 'unknown': say so, and where the pages are
+        raise BadInputError(f"{scene.name} / {name} has no interactive page; scenarios that have one: {_pages_named()}")
     return scene, scenario
+
+
+def _pages_named() -> str:
+    """'car: push_release, ...; slider: free, step': every scene's scenarios that run in the browser."""
+    return "; ".join(f"{scene}: {', '.join(names)}" for scene, names in sorted(interactive_scenes().items()))
 
 
 def page_config(scene_name: str, scenario_name: str | None = None) -> dict:

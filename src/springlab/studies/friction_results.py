@@ -258,6 +258,169 @@ class CaseStudy:
         )
 
 
+@dataclasses.dataclass(frozen=True)
+class HeldBody:
+    """A body that dry friction holds in a model file, through a run of the whole hold.
+
+    Attributes
+    ----------
+    name
+        the body's name.
+    size_m
+        its size [m]: the largest extent of its colliding geoms' bounding boxes (tol's length scale).
+    holders
+        the bodies touching it at the operating point (empty: a joint's frictionloss holds it).
+    coulomb_margin
+        how many times the force friction carries it could carry, early in the hold [-] (above 1: Coulomb
+        friction holds it, so any slip is MuJoCo's model error; None: friction carried no force).
+    creep_velocity_m_s
+        its mean speed over the second half of the time it was held [m/s] (None: the run diverged).
+    slip_m
+        the largest distance of its centre of mass from where the hold started [m] (None: diverged).
+    lost_at_s
+        when it first touched none of its holders [s] (None: held throughout).
+    """
+
+    name: str
+    size_m: float
+    holders: tuple[str, ...]
+    coulomb_margin: float | None
+    creep_velocity_m_s: float | None
+    slip_m: float | None
+    lost_at_s: float | None
+
+    def to_dict(self) -> dict[str, Any]:
+        """{"name", "size_m", "holders", "coulomb_margin", "creep_velocity_m_s", "slip_m", "lost_at_s"}."""
+        return json_ready(dataclasses.asdict(self))
+
+    def state(self, hold_s: float) -> str:
+        """'creeps at 7.7 mm/s and falls out of the grip at t = 7.61 s' or '... slips 0.2 mm over 60 s'."""
+        if self.creep_velocity_m_s is None or self.slip_m is None:
+            return "diverges"
+        creep = speed_text(self.creep_velocity_m_s)
+        if self.lost_at_s is not None:
+            return f"creeps at {creep} and falls out of the grip at t = {self.lost_at_s:.3g} s"
+        return f"creeps at {creep}, slipping {distance_text(self.slip_m)} over {hold_s:g} s"
+
+
+@dataclasses.dataclass(frozen=True)
+class HoldReport:
+    """The facts of a model file's hold (springlab.studies.friction_hold), beside its one case "hold".
+
+    Attributes
+    ----------
+    model
+        the model file.
+    operating_point
+        where the hold starts, e.g. "keyframe 'grasp'".
+    hold_s
+        the hold [s].
+    window_s
+        the sweep runs' length [s] (their slip over the rest of the hold is their creep velocity times it).
+    tol
+        the slip allowed over the hold, in body sizes [-].
+    bodies
+        the held bodies through a run of the whole hold at the model's own settings.
+    skipped
+        settings not swept, and why.
+    pick_bodies
+        the held bodies through the pick's verification run (empty: no pick).
+    """
+
+    model: str
+    operating_point: str
+    hold_s: float
+    window_s: float
+    tol: float
+    bodies: tuple[HeldBody, ...]
+    skipped: tuple[str, ...] = ()
+    pick_bodies: tuple[HeldBody, ...] = ()
+
+    def allowed(self) -> str:
+        """'1 mm (0.025 of the 40 mm body)': tol in metres and body sizes."""
+        size = min(b.size_m for b in self.bodies)
+        return f"{distance_text(self.tol * size)} ({self.tol:g} of the {distance_text(size)} body)"
+
+    def answer(self, case: CaseStudy) -> str:
+        """What the hold says: the margin, the creep at the model's own settings, that neither integrator nor
+        timestep removes it, and the cheapest setting that holds (or why none does)."""
+        parts = []
+        for body in self.bodies:
+            margin = body.coulomb_margin
+            holds = (
+                f"Coulomb friction holds {body.name!r} with margin {margin:.3g}x"
+                if margin is not None and margin > 1
+                else f"Coulomb friction cannot hold {body.name!r} (margin {margin:.3g}x): its slip is physics, not creep"
+                if margin is not None
+                else f"friction carries no force on {body.name!r}"
+            )
+            parts.append(
+                f"{holds}; at the model's own settings ({case.default.integrator if case.default else '?'}, dt ="
+                f" {case.default.dt if case.default else math.nan:g} s, {case.describe(case.default.settings) if case.default else '?'}) it"
+                f" {body.state(self.hold_s)}."
+            )
+        spread = self.creep_spread(case)
+        if spread:
+            parts.append(spread)
+        pick = case.pick
+        if pick is not None and pick.row is not None:
+            ratio = pick.details.get("work_vs_default")
+            cost = f"{ratio:.3g}x the counted work of the model's own settings" if ratio else "work unknown"
+            held = "; ".join(f"{b.name!r} {b.state(self.hold_s)}" for b in self.pick_bodies)
+            parts.append(
+                f"Cheapest setting that keeps it within {self.allowed()} over {self.hold_s:g} s:"
+                f" {case.describe(pick.row.settings)} with {pick.row.integrator} at dt = {pick.row.dt:g} s, {cost}"
+                f" (verified by a run of the whole hold: {held})."
+            )
+        elif pick is not None:
+            parts.append(pick.text)
+        return " ".join(parts)
+
+    def creep_spread(self, case: CaseStudy) -> str:
+        """'Integrator and timestep do not remove it: ...' from the sweep's runs at the model's own settings."""
+        if case.default is None:
+            return ""
+        own = [r for r in case.runs if r.settings == case.default.settings and r.run.valid]
+        creeps = [r.values.get("creep_velocity_m_s") for r in own]
+        finite = [c for c in creeps if c is not None]
+        if len(finite) < 2:
+            return ""
+        names = ", ".join(dict.fromkeys(r.integrator for r in own))
+        steps = ", ".join(f"{d * 1e3:g}" for d in sorted({r.dt for r in own}, reverse=True))
+        return (
+            f"That is MuJoCo's soft-friction model error, which integrator and timestep do not remove: {names} at"
+            f" dt = {steps} ms all creep at {speed_text(min(finite))} to {speed_text(max(finite))} over the first"
+            f" {self.window_s:g} s."
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """friction_settings.json's "hold": model, operating_point, hold_s, window_s, tol, allowed_slip_m, bodies,
+        skipped, pick_bodies."""
+        return json_ready(
+            {
+                "model": self.model,
+                "operating_point": self.operating_point,
+                "hold_s": self.hold_s,
+                "window_s": self.window_s,
+                "tol": self.tol,
+                "allowed_slip_m": self.tol * min(b.size_m for b in self.bodies),
+                "bodies": [b.to_dict() for b in self.bodies],
+                "skipped": list(self.skipped),
+                "pick_bodies": [b.to_dict() for b in self.pick_bodies],
+            }
+        )
+
+
+def speed_text(value: float) -> str:
+    """A speed [m/s] in mm/s or um/s, three digits: '7.69 mm/s', '0.41 um/s'."""
+    return f"{value * 1e3:.3g} mm/s" if abs(value) >= 1e-4 else f"{value * 1e6:.3g} um/s"
+
+
+def distance_text(value: float) -> str:
+    """A distance [m] in mm or um, three digits: '1 mm', '40 mm', '3.2 um'."""
+    return f"{value * 1e3:.3g} mm" if abs(value) >= 1e-4 else f"{value * 1e6:.3g} um"
+
+
 @dataclasses.dataclass(frozen=True, repr=False)
 class FrictionSettings(display.Shown):
     """The friction-settings study of one scene (`friction_settings`).
@@ -283,6 +446,8 @@ class FrictionSettings(display.Shown):
         one CaseStudy per case.
     wall_time_s
         the study's wall time [s].
+    hold
+        a model file's hold (springlab.studies.friction_hold; None: a scene's study).
     """
 
     scene: str
@@ -293,6 +458,7 @@ class FrictionSettings(display.Shown):
     mujoco_default: tuple[str, float]
     cases: tuple[CaseStudy, ...]
     wall_time_s: float = 0.0
+    hold: HoldReport | None = None
 
     @property
     def runs(self) -> int:
@@ -301,7 +467,11 @@ class FrictionSettings(display.Shown):
 
     def answer(self) -> str:
         """How much MuJoCo's friction drifts and what it costs to make it stop, one paragraph per case."""
-        return "\n".join(case.answer() for case in self.cases)
+        return "\n".join(self.case_answer(case) for case in self.cases)
+
+    def case_answer(self, case: CaseStudy) -> str:
+        """One case's answer: a model file's hold in its own words, a scene's case as `CaseStudy.answer`."""
+        return case.answer() if self.hold is None else self.hold.answer(case)
 
     def _shown(self) -> display.Summary:
         """The study as a notebook shows it: the picks first (or that none was asked for), then the runs."""
@@ -359,6 +529,7 @@ class FrictionSettings(display.Shown):
                 "wall_time_s": self.wall_time_s,
                 "cases": [c.to_dict() for c in self.cases],
                 "cost_basis": COST_BASIS,
+                **({} if self.hold is None else {"hold": self.hold.to_dict()}),
             }
         )
 

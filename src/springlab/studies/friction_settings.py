@@ -411,7 +411,7 @@ def _case_study(
         settings=settings,
         runs=runs,
         default=default,
-        model_errors=_model_errors(runs, dts) if MODEL_INTEGRATOR in integrators else (),
+        model_errors=model_errors(runs, dts) if MODEL_INTEGRATOR in integrators else (),
         pareto=tuple(pareto_front(runs)),
     )
     if tol is None:
@@ -419,7 +419,7 @@ def _case_study(
     return dataclasses.replace(study, pick=_pick(scene, study, tol, parameters))
 
 
-def _model_errors(runs: Sequence[SettingRun], dts: tuple[float, ...]) -> tuple[ModelError, ...]:
+def model_errors(runs: Sequence[SettingRun], dts: tuple[float, ...]) -> tuple[ModelError, ...]:
     """Per combination of settings: MODEL_INTEGRATOR's error at every dt, the last one its model error."""
     groups: dict[tuple, dict[float, SettingRun]] = {}
     for r in runs:

@@ -287,19 +287,36 @@
 
   // -- drawing: x(t), phase plane, error, and the 3D view from the model's geoms ------------------------
 
-  function axes(ctx, w, h, xr, yr, pad) {
+  var SUPERSCRIPT = { '-': '\u207b', 0: '\u2070', 1: '\u00b9', 2: '\u00b2', 3: '\u00b3', 4: '\u2074', 5: '\u2075', 6: '\u2076', 7: '\u2077', 8: '\u2078', 9: '\u2079' };
+
+  // a log10 axis's end labelled as the power it is: 10⁻¹⁷, never the bare exponent -17
+  function power(k) {
+    return '10' + String(Math.round(k)).split('').map(function (c) { return SUPERSCRIPT[c]; }).join('');
+  }
+
+  // the frame and its end labels (yLabel formats the y ends, fmt by default); the labels are kept in the
+  // canvas's data-x-labels and data-y-labels, and the lines drawn through the map stay inside the frame
+  function axes(ctx, w, h, xr, yr, pad, yLabel) {
     ctx.clearRect(0, 0, w, h);
     ctx.strokeStyle = '#bbb'; ctx.lineWidth = 1;
     ctx.strokeRect(pad, 8, w - pad - 8, h - pad - 8);
     ctx.fillStyle = '#555'; ctx.font = '11px sans-serif';
-    ctx.fillText(fmt(yr[1], 3), 2, 16); ctx.fillText(fmt(yr[0], 3), 2, h - pad);
-    ctx.fillText(fmt(xr[0], 3), pad, h - pad + 14); ctx.fillText(fmt(xr[1], 3), w - 50, h - pad + 14);
-    return function (x, y) {
+    var label = yLabel || function (y) { return fmt(y, 3); };
+    var ys = [label(yr[0]), label(yr[1])], xs = [fmt(xr[0], 3), fmt(xr[1], 3)];
+    ctx.fillText(ys[1], 2, 16); ctx.fillText(ys[0], 2, h - pad);
+    ctx.fillText(xs[0], pad, h - pad + 14); ctx.fillText(xs[1], w - 50, h - pad + 14);
+    ctx.canvas.dataset.xLabels = JSON.stringify(xs);
+    ctx.canvas.dataset.yLabels = JSON.stringify(ys);
+    var map = function (x, y) {
       return [pad + ((x - xr[0]) / (xr[1] - xr[0] || 1)) * (w - pad - 8), 8 + (1 - (y - yr[0]) / (yr[1] - yr[0] || 1)) * (h - pad - 8)];
     };
+    map.frame = [pad, 8, w - pad - 8, h - pad - 8];
+    return map;
   }
 
   function line(ctx, map, xs, ys, color, dash) {
+    ctx.save();
+    ctx.beginPath(); ctx.rect(map.frame[0], map.frame[1], map.frame[2], map.frame[3]); ctx.clip();  // a diverged run stays in its frame
     ctx.strokeStyle = color; ctx.setLineDash(dash || []); ctx.lineWidth = 1.5;
     ctx.beginPath();
     var stride = Math.max(1, Math.floor(xs.length / 2000));
@@ -309,6 +326,7 @@
       if (i === 0) ctx.moveTo(p[0], p[1]); else ctx.lineTo(p[0], p[1]);
     }
     ctx.stroke(); ctx.setLineDash([]);
+    ctx.restore();
   }
 
   function range(values, extra) {
@@ -344,7 +362,7 @@
     for (var i = 0; i < err.length; i++) err[i] = Math.log10(Math.abs(run.x[i] - ref.x[i]) + 1e-300);
     var lo = -17, hi = 1;
     for (i = 0; i < err.length; i++) if (isFinite(err[i])) hi = Math.max(hi, err[i]);
-    map = axes(ctx, c.width, c.height, [0, state.duration], [lo, Math.min(hi, 20)], 44);
+    map = axes(ctx, c.width, c.height, [0, state.duration], [lo, Math.min(Math.ceil(hi), 20)], 44, power);
     line(ctx, map, run.time, err, '#8e44ad');
     if (judged.tolerances) {
       var size = 0;

@@ -14,7 +14,8 @@ import mujoco
 
 from springlab import scenes
 from springlab.errors import BadInputError
-from springlab.sim.simulate import Setup, quiet_mujoco
+from springlab.sim import model_files
+from springlab.sim.simulate import Setup
 
 
 @dataclasses.dataclass(frozen=True)
@@ -66,10 +67,4 @@ def load(model: mujoco.MjModel | str | os.PathLike[str]) -> Source:
         return Source(f"scene {text!r} (scenario {chosen.name!r})", built, setup, chosen.duration, ("scene", text))
     if not path.is_file():
         raise BadInputError(f"no such model file or scene {text!r}; scenes: {', '.join(sorted(scenes.SCENES))}")
-    try:
-        with quiet_mujoco():
-            compiled = mujoco.MjModel.from_xml_path(str(path))
-    except Exception as error:  # MuJoCo raises ValueError with its compiler's message
-        message = " ".join(str(error).split())
-        raise BadInputError(f"cannot load {text!r}: {message}") from None
-    return Source(text, compiled, origin=("path", text))
+    return Source(text, model_files.load(path), origin=("path", text))

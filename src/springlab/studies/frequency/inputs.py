@@ -187,7 +187,35 @@ def resolve_input(model: mujoco.MjModel, name: str) -> tuple[str, int, str]:
         joint = model.joint(joint_name)
         unit = "N m" if int(joint.type[0]) == int(mujoco.mjtJoint.mjJNT_HINGE) else "N"
         return "force", int(joint.dofadr[0]), unit
-    raise UnknownNameError("input (ACTUATOR or JOINT:force)", name, actuators + [f"{j}:force" for j in joints])
+    raise UnknownNameError("input (ACTUATOR or JOINT:force)", name, valid_inputs(model))
+
+
+def valid_inputs(model: mujoco.MjModel) -> list[str]:
+    """Every input name `resolve_input` accepts on `model`: its named actuators, then 'JOINT:force' per joint."""
+    return _names(model, "actuator", model.nu) + [f"{j}:force" for j in _names(model, "joint", model.njnt)]
+
+
+def valid_responses(model: mujoco.MjModel) -> list[str]:
+    """Every response name `resolve_response` accepts on `model`: 'JOINT', 'JOINT:vel', 'JOINT:acc' per joint,
+    then each named sensor ('SENSOR' if one-dimensional, 'SENSOR[i]' per component)."""
+    return [f"{j}{suffix}" for j in _names(model, "joint", model.njnt) for suffix in ("", ":vel", ":acc")] + list(
+        _sensor_addresses(model)
+    )
+
+
+def _sensor_addresses(model: mujoco.MjModel) -> dict[str, tuple[int, int]]:
+    """'SENSOR' (one-dimensional) and 'SENSOR[i]' -> (sensordata address, sensor id) of every named sensor."""
+    sensors = {}
+    for sensor in range(model.nsensor):
+        sensor_name = model.sensor(sensor).name
+        if not sensor_name:
+            continue
+        dim, adr = int(model.sensor_dim[sensor]), int(model.sensor_adr[sensor])
+        if dim == 1:
+            sensors[sensor_name] = (adr, sensor)
+        for i in range(dim):
+            sensors[f"{sensor_name}[{i}]"] = (adr + i, sensor)
+    return sensors
 
 
 #: a sensor's unit by its type (others: 'sensor unit')
@@ -235,21 +263,11 @@ def resolve_response(model: mujoco.MjModel, name: str) -> tuple[int, str, str]:
         base = "rad" if hinge else "m"
         unit = {"pos": base, "vel": f"{base}/s", "acc": f"{base}/s^2"}[kind]
         return dof, kind, unit
-    sensors = {}
-    for sensor in range(model.nsensor):
-        sensor_name = model.sensor(sensor).name
-        if not sensor_name:
-            continue
-        dim, adr = int(model.sensor_dim[sensor]), int(model.sensor_adr[sensor])
-        if dim == 1:
-            sensors[sensor_name] = (adr, sensor)
-        for i in range(dim):
-            sensors[f"{sensor_name}[{i}]"] = (adr + i, sensor)
+    sensors = _sensor_addresses(model)
     if name in sensors:
         adr, sensor = sensors[name]
         return adr, "sensor", _sensor_unit(model, sensor)
-    valid = [f"{j}{suffix}" for j in joints for suffix in ("", ":vel", ":acc")] + list(sensors)
-    raise UnknownNameError("response (JOINT, JOINT:vel, JOINT:acc, SENSOR or SENSOR[i])", name, valid)
+    raise UnknownNameError("response (JOINT, JOINT:vel, JOINT:acc, SENSOR or SENSOR[i])", name, valid_responses(model))
 
 
 def output_row(linear: Linearization, b: np.ndarray, dof: int, kind: str) -> tuple[np.ndarray, float]:

@@ -21,7 +21,16 @@ from springlab.exact.model_at_point import ModelAtPoint
 from springlab.sim.simulate import INTEGRATORS, integrator_id
 from springlab.studies.executor import Executor
 
-from .inputs import Probe, Source, load_source, output_row, resolve_input, resolve_response
+from .inputs import (
+    Probe,
+    Source,
+    load_source,
+    output_row,
+    resolve_input,
+    resolve_response,
+    valid_inputs,
+    valid_responses,
+)
 from .linear import (
     EVALUATIONS,
     Discretizer,
@@ -282,9 +291,12 @@ def _signal(source: Source, input_name: str | None, response_name: str | None) -
     input_name = input_name if input_name is not None else source.input
     response_name = response_name if response_name is not None else source.response
     if input_name is None or response_name is None:
-        raise BadInputError(
-            "name the input (--input ACTUATOR|JOINT:force) and the response (--response JOINT[:vel|:acc]|SENSOR[i])"
-        )
+        # the names this model takes, so the first try is not a guess
+        missing = [
+            f"--input, one of: {', '.join(valid_inputs(source.model))}" if input_name is None else "",
+            f"--response, one of: {', '.join(valid_responses(source.model))}" if response_name is None else "",
+        ]
+        raise BadInputError(f"{source.label} declares no default: name {'; and '.join(m for m in missing if m)}")
     kind, index, input_unit = resolve_input(source.model, input_name)
     if input_name == source.input and source.input_unit:
         input_unit = source.input_unit  # the scene knows what its actuator's control is
