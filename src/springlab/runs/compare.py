@@ -209,7 +209,14 @@ def predicted_error(reference: Reference, integrator: str, dt: float, time: np.n
 
 
 def tolerances(reference: Reference, integrator: str, dt: float, time: np.ndarray) -> dict[str, float]:
-    """Relative tolerance per compared column (see module docstring)."""
+    """Relative tolerance per compared column (see module docstring); kept on the reference per setting."""
+    key = ("tolerances", integrator, float(dt), len(time), float(time[0]), float(time[-1]))
+    if key not in reference.derived:
+        reference.derived[key] = _tolerances(reference, integrator, dt, time)
+    return dict(reference.derived[key])
+
+
+def _tolerances(reference: Reference, integrator: str, dt: float, time: np.ndarray) -> dict[str, float]:
     floor = ROUNDOFF_PER_STEP * (len(time) - 1)
     predicted = predicted_error(reference, integrator, dt, time)
     out: dict[str, float] = {}
@@ -329,9 +336,15 @@ def mode_factors(rates: np.ndarray, integrator: str, dt: float, duration: float)
 
         # e^(-sigma h n) ((1 + a)^n - 1) peaks where its derivative vanishes (or at the end if it never decays)
         rate_of_change = growth - decay
-        rising = (rate_of_change >= 0.0) | (decay <= 0.0) | (growth <= 0.0)
-        peak = np.where(rising, float(steps), np.log(decay / -rate_of_change) / growth)
-        numerator = _max_over_steps(whole, steps, np.where(np.isfinite(peak), peak, float(steps)))
+        rising = (rate_of_change >= 0.0) | (decay <= 0.0)
+        # a decaying mode whose local error bound underflows to 0 has no peak in double precision: the
+        # same exceptions as the arithmetic per mode (runs.run turns them into "cannot be computed")
+        if np.any(bounded & ~rising & (growth <= 0.0)):
+            raise ZeroDivisionError("float division by zero")
+        peak = np.where(rising, float(steps), np.log(decay / -rate_of_change) / np.where(rising, 1.0, growth))
+        if np.any(bounded & ~np.isfinite(peak)):
+            raise OverflowError("cannot convert float infinity to integer")
+        numerator = _max_over_steps(whole, steps, peak)
         kept_peak = np.where(decay > 0, 1.0 / decay, float(steps))
         denominator = _max_over_steps(lambda n: n * kept * np.exp(-decay * n), steps, kept_peak)
         factor = numerator / denominator
@@ -357,6 +370,12 @@ def mode_factor(rate: complex, integrator: str, dt: float, duration: float) -> f
 
 def system_rates(reference: Reference) -> list[complex]:
     """Eigenvalues lambda [1/s] of every system matrix of the reference (segments included), 0 dropped."""
+    if "system_rates" not in reference.derived:
+        reference.derived["system_rates"] = tuple(_system_rates(reference))
+    return list(reference.derived["system_rates"])
+
+
+def _system_rates(reference: Reference) -> list[complex]:
     systems = [reference.system] + [a for _, a in reference.switches]
     rates: list[complex] = []
     for a in systems:

@@ -506,7 +506,7 @@ class Nonlinear(Scene):
     def _orbit(self, case: Case) -> dict:
         """The unforced, undamped motion through (x0, v0) (springlab.scenes.nonlinear.orbits.orbit)."""
         m, k1, k3, d = case.physical()
-        return orbit(m, k1, k3, case.params["x0"], case.params["v0"])
+        return dict(case.memo("orbit", lambda: orbit(m, k1, k3, case.params["x0"], case.params["v0"])))
 
     def quantities(self, case: Case, trajectory: Trajectory) -> dict:
         model, params = case.model, case.params
@@ -588,7 +588,8 @@ class Nonlinear(Scene):
     def checks(self, case: Case, trajectory: Trajectory) -> list[Check]:
         model, params = case.model, case.params
         m, k1, k3, d = case.physical()
-        out = self._linearization_checks(case)
+        # the case's own (MuJoCo's qacc at its equilibria): computed once per case
+        out = list(case.memo("linearization_checks", lambda: tuple(self._linearization_checks(case))))
         integrator, dt = trajectory.integrator, trajectory.dt
         order = ORDERS[integrator]
         unforced = d == 0 and self._forcing(params) == "none"
