@@ -91,6 +91,9 @@ def test_chain_is_linear_and_its_recommendation_meets_tol_against_the_exact_solu
 
 #: audit.json's keys, in order: the object's `to_dict()` keeps every one
 AUDIT_KEYS = [
+    "question",
+    "answer",
+    "answer_numbers",
     "model",
     "operating_point",
     "operating_point_state",
@@ -132,6 +135,8 @@ def test_the_audit_json_is_the_objects_to_dict_and_its_facts_are_attributes(chai
         "wall_time_s",
         "margin_confirmed",
         "cost",
+        "behaviour",
+        "growth",
     ]
     assert list(data["operating_point_state"]) == [
         "settle_s",
@@ -140,6 +145,8 @@ def test_the_audit_json_is_the_objects_to_dict_and_its_facts_are_attributes(chai
         "at_rest",
         "drift_m",
         "linear_map",
+        "creep",
+        "settling_helps",
     ]
     assert list(data["operating_point_state"]["at_point"]) == [
         "elements",
@@ -202,7 +209,7 @@ def test_the_audit_json_is_the_objects_to_dict_and_its_facts_are_attributes(chai
     assert code == (0 if result.own_ok else 1)
     assert json.loads(capsys.readouterr().out) == files.json_ready(data)
     cli_main.main(["audit", "chain.xml"])
-    assert capsys.readouterr().out == result.message + "\n"
+    assert capsys.readouterr().out == result.question_answer.text() + "\n" + result.message + "\n"
 
 
 def test_the_pick_is_the_cheapest_in_counted_work_and_no_timer_moves_it(chain_audit, monkeypatch):

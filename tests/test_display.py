@@ -368,3 +368,18 @@ def test_every_csv_reads_back_exactly_in_the_shortest_form(results, tmp_path):
                 _assert_exact([cells[header.index(name)]], [value])
                 numeric += 1
     assert numeric > len(memory), "the rows hold numbers"
+
+
+@pytest.mark.slow
+def test_every_figure_keeps_its_legends_clear_of_points_labels_and_axes(results, drawn):
+    """Issue 34 item 4: every result's figure (each study's, a run's) places its legends where they cover no
+    marked point, no axis label or title and no axes (the check of tests/test_settings_figures.py, on all)."""
+    from test_settings_figures import _assert_legends_clear
+
+    failures = {}
+    for name, figure in drawn.items():
+        try:
+            _assert_legends_clear(figure, require=False)
+        except AssertionError as error:
+            failures[name] = str(error).splitlines()[0]
+    assert not failures, "; ".join(f"{name}: {words[:90]}" for name, words in failures.items())

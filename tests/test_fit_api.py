@@ -83,7 +83,10 @@ def test_to_dict_is_what_fit_json_prints_and_fit_json_holds(tmp_path, monkeypatc
     assert printed == result.to_dict()
     assert json.loads((tmp_path / "out" / "fit.json").read_text()) == printed
     # the keys docs/fit.md promises, in its order
-    assert list(printed)[:6] == ["scene", "scenario", "signal", "signal_unit", "column", "free"]
+    assert list(printed)[:9] == [
+        *("question", "answer", "answer_numbers"),
+        *("scene", "scenario", "signal", "signal_unit", "column", "free"),
+    ]
     assert printed["verdict"] == result.verdict and printed["converged"] is result.converged
 
 

@@ -39,11 +39,12 @@ def _rendered(figure):
     return canvas.get_renderer()
 
 
-def _assert_legends_clear(figure) -> int:
-    """Every legend covers no drawn point, no axis label or title and no axes; returns the points checked."""
+def _assert_legends_clear(figure, require: bool = True) -> int:
+    """Every legend (the axes' and the figure's) covers no drawn point, no axis label or title and no axes;
+    returns the points checked (`require`: the figure has a legend)."""
     renderer = _rendered(figure)
-    legends = [axis.get_legend() for axis in figure.axes if axis.get_legend() is not None]
-    assert legends
+    legends = [axis.get_legend() for axis in figure.axes if axis.get_legend() is not None] + list(figure.legends)
+    assert legends or not require
     checked = 0
     for legend in legends:
         box = legend.get_window_extent(renderer)
@@ -95,6 +96,15 @@ def test_the_refine_figure_draws_a_run_beyond_its_limit_apart_and_keeps_its_lege
     # the valid runs' points are exactly the valid runs: no beyond-limit run among them
     valid = [p for line in error_cost.get_lines() if line.get_label().startswith("_") for p in zip(*line.get_data())]
     assert sorted(valid) == sorted((r.cost, r.error_bound) for r in study.runs if r.run.valid)
+    # the middle panel's best integration error per size and integrator comes from valid runs only
+    middle = figure.axes[1]
+    for name in ("euler", "rk4"):
+        (line,) = [line for line in middle.get_lines() if line.get_label() == f"{name}: best integration error"]
+        best = {
+            size: min(r.integration_error for r in study.runs if (r.size, r.integrator) == (size, name) and r.run.valid)
+            for size in (4, 8)
+        }
+        assert dict(zip(*line.get_data())) == best
 
 
 def test_the_friction_titles_follow_the_data_and_the_legends_stay_clear(incline_slide):
@@ -127,3 +137,24 @@ def test_a_flat_model_error_is_titled_flat():
     case = study.cases[0]
     assert case.default_model.converged and case.best_model.converged  # the joint decay's model error is flat
     assert figure.axes[1].get_title() == "flat as dt → 0: what is left is MuJoCo's model error"
+
+
+def test_the_sweep_figure_draws_a_configuration_that_failed_its_check_apart():
+    """rk4 at 10 ms over the slider's stiffness: the stiffest configuration (omega dt = 0.71) misses its
+    tolerance; it is a hollow grey circle labelled not valid, off the curve of the valid ones."""
+    from springlab.plots import sweep as sweep_chart
+    from springlab.studies.sweeps import sweep
+
+    result = sweep(
+        "slider", "free", vary={"stiffness": (50.0, 5000.0, 7, "log")}, integrator="rk4", dt=0.01, duration=0.5
+    )
+    failed = [i for i, row in enumerate(result.rows) if row.passed is False and not row.diverged]
+    assert failed and len(failed) < result.size
+    figure = sweep_chart.sweep_figure(result, "max_displacement_m")
+    _assert_legends_clear(figure)
+    axis = figure.axes[0]
+    (curve,) = [line for line in axis.get_lines() if line.get_label() == "max_displacement_m"]
+    (apart,) = [line for line in axis.get_lines() if line.get_label().startswith("failed its check")]
+    stiffness = result.values["stiffness"]
+    assert sorted(curve.get_xdata()) == sorted(stiffness[i] for i in range(result.size) if i not in failed)
+    assert list(apart.get_xdata()) == [stiffness[i] for i in failed] and apart.get_mfc() == "none"

@@ -319,7 +319,10 @@ def test_stability_cli_prints_json_and_writes_the_charts(tmp_path, capsys, monke
 
 
 #: stability.json's keys: the report's to_dict() keeps every one, in this order
-REPORT_KEYS = ["boundaries", "extremes", "energy", "growth_test", "accuracy_threshold", "wall_time_s"]
+REPORT_KEYS = [
+    *("question", "answer", "answer_numbers"),
+    *("boundaries", "extremes", "energy", "growth_test", "accuracy_threshold", "wall_time_s"),
+]
 BOUNDARY_KEYS = [
     "integrator",
     "zeta",

@@ -12,6 +12,10 @@ import re
 
 PACKAGE = pathlib.Path(__file__).resolve().parents[1] / "src" / "springlab"
 
+#: CONTRIBUTING.md's size limits ("Style"): a module a reader can hold, a function that fits on two screens
+MAX_MODULE_LINES = 750
+MAX_FUNCTION_LINES = 120
+
 GOOGLE_SECTION = re.compile(r"^\s*(Args|Arguments|Returns|Yields|Raises|Attributes|Keyword Args):\s*$", re.M)
 
 
@@ -91,3 +95,23 @@ def test_contributing_shows_the_package_tree_as_it_is():
         shown.update("/".join([*folders, w]) for w in words)
     actual = {p.relative_to(PACKAGE).as_posix() for p in PACKAGE.rglob("*.py")}
     assert shown == actual, f"missing from CONTRIBUTING.md: {sorted(actual - shown)}; gone: {sorted(shown - actual)}"
+
+
+def test_no_module_over_750_lines():
+    sizes = {p.relative_to(PACKAGE).as_posix(): len(p.read_text().splitlines()) for p in PACKAGE.rglob("*.py")}
+    over = [f"{name}: {lines} lines" for name, lines in sorted(sizes.items()) if lines > MAX_MODULE_LINES]
+    assert not over, f"modules over {MAX_MODULE_LINES} lines (split them along their seams):\n" + "\n".join(over)
+
+
+def test_no_function_over_120_lines():
+    over = [
+        f"{name}:{node.lineno} {node.name}: {node.end_lineno - node.lineno + 1} lines"
+        for name, tree in _sources()
+        for node in ast.walk(tree)
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef)
+        and node.end_lineno is not None
+        and node.end_lineno - node.lineno + 1 > MAX_FUNCTION_LINES
+    ]
+    assert not over, (
+        f"functions over {MAX_FUNCTION_LINES} lines (decorators aside; move a step into a helper):\n" + "\n".join(over)
+    )

@@ -11,12 +11,15 @@
 from springlab.exact import analytic
 from springlab.render.inline import Video, video
 from springlab.runs.compare import Verdict
+from springlab.runs.model_run import ModelRun
 from springlab.runs.run import Result, ValidationRow
 from springlab.studies.audit.audit import audit
 from springlab.studies.audit.results import Audit
 from springlab.studies.auto import run, validate
 from springlab.studies.fit.fit import fit
 from springlab.studies.frequency import FrequencyResponse, frequency
+from springlab.studies.friction_hold import friction_settings
+from springlab.studies.friction_results import FrictionSettings
 from springlab.studies.sweeps import sweep
 
 from . import errors
@@ -33,8 +36,11 @@ __all__ = [
     "Audit",
     "frequency",
     "FrequencyResponse",
+    "friction_settings",
+    "FrictionSettings",
     "fit",
     "Result",
+    "ModelRun",
     "Verdict",
     "ValidationRow",
     "SCENES",

@@ -23,7 +23,7 @@ import string
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-#: the JSON keys of an answer (DESIGN.md: `question` and `answer`, plus the numbers they quote)
+#: the JSON keys of an answer (`question` and `answer` as docs/json.md lists them, plus the numbers they quote)
 QUESTION_KEY = "question"
 ANSWER_KEY = "answer"
 NUMBERS_KEY = "answer_numbers"

@@ -39,7 +39,8 @@ from springlab.cli.commands import (
 )
 from springlab.cli.options import Parser
 from springlab.cli.signals import Terminated, sigterm_unwinds
-from springlab.errors import ExitCode, SpringlabError
+from springlab.errors import BadInputError, ExitCode, SpringlabError
+from springlab.sim import model_files
 
 #: the commands in the order `springlab --help` lists them; each module has NAME, HELP, add_arguments, main
 COMMANDS: tuple[ModuleType, ...] = (
@@ -78,8 +79,20 @@ def build_parser() -> argparse.ArgumentParser:
     for command in COMMANDS:
         command_parser = sub.add_parser(command.NAME, help=command.HELP)
         command.add_arguments(command_parser)
-        command_parser.set_defaults(main=command.main)
+        command_parser.set_defaults(main=command.main, model_file_instead=getattr(command, "MODEL_FILE_INSTEAD", None))
     return parser
+
+
+def refuse_model_file(args: argparse.Namespace) -> None:
+    """A model file given to a command that takes a scene (its module's MODEL_FILE_INSTEAD) is bad input: one
+    line naming what to run on a model file instead, before any work."""
+    instead = getattr(args, "model_file_instead", None)
+    if instead is None:
+        return
+    given = [getattr(args, "scene", None), *(getattr(args, "scenes", None) or [])]
+    model = next((name for name in given if name is not None and model_files.is_model_file(name)), None)
+    if model is not None:
+        raise BadInputError(f"{args.command} takes a scene, not a model file ({model}); for a model file use {instead}")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -90,6 +103,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         with sigterm_unwinds(), warnings.catch_warnings():
             warnings.simplefilter("ignore")
             args = build_parser().parse_args(argv)
+            refuse_model_file(args)
             return int(args.main(args))
     except SystemExit as done:  # --help, --version
         return done.code if isinstance(done.code, int) else ExitCode.OK

@@ -78,9 +78,14 @@ def print_json(value: Any) -> None:
 # -- options several commands share -------------------------------------------------
 
 
-def scene_arguments(parser: argparse.ArgumentParser) -> None:
-    """SCENE [SCENARIO] [--set NAME=VALUE]..."""
-    parser.add_argument("scene", help="scene name (see 'springlab list')")
+def scene_arguments(parser: argparse.ArgumentParser, *, model_files: bool = False) -> None:
+    """SCENE [SCENARIO] [--set NAME=VALUE]... (`model_files`: SCENE may also be a model file MODEL.xml)."""
+    parser.add_argument(
+        "scene",
+        help="scene name (see 'springlab list') or a model file MODEL.xml"
+        if model_files
+        else "scene name (see 'springlab list')",
+    )
     parser.add_argument("scenario", nargs="?", help="scenario name (default: the scene's first)")
     set_argument(parser)
 
@@ -107,6 +112,15 @@ def timing_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="TOL",
         help="relative tolerance to hold the run to (default: the integrator's predicted error)",
     )
+
+
+def refuse_scene_options(args: argparse.Namespace, *names: str) -> None:
+    """A scene's options given with a model file are bad input, said in one line (`names`: attributes of
+    `args`, e.g. 'scenario', 'set', 'tol')."""
+    for name in names:
+        if getattr(args, name, None):
+            option = name if name == "scenario" else f"--{name.replace('_', '-')}"
+            raise BadInputError(f"{option} applies to a scene, not to a model file ({args.scene})")
 
 
 def executor_arguments(parser: argparse.ArgumentParser) -> None:
@@ -149,8 +163,9 @@ def check_output(args: argparse.Namespace) -> None:
 
 
 def run(args: argparse.Namespace) -> Result:
-    """springlab.run from the scene, timing and --set arguments that run, render and plot share."""
-    return auto.run(
+    """springlab.run from the scene, timing and --set arguments that run, render and plot share (a scene's run:
+    a model file was refused before, springlab.cli.main)."""
+    result = auto.run(
         args.scene,
         args.scenario,
         integrator=args.integrator,
@@ -159,6 +174,9 @@ def run(args: argparse.Namespace) -> Result:
         tol=args.tol,
         **parse_sets(args.set),
     )
+    if not isinstance(result, Result):  # a model file reached a command that takes a scene
+        raise BadInputError(f"{args.scene} is a model file; this command takes a scene (see 'springlab list')")
+    return result
 
 
 def report_model_limits(result: Result) -> None:

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from springlab.answer import Answer
 from springlab.render import scale as render_scale
 from springlab.runs.compare import Verdict
 from springlab.runs.run import Result, ValidationRow
@@ -32,6 +33,11 @@ if TYPE_CHECKING:  # annotations only: these load mujoco.batch, scipy or sysid, 
     from springlab.studies.refine import Refinement
     from springlab.studies.stability import StabilityReport
     from springlab.studies.sweeps import Sweep
+
+
+def print_answer(answer: Answer) -> None:
+    """A study's question and its answer, the first lines it prints (the same words as its JSON's)."""
+    print(answer.text())
 
 
 def check_line(check: Check) -> str:
@@ -152,7 +158,9 @@ def _recommendation_line(pick: Recommendation, time_s: float | None) -> str:
 
 
 def print_tradeoff(result: tradeoff.Tradeoff, output: str | None) -> None:
-    """`springlab tradeoff`: every (integrator, dt) run, the observed orders and the recommendation."""
+    """`springlab tradeoff`: the question and answer, every (integrator, dt) run, the observed orders and the
+    recommendation."""
+    print_answer(result.question_answer)
     print(
         f"{result.scene} / {result.scenario}: {len(result.runs)} runs over {result.duration:g} s"
         f" in {result.sweep_wall_time_s:.1f} s"
@@ -182,6 +190,7 @@ def print_tradeoff(result: tradeoff.Tradeoff, output: str | None) -> None:
 def print_audit(result: Audit, output: str | None) -> None:
     """`springlab audit`: the audit's message (modes, your setting's margin and error, the cheapest setting
     meeting tol) and what was written."""
+    print_answer(result.question_answer)
     print(result.message)
     if output:
         print(f"wrote {pathlib.Path(output) / 'audit.json'} and audit.png")
@@ -190,9 +199,12 @@ def print_audit(result: Audit, output: str | None) -> None:
 def print_frequency(result: FrequencyResponse, output: str | None) -> None:
     """`springlab frequency`: a few lines, the band the setting reproduces, resonances, the dt each integrator
     needs, and what was written."""
+    print_answer(result.question_answer)
     print(f"{result.description} ({result.source})")
     for line in result.verdict():
         print(f"  {line}")
+    for warning in result.warnings:
+        print(f"  warning: {warning}")
     if output:
         extra = ", sinestream.csv" if result.sinestreams or result.sweeps else ""
         print(f"wrote {pathlib.Path(output) / 'frequency.json'}, frequency.csv{extra} and bode.png")
@@ -200,6 +212,7 @@ def print_frequency(result: FrequencyResponse, output: str | None) -> None:
 
 def print_stability(report: StabilityReport, output: str | None) -> None:
     """`springlab stability`: boundaries omega*dt [-] against theory, the extremes table, undamped energy."""
+    print_answer(report.question_answer)
     print("stability boundary omega*dt (measured by a growth test vs theory)")
     print(f"  {'integrator':<13}{'zeta':>7}{'measured':>12}{'theory':>12}{'rel diff':>10}")
     for b in report.boundaries:
@@ -236,7 +249,8 @@ def print_stability(report: StabilityReport, output: str | None) -> None:
 
 
 def print_design(study: Study, output: str | None) -> None:
-    """`springlab design`: the study's size and speed, ranked elasticities [-] and the answer."""
+    """`springlab design`: the question and answer, the study's size and speed, ranked elasticities [-]."""
+    print_answer(study.question_answer)
     where = f" on {study.nthread} threads" if study.executor == "local" else f" on {study.executor}"
     print(
         f"{study.scene} design study: {study.size} configurations ({study.levels} levels of "
@@ -257,13 +271,13 @@ def print_design(study: Study, output: str | None) -> None:
         f"  log-log fit R^2 {study.regression_r2:.3f}; analytic estimate / simulation: median"
         f" {float(np.median(ratio)):.3f}, 5-95% {float(np.percentile(ratio, 5)):.3f}-{float(np.percentile(ratio, 95)):.3f}"
     )
-    print(study.answer)
     if output:
         print(f"  wrote {pathlib.Path(output) / 'design.json'}, configurations.csv and design.png")
 
 
 def print_sobol(indices: SobolStudy, output: str | None) -> None:
     """`springlab design --sobol`: first-order and total Sobol indices [-] with their 95% half-widths."""
+    print_answer(indices.question_answer)
     print(
         f"Sobol indices of {indices.merit}: {indices.runs} runs in {indices.wall_time_s:.1f} s on {indices.executor}"
         f" ({indices.runs / indices.wall_time_s:.0f}/s), {indices.unsettled} unsettled"
@@ -278,7 +292,6 @@ def print_sobol(indices: SobolStudy, output: str | None) -> None:
             f"{st[name]:>8.3f}+-{st_conf[name]:<4.2f}{indices.interactions[name]:>8.3f}"
             f"{indices.elasticities[name]:>+12.3f}"
         )
-    print(indices.answer)
     if output:
         print(f"  wrote {pathlib.Path(output) / 'sobol.png'} and the sobol entry of design.json")
 
@@ -287,6 +300,7 @@ def print_sweep(result: Sweep, quantity: str | None, output: str | None) -> None
     """`springlab sweep`: counts by outcome and the range of `quantity` (default: the scenario's headline)."""
     from springlab.plots import sweep as sweep_plot  # mujoco.batch only for the command that sweeps
 
+    print_answer(result.question_answer)
     print(
         f"{result.scene} / {result.scenario}: {result.size} configurations ({result.integrator},"
         f" dt = {result.dt:g} s, {result.duration:g} s each) in {result.wall_time_s:.2f} s on {result.executor}"
@@ -316,6 +330,7 @@ def print_sweep(result: Sweep, quantity: str | None, output: str | None) -> None
 def print_friction_settings(study: FrictionSettings, output: str | None) -> None:
     """`springlab friction-settings`: per case MuJoCo's default, the model errors, the Pareto front and the pick."""
     integrator, dt = study.mujoco_default
+    print_answer(study.question_answer)
     print(
         f"{study.scene}: {study.runs} runs in {study.wall_time_s:.1f} s ({', '.join(study.integrators)};"
         f" dt = {', '.join(f'{d:g}' for d in study.dts)} s); baseline MuJoCo's defaults ({integrator}, dt = {dt:g} s)"
@@ -340,7 +355,9 @@ def print_friction_settings(study: FrictionSettings, output: str | None) -> None
 
 
 def print_fit(result: FitResult, output: str | None) -> None:
-    """`springlab fit`: the record used, each estimate with its 95% interval (in its unit), the verdict."""
+    """`springlab fit`: the question and answer (the verdict), the record used, each estimate with its 95%
+    interval (in its unit)."""
+    print_answer(result.question_answer)
     record = result.record
     print(
         f"{result.scene} / {result.scenario} from {record.column} ({record.time.size} samples,"
@@ -375,7 +392,6 @@ def print_fit(result: FitResult, output: str | None) -> None:
         print(f"  convergence: {judged['reason']}")
     if result.run_note:
         print(f"  note: {result.run_note}")
-    print(result.verdict)
     if output:
         wrote = "fit.json, fit.png" + (", trajectory.csv and summary.json" if result.run is not None else "")
         print(f"  wrote {wrote} under {output}")
@@ -390,9 +406,10 @@ def print_demo(rows: Sequence[ValidationRow], artifacts: int, out: pathlib.Path 
 
 def print_refine(result: Refinement, output: str | None) -> None:
     """`springlab refine`: per size the discretization error and the costs, the Pareto front, the recommendation."""
+    print_answer(result.question_answer)
     size = result.size_parameter
     print(
-        f"{result.scene} / {result.scenario}: {result.description} ({result.question}), {len(result.runs)} runs"
+        f"{result.scene} / {result.scenario}: {result.description} ({result.quantity}), {len(result.runs)} runs"
         f" over {result.duration:g} s in {result.sweep_wall_time_s:.1f} s"
     )
     names = list(result.cost_growth)

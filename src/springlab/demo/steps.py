@@ -31,7 +31,7 @@ def core_step(state: DemoState) -> list[Artifact]:
     written = []
     for scene in scenes.SCENES.values():
         for scenario in scene.scenarios.values():
-            result = auto.run(scene.name, scenario.name)
+            result = auto.run_scene(scene.name, scenario.name)
             state.results[(scene.name, scenario.name)] = result
             if scenario.exact:
                 state.validation.append(ValidationRow.of(result))
@@ -336,7 +336,7 @@ def refine_step(state: DemoState) -> list[Artifact]:
         study = refine.refine(name, tol=DEMO_REFINE_TOL, sizes=spec.sizes[:DEMO_REFINE_SIZES])
         folder = pathlib.Path("refine") / name
         refine_chart.write_refine(study, state.out / folder)
-        state.timings.append((f"refine {name} ({study.question})", study.sweep_wall_time_s))
+        state.timings.append((f"refine {name} ({study.quantity})", study.sweep_wall_time_s))
         pick = study.recommendation
         answer = (
             f"cheapest for {DEMO_REFINE_TOL:g}: {study.size_parameter} = {pick.details['size']}, {pick.integrator} at dt ="
@@ -353,7 +353,7 @@ def refine_step(state: DemoState) -> list[Artifact]:
                 name,
                 study.scenario,
             ),
-            Artifact(str(folder / "refine.json"), "data", f"{name}: the refine study of {study.question}", name),
+            Artifact(str(folder / "refine.json"), "data", f"{name}: the refine study of {study.quantity}", name),
         ]
     return written
 
@@ -409,7 +409,11 @@ def friction_step(state: DemoState) -> list[Artifact]:
         state.timings.append((f"friction settings of {scene.name} ({study.runs} runs)", study.wall_time_s))
         written += [
             Artifact(
-                str(folder / "friction_settings.png"), "plot", FRICTION_QUESTION, scene.name, answer=study.answer()
+                str(folder / "friction_settings.png"),
+                "plot",
+                FRICTION_QUESTION,
+                scene.name,
+                answer=study.answer_by_case(),
             ),
             Artifact(
                 str(folder / "friction_settings.json"),

@@ -23,7 +23,7 @@ from springlab import files
 from springlab.studies.audit.results import Audit
 
 from .charts import _COLORS, _figure, _save
-from .settings import Mark, Points, error_cost_panel
+from .settings import Mark, Points, error_cost_panel, legend_beside
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -126,7 +126,7 @@ def _limits_panel(result: Audit, ax) -> None:
         "hatched: UNCONFIRMED, never used for a verdict",
         fontsize=9,
     )
-    ax.legend(loc="lower right", fontsize=8)
+    legend_beside(ax, 8)
 
 
 def _cost_panel(result: Audit, ax) -> None:

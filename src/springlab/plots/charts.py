@@ -180,7 +180,9 @@ def stability_figure(report: StabilityReport, amplification: AmplificationMap) -
         axis.set_ylim(omega_dts[0], omega_dts[-1])
         axis.set_xlabel("damping ratio zeta [-]")
         axis.set_title(name)
-        axis.legend(fontsize=7, loc="upper left")
+    # one legend for the panels (the same lines on each), below them: over a panel it would hide the map
+    handles, labels = max((axis.get_legend_handles_labels() for axis in axes), key=lambda found: len(found[1]))
+    fig.legend(handles, labels, loc="outside lower center", ncols=len(labels), fontsize=8)
     axes[0].set_ylabel("omega * dt [-]")
     fig.colorbar(image, ax=list(axes), label="log10 per-step amplification (> 0: grows)", shrink=0.85)
     fig.suptitle("stability map: MuJoCo's measured one-step amplification, theory (line), measured boundary (o)")
@@ -198,7 +200,7 @@ def energy_figure(series: EnergyHistories) -> Figure:
     Three panels: the integrators that keep an invariant (`series.bounds`, the euler family) between
     their bounds, and rk4 and discrete against their per-step formulas (`series.exact`).
     """
-    fig, (euler, rk4, discrete) = _figure(3, (15, 4.4))
+    fig, (euler, rk4, discrete) = _figure(3, (17, 4.4), layout="constrained")  # room for the legends beside
     t = series.time_periods
     y = series.omega_dt
     first = t <= 3.0
@@ -235,11 +237,10 @@ def energy_figure(series: EnergyHistories) -> Figure:
     for axis in (euler, rk4, discrete):
         axis.set_xlabel("time [periods]")
         axis.grid(True, alpha=0.3)
-        axis.legend(fontsize=8)
+        legend_beside(axis, 8)
     fig.suptitle(
         f"undamped {series.scene}, omega*dt = y = {y:g}: energy from qpos/qvel vs each step map's exact formula"
     )
-    fig.tight_layout()
     return fig
 
 

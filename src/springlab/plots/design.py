@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from springlab import files
+from springlab.plots.settings import legend_beside
 from springlab.studies.design.sobol import CONFIDENCE, SobolStudy
 from springlab.studies.design.study import Study
 
@@ -88,9 +89,9 @@ def design_figure(study: Study) -> Figure:
         f"{study.design.merit} [ms], {study.setting}\n" + ", ".join(f"{p} = {default[p]:.3g}" for p in others),
         fontsize=10,
     )
-    legend = left.legend(loc="upper right", fontsize=8, facecolor="0.3", labelcolor="white")
-    legend.get_frame().set_alpha(0.6)
     bar = fig.colorbar(mesh, ax=left, label=f"{study.design.merit} [ms]")
+    # below the map, beside its colour bar: a legend over the map would hide configurations
+    left.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), fontsize=8, ncols=2, borderaxespad=0.0)
     bar.ax.yaxis.set_major_formatter(matplotlib.ticker.FormatStrFormatter("%.0f"))
     bar.ax.yaxis.set_minor_formatter(matplotlib.ticker.FormatStrFormatter("%.0f"))
 
@@ -113,7 +114,7 @@ def design_figure(study: Study) -> Figure:
         + ", ".join(f"{p.split('_')[0]} {elasticity[p]:+.2f}" for p in study.ranking),
         fontsize=10,
     )
-    right.legend(fontsize=8)
+    legend_beside(right, 8)
     return fig
 
 
@@ -159,7 +160,7 @@ def sobol_figure(study: SobolStudy) -> Figure:
         f" {int(round(100 * CONFIDENCE))}% bootstrap intervals;\nsum S1 = {sum(s1.values()):.2f}",
         fontsize=10,
     )
-    left.legend(fontsize=8)
+    left.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), fontsize=8, ncols=2, borderaxespad=0.0)
     elastic = [abs(study.elasticities[n]) for n in names]
     right.bar(x, elastic, 0.5, color="#7f7f7f")
     right.set_xticks(x, [n.replace("_", "\n") for n in names])

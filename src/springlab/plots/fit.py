@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from . import charts
+from .settings import legend_beside
 
 if TYPE_CHECKING:  # annotations only: the fit machinery is not needed to draw
     from matplotlib.axes import Axes
@@ -38,7 +39,7 @@ def fit_figure(result: FitResult) -> Figure:
     record = result.record
     from matplotlib.figure import Figure  # a bare Figure: the caller's pyplot state stays untouched
 
-    fig = Figure(figsize=(12, 8))
+    fig = Figure(figsize=(13, 8), layout="constrained")  # constrained: room for the legends beside the panels
     grid = fig.add_gridspec(2, 2, height_ratios=(3, 2))
     top, phase = fig.add_subplot(grid[0, 0]), fig.add_subplot(grid[0, 1])
     bottom = fig.add_subplot(grid[1, :])
@@ -51,7 +52,7 @@ def fit_figure(result: FitResult) -> Figure:
     top.set_xlabel("time [s]")
     top.set_ylabel(f"{_SIGNAL[record.signal]}: {label}")
     top.set_title(f"{result.scene} / {result.scenario}: {_SIGNAL[record.signal]} of {record.joint}")
-    top.legend(loc="best", fontsize=8)
+    legend_beside(top, 8)
     residual = record.values[kept] - result.fitted[kept]
     bottom.plot(record.time[kept], residual, ".", ms=2, color=_DATA)
     bottom.axhline(0.0, color="k", lw=0.6)
@@ -65,7 +66,6 @@ def fit_figure(result: FitResult) -> Figure:
     else:
         _phase_panel(phase, result)
     fig.suptitle(textwrap.fill(result.verdict, 140), fontsize=9)
-    fig.tight_layout(rect=(0, 0, 1, 0.95))
     return fig
 
 
@@ -91,7 +91,7 @@ def _phase_panel(ax: Axes, result: FitResult) -> None:
     ax.set_xlabel(f"{joint} position [m]")
     ax.set_ylabel(f"{joint} velocity [m/s]")
     ax.set_title("phase plane")
-    ax.legend(loc="best", fontsize=8)
+    legend_beside(ax, 8)
 
 
 def shown(size: int, most: int = DRAWN) -> slice:
@@ -110,4 +110,4 @@ def _polynomial_panel(ax: Axes, result: FitResult) -> None:
         ax.plot(t, value, "-", color=colour, label=f"{name} ± 95 %")
     ax.set_xlabel("time [s]")
     ax.set_title("velocity and acceleration of the fitted polynomial")
-    ax.legend(loc="best", fontsize=8)
+    legend_beside(ax, 8)

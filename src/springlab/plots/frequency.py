@@ -21,6 +21,7 @@ from springlab import files
 from springlab.studies.frequency import FrequencyResponse
 
 from .charts import _COLORS, _save
+from .settings import legend_beside
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -115,8 +116,8 @@ def bode_figure(result: FrequencyResponse) -> Figure:
     phase_ax.set_ylabel("phase [deg]")
     err_ax.set_ylabel("relative error |H_d / H - 1| [-]")
     err_ax.set_xlabel("frequency [Hz]")
-    mag_ax.legend(fontsize=8, loc="best")
-    err_ax.legend(fontsize=8, loc="best")
+    legend_beside(mag_ax, 8)
+    legend_beside(err_ax, 8)
     shaded = "" if result.within_tol_hz is None else f"; shaded: within tol up to {result.within_tol_hz[1]:.4g} Hz"
     fig.suptitle(f"{result.description}\n{result.source}, {setting}{shaded}", fontsize=10)
     return fig

@@ -73,7 +73,7 @@ def refine_figure(result: Refinement) -> Figure:
         result.pareto,
         marks=marks,
         tol=None if pick is None else pick.tolerance,
-        ylabel=f"{result.question}: discretization + integration error [-]",
+        ylabel=f"{result.quantity}: discretization + integration error [-]",
         title=f"{result.description}: error vs cost",
         legend_size=6.5,
     )
@@ -94,10 +94,10 @@ def refine_figure(result: Refinement) -> Figure:
     for name in dict.fromkeys(r.integrator for r in result.runs):
         best = []
         for size in sizes:
-            errors = [
+            errors = [  # valid runs only: one beyond its stability limit ended before its blow-up showed
                 r.integration_error
                 for r in result.runs
-                if r.size == size and r.integrator == name and r.integration_error
+                if r.size == size and r.integrator == name and r.integration_error and r.run.valid
             ]
             if errors:
                 best.append((size, min(errors)))
@@ -140,7 +140,7 @@ def refine_figure(result: Refinement) -> Figure:
     right.set_ylabel("wall time [s]")
     right.set_title("refining costs twice: per step x steps per second")
     legend_beside(right, 6.5)
-    fig.suptitle(f"{result.scene} / {result.scenario}: how much model does {result.question} need?")
+    fig.suptitle(f"{result.scene} / {result.scenario}: how much model does {result.quantity} need?")
     return fig
 
 

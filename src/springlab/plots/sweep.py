@@ -17,6 +17,11 @@ from springlab import files
 from springlab.errors import BadInputError
 from springlab.studies.sweeps import Sweep
 
+from .settings import BEYOND_STYLE, legend_beside
+
+#: a configuration that ran but failed its check: hollow and grey, as a run beyond its stability limit
+FAILED_STYLE = BEYOND_STYLE
+
 if TYPE_CHECKING:  # matplotlib is imported only when a figure is drawn
     from matplotlib.cm import ScalarMappable
     from matplotlib.figure import Figure
@@ -25,14 +30,9 @@ if TYPE_CHECKING:  # matplotlib is imported only when a figure is drawn
 def default_quantity(sweep: Sweep) -> str:
     """The quantity sweep.png shows by default: the scenario's last numeric quantity that every
     configuration that ran has (its headline result, e.g. max_displacement_m), else the first error column."""
-    ran = [row for row in sweep.rows if row.quantities]
-    names = [n for n in sweep.quantity_names() if all(n in row.quantities for row in ran)]
-    if names:
-        return names[-1]
-    errors = [c for row in sweep.rows for c in row.errors]
-    if errors:
-        return f"{errors[0]}_max_rel"
-    raise BadInputError("the sweep has no numeric quantity to plot (every configuration diverged?)")
+    if sweep.headline is None:
+        raise BadInputError("the sweep has no numeric quantity to plot (every configuration diverged?)")
+    return sweep.headline
 
 
 def csv_text(sweep: Sweep) -> str:
@@ -79,6 +79,10 @@ def sweep_figure(sweep: Sweep, quantity: str | None = None) -> Figure:
         raise BadInputError(f"unknown quantity {quantity!r} of this sweep; valid: {', '.join(dict.fromkeys(known))}")
     z = sweep.column(quantity)
     diverged = np.array([bool(r.diverged) for r in sweep.rows])
+    # a configuration that ran but failed its check (outside its tolerance or the estimate's range, invalid) is
+    # no valid result: drawn apart as a hollow grey circle, never on the curve or in the colour map
+    failed = np.array([r.passed is False and not r.diverged for r in sweep.rows]) & np.isfinite(z)
+    valid = ~failed
     axes = sweep.axes
     fig = Figure(figsize=(7.5, 5.0), layout="constrained")
     ax = fig.subplots()
@@ -87,10 +91,14 @@ def sweep_figure(sweep: Sweep, quantity: str | None = None) -> Figure:
     if len(axes) == 1:
         x = sweep.values[axes[0].name]
         order = np.argsort(x, kind="stable")
+        order = order[valid[order]]
         ax.plot(x[order], z[order], ".-" if sweep.samples is None else ".", label=quantity)
+        if failed.any():
+            ax.plot(x[failed], z[failed], **FAILED_STYLE, label=f"failed its check ({failed.sum()}): not valid")
         if diverged.any():
             ax.plot(x[diverged], np.zeros(diverged.sum()), "rx", label="diverged")
-            ax.legend(fontsize=8)
+        if failed.any() or diverged.any():
+            legend_beside(ax, 8)
         ax.set_xlabel(axes[0].name)
         ax.set_ylabel(quantity)
         if axes[0].log:
@@ -104,7 +112,7 @@ def sweep_figure(sweep: Sweep, quantity: str | None = None) -> Figure:
                 grid = other.values()
                 keep &= sweep.values[other.name] == grid[len(grid) // 2]
             title += "\n" + ", ".join(f"{o.name} = {o.values()[len(o.values()) // 2]:g}" for o in axes[2:])
-        finite = keep & np.isfinite(z)
+        finite = keep & np.isfinite(z) & valid
         mesh: ScalarMappable
         if sweep.samples is None:
             assert a.count is not None and b.count is not None, "a grid sweep's axes all have N"
@@ -117,7 +125,11 @@ def sweep_figure(sweep: Sweep, quantity: str | None = None) -> Figure:
         bad = keep & diverged
         if bad.any():
             ax.plot(x[bad], y[bad], "rx", markersize=5, label="diverged")
-            ax.legend(fontsize=8)
+        if (keep & failed).any():
+            shown = keep & failed
+            ax.plot(x[shown], y[shown], **FAILED_STYLE, label=f"failed its check ({shown.sum()}): not valid")
+        if bad.any() or (keep & failed).any():
+            legend_beside(ax, 8)
         ax.set_xlabel(b.name)
         ax.set_ylabel(a.name)
         if b.log:

@@ -45,7 +45,7 @@ from springlab.errors import BadInputError  # a ValueError; the CLI maps it to e
 from springlab.progress import bar as progress_bar
 from springlab.render import scale as render_scale
 
-from .drawings import SPRING_PREFIX, RoadBump, drawn_notes, drawn_springs
+from .drawings import SPRING_PREFIX, Drawings, RoadBump, drawn_notes, drawn_springs
 from .framing import framed_model
 from .gl import OffscreenScene, ensure_gl_backend
 from .sink import X264_CRF, X264_PRESET, GifSink, Mp4Sink, WriterThread
@@ -350,8 +350,83 @@ def render_video(
     success; on any error no partial file is left behind.
     """
     wall_start = _time.perf_counter()
+    job = _video_job(
+        model, time, qpos, output, fps, width, height, camera, duration, panel, slow_motion, exaggerate, road_bump
+    )
+    video_w, video_h = _encode(job, label, panel, antialias, progress)
+    return job.report(video_w, video_h, _time.perf_counter() - wall_start)
 
-    # ---- validate everything before touching the file system or GL
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class _VideoJob:
+    """A checked video request and what it shows (`_video_job`).
+
+    Attributes
+    ----------
+    model
+        the staged model (`stage`: a copy where it must frame or draw more than the model's own).
+    out_path, ext
+        the output file and its extension.
+    fps, width, height
+        frames per second [1/s] and the 3D view's size [px].
+    cam_id
+        the camera (-1: MuJoCo's free camera).
+    at
+        simulation time of each frame [s].
+    states
+        (frames, nq) positions drawn at each frame (exaggerated).
+    slow_motion, exaggeration
+        the factors [-] written on every frame.
+    drawings, camera_path
+        what `stage` adds (springs, road) and the camera's path along a long travel (None: fixed).
+    """
+
+    model: mujoco.MjModel
+    out_path: Path
+    ext: str
+    fps: float
+    width: int
+    height: int
+    cam_id: int
+    at: np.ndarray
+    states: np.ndarray
+    slow_motion: float = 1.0
+    exaggeration: float = 1.0
+    drawings: Drawings | None = None
+    camera_path: np.ndarray | None = None
+
+    def report(self, video_w: int, video_h: int, seconds: float) -> dict:
+        """render_video's answer: the encoded size [px] and the wall time [s]."""
+        return {
+            "frames": int(self.at.size),
+            "fps": self.fps,
+            "width": int(video_w),
+            "height": int(video_h),
+            "seconds": seconds,
+            "path": str(self.out_path),
+            "slow_motion": self.slow_motion,
+            "exaggeration": self.exaggeration,
+        }
+
+
+def _video_job(
+    model: mujoco.MjModel,
+    time: np.ndarray,
+    qpos: np.ndarray,
+    output: str | os.PathLike,
+    fps: float,
+    width: int,
+    height: int,
+    camera: str | int | None,
+    duration: float | None,
+    panel: Callable[[int, float], np.ndarray] | None,
+    slow_motion: float,
+    exaggerate: float | None,
+    road_bump: RoadBump | None,
+) -> _VideoJob:
+    """Every argument checked before touching the file system or GL (BadInputError, TypeError), then the
+    frames: their times, the states there (interpolated, quaternions renormalised, exaggerated) and the
+    staged model (drawings, a camera that follows)."""
     if not isinstance(model, mujoco.MjModel):
         raise TypeError(f"model must be a mujoco.MjModel, got {type(model).__name__}")
     out_path, ext, fps, width, height = check_video_arguments(output, fps, width, height)
@@ -386,8 +461,7 @@ def render_video(
     if exaggerate is not None:
         exaggerate = render_scale.check_factor("exaggerate", exaggerate)
     at = frame_times(duration * slow_motion, fps) / slow_motion  # simulation time of each frame [s]
-    n_frames = at.size
-    if n_frames == 0:
+    if at.size == 0:
         raise BadInputError(
             f"duration {duration} s at {fps} fps gives no frames (need duration >= {0.5 / (fps * slow_motion):.3g} s)"
         )
@@ -399,25 +473,39 @@ def render_video(
     if road_bump is not None and exaggerate != 1.0:
         road_bump = dataclasses.replace(road_bump, exaggeration=exaggerate)
     model, drawings, camera_path = stage(model, states, cam_id, width, height, road_bump)
+    return _VideoJob(
+        model, out_path, ext, fps, width, height, cam_id, at, states, slow_motion, exaggerate, drawings, camera_path
+    )
 
+
+def _encode(
+    job: _VideoJob,
+    label: str,
+    panel: Callable[[int, float], np.ndarray] | None,
+    antialias: bool,
+    progress: bool | None,
+) -> tuple[int, int]:
+    """Render every frame of a filmed job and encode them to job.out_path (all or nothing: a temporary file
+    beside it, renamed on success, removed on any failure); the encoded size (width, height) [px]."""
     try:
-        out_path.parent.mkdir(parents=True, exist_ok=True)
-        tmp_name = str(files.temporary_beside(out_path))
+        job.out_path.parent.mkdir(parents=True, exist_ok=True)
+        tmp_name = str(files.temporary_beside(job.out_path))
     except OSError as err:
-        raise BadInputError(f"cannot write {str(out_path)!r}: {err.strerror or err}") from None
+        raise BadInputError(f"cannot write {str(job.out_path)!r}: {err.strerror or err}") from None
 
+    model, at, width, height = job.model, job.at, job.width, job.height
     scene = None
     writer = None
-    bar = progress_bar(n_frames, description="rendering", unit="frame", enabled=progress)
+    bar = progress_bar(at.size, description="rendering", unit="frame", enabled=progress)
     try:
-        scene = OffscreenScene(model, width, height, cam_id, drawings=drawings, multisample=antialias)
+        scene = OffscreenScene(model, width, height, job.cam_id, drawings=job.drawings, multisample=antialias)
         data = mujoco.MjData(model)
         text = TextOverlay(
             label,
             height,
             float(at[-1]),
-            notes=[*render_scale.labels(slow_motion, exaggerate), *drawn_notes(model)],
-            time_step=1.0 / (fps * slow_motion),
+            notes=[*render_scale.labels(job.slow_motion, job.exaggeration), *drawn_notes(model)],
+            time_step=1.0 / (job.fps * job.slow_motion),
         )
 
         first_panel = None
@@ -426,23 +514,23 @@ def render_video(
             first_panel = _as_panel_image(panel(0, float(at[0])), 0, height, None)
             panel_w = first_panel.shape[1]
         video_w, video_h = width + panel_w, height
-        if ext == ".mp4":  # yuv420p needs even sizes: pad by one pixel
+        if job.ext == ".mp4":  # yuv420p needs even sizes: pad by one pixel
             video_w += video_w % 2
             video_h += video_h % 2
 
         sink: Mp4Sink | GifSink
-        if ext == ".mp4":
-            sink = Mp4Sink(tmp_name, video_w, video_h, fps)
+        if job.ext == ".mp4":
+            sink = Mp4Sink(tmp_name, video_w, video_h, job.fps)
         else:
-            sink = GifSink(tmp_name, n_frames, fps)
+            sink = GifSink(tmp_name, at.size, job.fps)
         writer = WriterThread(sink)
 
-        for i in range(n_frames):
+        for i in range(at.size):
             t = float(at[i])
-            data.qpos[:] = states[i]
+            data.qpos[:] = job.states[i]
             data.time = t
-            if camera_path is not None:  # a camera that follows a long travel
-                model.cam_pos[cam_id] = camera_path[i]
+            if job.camera_path is not None:  # a camera that follows a long travel
+                model.cam_pos[job.cam_id] = job.camera_path[i]
             mujoco.mj_fwdPosition(model, data)
 
             frame = np.empty((video_h, video_w, 3), dtype=np.uint8)
@@ -462,7 +550,7 @@ def render_video(
 
         writer.finish()
         writer = None
-        os.replace(tmp_name, out_path)
+        os.replace(tmp_name, job.out_path)
     except BaseException:
         if writer is not None:
             writer.abort()
@@ -475,14 +563,4 @@ def render_video(
         bar.close()  # ends the bar's line, so a following message starts clean
         if scene is not None:
             scene.close()
-
-    return {
-        "frames": int(n_frames),
-        "fps": fps,
-        "width": int(video_w),
-        "height": int(video_h),
-        "seconds": _time.perf_counter() - wall_start,
-        "path": str(out_path),
-        "slow_motion": slow_motion,
-        "exaggeration": exaggerate,
-    }
+    return video_w, video_h

@@ -16,8 +16,10 @@ import dataclasses
 from typing import Any
 
 from springlab.errors import BadInputError
+from springlab.runs.model_run import ModelRun, run_model
 from springlab.runs.run import Result, ValidationRow, exact_scenarios, run_scenario
 from springlab.scenes.base import Scene
+from springlab.sim import model_files
 
 from .tradeoff import sweepable, tradeoff
 
@@ -66,19 +68,22 @@ def run(
     dt: float | None = None,
     duration: float | None = None,
     tol: float | None = None,
+    keyframe: str | int | None = None,
     **parameters: Any,
-) -> Result:
-    """Simulate a scenario headless in MuJoCo and compare it with its exact solution (`springlab.run`).
+) -> Result | ModelRun:
+    """Simulate a scenario headless in MuJoCo and compare it with its exact solution (`springlab.run`),
+    or run a model file (nothing to compare with: a `ModelRun`, "not validated").
 
     The explicit-setting run (springlab.runs.run.run_scenario), where `integrator='auto'` first
-    picks the cheapest setting meeting `tol` (`auto_setting`).
+    picks the cheapest setting meeting `tol` (`auto_setting`); a model file's run is
+    springlab.runs.model_run.run_model (its own integrator and timestep unless given).
 
     Parameters
     ----------
     scene
-        scene name (see `springlab list`).
+        scene name (see `springlab list`), or a model file (MJCF, a path ending in .xml).
     scenario
-        scenario name (None: the scene's default).
+        scenario name (None: the scene's default); not for a model file.
     integrator
         one of 'euler', 'implicit', 'implicitfast', 'rk4', 'discrete'
         (None: the scene's validated default), or 'auto': the cheapest setting
@@ -89,15 +94,18 @@ def run(
         simulated time [s] (None: the scenario's).
     tol
         relative accuracy [-] to hold the run to instead of the integrator's
-        predicted error (see springlab.runs.compare); needed by 'auto'.
+        predicted error (see springlab.runs.compare); needed by 'auto'; not for a model file.
+    keyframe
+        a model file's start: a keyframe name or index (None: the first keyframe, else qpos0 at rest).
     **parameters
-        scene parameters in SI units, e.g. mass=2.0 [kg].
+        scene parameters in SI units, e.g. mass=2.0 [kg]; not for a model file.
 
     Returns
     -------
-    Result
-        The Result: `passed`, `verdict` and `message` say how the run compares with its exact
-        solution; `to_dict()` is summary.json, `to_pandas()` trajectory.csv.
+    Result or ModelRun
+        A scene's Result: `passed`, `verdict` and `message` say how the run compares with its exact
+        solution; `to_dict()` is summary.json, `to_pandas()` trajectory.csv. A model file's ModelRun:
+        the same files, `verdict` "not validated", `passed` None.
 
     Raises
     ------
@@ -107,6 +115,29 @@ def run(
     DivergedError
         the simulation blew up (nothing is returned for it).
     """
+    if model_files.is_model_file(scene):
+        given = [
+            name for name, value in (("scenario", scenario), ("tol", tol), *parameters.items()) if value is not None
+        ]
+        if given:
+            raise BadInputError(f"{given[0]} applies to a scene, not to a model file ({scene})")
+        return run_model(scene, keyframe=keyframe, integrator=integrator, dt=dt, duration=duration)
+    if keyframe is not None:
+        raise BadInputError(f"keyframe applies to a model file (MODEL.xml), not to the scene {scene!r}")
+    return run_scene(scene, scenario, integrator=integrator, dt=dt, duration=duration, tol=tol, **parameters)
+
+
+def run_scene(
+    scene: str,
+    scenario: str | None = None,
+    *,
+    integrator: str | None = None,
+    dt: float | None = None,
+    duration: float | None = None,
+    tol: float | None = None,
+    **parameters: Any,
+) -> Result:
+    """`run` on a scene (its arguments): the explicit-setting run, or 'auto''s verified cheapest setting."""
     if integrator == "auto":
         integrator, dt = auto_setting(scene, scenario, tol=tol, dt=dt, duration=duration, **parameters)
     return run_scenario(scene, scenario, integrator=integrator, dt=dt, duration=duration, tol=tol, **parameters)
@@ -157,5 +188,5 @@ def validate(
             row = ValidationRow.of(run_scenario(scene.name, scenario.name))
             rows.append(dataclasses.replace(row, note=NO_SWEEP_NOTE))
             continue
-        rows.append(ValidationRow.of(run(scene.name, scenario.name, integrator=integrator, dt=dt, tol=tol)))
+        rows.append(ValidationRow.of(run_scene(scene.name, scenario.name, integrator=integrator, dt=dt, tol=tol)))
     return rows

@@ -47,6 +47,7 @@ from springlab.scenes.capabilities.friction import (
 from springlab.sim import model_files
 from springlab.sim.simulate import INTEGRATORS, check_timing, integrator_id
 
+from . import friction_settings as scene_study
 from .audit.ship import compiled, ship
 from .executor import Executor, chunked, resolve
 from .friction_results import CaseStudy, FrictionSettings, HeldBody, HoldReport, SettingRun
@@ -76,6 +77,9 @@ DT_FRACTIONS = (1.0, 0.5)
 MAX_VERIFIED = 20
 #: runs per chunk of the executor
 CHUNK_RUNS = 24
+#: the settings that also change how stiff the contact is (how far the grip's surfaces press into each other),
+#: not only its friction: the study also names the cheapest setting that leaves them as they are
+STIFFNESS = ("solref_timeconst", "solimp_d")
 #: the case's name in the study's rows and JSON
 CASE = "hold"
 
@@ -208,10 +212,7 @@ def friction_hold(
     """
     started = _time.perf_counter()
     label = os.fspath(model)
-    if not (isinstance(hold_s, (int, float)) and math.isfinite(hold_s) and hold_s > 0):
-        raise BadInputError(f"--hold must be a number of seconds > 0, got {hold_s!r}")
-    if not (isinstance(tol, (int, float)) and math.isfinite(tol) and tol > 0):
-        raise BadInputError(f"--tol is the slip allowed over the hold in body sizes, a number > 0; got {tol!r}")
+    _check_hold(hold_s, tol)
     compiled_model = model_files.load(label)
     own_integrator, own_dt = _NAMES[int(compiled_model.opt.integrator)], float(compiled_model.opt.timestep)
     names = tuple(dict.fromkeys(integrators or (*HOLD_INTEGRATORS, own_integrator)))
@@ -225,6 +226,10 @@ def friction_hold(
         raise BadInputError(
             f"the study needs at least two timesteps to show the creep does not depend on dt, got {steps_of}"
         )
+    for name, chosen in (values or {}).items():
+        if name not in {s.name for s in settings} or not chosen:
+            valid = ", ".join(s.name for s in settings)
+            raise BadInputError(f"values: {name!r} is no swept setting of this hold (valid: {valid}) or has no values")
     friction = CONTACT_FRICTION if any(plan.holder_geoms) else JOINT_FRICTION
     question = f"does dry friction hold {_listed(compiled_model, plan)} for {hold_s:g} s?"
     case = FrictionCase(CASE, friction, question, MEASURES)
@@ -234,21 +239,8 @@ def friction_hold(
     carried = ship(("path", label), compiled_model) if runner.distributed else compiled_model
     baseline = dict(plan.baseline)
     own = _own_run(compiled_model, plan, baseline, own_integrator, own_dt)
-    for name, chosen in (values or {}).items():
-        if name not in {s.name for s in settings} or not chosen:
-            valid = ", ".join(s.name for s in settings)
-            raise BadInputError(f"values: {name!r} is no swept setting of this hold (valid: {valid}) or has no values")
     groups = grid(spec, case, names, steps_of, values)
-    configs = [config for group in groups for config in group]
-    pieces = chunked(len(groups), max(1, CHUNK_RUNS // len(steps_of)))
-    payloads = [HoldChunk(carried, plan, window, tuple(_jobs(groups[p.start : p.stop]))) for p in pieces]
-    sizes = [sum(len(g) for g in groups[p.start : p.stop]) for p in pieces]
-    outcomes = [
-        row
-        for part in runner.map(hold_chunk, payloads, description="friction settings: hold", sizes=sizes)
-        for row in part
-    ]
-    runs = tuple(_row(plan, config, outcome, window) for config, outcome in zip(configs, outcomes))
+    runs = _swept(runner, carried, plan, window, groups, len(steps_of))
     default = own.row
     study = CaseStudy(
         scenario=CASE,
@@ -263,6 +255,10 @@ def friction_hold(
     )
     pick, verified = _pick(compiled_model, plan, study, tol, default)
     study = dataclasses.replace(study, pick=pick)
+    alternative: Recommendation[SettingRun] | None = None
+    alternative_bodies: tuple[HeldBody, ...] = ()
+    if pick.found and pick.row is not None and any(pick.row.settings.get(n) != baseline.get(n) for n in STIFFNESS):
+        alternative, alternative_bodies = _pick(compiled_model, plan, study, tol, default, keep=STIFFNESS)
     report = HoldReport(
         model=label,
         operating_point=point.label,
@@ -272,6 +268,8 @@ def friction_hold(
         bodies=own.bodies,
         skipped=skipped,
         pick_bodies=verified,
+        friction_only=alternative,
+        friction_only_bodies=alternative_bodies,
     )
     return FrictionSettings(
         scene=label,
@@ -284,6 +282,36 @@ def friction_hold(
         wall_time_s=_time.perf_counter() - started,
         hold=report,
     )
+
+
+def _check_hold(hold_s: float, tol: float) -> None:
+    """BadInputError unless the hold [s] and the slip allowed [body sizes] are finite numbers > 0."""
+    if not (isinstance(hold_s, (int, float)) and math.isfinite(hold_s) and hold_s > 0):
+        raise BadInputError(f"--hold must be a number of seconds > 0, got {hold_s!r}")
+    if not (isinstance(tol, (int, float)) and math.isfinite(tol) and tol > 0):
+        raise BadInputError(f"--tol is the slip allowed over the hold in body sizes, a number > 0; got {tol!r}")
+
+
+def _swept(
+    runner: Executor,
+    carried: Any,
+    plan: HoldPlan,
+    window: float,
+    groups: list[list[tuple[dict[str, float], str, float]]],
+    n_steps: int,
+) -> tuple[SettingRun, ...]:
+    """The sweep's runs, one per configuration of `groups` in order: chunks of whole groups (about CHUNK_RUNS
+    runs each, `n_steps` timesteps per group) run by `runner` on the model as `carried`, over `window` [s]."""
+    configs = [config for group in groups for config in group]
+    pieces = chunked(len(groups), max(1, CHUNK_RUNS // n_steps))
+    payloads = [HoldChunk(carried, plan, window, tuple(_jobs(groups[p.start : p.stop]))) for p in pieces]
+    sizes = [sum(len(g) for g in groups[p.start : p.stop]) for p in pieces]
+    outcomes = [
+        row
+        for part in runner.map(hold_chunk, payloads, description="friction settings: hold", sizes=sizes)
+        for row in part
+    ]
+    return tuple(_row(plan, config, outcome, window) for config, outcome in zip(configs, outcomes))
 
 
 def _listed(model: mujoco.MjModel, plan: HoldPlan) -> str:
@@ -340,11 +368,16 @@ def _own_run(model: mujoco.MjModel, plan: HoldPlan, baseline: dict[str, float], 
 
 
 def _pick(
-    model: mujoco.MjModel, plan: HoldPlan, study: CaseStudy, tol: float, default: SettingRun | None
+    model: mujoco.MjModel,
+    plan: HoldPlan,
+    study: CaseStudy,
+    tol: float,
+    default: SettingRun | None,
+    keep: Sequence[str] = (),
 ) -> tuple[Recommendation[SettingRun], tuple[HeldBody, ...]]:
     """The cheapest setting whose slip over the hold stays within tol body sizes, verified by a run of the whole
     hold (springlab.studies.settings.cheapest_verified: counted work, then slip; no timer decides), and the held
-    bodies through that run (empty: no pick)."""
+    bodies through that run (empty: no pick). Settings named in `keep` stay at the model's own values."""
     passed: list[tuple[HeldBody, ...]] = []
 
     def verify(candidate: SettingRun) -> Verification:
@@ -369,7 +402,19 @@ def _pick(
     def describe(setting: Setting) -> str:
         return f"{study.describe(setting.option_values)} with {setting.integrator} at dt = {setting.dt:g} s"
 
-    candidates = [r for r in study.runs if r.run.valid and r.error <= tol]
+    def changed(row: SettingRun) -> float:
+        """How many of the model's own settings, integrator and timestep the row changes."""
+        settings = sum(row.settings.get(s.name) != s.mujoco_default for s in study.settings)
+        if default is None:
+            return float(settings)
+        return float(settings + (row.integrator != default.integrator) + (row.dt != default.dt))
+
+    own = {s.name: s.mujoco_default for s in study.settings}
+    candidates = [
+        r
+        for r in study.runs
+        if r.run.valid and r.error <= tol and all(r.settings.get(name, own.get(name)) == own.get(name) for name in keep)
+    ]
     pick = cheapest_verified(
         candidates,
         tol,
@@ -377,6 +422,8 @@ def _pick(
         describe=describe,
         max_tries=MAX_VERIFIED,
         error_words="slip over the hold in body sizes",
+        prefer=changed,  # of equal counted work, the fewest changes to the model's own settings
+        tie_words="ranked after it as they change more settings, slip more or are listed later in the sweep",
     )
     if pick.found:
         return pick, passed[-1]
@@ -401,4 +448,85 @@ def _floor(study: CaseStudy, tol: float, within: int) -> str:
     return (
         f"No swept setting holds it within {tol:g} body sizes over the hold: {closest}. Larger impratio, more NoSlip"
         " iterations or a stiffer grip (more squeeze, more friction) are the next things to try."
+    )
+
+
+def friction_settings(
+    model: str | os.PathLike[str],
+    scenarios: Sequence[str] | None = None,
+    *,
+    tol: float | None = None,
+    bodies: Sequence[str] = (),
+    hold_s: float | None = None,
+    keyframe: str | int | None = None,
+    integrators: Sequence[str] | None = None,
+    dts: Sequence[float] | None = None,
+    executor: Executor | None = None,
+    **parameters: Any,
+) -> FrictionSettings:
+    """MuJoCo's friction settings: a scene's exact dry-friction cases, or the creep of what dry friction holds in a
+    model file (`springlab friction-settings SCENE | MODEL.xml`).
+
+    Parameters
+    ----------
+    model
+        a scene that declares dry-friction cases (e.g. "friction"), or the path of a model file (MJCF, URDF).
+    scenarios
+        a scene's cases (None: all); not for a model file.
+    tol
+        a scene: the relative error each case's pick must meet (None: no picks); a model file: the slip allowed
+        over the hold, in body sizes [-] (None: DEFAULT_TOL, 1 mm for a 40 mm box).
+    bodies
+        a model file: the held bodies' names (empty: found).
+    hold_s
+        a model file: how long they must be held [s] (None: 10 s).
+    keyframe
+        a model file: where the hold starts (None: the first keyframe).
+    integrators, dts
+        the integrators and timesteps [s] swept (None: the scene's, or the model's own and its half).
+    executor
+        where the runs go (None: here).
+    **parameters
+        a scene's parameters in SI units (not the swept settings); not for a model file.
+
+    Returns
+    -------
+    FrictionSettings
+        the study: per case its runs, model errors, Pareto front and pick; a model file's also its `hold`.
+
+    Raises
+    ------
+    BadInputError
+        as `springlab.studies.friction_settings.friction_settings` (a scene) or `friction_hold` (a model file);
+        a scene's options given with a model file, or a model file's with a scene.
+
+    Examples
+    --------
+    >>> import springlab
+    >>> study = springlab.friction_settings("tests/data/gripper.xml", hold_s=60)  # doctest: +SKIP
+    >>> study.hold.bodies[0].creep_velocity_m_s  # doctest: +SKIP
+    0.00835
+    """
+    if not model_files.is_model_file(model):
+        given = [
+            name
+            for name, value in (("bodies", bodies), ("hold_s", hold_s), ("keyframe", keyframe))
+            if value not in (None, (), [])
+        ]
+        if given:
+            raise BadInputError(f"{given[0]} applies to a model file (MODEL.xml), not to the scene {model!r}")
+        return scene_study.friction_settings(
+            str(model), scenarios, tol=tol, integrators=integrators, dts=dts, executor=executor, **parameters
+        )
+    if scenarios or parameters:
+        raise BadInputError(f"scenarios and parameters apply to a scene, not to a model file ({os.fspath(model)})")
+    return friction_hold(
+        model,
+        bodies=bodies,
+        hold_s=DEFAULT_HOLD_S if hold_s is None else hold_s,
+        keyframe=keyframe,
+        tol=DEFAULT_TOL if tol is None else tol,
+        integrators=integrators,
+        dts=dts,
+        executor=executor,
     )

@@ -12,9 +12,11 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 from springlab import display, tables
+from springlab.answer import Answer
 from springlab.files import json_ready
 from springlab.scenes.capabilities.friction import FrictionMeasure, SolverSetting
 
+from . import answers
 from .settings import COST_BASIS, Recommendation, Run, RunFields
 
 if TYPE_CHECKING:
@@ -211,7 +213,7 @@ class CaseStudy:
         if default is not None and default.max_rel_error is not None:
             values = _values_text(self.measures, default.values)
             parts.append(
-                f"at MuJoCo's defaults ({default.integrator}, dt = {default.dt:g} s) its error is"
+                f"at MuJoCo's defaults ({default.integrator}, dt = {answers.written(default.dt, '~s')}) its error is"
                 f" {default.max_rel_error:.2g}{values}."
             )
         if model is not None and model.model_error is not None:
@@ -231,7 +233,7 @@ class CaseStudy:
                 ties = f"; {len(pick.ties)} other settings tie with it in counted work" if pick.ties else ""
                 parts.append(
                     f"Cheapest setting meeting {pick.tolerance:g}: {self.describe(pick.row.settings)} with"
-                    f" {pick.row.integrator} at dt = {pick.row.dt:g} s, error {error_text(pick.error)}{values}"
+                    f" {pick.row.integrator} at dt = {answers.written(pick.row.dt, '~s')}, error {error_text(pick.error)}{values}"
                     f" (verified by a run), {cost}{ties}."
                 )
             else:
@@ -276,7 +278,8 @@ class HeldBody:
     creep_velocity_m_s
         its mean speed over the second half of the time it was held [m/s] (None: the run diverged).
     slip_m
-        the largest distance of its centre of mass from where the hold started [m] (None: diverged).
+        the largest distance of its centre of mass from where the hold started while it was held [m] (None:
+        diverged).
     lost_at_s
         when it first touched none of its holders [s] (None: held throughout).
     """
@@ -325,6 +328,11 @@ class HoldReport:
         settings not swept, and why.
     pick_bodies
         the held bodies through the pick's verification run (empty: no pick).
+    friction_only
+        where the pick changes how stiff the contact is (solref, solimp), the cheapest verified setting that
+        leaves those as they are (None: the pick already does, or there is no pick).
+    friction_only_bodies
+        the held bodies through its verification run.
     """
 
     model: str
@@ -335,6 +343,8 @@ class HoldReport:
     bodies: tuple[HeldBody, ...]
     skipped: tuple[str, ...] = ()
     pick_bodies: tuple[HeldBody, ...] = ()
+    friction_only: Recommendation[SettingRun] | None = None
+    friction_only_bodies: tuple[HeldBody, ...] = ()
 
     def allowed(self) -> str:
         """'1 mm (0.025 of the 40 mm body)': tol in metres and body sizes."""
@@ -374,6 +384,16 @@ class HoldReport:
             )
         elif pick is not None:
             parts.append(pick.text)
+        other = self.friction_only
+        if other is not None and other.row is not None:
+            ratio = other.details.get("work_vs_default")
+            held = "; ".join(f"{b.name!r} {b.state(self.hold_s)}" for b in self.friction_only_bodies)
+            parts.append(
+                f"Without changing how stiff the contact is (solref, solimp): {case.describe(other.row.settings)}"
+                f" with {other.row.integrator} at dt = {other.row.dt:g} s, {ratio:.3g}x the counted work ({held})."
+            )
+        elif other is not None:
+            parts.append(f"Nothing cheaper holds it without changing how stiff the contact is: {other.text}")
         return " ".join(parts)
 
     def creep_spread(self, case: CaseStudy) -> str:
@@ -395,7 +415,7 @@ class HoldReport:
 
     def to_dict(self) -> dict[str, Any]:
         """friction_settings.json's "hold": model, operating_point, hold_s, window_s, tol, allowed_slip_m, bodies,
-        skipped, pick_bodies."""
+        skipped, pick_bodies, friction_only (a pick's shape, or null), friction_only_bodies."""
         return json_ready(
             {
                 "model": self.model,
@@ -407,6 +427,8 @@ class HoldReport:
                 "bodies": [b.to_dict() for b in self.bodies],
                 "skipped": list(self.skipped),
                 "pick_bodies": [b.to_dict() for b in self.pick_bodies],
+                "friction_only": None if self.friction_only is None else _pick_dict(self.friction_only),
+                "friction_only_bodies": [b.to_dict() for b in self.friction_only_bodies],
             }
         )
 
@@ -465,13 +487,66 @@ class FrictionSettings(display.Shown):
         """Runs in the sweep."""
         return sum(len(c.runs) for c in self.cases)
 
-    def answer(self) -> str:
+    def answer_by_case(self) -> str:
         """How much MuJoCo's friction drifts and what it costs to make it stop, one paragraph per case."""
         return "\n".join(self.case_answer(case) for case in self.cases)
 
     def case_answer(self, case: CaseStudy) -> str:
         """One case's answer: a model file's hold in its own words, a scene's case as `CaseStudy.answer`."""
         return case.answer() if self.hold is None else self.hold.answer(case)
+
+    @property
+    def question_answer(self) -> Answer:
+        """The question and its answer: per case, the error at MuJoCo's defaults and the verified cheapest
+        setting, one clause each (a model file's hold: its own words, `HoldReport.answer`)."""
+        say = answers.Quoter()
+        integrator, dt = self.mujoco_default
+        within = f", and which solver setting is the cheapest within {self.tol:g}" if self.tol is not None else ""
+        if self.hold is not None:
+            hold = self.hold
+            question = (
+                f"How fast do the bodies dry friction holds in {hold.model} creep over {answers.written(hold.hold_s, '~s')}"
+                f" at its own settings, and which settings keep the slip within {hold.allowed()}?"
+            )
+            numbers = {
+                f"{b.name}_creep_velocity_m_s": b.creep_velocity_m_s
+                for b in hold.bodies
+                if b.creep_velocity_m_s is not None
+            }
+            return answers.of_words(question, " ".join(hold.answer(case) for case in self.cases), numbers)
+        question = (
+            f"How far from the exact Coulomb answer is MuJoCo's dry friction in {', '.join(c.scenario for c in self.cases)}"
+            f" at its defaults ({integrator}, dt = {answers.written(dt, '~s')}){within}?"
+        )
+        parts = []
+        for case in self.cases:
+            default, pick, name = case.default, case.pick, case.scenario
+            at_default = (
+                "diverged at the defaults"
+                if default is None or default.max_rel_error is None
+                else f"error {say(f'{name}_default_error', default.max_rel_error, spec='.2g')} at the defaults"
+            )
+            if pick is None:
+                parts.append(f"{name}: {at_default}")
+            elif pick.row is not None and pick.found:
+                parts.append(
+                    f"{name}: {at_default}; cheapest within {pick.tolerance:g}: {case.describe(pick.row.settings)} with"
+                    f" {pick.row.integrator} at {say.dt(f'{name}_pick_dt_s', pick.row.dt)}, error"
+                    f" {say(f'{name}_pick_error', pick.error or 0.0, spec='.2g')}"
+                )
+            else:
+                parts.append(f"{name}: {at_default}; no verified setting within {pick.tolerance:g}")
+        return say.answer(question, ". ".join(parts) + ".")
+
+    @property
+    def question(self) -> str:
+        """What the study asks, in words (`question_answer`)."""
+        return self.question_answer.question
+
+    @property
+    def answer(self) -> str:
+        """The answer in words with units (`question_answer`)."""
+        return self.question_answer.answer
 
     def _shown(self) -> display.Summary:
         """The study as a notebook shows it: the picks first (or that none was asked for), then the runs."""
@@ -487,7 +562,7 @@ class FrictionSettings(display.Shown):
             f"{self.scene}: {', '.join(c.scenario for c in self.cases)}",
             verdict,
             ok,
-            self.answer(),
+            self.answer,
             (
                 display.Fact("runs", self.runs),
                 display.Fact("integrators", ", ".join(self.integrators)),
@@ -519,6 +594,7 @@ class FrictionSettings(display.Shown):
         cost_basis."""
         return json_ready(
             {
+                **self.question_answer.to_dict(),
                 "scene": self.scene,
                 "parameters": dict(self.overrides),
                 "tol": self.tol,
@@ -544,9 +620,10 @@ def error_text(value: float | None) -> str:
 
 
 def _values_text(measures: Sequence[FrictionMeasure], values: Mapping[str, float | None]) -> str:
-    """'; creep velocity ... 1.8e-03' for the measures with a value."""
+    """' (stop position -5.34 mm; creep velocity 1.8 mm/s)' for the measures with a value, each in the unit its
+    name ends in (springlab.studies.answers)."""
     shown = [
-        f"{m.label.split(' (')[0].split(' [')[0]} {values[m.quantity]:.3g}"
+        f"{m.label.split(' (')[0].split(' [')[0]} {answers.written(values[m.quantity] or 0.0, answers.unit_of(m.quantity))}"
         for m in measures
         if values.get(m.quantity) is not None and math.isfinite(values[m.quantity] or math.nan)
     ]

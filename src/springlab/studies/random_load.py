@@ -30,6 +30,7 @@ import numpy as np
 from mujoco import rollout as _rollout
 
 from springlab import display, scenes, tables
+from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError
 from springlab.exact import random_vibration as rv
 from springlab.files import json_ready
@@ -37,6 +38,7 @@ from springlab.scenes.base import Scene
 from springlab.scenes.capabilities.random_load import RandomLoadSpec
 from springlab.sim.simulate import check_timing, configured, initial_state, integrator_id, quiet_mujoco
 
+from . import answers
 from .executor import Executor, chunked, resolve
 
 if TYPE_CHECKING:
@@ -242,6 +244,21 @@ class Ensemble(display.Shown):
         return f"How large is {self.description} under the random load, and do {len(self.seeds)} seeded records agree?"
 
     @property
+    def question_answer(self) -> Answer:
+        """The question and `answer`, with the RMS values it quotes (in the response's unit)."""
+        return answers.of_words(
+            self.question,
+            self.answer,
+            {
+                "rms_exact": math.sqrt(self.continuous),
+                "rms_held": math.sqrt(self.held),
+                "rms_integrated": math.sqrt(self.integrated),
+                "rms_pooled": math.sqrt(self.mean_variance),
+                "inside": self.inside,
+            },
+        )
+
+    @property
     def answer(self) -> str:
         """The answer in words, with units."""
         low, high = self.interval.rms_interval()
@@ -286,8 +303,7 @@ class Ensemble(display.Shown):
         low, high = interval.rms_interval()
         return json_ready(
             {
-                "question": self.question,
-                "answer": self.answer,
+                **self.question_answer.to_dict(),
                 "scene": self.scene,
                 "scenario": self.scenario,
                 "quantity": self.quantity,

@@ -35,14 +35,17 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from springlab import display, scenes, tables
+from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError
 from springlab.files import json_ready
 from springlab.runs import compare
 from springlab.runs.run import run_scenario
 from springlab.scenes.base import Scene
+from springlab.scenes.capabilities.refine import RefinableSpec
 from springlab.sim.batch import TIMING_STEPS, time_run
 from springlab.sim.simulate import INTEGRATORS, MAX_STEPS, check_timing, integrator_id
 
+from . import answers
 from .executor import Executor
 from .settings import (
     COST_BASIS,
@@ -216,8 +219,8 @@ class Refinement(display.Shown):
     ----------
     scene, scenario
         names.
-    question, description
-        the measured quantity and the question in words.
+    quantity, description
+        the measured quantity's name and what it is in words (`question`: the study's question).
     size_parameter, size_description
         the parameter that sets the size and what it counts.
     duration
@@ -247,7 +250,7 @@ class Refinement(display.Shown):
 
     scene: str
     scenario: str
-    question: str
+    quantity: str
     description: str
     size_parameter: str
     size_description: str
@@ -262,6 +265,56 @@ class Refinement(display.Shown):
     step_cost_growth: float | None
     recommendation: Recommendation[RefineRun] | None = None
     sweep_wall_time_s: float = 0.0
+
+    @property
+    def question_answer(self) -> Answer:
+        """The question and its answer: the verified pick (or why none) and the discretization's order."""
+        say = answers.Quoter()
+        pick = self.recommendation
+        within = f" within {pick.tolerance:g} (relative) of the continuum's value" if pick is not None else ""
+        question = (
+            f"How large a model ({self.size_parameter}), which integrator and which timestep does {self.description}"
+            f" of {self.scene} / {self.scenario} need{within}, for the least work?"
+        )
+        order = self.discretization_order
+        trend = (
+            f"the discretization error falls as {self.size_parameter}^-{say('discretization_order', order, spec='.2f')}"
+            f" (expected {self.expected_order:g})"
+            if order is not None
+            else "too few sizes for the discretization's order"
+        )
+        if pick is None:
+            front = say("pareto", len(self.pareto), spec="d")
+            return say.answer(
+                question, f"{answers.capital(trend)}; the Pareto front has {front} settings (no tolerance asked)."
+            )
+        tolerance = say("tolerance", pick.tolerance, spec="g")
+        if not pick.found or pick.row is None or pick.dt is None:
+            return say.answer(question, f"No setting meets {tolerance}: {pick.text} {answers.capital(trend)}.")
+        details = pick.details
+        parts = ", ".join(
+            f"{words} {say(key, details[key], spec='.2g')}"
+            for words, key in (("discretization", "discretization_error"), ("integration", "integration_error"))
+            if details.get(key) is not None
+        )
+        return say.answer(
+            question,
+            f"{self.size_parameter} = {say('size', pick.row.size, spec='g')} with {pick.integrator} at"
+            f" {say.dt('dt_s', pick.dt)} is the cheapest setting within {tolerance}: its verification run's error"
+            f" bound is {say('error_bound', pick.error or 0.0, spec='.2g')}"
+            + (f" ({parts})" if parts else "")
+            + f". {answers.capital(trend)}.",
+        )
+
+    @property
+    def question(self) -> str:
+        """What the study asks, in words (`question_answer`)."""
+        return self.question_answer.question
+
+    @property
+    def answer(self) -> str:
+        """The answer in words with units (`question_answer`)."""
+        return self.question_answer.answer
 
     def _shown(self) -> display.Summary:
         """The refinement as a notebook shows it: the recommendation first, the orders, then the sizes."""
@@ -283,7 +336,7 @@ class Refinement(display.Shown):
             ok,
             message,
             (
-                display.Fact("question", self.question),
+                display.Fact("quantity", self.quantity),
                 display.Fact("discretization order", self.discretization_order),
                 display.Fact("expected order", self.expected_order),
                 display.Fact("step cost growth", self.step_cost_growth),
@@ -306,7 +359,7 @@ class Refinement(display.Shown):
         return display.plot(self)
 
     def to_dict(self) -> dict[str, Any]:
-        """refine.json: scene, scenario, question, description, size_parameter, size_description, duration,
+        """refine.json: question, answer, scene, scenario, quantity, description, size_parameter, size_description, duration,
         parameters, runs, sizes, pareto, discretization_order, expected_order, cost_growth, step_cost_growth,
         recommendation, cost_basis, wall_time_basis, sweep_wall_time_s (plain JSON values)."""
         pick = self.recommendation
@@ -314,7 +367,8 @@ class Refinement(display.Shown):
             {
                 "scene": self.scene,
                 "scenario": self.scenario,
-                "question": self.question,
+                **self.question_answer.to_dict(),
+                "quantity": self.quantity,
                 "description": self.description,
                 "size_parameter": self.size_parameter,
                 "size_description": self.size_description,
@@ -356,6 +410,47 @@ def _spec_of(scene: Scene):
             f"{scene.name} has no model size to refine; scenes that have one: {', '.join(refinable_scenes()) or 'none'}"
         )
     return spec
+
+
+def _checked_sizes(scene: Scene, spec: RefinableSpec, sizes: Sequence[int] | None) -> list[int]:
+    """The model sizes to sweep, sorted and distinct (BadInputError for none, or one that is not a whole
+    number within the size parameter's range)."""
+    sizes = list(spec.sizes if sizes is None else sizes)
+    size_parameter = scene.parameters[spec.size]
+    if not sizes:
+        raise BadInputError(f"give at least one {spec.size}")
+    for size in sizes:
+        checked = size_parameter.check(size)
+        if checked != round(checked):
+            raise BadInputError(f"{spec.size} must be whole numbers, got {size!r}")
+    return sorted({int(round(s)) for s in sizes})
+
+
+def _plans(
+    scene: Scene,
+    spec: RefinableSpec,
+    scenario: str,
+    sizes: list[int],
+    integrators: list[str],
+    omega_dt: Sequence[float],
+    duration: float,
+    parameters: dict[str, Any],
+) -> list[tuple[int, float, dict[str, float | None], list[float]]]:
+    """Per size: (size, its fastest mode [rad/s], integrator -> stability limit of w dt [-] (None: none),
+    the timesteps [s] of the grid that fit the run's step budget)."""
+    plans = []
+    for size in sizes:
+        case = scenes.case(scene, scenario, {**parameters, spec.size: size})
+        params, modes = case.params, case.modes()
+        fastest = max(omega for omega, _ in modes)
+        limits: dict[str, float | None] = {}
+        for name in integrators:
+            ratio = min(case.stability_limit(name, omega, zeta) / omega for omega, zeta in modes)
+            limits[name] = ratio if math.isfinite(ratio) else None
+        dts = sorted({_on_grid(_round_sig(f / fastest), params.get(spec.switch_time)) for f in omega_dt}, reverse=True)
+        dts = [dt for dt in dts if duration / dt <= min(MAX_REFINE_STEPS, MAX_STEPS) and dt <= duration / 4]
+        plans.append((size, fastest, limits, dts))
+    return plans
 
 
 def refine(
@@ -418,31 +513,12 @@ def refine(
     integrators = list(integrators)
     for name in integrators:
         integrator_id(name)
-    sizes = list(spec.sizes if sizes is None else sizes)
-    size_parameter = scene_obj.parameters[spec.size]
-    if not sizes:
-        raise BadInputError(f"give at least one {spec.size}")
-    for size in sizes:
-        checked = size_parameter.check(size)
-        if checked != round(checked):
-            raise BadInputError(f"{spec.size} must be whole numbers, got {size!r}")
-    sizes = sorted({int(round(s)) for s in sizes})
+    sizes = _checked_sizes(scene_obj, spec, sizes)
     scenario = scene_obj.scenario(asked.scenario)
     duration = scenario.duration if duration is None else duration
     check_timing(duration / 2, duration)
 
-    plans = []
-    for size in sizes:
-        case = scenes.case(scene_obj, asked.scenario, {**parameters, spec.size: size})
-        params, modes = case.params, case.modes()
-        fastest = max(omega for omega, _ in modes)
-        limits: dict[str, float | None] = {}
-        for name in integrators:
-            ratio = min(case.stability_limit(name, omega, zeta) / omega for omega, zeta in modes)
-            limits[name] = ratio if math.isfinite(ratio) else None
-        dts = sorted({_on_grid(_round_sig(f / fastest), params.get(spec.switch_time)) for f in omega_dt}, reverse=True)
-        dts = [dt for dt in dts if duration / dt <= min(MAX_REFINE_STEPS, MAX_STEPS) and dt <= duration / 4]
-        plans.append((size, fastest, limits, dts))
+    plans = _plans(scene_obj, spec, asked.scenario, sizes, integrators, omega_dt, duration, parameters)
     reference = scene_obj.name if scenes.SCENES.get(scene_obj.name) is scene_obj else scene_obj
     payloads = []
     for size, _, limits, dts in plans:
@@ -471,7 +547,7 @@ def refine(
     return Refinement(
         scene=scene_obj.name,
         scenario=asked.scenario,
-        question=asked.name,
+        quantity=asked.name,
         description=asked.description,
         size_parameter=spec.size,
         size_description=spec.description,

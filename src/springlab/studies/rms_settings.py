@@ -28,12 +28,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from springlab import display, tables
+from springlab.answer import Answer
 from springlab.errors import BadInputError
 from springlab.exact import random_vibration as rv
 from springlab.files import json_ready
 from springlab.scenes.base import Case, Scene
 from springlab.sim.simulate import INTEGRATORS, check_timing, integrator_id
 
+from . import answers
 from .executor import Executor
 from .random_load import declared, records
 from .settings import (
@@ -162,6 +164,15 @@ class RmsSettings(display.Shown):
         )
 
     @property
+    def question_answer(self) -> Answer:
+        """The question and `answer`, with the continuum's RMS and the pick's timestep [s] and bound it quotes."""
+        pick = self.recommendation
+        numbers: dict[str, float] = {"rms_continuum": math.sqrt(self.continuum)}
+        if pick.found and pick.row is not None:
+            numbers |= {"dt_s": pick.row.dt, "seeds": pick.row.seeds, "bound": pick.row.error or math.nan}
+        return answers.of_words(self.question, self.answer, numbers)
+
+    @property
     def answer(self) -> str:
         """The answer in words, with units."""
         rms = math.sqrt(self.continuum)
@@ -211,8 +222,7 @@ class RmsSettings(display.Shown):
         front = {id(r) for r in self.front}
         return json_ready(
             {
-                "question": self.question,
-                "answer": self.answer,
+                **self.question_answer.to_dict(),
                 "scene": self.scene,
                 "scenario": self.scenario,
                 "size_parameter": self.size_parameter,

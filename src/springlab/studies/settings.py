@@ -274,14 +274,16 @@ def beyond(dt: float, limit: float | None) -> bool:
 # -- what a sweep says -------------------------------------------------------------------------
 
 
-def ranked(rows: Iterable[R]) -> list[R]:
-    """The rows in the order every ranking uses: counted cost, then error, then the order given (rows without
-    an error last). Deterministic: nothing in it is measured by a timer."""
+def ranked(rows: Iterable[R], prefer: Callable[[R], float] | None = None) -> list[R]:
+    """The rows in the order every ranking uses: counted cost, then the study's own preference among equal cost
+    (`prefer`, smaller first, e.g. fewer settings changed; None: none), then error, then the order given (rows
+    without an error last). Deterministic: nothing in it is measured by a timer."""
     listed = list(rows)
 
-    def key(index: int) -> tuple[float, float, int]:
+    def key(index: int) -> tuple[float, float, float, int]:
         run = listed[index].run
-        return (run.cost, math.inf if run.error is None else run.error, index)
+        preference = 0.0 if prefer is None else float(prefer(listed[index]))
+        return (run.cost, preference, math.inf if run.error is None else run.error, index)
 
     return [listed[i] for i in sorted(range(len(listed)), key=key)]
 
@@ -458,6 +460,8 @@ def cheapest_verified(
     budget: float | None = None,
     none_text: str = "",
     error_words: str = "error",
+    prefer: Callable[[R], float] | None = None,
+    tie_words: str = "less accurate or listed later in the sweep",
 ) -> Recommendation[R]:
     """The cheapest row within `tolerance` whose verification run passes.
 
@@ -485,6 +489,10 @@ def cheapest_verified(
         the sentence when no candidate passes (default: that no setting of the sweep meets the tolerance).
     error_words
         what the error is, in the sentence ('error', 'error bound (discretization + integration)').
+    prefer
+        the study's order among rows of equal counted cost, before their error (`ranked`; None: error decides).
+    tie_words
+        why the rows that tie in counted work rank after the pick, in the sentence.
 
     Returns
     -------
@@ -492,7 +500,7 @@ def cheapest_verified(
         row None and verified False when no candidate passes.
     """
     most = tolerance if budget is None else budget
-    candidates = ranked(r for r in rows if r.run.valid and r.run.error is not None and r.run.error <= most)
+    candidates = ranked((r for r in rows if r.run.valid and r.run.error is not None and r.run.error <= most), prefer)
     rejected = 0
     for index, row in enumerate(candidates[:max_tries]):
         check = verify(row)
@@ -503,7 +511,7 @@ def cheapest_verified(
         later = candidates[index + 1 :]
         ties = tuple(r.run.setting for r in later if _same(r.run.cost, cost))
         near = tuple(r.run.setting for r in later if not _same(r.run.cost, cost) and r.run.cost <= cost * TIMING_NOISE)
-        text = sentence(row.run, tolerance, check.error, ties, near, rejected, describe, error_words)
+        text = sentence(row.run, tolerance, check.error, ties, near, rejected, describe, error_words, tie_words)
         return Recommendation(
             tolerance=tolerance,
             row=row,
@@ -541,6 +549,7 @@ def sentence(
     rejected: int,
     describe: Callable[[Setting], str] = Setting.describe,
     error_words: str = "error",
+    tie_words: str = "less accurate or listed later in the sweep",
 ) -> str:
     """The recommendation in words, with units: the setting, its steps and counted work, its verified error,
     the settings that tie with it or are within TIMING_NOISE of its counted work, the cheaper ones that failed."""
@@ -550,9 +559,7 @@ def sentence(
         f" {run.cost:.4g} {COST_UNIT} of counted work; its verification run's {error_words} is {verified} (relative)."
     ]
     if ties:
-        parts.append(
-            f"It ties in counted work with {_listed(ties, describe)}, less accurate or listed later in the sweep."
-        )
+        parts.append(f"It ties in counted work with {_listed(ties, describe)}, {tie_words}.")
     if near:
         parts.append(
             f"Within {TIMING_NOISE:g}x of its counted work: {_listed(near, describe)}; measured times could not tell"

@@ -40,11 +40,13 @@ import numpy as np
 from mujoco import batch as _mjbatch
 
 from springlab import display, tables
+from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError
 from springlab.exact.limits import stability_limit
 from springlab.sim.batch import RECORD_SPEC, run_batched
 from springlab.sim.simulate import BAD_WARNINGS, INTEGRATORS, integrator_id, quiet_mujoco
 
+from . import answers
 from .executor import Executor, resolve
 from .extremes import (
     ACCURACY,
@@ -591,6 +593,43 @@ class StabilityReport(display.Shown):
                 return row
         raise KeyError(f"no boundary measured for {integrator!r} at zeta = {zeta:g}")
 
+    @property
+    def question_answer(self) -> Answer:
+        """The question and its answer: the undamped boundaries and the agreement with theory."""
+        say = answers.Quoter()
+        question = (
+            "At which omega*dt does each of MuJoCo's integrators go unstable on the damped oscillator, and does"
+            " the measured boundary agree with the theory?"
+        )
+        undamped = [b for b in self.boundaries if b.zeta == 0.0 and math.isfinite(b.measured_omega_dt)]
+        measured = ", ".join(
+            f"{b.integrator} {say(f'{b.integrator}_omega_dt', b.measured_omega_dt, spec='.4g')}" for b in undamped
+        )
+        never = [b.integrator for b in self.boundaries if b.zeta == 0.0 and not math.isfinite(b.measured_omega_dt)]
+        measured += f"; {', '.join(never)} never goes unstable" if never and measured else ""
+        within = sum(b.within_tolerance for b in self.boundaries)
+        worst = max((b.relative_difference for b in self.boundaries), default=math.nan)
+        head = (
+            f"Undamped (zeta = 0), the measured limits of omega*dt are {measured}" if measured else "No limit measured"
+        )
+        agree = "agree" if self.passed else "do not all agree"
+        return say.answer(
+            question,
+            f"{head}. {say('within_tolerance', within, spec='d')} of {say('boundaries', len(self.boundaries), spec='d')}"
+            f" measured boundaries {agree} with the theory, the largest relative difference"
+            f" {say('largest_relative_difference', worst, spec='.2g')}.",
+        )
+
+    @property
+    def question(self) -> str:
+        """What the report asks, in words (`question_answer`)."""
+        return self.question_answer.question
+
+    @property
+    def answer(self) -> str:
+        """The answer in words (`question_answer`)."""
+        return self.question_answer.answer
+
     def _shown(self) -> display.Summary:
         """The report as a notebook shows it: every boundary within tolerance or not, then the boundaries."""
         worst = max((b.relative_difference for b in self.boundaries), default=None)
@@ -630,6 +669,7 @@ class StabilityReport(display.Shown):
         """stability.json and `springlab stability --json`: {"boundaries", "extremes", "energy", "growth_test",
         "accuracy_threshold", "wall_time_s"} (the energy series and the map are drawn, not stored)."""
         return {
+            **self.question_answer.to_dict(),
             "boundaries": [row.to_dict() for row in self.boundaries],
             "extremes": [row.to_dict() for row in self.extremes],
             "energy": [row.to_dict() for row in self.energy],

@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from springlab import display, scenes, tables
+from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError, UnknownNameError
 from springlab.files import json_ready
 from springlab.runs.compare import Verdict
@@ -34,6 +35,7 @@ from springlab.scenes.base import Case
 from springlab.sim.batch import run_rollout
 from springlab.sim.simulate import check_timing, integrator_id
 
+from . import answers
 from .executor import Executor, chunked, resolve
 
 if TYPE_CHECKING:
@@ -257,6 +259,75 @@ class Sweep(display.Shown):
                     names.append(name)
         return names
 
+    @property
+    def headline(self) -> str | None:
+        """The quantity the sweep answers by default: the scenario's last numeric quantity that every
+        configuration that ran has (its headline result, e.g. max_displacement_m), else the first error column
+        ('<col>_max_rel'); None when nothing ran."""
+        ran = [row for row in self.rows if row.quantities]
+        names = [n for n in self.quantity_names() if all(n in row.quantities for row in ran)]
+        if names:
+            return names[-1]
+        errors = [c for row in self.rows for c in row.errors]
+        return f"{errors[0]}_max_rel" if errors else None
+
+    @property
+    def question_answer(self) -> Answer:
+        """The question and its answer: the counts and the headline's range over the passed configurations."""
+        say = answers.Quoter()
+        varied = ", ".join(a.name for a in self.axes)
+        name = self.headline
+        question = (
+            f"How does {name or 'the result'} of {self.scene} / {self.scenario} vary with {varied} over {self.size}"
+            f" configurations ({self.integrator}, dt = {answers.written(self.dt, '~s')}), and which pass their check?"
+        )
+        counts = (
+            f"{say('passed', self.passed, spec='d')} of {say('configurations', self.size, spec='d')} configurations"
+            f" passed, {say('failed', self.failed, spec='d')} failed, {say('diverged', self.diverged, spec='d')} diverged"
+            + (f", {say('invalid', self.invalid, spec='d')} invalid" if self.invalid else "")
+        )
+        if name is None:
+            return say.answer(question, f"{counts}.")
+        values = self.column(name)
+        shown = np.array([row.passed is True for row in self.rows]) & np.isfinite(values)
+        if not shown.any():
+            return say.answer(question, f"{counts}; no passed configuration has a value of {name}.")
+        where = np.flatnonzero(shown)
+        low, high = int(where[np.argmin(values[shown])]), int(where[np.argmax(values[shown])])
+        unit = "" if name.endswith("_max_rel") else answers.unit_of(name)
+        if answers.written(float(values[low]), unit) == answers.written(float(values[high]), unit):
+            return say.answer(
+                question, f"{counts}. {name} is {say(name, float(values[low]), unit)} in every passed one."
+            )
+        return say.answer(
+            question,
+            f"{counts}. Over the passed ones {name} ranges from {say(f'{name}_min', float(values[low]), unit)}"
+            f" ({self._where(say, low, 'min')}) to {say(f'{name}_max', float(values[high]), unit)}"
+            f" ({self._where(say, high, 'max')}).",
+        )
+
+    @property
+    def question(self) -> str:
+        """What the sweep asks, in words (`question_answer`)."""
+        return self.question_answer.question
+
+    @property
+    def answer(self) -> str:
+        """The answer in words with units (`question_answer`)."""
+        return self.question_answer.answer
+
+    def _where(self, say: answers.Quoter, index: int, end: str) -> str:
+        """'damping = 0.5 N s/m, stiffness = 200 N/m': the varied values of configuration `index`, with units,
+        quoted as '<name>_at_<end>'."""
+        known = scenes.SCENES.get(self.scene)
+        units = {name: p.unit for name, p in known.parameters.items()} if known else {}
+        words = []
+        for name in self.values:
+            value = float(self.values[name][index])
+            unit, after = answers.unit_words(units.get(name, "-"))
+            words.append(f"{name} = {say(f'{name}_at_{end}', value, unit)}{after}")
+        return ", ".join(words)
+
     def column(self, name: str) -> np.ndarray:
         """(n,) values of a varied parameter, a quantity, or an error column ('<col>_max_rel') [their units]."""
         if name in self.values:
@@ -331,6 +402,7 @@ class Sweep(display.Shown):
         """What `springlab sweep --json` prints: setting, axes, counts, timings and every row (plain JSON values)."""
         return json_ready(
             {
+                **self.question_answer.to_dict(),
                 "scene": self.scene,
                 "scenario": self.scenario,
                 "integrator": self.integrator,

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from springlab import display, scenes, tables
+from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError
 from springlab.files import json_ready
 from springlab.runs import compare
@@ -32,9 +33,11 @@ from springlab.scenes.base import Case, Scenario, Scene
 from springlab.sim.batch import TIMING_STEPS, run_batched, time_run
 from springlab.sim.simulate import INTEGRATORS, ORDERS, Setup, check_timing, integrator_id
 
+from . import answers
 from .executor import Executor, chunked
 from .settings import (
     COST_BASIS,
+    COST_UNIT,
     Recommendation,
     Run,
     RunFields,
@@ -177,6 +180,55 @@ class Tradeoff(display.Shown):
     sweep_wall_time_s: float = 0.0
     limits: dict[str, float | None] = dataclasses.field(default_factory=dict)
 
+    @property
+    def question_answer(self) -> Answer:
+        """The question (with a tolerance: the cheapest setting that meets it) and its answer in one or two
+        sentences with units: the verified pick (or why none), the observed orders."""
+        say = answers.Quoter()
+        pick = self.recommendation
+        over = f"{self.scene} / {self.scenario} over {answers.written(self.duration, '~s', '.4g')}"
+        if pick is None:
+            question = (
+                f"How does the error of {over} fall with the timestep, and what does each integrator's accuracy cost?"
+            )
+        else:
+            question = f"Which integrator and timestep simulate {over} within {pick.tolerance:g} (relative) for the least work?"
+        said = [f"{name} {say(f'order_{name}', p, spec='.2f')}" for name, p in self.orders.items() if p is not None]
+        orders = (
+            f"observed orders of accuracy: {', '.join(said)}" if said else "no observed order (too few accurate runs)"
+        )
+        if pick is None:
+            valid = [r for r in self.runs if r.run.valid]
+            if not valid:
+                return say.answer(
+                    question, f"No setting ran valid (each diverged or ran beyond its stability limit); {orders}."
+                )
+            best = min(valid, key=lambda r: r.run.error or 0.0)  # valid: a finite error
+            return say.answer(
+                question,
+                f"{answers.capital(orders)}; the most accurate valid run, {best.integrator} at {say.dt('best_dt_s', best.dt)},"
+                f" has a max relative error of {say('best_max_rel_error', best.run.error or 0.0, spec='.2g')}.",
+            )
+        tolerance = say("tolerance", pick.tolerance, spec="g")
+        if not pick.found or pick.row is None or pick.dt is None:
+            return say.answer(question, f"No setting meets {tolerance}: {pick.text} {answers.capital(orders)}.")
+        return say.answer(
+            question,
+            f"{pick.integrator} at {say.dt('dt_s', pick.dt)} ({say('cost', pick.row.cost, spec='.4g')} {COST_UNIT} of"
+            f" counted work) is the cheapest setting within {tolerance}: its verification run's max relative error is"
+            f" {say('max_rel_error', pick.error or 0.0, spec='.2g')}. {answers.capital(orders)}.",
+        )
+
+    @property
+    def question(self) -> str:
+        """What the trade-off asks, in words (`question_answer`)."""
+        return self.question_answer.question
+
+    @property
+    def answer(self) -> str:
+        """The answer in words with units (`question_answer`)."""
+        return self.question_answer.answer
+
     def _shown(self) -> display.Summary:
         """The trade-off as a notebook shows it: the recommendation first, the orders, then the runs."""
         pick = self.recommendation
@@ -217,6 +269,7 @@ class Tradeoff(display.Shown):
         pick = self.recommendation
         return json_ready(
             {
+                **self.question_answer.to_dict(),
                 "scene": self.scene,
                 "scenario": self.scenario,
                 "duration": self.duration,

@@ -12,6 +12,8 @@ from springlab.errors import ExitCode
 
 NAME = "design"
 HELP = "design study: positioning time over a property sweep, ranked sensitivities"
+#: what to run on a model file instead (this command takes a scene: springlab.cli.main refuses a model file)
+MODEL_FILE_INSTEAD = "'springlab sweep MODEL.xml --vary NAME=LOW:HIGH:N'"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -12,6 +12,8 @@ from springlab.errors import ExitCode
 
 NAME = "fit"
 HELP = "identify a scene's parameters from a recorded signal (CSV)"
+#: what to run on a model file instead (this command takes a scene: springlab.cli.main refuses a model file)
+MODEL_FILE_INSTEAD = "'springlab sweep MODEL.xml --vary NAME=LOW:HIGH:N'"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -9,6 +9,8 @@ from springlab.errors import ExitCode
 
 NAME = "interactive"
 HELP = "a scenario as a web page running MuJoCo in the browser, with sliders"
+#: what to run on a model file instead (this command takes a scene: springlab.cli.main refuses a model file)
+MODEL_FILE_INSTEAD = "'springlab view MODEL.xml'"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

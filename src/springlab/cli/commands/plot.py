@@ -9,6 +9,8 @@ from springlab.errors import ExitCode
 
 NAME = "plot"
 HELP = "plot a scenario: time series, phase plane, family, zeta family"
+#: what to run on a model file instead (this command takes a scene: springlab.cli.main refuses a model file)
+MODEL_FILE_INSTEAD = "'springlab run MODEL.xml --output DIR' (trajectory.csv)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -11,6 +11,8 @@ from springlab.sim.simulate import INTEGRATORS
 
 NAME = "refine"
 HELP = "how much model a question needs: model size x integrator x timestep, cheapest for --tol"
+#: what to run on a model file instead (this command takes a scene: springlab.cli.main refuses a model file)
+MODEL_FILE_INSTEAD = "'springlab audit MODEL.xml' or 'springlab tradeoff MODEL.xml'"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

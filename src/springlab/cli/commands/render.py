@@ -11,6 +11,8 @@ from springlab.cli import text as cli_text
 
 NAME = "render"
 HELP = "film a scenario off-screen: mp4 (H.264) or gif, optionally beside its phase plane"
+#: what to run on a model file instead (this command takes a scene: springlab.cli.main refuses a model file)
+MODEL_FILE_INSTEAD = "'springlab view MODEL.xml' (MuJoCo's viewer) or 'springlab run MODEL.xml --output DIR'"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -6,6 +6,7 @@ import argparse
 from typing import TYPE_CHECKING
 
 from springlab.cli import options
+from springlab.cli import text as cli_text
 from springlab.errors import BadInputError, ExitCode
 from springlab.sim.simulate import INTEGRATORS
 
@@ -14,6 +15,8 @@ if TYPE_CHECKING:
 
 NAME = "rms"
 HELP = "the RMS under a random load: many seeded records against the exact value; --tol: the cheapest accurate setting"
+#: what to run on a model file instead (this command takes a scene: springlab.cli.main refuses a model file)
+MODEL_FILE_INSTEAD = "'springlab frequency MODEL.xml' (its frequency response)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -83,7 +86,7 @@ def main(args: argparse.Namespace) -> int:
     if args.json:
         options.print_json(result.to_dict())
     else:
-        print(result.answer)
+        cli_text.print_answer(result.question_answer)
         print(
             f"  {len(result.seeds)} records x {result.steps} steps ({result.integrator}, dt = {result.dt:g} s) in"
             f" {result.wall_time_s:.1f} s on {result.executor}; the exact answers in {result.exact_time_s:.1f} s"
@@ -103,7 +106,7 @@ def _report_settings(study: RmsSettings, args: argparse.Namespace) -> int:
     if args.json:
         options.print_json(study.to_dict())
     else:
-        print(study.answer)
+        cli_text.print_answer(study.question_answer)
         print(f"  {len(study.rows)} settings, {len(study.front)} on the Pareto front of bound vs counted work")
         if args.output:
             print(f"  wrote {args.output}/rms_settings.json, rms_settings.png")

@@ -1,27 +1,33 @@
-"""`springlab sweep`: a scenario over a grid (or random samples) of parameters, batched."""
+"""`springlab sweep`: a scenario over a grid (or random samples) of parameters, batched; or a model file over its
+MJCF options and named attributes."""
 
 from __future__ import annotations
 
 import argparse
 
-from springlab.cli import options
+from springlab.cli import model_text, options
 from springlab.cli import text as cli_text
-from springlab.errors import ExitCode
+from springlab.errors import BadInputError, ExitCode
+from springlab.sim import model_files
 from springlab.sim.simulate import INTEGRATORS
 
 NAME = "sweep"
-HELP = "run a scenario over a grid (or random samples) of parameters, batched"
+HELP = "run a scenario (or MODEL.xml: its options, named attributes) over a grid of parameters, batched"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    options.scene_arguments(parser)
+    options.scene_arguments(parser, model_files=True)
+    parser.add_argument(
+        "--keyframe", metavar="NAME|INDEX", help="a model file: where every run starts (default: first keyframe)"
+    )
     parser.add_argument(
         "--vary",
         action="append",
         default=[],
         required=True,
         metavar="NAME=LOW:HIGH:N[:log]",
-        help="vary a parameter over N values from LOW to HIGH, SI units (repeatable; :log for log spacing)",
+        help="vary a parameter over N values from LOW to HIGH, SI units (repeatable; :log for log spacing); a model"
+        " file: opt.OPTION or KIND.NAME.ATTRIBUTE[INDEX], e.g. opt.impratio, geom.box.friction, opt.integrator=euler,rk4",
     )
     parser.add_argument("--samples", type=int, metavar="N", help="N random points in the box instead of the full grid")
     parser.add_argument("--seed", type=int, default=0, help="seed of the random points (default 0)")
@@ -42,6 +48,10 @@ def main(args: argparse.Namespace) -> int:
     from springlab.plots import sweep as sweep_plot
     from springlab.studies import sweeps
 
+    if model_files.is_model_file(args.scene):
+        return _model_file(args)
+    if args.keyframe is not None:
+        raise BadInputError(f"--keyframe applies to a model file (MODEL.xml), not to the scene {args.scene!r}")
     options.check_output(args)
     with options.executor(args) as executor:
         result = sweeps.sweep(
@@ -62,4 +72,36 @@ def main(args: argparse.Namespace) -> int:
         options.print_json(result.to_dict())
         return ExitCode.OK
     cli_text.print_sweep(result, args.quantity, args.output)
+    return ExitCode.OK
+
+
+def _model_file(args: argparse.Namespace) -> int:
+    """`sweep MODEL.xml`: its options and named attributes over the grid, each row what `run MODEL.xml` measures."""
+    from springlab.plots import sweep as sweep_plot
+    from springlab.studies.model_sweep import default_quantity, model_sweep
+
+    options.refuse_scene_options(args, "scenario", "set")
+    options.check_output(args)
+    with options.executor(args) as executor:
+        result = model_sweep(
+            args.scene,
+            vary=args.vary,
+            keyframe=args.keyframe,
+            samples=args.samples,
+            seed=args.seed,
+            integrator=args.integrator,
+            dt=args.dt,
+            duration=args.duration,
+            executor=executor,
+        )
+    quantity = args.quantity or default_quantity(result)
+    known = [*result.values, *result.quantity_names()]
+    if quantity not in known:
+        raise BadInputError(f"unknown --quantity {quantity!r}; valid: {', '.join(known)}")
+    if args.output:
+        sweep_plot.write(result, args.output, quantity)
+    if args.json:
+        options.print_json(result.to_dict())
+        return ExitCode.OK
+    model_text.print_model_sweep(result, quantity, args.output)
     return ExitCode.OK

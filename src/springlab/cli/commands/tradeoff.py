@@ -1,13 +1,15 @@
-"""`springlab tradeoff`: error against cost of every integrator and timestep; the cheapest setting for --tol."""
+"""`springlab tradeoff`: error against cost of every integrator and timestep; the cheapest setting for --tol (a scene:
+against its exact solution; a model file: against a converged run of the same model)."""
 
 from __future__ import annotations
 
 import argparse
 
-from springlab.cli import options
+from springlab.cli import model_text, options
 from springlab.cli import text as cli_text
-from springlab.errors import ExitCode
+from springlab.errors import BadInputError, ExitCode
 from springlab.plots import charts
+from springlab.sim import model_files
 from springlab.studies import tradeoff
 
 NAME = "tradeoff"
@@ -15,7 +17,16 @@ HELP = "error vs cost of every integrator and timestep; cheapest setting for --t
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    options.scene_arguments(parser)
+    options.scene_arguments(parser, model_files=True)
+    parser.add_argument(
+        "--keyframe", metavar="NAME|INDEX", help="a model file: where every run starts (default: first keyframe)"
+    )
+    parser.add_argument(
+        "--integrators", metavar="A,B", help="a model file: the integrators to sweep (default: all five)"
+    )
+    parser.add_argument(
+        "--dt", metavar="LIST", help="a model file: the timesteps 'a,b,c' [s] (default: from 4x its own down)"
+    )
     parser.add_argument(
         "--tol", type=float, metavar="TOL", help="recommend the cheapest setting meeting this relative error"
     )
@@ -28,6 +39,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
+    if model_files.is_model_file(args.scene):
+        return _model_file(args)
+    given = [f"--{name}" for name in ("keyframe", "integrators", "dt") if getattr(args, name) is not None]
+    if given:
+        raise BadInputError(f"{given[0]} applies to a model file (MODEL.xml), not to the scene {args.scene!r}")
     options.check_output(args)
     with options.executor(args) as executor:
         result = tradeoff.tradeoff(
@@ -44,5 +60,32 @@ def main(args: argparse.Namespace) -> int:
         options.print_json(result.to_dict())
     else:
         cli_text.print_tradeoff(result, args.output)
+    pick = result.recommendation
+    return ExitCode.FAILED if pick is not None and not pick.found else ExitCode.OK
+
+
+def _model_file(args: argparse.Namespace) -> int:
+    """`tradeoff MODEL.xml`: every integrator and timestep against a converged run of the same model."""
+    from springlab.plots.model_tradeoff import write_model_tradeoff
+    from springlab.studies.model_tradeoff import model_tradeoff
+
+    options.refuse_scene_options(args, "scenario", "set")
+    options.check_output(args)
+    with options.executor(args) as executor:
+        result = model_tradeoff(
+            args.scene,
+            keyframe=args.keyframe,
+            tol=args.tol,
+            duration=args.duration,
+            integrators=options.names(args.integrators),
+            dts=options.numbers("--dt", args.dt) if args.dt else None,
+            executor=executor,
+        )
+    if args.output:
+        write_model_tradeoff(result, args.output)
+    if args.json:
+        options.print_json(result.to_dict())
+    else:
+        model_text.print_model_tradeoff(result, args.output)
     pick = result.recommendation
     return ExitCode.FAILED if pick is not None and not pick.found else ExitCode.OK

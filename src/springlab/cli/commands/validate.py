@@ -11,6 +11,8 @@ from springlab.studies import auto
 
 NAME = "validate"
 HELP = "check every exact scenario against its tolerance"
+#: what to run on a model file instead (this command takes a scene: springlab.cli.main refuses a model file)
+MODEL_FILE_INSTEAD = "'springlab run MODEL.xml' (a record, not validated) or 'springlab audit MODEL.xml'"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -194,8 +194,6 @@ def simulate_moves(
     DivergedError
         a simulation blew up (MuJoCo's warning counters rose).
     """
-    from mujoco import batch as mjbatch  # here: importing the scenes must not load mujoco.batch
-
     params = dict(base)
     model = copy.copy(model)
     model.opt.integrator = mujoco.mjtIntegrator.mjINT_RK4
@@ -204,26 +202,14 @@ def simulate_moves(
     m_c = np.asarray(values["carriage_mass"], float)
     total = m_c + m_m
     stiffness = np.asarray(values["belt_stiffness"], float)
-    damping = belt_damping(values, m_m)
     limit = np.asarray(values["drive_force"], float)
     distance, band = move_distances(params, values), params["positioning_band"]
     dt = timesteps(values, params, omega_dt)
     half_steps, force = move_profiles(params, values, dt)
     move_steps = 2 * half_steps
 
-    with quiet_mujoco():
-        batch = mjbatch.Batch(model, nsim=n, nthread=nthread)
-        batch.body("carriage").mass = m_c[:, None]
-        belt = model.tendon("belt").id
-        batch.expand("tendon_stiffness")[:, belt] = stiffness
-        batch.expand("tendon_damping")[:, belt] = damping
-        batch.actuator("drive").ctrlrange = np.column_stack([-limit, limit])
-        batch.expand("opt.timestep")[:] = dt
-        batch.set_const()
-        # start: belt stretched by `deflection`, centre of mass at rest at 0 (as the scene)
-        stretch0 = params["deflection"]
-        batch.joint("carriage").qpos = (-m_m * stretch0 / total)[:, None]
-        batch.joint("motor").qpos = (m_c * stretch0 / total)[:, None]
+    stretch0 = params["deflection"]
+    batch = _move_batch(model, n, nthread, m_c, m_m, stiffness, belt_damping(values, m_m), limit, dt, stretch0)
     carriage = model.joint("carriage").qposadr[0]
     motor = model.joint("motor").qposadr[0]
 
@@ -277,11 +263,7 @@ def simulate_moves(
         active = active[~certified & (steps[active] * dt[active] <= max_duration)]
 
     # the last exit from the band: the root of the last interval outside (a certified run ends inside)
-    last_exit = np.zeros(n)
-    for i in np.flatnonzero(settled & (exit_step >= 0)):
-        t0 = exit_step[i] * dt[i]
-        y0, y1, v0, v1 = exit_data[i]
-        last_exit[i] = events.band_exit(t0, t0 + dt[i], y0, y1, v0, v1, band)
+    last_exit = _last_exits(settled, exit_step, exit_data, dt, band)
     move_time = move_steps * dt
     settling = np.where(settled, np.maximum(last_exit - move_time, 0.0), np.inf)
     return MoveRuns(
@@ -293,6 +275,51 @@ def simulate_moves(
         steps=steps,
         nthread=int(batch.nthread),
     )
+
+
+def _move_batch(
+    model: mujoco.MjModel,
+    n: int,
+    nthread: int,
+    carriage_mass: np.ndarray,
+    motor_mass: float,
+    stiffness: np.ndarray,
+    damping: np.ndarray,
+    limit: np.ndarray,
+    dt: np.ndarray,
+    stretch0: float,
+) -> Any:
+    """The mujoco.batch.Batch of `simulate_moves`: one simulation per configuration, its carriage mass [kg],
+    belt stiffness [N/m] and damping [N s/m], drive limit [N] and timestep [s], started with the belt
+    stretched by `stretch0` [m] and the centre of mass at rest at 0 (as the scene)."""
+    from mujoco import batch as mjbatch  # here: importing the scenes must not load mujoco.batch
+
+    total = carriage_mass + motor_mass
+    with quiet_mujoco():
+        batch = mjbatch.Batch(model, nsim=n, nthread=nthread)
+        batch.body("carriage").mass = carriage_mass[:, None]
+        belt = model.tendon("belt").id
+        batch.expand("tendon_stiffness")[:, belt] = stiffness
+        batch.expand("tendon_damping")[:, belt] = damping
+        batch.actuator("drive").ctrlrange = np.column_stack([-limit, limit])
+        batch.expand("opt.timestep")[:] = dt
+        batch.set_const()
+        batch.joint("carriage").qpos = (-motor_mass * stretch0 / total)[:, None]
+        batch.joint("motor").qpos = (carriage_mass * stretch0 / total)[:, None]
+    return batch
+
+
+def _last_exits(
+    settled: np.ndarray, exit_step: np.ndarray, exit_data: np.ndarray, dt: np.ndarray, band: float
+) -> np.ndarray:
+    """The time [s] of each settled configuration's last exit from the band: the root of its last step
+    interval outside it (Hermite data in `exit_data`); 0 where it never left or never settled."""
+    last_exit = np.zeros(len(settled))
+    for i in np.flatnonzero(settled & (exit_step >= 0)):
+        t0 = exit_step[i] * dt[i]
+        y0, y1, v0, v1 = exit_data[i]
+        last_exit[i] = events.band_exit(t0, t0 + dt[i], y0, y1, v0, v1, band)
+    return last_exit
 
 
 def estimates(base: Mapping[str, float], values: Mapping[str, np.ndarray], dt: np.ndarray) -> MoveEstimates:
@@ -376,11 +403,11 @@ class PrinterHeadDesign:
             f"{fixed['motor_mass']:.3g} kg, belt {d['properties']['belt_stiffness']:.3g} N/m at zeta = "
             f"{d['properties']['damping_ratio']:.3g}, belt mode {d['natural_frequency_hz']:.0f} Hz, "
             f"{d['properties']['drive_force']:.3g} N) a {fixed['move_distance'] * 1e3:.4g} mm move to "
-            f"+-{fixed['positioning_band'] * 1e6:.3g} um takes {d['positioning_time_s'] * 1e3:.1f} ms: "
+            f"±{fixed['positioning_band'] * 1e6:.3g} µm takes {d['positioning_time_s'] * 1e3:.1f} ms: "
             f"{d['move_time_s'] * 1e3:.1f} ms of bang-bang move (the minimum at this force) and "
             f"{d['settling_time_s'] * 1e3:.1f} ms of settling (estimate {d['estimate_s'] * 1e3:.1f} ms total, "
             f"worst case {d['worst_case_estimate_s'] * 1e3:.1f} ms). Over the {summary['configurations']} "
-            f"configurations it ranges {summary['positioning_time_s']['min'] * 1e3:.1f}-"
+            f"configurations it ranges from {summary['positioning_time_s']['min'] * 1e3:.1f} ms to "
             f"{summary['positioning_time_s']['max'] * 1e3:.0f} ms. Which properties? By elasticity d ln T / d ln p: "
             + ", ".join(f"{p} {e[p]:+.2f}" for p in summary["ranking"])
             + "."

@@ -27,6 +27,7 @@ from collections.abc import Mapping, Sequence
 from types import MappingProxyType
 
 import mujoco
+import numpy as np
 
 from springlab.errors import DivergedError
 from springlab.exact.model_at_point import ModelAtPoint
@@ -46,13 +47,14 @@ from springlab.studies.settings import (
     work_per_evaluation,
 )
 
+from .creep import creep_at
 from .limits import ConstraintFlag, Limit, RunProbe, constraint_flags, stability_limits, watch
 from .options import DEFAULT_PERTURB, DEFAULT_TOL, Options, check_options, resolve_duration
 from .parts import Excitation, Linearity, OwnSetting, PointReport, ReferenceUsed, Timings
 from .results import Audit
 from .ship import Runner, ship
 from .source import Source, load
-from .start import Start, excitation, point_report, start_of
+from .start import REST_FRACTION, Start, excitation, point_report, start_of
 from .sweep import (
     MAX_SAMPLES,
     REFERENCE_FRACTION,
@@ -226,6 +228,9 @@ def _limits(at: ModelAtPoint, start: Start, options: Options, duration: float, r
     flags = tuple(constraint_flags(model, float(model.opt.timestep)))
     seen = watch(model, start.setup, duration)
     point_state = point_report(at, seen, options.settle_s, options.perturb, duration)
+    if not point_state.at_rest:  # what keeps it moving: creep under dry friction, or motion that dies out
+        creep, helps = creep_at(at, duration, REST_FRACTION * options.perturb)
+        point_state = dataclasses.replace(point_state, creep=creep, settling_helps=helps)
     qvel = start.setup.qvel
     start_speed = float(abs(qvel).max(initial=0.0)) if qvel is not None else 0.0
     gravity = float(math.hypot(*model.opt.gravity))
@@ -344,16 +349,18 @@ def _score(
     own_outcome = swept.outcomes[(own_name, own_dt)]
     own_limit = limits.limits[own_name]
     own_steps = round(swept.duration / own_dt)
+    behaviour, growth = _behaviour(at, own_limit, own_dt, own_outcome, limits.probe, run)
     own = OwnSetting(
         integrator=own_name,
         dt=own_dt,
-        stable=not isinstance(own_outcome, DivergedError)
-        and not _blows_up(model, own_limit, own_dt, limits.probe, run),
+        stable=behaviour == "stable",
         error=run_error(at, own_outcome, reference),
         margin=own_limit.margin,
         wall_time_s=per_step[own_name] * own_steps,
         margin_confirmed=None if own_limit.limit_dt_s is None else bool(own_limit.confirmed),
         cost=counted_cost(own_name, own_steps, work),
+        behaviour=behaviour,
+        growth=growth,
     )
     front = tuple(pareto_front(runs))
     if judged.excitation.any_motion:
@@ -363,17 +370,60 @@ def _score(
     return _Scored(tuple(runs), orders, own, front, recommendation)
 
 
-def _blows_up(model: mujoco.MjModel, limit: Limit, own_dt: float, probe: RunProbe, run: Runner) -> bool:
-    """Whether a brute-force run at the model's own timestep blows up: read off the brute force's
-    bracket when the limit came from runs (the own timestep is their first), else run it when the own
-    timestep is at or above a confirmed limit; never from an unconfirmed figure alone."""
+#: past a confirmed limit, a run "grew" when its largest deviation from the operating point reached this many
+#: times its start's ...
+GROWN = 10.0
+#: ... and it "saturates" (rather than "grows") when its second half reaches at most this many times its first
+#: half's largest deviation
+LEVELLED = 2.0
+
+
+def _behaviour(
+    at: ModelAtPoint,
+    limit: Limit,
+    own_dt: float,
+    own_outcome: Trajectory | DivergedError,
+    probe: RunProbe,
+    run: Runner,
+) -> tuple[str, float | None]:
+    """What runs of the own setting show, in one word (parts.BEHAVIOURS), and the growth of its brute-force run.
+
+    Below a confirmed limit (or with none): "stable" unless a run blows up (the brute force's bracket when the
+    limit came from runs). At or past a confirmed limit never "stable": a brute-force run from the audit's start
+    says which of "blows up", "spins", "saturates", "grows" or "bounded" it is (`_shown_by`). An unconfirmed
+    figure alone never decides."""
+    if isinstance(own_outcome, DivergedError):
+        return "blows up", None
     if limit.method == "nonlinear runs":
-        return limit.runs_bounded_dt_s is None or limit.runs_bounded_dt_s < own_dt
+        bounded = limit.runs_bounded_dt_s
+        return ("blows up" if bounded is None or bounded < own_dt else "stable"), None
     confirmed = limit.confirmed_limit_s
     if confirmed is None or own_dt < confirmed:
-        return False
-    outcome = run([Job(model, limit.integrator, own_dt, probe.steps(own_dt), probe.start)])[0]
-    return probe.blew_up(outcome, own_dt)
+        return "stable", None
+    outcome = run([Job(at.model, limit.integrator, own_dt, probe.steps(own_dt), probe.start)])[0]
+    if probe.blew_up(outcome, own_dt) or isinstance(outcome, DivergedError):
+        return "blows up", None
+    return _shown_by(at, outcome)
+
+
+def _shown_by(at: ModelAtPoint, trajectory: Trajectory) -> tuple[str, float]:
+    """A bounded run past a confirmed limit in one word: "spins" (a hinge more than a turn from the point),
+    "saturates" (its deviation from the point grew GROWN-fold and its second half stays within LEVELLED x its
+    first half's), "grows" (grew, still growing) or "bounded" (did not grow GROWN-fold); and the growth [-]."""
+    model, point = at.model, at.point
+    rows = np.unique(np.linspace(0, len(trajectory.time) - 1, min(len(trajectory.time), 2000)).astype(int))
+    deviation = np.zeros((len(rows), model.nv))
+    for k, row in enumerate(rows):
+        mujoco.mj_differentiatePos(model, deviation[k], 1.0, point.qpos, trajectory.qpos[row])
+    size = np.max(np.abs(deviation), axis=1)
+    growth = float(size.max() / max(size[0], 1e-300))
+    hinges = [int(model.jnt_dofadr[j]) for j in range(model.njnt) if model.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE]
+    if hinges and float(np.max(np.abs(deviation[:, hinges]))) > 2 * math.pi:
+        return "spins", growth
+    if growth < GROWN:
+        return "bounded", growth
+    half = len(size) // 2
+    return ("saturates" if size[half:].max() <= LEVELLED * size[:half].max() else "grows"), growth
 
 
 def _order(runs: list[Run], reference_error: float) -> float | None:

@@ -585,20 +585,44 @@ def constraint_flags(model: mujoco.MjModel, dt: float) -> list[ConstraintFlag]:
     timestep that keeps it as written)."""
     rows = []
 
-    def check(kind: str, count: int, solref: np.ndarray, name_of) -> None:
+    def check(kind: str, count: int, solref: np.ndarray, name_of, active=lambda i: True) -> None:
         for i in range(count):
             timeconst = float(solref[i][0])
-            if timeconst > 0 and timeconst < 2 * dt:
+            if timeconst > 0 and timeconst < 2 * dt and active(i):
                 rows.append(ConstraintFlag(f"{kind} {name_of(i)!r}", timeconst, timeconst / 2))
 
     def name(obj):
         return lambda i: obj(i).name or str(i)
 
-    check("geom", model.ngeom, model.geom_solref, name(model.geom))
-    check("joint limit", model.njnt, model.jnt_solref, name(model.joint))
+    # only constraints that can become active: a geom that can touch another, a joint or tendon with a range
+    check("geom", model.ngeom, model.geom_solref, name(model.geom), lambda i: _can_collide(model, i))
+    check("joint limit", model.njnt, model.jnt_solref, name(model.joint), lambda i: bool(model.jnt_limited[i]))
     check("equality", model.neq, model.eq_solref, name(model.eq))
-    check("tendon limit", model.ntendon, model.tendon_solref_lim, name(model.tendon))
+    check(
+        "tendon limit",
+        model.ntendon,
+        model.tendon_solref_lim,
+        name(model.tendon),
+        lambda i: bool(model.tendon_limited[i]),
+    )
     check("contact pair", model.npair, model.pair_solref, name(model.pair))
     if model.opt.enableflags & int(mujoco.mjtEnableBit.mjENBL_OVERRIDE):
         check("option o_solref", 1, model.opt.o_solref[None], lambda i: "override")
     return rows
+
+
+def _can_collide(model: mujoco.MjModel, geom: int) -> bool:
+    """Whether `geom` can ever touch another: contacts are enabled, and its contype/conaffinity bits match those
+    of a geom of another body (or an explicit contact pair names it). A geom with contype = conaffinity = 0, or
+    alone in the model, never makes a contact."""
+    if model.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_CONTACT):
+        return False
+    if any(geom in (int(model.pair_geom1[p]), int(model.pair_geom2[p])) for p in range(model.npair)):
+        return True
+    body = int(model.geom_bodyid[geom])
+    contype, conaffinity = int(model.geom_contype[geom]), int(model.geom_conaffinity[geom])
+    return any(
+        int(model.geom_bodyid[other]) != body
+        and ((contype & int(model.geom_conaffinity[other])) or (int(model.geom_contype[other]) & conaffinity))
+        for other in range(model.ngeom)
+    )

@@ -11,6 +11,12 @@ from typing import Any
 
 from springlab.exact.constraints import ConstraintState
 
+#: what a run of a setting shows, one word each: "stable" (bounded, below any confirmed limit), and past a
+#: confirmed limit "blows up" (MuJoCo flags it or its speed runs away), "spins" (a hinge turns over and keeps
+#: turning), "saturates" (it grows, then stops growing: a nonlinear model's amplitude is bounded), "grows" (still
+#: growing at the run's end) or "bounded" (the run did not grow within its steps, though runs just above the limit do)
+BEHAVIOURS = ("stable", "blows up", "spins", "saturates", "grows", "bounded")
+
 
 @dataclasses.dataclass(frozen=True)
 class OwnSetting:
@@ -37,6 +43,13 @@ class OwnSetting:
     cost
         its counted work [DOF-evaluations] (springlab.studies.settings.counted_cost), what the
         recommendation's cost is compared with.
+    behaviour
+        what a run of it shows, one word (BEHAVIOURS): "stable" below its limit (or with none), else "blows up",
+        "spins", "saturates", "grows" or "bounded" (past a confirmed limit, the run did not grow within its steps).
+        Only "stable" is stable.
+    growth
+        how many times its start's deviation from the operating point the run reached [-] (None: not measured,
+        or it blew up).
     """
 
     integrator: str
@@ -47,10 +60,12 @@ class OwnSetting:
     wall_time_s: float
     margin_confirmed: bool | None = None
     cost: float = math.nan
+    behaviour: str = "stable"
+    growth: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """audit.json's "own_setting": {"integrator", "dt", "stable", "error", "margin", "wall_time_s",
-        "margin_confirmed", "cost"}."""
+        "margin_confirmed", "cost", "behaviour", "growth"}."""
         return dataclasses.asdict(self)
 
 
@@ -119,6 +134,12 @@ class PointReport:
     linear_map
         whether MuJoCo's one-step map is the dynamics (nothing of `along_motion` is active), so the
         limits come from it; otherwise they come from nonlinear runs.
+    creep
+        the bodies dry friction holds (Coulomb margin above 1) that creep at the point
+        (springlab.studies.audit.creep.CreepFinding): MuJoCo's soft-friction model error.
+    settling_helps
+        whether a run from the point moves at most half as much over its second half as over its first, so
+        settling longer would bring it closer to rest (None: not measured).
     """
 
     settle_s: float | None
@@ -127,10 +148,12 @@ class PointReport:
     at_rest: bool
     drift_m: float
     linear_map: bool
+    creep: tuple[Any, ...] = ()
+    settling_helps: bool | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """audit.json's "operating_point_state": {"settle_s", "at_point", "along_motion", "at_rest",
-        "drift_m", "linear_map"}."""
+        "drift_m", "linear_map", "creep", "settling_helps"}."""
         return {
             "settle_s": self.settle_s,
             "at_point": self.at_point.to_dict(),
@@ -138,6 +161,8 @@ class PointReport:
             "at_rest": self.at_rest,
             "drift_m": self.drift_m,
             "linear_map": self.linear_map,
+            "creep": [c.to_dict() for c in self.creep],
+            "settling_helps": self.settling_helps,
         }
 
 

@@ -10,8 +10,10 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 from springlab import display, tables
+from springlab.answer import Answer
 from springlab.exact.linearize import Linearization
 from springlab.sim.simulate import Setup
+from springlab.studies import answers
 from springlab.studies.settings import COST_BASIS, Recommendation, Run
 
 from . import text
@@ -117,6 +119,50 @@ class Audit(display.Shown):
         rest, no motion, broken constraints, an unconverged reference)."""
         return text.message(self)
 
+    @property
+    def question_answer(self) -> Answer:
+        """The question and its answer: the own setting's stability and error, the verified cheapest setting."""
+        say = answers.Quoter()
+        own, pick = self.own, self.recommendation
+        tolerance = f"{self.tol:g}"
+        question = (
+            f"Is {self.model}'s own setting ({own.integrator}, dt = {answers.written(own.dt, '~s')}) stable and within"
+            f" {tolerance} over {answers.written(self.duration, '~s')}, and which setting is the cheapest that is?"
+        )
+        limit = self.stability[own.integrator]
+        if not own.stable:
+            state = "is unstable (a run of it blows up)"
+        elif limit.limit_dt_s is not None and limit.confirmed and own.margin is not None:
+            state = (
+                f"is stable with margin {say('own_margin', own.margin, spec='.3g')}x (its limit"
+                f" {say.dt('limit_dt_s', limit.limit_dt_s)})"
+            )
+        else:
+            state = "is stable (its run stays bounded)"
+        error = (
+            "not compared"
+            if own.error is None
+            else f"{say('own_error', own.error, spec='.2g')}, {'within' if own.error <= self.tol else 'outside'} {tolerance}"
+        )
+        head = f"Its own setting {state}; its error is {error}."
+        if not pick.found or pick.dt is None:
+            return say.answer(question, f"{head} No verified setting meets {tolerance}.")
+        return say.answer(
+            question,
+            f"{head} The cheapest verified setting within {tolerance} is {pick.integrator} at"
+            f" {say.dt('dt_s', pick.dt)}, error {say('error', pick.error or 0.0, spec='.2g')}.",
+        )
+
+    @property
+    def question(self) -> str:
+        """What the audit asks, in words (`question_answer`)."""
+        return self.question_answer.question
+
+    @property
+    def answer(self) -> str:
+        """The answer in words with units (`question_answer`)."""
+        return self.question_answer.answer
+
     def _shown(self) -> display.Summary:
         """The audit as a notebook shows it: whether the model's own setting meets tol, then the numbers."""
         own, pick = self.own, self.recommendation
@@ -158,6 +204,7 @@ class Audit(display.Shown):
         own setting, sweep and recommendation, plus linearity, orders, pareto, reference, constraints and timings."""
         fastest = self.linear.fastest
         return {
+            **self.question_answer.to_dict(),
             "model": self.model,
             "operating_point": self.linear.point.to_dict(),
             "operating_point_state": self.point_state.to_dict(),

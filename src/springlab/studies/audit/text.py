@@ -95,14 +95,12 @@ def point_lines(audit: AuditFacts) -> list[str]:
     where = audit.linear.point.label
     lines = [f"at {where}: {state.at_point.describe()}; along the motion: {state.along_motion.describe()}"]
     if not state.at_rest:
-        advice = (
-            "settling longer may bring it to rest" if state.settle_s else "--settle SECONDS lets it come to rest first"
-        )
         lines.append(
             f"warning: the operating point is not at rest (it drifts {state.drift_m:.2g} m or rad over"
             f" {audit.duration:g} s, more than --perturb {audit.perturb:g}): the modes are those of the motion"
-            f" through it, not of an equilibrium; {advice}"
+            f" through it, not of an equilibrium{settling_advice(audit)}"
         )
+        lines += creep_lines(audit)
     if not state.linear_map:
         lines.append(
             "constraints, contacts or dry friction are active, so the linear map is not the dynamics:"
@@ -115,6 +113,45 @@ def point_lines(audit: AuditFacts) -> list[str]:
             " are measured by runs"
         )
     return lines
+
+
+def settling_advice(audit: AuditFacts) -> str:
+    """'; settling longer may bring it to rest (...)' only where a run from the point shows its motion dying out."""
+    state = audit.point_state
+    if state.creep:
+        return "; settling longer does not bring it to rest: it creeps (below)"
+    if state.settling_helps is None:
+        return ""
+    if not state.settling_helps:
+        return (
+            f"; settling longer does not help: a {audit.duration:g} s run from it moves as much over its second half"
+            " as over its first"
+        )
+    how = "settling longer" if state.settle_s else "--settle SECONDS"
+    return f"; {how} may bring it to rest (a {audit.duration:g} s run from it moves less than half as much over its second half)"
+
+
+def creep_lines(audit: AuditFacts) -> list[str]:
+    """One line per creeping body: its speed, its Coulomb margin, that it is MuJoCo's model error, what to run."""
+    lines = []
+    for finding in audit.point_state.creep:
+        lost = f"; it leaves its grip at t = {finding.lost_at_s:.3g} s" if finding.lost_at_s is not None else ""
+        lines.append(
+            f"friction creep: {finding.body!r} slides at {_speed(finding.speed_m_s)} under dry friction though Coulomb"
+            f" friction holds it (margin {finding.coulomb_margin:.3g}x){lost}. That is MuJoCo's soft-friction model"
+            " error: the integrator and timestep do not remove it; `springlab friction-settings"
+            f" {_model_argument(audit.model)}` measures it and finds the settings that stop it"
+        )
+    return lines
+
+
+def _speed(value: float) -> str:
+    return f"{value * 1e3:.3g} mm/s" if abs(value) >= 1e-4 else f"{value * 1e6:.3g} um/s"
+
+
+def _model_argument(model: str) -> str:
+    """The model as friction-settings takes it: the path of a model file, else MODEL.xml."""
+    return model if model.lower().endswith((".xml", ".urdf", ".mjcf")) else "MODEL.xml"
 
 
 def own_line(audit: AuditFacts) -> str:
@@ -136,7 +173,15 @@ def own_stability(audit: AuditFacts) -> str:
     how = f"{limit.method}, {'confirmed by runs' if limit.confirmed else 'UNCONFIRMED'}"
     if not own.stable:
         confirmed = f" (limit {figure:.3g} s, {how})" if figure is not None and limit.confirmed else ""
-        return f"is UNSTABLE: a run of it blows up{confirmed}"
+        shown = {
+            "blows up": "blows up",
+            "spins": "spins (a hinge turns over and keeps turning)",
+            "saturates": f"saturates (it grows {own.growth or 0:.3g}-fold from its start, then stops growing)",
+            "grows": f"grows ({own.growth or 0:.3g}-fold from its start, still growing at its end)",
+            "bounded": "stays bounded over its steps, though runs just above the limit grow",
+        }[own.behaviour]
+        past = f", {own.dt / figure:.3g}x its limit" if figure is not None and limit.confirmed else ""
+        return f"is UNSTABLE{past}: a run of it {shown}{confirmed}"
     if figure is None:
         bounded = limit.runs_bounded_dt_s
         text = "has no stability limit up to the duration"
@@ -172,9 +217,15 @@ def recommendation_lines(audit: AuditFacts) -> list[str]:
     if pick.integrator is None or pick.dt is None or pick.error is None or pick.cost is None:
         return [pick.text]
     ratio = f" at {pick.cost / own.cost:.2g}x the counted work of yours" if own.cost > 0 else ""
+    verified = "verified by a run"
+    if audit.point_state.creep:
+        verified += (
+            ", against a converged run of the same soft-friction model, which creeps just as much: this error does"
+            " not see the creep, and this setting does not stop it"
+        )
     return [
         f"cheapest meeting tol {audit.tol:g}: {pick.integrator} at {pick.dt * 1e3:.3g} ms, error"
-        f" {pick.error:.2g}{ratio} (verified by a run)"
+        f" {pick.error:.2g}{ratio} ({verified})"
     ]
 
 

@@ -38,8 +38,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from springlab import display, files, tables
+from springlab.answer import Answer
 from springlab.errors import BadInputError
 from springlab.scenes.base import Scene
+from springlab.studies import answers
 from springlab.studies.executor import Executor, chunked, resolve
 
 from . import moves
@@ -322,11 +324,23 @@ class SobolStudy(display.Shown):
         return float(sum(self.indices["S1"].values()))
 
     @property
+    def question(self) -> str:
+        """What the Sobol study asks, in words."""
+        return f"Which properties drive the variance of the {self.merit}, alone and through their interactions?"
+
+    @property
+    def question_answer(self) -> Answer:
+        """The question and `answer`, with the first-order and total indices it quotes [-]."""
+        s1, st = self.indices["S1"], self.indices["ST"]
+        numbers = {f"S1_{n}": s1[n] for n in self.ranking} | {f"ST_{n}": st[n] for n in self.ranking}
+        return answers.of_words(self.question, self.answer, {**numbers, "first_order_sum": self.first_order_sum})
+
+    @property
     def answer(self) -> str:
         """Which properties matter, in words, with the study's numbers."""
         s1, st, conf = self.indices["S1"], self.indices["ST"], self.indices["ST_conf"]
         alone = ", ".join(f"{n} {s1[n]:.2f}" for n in self.ranking)
-        total = ", ".join(f"{n} {st[n]:.2f}+-{conf[n]:.2f}" for n in self.ranking)
+        total = ", ".join(f"{n} {st[n]:.2f} ± {conf[n]:.2f}" for n in self.ranking)
         inter = self.interactions
         through = [n for n in self.ranking if inter[n] > max(0.05, self.indices["ST_conf"][n])]
         elastic = self.elasticity_ranking
@@ -378,6 +392,7 @@ class SobolStudy(display.Shown):
         runs (docs/sweeps.md), and more; JSON-ready (inf and nan as None)."""
         return files.json_ready(
             {
+                **self.question_answer.to_dict(),
                 "parameters": {
                     n: {"unit": self.units[n], "range": list(self.ranges[n]), "log_uniform": True} for n in self.names
                 },

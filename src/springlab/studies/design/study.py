@@ -44,9 +44,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from springlab import display, files, tables
+from springlab.answer import Answer
 from springlab.errors import BadInputError
 from springlab.scenes.base import Scene
 from springlab.scenes.capabilities.design import DesignSpec
+from springlab.studies import answers
 from springlab.studies.executor import Executor
 
 from . import moves
@@ -342,7 +344,27 @@ class Study(display.Shown):
 
     def to_dict(self) -> dict[str, Any]:
         """What `springlab design --json` prints and design.json holds (JSON-ready: inf and nan as None)."""
-        return files.json_ready(self._facts())
+        return files.json_ready({**self.question_answer.to_dict(), **self._facts()})
+
+    @property
+    def question(self) -> str:
+        """The design question the scene declares (`DesignSpec.question`)."""
+        return self.design.question
+
+    @property
+    def question_answer(self) -> Answer:
+        """The design question and the scene's answer (`answer`), with the positioning times it quotes [s]."""
+        facts = self._facts()
+        times = facts["positioning_time_s"]
+        return answers.of_words(
+            self.question,
+            self.answer,
+            {
+                "default_positioning_time_s": facts["default"]["positioning_time_s"],
+                "positioning_time_s_min": times["min"],
+                "positioning_time_s_max": times["max"],
+            },
+        )
 
     def _facts(self) -> dict[str, Any]:
         """to_dict's entries before JSON (an unsettled time still inf), for the answer's words."""

@@ -212,8 +212,43 @@ def load(
             )
         rows = time.size
         notes.extend([how] if how else [])
+    time, values = _in_units(
+        time, values, scale, time_scale, columns.units_row, (t_index, y_index), header, chosen, notes
+    )
+    time, values, skipped = _finite_samples(time, values, column, source, notes)
+    record = Record(
+        time=time,
+        values=values,
+        joint=joint,
+        signal=signal,
+        column=column,
+        origin=float(time[0]),
+        rows=rows,
+        skipped_nan=skipped,
+        notes=tuple(notes),
+    )
+    if start is not None:
+        return _cut(record, start, source, detected=False)
+    return record
+
+
+def _in_units(
+    time: np.ndarray,
+    values: np.ndarray,
+    scale: float | None,
+    time_scale: float | None,
+    units: Sequence[str] | None,
+    indices: tuple[int, int],
+    header: Sequence[str],
+    chosen: str,
+    notes: list[str],
+) -> tuple[np.ndarray, np.ndarray]:
+    """(time [s], signal [SI]) of `load`'s two columns: an explicit factor, else what the column's name or
+    the units row states, else SI; what was applied or doubted is appended to `notes`."""
+    t_index, y_index = indices
+    t_column, column = header[t_index], header[y_index]
+    signal = chosen.rsplit("_", 1)[1]
     # units: an explicit factor, else what the column's name or the units row states, else SI
-    units = columns.units_row
     t_factor, t_note, t_warning = reader.resolve(
         time_scale,
         reader.stated(t_column, units[t_index] if units else None, "time", "the time"),
@@ -233,6 +268,14 @@ def load(
         time = time * t_factor
     if y_factor != 1.0:
         values = values * y_factor
+    return time, values
+
+
+def _finite_samples(
+    time: np.ndarray, values: np.ndarray, column: str, source: str, notes: list[str]
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """(time [s], values, rows skipped) of `load`'s samples: no infinite value, rows with a missing or NaN
+    value dropped (noted in `notes`), enough left, time strictly increasing (uneven sampling noted)."""
     if not (np.all(np.isfinite(time[~np.isnan(time)])) and np.all(np.isfinite(values[~np.isnan(values)]))):
         raise BadInputError(f"{source} holds an infinite value; valid: finite numbers")
     keep = np.isfinite(time) & np.isfinite(values)
@@ -252,20 +295,7 @@ def load(
         notes.append(
             f"uneven sampling: intervals {steps.min():.3g} to {steps.max():.3g} s (model interpolated at each sample)"
         )
-    record = Record(
-        time=time,
-        values=values,
-        joint=joint,
-        signal=signal,
-        column=column,
-        origin=float(time[0]),
-        rows=rows,
-        skipped_nan=skipped,
-        notes=tuple(notes),
-    )
-    if start is not None:
-        return _cut(record, start, source, detected=False)
-    return record
+    return time, values, skipped
 
 
 def _check_factor(value: float | None, option: str, meaning: str, *, positive: bool) -> None:

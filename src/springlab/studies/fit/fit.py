@@ -25,7 +25,7 @@ import numpy as np
 from springlab import progress, scenes
 from springlab.errors import BadInputError, ParameterError, SpringlabError
 from springlab.runs.run import Result, run_scenario
-from springlab.scenes.base import Scenario
+from springlab.scenes.base import Scenario, Scene
 from springlab.studies.executor import Executor
 from springlab.studies.fit import data as fit_data
 from springlab.studies.fit import reductions
@@ -119,28 +119,11 @@ def fit(
     starts = fit_starts.check_count(starts)
     if executor is not None and (workers is not None or scheduler is not None):
         raise BadInputError("give an executor or workers/scheduler, not both")
-    if scene not in scenes.SCENES:
-        raise not_fittable(scene)
-    scene_obj = scenes.get(scene)
-    how = model_of(scene_obj)
+    scene_obj, how = _fitted_scene(scene)
     scenario = how.scenarios[0] if scenario is None else scenario
-    if scenario not in how.scenarios:
-        valid = ", ".join(how.scenarios)
-        if scenario not in scene_obj.scenarios:
-            raise BadInputError(f"unknown scenario {scenario!r} of {scene}; a fit takes one of: {valid}")
-        raise BadInputError(f"{scene} {scenario} cannot be fitted from a record; a fit takes one of: {valid}")
-    chosen = scene_obj.scenario(scenario)
-    nuisance = {}
-    for name, value in parameters.items():
-        if name in ("x0", "v0", "offset", "delay") and name not in scene_obj.parameters:
-            try:
-                nuisance[name] = float(value)
-            except (TypeError, ValueError):
-                nuisance[name] = math.nan
-            if not math.isfinite(nuisance[name]):
-                raise ParameterError(f"{name} must be a finite number, got {value!r}")
-    scene_values = {k: v for k, v in parameters.items() if k not in nuisance}
-    base = scene_obj.resolve(chosen, scene_values)
+    chosen = _fitted_scenario(scene_obj, how, scenario)
+    nuisance = _nuisance(scene_obj, parameters)
+    base = scene_obj.resolve(chosen, {k: v for k, v in parameters.items() if k not in nuisance})
     # a fitted delay models the held part before a release itself: keep it in the record
     wants_delay = any("delay" in str(item) for item in (free or ()))
     record = fit_data.load(
@@ -155,25 +138,68 @@ def fit(
     )
     free_given = bool(free)
     free = _free_names(how, free, degree, record)
-    force_name = how.step_force(scenario)
-    forced = force_name is not None and base.get(force_name, 0.0) != 0.0
-    force = base.get(force_name, 0.0) if force_name is not None and forced else 0.0
-    how.check_free(free, nuisance, base, forced, record.signal)
-    fit_starts.check_spreadable(free, starts)
-    if len(free) + 2 > record.time.size:
-        raise BadInputError(
-            f"{record.time.size} samples cannot fit {len(free)} parameters; a fit needs at least {len(free) + 2}"
-        )
+    forced, force = _step_force(how, scenario, base)
+    _check_free(how, free, nuisance, base, forced, record, starts)
     modal = how.modal(free)
     fixed = dict(nuisance) | {k: base[k] for k in ("x0", "v0") if k in parameters and k in base}
     # a held start is dropped only when the data show it beyond their noise (springlab.studies.fit.release)
     record, release = fit_release.decide(how, record, base, fixed, free, force, given=start, delay=wants_delay)
     if not isinstance(how, PolynomialModel):
-        # an initial state neither fitted nor given: the first sample, at rest
-        if "x0" not in free and "x0" not in fixed:
-            fixed["x0"] = float(record.values[0]) if record.signal == "pos" else how.equilibrium(base)
-        if "v0" not in free and "v0" not in fixed:
-            fixed["v0"] = 0.0
+        fixed |= _initial_state(how, record, base, free, fixed)
+    return _solved(
+        how,
+        chosen,
+        base,
+        record,
+        free,
+        fixed,
+        modal,
+        force,
+        starts=starts,
+        executor=executor,
+        workers=workers,
+        scheduler=scheduler,
+        choose_degree=isinstance(how, PolynomialModel) and not free_given and degree is None,
+        run_scene=run_scene,
+        release=release,
+        show_progress=show_progress,
+    )
+
+
+def _initial_state(
+    how: FitModel, record: fit_data.Record, base: dict[str, float], free: list[str], fixed: dict[str, float]
+) -> dict[str, float]:
+    """An initial state neither fitted nor given: x0 [m] the first sample (a position record; else the
+    equilibrium), v0 [m/s] at rest."""
+    state = {}
+    if "x0" not in free and "x0" not in fixed:
+        state["x0"] = float(record.values[0]) if record.signal == "pos" else how.equilibrium(base)
+    if "v0" not in free and "v0" not in fixed:
+        state["v0"] = 0.0
+    return state
+
+
+def _solved(
+    how: FitModel,
+    chosen: Scenario,
+    base: dict[str, float],
+    record: fit_data.Record,
+    free: list[str],
+    fixed: dict[str, float],
+    modal: bool,
+    force: float,
+    *,
+    starts: int,
+    executor: Executor | None,
+    workers: int | None,
+    scheduler: str | None,
+    choose_degree: bool,
+    run_scene: bool,
+    release: fit_release.Release,
+    show_progress: bool | None,
+) -> FitResult:
+    """`fit`'s optimization (its starts on `executor`, or an own one of `workers`/`scheduler` for several),
+    the polynomial degree where it is chosen, then the FitResult."""
     # a long record's fit takes seconds: its stages on a terminal (a short one's would only flicker)
     long = record.time.size > reductions.BLOCK
     with progress.bar(
@@ -184,23 +210,104 @@ def fit(
                 problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force, starts, own)
         else:
             problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force, starts, executor)
-        if isinstance(how, PolynomialModel) and not free_given and degree is None:
-            # the degree is chosen: drop the highest coefficient while its 95 % interval contains 0
-            result = _finish(problem, solved, None, run_scene=False)
-            while len(free) > 1:
-                low, high = result.estimates[free[-1]]["ci95"]
-                if not low <= 0.0 <= high:
-                    break
-                note = f"degree chosen: {free[-1]}'s 95 % interval [{low:.3g}, {high:.3g}] contains 0"
-                record = dataclasses.replace(record, notes=(*record.notes, note))
-                free = free[:-1]
-                problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force)
-                result = _finish(problem, solved, None, run_scene=False)
+        if choose_degree:
+            assert isinstance(how, PolynomialModel), "only a polynomial fit chooses its degree"
+            problem, solved, runs = _chosen_degree(
+                how, chosen, base, record, free, fixed, modal, force, problem, solved, runs
+            )
         bar.update(1)
         bar.set_description("fitting: intervals, cross-check, scene run")
         result = _finish(problem, solved, runs, run_scene, release)
         bar.update(1)
     return result
+
+
+def _fitted_scene(scene: str) -> tuple[Scene, FitModel]:
+    """The scene named `scene` and how it is fitted (BadInputError for one that declares no fit)."""
+    if scene not in scenes.SCENES:
+        raise not_fittable(scene)
+    scene_obj = scenes.get(scene)
+    return scene_obj, model_of(scene_obj)
+
+
+def _step_force(how: FitModel, scenario: str, base: dict[str, float]) -> tuple[bool, float]:
+    """(whether the scenario applies a step force, that force [N] or 0)."""
+    force_name = how.step_force(scenario)
+    forced = force_name is not None and base.get(force_name, 0.0) != 0.0
+    force = base.get(force_name, 0.0) if force_name is not None and forced else 0.0
+    return forced, force
+
+
+def _check_free(
+    how: FitModel,
+    free: list[str],
+    nuisance: dict[str, float],
+    base: dict[str, float],
+    forced: bool,
+    record: fit_data.Record,
+    starts: int,
+) -> None:
+    """BadInputError unless the record can identify `free` (the model's own rules, the starts' spread, and
+    at least two samples more than free names)."""
+    how.check_free(free, nuisance, base, forced, record.signal)
+    fit_starts.check_spreadable(free, starts)
+    if len(free) + 2 > record.time.size:
+        raise BadInputError(
+            f"{record.time.size} samples cannot fit {len(free)} parameters; a fit needs at least {len(free) + 2}"
+        )
+
+
+def _fitted_scenario(scene: Scene, how: FitModel, scenario: str) -> Scenario:
+    """The scenario `fit` identifies: one the scene's fit declares (BadInputError naming them otherwise)."""
+    if scenario not in how.scenarios:
+        valid = ", ".join(how.scenarios)
+        if scenario not in scene.scenarios:
+            raise BadInputError(f"unknown scenario {scenario!r} of {scene.name}; a fit takes one of: {valid}")
+        raise BadInputError(f"{scene.name} {scenario} cannot be fitted from a record; a fit takes one of: {valid}")
+    return scene.scenario(scenario)
+
+
+def _nuisance(scene: Scene, parameters: Mapping[str, Any]) -> dict[str, float]:
+    """The fixed values among `parameters` that are not the scene's: x0 [m], v0 [m/s], offset [signal unit],
+    delay [s] (ParameterError for a value that is not a finite number)."""
+    nuisance = {}
+    for name, value in parameters.items():
+        if name in ("x0", "v0", "offset", "delay") and name not in scene.parameters:
+            try:
+                nuisance[name] = float(value)
+            except (TypeError, ValueError):
+                nuisance[name] = math.nan
+            if not math.isfinite(nuisance[name]):
+                raise ParameterError(f"{name} must be a finite number, got {value!r}")
+    return nuisance
+
+
+def _chosen_degree(
+    how: PolynomialModel,
+    chosen: Scenario,
+    base: dict[str, float],
+    record: fit_data.Record,
+    free: list[str],
+    fixed: dict[str, float],
+    modal: bool,
+    force: float,
+    problem: Problem,
+    solved: dict[str, Any],
+    runs: dict[str, Any] | None,
+) -> tuple[Problem, dict[str, Any], dict[str, Any] | None]:
+    """A polynomial fit whose degree is chosen: drop the highest coefficient while its 95 % interval contains
+    0 (a note on the record says so); the (problem, solved, runs) of the degree kept."""
+    result = _finish(problem, solved, None, run_scene=False)
+    while len(free) > 1:
+        low, high = result.estimates[free[-1]]["ci95"]
+        if not low <= 0.0 <= high:
+            break
+        note = f"degree chosen: {free[-1]}'s 95 % interval [{low:.3g}, {high:.3g}] contains 0"
+        record = dataclasses.replace(record, notes=(*record.notes, note))
+        free = free[:-1]
+        problem, solved, runs = _identify(how, chosen, base, record, free, fixed, modal, force)
+        result = _finish(problem, solved, None, run_scene=False)
+    return problem, solved, runs
 
 
 def _identify(

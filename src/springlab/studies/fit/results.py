@@ -18,8 +18,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from springlab import display, files, tables
+from springlab.answer import Answer
 from springlab.exact import analytic
 from springlab.runs import compare
+from springlab.studies import answers
 
 from . import reductions
 from .data import Record
@@ -145,6 +147,35 @@ class FitResult(display.Shown):
         """The one-line answer (see `verdict`)."""
         return verdict(self)
 
+    @property
+    def question(self) -> str:
+        """What the fit asks, in words: which values of the free parameters reproduce the record."""
+        record = self.record
+        return (
+            f"Which {', '.join(self.free)} of {self.scene} / {self.scenario} reproduce the record {record.column}"
+            f" ({record.time.size} samples from {record.time[0]:.4g} s to {record.time[-1]:.4g} s)?"
+        )
+
+    @property
+    def answer(self) -> str:
+        """The answer in words with units: the estimates with their 95% intervals, the residual (`verdict`)."""
+        return self.verdict
+
+    @property
+    def question_answer(self) -> Answer:
+        """The question and `answer` (the verdict), with the estimates and the residual it quotes (SI)."""
+        quoted = {**self.estimates, **self.derived}
+        shown = ["omega_n_rad_s" if "omega_n_rad_s" in self.derived else "omega_n"]
+        shown += ["damping_ratio" if "damping_ratio" in self.derived else "zeta"]
+        shown += [n for n in self.free if n not in ("omega_n", "zeta", "x0", "v0", "offset", "delay")]
+        numbers = {n: float(quoted[n]["value"]) for n in shown if n in quoted and quoted[n].get("value") is not None}
+        if self.kind == "polynomial":  # its verdict quotes the polynomial's coefficients instead
+            numbers = {n: float(q["value"]) for n, q in self.derived.items() if q.get("value") is not None}
+        numbers["residual_rms"] = self.residual_rms
+        if self.amplitude > 0:
+            numbers["residual_share_of_amplitude"] = self.residual_rms / self.amplitude
+        return answers.of_words(self.question, self.answer, numbers)
+
     def _shown(self) -> display.Summary:
         """The fit as a notebook shows it: converged or not with the one-line answer, then the estimates."""
         rows = [
@@ -184,6 +215,7 @@ class FitResult(display.Shown):
         r = self.record
         return files.json_ready(
             {
+                **self.question_answer.to_dict(),
                 "scene": self.scene,
                 "scenario": self.scenario,
                 "signal": r.name,

@@ -11,7 +11,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from springlab import display, tables
+from springlab.answer import Answer
 from springlab.exact.harmonic_balance import Duffing
+from springlab.studies import answers
 
 if TYPE_CHECKING:
     import pandas
@@ -203,6 +205,9 @@ class FrequencyResponse(display.Shown):
     answers, answer_lines
         what the response means for the scene's question (`FrequencySpec.interpret`: named values, SI, and
         their verdict lines), e.g. the single-mass car's isolation frequency; empty for a model file.
+    warnings
+        what the linearization cannot say at this operating point (springlab.studies.frequency.caveats: not at
+        rest, contacts, dry friction, constraints; valid only for small motions keeping the contact state).
     """
 
     source: str
@@ -232,6 +237,7 @@ class FrequencyResponse(display.Shown):
 
     answers: Mapping[str, Any] = dataclasses.field(default_factory=dict)
     answer_lines: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
 
     @property
     def amplitude_spread(self) -> np.ndarray | None:
@@ -314,6 +320,55 @@ class FrequencyResponse(display.Shown):
             "phase_error_rad": self.phase_error_rad,
             "hold_error": self.hold_error,
         }
+
+    @property
+    def question_answer(self) -> Answer:
+        """The question and its answer: the band the setting reproduces, the resonances, the cheapest setting."""
+        say = answers.Quoter()
+        lo, hi = self.band_hz
+        setting = f"{self.integrator} at dt = {answers.written(self.dt, '~s')}"
+        question = (
+            f"What is the frequency response of {self.description} ({self.input} -> {self.response}) from"
+            f" {answers.written(lo, 'Hz', '.4g')} to {answers.written(hi, 'Hz', '.4g')}, and does {setting} reproduce"
+            f" it within {self.tol:g}?"
+        )
+        low = say("band_low_hz", lo, "Hz", ".4g")
+        setting = f"{self.integrator} at {say.dt('dt_s', self.dt)}"
+        if self.within_tol_hz is None:
+            head = f"{setting} misses {self.tol:g} already at {low}"
+        else:
+            word = "the whole band" if self.covers_band else "not the whole band"
+            head = (
+                f"{setting} reproduces it within {self.tol:g} from {low} to"
+                f" {say('within_tol_high_hz', self.within_tol_hz[1], 'Hz', '.4g')} ({word})"
+            )
+        peaks = [
+            say(f"resonance_{i}_hz", r.frequency_hz, "Hz", ".4g")
+            + (
+                ""
+                if r.damping_ratio is None
+                else f" (damping ratio {say(f'resonance_{i}_damping_ratio', r.damping_ratio)})"
+            )
+            for i, r in enumerate(self.resonances, start=1)
+        ]
+        found = f"; it resonates at {', '.join(peaks)}" if peaks else "; no resonance in the band"
+        best = self.cheapest
+        cheapest = (
+            f" The cheapest setting covering the band: {best.integrator} at {say.dt('cheapest_dt_s', best.max_dt_s)}."
+            if best is not None and best.max_dt_s is not None
+            else ""
+        )
+        return say.answer(question, f"{head}{found}.{cheapest}")
+
+    @property
+    def question(self) -> str:
+        """What the analysis asks, in words (`question_answer`)."""
+        return self.question_answer.question
+
+    @property
+    def answer(self) -> str:
+        """The answer in words with units (`question_answer`)."""
+        return self.question_answer.answer
 
     def verdict(self) -> list[str]:
         """A few lines for the terminal: the band the setting reproduces and the cheapest setting for the band."""
@@ -451,6 +506,7 @@ class FrequencyResponse(display.Shown):
         """frequency.json (docs/json.md lists the keys)."""
         rows = {name: column.tolist() for name, column in self.rows().items()}
         return {
+            **self.question_answer.to_dict(),
             "source": self.source,
             "description": self.description,
             "input": self.input,
@@ -481,6 +537,7 @@ class FrequencyResponse(display.Shown):
             "sweeps": [b.to_dict() for b in self.sweeps],
             "harmonic_balance": None if self.duffing is None else self.duffing.to_dict(),
             "answers": dict(self.answers),
+            "warnings": list(self.warnings),
             "wall_time_s": self.wall_time_s,
         }
 

@@ -21,6 +21,7 @@ from springlab.exact.model_at_point import ModelAtPoint
 from springlab.sim.simulate import INTEGRATORS, integrator_id
 from springlab.studies.executor import Executor
 
+from .caveats import point_warnings
 from .inputs import (
     Probe,
     Source,
@@ -217,9 +218,10 @@ def frequency(
         streams = _sinestreams(responses, integrator, dt, band, int(sines), amplitude_values, executor)
     if sweep is not None:
         branches, duffing = _sweeps(responses, integrator, dt, band, int(sines), amplitude_values, sweep)
-    return _result(
+    result = _result(
         source, signal, at.point.label, integrator, dt, tol, band, responses, streams, branches, duffing, started
     )
+    return dataclasses.replace(result, warnings=point_warnings(at, band))
 
 
 def _result(
