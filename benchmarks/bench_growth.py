@@ -19,6 +19,7 @@ from collections.abc import Callable
 import numpy as np
 
 import springlab
+from bench import forget_cases
 from springlab.studies.design import run_study
 
 
@@ -51,7 +52,7 @@ def exponent(sizes: list[int], costs: list[float]) -> float:
 
 def sweep_growth(sizes: list[int], repeat: int) -> tuple[list[float], list[float]]:
     def call(n: int) -> Callable[[], object]:
-        return lambda: springlab.sweep("slider", "free", vary={"stiffness": (10.0, 1000.0)}, samples=n, seed=0)
+        return lambda: springlab.sweep("slider", "free", vary={"stiffness": (10.0, 1000.0, n, "log")})
 
     return [cpu_of(call(n), repeat) for n in sizes], [peak_memory(call(n)) for n in sizes]
 
@@ -64,7 +65,13 @@ def design_growth(levels: list[int], repeat: int) -> tuple[list[int], list[float
 
 
 def drill_growth(sizes: list[int], repeat: int) -> list[float]:
-    return [cpu_of(lambda n=n: springlab.run("drill_string", "modes", n_elements=n), repeat) for n in sizes]
+    """CPU [s] of a first run of the drill string at each size (its compile and exact precomputations included)."""
+
+    def first_run(n: int) -> None:
+        forget_cases()
+        springlab.run("drill_string", "modes", n_elements=n)
+
+    return [cpu_of(lambda n=n: first_run(n), repeat) for n in sizes]
 
 
 def main() -> None:
@@ -74,7 +81,7 @@ def main() -> None:
     args = parser.parse_args()
     repeat = 1 if args.quick else 3
     sweep_sizes = [16, 64, 256] if args.quick else [16, 64, 256, 1024, 4096]
-    design_levels = [2, 3, 4] if args.quick else [2, 3, 4, 6, 8]
+    design_levels = [3, 5, 7] if args.quick else [3, 5, 7, 9, 11]
     drill_sizes = [8, 16, 32] if args.quick else [8, 16, 32, 64, 128]
 
     rows = []
