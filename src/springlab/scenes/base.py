@@ -40,6 +40,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 import mujoco
 import numpy as np
 
+from springlab.answer import Answer, compose
 from springlab.errors import ParameterError, UnknownNameError
 from springlab.exact.limits import stability_limit
 from springlab.sim import model_files
@@ -86,6 +87,14 @@ StopCondition = Callable[[np.ndarray, np.ndarray], np.ndarray]
 PhaseField = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 
+#: the sentence an answer closes with where the run is compared with an exact trajectory: the measured agreement
+#: beside the exact answer (a template over a run's facts, springlab.runs.run.evaluate)
+FOLLOWS_EXACT = (
+    " MuJoCo's run ({integrator}, dt = {dt_s:g ~s}) stays within {max_rel_error:.1e} of the exact solution"
+    " (relative to its largest value)."
+)
+
+
 class Scene:
     """Base class of the scenes: one MJCF file under models/ and one module of the same name.
 
@@ -96,7 +105,9 @@ class Scene:
        (name -> `Parameter`, SI with units and valid ranges), `scenarios` (name -> `Scenario`,
        each with its duration, presets and validated `dt`; a scene whose scenarios differ in their
        model gives each its `variant` instead of dispatching on names), `default_scenario`, and
-       the validated default setting `integrator` and `dt` [s]; optionally `camera`.
+       the validated default setting `integrator` and `dt` [s]; optionally `camera`; and `questions`
+       (scenario -> the question it asks and its answer's template, `Scene.answer`: units a reader expects,
+       the exact value beside MuJoCo's; `grid_notes(case, dt)` says what a step grid changes in the input).
     2. `model_defaults(model)`: the parameters whose defaults live in the MJCF, read back from the
        compiled model (the physics values have one home, the MJCF).
     3. `edit(spec, params, scenario)`: MjSpec edits that apply the parameters, so the physics
@@ -174,9 +185,11 @@ class Scene:
     dt: float = 1e-3
     #: named camera for rendering.
     camera: str | None = None
-    #: scenario -> (the textbook question it answers, the answer as one sentence): the answer is a
-    #: str.format template over the run's quantities and parameters, e.g. "... {period_s:.3g} s ..."
-    questions: dict[str, tuple[str, str]] = {}
+    #: scenario -> (the textbook question it answers, its answer in one or two sentences): the answer is a
+    #: template over the run's parameters, quantities and facts (springlab.answer.compose: a field's spec may
+    #: end in the unit a reader expects, "{settling_time_s:.3g ms}", "{creep_velocity_m_s:.2g ~m/s}"), or a
+    #: function of those values returning the template (an answer that words a case differently)
+    questions: dict[str, tuple[str, str | Callable[[Mapping[str, Any]], str]]] = {}
     #: how `springlab fit` identifies the scene from a recorded signal (None: it cannot be fitted)
     fit: FitSpec | None = None
     #: the scene is the textbook's one-mode mass-spring-damper: its parameter, scenario and joint names
@@ -202,15 +215,41 @@ class Scene:
     #: springlab.studies.random_load reads it)
     random_load: RandomLoadSpec | None = None
 
-    def question_and_answer(self, scenario: str, quantities: dict, parameters: dict) -> tuple[str, str] | None:
-        """(question, answer sentence) of a scenario's run, or None where the scene states none."""
+    def answer(self, scenario: str, values: Mapping[str, Any]) -> Answer | None:
+        """The question `scenario` asks and a run's answer to it, worded from `values` (None: the scene states none).
+
+        Parameters
+        ----------
+        scenario
+            the scenario's name.
+        values
+            the run's parameters, quantities and facts by name (SI).
+
+        Returns
+        -------
+        Answer or None
+            the one source of the sentence `springlab run` prints first, summary.json carries and the report
+            shows. A run too short to produce a value the answer quotes says so instead of a sentence.
+        """
         if scenario not in self.questions:
             return None
         question, template = self.questions[scenario]
+        wording = template(values) if callable(template) else template
         try:
-            return question, template.format_map({**parameters, **quantities})
-        except (KeyError, ValueError, TypeError, IndexError):  # a quantity the run did not produce
-            return question, ""
+            return compose(question, wording, values)
+        except KeyError as missing:
+            return Answer(
+                question,
+                f"This run does not answer it: it produced no {missing.args[0]} (a longer --duration may).",
+            )
+
+    def grid_notes(self, case: Case, dt: float) -> list[str]:
+        """What the step grid of `dt` [s] changes in the scenario's input, one line each (override; empty: nothing).
+
+        E.g. a ramp of 2 s on a 12 ms grid lasts 2.004 s: the run and its exact reference both follow the
+        realized input, and the verdict line says so up front.
+        """
+        return []
 
     # -- names ---------------------------------------------------------------
 
@@ -628,6 +667,10 @@ class Case:
     def model_limits(self, trajectory: Trajectory) -> list[str]:
         """Where a run leaves the scene's equations, one line each (`Scene.model_limits`; empty: nowhere)."""
         return self.scene.model_limits(self, trajectory)
+
+    def grid_notes(self, dt: float) -> list[str]:
+        """What a step grid of `dt` [s] changes in the scenario's input, one line each (`Scene.grid_notes`)."""
+        return self.scene.grid_notes(self, dt)
 
     def modes(self) -> list[tuple[float, float]]:
         """[(natural frequency [rad/s], damping ratio [-])] of every mode a run must resolve (`Scene.modes`)."""

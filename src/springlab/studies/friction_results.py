@@ -519,13 +519,16 @@ class FrictionSettings(display.Shown):
             f" at its defaults ({integrator}, dt = {answers.written(dt, '~s')}){within}?"
         )
         parts = []
+        # MuJoCo's defaults are a run of the sweep only where its integrator and timestep were swept
+        swept = integrator in self.integrators and any(math.isclose(dt, d) for d in self.dts)
         for case in self.cases:
             default, pick, name = case.default, case.pick, case.scenario
-            at_default = (
-                "diverged at the defaults"
-                if default is None or default.max_rel_error is None
-                else f"error {say(f'{name}_default_error', default.max_rel_error, spec='.2g')} at the defaults"
-            )
+            if default is not None and default.max_rel_error is not None:
+                at_default = f"error {say(f'{name}_default_error', default.max_rel_error, spec='.2g')} at the defaults"
+            else:
+                at_default = (
+                    "diverged at the defaults" if swept else "MuJoCo's defaults not in the sweep (--integrators, --dt)"
+                )
             if pick is None:
                 parts.append(f"{name}: {at_default}")
             elif pick.row is not None and pick.found:

@@ -216,19 +216,27 @@ class Nonlinear(Scene):
     questions = {
         "softening": (
             "A softening spring: where are the equilibria and is a release from 0.09 m bounded?",
-            "Equilibria at {equilibria_m} m (saddle, centre, saddle); the motion is {motion}, period {period_simulated_s:.4g} s, longer than the linear 2π/ω.",
+            "Equilibria at {equilibria_m} m (saddle, centre, saddle); the motion is {motion}, with period"
+            " {period_quadrature_s:.7g} s by exact quadrature (MuJoCo's run: {period_simulated_s:.7g} s), longer"
+            " than the linear 2π/ω.",
         ),
         "softening_escape": (
             "Released beyond the separatrix, does the softening spring hold the block?",
-            "No: its energy {energy_J:.3g} J exceeds the barrier {barrier_height_J:.3g} J and the block escapes (motion {motion}).",
+            "No: its energy {energy_J:.3g} J exceeds the barrier {barrier_height_J:.3g} J and the block escapes"
+            " (motion {motion}), reaching {escape_radius_m:.3g} m after {escape_time_quadrature_s:.6g} s by exact"
+            " quadrature (MuJoCo's run: {escape_time_s:.6g} s).",
         ),
         "double_well": (
             "A double-well spring: how does a block released in one well move?",
-            "It stays in that well (energy {energy_J:.3g} J below the barrier), oscillating between {turning_points_m[0]:.3g} and {turning_points_m[1]:.3g} m with period {period_simulated_s:.4g} s.",
+            "It stays in that well (energy {energy_J:.3g} J below the barrier), oscillating between"
+            " {turning_points_m[0]:.3g ~m} and {turning_points_m[1]:.3g ~m} with period {period_quadrature_s:.7g} s"
+            " by exact quadrature (MuJoCo's run: {period_simulated_s:.7g} s).",
         ),
         "forced_duffing": (
             "A damped, forced double well: is the motion predictable?",
-            "No, it is chaotic: nearby starts separate at about {lyapunov_exponent_per_s:.3g} 1/s, so the computed path is accurate only up to {accurate_until_s:.3g} s.",
+            "No, it is chaotic: nearby starts separate at about {lyapunov_exponent_per_s:.3g} 1/s (± "
+            "{lyapunov_standard_error_per_s:.2g} 1/s), so a start known to {perturbation_m:.3g ~m} is lost after"
+            " {separation_time_s:.3g} s and the computed path is accurate only up to {accurate_until_s:.3g} s.",
         ),
     }
     parameters = {
