@@ -30,7 +30,7 @@ from springlab.runs import compare
 from springlab.runs.compare import Verdict
 from springlab.runs.run import evaluate, run_scenario
 from springlab.scenes.base import Case, Scenario, Scene
-from springlab.scenes.declarations import keyword_parameters
+from springlab.scenes.declarations import keyword_parameters, refuse_text
 from springlab.sim.batch import TIMING_STEPS, run_batched, time_run
 from springlab.sim.simulate import INTEGRATORS, ORDERS, Setup, check_timing, integrator_id
 
@@ -655,6 +655,8 @@ def tradeoff(
     *,
     tol: float | None = None,
     duration: float | None = None,
+    integrators: Sequence[str] | None = None,
+    dts: Sequence[float] | None = None,
     executor: Executor | None = None,
     **parameters: float,
 ) -> Tradeoff:
@@ -673,6 +675,10 @@ def tradeoff(
         relative error [-] the recommended setting must meet (None: no recommendation).
     duration
         simulated time [s] (None: the scenario's).
+    integrators
+        the integrators swept, e.g. ['euler', 'rk4'] (None: MuJoCo's five).
+    dts
+        the timesteps swept [s] (None: `timestep_grid` from the scenario's fastest rate).
     executor
         where the grid's chunks run (None: locally); the numbers are the same wherever they ran.
     **parameters
@@ -694,6 +700,9 @@ def tradeoff(
     if tol is not None:
         tol = compare.check_tolerance(tol)
     started = _time.perf_counter()
-    result = sweep(model, scenario, duration=duration, executor=executor, **overrides)
+    refuse_text("integrators", integrators, "a sequence of names, e.g. integrators=['rk4', 'euler']")
+    refuse_text("dts", dts, "a sequence of timesteps [s], e.g. dts=(0.002, 0.001)", numbers=True)
+    swept = tuple(INTEGRATORS) if integrators is None else tuple(integrators)
+    result = sweep(model, scenario, integrators=swept, dts=dts, duration=duration, executor=executor, **overrides)
     recommendation = recommend(result, tol) if tol is not None else None
     return dataclasses.replace(result, recommendation=recommendation, sweep_wall_time_s=_time.perf_counter() - started)
