@@ -333,6 +333,9 @@ class Reference:
     scales
         column -> the scale [m or m/s] its max_rel is relative to where the exact motion
         has none (max |ref| = 0: a block held at rest); otherwise max |ref| is.
+    derived
+        what the run layer derives from this reference alone (its tolerances per setting, its modes),
+        kept so a reference kept by its case (`Case.reference`) is judged without recomputing them.
     """
 
     pos: dict[str, np.ndarray]
@@ -347,6 +350,7 @@ class Reference:
     input_error: dict[str, float] = dataclasses.field(default_factory=dict)
     roundoff: dict[str, float] = dataclasses.field(default_factory=dict)
     scales: dict[str, float] = dataclasses.field(default_factory=dict)
+    derived: dict[Any, Any] = dataclasses.field(default_factory=dict, init=False, repr=False, compare=False)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -520,7 +520,8 @@ def run_chunk(payload: SweepChunk, nthread: int = 0) -> list[dict[str, Any]]:
             "detail": "",
         }
         rows.append(row)
-        case = Case.compiled(scene, chosen, params)
+        # built here, not taken from Case.compiled's shared cases: the rollout below writes into the model
+        case = Case(scene, chosen, params, scene.build(params, chosen))
         try:
             job = case.job(integrator, dt, steps)
         except BadInputError as error:  # e.g. a bump that lifts the car off its springs: a row, not a failed sweep
