@@ -175,3 +175,8 @@ def test_no_user_input_of_a_study_is_typed_any(name):
     signature = inspect.signature(_study(name), eval_str=True)
     untyped = [p.name for p in signature.parameters.values() if "Any" in str(p.annotation)]
     assert not untyped, f"springlab.{name}: {untyped} typed Any"
+
+
+def test_validate_takes_one_scene_name_or_several():
+    one = [(row.scene, row.scenario) for row in springlab.validate("kinematics")]
+    assert one and one == [(row.scene, row.scenario) for row in springlab.validate(["kinematics"])]
