@@ -17,7 +17,9 @@ the same bit for bit wherever it ran.
 
 from __future__ import annotations
 
+import csv
 import dataclasses
+import io
 import math
 import time as _time
 from collections.abc import Mapping, Sequence
@@ -28,7 +30,7 @@ import numpy as np
 from springlab import display, scenes, tables
 from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError, UnknownNameError
-from springlab.files import json_ready
+from springlab.files import Output, json_ready, number_text
 from springlab.runs.compare import Verdict
 from springlab.runs.run import Result, evaluate, prepare
 from springlab.scenes.base import Case
@@ -423,6 +425,17 @@ class Sweep(display.Shown):
             }
         )
 
+    def outputs(self) -> tuple[Output, ...]:
+        """The files `springlab sweep --output DIR` writes (springlab.outputs.write): sweep.csv (header, then one
+        row per configuration, numbers in their shortest exact form) and sweep.png (its quantity given to the writer)."""
+        header, body = self.table()
+        buffer = io.StringIO()
+        writer = csv.writer(buffer, lineterminator="\n")
+        writer.writerow(header)
+        for line in body:
+            writer.writerow([_csv_cell(value) for value in line])
+        return Output("sweep.csv", buffer.getvalue()), Output("sweep.png")
+
     def to_pandas(self) -> pandas.DataFrame:
         """sweep.csv as a DataFrame, one row per configuration: varied parameters, quantities,
         `<column>_max_rel` errors, passed, diverged, detail (None/NaN where a configuration has no value;
@@ -715,3 +728,12 @@ def _axes(vary: Mapping[str, Any] | Sequence[str]) -> list[Axis]:
     if len(set(names)) != len(names):
         raise BadInputError(f"a parameter is varied twice: {', '.join(names)}")
     return axes
+
+
+def _csv_cell(value: Any) -> str:
+    """sweep.csv's text of a value: true/false, floats in their shortest exact form, integers as integers."""
+    if isinstance(value, (bool, np.bool_)):
+        return "true" if value else "false"
+    if isinstance(value, (float, np.floating, int, np.integer)):
+        return number_text(value) if isinstance(value, (float, np.floating)) else str(int(value))
+    return str(value)
