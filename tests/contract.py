@@ -8,6 +8,9 @@ from typing import Any
 SUMMARY_KEYS = [
     "scene",
     "scenario",
+    "question",
+    "answer",
+    "answer_numbers",
     "integrator",
     "dt",
     "duration",
@@ -23,6 +26,7 @@ SUMMARY_KEYS = [
     "estimate_range",
     "checks",
     "model_limits",
+    "grid_notes",
 ]
 
 

@@ -248,3 +248,22 @@ def test_frequency_of_the_stuck_drill_bit_says_dry_friction_holds_it(capsys):
 def test_frequency_of_a_smooth_scene_at_rest_has_no_warnings(capsys):
     assert main(["frequency", "slider", "--points", "20", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["warnings"] == []
+
+
+@pytest.mark.slow
+def test_a_model_sweep_on_two_dask_workers_equals_the_local_one():
+    from springlab.studies.executor import Executor
+
+    vary = ["opt.impratio=1:10:3", "joint.left.damping=0.5:2:2"]
+    local = model_sweep(GRIPPER, vary=vary, duration=0.1, chunk_size=2)
+    with Executor(workers=2, progress=False) as executor:
+        shipped = model_sweep(GRIPPER, vary=vary, duration=0.1, chunk_size=2, executor=executor)
+    assert shipped.chunks == 3 and "dask" in shipped.executor
+    assert [row.to_dict() for row in shipped.rows] == [row.to_dict() for row in local.rows]
+
+
+def test_a_tradeoff_of_a_model_at_rest_says_it_measured_nothing():
+    # dm_control's cartpole starts upright at rest with no keyframe: an equilibrium, nothing moves
+    study = model_tradeoff(SUITE / "cartpole.xml", duration=0.2, integrators=["euler", "rk4"])
+    assert study.moves is False and all(run.error == 0 for run in study.runs)
+    assert "does not move from qpos0 (no keyframe): nothing was measured" in study.question_answer.answer

@@ -224,13 +224,11 @@ def test_chromium_decodes_the_h264_videos_to_the_rendered_pictures(demo_out, tmp
 def test_report_reads_like_the_chapter(demo_out):
     import html as html_module
 
-    from springlab import scenes
-
     out, state = demo_out
     page = (out / "index.html").read_text()
     for (scene_name, scenario), result in state.results.items():
-        scene = scenes.get(scene_name)
-        question, answer = scene.question_and_answer(scenario, result.quantities, result.parameters)
+        assert result.answer is not None, f"{scene_name}/{scenario} states its question and answer"
+        question, answer = result.answer.question, result.answer.answer
         assert question and answer, f"{scene_name}/{scenario} states its question and answer"
         assert html_module.escape(question) in page and html_module.escape(answer) in page
         for name in result.parameters:  # every parameter listed, with its value
@@ -250,6 +248,6 @@ def test_every_scenario_states_its_question_and_an_answer_from_its_own_run(scena
     for scene in scenes.SCENES.values():
         for scenario in scene.scenarios:
             result = scenario_run(scene.name, scenario)
-            qa = scene.question_and_answer(scenario, result.quantities, result.parameters)
-            assert qa is not None and qa[0].strip() and qa[1].strip(), f"{scene.name}/{scenario}"
-            assert "{" not in qa[1], f"{scene.name}/{scenario}: unfilled template {qa[1]!r}"
+            answer = result.answer
+            assert answer is not None and answer.question.strip() and answer.answer.strip(), f"{scene.name}/{scenario}"
+            assert "{" not in answer.answer and "nan" not in answer.answer.split(), f"{scene.name}/{scenario}"

@@ -138,7 +138,7 @@ def test_tradeoff_answers_with_the_verified_pick_and_the_orders_and_prints_them_
 
 
 def test_tradeoff_without_tol_answers_with_the_orders():
-    data = tradeoff.tradeoff("slider", "free", duration=0.5, integrators=("euler", "rk4")).to_dict()
+    data = tradeoff.sweep("slider", "free", duration=0.5, integrators=("euler", "rk4")).to_dict()
     best = min(
         (r for r in data["runs"] if not r["diverged"] and not r["beyond_limit"]), key=lambda r: r["max_rel_error"]
     )
@@ -269,3 +269,10 @@ def test_the_random_load_studies_print_their_json_question_and_answer_first(caps
     cable = ["--set", "n_elements=9", "--set", "damper_position=30", "--set", "damper_coefficient=4e4"]
     data = assert_prints_its_json_first(capsys, ["rms", "stay_cable", "--seeds", "2", "--record", "20", *cable])
     assert_answer_from_json(data, inside=data["inside"]) if "inside" in data else assert_answer_from_json(data)
+
+
+def test_friction_settings_says_when_mujocos_defaults_were_not_swept():
+    ends = {s.name: (s.mujoco_default,) for s in get("friction").dry_friction.settings}
+    study = friction_settings("friction", ["coulomb_decay"], integrators=("rk4",), dts=(1e-3, 5e-4), values=ends)
+    assert study.cases[0].default is None  # MuJoCo's default is euler at 2 ms
+    assert "coulomb_decay: MuJoCo's defaults not in the sweep" in study.answer and "diverged" not in study.answer

@@ -9,13 +9,15 @@ into place, so an interrupted or failed write never leaves a partial file.
 from __future__ import annotations
 
 import contextlib
+import csv
 import dataclasses
+import io
 import json
 import math
 import os
 import pathlib
 import secrets
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -149,6 +151,27 @@ def csv_text(columns: Mapping[str, np.ndarray], every: int = 1) -> str:
     table = np.column_stack([np.asarray(columns[name], float)[rows] for name in names])
     lines = [",".join(names)] + [",".join(map(number_text, row)) for row in table.tolist()]
     return "\n".join(lines) + "\n"
+
+
+def rows_text(header: Sequence[str], rows: Iterable[Sequence[Any]]) -> str:
+    """CSV of a header and rows of mixed cells (the csv module's quoting): true/false for booleans, floats in
+    their shortest exact form (`number_text`), integers as integers, anything else as its text."""
+
+    def cell(value: Any) -> str:
+        if isinstance(value, (bool, np.bool_)):
+            return "true" if value else "false"
+        if isinstance(value, (float, np.floating)):
+            return number_text(value)
+        if isinstance(value, (int, np.integer)):
+            return str(int(value))
+        return str(value)
+
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(header)
+    for line in rows:
+        writer.writerow([cell(value) for value in line])
+    return buffer.getvalue()
 
 
 def write_text_files(directory: str | os.PathLike, files: Mapping[str, str]) -> list[pathlib.Path]:

@@ -66,7 +66,12 @@ def print_list(catalogue: list[dict[str, Any]]) -> None:
 
 
 def print_run(result: Result, output: str | None) -> None:
-    """`springlab run`: setting, quantities, errors against the exact solution, checks and the verdict."""
+    """`springlab run`: the question and its answer first, then the setting, quantities, errors against the
+    exact solution, checks and the verdict (with what the step grid changed in the input)."""
+    if result.answer is not None:
+        print(result.answer.text())
+    for note in result.grid_notes:
+        print(f"Note: {note}")
     print(
         f"{result.scene} / {result.scenario}: {result.integrator}, dt = {result.dt:g} s,"
         f" {result.steps} steps in {result.wall_time_s * 1e3:.1f} ms"
@@ -79,8 +84,11 @@ def print_run(result: Result, output: str | None) -> None:
         print(f"  check {check_line(check)}")
     if result.tolerance is not None or result.checks:
         verdict = "FAIL (outside tolerance)" if result.verdict is Verdict.FAIL else str(result.verdict)
+        grid = "".join(f" ({note})" for note in result.grid_notes)
         print(
-            f"  tolerance {result.tolerance:.3e}: {verdict}" if result.tolerance is not None else f"  checks: {verdict}"
+            f"  tolerance {result.tolerance:.3e}: {verdict}{grid}"
+            if result.tolerance is not None
+            else f"  checks: {verdict}{grid}"
         )
         validity = result.estimate_range
         if validity is not None and not validity.inside:
@@ -117,13 +125,20 @@ def _row_result(row: ValidationRow) -> str:
 
 
 def print_validate(rows: Sequence[ValidationRow]) -> None:
-    """`springlab validate`: the table, the tolerance bases, the scenarios' notes and the count."""
+    """`springlab validate`: the table, the tolerance bases, the scenarios' notes, one answer line per scenario
+    and the count."""
     print(validation_table(rows))
     for basis in dict.fromkeys(r.tolerance_basis for r in rows):
         print(f"tolerance = {basis}")
     for r in rows:
         if r.note:
             print(f"{r.scene} {r.scenario}: {r.note}")
+    answered = [r for r in rows if r.answer is not None and r.answer.answer]
+    if answered:
+        print("answers:")
+        for r in answered:
+            assert r.answer is not None
+            print(f"  {r.scene} {r.scenario}: {r.answer.answer}")
     failed = sum(not r.passed for r in rows)
     unvalidated = sum(r.verdict is Verdict.NOT_VALIDATED for r in rows)
     outside = f" ({unvalidated} not validated: outside the range of the error estimate)" if unvalidated else ""

@@ -228,17 +228,14 @@ def _quantities(quantities: dict[str, Any]) -> str:
     return f"<details><summary>quantities</summary><table>{rows}</table></details>" if rows else ""
 
 
-def _question(scene, scenario_name: str, result) -> str:
-    """The scenario's textbook question and its answer sentence, from the scene's own metadata."""
-    if scene is None or result is None or not hasattr(scene, "question_and_answer"):
+def _question(result) -> str:
+    """The scenario's question and the run's answer: the run's own Answer, the sentence its terminal and JSON carry."""
+    answer = getattr(result, "answer", None)
+    if answer is None:
         return ""
-    qa = scene.question_and_answer(scenario_name, result.quantities, result.parameters)
-    if qa is None:
-        return ""
-    question, answer = qa
-    text = f"<p class='question'><b>Question.</b> {_e(question)}"
-    if answer:
-        text += f"<br><b>Answer.</b> {_e(answer)}"
+    text = f"<p class='question'><b>Question.</b> {_e(answer.question)}"
+    if answer.answer:
+        text += f"<br><b>Answer.</b> {_e(answer.answer)}"
     return text + "</p>"
 
 
@@ -314,7 +311,7 @@ def build_html(state: DemoState, *, wall_time_s: float | None = None) -> str:
                 f"<h3 id='{_e(name)}-{_e(scenario_name)}'>{_e(name)} / {_e(scenario_name)}{verdict}</h3>"
                 f"<p class='muted'>{_e(description)}</p>"
             )
-            body.append(_question(scene, scenario_name, result))
+            body.append(_question(result))
             if scene is not None:
                 body.append(_parameters(scene, result))
             media, rest = _media(sorted(items, key=_kind_rank), ids)

@@ -357,6 +357,94 @@ def held_run(
     return x, u
 
 
+def held_maximum(
+    a: np.ndarray, b: np.ndarray, dt: float, states: np.ndarray, forces: np.ndarray, row: np.ndarray
+) -> float:
+    """The largest row . x(t) of a held motion (`held_run`) over continuous time, not only at its steps.
+
+    Between steps the motion is exact with its held input, x(t_j + s) = Phi(s) x_j + Gamma(s) u_j; the best
+    sample's two neighbouring steps are searched by a bounded Brent method on that map (a smooth peak sampled
+    at many steps per oscillation lies next to its best sample).
+
+    Parameters
+    ----------
+    a, b
+        the plant x' = A x + B u [1/s], [state units / (input units s)].
+    dt
+        the step [s].
+    states
+        (steps + 1, n) the exact states at the steps.
+    forces
+        (steps,) the input held over each step [input units].
+    row
+        (n,) the output read, e.g. the carriage's position.
+
+    Returns
+    -------
+    float
+        the continuous maximum [output units].
+    """
+    values = states @ row
+    best_step = int(np.argmax(values))
+    best = float(values[best_step])
+    import scipy.optimize
+
+    for step in (best_step - 1, best_step):
+        if step < 0 or step >= len(forces):
+            continue
+
+        def output(s: float, step: int = step) -> float:
+            if s <= 0.0:
+                return float(states[step] @ row)
+            phi, gamma = zoh(a, b, s)
+            return float(row @ (phi @ states[step] + gamma[:, 0] * forces[step]))
+
+        found = scipy.optimize.minimize_scalar(
+            lambda s: -output(s), bounds=(0.0, dt), method="bounded", options={"xatol": 1e-9 * dt}
+        )
+        best = max(best, -float(found.fun))
+    return best
+
+
+def held_last_exit(
+    a: np.ndarray,
+    b: np.ndarray,
+    dt: float,
+    states: np.ndarray,
+    forces: np.ndarray,
+    row: np.ndarray,
+    level: float,
+    offset: float = 0.0,
+) -> float:
+    """The time [s] after which |row . x(t) - offset| stays <= level for good, within the held motion's record.
+
+    Located on the cubic Hermite interpolant of the steps (springlab.exact.events.last_exit), then found by
+    Brent's method on the exact map of the step it falls in, x(t_j + s) = Phi(s) x_j + Gamma(s) u_j: a root of
+    the exact motion, not of its interpolant. Arguments as `held_maximum`; 0 if it never leaves the band.
+    """
+    import scipy.optimize
+
+    from springlab.exact import events
+
+    time = dt * np.arange(len(states))
+    held = np.append(forces, forces[-1] if len(forces) else 0.0)
+    rates = (states @ a.T + np.outer(held, b[:, 0])) @ row
+    estimate = events.last_exit(time, states @ row - offset, rates, level)
+    if not math.isfinite(estimate) or estimate <= 0.0:
+        return estimate
+    for step in dict.fromkeys(min(max(k, 0), len(forces) - 1) for k in (int(estimate // dt), int(estimate // dt) - 1)):
+
+        def excess(s: float, step: int = step) -> float:
+            if s <= 0.0:
+                return abs(float(states[step] @ row) - offset) - level
+            phi, gamma = zoh(a, b, s)
+            return abs(float(row @ (phi @ states[step] + gamma[:, 0] * forces[step])) - offset) - level
+
+        if excess(0.0) > 0.0 >= excess(dt):
+            return step * dt + float(scipy.optimize.brentq(excess, 0.0, dt, xtol=1e-15, rtol=1e-15))
+    return estimate
+
+
 def held_run_error(
     a: np.ndarray,
     b: np.ndarray,

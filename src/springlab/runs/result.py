@@ -7,12 +7,14 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
+import warnings
 from typing import TYPE_CHECKING, Any
 
 import mujoco
 import numpy as np
 
 from springlab import display, tables
+from springlab.answer import Answer
 from springlab.files import Output, csv_text, json_ready
 from springlab.scenes.base import Case, Check
 from springlab.sim.simulate import Trajectory
@@ -37,8 +39,7 @@ class Result(display.Shown):
 
     Immutable: the attributes cannot be rebound and the series are read-only arrays.
     `to_dict()` is summary.json (what `springlab run --json` prints), `to_pandas()` is
-    trajectory.csv as a DataFrame, and `summary` is the same facts as a dict of Python
-    values (inf stays inf where summary.json writes null).
+    trajectory.csv as a DataFrame (`summary`, the same facts in Python values, is deprecated).
 
     Attributes
     ----------
@@ -91,6 +92,13 @@ class Result(display.Shown):
         the compiled MjModel that ran (`case.model`).
     trajectory
         the raw Trajectory.
+    answer
+        the question the scenario asks and this run's answer in words (springlab.answer.Answer; None where the
+        scene states none): what `springlab run` prints first and summary.json's `question`, `answer` and
+        `answer_numbers`.
+    grid_notes
+        what the step grid changed in the scenario's input (e.g. a ramp lasting 2.004 s instead of 2 s), one
+        line each; the verdict line says them (empty: nothing).
     """
 
     scene: str
@@ -118,6 +126,8 @@ class Result(display.Shown):
     case: Case = dataclasses.field(repr=False)
     trajectory: Trajectory = dataclasses.field(repr=False)
     column_tolerances: dict[str, float] = dataclasses.field(default_factory=dict, repr=False)
+    answer: Answer | None = dataclasses.field(default=None, repr=False)
+    grid_notes: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "time", _read_only(self.time))
@@ -163,17 +173,29 @@ class Result(display.Shown):
             )
         if self.checks:
             within.append(f"{len(self.checks)} check{'s' if len(self.checks) > 1 else ''} within tolerance")
-        return "; ".join(within)
+        return "; ".join([*within, *self.grid_notes])
 
     @property
     def summary(self) -> dict[str, Any]:
-        """The facts as summary.json's dict, in Python values (inf where summary.json has null).
+        """Deprecated: `to_dict()` (summary.json) or the attributes (`quantities`, `errors`, `passed` ...).
 
-        Kept for scripts written against it; `to_dict()` is summary.json itself.
+        The facts as summary.json's dict in Python values (inf where summary.json has null), kept for
+        scripts written against it; it warns (DeprecationWarning) since issue 32.
         """
+        warnings.warn(
+            "Result.summary is deprecated: use Result.to_dict() (summary.json, what `springlab run --json`"
+            " prints) or the attributes (result.quantities, result.errors, result.passed)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self._facts()
+
+    def _facts(self) -> dict[str, Any]:
+        """summary.json's dict in Python values (inf where summary.json has null)."""
         return {
             "scene": self.scene,
             "scenario": self.scenario,
+            **(self.answer.to_dict() if self.answer is not None else {}),
             "integrator": self.integrator,
             "dt": self.dt,
             "duration": self.duration,
@@ -189,6 +211,7 @@ class Result(display.Shown):
             "estimate_range": None if self.estimate_range is None else self.estimate_range.to_dict(),
             "checks": [check.to_dict() for check in self.checks],
             "model_limits": list(self.model_limits),
+            "grid_notes": list(self.grid_notes),
         }
 
     def _shown(self) -> display.Summary:
@@ -248,11 +271,11 @@ class Result(display.Shown):
     def to_dict(self) -> dict[str, Any]:
         """summary.json, exactly what `springlab run --json` prints (plain JSON values: inf and nan are None).
 
-        Keys: scene, scenario, integrator, dt [s], duration [s], steps, wall_time_s [s], parameters,
-        quantities, errors, tolerance, tolerance_basis, passed, verdict, estimate_range, checks,
-        model_limits (see docs/runs.md).
+        Keys: scene, scenario, question, answer, answer_numbers (where the scene states a question),
+        integrator, dt [s], duration [s], steps, wall_time_s [s], parameters, quantities, errors, tolerance,
+        tolerance_basis, passed, verdict, estimate_range, checks, model_limits, grid_notes (see docs/runs.md).
         """
-        return json_ready(self.summary)
+        return json_ready(self._facts())
 
     def outputs(self, every: int = 1) -> tuple[Output, ...]:
         """The files `springlab run --output DIR` writes (springlab.outputs.write): trajectory.csv and summary.json.
@@ -330,6 +353,9 @@ class ValidationRow(display.Shown):
         the scenario's checks.
     note
         why a run is not validated (its verdict and reason), or what a study noted (None: nothing).
+    answer
+        the scenario's question and the run's answer (`Result.answer`; None where the scene states none):
+        `springlab validate` prints the answer, one line per scenario.
     """
 
     scene: str
@@ -346,6 +372,7 @@ class ValidationRow(display.Shown):
     wall_time_s: float
     checks: tuple[Check, ...]
     note: str | None = None
+    answer: Answer | None = None
 
     @classmethod
     def of(cls, result: Result) -> ValidationRow:
@@ -371,6 +398,8 @@ class ValidationRow(display.Shown):
             note = f"{result.verdict}: " + "; ".join(result.model_limits)
         elif result.estimate_range is not None and not result.estimate_range.inside:
             note = f"{result.verdict}: {result.estimate_range.reason()}"
+        if result.grid_notes:
+            note = "; ".join([*([note] if note else []), *result.grid_notes])
         return cls(
             scene=result.scene,
             scenario=result.scenario,
@@ -386,6 +415,7 @@ class ValidationRow(display.Shown):
             wall_time_s=result.wall_time_s,
             checks=result.checks,
             note=note,
+            answer=result.answer,
         )
 
     def _shown(self) -> display.Summary:
@@ -426,4 +456,6 @@ class ValidationRow(display.Shown):
         }
         if self.note is not None:
             row["note"] = self.note
+        if self.answer is not None:
+            row.update(self.answer.to_dict())
         return json_ready(row)

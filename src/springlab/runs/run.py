@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from springlab import scenes
+from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError, ParameterError, SpringlabError
 from springlab.scenes.base import Case, Check, Scenario, Scene
 from springlab.sim.simulate import (
@@ -253,16 +254,18 @@ def evaluate(case: Case, trajectory: Trajectory, tol: float | None = None, *, ch
         verdict = Verdict.NOT_VALIDATED
     else:
         verdict = Verdict.PASS if passed else Verdict.FAIL
+    quantities = case.quantities(trajectory)
+    duration = trajectory.steps * trajectory.dt  # MuJoCo's time accumulates dt: rounding
     return Result(
         scene=scene.name,
         scenario=scenario.name,
         integrator=trajectory.integrator,
         dt=trajectory.dt,
-        duration=trajectory.steps * trajectory.dt,  # MuJoCo's time accumulates dt: rounding
+        duration=duration,
         steps=trajectory.steps,
         wall_time_s=trajectory.wall_time_s,
         parameters=dict(params),
-        quantities=case.quantities(trajectory),
+        quantities=quantities,
         errors=errors,
         tolerance=tolerance,
         tolerance_basis=basis,
@@ -279,7 +282,25 @@ def evaluate(case: Case, trajectory: Trajectory, tol: float | None = None, *, ch
         case=case,
         trajectory=trajectory,
         column_tolerances=per_column,
+        answer=_answer(case, trajectory, quantities, errors, tolerance),
+        grid_notes=tuple(case.grid_notes(trajectory.dt)),
     )
+
+
+def _answer(
+    case: Case, trajectory: Trajectory, quantities: dict[str, Any], errors: dict[str, ColumnError], tol: float | None
+) -> Answer | None:
+    """The scenario's question and this run's answer (`Scene.answer`), from its parameters, quantities and facts."""
+    # what an answer may quote besides the parameters and quantities: the run's own facts
+    facts: dict[str, Any] = {
+        "integrator": trajectory.integrator,
+        "dt_s": trajectory.dt,
+        "duration_s": trajectory.steps * trajectory.dt,
+    }
+    if errors:
+        facts["max_rel_error"] = max(e.max_rel for e in errors.values())
+        facts["tolerance"] = tol
+    return case.scene.answer(case.scenario.name, {**facts, **case.params, **quantities})
 
 
 def _capped(check: Check, tol: float | None) -> Check:

@@ -29,18 +29,22 @@ Data flows one way: parameters -> MjModel -> Trajectory -> (reference, errors)
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import functools
+import hashlib
+import threading
 from collections.abc import Callable, Hashable, Mapping
 from typing import TYPE_CHECKING, Any, TypeVar
 
 import mujoco
 import numpy as np
 
+from springlab.answer import Answer, compose
 from springlab.errors import ParameterError, UnknownNameError
 from springlab.exact.limits import stability_limit
 from springlab.sim import model_files
-from springlab.sim.simulate import Setup, Trajectory, check_timing, quiet_mujoco, simulate
+from springlab.sim.simulate import Setup, Trajectory, check_timing, configured, quiet_mujoco, simulate
 
 from .capabilities.design import DesignSpec
 from .capabilities.drawing import Drawing
@@ -83,6 +87,14 @@ StopCondition = Callable[[np.ndarray, np.ndarray], np.ndarray]
 PhaseField = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 
+#: the sentence an answer closes with where the run is compared with an exact trajectory: the measured agreement
+#: beside the exact answer (a template over a run's facts, springlab.runs.run.evaluate)
+FOLLOWS_EXACT = (
+    " MuJoCo's run ({integrator}, dt = {dt_s:g ~s}) stays within {max_rel_error:.1e} of the exact solution"
+    " (relative to its largest value)."
+)
+
+
 class Scene:
     """Base class of the scenes: one MJCF file under models/ and one module of the same name.
 
@@ -93,7 +105,9 @@ class Scene:
        (name -> `Parameter`, SI with units and valid ranges), `scenarios` (name -> `Scenario`,
        each with its duration, presets and validated `dt`; a scene whose scenarios differ in their
        model gives each its `variant` instead of dispatching on names), `default_scenario`, and
-       the validated default setting `integrator` and `dt` [s]; optionally `camera`.
+       the validated default setting `integrator` and `dt` [s]; optionally `camera`; and `questions`
+       (scenario -> the question it asks and its answer's template, `Scene.answer`: units a reader expects,
+       the exact value beside MuJoCo's; `grid_notes(case, dt)` says what a step grid changes in the input).
     2. `model_defaults(model)`: the parameters whose defaults live in the MJCF, read back from the
        compiled model (the physics values have one home, the MJCF).
     3. `edit(spec, params, scenario)`: MjSpec edits that apply the parameters, so the physics
@@ -171,9 +185,11 @@ class Scene:
     dt: float = 1e-3
     #: named camera for rendering.
     camera: str | None = None
-    #: scenario -> (the textbook question it answers, the answer as one sentence): the answer is a
-    #: str.format template over the run's quantities and parameters, e.g. "... {period_s:.3g} s ..."
-    questions: dict[str, tuple[str, str]] = {}
+    #: scenario -> (the textbook question it answers, its answer in one or two sentences): the answer is a
+    #: template over the run's parameters, quantities and facts (springlab.answer.compose: a field's spec may
+    #: end in the unit a reader expects, "{settling_time_s:.3g ms}", "{creep_velocity_m_s:.2g ~m/s}"), or a
+    #: function of those values returning the template (an answer that words a case differently)
+    questions: dict[str, tuple[str, str | Callable[[Mapping[str, Any]], str]]] = {}
     #: how `springlab fit` identifies the scene from a recorded signal (None: it cannot be fitted)
     fit: FitSpec | None = None
     #: the scene is the textbook's one-mode mass-spring-damper: its parameter, scenario and joint names
@@ -199,15 +215,41 @@ class Scene:
     #: springlab.studies.random_load reads it)
     random_load: RandomLoadSpec | None = None
 
-    def question_and_answer(self, scenario: str, quantities: dict, parameters: dict) -> tuple[str, str] | None:
-        """(question, answer sentence) of a scenario's run, or None where the scene states none."""
+    def answer(self, scenario: str, values: Mapping[str, Any]) -> Answer | None:
+        """The question `scenario` asks and a run's answer to it, worded from `values` (None: the scene states none).
+
+        Parameters
+        ----------
+        scenario
+            the scenario's name.
+        values
+            the run's parameters, quantities and facts by name (SI).
+
+        Returns
+        -------
+        Answer or None
+            the one source of the sentence `springlab run` prints first, summary.json carries and the report
+            shows. A run too short to produce a value the answer quotes says so instead of a sentence.
+        """
         if scenario not in self.questions:
             return None
         question, template = self.questions[scenario]
+        wording = template(values) if callable(template) else template
         try:
-            return question, template.format_map({**parameters, **quantities})
-        except (KeyError, ValueError, TypeError, IndexError):  # a quantity the run did not produce
-            return question, ""
+            return compose(question, wording, values)
+        except KeyError as missing:
+            return Answer(
+                question,
+                f"This run does not answer it: it produced no {missing.args[0]} (a longer --duration may).",
+            )
+
+    def grid_notes(self, case: Case, dt: float) -> list[str]:
+        """What the step grid of `dt` [s] changes in the scenario's input, one line each (override; empty: nothing).
+
+        E.g. a ramp of 2 s on a 12 ms grid lasts 2.004 s: the run and its exact reference both follow the
+        realized input, and the verdict line says so up front.
+        """
+        return []
 
     # -- names ---------------------------------------------------------------
 
@@ -387,6 +429,16 @@ class Scene:
         return columns
 
 
+#: how many references (grids of times) a case keeps (`Case.reference`)
+KEPT_REFERENCES = 4
+#: how many compiled cases (model and `Case.memo`) the process keeps, least recently used dropped first
+COMPILED_CASES = 32
+#: (scene, scenario, parameters) -> its Case: a repeated run, a study's repeated setting and every hook of
+#: one parameter set share one compiled model and one set of exact precomputations (`Case.compiled`)
+_COMPILED: collections.OrderedDict[Hashable, Case] = collections.OrderedDict()
+_COMPILED_LOCK = threading.Lock()
+
+
 @dataclasses.dataclass(frozen=True, eq=False, repr=False)
 class Case:
     """A scenario of a scene with its resolved parameters and its compiled model.
@@ -430,6 +482,11 @@ class Case:
     def compiled(cls, scene: Scene, scenario: Scenario, params: Mapping[str, float]) -> Case:
         """The case of parameters already resolved (`Scene.resolve`): its model compiled (`Scene.build`).
 
+        Kept per process for the last COMPILED_CASES parameter sets: the same scene, scenario and
+        parameters give the same Case, so its compiled model and what its memo keeps (continuum roots,
+        eigen-decompositions, matrix exponentials) are computed once. The model is shared: read it,
+        or work on a `copy.copy` of it (as `springlab.sim.simulate.configured` does).
+
         Parameters
         ----------
         scene
@@ -445,7 +502,22 @@ class Case:
             MuJoCo cannot compile the model at these values.
         """
         values = dict(params)
-        return cls(scene, scenario, values, scene.build(values, scenario))
+        try:
+            key: Hashable = (id(scene), id(scenario), tuple(sorted(values.items())))
+            hash(key)
+        except TypeError:  # a value that is no number: compile it, keep nothing
+            return cls(scene, scenario, values, scene.build(values, scenario))
+        with _COMPILED_LOCK:
+            kept = _COMPILED.get(key)
+            if kept is not None and kept.scene is scene and kept.scenario is scenario:
+                _COMPILED.move_to_end(key)
+                return kept
+        case = cls(scene, scenario, values, scene.build(values, scenario))
+        with _COMPILED_LOCK:
+            _COMPILED[key] = case
+            while len(_COMPILED) > COMPILED_CASES:
+                _COMPILED.popitem(last=False)
+        return case
 
     def memo(self, key: Hashable, compute: Callable[[], T]) -> T:
         """`compute()` the first time `key` is asked for, the kept value after: what depends only on the case.
@@ -481,7 +553,14 @@ class Case:
         return self.memo("stop_condition", lambda: self.scene.stop_condition(self))
 
     def simulate(
-        self, integrator: str, dt: float, duration: float, *, setup: Setup | None = None, stop: bool = True
+        self,
+        integrator: str,
+        dt: float,
+        duration: float,
+        *,
+        setup: Setup | None = None,
+        stop: bool = True,
+        keep: bool = False,
     ) -> Trajectory:
         """Run the case headless (springlab.sim.simulate): the model is not changed.
 
@@ -498,6 +577,10 @@ class Case:
         stop
             end the run at the scene's stop condition (False: run the full duration; a run that only
             needs the trajectory up to an event the scene has none of).
+        keep
+            keep the run on the case (`memo`) and return the kept one when asked again with the scenario's
+            own setup: for the verification runs a verdict repeats (a run at dt/2 that measures the
+            convergence), which depend on the case and the setting only. Read it, never write into it.
 
         Raises
         ------
@@ -506,11 +589,17 @@ class Case:
         DivergedError
             the simulation blew up.
         """
+        if keep and setup is None:
+            key = ("simulate", integrator, float(dt), float(duration), stop)
+            return self.memo(key, lambda: self.simulate(integrator, dt, duration, stop=stop))
         steps = check_timing(dt, duration)
         if setup is None:
             setup = self.setup(steps, dt)
+        model, data = _work(self.model, integrator, dt)
         return simulate(
-            self.model,
+            model,
+            data=data,
+            prepared=True,
             integrator=integrator,
             dt=dt,
             duration=duration,
@@ -553,8 +642,19 @@ class Case:
         return self.memo("physical", lambda: self.scene.physical(self.model))
 
     def reference(self, time: np.ndarray, *, dt: float) -> Reference | None:
-        """The exact solution at `time` [s] of a run with timestep `dt` [s] (`Scene.reference`; None: none)."""
-        return self.scene.reference(self, time, dt=dt)
+        """The exact solution at `time` [s] of a run with timestep `dt` [s] (`Scene.reference`; None: none).
+
+        Kept for the last few grids of times (a repeated run, the same run shown and checked): the
+        reference depends on the case, the times and dt only. Read it, never write into it.
+        """
+        times = np.ascontiguousarray(time, dtype=float)
+        key = ("reference", float(dt), times.shape, hashlib.blake2b(times.tobytes(), digest_size=16).digest())
+        kept: collections.OrderedDict = self.memo("references", collections.OrderedDict)
+        if key not in kept:
+            kept[key] = self.scene.reference(self, time, dt=dt)
+            while len(kept) > KEPT_REFERENCES:
+                kept.popitem(last=False)
+        return kept[key]
 
     def checks(self, trajectory: Trajectory) -> list[Check]:
         """The scalar claims a run of this case is held to (`Scene.checks`)."""
@@ -567,6 +667,10 @@ class Case:
     def model_limits(self, trajectory: Trajectory) -> list[str]:
         """Where a run leaves the scene's equations, one line each (`Scene.model_limits`; empty: nowhere)."""
         return self.scene.model_limits(self, trajectory)
+
+    def grid_notes(self, dt: float) -> list[str]:
+        """What a step grid of `dt` [s] changes in the scenario's input, one line each (`Scene.grid_notes`)."""
+        return self.scene.grid_notes(self, dt)
 
     def modes(self) -> list[tuple[float, float]]:
         """[(natural frequency [rad/s], damping ratio [-])] of every mode a run must resolve (`Scene.modes`)."""
@@ -597,6 +701,32 @@ class Case:
     def drawing(self) -> Drawing:
         """What the pictures of a run of the case show beyond the model's own geoms (`Scene.drawing`)."""
         return self.scene.drawing(self)
+
+
+#: per thread, the last few (case model, integrator, dt) -> (its configured copy, its MjData) (`_work`)
+_WORK = threading.local()
+#: how many the slots hold per thread: a run and its verification run at dt/2 (an MjData may be megabytes)
+WORK_SLOTS = 2
+
+
+def _work(model: mujoco.MjModel, integrator: str, dt: float) -> tuple[mujoco.MjModel, mujoco.MjData]:
+    """A case model's copy set to `integrator` and `dt` [s], and an MjData of it, reused by this thread's next run.
+
+    Copying a model and allocating its MjData (its arena: megabytes, zeroed) cost as much as a thousand steps
+    of a small scene; a case's model is never written into (`Case.compiled`), so the copy stays right.
+    """
+    slots: collections.OrderedDict | None = getattr(_WORK, "slots", None)
+    if slots is None:
+        slots = _WORK.slots = collections.OrderedDict()
+    key = (id(model), integrator, float(dt))
+    kept = slots.get(key)
+    if kept is None or kept[0] is not model:
+        work = configured(model, integrator, dt)
+        kept = slots[key] = (model, work, mujoco.MjData(work))
+        while len(slots) > WORK_SLOTS:
+            slots.popitem(last=False)
+    slots.move_to_end(key)
+    return kept[1], kept[2]
 
 
 def _case_of(scene: Scene, scenario: str, params: dict[str, float], model: mujoco.MjModel) -> Case:

@@ -44,9 +44,11 @@ from springlab.scenes.capabilities.friction import (
     FrictionCase,
     FrictionMeasure,
 )
+from springlab.scenes.declarations import keyword_parameters
 from springlab.sim import model_files
 from springlab.sim.simulate import INTEGRATORS, check_timing, integrator_id
 
+from . import friction_settings as scene_study
 from .audit.ship import compiled, ship
 from .executor import Executor, chunked, resolve
 from .friction_results import CaseStudy, FrictionSettings, HeldBody, HoldReport, SettingRun
@@ -225,6 +227,10 @@ def friction_hold(
         raise BadInputError(
             f"the study needs at least two timesteps to show the creep does not depend on dt, got {steps_of}"
         )
+    for name, chosen in (values or {}).items():
+        if name not in {s.name for s in settings} or not chosen:
+            valid = ", ".join(s.name for s in settings)
+            raise BadInputError(f"values: {name!r} is no swept setting of this hold (valid: {valid}) or has no values")
     friction = CONTACT_FRICTION if any(plan.holder_geoms) else JOINT_FRICTION
     question = f"does dry friction hold {_listed(compiled_model, plan)} for {hold_s:g} s?"
     case = FrictionCase(CASE, friction, question, MEASURES)
@@ -234,10 +240,6 @@ def friction_hold(
     carried = ship(("path", label), compiled_model) if runner.distributed else compiled_model
     baseline = dict(plan.baseline)
     own = _own_run(compiled_model, plan, baseline, own_integrator, own_dt)
-    for name, chosen in (values or {}).items():
-        if name not in {s.name for s in settings} or not chosen:
-            valid = ", ".join(s.name for s in settings)
-            raise BadInputError(f"values: {name!r} is no swept setting of this hold (valid: {valid}) or has no values")
     groups = grid(spec, case, names, steps_of, values)
     runs = _swept(runner, carried, plan, window, groups, len(steps_of))
     default = own.row
@@ -447,4 +449,86 @@ def _floor(study: CaseStudy, tol: float, within: int) -> str:
     return (
         f"No swept setting holds it within {tol:g} body sizes over the hold: {closest}. Larger impratio, more NoSlip"
         " iterations or a stiffer grip (more squeeze, more friction) are the next things to try."
+    )
+
+
+def friction_settings(
+    model: str | os.PathLike[str],
+    scenarios: Sequence[str] | None = None,
+    *,
+    tol: float | None = None,
+    bodies: Sequence[str] = (),
+    hold_s: float | None = None,
+    keyframe: str | int | None = None,
+    integrators: Sequence[str] | None = None,
+    dts: Sequence[float] | None = None,
+    executor: Executor | None = None,
+    **parameters: float,
+) -> FrictionSettings:
+    """MuJoCo's friction settings: a scene's exact dry-friction cases, or the creep of what dry friction holds in a
+    model file (`springlab friction-settings SCENE | MODEL.xml`).
+
+    Parameters
+    ----------
+    model
+        a scene that declares dry-friction cases (e.g. "friction"), or the path of a model file (MJCF, URDF).
+    scenarios
+        a scene's cases (None: all); not for a model file.
+    tol
+        a scene: the relative error each case's pick must meet (None: no picks); a model file: the slip allowed
+        over the hold, in body sizes [-] (None: DEFAULT_TOL, 1 mm for a 40 mm box).
+    bodies
+        a model file: the held bodies' names (empty: found).
+    hold_s
+        a model file: how long they must be held [s] (None: 10 s).
+    keyframe
+        a model file: where the hold starts (None: the first keyframe).
+    integrators, dts
+        the integrators and timesteps [s] swept (None: the scene's, or the model's own and its half).
+    executor
+        where the runs go (None: here).
+    **parameters
+        a scene's parameters in SI units (not the swept settings); not for a model file.
+
+    Returns
+    -------
+    FrictionSettings
+        the study: per case its runs, model errors, Pareto front and pick; a model file's also its `hold`.
+
+    Raises
+    ------
+    BadInputError
+        as `springlab.studies.friction_settings.friction_settings` (a scene) or `friction_hold` (a model file);
+        a scene's options given with a model file, or a model file's with a scene.
+
+    Examples
+    --------
+    >>> import springlab
+    >>> study = springlab.friction_settings("tests/data/gripper.xml", hold_s=60)  # doctest: +SKIP
+    >>> study.hold.bodies[0].creep_velocity_m_s  # doctest: +SKIP
+    0.00835
+    """
+    overrides = keyword_parameters("friction_settings", parameters)
+    if not model_files.is_model_file(model):
+        given = [
+            name
+            for name, value in (("bodies", bodies), ("hold_s", hold_s), ("keyframe", keyframe))
+            if value not in (None, (), [])
+        ]
+        if given:
+            raise BadInputError(f"{given[0]} applies to a model file (MODEL.xml), not to the scene {model!r}")
+        return scene_study.friction_settings(
+            str(model), scenarios, tol=tol, integrators=integrators, dts=dts, executor=executor, **overrides
+        )
+    if scenarios or overrides:
+        raise BadInputError(f"scenarios and parameters apply to a scene, not to a model file ({os.fspath(model)})")
+    return friction_hold(
+        model,
+        bodies=bodies,
+        hold_s=DEFAULT_HOLD_S if hold_s is None else hold_s,
+        keyframe=keyframe,
+        tol=DEFAULT_TOL if tol is None else tol,
+        integrators=integrators,
+        dts=dts,
+        executor=executor,
     )

@@ -280,7 +280,8 @@ class HeldBody:
     creep_velocity_m_s
         its mean speed over the second half of the time it was held [m/s] (None: the run diverged).
     slip_m
-        the largest distance of its centre of mass from where the hold started [m] (None: diverged).
+        the largest distance of its centre of mass from where the hold started while it was held [m] (None:
+        diverged).
     lost_at_s
         when it first touched none of its holders [s] (None: held throughout).
     """
@@ -520,13 +521,16 @@ class FrictionSettings(display.Shown):
             f" at its defaults ({integrator}, dt = {answers.written(dt, '~s')}){within}?"
         )
         parts = []
+        # MuJoCo's defaults are a run of the sweep only where its integrator and timestep were swept
+        swept = integrator in self.integrators and any(math.isclose(dt, d) for d in self.dts)
         for case in self.cases:
             default, pick, name = case.default, case.pick, case.scenario
-            at_default = (
-                "diverged at the defaults"
-                if default is None or default.max_rel_error is None
-                else f"error {say(f'{name}_default_error', default.max_rel_error, spec='.2g')} at the defaults"
-            )
+            if default is not None and default.max_rel_error is not None:
+                at_default = f"error {say(f'{name}_default_error', default.max_rel_error, spec='.2g')} at the defaults"
+            else:
+                at_default = (
+                    "diverged at the defaults" if swept else "MuJoCo's defaults not in the sweep (--integrators, --dt)"
+                )
             if pick is None:
                 parts.append(f"{name}: {at_default}")
             elif pick.row is not None and pick.found:

@@ -320,7 +320,8 @@ class Track:
     Attributes
     ----------
     slip_m
-        max distance of its centre of mass from where the hold started, over the run [m].
+        max distance of its centre of mass from where the hold started while it was held [m] (a lost body: up to
+        the first sample that finds it out of the grip).
     creep_velocity_m_s
         its mean speed over the second half of the time it was held [m/s].
     lost_at_s
@@ -348,18 +349,22 @@ def track(model: mujoco.MjModel, trajectory: Trajectory, plan: HoldPlan) -> list
     bodies = list(plan.bodies)
     positions = np.empty((len(rows), len(bodies), 3))
     held = np.ones((len(rows), len(bodies)), bool)
-    holder_sets = [set(h) for h in plan.holder_geoms]
-    own_sets = [set(g) for g in plan.body_geoms]
+    # per held body, every geom's role: 1 its own, 2 a holder's (a contact of a 1 with a 2 holds it)
+    roles = np.zeros((len(bodies), model.ngeom), np.int8)
+    for j, (mine, theirs) in enumerate(zip(plan.body_geoms, plan.holder_geoms)):
+        roles[j, list(mine)] = 1
+        roles[j, list(theirs)] = 2
+    gripped = [j for j, theirs in enumerate(plan.holder_geoms) if theirs]
     for k, row in enumerate(rows):
         data.qpos[:] = trajectory.qpos[row]
         mujoco.mj_kinematics(model, data)
         positions[k] = data.xipos[bodies]
-        if any(holder_sets):
+        if gripped:
             mujoco.mj_collision(model, data)
-            pairs = [tuple(int(g) for g in data.contact[i].geom) for i in range(data.ncon)]
-            for j, (mine, theirs) in enumerate(zip(own_sets, holder_sets)):
-                if theirs:
-                    held[k, j] = any((a in mine and b in theirs) or (b in mine and a in theirs) for a, b in pairs)
+            pairs = data.contact.geom  # (ncon, 2) geom ids
+            for j in gripped:
+                role = roles[j][pairs]
+                held[k, j] = bool(np.any(role[:, 0] * role[:, 1] == 2))
     times = trajectory.time[rows]
     out = []
     for j in range(len(bodies)):
@@ -372,7 +377,7 @@ def track(model: mujoco.MjModel, trajectory: Trajectory, plan: HoldPlan) -> list
         margin_row = rows[min(int(np.searchsorted(times, min(MARGIN_AT_S, times[end] / 2))), end)]
         out.append(
             Track(
-                slip_m=float(slip.max()),
+                slip_m=float(slip[: end + 1].max()),  # what it slid while held: once out of the grip it falls
                 creep_velocity_m_s=creep,
                 lost_at_s=float(times[end]) if lost.size else None,
                 held_s=float(times[end]),

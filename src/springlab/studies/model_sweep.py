@@ -21,8 +21,9 @@ What may vary (`NAME` of `--vary NAME=LOW:HIGH:N[:log]`):
 The values are set on the compiled model (MuJoCo reads them at every step; nothing is recompiled; after a mass or
 an armature, `mj_setConst` recomputes the constants MuJoCo derives from them). Each
 configuration is one job of a threaded `mujoco.rollout` call, chunked on the executor (springlab.studies.
-executor); a worker rebuilds the model from the file's path, so the rows are the same wherever they ran and
-equal single `springlab run MODEL.xml` runs at the same setting.
+executor); a dask worker compiles the model from its text and the files it names (springlab.studies.audit.ship,
+as the audit sends a model), so the rows are the same wherever they ran and equal single `springlab run MODEL.xml`
+runs at the same setting.
 """
 
 from __future__ import annotations
@@ -48,6 +49,7 @@ from springlab.sim.batch import Job, run_rollout
 from springlab.sim.simulate import INTEGRATORS, Setup, check_timing, integrator_id
 
 from . import answers
+from .audit.ship import Shipped, compiled, ship
 from .executor import Executor, chunked, resolve
 from .sweeps import CHUNK_CONFIGURATIONS, MAX_CONFIGURATIONS, Axis, Sweep, SweepRow, make_axis
 
@@ -251,8 +253,9 @@ class ModelSweepChunk:
 
     Attributes
     ----------
-    path
-        the model file.
+    model
+        the model file's path (locally), or its shipped text and assets (on dask: springlab.studies.audit.ship,
+        compiled on the worker and checked there to equal the caller's).
     keyframe
         where every run starts (None: the first keyframe, else qpos0 at rest).
     integrator
@@ -265,7 +268,7 @@ class ModelSweepChunk:
         each configuration's (name, value) pairs, as the targets take them.
     """
 
-    path: str
+    model: str | Shipped
     keyframe: str | None
     integrator: str
     dt: float
@@ -276,7 +279,7 @@ class ModelSweepChunk:
 def run_model_chunk(payload: ModelSweepChunk, nthread: int = 0) -> list[dict[str, Any]]:
     """Run one chunk of a model file's sweep as one batched MuJoCo call; the rows for it (module-level, plain
     data: dask ships it to workers)."""
-    base = model_files.load(payload.path)
+    base = model_files.load(payload.model) if isinstance(payload.model, str) else compiled(payload.model)
     start = operating_point(base, payload.keyframe)
     setup = Setup(qpos=start.qpos, qvel=start.qvel, act=start.act, control=start.ctrl if base.nu else None)
     jobs: list[Job] = []
@@ -378,10 +381,11 @@ def model_sweep(
         if aim.option == "timestep":
             check_timing(float(np.min(column)), duration)
     runner = resolve(executor)
+    source: str | Shipped = ship(("path", text), model) if runner.distributed else text
     pieces = chunked(count, chunk_size)
     payloads = [
         ModelSweepChunk(
-            text,
+            source,
             None if keyframe is None else str(keyframe),
             integrator,
             float(dt),

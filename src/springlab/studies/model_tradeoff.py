@@ -26,6 +26,7 @@ from collections.abc import Sequence
 from typing import Any
 
 import mujoco
+import numpy as np
 
 from springlab import display
 from springlab.answer import Answer
@@ -111,6 +112,9 @@ class ModelTradeoff(display.Shown):
         wall time of the whole study [s].
     executor
         where the runs ran.
+    moves
+        whether the reference moves at all from the start (False: a model at rest there; every error is then
+        round-off and nothing was measured).
     """
 
     model: str
@@ -126,6 +130,7 @@ class ModelTradeoff(display.Shown):
     recommendation: Recommendation[Run] | None
     wall_time_s: float
     executor: str
+    moves: bool = True
 
     @property
     def question_answer(self) -> Answer:
@@ -152,6 +157,8 @@ class ModelTradeoff(display.Shown):
         else:
             chosen = "; no setting of the sweep meets tol"
         basis = "" if self.converged else " The reference did NOT converge: errors near its own are not resolved."
+        if not self.moves:
+            basis += f" The model does not move from {self.start}: nothing was measured (give a keyframe that moves)."
         return say.answer(
             question,
             f"{mine}{chosen}. This is integration error only: MuJoCo's model error (soft contacts, regularised"
@@ -174,6 +181,7 @@ class ModelTradeoff(display.Shown):
                     "converged": self.converged,
                     "note": REFERENCE_NOTE,
                 },
+                "moves": self.moves,
                 "error_measure": "max over the run of |q - q_ref| / max |q_ref - q(0)| and |v - v_ref| / max |v_ref|"
                 " (positions in the tangent space), the larger",
                 "own_setting": self.own.to_dict(),
@@ -316,7 +324,16 @@ def model_tradeoff(
         recommendation=recommendation,
         wall_time_s=_time.perf_counter() - started,
         executor="local" if executor is None else executor.describe(),
+        moves=_moves(reference),
     )
+
+
+def _moves(reference: Reference) -> bool:
+    """Whether a converged reference moves at all from its start (positions or velocities change)."""
+    trajectory = getattr(reference, "trajectory", None)
+    if trajectory is None:
+        return True
+    return bool(np.any(trajectory.qpos != trajectory.qpos[0]) or np.any(trajectory.qvel != trajectory.qvel[0]))
 
 
 def _default_grid(own_dt: float, duration: float) -> list[float]:

@@ -71,7 +71,7 @@ def main(args: argparse.Namespace) -> int:
             executor=executor,
             omega_dt=design.OMEGA_DT,
             sobol=args.sobol,
-            seed=args.seed,
+            sobol_seed=args.seed,
             **overrides,
         )
     if args.output:

@@ -105,7 +105,7 @@ def _check_arguments(args: argparse.Namespace, model_file: bool) -> None:
         given = [
             name
             for name, value in (("--body", args.body), ("--hold", args.hold), ("--keyframe", args.keyframe))
-            if value
+            if value not in (None, [])
         ]
         if given:
             raise BadInputError(f"{given[0]} applies to a model file (MODEL.xml), not to the scene {args.scene!r}")

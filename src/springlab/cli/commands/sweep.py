@@ -45,6 +45,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print the sweep (setting, counts, every row) as JSON")
 
 
+def _vary(texts: list[str]) -> dict[str, tuple[float, float, int | None] | tuple[float, float, int | None, str]]:
+    """--vary's 'NAME=LOW:HIGH:N[:log]' texts -> sweep's typed `vary` mapping (each text checked)."""
+    from springlab.studies import sweeps
+
+    axes = [sweeps.parse_axis(text) for text in texts]
+    names = [axis.name for axis in axes]
+    if len(set(names)) != len(names):
+        raise BadInputError(f"a parameter is varied twice: {', '.join(names)}")
+    return {a.name: (a.low, a.high, a.count, "log") if a.log else (a.low, a.high, a.count) for a in axes}
+
+
 def main(args: argparse.Namespace) -> int:
     from springlab.studies import sweeps
 
@@ -57,9 +68,9 @@ def main(args: argparse.Namespace) -> int:
         result = sweeps.sweep(
             args.scene,
             args.scenario,
-            vary=args.vary,
+            vary=_vary(args.vary),
             samples=args.samples,
-            seed=args.seed,
+            sample_seed=args.seed,
             integrator=args.integrator,
             dt=args.dt,
             duration=args.duration,

@@ -89,7 +89,17 @@ import mujoco
 import numpy as np
 
 from springlab.errors import ParameterError
-from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Case, Parameter, PhaseField, Reference, Scenario, Scene
+from springlab.scenes.base import (
+    FOLLOWS_EXACT,
+    MIN_MASS,
+    MIN_MASS_REASON,
+    Case,
+    Parameter,
+    PhaseField,
+    Reference,
+    Scenario,
+    Scene,
+)
 from springlab.scenes.capabilities.drawing import Drawing
 from springlab.scenes.capabilities.fit import OscillatorFit
 from springlab.scenes.capabilities.frequency import FrequencySpec
@@ -131,19 +141,28 @@ class Car(Scene):
     questions = {
         "push_release": (
             "Passers-by push the car down with 250 kg and let go: how does it move?",
-            "It bobs ±{static_sag_m:.3g} m about its rest height at {omega_rad_s:.4g} rad/s (period {period_s:.3g} s), undamped.",
+            "It bobs ±{static_sag_m:.3g ~m} about its rest height at {omega_rad_s:.4g} rad/s (period {period_s:.3g}"
+            " s), undamped; MuJoCo's car rises at most to {max_height_m:.4g ~m} (exact: the rest height"
+            " {equilibrium_height_m:.4g ~m} plus the sag)." + FOLLOWS_EXACT,
         ),
         "damped_release": (
             "The same release with shock absorbers at ζ = 0.3?",
-            "The bobbing dies out with logarithmic decrement {logarithmic_decrement:.3g} (time constant {decay_time_constant_s:.3g} s); the car rises at most to {max_height_m:.4g} m.",
+            "The bobbing dies out with logarithmic decrement {logarithmic_decrement:.6g} (MuJoCo's peaks:"
+            " {logarithmic_decrement_measured:.6g}), time constant {decay_time_constant_s:.3g} s; the car rises at"
+            " most to {max_height_m:.4g ~m}." + FOLLOWS_EXACT,
         ),
         "pitch_heave": (
             "With front and rear springs, how does the car pitch and heave after a push over the front axle?",
-            "Two modes at {frequency_1_hz:.3g} Hz and {frequency_2_hz:.3g} Hz, each a rotation about its own node ({mode_1_node_m:.3g} m and {mode_2_node_m:.3g} m from the centre of mass).",
+            "Two modes at {frequency_1_hz:.4g} Hz and {frequency_2_hz:.4g} Hz (exactly ω = {omega_1_analytic_rad_s:.8g}"
+            " and {omega_2_analytic_rad_s:.8g} rad/s; MuJoCo's linearization {omega_1_rad_s:.8g} and"
+            " {omega_2_rad_s:.8g} rad/s), each a rotation about its own node ({mode_1_node_m:.3g} m and"
+            " {mode_2_node_m:.3g} m from the centre of mass)." + FOLLOWS_EXACT,
         ),
         "road_bump": (
             "A quarter car drives over an 8 cm half-sine bump at 8 m/s: what do the passengers feel?",
-            "A peak body acceleration of {peak_body_acceleration_m_s2:.3g} m/s² and {peak_suspension_travel_m:.3g} m of suspension travel; the tire keeps at least {min_tire_force_n:.4g} N on the road.",
+            "A peak body acceleration of {peak_body_acceleration_m_s2:.3g} m/s² and {peak_suspension_travel_m:.3g ~m}"
+            " of suspension travel; the tire keeps at least {min_tire_force_n:.4g} N of its static"
+            " {static_tire_force_n:.4g} N on the road (measured on MuJoCo's run)." + FOLLOWS_EXACT,
         ),
     }
     parameters = {

@@ -5,7 +5,7 @@ Each scenario gets two panels (springlab.scenes.capabilities.figure.Panel), draw
 * `modes`: the first three mode shapes of the N-element model (dashed) beside the continuum's sin(beta_n x)
   (dotted), each scaled to 1 at its largest; the twist along the string at a few instants of the run.
 * `spin_up`, `breakaway`: the top drive's and the bit's speed against time, the bit's exact (N elements,
-  dashed) and continuum (dotted) speed on top, the exact breakaway and re-stick marked; the twist along
+  dashed) and continuum (dotted) speed on top, the exact breakaway and re-stick marked (the events the run reports, answers.RESTICK_FRACTION); the twist along
   the string (each node's angle minus the top drive's, in turns) at chosen instants.
 """
 
@@ -93,10 +93,12 @@ def panels(case: CaseView, trajectory: Trajectory) -> tuple[Panel, ...]:
         curves.append(Curve(f"bit, {lumped.size - 1} elements exact", sample, exact_v[:, -1] / answers.RPM, "exact"))
         curves.append(Curve("bit, continuum (travelling waves)", sample, continuum_v / answers.RPM, "continuum"))
         breakaway = exact.first("slip")
-        restick = next((t for t, kind in exact.events if kind == "stick" and t > breakaway), math.nan)
-        marks.append((breakaway, f"breakaway (exact) {breakaway:.4g} s"))
+        # the run's own events (answers.RESTICK_FRACTION), at their exact N-element instants
+        restick = answers.restick_exact(lumped, exact, drive)
+        marks.append((breakaway, f"breakaway (exact) {breakaway:.5g} s"))
         if math.isfinite(restick):
-            marks.append((restick, f"sticks again {restick:.4g} s"))
+            level = answers.RESTICK_FRACTION * drive.speed / answers.RPM
+            marks.append((restick, f"re-stick (exact, below {level:.2g} rpm) {restick:.4g} s"))
         instants = [t for t in (0.5 * breakaway, breakaway, exact.peak_time, restick) if math.isfinite(t)]
     speeds = Panel(
         "top drive and bit speed",

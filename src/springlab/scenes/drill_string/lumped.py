@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 
 import mujoco
 import numpy as np
@@ -275,7 +276,7 @@ class LumpedString:
                 zero = _first_root(lambda s: -bit_speed(s), t, end, spacing)
             stop = end if zero is None else zero
             phases.append(Phase(t, stop, "slip", direction, q.copy(), v.copy()))
-            best_t, best = _maximum(bit_speed, t, stop, spacing)
+            best_t, best = maximum(bit_speed, t, stop, spacing)
             if best > peak[1]:
                 peak = (best_t, best)
             qs, vs = full.state(np.array([stop - t]), q, v, slipping)
@@ -377,8 +378,15 @@ def _first_root(function, start: float, end: float, spacing: float) -> float | N
     return float(_optimize().brentq(lambda s: float(function(np.array([s]))[0]), low, high, xtol=1e-15, rtol=1e-15))
 
 
-def _maximum(function, start: float, end: float, spacing: float) -> tuple[float, float]:
-    """(t, value) of the largest value of function on [start, end]: the grid's best, refined."""
+def maximum(
+    function: Callable[[np.ndarray], np.ndarray], start: float, end: float, spacing: float
+) -> tuple[float, float]:
+    """(t [s], value) of the largest value of `function` (vectorized in t) on [start, end] [s].
+
+    A grid of `spacing` [s] (finer than a quarter of the fastest oscillation, so no peak falls between two
+    samples unseen) finds the best sample; scipy's bounded Brent search between its neighbours then finds the
+    continuous maximum to 1e-13 s, so the value is the function's own to round-off (a smooth peak is flat).
+    """
     count = max(int(math.ceil((end - start) / spacing)), 2)
     grid = np.linspace(start, end, count + 1)
     values = function(grid)

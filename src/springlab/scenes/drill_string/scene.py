@@ -34,6 +34,7 @@ adjusted so the speed reaches top_speed_rpm exactly); every exact answer uses th
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from typing import Any
 
 import mujoco
@@ -66,6 +67,45 @@ EVENT_ROOT_ERROR = 1e-12
 def _positive(name: str, unit: str, description: str) -> Parameter:
     """A parameter that must be > 0."""
     return Parameter(name, unit, description, minimum=0.0, minimum_inclusive=False)
+
+
+def _breakaway_answer(values: Mapping[str, Any]) -> str:
+    """The breakaway's answer, worded for a run that re-sticks within its duration or one that does not yet."""
+    if not math.isfinite(values.get("breakaway_time_s", math.nan)):
+        return (
+            "The bit is still stuck when the run ends at {duration_s:.4g} s, the string wound up"
+            " {windup_turns_static:.3g} turns by the time it can break free (the rod's bit does at"
+            " {breakaway_time_s_continuum:.5g} s): a longer --duration shows the slip."
+        )
+    text = (
+        "The bit sticks while the string winds up {windup_turns:.2f} turns (exact {windup_turns_exact:.5f}); it"
+        " breaks free at {breakaway_time_s:.5g} s (exact {breakaway_time_s_exact:.7g} s, the rod:"
+        " {breakaway_time_s_continuum:.5g} s), whips round at {peak_bit_speed_rad_s:.3g rpm}, {peak_speed_ratio:.2g}x"
+        " the top drive (exact {peak_bit_speed_rad_s_exact:.5g rpm}),"
+    )
+    if math.isfinite(values.get("restick_time_s", math.nan)):
+        text += (
+            " and re-sticks (its speed below 1 % of the top drive's, {restick_speed_rad_s:.2g rpm}) at"
+            " {restick_time_s:.6g} s (exact {restick_time_s_exact:.6g} s)"
+        )
+    else:
+        text += (
+            " and has not slowed below 1 % of the top drive's speed ({restick_speed_rad_s:.2g rpm}) by the run's end"
+        )
+    return text + (
+        ": stick-slip, with a perfectly steady top drive (MuJoCo's dry friction is Coulomb; the velocity-weakening"
+        " friction of real bits is not a MuJoCo model)."
+    )
+
+
+def _round_divisor(total: float, dt: float) -> float:
+    """The largest round timestep (1, 2, 2.5, 4 or 5 x 10^k s) not above `dt` that divides `total` [s]."""
+    for exponent in range(math.floor(math.log10(dt)), math.floor(math.log10(dt)) - 12, -1):
+        for mantissa in (5.0, 4.0, 2.5, 2.0, 1.0):
+            step = mantissa * 10.0**exponent
+            if step <= dt * (1 + 1e-12) and abs(total / step - round(total / step)) <= 1e-9 * total / step:
+                return step
+    return total / math.ceil(total / dt)
 
 
 def _friction_free(params: dict[str, float], explicit: set[str]) -> dict[str, float]:
@@ -141,23 +181,22 @@ class DrillString(Scene):
     questions = {
         "modes": (
             "What are the torsional natural frequencies of the drill string, and how many elements does f1 need?",
-            "f1 = {mode_1_frequency_hz_continuum:.5g} Hz for the rod (period {mode_1_period_s:.3g} s); the"
-            " {n_elements:.0f}-element model gives {mode_1_frequency_hz_exact:.7g} Hz (discretization error"
-            " {mode_1_discretization_error:.2g}) and the run measures {mode_1_frequency_hz:.7g} Hz.",
+            "f1 = {mode_1_frequency_hz_continuum:.6g} Hz for the rod (period {mode_1_period_s_continuum:.6g} s); the"
+            " {n_elements:.0f}-element model's is exactly {mode_1_frequency_hz_exact:.7g} Hz (period"
+            " {mode_1_period_s:.6g} s, discretization error {mode_1_discretization_error:.2g}) and the run measures"
+            " {mode_1_frequency_hz:.7g} Hz.",
         ),
         "spin_up": (
             "How does the bit follow when the top drive spins up, with nothing holding the bit?",
             "The bit lags the top drive by a travel time of {travel_time_s:.3g} s and overshoots to"
-            " {bit_peak_speed_rpm:.4g} rpm ({top_speed_rpm:.3g} rpm at the top): the string winds up to"
-            " {windup_turns:.3g} turns and rings at f1 = {mode_1_frequency_hz_exact:.3g} Hz.",
+            " {bit_peak_speed_rad_s:.7g rpm} (exact {bit_peak_speed_rad_s_exact:.7g rpm}; the rod's"
+            " {bit_peak_speed_rad_s_continuum:.5g rpm}) against {top_speed_rpm:.3g} rpm at the top: the string winds"
+            " up {windup_turns:.7g} turns (exact {windup_turns_exact:.7g}) and rings at f1 ="
+            " {mode_1_frequency_hz_exact:.4g} Hz.",
         ),
         "breakaway": (
             "How does friction at the bit influence the rotation of a kilometre-long rod (Fig. 5.2)?",
-            "The bit sticks while the string winds up {windup_turns:.3g} turns; it breaks free at"
-            " {breakaway_time_s:.5g} s (exact rod: {breakaway_time_s_continuum:.5g} s), whips round at up to"
-            " {peak_bit_speed_rpm:.4g} rpm, {peak_speed_ratio:.2g} times the top drive's {top_speed_rpm:.3g} rpm,"
-            " and slows to a near stop again at {restick_time_s:.4g} s: stick-slip, with a perfectly steady top drive"
-            " (MuJoCo's dry friction is Coulomb; the velocity-weakening friction of real bits is not a MuJoCo model).",
+            _breakaway_answer,
         ),
     }
     #: `springlab refine`: how many elements each question needs, and with which integrator and timestep
@@ -249,6 +288,21 @@ class DrillString(Scene):
     def modes(self, case: Case) -> list[tuple[float, float]]:
         return [(float(w), 0.0) for w in answers.frequencies(answers.lumped_of(case))]
 
+    def grid_notes(self, case: Case, dt: float) -> list[str]:
+        """The spin-up's ramp is whole steps: a dt that does not divide spin_up_time lengthens or shortens it."""
+        if case.scenario.name == "modes":
+            return []
+        asked = float(case.params["spin_up_time"])
+        drive = self.drive(case.model, dt)
+        if abs(drive.ramp_time - asked) <= 1e-9 * asked:
+            return []
+        return [
+            f"the top drive's {asked:g} s spin-up lasts {drive.ramp_time:.6g} s on this step grid ({drive.ramp_steps}"
+            f" steps of {dt:g} s), and the exact reference follows it; a dt that divides {asked:g} s keeps it:"
+            f" {_round_divisor(asked, dt):g} s, or the nearest, {asked / math.ceil(asked / dt):.6g} s and"
+            f" {asked / max(1, math.floor(asked / dt)):.6g} s"
+        ]
+
     # -- a run ------------------------------------------------------------------------
 
     def setup(self, case: Case, steps: int, dt: float) -> Setup:
@@ -327,7 +381,9 @@ class DrillString(Scene):
             out[f"mode_{k + 1}_frequency_hz_exact"] = float(exact_hz[k])
             out[f"mode_{k + 1}_frequency_hz_continuum"] = float(continuum_hz[k])
             out[f"mode_{k + 1}_discretization_error"] = float(abs(exact_hz[k] / continuum_hz[k] - 1))
-        out["mode_1_period_s"] = float(1.0 / continuum_hz[0])
+        # the period of the model that runs (N elements) and, named as such, the rod's
+        out["mode_1_period_s"] = float(1.0 / exact_hz[0])
+        out["mode_1_period_s_continuum"] = float(1.0 / continuum_hz[0])
         top, bit = (case.joint_columns(trajectory)[j] for j in (TOP, BIT))
         if scenario.name == "modes":
             measured = answers.measured_frequency(trajectory.time, bit[0], bit[1])
@@ -384,16 +440,14 @@ def _breakaway_checks(case: Case, trajectory: Trajectory) -> list[Check]:
     drive = answers.drive_of(case.model, trajectory.dt)
     half_dt = trajectory.dt / 2
     duration = float(trajectory.time[-1])
-    finer = case.simulate(trajectory.integrator, half_dt, duration)
+    finer = case.simulate(trajectory.integrator, half_dt, duration, keep=True)
     columns = [case.joint_columns(run) for run in (trajectory, finer)]
     coarse, fine = (
         answers.simulated_events(lumped, answers.drive_of(case.model, run.dt), run, cols[TOP], cols[BIT])
         for run, cols in zip((trajectory, finer), columns)
     )
     exact = answers.stick_slip(lumped, duration, drive)
-    restick_exact = lumped.slowdown_time(
-        exact, answers.RESTICK_FRACTION * drive.speed, lumped.drive_control(drive.acceleration), drive.ramp_time
-    )
+    restick_exact = answers.restick_exact(lumped, exact, drive)
     basis = (
         "2 x the Richardson estimate from a run at dt/2 with order 1 (MuJoCo's friction constraint is"
         " regularized over 2 dt) + 100 eps per step; the exact value from the N-element model's stick-slip solution"

@@ -233,31 +233,33 @@ class Friction(Scene):
     questions = {
         "coulomb_decay": (
             "A block on a spring with dry friction F is released from rest: how does it come to a stop?",
-            "Each half cycle lasts π/ω = {half_period_s:.4g} s and ends {amplitude_drop_per_half_cycle_m:.3g} m (2F/k)"
+            "Each half cycle lasts π/ω = {half_period_s:.4g} s and ends {amplitude_drop_per_half_cycle_m:.3g ~m} (2F/k)"
             " closer to the spring's rest: the amplitude falls linearly, not by a constant factor as under viscous"
             " damping. It stops for good after {half_cycles_exact} half cycles, at t = {stop_time_s_exact:.4g} s and"
-            " x = {stop_position_m_exact:.4g} m, inside the stick zone ±F/k = ±{stick_zone_m:.3g} m."
-            " MuJoCo: {half_cycles} half cycles, stop at {stop_time_s:.4g} s and x = {stop_position_m:.4g} m, then"
-            " a creep of {creep_velocity_m_s:.2g} m/s.",
+            " x = {stop_position_m_exact:.4g ~m}, inside the stick zone ±F/k = ±{stick_zone_m:.3g ~m}."
+            " MuJoCo: {half_cycles} half cycles, stop at {stop_time_s:.4g} s and x = {stop_position_m:.4g ~m}, then"
+            " a creep of {creep_velocity_m_s:.3g ~m/s} (exact: {creep_velocity_m_s_exact:.3g ~m/s}).",
         ),
         "contact_decay": (
             "The same block slides on a plane with contact friction μ: how does it come to a stop?",
             "Friction is μ m g = {friction_force_N:.4g} N, so the amplitude falls by 2F/k ="
-            " {amplitude_drop_per_half_cycle_m:.3g} m per half cycle; the block stops after {half_cycles_exact} half"
-            " cycles at t = {stop_time_s_exact:.4g} s, x = {stop_position_m_exact:.4g} m. MuJoCo: {half_cycles} half"
-            " cycles, stop at {stop_time_s:.4g} s and x = {stop_position_m:.4g} m, then a creep of"
-            " {creep_velocity_m_s:.2g} m/s.",
+            " {amplitude_drop_per_half_cycle_m:.3g ~m} per half cycle; the block stops after {half_cycles_exact} half"
+            " cycles at t = {stop_time_s_exact:.4g} s, x = {stop_position_m_exact:.4g ~m}. MuJoCo: {half_cycles}"
+            " half cycles, stop at {stop_time_s:.4g} s and x = {stop_position_m:.4g ~m}, then a creep of"
+            " {creep_velocity_m_s:.3g ~m/s} (exact: {creep_velocity_m_s_exact:.3g ~m/s}).",
         ),
         "incline_hold": (
             "Does friction hold a block on an incline below its friction angle?",
             "Yes: the incline ({incline_deg:.3g}°) is below the friction angle atan μ = {friction_angle_deg:.3g}°,"
-            " so exactly nothing moves. MuJoCo's block creeps at {creep_velocity_m_s:.2g} m/s: {crept_distance_m:.2g} m"
-            " over the run.",
+            " so exactly nothing moves (exact creep {creep_velocity_m_s_exact:.3g ~m/s}). MuJoCo's block creeps at"
+            " {creep_velocity_m_s:.3g ~m/s}: {crept_distance_m:.3g ~m} over the run (exact"
+            " {crept_distance_m_exact:.3g ~m}).",
         ),
         "incline_slide": (
             "How fast does a block slide down an incline steeper than its friction angle?",
-            "a = g (sin θ − μ cos θ) = {acceleration_m_s2_exact:.4g} m/s² from the start; MuJoCo's block"
-            " accelerates at {acceleration_m_s2:.4g} m/s².",
+            "a = g (sin θ − μ cos θ) = {acceleration_m_s2_exact:.8g} m/s² from the start, {distance_m_exact:.7g ~m}"
+            " down the slope by the run's end; MuJoCo's block accelerates at {acceleration_m_s2:.8g} m/s² and slides"
+            " {distance_m:.7g ~m}.",
         ),
     }
     parameters = {
@@ -510,7 +512,7 @@ class Friction(Scene):
         model, scenario = case.model, case.scenario
         x, v = case.joint_columns(trajectory)[ALONG]
         exact = self.motion(case, float(trajectory.time[-1]))
-        half = case.simulate(trajectory.integrator, trajectory.dt / 2, float(trajectory.time[-1]))
+        half = case.simulate(trajectory.integrator, trajectory.dt / 2, float(trajectory.time[-1]), keep=True)
         xh, vh = case.joint_columns(half)[ALONG]
         n = min(len(x), (len(xh) + 1) // 2)
         ref_x, ref_v = exact.state(trajectory.time)

@@ -177,19 +177,24 @@ class Kinematics(Scene):
     questions = {
         "polynomial_position": (
             "Given x(t) = 0.03 t³ + 0.2 t² + 1.2 t + 3 m, find v(t) and a(t).",
-            "{velocity_expression} and {acceleration_expression}; at t = {end_time_s:.3g} s, v = {v_end_m_s:.4g} m/s.",
+            "{velocity_expression} and {acceleration_expression}; at t = {end_time_s:.3g} s, v = {v_end_m_s:.4g} m/s"
+            " and a = {a_end_m_s2:.4g} m/s² (MuJoCo's run: {v_end_simulated_m_s:.10g} m/s and"
+            " {a_end_simulated_m_s2:.10g} m/s²).",
         ),
         "linear_acceleration": (
             "Given a(t) = 1.2 t + 3 m/s², v(0) = 15 m/s, x(0) = 150 m, find v(t) and x(t).",
-            "{velocity_expression} and {position_expression}: x = {x_end_m:.5g} m at t = {end_time_s:.3g} s.",
+            "{velocity_expression} and {position_expression}: x = {x_end_m:.5g} m at t = {end_time_s:.3g} s"
+            " (MuJoCo's run: {x_end_simulated_m:.10g} m).",
         ),
         "constant_acceleration": (
             "Uniform acceleration (eq. 5.5): a = 2 m/s² from 10 m/s; where is the car after 5 s?",
-            "{position_expression}: {x_end_m:.4g} m, at {v_end_m_s:.4g} m/s.",
+            "{position_expression}: {x_end_m:.4g} m, at {v_end_m_s:.4g} m/s (MuJoCo's run: {x_end_simulated_m:.10g} m"
+            " at {v_end_simulated_m_s:.10g} m/s).",
         ),
         "tachograph": (
             "A bus's tachograph records v(t) over 12 s: how far did it go, and what were its accelerations?",
-            "The area under v(t) is {displacement_m:.4g} m; the slopes are {segment_accelerations_m_s2} m/s².",
+            "The area under v(t) is {displacement_m:.4g} m (MuJoCo's bus: {x_end_simulated_m:.10g} m); the slopes are"
+            " {segment_accelerations_m_s2} m/s².",
         ),
     }
     parameters = {

@@ -216,19 +216,27 @@ class Nonlinear(Scene):
     questions = {
         "softening": (
             "A softening spring: where are the equilibria and is a release from 0.09 m bounded?",
-            "Equilibria at {equilibria_m} m (saddle, centre, saddle); the motion is {motion}, period {period_simulated_s:.4g} s, longer than the linear 2π/ω.",
+            "Equilibria at {equilibria_m} m (saddle, centre, saddle); the motion is {motion}, with period"
+            " {period_quadrature_s:.7g} s by exact quadrature (MuJoCo's run: {period_simulated_s:.7g} s), longer"
+            " than the linear 2π/ω.",
         ),
         "softening_escape": (
             "Released beyond the separatrix, does the softening spring hold the block?",
-            "No: its energy {energy_J:.3g} J exceeds the barrier {barrier_height_J:.3g} J and the block escapes (motion {motion}).",
+            "No: its energy {energy_J:.3g} J exceeds the barrier {barrier_height_J:.3g} J and the block escapes"
+            " (motion {motion}), reaching {escape_radius_m:.3g} m after {escape_time_quadrature_s:.6g} s by exact"
+            " quadrature (MuJoCo's run: {escape_time_s:.6g} s).",
         ),
         "double_well": (
             "A double-well spring: how does a block released in one well move?",
-            "It stays in that well (energy {energy_J:.3g} J below the barrier), oscillating between {turning_points_m[0]:.3g} and {turning_points_m[1]:.3g} m with period {period_simulated_s:.4g} s.",
+            "It stays in that well (energy {energy_J:.3g} J below the barrier), oscillating between"
+            " {turning_points_m[0]:.3g ~m} and {turning_points_m[1]:.3g ~m} with period {period_quadrature_s:.7g} s"
+            " by exact quadrature (MuJoCo's run: {period_simulated_s:.7g} s).",
         ),
         "forced_duffing": (
             "A damped, forced double well: is the motion predictable?",
-            "No, it is chaotic: nearby starts separate at about {lyapunov_exponent_per_s:.3g} 1/s, so the computed path is accurate only up to {accurate_until_s:.3g} s.",
+            "No, it is chaotic: nearby starts separate at about {lyapunov_exponent_per_s:.3g} 1/s (± "
+            "{lyapunov_standard_error_per_s:.2g} 1/s), so a start known to {perturbation_m:.3g ~m} is lost after"
+            " {separation_time_s:.3g} s and the computed path is accurate only up to {accurate_until_s:.3g} s.",
         ),
     }
     parameters = {
@@ -487,6 +495,9 @@ class Nonlinear(Scene):
         """Another run of the case at another setting, optionally from another block state or from a full
         (qpos, qvel) state (the case's model is not changed: simulate steps a copy)."""
         params = case.params
+        if state is None and x0 is None and v0 is None:
+            # the scenario's own start: a verification run (dt/2, dt/4), kept on the case for the next verdict
+            return case.simulate(integrator, dt, duration, keep=True)
         if state is not None:
             qpos, qvel = state
             setup = Setup(qpos=qpos, qvel=qvel, control=self._setup(case, 0.0, 0.0).control)
@@ -503,7 +514,7 @@ class Nonlinear(Scene):
     def _orbit(self, case: Case) -> dict:
         """The unforced, undamped motion through (x0, v0) (springlab.scenes.nonlinear.orbits.orbit)."""
         m, k1, k3, d = case.physical()
-        return orbit(m, k1, k3, case.params["x0"], case.params["v0"])
+        return dict(case.memo("orbit", lambda: orbit(m, k1, k3, case.params["x0"], case.params["v0"])))
 
     def quantities(self, case: Case, trajectory: Trajectory) -> dict:
         model, params = case.model, case.params
@@ -585,7 +596,8 @@ class Nonlinear(Scene):
     def checks(self, case: Case, trajectory: Trajectory) -> list[Check]:
         model, params = case.model, case.params
         m, k1, k3, d = case.physical()
-        out = self._linearization_checks(case)
+        # the case's own (MuJoCo's qacc at its equilibria): computed once per case
+        out = list(case.memo("linearization_checks", lambda: tuple(self._linearization_checks(case))))
         integrator, dt = trajectory.integrator, trajectory.dt
         order = ORDERS[integrator]
         unforced = d == 0 and self._forcing(params) == "none"

@@ -355,12 +355,16 @@ class Feedback(Variant):
         out["encoder_error_max_m"] = float(np.max(np.abs(encoder[::per_sample] - exact_encoder[::per_sample])))
         band, target = params["positioning_band"], params["move_distance"]
         out["settling_band_m"] = band
-        out["overshoot_m"] = max(0.0, float(np.max(run.q_c - target)))
-        out["overshoot_m_exact"] = max(0.0, float(np.max(exact.states[:, 0] - target)))
+        # the run's overshoot between its steps as well (cubic Hermite of position and velocity, O(dt^4))
+        turns = events.extrema(run.time, run.q_c - target, run.v_c)
+        out["overshoot_m"] = max(0.0, float(np.max(run.q_c - target)), *(float(v) for v in turns[:, 1]))
+        # the exact loop's largest excursion between its steps too, not the largest of its samples
+        carriage = np.eye(len(a))[0]
+        peak = sampled_loop.held_maximum(a, b, run.dt, exact.states, exact.forces, carriage)
+        out["overshoot_m_exact"] = max(0.0, peak - target)
         out["final_error_m"] = abs(float(run.q_c[-1]) - target)
-        exact_exit = events.last_exit(
-            run.dt * np.arange(len(exact.states)), exact.states[:, 0] - target, exact.states[:, 2], band
-        )
+        # a root of the exact held motion, not of an interpolant of its steps
+        exact_exit = sampled_loop.held_last_exit(a, b, run.dt, exact.states, exact.forces, carriage, band, target)
         # for good: the exact loop, continued until its decay certifies it, leaves the band no more after the run
         out["settled_for_good"] = bool(exact.settled and exact_exit <= run.time[-1])
         out["positioning_time_s_exact"] = exact_exit if exact.settled else math.inf

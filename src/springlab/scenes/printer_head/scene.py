@@ -99,7 +99,7 @@ from springlab.exact import analytic
 from springlab.exact.limits import stability_limit as joint_damping_stability_limit
 from springlab.exact.linearize import one_step_map, operating_point
 from springlab.exact.shaping import SHAPERS
-from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Case, Parameter, Reference, Scenario, Scene
+from springlab.scenes.base import FOLLOWS_EXACT, MIN_MASS, MIN_MASS_REASON, Case, Parameter, Reference, Scenario, Scene
 from springlab.scenes.capabilities.case import CaseView
 from springlab.scenes.capabilities.fit import OscillatorFit
 from springlab.scenes.capabilities.frequency import FrequencySpec
@@ -196,23 +196,30 @@ class PrinterHead(Scene):
     questions = {
         "move": (
             "How fast can the print head be positioned one inch away, to ±10 µm?",
-            "The minimum-time move takes {move_time_s:.3g} s; the {natural_frequency_hz:.4g} Hz belt ringing then settles in {settling_time_s:.3g} s: positioned in {positioning_time_s:.4g} s.",
+            "The minimum-time move takes {move_time_s:.4g ms}; the {natural_frequency_hz:.4g} Hz belt ringing"
+            " ({residual_amplitude_m:.3g µm} left) then settles in {settling_time_s:.3g ms}: positioned in"
+            " {positioning_time_s:.4g ms} (the envelope's estimate: {positioning_time_estimate_s:.4g ms})."
+            + FOLLOWS_EXACT,
         ),
         "step_force": (
             "What does a constant motor force do to the carriage and the belt?",
-            "The carriage accelerates at {rigid_acceleration_m_s2:.4g} m/s² while the belt stretches to {max_belt_stretch_m:.3g} m, twice its static {static_belt_stretch_m:.3g} m, ringing at {natural_frequency_hz:.4g} Hz.",
+            "The carriage accelerates at {rigid_acceleration_m_s2:.4g} m/s² while the belt stretches to"
+            " {max_belt_stretch_m:.3g µm}, twice its static {static_belt_stretch_m:.3g µm} less the damping, ringing"
+            " at {natural_frequency_hz:.4g} Hz." + FOLLOWS_EXACT,
         ),
         "settle": (
             "Released from the belt stretch of full acceleration, how long does the carriage take to settle?",
-            "It rings at {natural_frequency_hz:.4g} Hz with ζ = {damping_ratio:.3g} and stays within the band after {settling_time_s:.3g} s.",
+            "It rings at {natural_frequency_hz:.4g} Hz with ζ = {damping_ratio:.3g} from {initial_deviation_m:.3g µm}"
+            " and stays within ±{settling_band_m:.3g µm} after {settling_time_s:.3g ms} (the envelope's estimate:"
+            " {settling_time_estimate_s:.3g ms})." + FOLLOWS_EXACT,
         ),
         **{
             f"move_{name}": (
                 f"How fast is the print head positioned one inch away, to ±10 µm, when the move is shaped by a"
                 f" {name.upper()} input shaper?",
-                "The shaper adds {shaper_duration_s:.3g} s and leaves {residual_vibration:.3g} of the belt's"
-                " vibration ({residual_amplitude_m:.3g} m, exact {residual_amplitude_m_exact:.3g} m): positioned in"
-                " {positioning_time_s:.4g} s (exact {positioning_time_s_exact:.4g} s).",
+                "The shaper adds {shaper_duration_s:.3g ms} and leaves {residual_vibration:.3g %} of the belt's"
+                " vibration ({residual_amplitude_m:.3g ~m}, exact {residual_amplitude_m_exact:.3g ~m}): positioned"
+                " in {positioning_time_s:.5g ms} (exact {positioning_time_s_exact:.5g ms}).",
             )
             for name in SHAPERS
         },
@@ -220,10 +227,10 @@ class PrinterHead(Scene):
             f"feedback_{encoder}": (
                 f"How fast does a sampled PD/PID loop on the {encoder} encoder position the print head, and how"
                 " much gain margin does it have?",
-                "At {control_period_s:.3g} s per sample the loop has {gain_margin_db:.3g} dB of gain margin and"
+                "At {control_period_s:.3g ms} per sample the loop has {gain_margin_db:.3g} dB of gain margin and"
                 " {phase_margin_deg:.3g}° of phase margin (it loses stability at {critical_gain:.4g} times its"
-                " gains); the carriage is positioned in {positioning_time_s:.4g} s (exact"
-                " {positioning_time_s_exact:.4g} s).",
+                " gains); the carriage overshoots by {overshoot_m:.3g µm} (exact {overshoot_m_exact:.3g µm}) and is"
+                " positioned in {positioning_time_s:.5g ms} (exact {positioning_time_s_exact:.5g ms}).",
             )
             for encoder in control.ENCODERS
         },
@@ -232,8 +239,9 @@ class PrinterHead(Scene):
             " does it choose?",
             "The belt resonates at {belt_frequency_hz_measured:.6g} Hz (95 % interval"
             " {belt_frequency_ci95_width_hz:.3g} Hz wide; the model's {natural_frequency_hz:.6g} Hz), ζ ="
-            " {belt_damping_ratio_measured:.3g}; it chooses {chosen_shaper}, whose move MuJoCo positions in"
-            " {chosen_shaper_positioning_time_s:.4g} s.",
+            " {belt_damping_ratio_measured:.3g} (the model's {damping_ratio:.3g}); it chooses {chosen_shaper}, whose"
+            " move MuJoCo positions in {chosen_shaper_positioning_time_s:.5g ms} (exact"
+            " {chosen_shaper_positioning_time_s_exact:.5g ms}).",
         ),
     }
     parameters = {
@@ -484,7 +492,9 @@ class PrinterHead(Scene):
             "natural_frequency_hz": omega_n / (2 * math.pi),
             "damping_ratio": zeta,
         }
-        lin_omega, lin_zeta, _ = linearized_mode(model, trajectory.integrator, dt)
+        lin_omega, lin_zeta, _ = case.memo(
+            ("linearized_mode", trajectory.integrator, dt), lambda: linearized_mode(model, trajectory.integrator, dt)
+        )
         out["linearized_natural_frequency_hz"] = lin_omega / (2 * math.pi)
         out["linearized_damping_ratio"] = lin_zeta
         out["omega_n_rad_s"] = omega_n

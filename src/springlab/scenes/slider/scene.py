@@ -36,7 +36,17 @@ import numpy as np
 
 from springlab.exact import analytic
 from springlab.exact.linear import generator_system, state_matrix
-from springlab.scenes.base import MIN_MASS, MIN_MASS_REASON, Case, Parameter, PhaseField, Reference, Scenario, Scene
+from springlab.scenes.base import (
+    FOLLOWS_EXACT,
+    MIN_MASS,
+    MIN_MASS_REASON,
+    Case,
+    Parameter,
+    PhaseField,
+    Reference,
+    Scenario,
+    Scene,
+)
 from springlab.scenes.capabilities.fit import OscillatorFit
 from springlab.scenes.capabilities.frequency import FrequencySpec
 from springlab.scenes.capabilities.interactive import InteractiveSpec, MjcfEdit
@@ -103,39 +113,48 @@ class Slider(Scene):
     questions = {
         "free": (
             "How does a lightly damped mass-spring system move after it is released?",
-            "It oscillates at {natural_frequency_hz:.3g} Hz (damped period {damped_period_s:.3g} s) with an amplitude decaying as e^(-ζωt), ζ = {damping_ratio:.3g}.",
+            "It oscillates at {natural_frequency_hz:.3g} Hz (damped period {damped_period_s:.3g} s) with an amplitude"
+            " decaying as e^(-ζωt), ζ = {damping_ratio:.3g}, from {max_displacement_m:.3g ~m}." + FOLLOWS_EXACT,
         ),
         "undamped": (
             "What is the motion of an undamped mass on a spring released from x0?",
-            "x(t) = x0 cos(ωt): ω = {omega_n_rad_s:.4g} rad/s, period {period_s:.4g} s, amplitude {max_displacement_m:.3g} m for ever.",
+            "x(t) = x0 cos(ωt): ω = {omega_n_rad_s:.4g} rad/s, period {period_s:.4g} s, amplitude"
+            " {max_displacement_m:.3g ~m} for ever." + FOLLOWS_EXACT,
         ),
         "underdamped": (
             "What does damping ratio 0.1 do to the free vibration?",
-            "It still oscillates, at ω_d = {omega_d_rad_s:.4g} rad/s (period {damped_period_s:.4g} s), each swing smaller than the last.",
+            "It still oscillates, at ω_d = {omega_d_rad_s:.4g} rad/s (period {damped_period_s:.4g} s), each swing"
+            " smaller than the last (ζ = {damping_ratio:.3g})." + FOLLOWS_EXACT,
         ),
         "critical": (
             "How does a critically damped system return to rest?",
-            "Without overshoot, as (A + Bt) e^(-ωt) with the double root λ = {lambda_1_per_s:.3g} 1/s: the fastest return that does not oscillate.",
+            "Without overshoot, as (A + Bt) e^(-ωt) with the double root λ = {lambda_1_per_s:.3g} 1/s: the fastest"
+            " return that does not oscillate." + FOLLOWS_EXACT,
         ),
         "overdamped": (
             "How does an overdamped system (ζ = 2) return to rest?",
-            "Without oscillating, as A e^(λ1 t) + B e^(λ2 t) with λ1 = {lambda_1_per_s:.4g} and λ2 = {lambda_2_per_s:.4g} 1/s, slower than critical damping.",
+            "Without oscillating, as A e^(λ1 t) + B e^(λ2 t) with λ1 = {lambda_1_per_s:.4g} 1/s and λ2 ="
+            " {lambda_2_per_s:.4g} 1/s, slower than critical damping." + FOLLOWS_EXACT,
         ),
         "step": (
             "What happens when a constant force is applied suddenly?",
-            "The mass overshoots its new static position {static_deflection_m:.3g} m, reaching {max_displacement_m:.3g} m (almost twice it), and rings about it.",
+            "The mass overshoots its new static position {static_deflection_m:.3g ~m}, reaching"
+            " {max_displacement_m:.3g ~m} (almost twice it), and rings about it." + FOLLOWS_EXACT,
         ),
         "harmonic": (
             "What is the steady response to a harmonic force?",
-            "At frequency ratio {frequency_ratio:.3g} the mass settles to amplitude {steady_state_amplitude_m:.3g} m, lagging the force by {phase_lag_rad:.3g} rad.",
+            "At frequency ratio {frequency_ratio:.3g} the mass settles to amplitude {steady_state_amplitude_m:.3g ~m},"
+            " lagging the force by {phase_lag_rad:.3g} rad ({phase_lag_rad:.3g °})." + FOLLOWS_EXACT,
         ),
         "resonance": (
             "What happens when an undamped system is forced at its natural frequency?",
-            "Resonance: the amplitude grows linearly in time without bound (here to {max_displacement_m:.3g} m in the run).",
+            "Resonance: the amplitude grows linearly in time without bound (here to {max_displacement_m:.3g ~m} in"
+            " {duration_s:.3g} s)." + FOLLOWS_EXACT,
         ),
         "exercise": (
             "The chapter's exercise: m = 1 kg, k = 2 N/m, c = 3 N s/m, released from 5 m; what is x(t)?",
-            "x(t) = {coefficient_A_m:.3g} e^({lambda_1_per_s:.3g} t) + ({coefficient_B_m:.3g}) e^({lambda_2_per_s:.3g} t) m: overdamped (ζ = {damping_ratio:.3g}), no oscillation.",
+            "x(t) = {coefficient_A_m:.3g} e^({lambda_1_per_s:.3g} t) + ({coefficient_B_m:.3g}) e^({lambda_2_per_s:.3g}"
+            " t) m: overdamped (ζ = {damping_ratio:.3g}), no oscillation." + FOLLOWS_EXACT,
         ),
     }
     parameters = {
