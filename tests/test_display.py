@@ -37,6 +37,7 @@ from springlab.studies import random_load, rms_settings
 from springlab.studies.design import run_study
 from springlab.studies.families import run_phase_family, run_zeta_family
 from springlab.studies.friction_settings import friction_settings
+from springlab.studies.model_tradeoff import model_tradeoff
 from springlab.studies.refine import refine
 from springlab.studies.tradeoff import tradeoff
 from test_layers import layer_of
@@ -88,6 +89,7 @@ def results(stability_report, shipped_audit):
         "PhaseFamily": run_phase_family(result),
         "Ensemble": random_load.ensemble("stay_cable", seeds=2, record=20.0, **SHORT_CABLE),
         "ModelRun": springlab.run(str(GRIPPER), duration=0.2),
+        "ModelTradeoff": model_tradeoff(GRIPPER, tol=1e-2, duration=0.2, integrators=["euler"], dts=[2e-3, 1e-3]),
         "RmsSettings": rms_settings.rms_settings(
             "stay_cable", tol=0.5, integrators=("implicitfast",), seed_counts=(1,), record=20.0, sizes=(9,)
         ),
@@ -115,6 +117,7 @@ def test_every_top_level_result_shows_itself_and_this_test_builds_each(results):
     returned = {"Result", "ValidationRow", "Sweep", "Tradeoff", "FitResult", "Audit", "StabilityReport"}
     returned |= {"FrequencyResponse", "Study", "SobolStudy", "FrictionSettings", "Refinement"}
     returned |= {"ZetaFamily", "PhaseFamily", "Ensemble", "RmsSettings", "ModelRun"}
+    returned |= {"ModelTradeoff"}
     assert returned <= shown, "a result the public functions return has no display"
     assert shown == set(results), "a new Shown class joins the `results` fixture"
 
