@@ -19,6 +19,7 @@ import csv
 import html
 import io
 import math
+import pathlib
 import re
 import struct
 import subprocess
@@ -40,12 +41,15 @@ from springlab.studies.design import run_study
 from springlab.studies.design import study as design_study
 from springlab.studies.families import run_phase_family, run_zeta_family
 from springlab.studies.friction_settings import friction_settings
+from springlab.studies.model_sweep import model_sweep
+from springlab.studies.model_tradeoff import model_tradeoff
 from springlab.studies.refine import refine
 from springlab.studies.tradeoff import tradeoff
 from test_layers import layer_of
 from test_report import _browse_until, _chromium
 
 #: a nine-node stay cable with a damper: a random-load ensemble and its settings study in about a second
+GRIPPER = pathlib.Path(__file__).parent / "data" / "pinch_gripper.xml"
 SHORT_CABLE = {"n_elements": 9, "damper_position": 30.0, "damper_coefficient": 4e4, "structural_damping_ratio": 0.01}
 
 #: lines of a plain repr at most: the verdict, its reason, the figures
@@ -90,6 +94,10 @@ def results(stability_report, shipped_audit):
         "RmsSettings": rms_settings.rms_settings(
             "stay_cable", tol=0.5, integrators=("implicitfast",), seed_counts=(1,), record=20.0, sizes=(9,)
         ),
+        # a model file's run, sweep and trade-off (tests/data/pinch_gripper.xml: the box falls freely from 'open')
+        "ModelRun": springlab.run(str(GRIPPER), keyframe="open", duration=0.2),
+        "ModelSweep": model_sweep(GRIPPER, keyframe="open", vary=["opt.timestep=0.001:0.004:4"], duration=0.2),
+        "ModelTradeoff": model_tradeoff(GRIPPER, keyframe="open", duration=0.2, integrators=["euler", "rk4"]),
     }
     assert {type(r).__name__ for r in built.values()} == set(built)
     return built
