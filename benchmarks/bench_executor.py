@@ -87,7 +87,7 @@ def sobol_projection(measured: dict[str, float]) -> None:
 
 
 def slider_sweep() -> None:
-    vary = ["damping=0.5:40:25:log", "stiffness=100:2000:40"]
+    vary = {"damping": (0.5, 40.0, 25, "log"), "stiffness": (100.0, 2000.0, 40)}
     scene = scenes.get("slider")
     chosen = scene.scenario("free")
     dt, duration = chosen.dt or scene.dt, chosen.duration

@@ -9,13 +9,13 @@ Run: python scenarios/printer_which_properties.py [--levels N]   (N odd, default
 
 import argparse
 
-from springlab.studies.design import run_study
+import springlab
 
 parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
 parser.add_argument("--levels", type=int, default=7, help="odd grid points per property (default 7: 2401)")
 levels = parser.parse_args().levels
 
-study = run_study("printer_head", levels=levels, plane_levels=0)  # the dense plane is only for the plot
+study = springlab.design("printer_head", levels=levels, plane_levels=0)  # the dense plane is only for the plot
 summary = study.to_dict()
 print(study.answer)
 print()

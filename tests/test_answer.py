@@ -60,3 +60,9 @@ def test_the_json_fields_round_trip():
     assert Answer.from_dict(data) == answer
     assert Answer.from_dict({}) is None
     assert answer.text() == "Question: Where?\nAnswer: At 12.3 mm (1 m)."
+
+
+def test_a_damper_of_329_kn_s_per_m_reads_in_kn_s_per_m():
+    assert quantity(329107.2, "~N s/m", ".4g") == "329.1 kN s/m"
+    assert quantity(68.5, "~N s/m", ".3g") == "68.5 N s/m"
+    assert quantity(0.01021, "%", ".4g") == "1.021%"

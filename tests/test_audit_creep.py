@@ -54,9 +54,11 @@ def test_the_audit_names_the_creeping_body_its_speed_and_the_friction_study(grip
     assert "friction creep: 'box' slides at" in message and "integrator and timestep do not remove it" in message
     assert f"springlab friction-settings {GRIPPER}" in message
     assert "settling longer may bring it to rest" not in message
-    for line in message.splitlines():
+    for line in [*message.splitlines(), gripper_audit.answer]:
         if "verified" in line:
             assert "does not see the creep" in line, line
+    numbers = gripper_audit.question_answer.numbers
+    assert numbers["creep_speed_m_s"] == findings[0].speed_m_s
     state = gripper_audit.to_dict()["operating_point_state"]
     assert state["creep"][0]["body"] == "box" and state["settling_helps"] is False
 

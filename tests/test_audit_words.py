@@ -89,6 +89,7 @@ def test_the_own_settings_word_is_what_a_plain_loop_shows(xml, word):
     assert result.own.stable is (not past) and ("stable with margin" in line) is (not past)
     assert ("UNSTABLE" in line) is past
     assert result.to_dict()["own_setting"]["behaviour"] == word
+    assert ("is unstable" in result.answer) is past and (f"a run of it {word}" in result.answer) is past
 
 
 NOTE_XML = """<mujoco><option timestep="0.002" gravity="0 0 0"/><worldbody>

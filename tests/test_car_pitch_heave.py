@@ -49,11 +49,11 @@ def test_mujoco_linearization_gives_exactly_the_textbook_m_c_k(result):
     np.testing.assert_allclose(linear["M"], MASS, rtol=1e-9, atol=1e-9 * J)
     np.testing.assert_allclose(linear["K"], STIFFNESS, rtol=1e-8, atol=1e-8 * KF)
     np.testing.assert_allclose(linear["C"], DAMPING, rtol=1e-8, atol=1e-8 * CF)
-    assert result.summary["quantities"]["linearization_max_rel_diff"] < 1e-8
+    assert result.to_dict()["quantities"]["linearization_max_rel_diff"] < 1e-8
 
 
 def test_natural_frequencies_and_mode_shapes_agree_with_the_2x2_eigenproblem(result):
-    q = result.summary["quantities"]
+    q = result.to_dict()["quantities"]
     omega2, shapes = scipy.linalg.eigh(STIFFNESS, MASS)
     for i in (0, 1):
         assert q[f"omega_{i + 1}_rad_s"] == pytest.approx(math.sqrt(omega2[i]), rel=1e-9)
@@ -66,7 +66,7 @@ def test_natural_frequencies_and_mode_shapes_agree_with_the_2x2_eigenproblem(res
 
 
 def test_modal_damping_ratios_agree_with_the_damped_eigenvalues(result):
-    q = result.summary["quantities"]
+    q = result.to_dict()["quantities"]
     state = STATE
     roots = sorted((r for r in np.linalg.eigvals(state) if r.imag > 0), key=abs)
     for i, root in enumerate(roots, start=1):
@@ -115,8 +115,8 @@ def test_release_after_a_push_over_the_front_axle_is_the_exact_linear_motion(res
     assert np.max(np.abs(heave - z[:, 0])) < 1e-6 * np.max(np.abs(z[:, 0]))
     assert np.max(np.abs(pitch - z[:, 1])) < 1e-6 * np.max(np.abs(z[:, 1]))
     assert np.max(np.abs(result.vel["pitch"] - z[:, 3])) < 1e-6 * np.max(np.abs(z[:, 3]))
-    assert result.summary["passed"] is True
-    q = result.summary["quantities"]
+    assert result.to_dict()["passed"] is True
+    q = result.to_dict()["quantities"]
     assert q["initial_heave_offset_m"] == pytest.approx(z0[0], rel=1e-12)
     assert q["initial_pitch_rad"] == pytest.approx(z0[1], rel=1e-12) and z0[1] > 0  # nose down
 

@@ -35,14 +35,14 @@ def test_textbook_values_are_the_model_defaults(textbook):
 
 
 def test_static_sag_is_push_weight_over_k_and_the_height_before_release_follows(textbook):
-    q = textbook.summary["quantities"]
+    q = textbook.to_dict()["quantities"]
     assert q["static_sag_m"] == pytest.approx(0.0024525, rel=1e-12)  # 250 * 9.81 / 1e6
     assert q["height_before_release_m"] == pytest.approx(0.0975475, rel=1e-12)
     assert textbook.pos["heave"][0] == pytest.approx(0.0975475, rel=1e-12)
 
 
 def test_equilibrium_amplitude_and_omega_are_the_textbook_answers(textbook):
-    q = textbook.summary["quantities"]
+    q = textbook.to_dict()["quantities"]
     assert q["equilibrium_height_m"] == pytest.approx(0.10, rel=1e-12)
     assert q["amplitude_m"] == pytest.approx(-0.0024525, rel=1e-12)  # starts below x_s
     assert q["omega_rad_s"] == pytest.approx(31.6227766017, rel=1e-10)  # sqrt(1000)
@@ -54,22 +54,22 @@ def test_heave_follows_xs_plus_a_cos_omega_t(textbook):
     t = textbook.time
     expected = CLEARANCE - SAG * np.cos(OMEGA * t)
     # RK4's phase error: omega t (omega dt)^4 / 120 = 2.6e-7 of the amplitude after 1 s at 1 ms
-    rk4 = OMEGA * t[-1] * (OMEGA * textbook.summary["dt"]) ** 4 / 120
+    rk4 = OMEGA * t[-1] * (OMEGA * textbook.to_dict()["dt"]) ** 4 / 120
     assert rk4 < 1e-6
     assert np.max(np.abs(textbook.pos["heave"] - expected)) < 1.5 * rk4 * SAG
     assert np.max(np.abs(textbook.vel["heave"] - SAG * OMEGA * np.sin(OMEGA * t))) < 1.5 * rk4 * SAG * OMEGA
-    assert textbook.summary["passed"] is True
+    assert textbook.to_dict()["passed"] is True
 
 
 def test_phase_plane_is_an_ellipse_centred_at_the_equilibrium(textbook):
-    q = textbook.summary["quantities"]
+    q = textbook.to_dict()["quantities"]
     x, v = textbook.pos["heave"], textbook.vel["heave"]
     radius = ((x - 0.10) / SAG) ** 2 + (v / (OMEGA * SAG)) ** 2
     assert np.max(np.abs(radius - 1.0)) < 1e-6  # RK4 drifts mostly in phase, which keeps the ellipse
     assert q["phase_ellipse_height_semi_axis_m"] == pytest.approx(SAG, rel=1e-12)
     assert q["phase_ellipse_velocity_semi_axis_m_s"] == pytest.approx(SAG * OMEGA, rel=1e-12)
     # sampled maxima: a peak can fall half a step from a sample, 1 - cos(omega dt / 2) = (omega dt)^2 / 8
-    sampling = (OMEGA * textbook.summary["dt"]) ** 2 / 8
+    sampling = (OMEGA * textbook.to_dict()["dt"]) ** 2 / 8
     assert q["max_height_m"] == pytest.approx(CLEARANCE + SAG, abs=SAG * sampling)
     assert q["max_speed_m_s"] == pytest.approx(SAG * OMEGA, rel=sampling)
 
@@ -124,7 +124,7 @@ def test_default_damping_ratio_is_a_typical_passenger_car_value(damped):
     # Gillespie, Fundamentals of Vehicle Dynamics, ch. 5: 0.2-0.4
     assert damped.parameters["damping_ratio"] == 0.3
     assert damped.parameters["damping"] == pytest.approx(2 * 0.3 * math.sqrt(K * M), rel=1e-14)
-    assert damped.summary["quantities"]["damping_ratio"] == pytest.approx(0.3, rel=1e-12)
+    assert damped.to_dict()["quantities"]["damping_ratio"] == pytest.approx(0.3, rel=1e-12)
 
 
 def test_damped_release_matches_the_underdamped_closed_form(damped):
@@ -137,13 +137,13 @@ def test_damped_release_matches_the_underdamped_closed_form(damped):
     )
     # validated to 1e-6 at its default 2 ms (predicted bound 5.6e-7)
     assert np.max(np.abs(damped.pos["heave"] - expected)) < 1e-6 * SAG
-    q = damped.summary["quantities"]
+    q = damped.to_dict()["quantities"]
     assert q["omega_d_rad_s"] == pytest.approx(omega_d, rel=1e-12)
     assert q["regime"] == "underdamped"
 
 
 def test_logarithmic_decrement_measured_from_the_peaks_equals_2_pi_zeta_over_sqrt(damped):
-    q = damped.summary["quantities"]
+    q = damped.to_dict()["quantities"]
     theory = 2 * math.pi * 0.3 / math.sqrt(1 - 0.09)
     assert q["logarithmic_decrement"] == pytest.approx(theory, rel=1e-12)
     # peaks from the velocity's zeros with a cubic Hermite interpolant: O(dt^4) accurate
@@ -178,7 +178,7 @@ def test_a_damped_car_may_take_a_push_that_would_lift_the_undamped_one():
     # overshoot is exp(-pi zeta / sqrt(1 - zeta^2)) = 0.372 of it
     overshoot = math.exp(-math.pi * 0.3 / math.sqrt(1 - 0.09))
     result = springlab.run("car", "damped_release", push_mass=1500.0, duration=0.3)
-    sampling = (OMEGA * result.summary["dt"]) ** 2 / 8  # the sampled peak, as above
+    sampling = (OMEGA * result.to_dict()["dt"]) ** 2 / 8  # the sampled peak, as above
     assert np.max(result.pos["heave"]) - 0.1 == pytest.approx(1500 * G / K * overshoot, rel=sampling)
     with pytest.raises(springlab.BadInputError, match="off its springs"):
         springlab.run("car", "damped_release", push_mass=1.01 * M / overshoot)

@@ -66,7 +66,7 @@ def test_the_car_rests_in_static_equilibrium_before_the_bump(bump):
     result, _ = bump
     assert result.pos["heave"][0] == pytest.approx(0.10, abs=1e-15)
     assert result.pos["wheel"][0] == pytest.approx(WHEEL_REST, abs=1e-15)
-    assert result.summary["quantities"]["static_tire_force_n"] == pytest.approx((MS + MU) * G, rel=1e-12)
+    assert result.to_dict()["quantities"]["static_tire_force_n"] == pytest.approx((MS + MU) * G, rel=1e-12)
 
 
 def test_body_and_wheel_follow_the_exact_response_to_the_half_sine_bump(bump):
@@ -76,7 +76,7 @@ def test_body_and_wheel_follow_the_exact_response_to_the_half_sine_bump(bump):
     assert np.max(np.abs(heave - exact[:, 0])) < 1e-6 * np.max(np.abs(exact[:, 0]))
     assert np.max(np.abs(wheel - exact[:, 1])) < 1e-6 * np.max(np.abs(exact[:, 1]))
     assert np.max(np.abs(result.vel["wheel"] - exact[:, 3])) < 1e-6 * np.max(np.abs(exact[:, 3]))
-    assert result.summary["passed"] is True
+    assert result.to_dict()["passed"] is True
 
 
 def continuous_peak(signal, start=0.0, stop=3.0, points=30001) -> float:
@@ -95,7 +95,7 @@ def continuous_peak(signal, start=0.0, stop=3.0, points=30001) -> float:
 
 def test_ride_quantities_agree_with_the_exact_response(bump):
     result, _ = bump
-    q = result.summary["quantities"]
+    q = result.to_dict()["quantities"]
     state, road, _ = continuous_quarter_car()
 
     def body_acceleration(t):
@@ -103,7 +103,7 @@ def test_ride_quantities_agree_with_the_exact_response(bump):
         return (-KS * (xs - xw) - CS * (vs - vw)) / MS
 
     # peaks between the samples (springlab.exact.events), to the run's tolerance
-    tolerance = 2 * result.summary["tolerance"]
+    tolerance = 2 * result.to_dict()["tolerance"]
     assert q["peak_body_acceleration_m_s2"] == pytest.approx(continuous_peak(body_acceleration), rel=tolerance)
     assert q["peak_suspension_travel_m"] == pytest.approx(
         continuous_peak(lambda t: state(t)[0] - state(t)[1]), rel=tolerance
@@ -116,7 +116,7 @@ def test_ride_quantities_agree_with_the_exact_response(bump):
 
 
 def test_modes_are_the_quarter_cars_body_bounce_and_wheel_hop(bump):
-    q = bump[0].summary["quantities"]
+    q = bump[0].to_dict()["quantities"]
     mass = np.diag([MS, MU])
     stiffness = np.array([[KS, -KS], [-KS, KS + KT]])
     damping = np.array([[CS, -CS], [-CS, CS]])
@@ -177,12 +177,12 @@ def test_the_peak_body_acceleration_is_the_continuous_one_not_the_largest_sample
     peak = abs(acceleration(best.x)[0])
     for dt in (1e-3, 2e-3):
         result = springlab.run("car", "road_bump", speed=16.0, dt=dt)
-        measured = result.summary["quantities"]["peak_body_acceleration_m_s2"]
+        measured = result.to_dict()["quantities"]["peak_body_acceleration_m_s2"]
         sampled = np.max(np.abs(acceleration(result.time)))
         # the run is validated to its tolerance (relative to each column's peak); the acceleration is a
         # combination of positions and velocities weighted (ks |x| + cs |v|) / ms, and the Hermite
         # interpolation adds (omega dt)^4 / 384 of the wheel hop (72 rad/s), below 1e-6 at 2 ms
-        tolerance = 2 * (result.summary["tolerance"] + (72.0 * dt) ** 4 / 384)
+        tolerance = 2 * (result.to_dict()["tolerance"] + (72.0 * dt) ** 4 / 384)
         assert measured == pytest.approx(peak, rel=tolerance)
         assert abs(sampled - peak) > 10 * tolerance * peak  # reading the samples is not good enough
 
@@ -200,22 +200,22 @@ def test_a_short_sharp_bump_lifts_the_tire_off_the_road_and_the_run_says_it_is_n
     slope = KT * abs(float(road_rate(root)) - state(root)[3][0])  # |dF/dt| at the root [N/s]
     for dt in (1e-3, 5e-4, 2.5e-4):
         result = springlab.run("car", "road_bump", bump_height=height, bump_length=length, speed=speed, dt=dt)
-        q = result.summary["quantities"]
+        q = result.to_dict()["quantities"]
         assert q["tire_leaves_road"] is True
         # a force error kt * (the run's tolerance x the wheel's largest excursion) moves the root by that / slope
         wheel_scale = np.max(np.abs(state(grid)[1]))
-        tolerance = 2 * KT * result.summary["tolerance"] * wheel_scale / slope
+        tolerance = 2 * KT * result.to_dict()["tolerance"] * wheel_scale / slope
         assert q["tire_lift_off_time_s"] == pytest.approx(root, abs=tolerance)
         assert q["min_tire_force_n"] == pytest.approx(np.min(tire(grid)), rel=1e-4)
         # the linear tire pulls after lift-off: matching the exact linear solution certifies nothing
-        assert result.summary["passed"] is False
-        assert result.summary["errors"]["wheel_pos"]["max_rel"] <= result.summary["tolerance"]
-        (limit,) = result.summary["model_limits"]
+        assert result.to_dict()["passed"] is False
+        assert result.to_dict()["errors"]["wheel_pos"]["max_rel"] <= result.to_dict()["tolerance"]
+        (limit,) = result.to_dict()["model_limits"]
         assert "tire leaves the road at t = 0.0273274 s" in limit
 
 
 def test_a_bump_the_tire_follows_has_no_model_limits(bump):
-    assert bump[0].summary["model_limits"] == [] and bump[0].summary["passed"] is True
+    assert bump[0].to_dict()["model_limits"] == [] and bump[0].to_dict()["passed"] is True
 
 
 def test_a_bump_ending_between_steps_is_covered_by_its_exact_input_error():
@@ -224,10 +224,10 @@ def test_a_bump_ending_between_steps_is_covered_by_its_exact_input_error():
     exact = quarter_car(result.time)
     wheel_error = np.max(np.abs(result.vel["wheel"] - exact[:, 3])) / np.max(np.abs(exact[:, 3]))
     aligned = springlab.run("car", "road_bump", dt=5e-4, duration=1.5)
-    assert wheel_error > 10 * aligned.summary["errors"]["wheel_vel"]["max_rel"]  # the input error is real
-    assert result.summary["errors"]["wheel_vel"]["max_rel"] == pytest.approx(wheel_error, rel=1e-3)
-    assert result.summary["passed"] is True
-    assert "step grid at 0.4998 s" in result.summary["tolerance_basis"]
+    assert wheel_error > 10 * aligned.to_dict()["errors"]["wheel_vel"]["max_rel"]  # the input error is real
+    assert result.to_dict()["errors"]["wheel_vel"]["max_rel"] == pytest.approx(wheel_error, rel=1e-3)
+    assert result.to_dict()["passed"] is True
+    assert "step grid at 0.4998 s" in result.to_dict()["tolerance_basis"]
 
 
 def test_the_input_needs_no_python_callback():

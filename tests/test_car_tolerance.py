@@ -52,8 +52,8 @@ def test_a_switch_off_the_step_grid_is_refused():
 def test_rk4_error_of_the_switched_bump_is_predicted_not_just_bounded(dt):
     # 0.5 s is on both grids: no input error, the tolerance is 2 x the leading-order prediction
     result = springlab.run("car", "road_bump", integrator="rk4", dt=dt)
-    worst = max(e["max_rel"] for e in result.summary["errors"].values())
-    assert 0.25 * result.summary["tolerance"] <= worst <= result.summary["tolerance"]
+    worst = max(e["max_rel"] for e in result.to_dict()["errors"].values())
+    assert 0.25 * result.to_dict()["tolerance"] <= worst <= result.to_dict()["tolerance"]
 
 
 def test_input_error_is_zero_on_the_grid_and_exactly_the_realized_difference_off_it():

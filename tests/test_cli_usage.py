@@ -96,7 +96,7 @@ def test_list_shows_each_scenarios_validated_dt(capsys):
 def test_list_dt_is_the_dt_run_uses(capsys):
     code, out, _ = _run(capsys, "list", "--json")
     setting = {e["scene"]: e for e in json.loads(out)}["slider"]["scenario_settings"]["undamped"]
-    assert springlab.run("slider", "undamped", duration=0.1).summary["dt"] == setting["dt"]
+    assert springlab.run("slider", "undamped", duration=0.1).to_dict()["dt"] == setting["dt"]
 
 
 def test_design_accepts_the_damping_ratio_its_table_shows():

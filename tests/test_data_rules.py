@@ -67,11 +67,11 @@ def _summaries(scenario_run):
     out = []
     for scene in scenes.SCENES.values():
         for scenario in scene.scenarios:
-            out.append(scenario_run(scene.name, scenario).summary)  # the scenario's own settings, run once
+            out.append(scenario_run(scene.name, scenario).to_dict())  # the scenario's own settings, run once
     for scene, scenario, settings in EDGE_CASES:
         settings = dict(settings)
         duration = settings.pop("duration", None)
-        out.append(springlab.run(scene, scenario, duration=duration, **settings).summary)
+        out.append(springlab.run(scene, scenario, duration=duration, **settings).to_dict())
     return out
 
 
@@ -104,9 +104,7 @@ def test_a_carriage_that_never_settles_writes_null_and_a_false_flag(tmp_path, ca
     quantities = json.loads((tmp_path / "summary.json").read_text(), parse_constant=_reject_constant)["quantities"]
     assert quantities["settled_for_good"] is False
     assert quantities["settling_time_s"] is None
-    assert math.isinf(
-        springlab.run("printer_head", "settle", belt_damping=0.0).summary["quantities"]["settling_time_s"]
-    )
+    assert math.isinf(springlab.run("printer_head", "settle", belt_damping=0.0).quantities["settling_time_s"])
 
 
 def test_the_validation_table_names_what_each_error_measures(capsys):

@@ -29,16 +29,12 @@ import numpy as np
 import pytest
 
 import springlab
-from springlab import display, files
+from springlab import display, files, outputs
 from springlab.plots import figures
-from springlab.plots import frequency as plots_frequency
-from springlab.plots import friction_settings as plots_friction
-from springlab.plots import sweep as plots_sweep
-from springlab.runs.run import ValidationRow, run_scenario, write_run
+from springlab.runs.run import ValidationRow, run_scenario
 from springlab.scenes import get
 from springlab.studies import random_load, rms_settings
 from springlab.studies.design import run_study
-from springlab.studies.design import study as design_study
 from springlab.studies.families import run_phase_family, run_zeta_family
 from springlab.studies.friction_settings import friction_settings
 from springlab.studies.model_sweep import model_sweep
@@ -334,16 +330,16 @@ def _assert_exact(cells: list[str], values) -> None:
 @pytest.mark.slow
 def test_every_csv_reads_back_exactly_in_the_shortest_form(results, tmp_path):
     run = results["Result"]
-    write_run(tmp_path / "run", run)
+    outputs.write(run, tmp_path / "run")
     header, body = _read(tmp_path / "run" / "trajectory.csv")
-    columns = run._csv_columns()  # what write_run writes: time is k dt, exactly
+    columns = run._csv_columns()  # what outputs.write writes: time is k dt, exactly
     assert header == list(columns)
     for i, name in enumerate(header):
         _assert_exact([row[i] for row in body], columns[name])
     assert body[20][0] == "0.1"  # 20 x 0.005 s is the double nearest 0.1: %.17g wrote 0.10000000000000001
 
     sweep = results["Sweep"]
-    plots_sweep.write(sweep, tmp_path / "sweep")
+    outputs.write(sweep, tmp_path / "sweep")
     header, body = _read(tmp_path / "sweep" / "sweep.csv")
     expected_header, expected = sweep.table()
     assert header == expected_header
@@ -352,21 +348,21 @@ def test_every_csv_reads_back_exactly_in_the_shortest_form(results, tmp_path):
             _assert_exact([row[i] for row in body], [line[i] for line in expected])
 
     response = results["FrequencyResponse"]
-    plots_frequency.write_frequency(response, tmp_path / "frequency")
+    outputs.write(response, tmp_path / "frequency")
     header, body = _read(tmp_path / "frequency" / "frequency.csv")
     for i, (name, values) in enumerate(response.rows().items()):
         assert header[i] == name
         _assert_exact([row[i] for row in body], values)
 
     study = results["Study"]
-    design_study.write(study, tmp_path / "design")
+    outputs.write(study, tmp_path / "design")
     header, body = _read(tmp_path / "design" / "configurations.csv")
     for i, (name, values) in enumerate(study.columns.items()):
         assert header[i] == name
         _assert_exact([row[i] for row in body], values)
 
     friction = results["FrictionSettings"]
-    plots_friction.write(friction, tmp_path / "friction")
+    outputs.write(friction, tmp_path / "friction")
     header, body = _read(tmp_path / "friction" / "friction_settings.csv")
     memory = [r.row() for case in friction.cases for r in case.runs]
     numeric = 0

@@ -46,7 +46,11 @@ def cluster():
 
 def _sweep(executor=None):
     return springlab.sweep(
-        "slider", "free", vary=["damping=0.5:40:4:log", "stiffness=100:1000:3"], chunk_size=3, executor=executor
+        "slider",
+        "free",
+        vary={"damping": (0.5, 40.0, 4, "log"), "stiffness": (100.0, 1000.0, 3)},
+        chunk_size=3,
+        executor=executor,
     )
 
 
@@ -95,7 +99,9 @@ def test_stability_boundaries_on_two_workers_equal_the_local_ones(cluster):
 
 
 def test_a_worker_killed_mid_sweep_changes_nothing():
-    expected = springlab.sweep("slider", "free", vary=["damping=0.5:40:8:log", "stiffness=100:1000:5"])
+    expected = springlab.sweep(
+        "slider", "free", vary={"damping": (0.5, 40.0, 8, "log"), "stiffness": (100.0, 1000.0, 5)}
+    )
     killed = []
 
     def kill_one_worker(index):
@@ -111,7 +117,7 @@ def test_a_worker_killed_mid_sweep_changes_nothing():
         result = springlab.sweep(
             "slider",
             "free",
-            vary=["damping=0.5:40:8:log", "stiffness=100:1000:5"],
+            vary={"damping": (0.5, 40.0, 8, "log"), "stiffness": (100.0, 1000.0, 5)},
             chunk_size=1,
             executor=executor,
         )

@@ -83,7 +83,7 @@ def test_slider_stiffness_and_damping_given_the_mass(tmp_path):
     t = np.arange(0, 3, 2e-3)
     x, _, _ = free_decay(t, omega, zeta, 0.05, 0.0)
     data = write(tmp_path / "d.csv", {"time": t, "slider_pos": x})
-    result = fit("slider", data, free=["stiffness,damping,x0,v0,offset"], mass=m, run_scene=False)
+    result = fit("slider", data, free=["stiffness", "damping", "x0", "v0", "offset"], mass=m, run_scene=False)
     assert rel(result.estimates["stiffness"]["value"], k) < EXACT
     assert rel(result.estimates["damping"]["value"], d) < EXACT
     assert rel(result.derived["omega_n_rad_s"]["value"], omega) < EXACT
@@ -116,7 +116,14 @@ def test_slider_mass_stiffness_and_damping_from_a_known_step_force(tmp_path):
     t = np.arange(0, 3, 2e-3)
     x, _, _ = free_decay(t, omega, zeta, -force / k, 0.0)  # about the new equilibrium F/k, from rest at 0
     data = write(tmp_path / "d.csv", {"time": t, "slider_pos": x + force / k})
-    result = fit("slider", data, "step", free=["mass,stiffness,damping,x0,v0"], force_amplitude=force, run_scene=False)
+    result = fit(
+        "slider",
+        data,
+        "step",
+        free=["mass", "stiffness", "damping", "x0", "v0"],
+        force_amplitude=force,
+        run_scene=False,
+    )
     for name, truth in (("mass", m), ("stiffness", k), ("damping", d)):
         assert rel(result.estimates[name]["value"], truth) < EXACT
 
@@ -142,7 +149,9 @@ def test_car_mass_given_the_stiffness(tmp_path):
     t = np.arange(0, 1.0, 1e-3)
     x, _, _ = free_decay(t, math.sqrt(k / m), d / (2 * math.sqrt(k * m)), -0.004, 0.0)
     data = write(tmp_path / "d.csv", {"time": t, "heave_pos": x + p["clearance"]})
-    result = fit("car", data, "damped_release", free=["mass,damping,x0,v0,offset"], stiffness=k, run_scene=False)
+    result = fit(
+        "car", data, "damped_release", free=["mass", "damping", "x0", "v0", "offset"], stiffness=k, run_scene=False
+    )
     assert rel(result.estimates["mass"]["value"], m) < EXACT
 
 
@@ -204,7 +213,7 @@ def test_release_time_from_rest_is_fitted_as_a_delay(tmp_path):
     t = np.arange(0, 3, 2e-3)
     x, _, _ = free_decay(np.clip(t - 0.4567, 0, None), 20.0, 0.05, 0.05, 0.0)
     data = write(tmp_path / "d.csv", {"time": t, "slider_pos": x})
-    result = fit("slider", data, free=["omega_n,zeta,x0,offset,delay"], v0=0.0, run_scene=False)
+    result = fit("slider", data, free=["omega_n", "zeta", "x0", "offset", "delay"], v0=0.0, run_scene=False)
     assert abs(result.estimates["delay"]["value"] - 0.4567) < 1e-6
     assert rel(result.estimates["omega_n"]["value"], 20.0) < EXACT
 
@@ -243,9 +252,9 @@ def test_too_few_rows_after_skipping_is_bad_input(tmp_path):
 @pytest.mark.parametrize(
     ("free", "match"),
     [
-        (["mass,stiffness,damping"], "cannot all be fitted"),
-        (["omega_n,stiffness"], "not both"),
-        (["omega_n,zeta,x0,v0,delay"], "delay and v0"),
+        (["mass", "stiffness", "damping"], "cannot all be fitted"),
+        (["omega_n", "stiffness"], "not both"),
+        (["omega_n", "zeta", "x0", "v0", "delay"], "delay and v0"),
         (["viscosity"], "unknown fit parameter"),
     ],
 )
@@ -260,7 +269,7 @@ def test_mass_and_stiffness_need_damping(tmp_path):
     t = np.arange(0, 1, 2e-3)
     x, _, _ = free_decay(t, 20.0, 0.0, 0.05, 0.0)
     with pytest.raises(BadInputError, match="damping = 0"):
-        fit("slider", write(tmp_path / "d.csv", {"time": t, "slider_pos": x}), free=["mass,stiffness"], damping=0)
+        fit("slider", write(tmp_path / "d.csv", {"time": t, "slider_pos": x}), free=["mass", "stiffness"], damping=0)
 
 
 def test_printer_masses_are_refused(tmp_path):
@@ -319,7 +328,7 @@ def test_kinematics_chooses_the_degree_of_uniformly_accelerated_motion(tmp_path)
 def test_kinematics_refuses_an_offset(tmp_path):
     t = np.linspace(0, 5, 51)
     with pytest.raises(BadInputError, match="indistinguishable"):
-        fit("kinematics", write(tmp_path / "d.csv", {"time": t, "vehicle_pos": t**2}), free=["x0,offset"])
+        fit("kinematics", write(tmp_path / "d.csv", {"time": t, "vehicle_pos": t**2}), free=["x0", "offset"])
 
 
 # -- coverage of the 95 % intervals --------------------------------------------------------
@@ -359,12 +368,12 @@ def test_car_intervals_cover_the_truth_95_percent_of_the_time(tmp_path):
 
 
 def test_fit_json_has_the_contract_keys(tmp_path):
-    from springlab.studies.fit.fit import write as write_fit
+    from springlab import outputs
 
     t = np.arange(0, 1, 2e-3)
     x, _, _ = free_decay(t, 20.0, 0.05, 0.05, 0.0)
     result = fit("slider", write(tmp_path / "d.csv", {"time": t, "slider_pos": x}))
-    write_fit(result, tmp_path / "out")
+    outputs.write(result, tmp_path / "out")
     doc = json.loads((tmp_path / "out" / "fit.json").read_text())
     for key in ("scene", "scenario", "free", "estimates", "derived", "residual_rms", "samples", "time_span_s"):
         assert key in doc

@@ -252,18 +252,6 @@ def test_the_library_refuses_the_command_lines_strings_and_names_the_typed_form(
         springlab.frequency("slider", **{option: text})
 
 
-def test_no_scene_parameter_is_named_like_an_option():
-    """A scene's parameters reach `springlab.frequency` as keywords; one named like an option (`dt`, `tol`,
-    `band` ...) would be taken for the option, so no scene may declare one."""
-    import inspect
-
-    options = {
-        name for name, p in inspect.signature(springlab.frequency).parameters.items() if p.kind is not p.VAR_KEYWORD
-    }
-    clashes = {name: sorted(options & set(scene.parameters)) for name, scene in springlab.SCENES.items()}
-    assert not any(clashes.values()), clashes
-
-
 def test_one_linearization_and_one_map_per_setting_at_the_operating_point(monkeypatch):
     """The model is held at its operating point once (springlab.exact.model_at_point): one linearization, one
     eig(A), and each one-step map differenced once per (integrator, dt, step), though the band's bisection in

@@ -18,7 +18,7 @@ EPS = np.finfo(float).eps
 def test_polynomial_position_gives_the_textbook_velocity_and_acceleration():
     # x = 0.03 t^3 + 0.2 t^2 + 1.2 t + 3.0  =>  v = 0.09 t^2 + 0.4 t + 1.2,  a = 0.18 t + 0.4 (by hand)
     result = springlab.run("kinematics", "polynomial_position")
-    q = result.summary["quantities"]
+    q = result.to_dict()["quantities"]
     assert q["position_expression"] == "x(t) = 0.03 t^3 + 0.2 t^2 + 1.2 t + 3 m"
     assert q["velocity_expression"] == "v(t) = 0.09 t^2 + 0.4 t + 1.2 m/s"
     assert q["acceleration_expression"] == "a(t) = 0.18 t + 0.4 m/s^2"
@@ -41,14 +41,14 @@ def test_polynomial_position_gives_the_textbook_velocity_and_acceleration():
 def test_linear_acceleration_integrates_to_the_textbook_velocity_and_position():
     # a = 1.2 t + 3.0, v(0) = 15, x(0) = 150  =>  v = 0.6 t^2 + 3 t + 15,  x = 0.2 t^3 + 1.5 t^2 + 15 t + 150
     result = springlab.run("kinematics", "linear_acceleration")
-    q = result.summary["quantities"]
+    q = result.to_dict()["quantities"]
     assert q["velocity_expression"] == "v(t) = 0.6 t^2 + 3 t + 15 m/s"
     assert q["position_expression"] == "x(t) = 0.2 t^3 + 1.5 t^2 + 15 t + 150 m"
     assert q["v_end_m_s"] == pytest.approx(0.6 * 25 + 15 + 15, rel=1e-12)  # 45 m/s at 5 s
     assert q["x_end_m"] == pytest.approx(0.2 * 125 + 1.5 * 25 + 75 + 150, rel=1e-12)  # 287.5 m
     t = result.time
     np.testing.assert_allclose(result.pos["vehicle"], 0.2 * t**3 + 1.5 * t**2 + 15 * t + 150, rtol=1e-13)
-    assert result.summary["passed"] is True
+    assert result.to_dict()["passed"] is True
 
 
 @pytest.mark.parametrize("a, v0, x0", [(2.0, 10.0, 0.0), (-3.0, 20.0, 5.0)])
@@ -57,12 +57,12 @@ def test_constant_acceleration_follows_eq_5_5(a, v0, x0):
     t = result.time
     np.testing.assert_allclose(result.vel["vehicle"], v0 + a * t, rtol=1e-13, atol=1e-12)
     np.testing.assert_allclose(result.pos["vehicle"], x0 + v0 * t + 0.5 * a * t**2, rtol=1e-13, atol=1e-11)
-    assert result.summary["quantities"]["a_end_m_s2"] == a
+    assert result.to_dict()["quantities"]["a_end_m_s2"] == a
 
 
 def test_tachograph_displacement_is_the_area_under_v_and_acceleration_its_slope():
     result = springlab.run("kinematics", "tachograph")
-    q = result.summary["quantities"]
+    q = result.to_dict()["quantities"]
     # 0-4 s: 0 -> 6 m/s, 4-8 s: 6 m/s, 8-12 s: 6 -> 0 m/s; areas 12, 24, 12 m (triangles and a rectangle)
     assert q["segment_accelerations_m_s2"] == [1.5, 0.0, -1.5]
     assert q["segment_displacements_m"] == [12.0, 24.0, 12.0]
@@ -87,17 +87,17 @@ def test_rk4_is_exact_for_cubic_motion_even_at_coarse_steps(scenario):
     # the motion is a polynomial of degree <= 3 on every step, which RK4 integrates exactly:
     # only round-off remains, even with a step of half a second
     result = springlab.run("kinematics", scenario, dt=0.5 if scenario != "tachograph" else 1.0)
-    worst = max(e["max_rel"] for e in result.summary["errors"].values())
+    worst = max(e["max_rel"] for e in result.to_dict()["errors"].values())
     assert worst < 1e-13
-    assert result.summary["passed"] is True
+    assert result.to_dict()["passed"] is True
 
 
 def test_first_order_integrators_converge_at_first_order_within_their_tolerance():
     errors = []
     for dt in (0.01, 0.005):
         result = springlab.run("kinematics", "polynomial_position", integrator="euler", dt=dt)
-        assert result.summary["passed"] is True
-        errors.append(result.summary["errors"]["vehicle_pos"]["max_abs"])
+        assert result.to_dict()["passed"] is True
+        errors.append(result.to_dict()["errors"]["vehicle_pos"]["max_abs"])
     assert errors[0] / errors[1] == pytest.approx(2.0, rel=0.01)
 
 
@@ -136,7 +136,7 @@ def test_actuator_force_is_the_integrated_control():
 def test_mass_is_read_back_from_the_model_and_does_not_change_the_motion():
     heavy = springlab.run("kinematics", "polynomial_position", mass=12000.0)
     light = springlab.run("kinematics", "polynomial_position", mass=0.5)
-    assert heavy.summary["quantities"]["force_expression"] == "F(t) = 2160 t + 4800 N"
+    assert heavy.to_dict()["quantities"]["force_expression"] == "F(t) = 2160 t + 4800 N"
     np.testing.assert_allclose(heavy.pos["vehicle"], light.pos["vehicle"], rtol=1e-13)
     default = scenes.get("kinematics").resolve(scenes.get("kinematics").scenario(None), {})
     assert default["mass"] == 1000.0  # models/kinematics.xml
@@ -146,8 +146,8 @@ def test_mass_is_read_back_from_the_model_and_does_not_change_the_motion():
 def test_tachograph_is_exact_on_any_step_grid_through_its_switch_times(dt):
     # MuJoCo's accumulated time overshoots 12 s by round-off at these steps; the run still compares
     result = springlab.run("kinematics", "tachograph", dt=dt)
-    assert result.summary["passed"] is True
-    assert result.summary["errors"]["vehicle_pos"]["max_rel"] < 1e-11
+    assert result.to_dict()["passed"] is True
+    assert result.to_dict()["errors"]["vehicle_pos"]["max_rel"] < 1e-11
 
 
 def test_tachograph_refuses_steps_that_straddle_its_switch_times():

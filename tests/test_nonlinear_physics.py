@@ -55,7 +55,7 @@ def test_polynomial_joint_stiffness_gives_minus_k1_x_minus_k3_x_cubed():
 def test_softening_spring_force_peaks_at_sqrt_k1_over_3_abs_k3():
     model, params, case = _built("softening")
     result = springlab.run("nonlinear", "softening", duration=0.01)
-    q = result.summary["quantities"]
+    q = result.to_dict()["quantities"]
     x_peak = math.sqrt(K1 / (3 * -K3))  # d/dx (k1 x + k3 x^3) = 0
     assert q["peak_force_stretch_m"] == pytest.approx(x_peak, rel=1e-15)
     assert q["peak_spring_force_N"] == pytest.approx(K1 * x_peak + K3 * x_peak**3, rel=1e-14)
@@ -125,7 +125,7 @@ def test_scene_linearization_agrees_with_mujocos_transition_derivatives():
 def test_double_well_small_oscillation_frequency_is_sqrt_minus_2_k1_over_m():
     omega = math.sqrt(-2 * -100.0 / M)  # V''(+-sqrt(-k1/k3)) = k1 + 3 k3 (-k1/k3) = -2 k1
     result = springlab.run("nonlinear", "double_well", x0=0.1 + 1e-5, duration=2.0)
-    q = result.summary["quantities"]
+    q = result.to_dict()["quantities"]
     assert q["equilibria_m"] == [pytest.approx(-0.1, rel=1e-15), 0.0, pytest.approx(0.1, rel=1e-15)]
     assert q["stable_equilibria_m"] == [pytest.approx(-0.1, rel=1e-15), pytest.approx(0.1, rel=1e-15)]
     assert q["omega_at_+0.1_m_rad_s"] == pytest.approx(omega, rel=1e-15)
@@ -194,7 +194,7 @@ def test_simulated_period_matches_scipy_event_detection():
     sol = solve_ivp(_duffing_ode(K1, K3), (0, 5), [0.09, 0.0], events=event, rtol=1e-12, atol=1e-15, method="DOP853")
     maxima = sol.t_events[0]
     independent = (maxima[-1] - maxima[0]) / (len(maxima) - 1)
-    q = result.summary["quantities"]
+    q = result.to_dict()["quantities"]
     assert q["period_simulated_s"] == pytest.approx(independent, rel=1e-9)
     assert q["period_quadrature_s"] == pytest.approx(independent, rel=1e-9)
 
@@ -206,7 +206,7 @@ def test_undamped_runs_conserve_energy_to_1e_minus_6(scenario_name):
     x, v = result.pos["block"], result.vel["block"]
     e = _energy(x, v, p["k1"], p["k3"])
     assert np.max(np.abs(e - e[0])) <= 1e-6 * np.max(0.5 * M * v**2)
-    assert result.summary["passed"] is True
+    assert result.to_dict()["passed"] is True
 
 
 # -- escape ------------------------------------------------------------------------------
@@ -219,9 +219,9 @@ def test_escape_outside_the_separatrix_stops_at_three_saddle_distances_not_as_di
     assert result.trajectory.stopped
     assert abs(x[-1]) >= 0.3 > abs(x[-2])
     assert result.time[-1] < 1.0
-    q = result.summary["quantities"]
+    q = result.to_dict()["quantities"]
     assert q["escaped"] is True and q["escape_radius_m"] == pytest.approx(0.3, rel=1e-15)
-    assert result.summary["passed"] is True
+    assert result.to_dict()["passed"] is True
     # the energy is above the saddle's: outside the separatrix
     assert q["energy_J"] == pytest.approx(0.5 * 0.75**2) and q["separatrix_energy_J"] == pytest.approx(0.25)
 
@@ -231,7 +231,7 @@ def test_escape_time_matches_scipy_event_detection():
     event.terminal = True
     sol = solve_ivp(_duffing_ode(K1, K3), (0, 5), [0.0, 0.75], events=event, rtol=1e-12, atol=1e-15, method="DOP853")
     independent = sol.t_events[0][0]
-    q = springlab.run("nonlinear", "softening_escape").summary["quantities"]
+    q = springlab.run("nonlinear", "softening_escape").to_dict()["quantities"]
     assert q["escape_time_s"] == pytest.approx(independent, rel=1e-8)
     assert q["escape_time_quadrature_s"] == pytest.approx(independent, rel=1e-10)
     # from rest just beyond the saddle (a turning-point start)
@@ -252,7 +252,7 @@ def test_bounded_motion_inside_the_separatrix_never_escapes():
     result = springlab.run("nonlinear", "softening", x0=0.0999, duration=10.0)
     assert not result.trajectory.stopped
     assert np.max(np.abs(result.pos["block"])) <= 0.0999 + 1e-12
-    assert result.summary["quantities"]["motion"] == "bounded"
+    assert result.to_dict()["quantities"]["motion"] == "bounded"
 
 
 # -- separatrices and the phase field -------------------------------------------------------------
@@ -329,7 +329,7 @@ def test_forced_duffing_agrees_with_an_independent_solver_until_its_accuracy_hor
     difference = np.abs(sol.y[0] - forced.pos["block"])
     # the exciter's sinusoidal force keeps RK4 at fourth order: a 1 s run is good to ~1e-10 m
     assert np.max(difference[t <= 1.0]) < 1e-9
-    horizon = forced.summary["quantities"]["accurate_until_s"]
+    horizon = forced.to_dict()["quantities"]["accurate_until_s"]
     assert 5.0 < horizon < t[-1]
     # the trajectory is as good as its own Richardson estimate says (1 % of the 0.1 m wells)
     assert np.max(difference[t <= horizon]) < 1e-3
@@ -359,21 +359,21 @@ def test_twin_runs_separate_like_the_variational_equation(forced):
     twin = springlab.run("nonlinear", "forced_duffing", x0=p["x0"] + 1e-9, duration=t_end)
     lead = springlab.run("nonlinear", "forced_duffing", duration=t_end)
     for when in (4.0, 6.0, 8.0):
-        i = int(round(when / lead.summary["dt"]))
+        i = int(round(when / lead.to_dict()["dt"]))
         separation = twin.pos["block"][i] - lead.pos["block"][i]
         assert separation == pytest.approx(1e-9 * sol.sol(when)[2], rel=1e-3)
 
 
 @pytest.mark.slow
 def test_forced_duffing_is_chaotic(forced):
-    q = forced.summary["quantities"]
+    q = forced.to_dict()["quantities"]
     assert q["perturbation_m"] == 1e-9 and q["well_size_m"] == pytest.approx(0.1)
     assert 5.0 < q["separation_time_s"] < forced.time[-1]
     # a positive exponent is chaos; 1e-9 m -> 0.1 m is ln(1e8) = 18.4 e-foldings
     assert q["lyapunov_exponent_per_s"] > 0.5
     assert q["ftle_per_s"] == pytest.approx(math.log(0.1 / 1e-9) / q["separation_time_s"], rel=0.5)
-    assert forced.summary["passed"] is True
-    observed = next(c for c in forced.summary["checks"] if c["name"] == "observed_order")
+    assert forced.to_dict()["passed"] is True
+    observed = next(c for c in forced.to_dict()["checks"] if c["name"] == "observed_order")
     assert observed["reference"] == 4 and abs(observed["value"] - 4) < 0.5
 
 
@@ -409,7 +409,7 @@ def test_forced_duffing_separation_time_is_the_converged_one_of_the_exact_system
         events=apart,
     )
     exact = sol.t_events[0][0]  # 20.5934 s
-    q = forced.summary["quantities"]
+    q = forced.to_dict()["quantities"]
     assert q["separation_time_converged"] is True
     # converged: the last two refinements agree within SEPARATION_RTOL, and so does the exact system
     last, before = q["separation_time_refinement_s"][-1], q["separation_time_refinement_s"][-2]
@@ -433,7 +433,7 @@ def test_forced_runs_are_checked_at_the_integrators_own_order():
     result = springlab.run(
         "nonlinear", "forced_duffing", integrator="euler", dt=1e-3, duration=5.0, force_amplitude=3.0
     )
-    observed = next(c for c in result.summary["checks"] if c["name"] == "observed_order")
+    observed = next(c for c in result.to_dict()["checks"] if c["name"] == "observed_order")
     assert observed["reference"] == 1
     assert abs(observed["value"] - 1) < 0.5
 

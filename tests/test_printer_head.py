@@ -98,7 +98,7 @@ def _last_exit(time, deviation, band):
 @pytest.mark.parametrize("scenario", ["step_force", "move", "settle"])
 def test_trajectories_match_the_exact_two_dof_solution(scenario):
     result = springlab.run("printer_head", scenario)
-    p, dt = result.parameters, result.summary["dt"]
+    p, dt = result.parameters, result.to_dict()["dt"]
     every = 10  # expm per sample is the cost; every 10th step covers every phase of the 195 Hz mode
     time = result.time[::every]
     q, v = _exact(p, scenario, dt, time)
@@ -113,7 +113,7 @@ def test_trajectories_match_the_exact_two_dof_solution(scenario):
         velocity_error = np.max(np.abs(result.vel[joint][::every] - v[:, column]))
         assert position_error <= predicted + 1e-12 * scale, joint
         assert velocity_error <= omega * predicted + 1e-12 * scale * omega, joint
-    assert result.summary["passed"] is True
+    assert result.to_dict()["passed"] is True
 
 
 def test_move_stops_the_centre_of_mass_exactly_at_the_distance():
@@ -121,14 +121,14 @@ def test_move_stops_the_centre_of_mass_exactly_at_the_distance():
     p = result.parameters
     total = p["carriage_mass"] + p["motor_mass"]
     centre = (p["carriage_mass"] * result.pos["carriage"] + p["motor_mass"] * result.pos["motor"]) / total
-    q = result.summary["quantities"]
+    q = result.to_dict()["quantities"]
     after = result.time >= q["move_time_s"] - 1e-12
     np.testing.assert_allclose(centre[after], p["move_distance"], rtol=0, atol=1e-12)
 
 
 def test_belt_mode_frequency_and_damping_ratio_match_the_two_by_two_eigenproblem():
     result = springlab.run("printer_head", "settle", duration=0.001)
-    q = result.summary["quantities"]
+    q = result.to_dict()["quantities"]
     omega, zeta = _belt_mode(result.parameters)
     assert q["natural_frequency_hz"] == pytest.approx(omega / (2 * math.pi), rel=1e-12)
     assert q["damping_ratio"] == pytest.approx(zeta, rel=1e-12)
@@ -136,7 +136,7 @@ def test_belt_mode_frequency_and_damping_ratio_match_the_two_by_two_eigenproblem
     assert q["natural_frequency_hz"] == pytest.approx(math.sqrt(5e4 / (0.2 * 0.04 / 0.24)) / (2 * math.pi))
     assert q["damping_ratio"] == pytest.approx(0.030, abs=1e-4)
     # the scene's own linearization of RK4's step map: off by RK4's (omega dt)^4 / 120 per radian
-    omega_dt = omega * result.summary["dt"]
+    omega_dt = omega * result.to_dict()["dt"]
     rk4 = 2 * omega_dt**4 / 120
     assert q["linearized_natural_frequency_hz"] == pytest.approx(omega / (2 * math.pi), rel=rk4)
     assert q["linearized_damping_ratio"] == pytest.approx(zeta, rel=rk4 / zeta)
@@ -181,8 +181,8 @@ def test_mujoco_linearization_converges_to_the_analytic_belt_mode_at_first_order
 )
 def test_settling_time_matches_the_exact_trajectory_within_one_step(scenario, overrides):
     result = springlab.run("printer_head", scenario, **overrides)
-    p, dt = result.parameters, result.summary["dt"]
-    q = result.summary["quantities"]
+    p, dt = result.parameters, result.to_dict()["dt"]
+    q = result.to_dict()["quantities"]
     band = q["settling_band_m"]
     start = q.get("move_time_s", 0.0)
     target = p["move_distance"] if scenario == "move" else 0.0
@@ -204,8 +204,8 @@ def test_settling_time_matches_the_exact_trajectory_within_one_step(scenario, ov
 
 def test_bang_bang_move_takes_the_minimum_time_2_sqrt_dm_over_f():
     result = springlab.run("printer_head", "move")
-    p, dt = result.parameters, result.summary["dt"]
-    q = result.summary["quantities"]
+    p, dt = result.parameters, result.to_dict()["dt"]
+    q = result.to_dict()["quantities"]
     minimum = 2 * math.sqrt(p["move_distance"] * (p["carriage_mass"] + p["motor_mass"]) / p["drive_force"])
     assert q["minimum_move_time_s"] == pytest.approx(minimum, rel=1e-14)
     # rounded up to the step grid: at most one step more per half
@@ -219,8 +219,8 @@ def test_positioning_time_estimate_is_the_runs_move_time_plus_the_estimated_sett
     # settling is estimated: realized move time 2 n dt + ln(A / band) / (zeta omega_n), A the envelope of
     # the exact residual vibration after the move (not the minimum move time 2 sqrt(D M / F))
     result = springlab.run("printer_head", "move")
-    p, dt = result.parameters, result.summary["dt"]
-    q = result.summary["quantities"]
+    p, dt = result.parameters, result.to_dict()["dt"]
+    q = result.to_dict()["quantities"]
     starts, _ = _segments(p, "move", dt)
     move_time = starts[2]
     q_exact, v_exact = _exact(p, "move", dt, np.array([move_time]))
@@ -279,7 +279,7 @@ def test_undamped_residual_vibration_is_4_sin_squared_of_omega_t_over_4_times_th
     half = math.sqrt(default["move_distance"] * total / default["drive_force"])
     stiffness = reduced * (2 * math.pi * periods / half) ** 2
     result = springlab.run("printer_head", "move", belt_stiffness=stiffness, belt_damping=0.0, duration=0.1)
-    q, dt = result.summary["quantities"], result.summary["dt"]
+    q, dt = result.to_dict()["quantities"], result.to_dict()["dt"]
     omega = math.sqrt(stiffness / reduced)
     assert q["half_move_belt_periods"] == pytest.approx(q["move_time_s"] / 2 * omega / (2 * math.pi), rel=1e-12)
     assert q["half_move_belt_periods"] == pytest.approx(periods, abs=omega * dt / (2 * math.pi))  # grid rounding

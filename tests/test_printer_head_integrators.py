@@ -211,7 +211,7 @@ def test_implicit_integrators_stop_the_carriage_short_by_2hc_over_m_of_the_move(
     shortfall = 2 * 1e-4 * p["belt_damping"] * p["move_distance"] / total
     assert p["move_distance"] - centre == pytest.approx(shortfall, rel=0.02)
     assert shortfall > 5 * p["positioning_band"]
-    assert result.summary["quantities"]["settled_for_good"] is False
+    assert result.to_dict()["quantities"]["settled_for_good"] is False
     for exact in ("rk4", "euler"):
         other = springlab.run("printer_head", "move", integrator=exact, dt=1e-4)
         centre = (p["carriage_mass"] * other.pos["carriage"][-1] + p["motor_mass"] * other.pos["motor"][-1]) / total

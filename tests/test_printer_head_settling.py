@@ -213,7 +213,7 @@ def test_the_issue_run_reports_the_exact_last_exit_between_samples():
     # springlab run printer_head move --set ... --dt 0.000168... --duration 0.6: 0.388616 s reported
     # before (the samples), 0.393559 s the exact last exit
     result = springlab.run("printer_head", "move", dt=ISSUE_DT, duration=0.6, **ISSUE)
-    p, q = result.parameters, result.summary["quantities"]
+    p, q = result.parameters, result.to_dict()["quantities"]
     m_c, m_m = p["carriage_mass"], p["motor_mass"]
     belt = _belt(m_c, m_m, p["belt_stiffness"], p["belt_damping"])
     # the move on the run's grid: n steps each way at the force lowered to stop at D (no lowering here)

@@ -77,15 +77,17 @@ def test_the_attributes_are_the_facts_summary_json_holds():
     assert result.quantities == data["quantities"] and result.parameters == data["parameters"]
     assert result.estimate_range is not None and result.estimate_range.to_dict() == data["estimate_range"]
     assert result.checks == () and result.model_limits == ()
-    # `summary` is kept as the same dict, in Python values
-    assert result.summary == data
+    # `summary` is kept as the same dict, in Python values, and warns that to_dict() is its new name
+    with pytest.warns(DeprecationWarning, match=r"Result\.to_dict\(\)"):
+        assert result.summary == data
     assert result.message.startswith("every compared column within its tolerance")
 
 
 def test_to_dict_is_plain_json_where_python_has_inf_and_summary_keeps_it():
     result = springlab.run("printer_head", "settle", belt_damping=0.0)  # a carriage that never settles
     assert math.isinf(result.quantities["settling_time_s"])
-    assert math.isinf(result.summary["quantities"]["settling_time_s"])
+    with pytest.warns(DeprecationWarning, match="deprecated"):
+        assert math.isinf(result.summary["quantities"]["settling_time_s"])
     assert result.to_dict()["quantities"]["settling_time_s"] is None
     assert json.loads(json.dumps(result.to_dict(), allow_nan=False)) == result.to_dict()
 
@@ -111,7 +113,8 @@ def test_a_result_is_immutable_once_returned():
         with pytest.raises(ValueError, match="read-only"):
             series[0] = 1.0
     # the dicts handed out are copies: changing them changes nothing the result says
-    result.summary["passed"] = False
+    with pytest.warns(DeprecationWarning):
+        result.summary["passed"] = False
     result.to_dict()["errors"].clear()
     assert result.passed is True and result.to_dict()["passed"] is True and result.to_dict()["errors"]
 

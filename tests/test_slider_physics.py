@@ -16,9 +16,9 @@ from springlab.sim.simulate import ORDERS
 )
 def test_default_setting_reaches_1e6_relative_accuracy(scenario):
     result = springlab.run("slider", scenario)
-    worst = max(e["max_rel"] for e in result.summary["errors"].values())
+    worst = max(e["max_rel"] for e in result.to_dict()["errors"].values())
     assert worst <= 1e-6
-    assert result.summary["passed"] is True
+    assert result.to_dict()["passed"] is True
 
 
 @pytest.mark.parametrize("integrator", list(ORDERS))
@@ -28,7 +28,7 @@ def test_the_predicted_tolerance_bounds_the_measured_error(integrator, scenario)
     # bound of the error the run reports, and the verdict follows the 1e-2 cap. It is not an independent
     # check of that error; test_unforced_error_is_the_exact_error_of_the_integrators_one_step_map is.
     result = springlab.run("slider", scenario, integrator=integrator, dt=1e-3, duration=2.0)
-    summary = result.summary
+    summary = result.to_dict()
     assert summary["estimate_range"]["inside"] is True  # omega dt = 0.01: the prediction holds
     reference = result.case.reference(result.time, dt=1e-3)
     predicted = springlab.runs.compare.tolerances(reference, integrator, 1e-3, result.time)
@@ -81,20 +81,20 @@ def test_unforced_error_is_the_exact_error_of_the_integrators_one_step_map(integ
         scale = np.max(np.abs(exact[:, j]))
         assert np.max(np.abs(simulated - discrete[:, j])) <= roundoff * scale, column
         map_error = np.max(np.abs(discrete[:, j] - exact[:, j])) / scale
-        assert result.summary["errors"][column]["max_rel"] == pytest.approx(map_error, rel=1e-6, abs=2 * roundoff)
+        assert result.to_dict()["errors"][column]["max_rel"] == pytest.approx(map_error, rel=1e-6, abs=2 * roundoff)
 
 
 def test_rk4_tolerance_is_a_tight_prediction_not_a_blanket():
     # the leading-order prediction of RK4's error must be within a factor 2..4 of the real error
     result = springlab.run("slider", "undamped", integrator="rk4", dt=5e-3, duration=5.0)
-    error = result.summary["errors"]["slider_pos"]["max_rel"]
-    assert result.summary["tolerance"] / 4 <= error <= result.summary["tolerance"]
+    error = result.to_dict()["errors"]["slider_pos"]["max_rel"]
+    assert result.to_dict()["tolerance"] / 4 <= error <= result.to_dict()["tolerance"]
 
 
 def test_exercise_gives_the_textbook_answer():
     # chapter 5.4 'Under or overdamped?': d/m = 3, k/m = 2, x0 = 5 m -> x = 10 e^-t - 5 e^-2t
     result = springlab.run("slider", "exercise")
-    q = result.summary["quantities"]
+    q = result.to_dict()["quantities"]
     assert q["regime"] == "overdamped"
     assert q["damping_ratio"] == pytest.approx(3 / (2 * math.sqrt(2)), rel=1e-14)
     assert q["lambda_1_per_s"] == pytest.approx(-1.0, rel=1e-14)
@@ -116,7 +116,7 @@ def test_undamped_motion_is_x0_cos_omega_t():
 
 def test_step_force_settles_at_static_deflection_f_over_k():
     result = springlab.run("slider", "step", duration=20.0, damping=5.0)
-    q = result.summary["quantities"]
+    q = result.to_dict()["quantities"]
     assert q["static_deflection_m"] == pytest.approx(10.0 / result.parameters["stiffness"])
     assert result.pos["slider"][-1] == pytest.approx(q["static_deflection_m"], rel=1e-6)
 
@@ -133,7 +133,7 @@ def test_resonance_grows_linearly_like_t_cos():
 
 def test_harmonic_response_approaches_the_steady_state_amplitude():
     result = springlab.run("slider", "harmonic", damping=4.0, duration=20.0)
-    q = result.summary["quantities"]
+    q = result.to_dict()["quantities"]
     m, k, d = (result.parameters[n] for n in ("mass", "stiffness", "damping"))
     w = 2 * math.pi * result.parameters["force_frequency"]
     expected = result.parameters["force_amplitude"] / math.hypot(k - m * w * w, d * w)
@@ -147,7 +147,7 @@ def _observed_order(integrator, scenario):
     dts = (2e-3, 1e-3, 5e-4)
     for dt in dts:
         r = springlab.run("slider", scenario, integrator=integrator, dt=dt, duration=2.0)
-        errors.append(r.summary["errors"]["slider_pos"]["max_rel"])
+        errors.append(r.to_dict()["errors"]["slider_pos"]["max_rel"])
     return np.polyfit(np.log(dts), np.log(errors), 1)[0]
 
 
@@ -181,10 +181,10 @@ def test_overrides_reach_the_compiled_model():
     assert result.model.body("block").mass[0] == 2.0
     assert result.model.jnt_stiffness[0] == 800.0
     assert result.model.dof_damping[0] == 4.0
-    assert result.summary["quantities"]["omega_n_rad_s"] == pytest.approx(20.0)
+    assert result.to_dict()["quantities"]["omega_n_rad_s"] == pytest.approx(20.0)
 
 
 @pytest.mark.parametrize("scenario", list(springlab.SCENES["slider"].scenarios))
 def test_default_setting_is_predicted_to_meet_1e6(scenario):
     # the per-scenario dt is chosen so that the order-based bound itself is <= 1e-6
-    assert springlab.run("slider", scenario).summary["tolerance"] <= 1e-6
+    assert springlab.run("slider", scenario).to_dict()["tolerance"] <= 1e-6

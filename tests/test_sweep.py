@@ -13,10 +13,10 @@ import pandas
 import pytest
 
 import springlab
+from springlab import outputs
 from springlab.cli.main import main
 from springlab.errors import BadInputError, DivergedError
 from springlab.exact.limits import stability_limit
-from springlab.plots import sweep as sweep_plot
 from springlab.studies import sweeps
 from springlab.studies.sweeps import configurations, parse_axis
 
@@ -65,7 +65,13 @@ def test_every_row_equals_a_single_run_at_its_parameters(scene, scenario, vary):
 def test_a_diverged_configuration_is_a_marked_row_and_run_refuses_it():
     # rk4 at omega*dt = sqrt(k/m)*dt = 0.16, 1.6 and 16: the last is past its stability limit (2.83 at zeta ~ 0)
     result = springlab.sweep(
-        "slider", "free", vary=["stiffness=10:100000:3:log"], integrator="rk4", dt=0.05, duration=2.0, mass=1.0
+        "slider",
+        "free",
+        vary={"stiffness": (10.0, 100000.0, 3, "log")},
+        integrator="rk4",
+        dt=0.05,
+        duration=2.0,
+        mass=1.0,
     )
     for row in result.rows:
         params = row.parameters
@@ -100,7 +106,7 @@ def test_bad_ranges_are_one_line_errors_and_write_nothing(tmp_path, capsys, vary
 
 def test_varied_and_fixed_at_once_is_refused():
     with pytest.raises(BadInputError, match="both varied"):
-        springlab.sweep("slider", vary=["mass=1:2:2"], mass=3.0)
+        springlab.sweep("slider", vary={"mass": (1.0, 2.0, 2)}, mass=3.0)
 
 
 def test_cli_writes_the_csv_and_the_plot_and_json_is_silent_on_stderr(tmp_path, capsys, monkeypatch):
@@ -154,7 +160,7 @@ def test_cli_writes_the_csv_and_the_plot_and_json_is_silent_on_stderr(tmp_path, 
 
 
 def test_plot_rejects_an_unknown_quantity_and_leaves_no_file(tmp_path):
-    result = springlab.sweep("slider", "free", vary=["damping=1:2:2"])
+    result = springlab.sweep("slider", "free", vary={"damping": (1.0, 2.0, 2)})
     with pytest.raises(BadInputError, match="unknown quantity"):
-        sweep_plot.write(result, tmp_path, quantity="nonsense")
+        outputs.write(result, tmp_path, quantity="nonsense")
     assert list(tmp_path.iterdir()) == []

@@ -16,33 +16,75 @@ from springlab.runs.run import Result, ValidationRow
 from springlab.studies.audit.audit import audit
 from springlab.studies.audit.results import Audit
 from springlab.studies.auto import run, validate
+from springlab.studies.design import SobolStudy, Study, design
 from springlab.studies.fit.fit import fit
+from springlab.studies.fit.results import FitResult
 from springlab.studies.frequency import FrequencyResponse, frequency
 from springlab.studies.friction_hold import friction_settings
 from springlab.studies.friction_results import FrictionSettings
-from springlab.studies.sweeps import sweep
+from springlab.studies.random_load import Ensemble
+from springlab.studies.random_load import ensemble as rms
+from springlab.studies.refine import Refinement, refine
+from springlab.studies.rms_settings import RmsSettings, rms_settings
+from springlab.studies.stability import StabilityReport
+from springlab.studies.stability import stability_report as stability
+from springlab.studies.sweeps import Sweep, sweep
+from springlab.studies.tradeoff import Tradeoff, tradeoff
 
 from . import errors
 from .errors import BadInputError, ClusterError, DivergedError, SpringlabError, UnknownNameError
 from .scenes import SCENES
 
-__all__ = [
-    "analytic",
-    "errors",
+#: the studies, each `study(model, [scenario,] *, options..., **scene_parameters)` (stability takes no model)
+STUDIES = (
     "run",
     "validate",
     "sweep",
-    "audit",
-    "Audit",
+    "tradeoff",
+    "stability",
+    "design",
+    "fit",
+    "refine",
+    "friction_settings",
+    "rms",
+    "rms_settings",
     "frequency",
-    "FrequencyResponse",
+    "audit",
+)
+
+__all__ = [
+    "analytic",
+    "errors",
+    # the studies and what they return
+    "run",
+    "Result",
+    "validate",
+    "ValidationRow",
+    "sweep",
+    "Sweep",
+    "tradeoff",
+    "Tradeoff",
+    "stability",
+    "StabilityReport",
+    "design",
+    "Study",
+    "SobolStudy",
+    "fit",
+    "FitResult",
+    "refine",
+    "Refinement",
     "friction_settings",
     "FrictionSettings",
-    "fit",
-    "Result",
+    "rms",
+    "Ensemble",
+    "rms_settings",
+    "RmsSettings",
+    "frequency",
+    "FrequencyResponse",
+    "audit",
+    "Audit",
     "ModelRun",
     "Verdict",
-    "ValidationRow",
     "SCENES",
     "SpringlabError",
     "BadInputError",

@@ -74,6 +74,7 @@ UNITS: dict[str, float] = {
     "J": 1.0,
     "mJ": 1e3,
     "µJ": 1e6,
+    "kN s/m": 1e-3,
     "N s/m": 1.0,
     "kg": 1.0,
     "g": 1e3,
@@ -90,6 +91,7 @@ FAMILIES: dict[str, tuple[str, ...]] = {
     "N": ("kN", "N", "mN"),
     "Hz": ("kHz", "Hz", "mHz"),
     "J": ("J", "mJ", "µJ"),
+    "N s/m": ("kN s/m", "N s/m"),
 }
 #: units written without a space after the number
 _ATTACHED = ("°", "%")

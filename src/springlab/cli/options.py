@@ -44,16 +44,20 @@ class Parser(argparse.ArgumentParser):
 
 
 def parse_sets(pairs: Sequence[str]) -> dict[str, Any]:
-    """['mass=2', ...] -> {'mass': '2'}; values are checked by the scene.
+    """['mass=2', ...] -> {'mass': 2.0}; the names and ranges are checked by the scene.
 
-    The values are strings; typed Any because they travel as ``**parameters`` next to typed keywords.
+    The library takes numbers; a VALUE that is not one stays text, which the scene refuses naming the
+    parameter's valid range (`mass must be a number > 0 kg, got 'abc'`).
     """
     out: dict[str, Any] = {}
     for pair in pairs or ():
         name, sep, value = pair.partition("=")
         if not sep or not name.strip():
             raise BadInputError(f"--set takes NAME=VALUE, got {pair!r}")
-        out[name.strip()] = value.strip()
+        try:
+            out[name.strip()] = float(value)
+        except ValueError:
+            out[name.strip()] = value.strip()
     return out
 
 

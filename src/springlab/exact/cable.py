@@ -36,9 +36,10 @@ import dataclasses
 import math
 
 import numpy as np
-import scipy.linalg
 
 from springlab.errors import ParameterError
+
+from . import linear
 
 _EPS = float(np.finfo(float).eps)
 #: Newton steps allowed per continuation point of the damped root (it converges quadratically in 3-6)
@@ -292,7 +293,7 @@ class LumpedCable:
         damper is well conditioned, so lambda is good to about N eps |lambda_max| absolute. An eigenvalue
         whose imaginary part is within 64 eps |lambda_max| of 0 counts as real.
         """
-        values = scipy.linalg.eigvals(self.state_matrix())
+        (values,) = linear.eigen(self.state_matrix())
         tolerance = 64 * _EPS * float(np.max(np.abs(values)))
         real = np.abs(values.imag) <= tolerance
         oscillatory = values[~real & (values.imag > 0)]
@@ -300,7 +301,7 @@ class LumpedCable:
 
     def growth_rate(self) -> float:
         """max Re(lambda) [1/s] over every mode (> 0: the model's own motion grows)."""
-        return float(np.max(scipy.linalg.eigvals(self.state_matrix()).real))
+        return float(np.max(linear.eigen(self.state_matrix())[0].real))
 
 
 def stabilising_damper(model: LumpedCable, node: int, *, rtol: float = 1e-12) -> tuple[float, float]:

@@ -16,13 +16,74 @@ with M [kg], C [N s/m], K [N/m], q [m], q' [m/s], f [N].
 
 from __future__ import annotations
 
+import collections
+import hashlib
 import math
+from typing import Any
 
 import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike
 
 __all__ = ["state_matrix", "generator_system", "lti_response", "linear_response", "expm_minus_identity"]
+
+
+#: BLAS's thread pools, found on first use (`single_threaded_blas`)
+_BLAS_POOLS: Any = None
+#: the last few eigen-decompositions (`eigen`), by matrix
+_EIGEN: collections.OrderedDict[tuple, tuple[np.ndarray, ...]] = collections.OrderedDict()
+#: how many `_EIGEN` keeps: a scene's state matrices of one case and the next
+KEPT_EIGEN = 16
+
+
+def single_threaded_blas() -> Any:
+    """A context in which BLAS (numpy's and scipy's OpenBLAS) runs on one thread (threadpoolctl).
+
+    For the dense eigenproblems of a few hundred unknowns springlab solves, BLAS's threads cost more than they
+    save, and on a machine the rollouts or the test workers already fill they oversubscribe the cores: a 200 x
+    200 `scipy.linalg.eig` took 0.09 s on one thread and 0.75 s on two busy cores with OpenBLAS's own.
+    """
+    global _BLAS_POOLS
+    if _BLAS_POOLS is None:
+        from threadpoolctl import ThreadpoolController  # here: importing springlab loads no thread pools
+
+        _BLAS_POOLS = ThreadpoolController()
+    return _BLAS_POOLS.limit(limits=1, user_api="blas")
+
+
+def eigen(a: np.ndarray, *, vectors: bool = False) -> tuple[np.ndarray, ...]:
+    """scipy.linalg.eig of a square matrix on one BLAS thread, kept for the last KEPT_EIGEN matrices.
+
+    Parameters
+    ----------
+    a
+        (n, n) real or complex matrix (e.g. a state matrix A [1/s]).
+    vectors
+        also the left and right eigenvectors.
+
+    Returns
+    -------
+    tuple of np.ndarray
+        (values,) or (values, left, right) as scipy.linalg.eig returns them, read-only (they are shared).
+    """
+    matrix = np.ascontiguousarray(a)
+    key = (matrix.dtype.str, matrix.shape, hashlib.blake2b(matrix.tobytes(), digest_size=16).digest(), vectors)
+    kept = _EIGEN.get(key)
+    if kept is None:
+        with single_threaded_blas():
+            if vectors:
+                values, left, right = scipy.linalg.eig(matrix, left=True, right=True)
+                kept = (values, left, right)
+            else:
+                kept = (scipy.linalg.eigvals(matrix),)
+        for array in kept:
+            array.setflags(write=False)
+        _EIGEN[key] = kept
+        while len(_EIGEN) > KEPT_EIGEN:
+            _EIGEN.popitem(last=False)
+    else:
+        _EIGEN.move_to_end(key)
+    return kept
 
 
 def _onenorm(a: np.ndarray) -> float:

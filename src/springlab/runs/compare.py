@@ -75,6 +75,7 @@ from __future__ import annotations
 
 import dataclasses
 import enum
+import functools
 import math
 from collections.abc import Iterable
 from typing import Any
@@ -208,7 +209,14 @@ def predicted_error(reference: Reference, integrator: str, dt: float, time: np.n
 
 
 def tolerances(reference: Reference, integrator: str, dt: float, time: np.ndarray) -> dict[str, float]:
-    """Relative tolerance per compared column (see module docstring)."""
+    """Relative tolerance per compared column (see module docstring); kept on the reference per setting."""
+    key = ("tolerances", integrator, float(dt), len(time), float(time[0]), float(time[-1]))
+    if key not in reference.derived:
+        reference.derived[key] = _tolerances(reference, integrator, dt, time)
+    return dict(reference.derived[key])
+
+
+def _tolerances(reference: Reference, integrator: str, dt: float, time: np.ndarray) -> dict[str, float]:
     floor = ROUNDOFF_PER_STEP * (len(time) - 1)
     predicted = predicted_error(reference, integrator, dt, time)
     out: dict[str, float] = {}
@@ -287,10 +295,60 @@ def _round_down(value: float, digits: int = 2) -> float:
     return out if out <= value else float(f"{out - unit:.{digits - 1}e}")
 
 
-def _max_over_steps(values, steps: int, peak: float) -> float:
-    """max of values(n) over the integers n in [1, steps] next to a real peak (the function is unimodal)."""
-    candidates = {1, steps, min(max(math.floor(peak), 1), steps), min(max(math.ceil(peak), 1), steps)}
-    return max(values(n) for n in candidates)
+def _max_over_steps(values, steps: int, peak: np.ndarray) -> np.ndarray:
+    """Per mode, the max of values(n) over the integers n in [1, steps] next to its real peak (unimodal)."""
+    floor = np.clip(np.floor(peak), 1, steps)
+    candidates = np.stack([np.ones_like(peak), np.full_like(peak, steps), floor, np.clip(np.ceil(peak), 1, steps)])
+    return np.max(values(candidates), axis=0)
+
+
+def mode_factors(rates: np.ndarray, integrator: str, dt: float, duration: float) -> np.ndarray:
+    """F [-] of every mode at once: its whole error's bound over the estimate's kept term; inf where none.
+
+    Parameters
+    ----------
+    rates
+        (modes,) eigenvalues lambda [1/s].
+    integrator
+        integrator name.
+    dt
+        timestep [s].
+    duration
+        simulated time [s].
+    """
+    rates = np.asarray(rates, complex)
+    order = ORDERS[integrator]
+    steps = max(1, round(duration / dt))
+    size = dt * np.abs(rates)
+    decay = -rates.real * dt  # sigma h
+    tail = size / (order + 2)
+    bounded = tail < 1.0
+    with np.errstate(all="ignore"):
+        kept = ERROR_CONSTANTS[integrator] * size ** (order + 1)
+        local = np.where(bounded, kept * np.exp(decay) / (1.0 - tail), 0.0)  # bound a on |eps|
+        growth = np.log1p(local)
+
+        def whole(n: np.ndarray) -> np.ndarray:
+            # e^(-sigma h n) ((1 + a)^n - 1) in logs: log(expm1(x)) = x + log1p(-e^-x), no overflow
+            x = growth * n
+            log_expm1 = np.where(x < 30.0, np.log(np.expm1(np.minimum(x, 30.0))), x + np.log1p(-np.exp(-x)))
+            return np.where(x > 0.0, np.exp(np.minimum(-decay * n + log_expm1, 700.0)), 0.0)
+
+        # e^(-sigma h n) ((1 + a)^n - 1) peaks where its derivative vanishes (or at the end if it never decays)
+        rate_of_change = growth - decay
+        rising = (rate_of_change >= 0.0) | (decay <= 0.0)
+        # a decaying mode whose local error bound underflows to 0 has no peak in double precision: the
+        # same exceptions as the arithmetic per mode (runs.run turns them into "cannot be computed")
+        if np.any(bounded & ~rising & (growth <= 0.0)):
+            raise ZeroDivisionError("float division by zero")
+        peak = np.where(rising, float(steps), np.log(decay / -rate_of_change) / np.where(rising, 1.0, growth))
+        if np.any(bounded & ~np.isfinite(peak)):
+            raise OverflowError("cannot convert float infinity to integer")
+        numerator = _max_over_steps(whole, steps, peak)
+        kept_peak = np.where(decay > 0, 1.0 / decay, float(steps))
+        denominator = _max_over_steps(lambda n: n * kept * np.exp(-decay * n), steps, kept_peak)
+        factor = numerator / denominator
+    return np.where(bounded & (denominator > 0.0) & np.isfinite(numerator), factor, np.inf)
 
 
 def mode_factor(rate: complex, integrator: str, dt: float, duration: float) -> float:
@@ -307,40 +365,17 @@ def mode_factor(rate: complex, integrator: str, dt: float, duration: float) -> f
     duration
         simulated time [s].
     """
-    order = ORDERS[integrator]
-    steps = max(1, round(duration / dt))
-    size = dt * abs(rate)
-    decay = -float(np.real(rate)) * dt  # sigma h
-    tail = size / (order + 2)
-    if tail >= 1.0:
-        return math.inf
-    kept = ERROR_CONSTANTS[integrator] * size ** (order + 1)
-    local = kept * math.exp(decay) / (1.0 - tail)  # bound a on |eps|
-    growth = math.log1p(local)
-
-    def whole(n: int) -> float:
-        # e^(-sigma h n) ((1 + a)^n - 1) in logs: log(expm1(x)) = x + log1p(-e^-x), no overflow
-        x = growth * n
-        if x <= 0.0:
-            return 0.0
-        log_expm1 = math.log(math.expm1(x)) if x < 30.0 else x + math.log1p(-math.exp(-x))
-        return math.exp(min(-decay * n + log_expm1, 700.0))
-
-    # e^(-sigma h n) ((1 + a)^n - 1) peaks where its derivative vanishes (or at the end if it never decays)
-    rate_of_change = growth - decay
-    if rate_of_change >= 0.0 or decay <= 0.0:
-        peak = float(steps)
-    else:
-        peak = math.log(decay / -rate_of_change) / growth
-    numerator = _max_over_steps(whole, steps, peak)
-    denominator = _max_over_steps(lambda n: n * kept * math.exp(-decay * n), steps, 1.0 / decay if decay > 0 else steps)
-    if denominator <= 0.0 or not math.isfinite(numerator):
-        return math.inf
-    return numerator / denominator
+    return float(mode_factors(np.array([rate]), integrator, dt, duration)[0])
 
 
 def system_rates(reference: Reference) -> list[complex]:
     """Eigenvalues lambda [1/s] of every system matrix of the reference (segments included), 0 dropped."""
+    if "system_rates" not in reference.derived:
+        reference.derived["system_rates"] = tuple(_system_rates(reference))
+    return list(reference.derived["system_rates"])
+
+
+def _system_rates(reference: Reference) -> list[complex]:
     systems = [reference.system] + [a for _, a in reference.switches]
     rates: list[complex] = []
     for a in systems:
@@ -367,9 +402,18 @@ def estimate_range(rates: Iterable[complex], integrator: str, dt: float, duratio
     rates = list(rates)
     if not rates:
         return EstimateRange(True, 1.0, 0j, dt, math.inf)
+    return _estimate_range(tuple(complex(r) for r in rates), integrator, float(dt), float(duration))
+
+
+@functools.lru_cache(maxsize=256)
+def _estimate_range(rates: tuple[complex, ...], integrator: str, dt: float, duration: float) -> EstimateRange:
+    """`estimate_range` of modes that are there, kept per (modes, setting): it depends on nothing else."""
+    modes = np.array(rates, complex)
 
     def worst(h: float) -> tuple[float, complex]:
-        return max(((mode_factor(r, integrator, h, duration), r) for r in rates), key=lambda item: item[0])
+        factors = mode_factors(modes, integrator, h, duration)
+        which = int(np.argmax(factors))  # the first of equal factors, as max() over the modes
+        return float(factors[which]), rates[which]
 
     factor, rate = worst(dt)
     inside = factor <= SAFETY

@@ -7,6 +7,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
+import warnings
 from typing import TYPE_CHECKING, Any
 
 import mujoco
@@ -14,7 +15,7 @@ import numpy as np
 
 from springlab import display, tables
 from springlab.answer import Answer
-from springlab.files import json_ready
+from springlab.files import Output, csv_text, json_ready
 from springlab.scenes.base import Case, Check
 from springlab.sim.simulate import Trajectory
 
@@ -38,8 +39,7 @@ class Result(display.Shown):
 
     Immutable: the attributes cannot be rebound and the series are read-only arrays.
     `to_dict()` is summary.json (what `springlab run --json` prints), `to_pandas()` is
-    trajectory.csv as a DataFrame, and `summary` is the same facts as a dict of Python
-    values (inf stays inf where summary.json writes null).
+    trajectory.csv as a DataFrame (`summary`, the same facts in Python values, is deprecated).
 
     Attributes
     ----------
@@ -177,10 +177,21 @@ class Result(display.Shown):
 
     @property
     def summary(self) -> dict[str, Any]:
-        """The facts as summary.json's dict, in Python values (inf where summary.json has null).
+        """Deprecated: `to_dict()` (summary.json) or the attributes (`quantities`, `errors`, `passed` ...).
 
-        Kept for scripts written against it; `to_dict()` is summary.json itself.
+        The facts as summary.json's dict in Python values (inf where summary.json has null), kept for
+        scripts written against it; it warns (DeprecationWarning) since issue 32.
         """
+        warnings.warn(
+            "Result.summary is deprecated: use Result.to_dict() (summary.json, what `springlab run --json`"
+            " prints) or the attributes (result.quantities, result.errors, result.passed)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self._facts()
+
+    def _facts(self) -> dict[str, Any]:
+        """summary.json's dict in Python values (inf where summary.json has null)."""
         return {
             "scene": self.scene,
             "scenario": self.scenario,
@@ -264,7 +275,23 @@ class Result(display.Shown):
         integrator, dt [s], duration [s], steps, wall_time_s [s], parameters, quantities, errors, tolerance,
         tolerance_basis, passed, verdict, estimate_range, checks, model_limits, grid_notes (see docs/runs.md).
         """
-        return json_ready(self.summary)
+        return json_ready(self._facts())
+
+    def outputs(self, every: int = 1) -> tuple[Output, ...]:
+        """The files `springlab run --output DIR` writes (springlab.outputs.write): trajectory.csv and summary.json.
+
+        Parameters
+        ----------
+        every
+            keep every `every`-th step in trajectory.csv (the last always), as `--record-every`.
+
+        The time column is k dt [s] for step k, exactly: the state after k steps is the state at k dt
+        (MuJoCo's data.time accumulates dt and drifts by rounding).
+        """
+        return (
+            Output("trajectory.csv", csv_text(self._csv_columns(), every)),
+            Output.json("summary.json", self.to_dict()),
+        )
 
     def columns(self) -> dict[str, np.ndarray]:
         """The series in trajectory.csv's order: time (MuJoCo's clock), <joint>_pos/_vel, then the references."""

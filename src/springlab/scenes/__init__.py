@@ -12,7 +12,8 @@ from __future__ import annotations
 
 import importlib
 import pkgutil
-from collections.abc import Mapping
+import types
+from collections.abc import Iterator, Mapping
 from typing import Any
 
 from springlab.errors import UnknownNameError
@@ -35,8 +36,33 @@ def _discover() -> dict[str, Scene]:
     return found
 
 
-#: scene name -> Scene, in catalogue order
-SCENES: dict[str, Scene] = _discover()
+class _Registry(Mapping[str, Scene]):
+    """The scenes by name, in catalogue order: read-only, discovered on first use (importing springlab
+    imports no scene; the first lookup imports them all, once)."""
+
+    def __init__(self) -> None:
+        self._found: Mapping[str, Scene] | None = None
+
+    def _scenes(self) -> Mapping[str, Scene]:
+        if self._found is None:
+            self._found = types.MappingProxyType(_discover())
+        return self._found
+
+    def __getitem__(self, name: str) -> Scene:
+        return self._scenes()[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._scenes())
+
+    def __len__(self) -> int:
+        return len(self._scenes())
+
+    def __repr__(self) -> str:
+        return f"<springlab scenes: {', '.join(self)}>"
+
+
+#: scene name -> Scene, in catalogue order (read-only; discovered on first use)
+SCENES: Mapping[str, Scene] = _Registry()
 
 
 def get(name: str) -> Scene:

@@ -29,8 +29,11 @@ Data flows one way: parameters -> MjModel -> Trajectory -> (reference, errors)
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import functools
+import hashlib
+import threading
 from collections.abc import Callable, Hashable, Mapping
 from typing import TYPE_CHECKING, Any, TypeVar
 
@@ -41,7 +44,7 @@ from springlab.answer import Answer, compose
 from springlab.errors import ParameterError, UnknownNameError
 from springlab.exact.limits import stability_limit
 from springlab.sim import model_files
-from springlab.sim.simulate import Setup, Trajectory, check_timing, quiet_mujoco, simulate
+from springlab.sim.simulate import Setup, Trajectory, check_timing, configured, quiet_mujoco, simulate
 
 from .capabilities.design import DesignSpec
 from .capabilities.drawing import Drawing
@@ -426,6 +429,16 @@ class Scene:
         return columns
 
 
+#: how many references (grids of times) a case keeps (`Case.reference`)
+KEPT_REFERENCES = 4
+#: how many compiled cases (model and `Case.memo`) the process keeps, least recently used dropped first
+COMPILED_CASES = 32
+#: (scene, scenario, parameters) -> its Case: a repeated run, a study's repeated setting and every hook of
+#: one parameter set share one compiled model and one set of exact precomputations (`Case.compiled`)
+_COMPILED: collections.OrderedDict[Hashable, Case] = collections.OrderedDict()
+_COMPILED_LOCK = threading.Lock()
+
+
 @dataclasses.dataclass(frozen=True, eq=False, repr=False)
 class Case:
     """A scenario of a scene with its resolved parameters and its compiled model.
@@ -469,6 +482,11 @@ class Case:
     def compiled(cls, scene: Scene, scenario: Scenario, params: Mapping[str, float]) -> Case:
         """The case of parameters already resolved (`Scene.resolve`): its model compiled (`Scene.build`).
 
+        Kept per process for the last COMPILED_CASES parameter sets: the same scene, scenario and
+        parameters give the same Case, so its compiled model and what its memo keeps (continuum roots,
+        eigen-decompositions, matrix exponentials) are computed once. The model is shared: read it,
+        or work on a `copy.copy` of it (as `springlab.sim.simulate.configured` does).
+
         Parameters
         ----------
         scene
@@ -484,7 +502,22 @@ class Case:
             MuJoCo cannot compile the model at these values.
         """
         values = dict(params)
-        return cls(scene, scenario, values, scene.build(values, scenario))
+        try:
+            key: Hashable = (id(scene), id(scenario), tuple(sorted(values.items())))
+            hash(key)
+        except TypeError:  # a value that is no number: compile it, keep nothing
+            return cls(scene, scenario, values, scene.build(values, scenario))
+        with _COMPILED_LOCK:
+            kept = _COMPILED.get(key)
+            if kept is not None and kept.scene is scene and kept.scenario is scenario:
+                _COMPILED.move_to_end(key)
+                return kept
+        case = cls(scene, scenario, values, scene.build(values, scenario))
+        with _COMPILED_LOCK:
+            _COMPILED[key] = case
+            while len(_COMPILED) > COMPILED_CASES:
+                _COMPILED.popitem(last=False)
+        return case
 
     def memo(self, key: Hashable, compute: Callable[[], T]) -> T:
         """`compute()` the first time `key` is asked for, the kept value after: what depends only on the case.
@@ -520,7 +553,14 @@ class Case:
         return self.memo("stop_condition", lambda: self.scene.stop_condition(self))
 
     def simulate(
-        self, integrator: str, dt: float, duration: float, *, setup: Setup | None = None, stop: bool = True
+        self,
+        integrator: str,
+        dt: float,
+        duration: float,
+        *,
+        setup: Setup | None = None,
+        stop: bool = True,
+        keep: bool = False,
     ) -> Trajectory:
         """Run the case headless (springlab.sim.simulate): the model is not changed.
 
@@ -537,6 +577,10 @@ class Case:
         stop
             end the run at the scene's stop condition (False: run the full duration; a run that only
             needs the trajectory up to an event the scene has none of).
+        keep
+            keep the run on the case (`memo`) and return the kept one when asked again with the scenario's
+            own setup: for the verification runs a verdict repeats (a run at dt/2 that measures the
+            convergence), which depend on the case and the setting only. Read it, never write into it.
 
         Raises
         ------
@@ -545,11 +589,17 @@ class Case:
         DivergedError
             the simulation blew up.
         """
+        if keep and setup is None:
+            key = ("simulate", integrator, float(dt), float(duration), stop)
+            return self.memo(key, lambda: self.simulate(integrator, dt, duration, stop=stop))
         steps = check_timing(dt, duration)
         if setup is None:
             setup = self.setup(steps, dt)
+        model, data = _work(self.model, integrator, dt)
         return simulate(
-            self.model,
+            model,
+            data=data,
+            prepared=True,
             integrator=integrator,
             dt=dt,
             duration=duration,
@@ -592,8 +642,19 @@ class Case:
         return self.memo("physical", lambda: self.scene.physical(self.model))
 
     def reference(self, time: np.ndarray, *, dt: float) -> Reference | None:
-        """The exact solution at `time` [s] of a run with timestep `dt` [s] (`Scene.reference`; None: none)."""
-        return self.scene.reference(self, time, dt=dt)
+        """The exact solution at `time` [s] of a run with timestep `dt` [s] (`Scene.reference`; None: none).
+
+        Kept for the last few grids of times (a repeated run, the same run shown and checked): the
+        reference depends on the case, the times and dt only. Read it, never write into it.
+        """
+        times = np.ascontiguousarray(time, dtype=float)
+        key = ("reference", float(dt), times.shape, hashlib.blake2b(times.tobytes(), digest_size=16).digest())
+        kept: collections.OrderedDict = self.memo("references", collections.OrderedDict)
+        if key not in kept:
+            kept[key] = self.scene.reference(self, time, dt=dt)
+            while len(kept) > KEPT_REFERENCES:
+                kept.popitem(last=False)
+        return kept[key]
 
     def checks(self, trajectory: Trajectory) -> list[Check]:
         """The scalar claims a run of this case is held to (`Scene.checks`)."""
@@ -640,6 +701,32 @@ class Case:
     def drawing(self) -> Drawing:
         """What the pictures of a run of the case show beyond the model's own geoms (`Scene.drawing`)."""
         return self.scene.drawing(self)
+
+
+#: per thread, the last few (case model, integrator, dt) -> (its configured copy, its MjData) (`_work`)
+_WORK = threading.local()
+#: how many the slots hold per thread: a run and its verification run at dt/2 (an MjData may be megabytes)
+WORK_SLOTS = 2
+
+
+def _work(model: mujoco.MjModel, integrator: str, dt: float) -> tuple[mujoco.MjModel, mujoco.MjData]:
+    """A case model's copy set to `integrator` and `dt` [s], and an MjData of it, reused by this thread's next run.
+
+    Copying a model and allocating its MjData (its arena: megabytes, zeroed) cost as much as a thousand steps
+    of a small scene; a case's model is never written into (`Case.compiled`), so the copy stays right.
+    """
+    slots: collections.OrderedDict | None = getattr(_WORK, "slots", None)
+    if slots is None:
+        slots = _WORK.slots = collections.OrderedDict()
+    key = (id(model), integrator, float(dt))
+    kept = slots.get(key)
+    if kept is None or kept[0] is not model:
+        work = configured(model, integrator, dt)
+        kept = slots[key] = (model, work, mujoco.MjData(work))
+        while len(slots) > WORK_SLOTS:
+            slots.popitem(last=False)
+    slots.move_to_end(key)
+    return kept[1], kept[2]
 
 
 def _case_of(scene: Scene, scenario: str, params: dict[str, float], model: mujoco.MjModel) -> Case:

@@ -1,17 +1,191 @@
 """The plain data of a scene: what it declares (its parameters and scenarios) and what it answers with (an
 exact reference, scalar checks). springlab.scenes.base builds on these; they import nothing of the scenes.
+
+Also the one set of names no scene parameter may take, `STUDY_OPTIONS`: every study takes a scene's
+parameters as keyword arguments beside its own options (`springlab.sweep("slider", vary=..., mass=2.0)`), so
+a parameter named like an option would be taken for the option. `keyword_parameters` is what each study
+calls on its `**parameters`.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable, Mapping
+import warnings
+from collections.abc import Callable, Collection, Mapping
 from typing import Any
 
 import numpy as np
 
-from springlab.errors import ParameterError
+from springlab.errors import BadInputError, ParameterError
+
+#: Every name a public study (springlab.run, validate, sweep, tradeoff, design, fit, stability, refine,
+#: friction_settings, rms, rms_settings, frequency, audit) takes besides a scene's parameters, and the names
+#: their first argument and parameters had before issue 32. A scene parameter named like one would be taken
+#: for the option (or refused), so no scene may declare one: tests/test_api.py holds every scene and every
+#: study's signature to this set, and a study's new option is added here.
+STUDY_OPTIONS: frozenset[str] = frozenset(
+    {
+        # every study: the model, its scenario, where the chunks run
+        "model",
+        "scenario",
+        "executor",
+        "nthread",
+        # the setting and its tolerance
+        "integrator",
+        "dt",
+        "duration",
+        "tol",
+        "integrators",
+        "dts",
+        # sweep
+        "vary",
+        "samples",
+        "sample_seed",
+        "chunk_size",
+        # design
+        "levels",
+        "plane_levels",
+        "omega_dt",
+        "sobol",
+        "sobol_seed",
+        # fit
+        "data",
+        "map",
+        "free",
+        "scale",
+        "time_scale",
+        "start",
+        "degree",
+        "run_scene",
+        "starts",
+        "workers",
+        "scheduler",
+        "show_progress",
+        # stability
+        "full",
+        # refine, friction_settings
+        "question",
+        "sizes",
+        "scenarios",
+        "values",
+        "bodies",
+        "hold_s",
+        # rms, rms_settings
+        "seeds",
+        "record",
+        "level",
+        "seed_counts",
+        # frequency
+        "input",
+        "response",
+        "band",
+        "points",
+        "sines",
+        "amplitudes",
+        "sweep",
+        # audit, and a model file's run, sweep and friction settings
+        "keyframe",
+        "settle_s",
+        "perturb",
+        # names before issue 32: the first argument, the parameters as one mapping
+        "scene",
+        "scene_or_model",
+        "model_or_path",
+        "scene_names",
+        "parameters",
+        "overrides",
+    }
+)
+#: the first argument's names before issue 32 (it is `model` in every study now)
+_FIRST_ARGUMENT_BEFORE = ("scene", "scene_or_model", "model_or_path", "scene_names")
+
+
+def keyword_parameters(
+    study: str,
+    parameters: Mapping[str, Any],
+    *,
+    declared: Collection[str] = (),
+    renamed: Mapping[str, str] | None = None,
+) -> dict[str, Any]:
+    """A study's `**parameters`, checked to be a scene's parameters and not an option spelled another way.
+
+    Parameters
+    ----------
+    study
+        the study's public name (for the message), e.g. 'sweep'.
+    parameters
+        the keyword arguments the study did not bind to an option.
+    declared
+        the scene's parameter names (empty: unknown here, e.g. a model file).
+    renamed
+        old option keyword -> its new name, for this study's options renamed in issue 32 (sweep's
+        `seed` is `sample_seed`). Where the scene declares a parameter of the old name (the printer
+        head's `seed`), the keyword is that parameter and a DeprecationWarning says so.
+
+    Returns
+    -------
+    dict[str, Any]
+        the scene parameter overrides, name -> value.
+
+    Raises
+    ------
+    TypeError
+        an old spelling (a renamed option, the first argument's old name, `parameters=` or `overrides=`
+        as one mapping) or another study's option, as Python says of an unexpected keyword.
+    """
+    renamed = renamed or {}
+    for name in parameters:
+        if name in renamed and name in declared:
+            warnings.warn(
+                f"{study}(): {name}= sets the scene's parameter {name}; the study's option it named before issue 32"
+                f" is {renamed[name]}=",
+                DeprecationWarning,
+                stacklevel=3,
+            )
+        elif name in renamed:
+            raise TypeError(f"{study}() takes {renamed[name]}= where it took {name}= (renamed in issue 32)")
+        elif name in _FIRST_ARGUMENT_BEFORE:
+            raise TypeError(
+                f"{study}()'s first argument is `model` (it was `{name}`): pass the scene name first, e.g."
+                f" {study}('slider', ...)"
+            )
+        elif name in ("parameters", "overrides"):
+            raise TypeError(
+                f"{study}() takes a scene's parameters as keyword arguments (mass=2.0, damping=4.0), not {name}={{...}}:"
+                f" unpack the mapping, {study}(model, **{name})"
+            )
+        elif name in STUDY_OPTIONS:
+            raise TypeError(
+                f"{study}() got an unexpected keyword argument {name!r} (an option of another study; no scene"
+                " parameter is named like one)"
+            )
+    return dict(parameters)
+
+
+def refuse_text(option: str, value: object, typed: str, *, numbers: bool = False) -> None:
+    """Refuse the command line's string where a study takes a typed value (only `springlab.cli` parses text).
+
+    Parameters
+    ----------
+    option
+        the keyword, e.g. 'integrators'.
+    value
+        what was passed.
+    typed
+        the typed form, e.g. "a sequence of names, e.g. integrators=['rk4', 'euler']".
+    numbers
+        `value` is a sequence of numbers: a string among them is refused too.
+
+    Raises
+    ------
+    BadInputError
+        `value` is a string (or, with `numbers`, holds one).
+    """
+    if isinstance(value, (str, bytes)):
+        raise BadInputError(f"{option} takes {typed}, not the command line's string {value!r}")
+    if numbers and isinstance(value, (list, tuple)) and any(isinstance(v, (str, bytes)) for v in value):
+        raise BadInputError(f"{option} takes {typed}, not strings: got {value!r}")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -58,7 +232,12 @@ class Parameter:
         return (" and ".join(parts) or "any finite value") + unit
 
     def check(self, value: Any) -> float:
-        """Return `value` as a float, or raise ParameterError saying what is valid."""
+        """Return `value` as a float, or raise ParameterError saying what is valid.
+
+        A string is refused: the library takes numbers, and only the command line parses `--set`'s text.
+        """
+        if isinstance(value, (str, bytes)):
+            raise ParameterError(f"{self.name} must be a number {self.valid_range()}, got {value!r}")
         try:
             number = float(value)
         except (TypeError, ValueError):
@@ -154,6 +333,9 @@ class Reference:
     scales
         column -> the scale [m or m/s] its max_rel is relative to where the exact motion
         has none (max |ref| = 0: a block held at rest); otherwise max |ref| is.
+    derived
+        what the run layer derives from this reference alone (its tolerances per setting, its modes),
+        kept so a reference kept by its case (`Case.reference`) is judged without recomputing them.
     """
 
     pos: dict[str, np.ndarray]
@@ -168,6 +350,7 @@ class Reference:
     input_error: dict[str, float] = dataclasses.field(default_factory=dict)
     roundoff: dict[str, float] = dataclasses.field(default_factory=dict)
     scales: dict[str, float] = dataclasses.field(default_factory=dict)
+    derived: dict[Any, Any] = dataclasses.field(default_factory=dict, init=False, repr=False, compare=False)
 
 
 @dataclasses.dataclass(frozen=True)

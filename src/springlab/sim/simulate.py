@@ -207,6 +207,7 @@ def simulate(
     data: mujoco.MjData | None = None,
     stop: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
     controller: Controller | None = None,
+    prepared: bool = False,
 ) -> Trajectory:
     """Run `model` headless and record every step.
 
@@ -236,6 +237,9 @@ def simulate(
     controller
         a sampled-data controller in the loop (springlab.sim.controller.Controller) instead of `control`:
         every `controller.steps_per_sample` steps it reads the sensors and sets the controls, held in between.
+    prepared
+        `model` is already a copy set to `integrator` and `dt` that nobody writes into (`configured`, kept by
+        its caller with its `data`): step it as it is instead of copying it again.
 
     Returns
     -------
@@ -248,7 +252,8 @@ def simulate(
         MuJoCo flagged or silently reset the run, or it went non-finite.
     """
     steps = check_timing(dt, duration)
-    model = configured(model, integrator, dt)
+    if not prepared:
+        model = configured(model, integrator, dt)
     data = mujoco.MjData(model) if data is None else data
     state0 = initial_state(model, qpos, qvel, act, data)
     if controller is not None:

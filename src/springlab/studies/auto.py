@@ -13,12 +13,14 @@ a cycle (the studies); the command line, the demo and users call `run` and `vali
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
 from typing import Any
 
 from springlab.errors import BadInputError
 from springlab.runs.model_run import ModelRun, run_model
 from springlab.runs.run import Result, ValidationRow, exact_scenarios, run_scenario
 from springlab.scenes.base import Scene
+from springlab.scenes.declarations import keyword_parameters
 from springlab.sim import model_files
 
 from .tradeoff import sweepable, tradeoff
@@ -61,7 +63,7 @@ def auto_setting(
 
 
 def run(
-    scene: str,
+    model: str,
     scenario: str | None = None,
     *,
     integrator: str | None = None,
@@ -69,7 +71,7 @@ def run(
     duration: float | None = None,
     tol: float | None = None,
     keyframe: str | int | None = None,
-    **parameters: Any,
+    **parameters: float,
 ) -> Result | ModelRun:
     """Simulate a scenario headless in MuJoCo and compare it with its exact solution (`springlab.run`),
     or run a model file (nothing to compare with: a `ModelRun`, "not validated").
@@ -80,7 +82,7 @@ def run(
 
     Parameters
     ----------
-    scene
+    model
         scene name (see `springlab list`), or a model file (MJCF, a path ending in .xml).
     scenario
         scenario name (None: the scene's default); not for a model file.
@@ -98,7 +100,8 @@ def run(
     keyframe
         a model file's start: a keyframe name or index (None: the first keyframe, else qpos0 at rest).
     **parameters
-        scene parameters in SI units, e.g. mass=2.0 [kg]; not for a model file.
+        scene parameters in SI units, e.g. mass=2.0 [kg] (numbers; none is named like an option,
+        springlab.scenes.declarations.STUDY_OPTIONS); not for a model file.
 
     Returns
     -------
@@ -110,21 +113,24 @@ def run(
     Raises
     ------
     BadInputError
-        unknown names, non-physical values, bad dt/duration; for
+        unknown names, non-physical values (a string where a number goes), bad dt/duration; for
         'auto' no tol, a dt given, or no setting meeting tol.
     DivergedError
         the simulation blew up (nothing is returned for it).
+    TypeError
+        an old keyword spelling (`scene=`, `parameters={...}`) or another study's option.
     """
-    if model_files.is_model_file(scene):
+    parameters = keyword_parameters("run", parameters)
+    if model_files.is_model_file(model):
         given = [
             name for name, value in (("scenario", scenario), ("tol", tol), *parameters.items()) if value is not None
         ]
         if given:
-            raise BadInputError(f"{given[0]} applies to a scene, not to a model file ({scene})")
-        return run_model(scene, keyframe=keyframe, integrator=integrator, dt=dt, duration=duration)
+            raise BadInputError(f"{given[0]} applies to a scene, not to a model file ({model})")
+        return run_model(model, keyframe=keyframe, integrator=integrator, dt=dt, duration=duration)
     if keyframe is not None:
-        raise BadInputError(f"keyframe applies to a model file (MODEL.xml), not to the scene {scene!r}")
-    return run_scene(scene, scenario, integrator=integrator, dt=dt, duration=duration, tol=tol, **parameters)
+        raise BadInputError(f"keyframe applies to a model file (MODEL.xml), not to the scene {model!r}")
+    return run_scene(model, scenario, integrator=integrator, dt=dt, duration=duration, tol=tol, **parameters)
 
 
 def run_scene(
@@ -135,7 +141,7 @@ def run_scene(
     dt: float | None = None,
     duration: float | None = None,
     tol: float | None = None,
-    **parameters: Any,
+    **parameters: float,
 ) -> Result:
     """`run` on a scene (its arguments): the explicit-setting run, or 'auto''s verified cheapest setting."""
     if integrator == "auto":
@@ -144,7 +150,7 @@ def run_scene(
 
 
 def validate(
-    scene_names: list[str] | None = None,
+    model: str | Sequence[str] | None = None,
     *,
     integrator: str | None = None,
     dt: float | None = None,
@@ -157,8 +163,8 @@ def validate(
 
     Parameters
     ----------
-    scene_names
-        scenes to validate (None: all).
+    model
+        a scene name, or scene names, to validate (None or empty: all).
     integrator
         integrator name, None (the scenes' own) or 'auto'.
     dt
@@ -182,8 +188,9 @@ def validate(
     DivergedError
         a run blew up.
     """
+    names = [model] if isinstance(model, str) else None if model is None else list(model)
     rows = []
-    for scene, scenario in exact_scenarios(scene_names):
+    for scene, scenario in exact_scenarios(names):
         if integrator == "auto" and not sweepable(scene, scenario, None):
             row = ValidationRow.of(run_scenario(scene.name, scenario.name))
             rows.append(dataclasses.replace(row, note=NO_SWEEP_NOTE))

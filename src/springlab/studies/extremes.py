@@ -497,7 +497,7 @@ def _classify(context: Oscillator, outcome: Trajectory | DivergedError) -> tuple
         result = evaluate(context.case, outcome)
     except DivergedError as error:
         return "diverged", None, str(error)
-    worst = max(e["max_rel"] for e in result.summary["errors"].values())
+    worst = max(e.max_rel for e in result.errors.values())
     return ("accurate" if worst <= ACCURACY else "inaccurate"), worst, ""
 
 

@@ -44,6 +44,7 @@ from springlab.scenes.capabilities.friction import (
     FrictionCase,
     FrictionMeasure,
 )
+from springlab.scenes.declarations import keyword_parameters
 from springlab.sim import model_files
 from springlab.sim.simulate import INTEGRATORS, check_timing, integrator_id
 
@@ -462,7 +463,7 @@ def friction_settings(
     integrators: Sequence[str] | None = None,
     dts: Sequence[float] | None = None,
     executor: Executor | None = None,
-    **parameters: Any,
+    **parameters: float,
 ) -> FrictionSettings:
     """MuJoCo's friction settings: a scene's exact dry-friction cases, or the creep of what dry friction holds in a
     model file (`springlab friction-settings SCENE | MODEL.xml`).
@@ -507,6 +508,7 @@ def friction_settings(
     >>> study.hold.bodies[0].creep_velocity_m_s  # doctest: +SKIP
     0.00835
     """
+    overrides = keyword_parameters("friction_settings", parameters)
     if not model_files.is_model_file(model):
         given = [
             name
@@ -516,9 +518,9 @@ def friction_settings(
         if given:
             raise BadInputError(f"{given[0]} applies to a model file (MODEL.xml), not to the scene {model!r}")
         return scene_study.friction_settings(
-            str(model), scenarios, tol=tol, integrators=integrators, dts=dts, executor=executor, **parameters
+            str(model), scenarios, tol=tol, integrators=integrators, dts=dts, executor=executor, **overrides
         )
-    if scenarios or parameters:
+    if scenarios or overrides:
         raise BadInputError(f"scenarios and parameters apply to a scene, not to a model file ({os.fspath(model)})")
     return friction_hold(
         model,

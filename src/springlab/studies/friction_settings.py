@@ -47,6 +47,7 @@ from springlab.runs import compare
 from springlab.runs.run import evaluate, prepare, run_scenario
 from springlab.scenes.base import Scene
 from springlab.scenes.capabilities.friction import DryFrictionSpec, FrictionCase, FrictionMeasure
+from springlab.scenes.declarations import keyword_parameters, refuse_text
 from springlab.sim.simulate import INTEGRATORS, check_timing, integrator_id
 
 from .executor import Executor, chunked, resolve
@@ -260,7 +261,7 @@ def measure_error(measure: FrictionMeasure, quantities: Mapping[str, Any]) -> fl
 
 
 def friction_settings(
-    scene: str | Scene,
+    model: str | Scene,
     scenarios: Sequence[str] | None = None,
     *,
     tol: float | None = None,
@@ -268,14 +269,14 @@ def friction_settings(
     dts: Sequence[float] | None = None,
     values: Mapping[str, Sequence[float]] | None = None,
     executor: Executor | None = None,
-    **parameters: Any,
+    **parameters: float,
 ) -> FrictionSettings:
     """Sweep MuJoCo's friction settings over a scene's declared dry-friction cases (see the module docstring).
 
     Parameters
     ----------
-    scene
-        a scene that declares `dry_friction`.
+    model
+        a scene that declares `dry_friction`, or its name.
     scenarios
         the cases to sweep (None: every declared one).
     tol
@@ -300,10 +301,16 @@ def friction_settings(
     ------
     BadInputError
         a scene without a declaration, an unknown scenario or integrator, a swept setting given as a
-        parameter, fewer than two timesteps, a bad tolerance.
+        parameter, fewer than two timesteps, a bad tolerance, the command line's strings ('0.002,0.001').
+    TypeError
+        an old keyword spelling (`scene=`) or another study's option.
     """
     started = _time.perf_counter()
-    scene_obj, spec = declaration(scene)
+    parameters = keyword_parameters("friction_settings", parameters)
+    refuse_text("scenarios", scenarios, "a sequence of scenario names, e.g. ['incline_hold']")
+    refuse_text("integrators", integrators, "a sequence of names, e.g. integrators=['rk4', 'euler']")
+    refuse_text("dts", dts, "a sequence of timesteps [s], e.g. dts=(0.002, 0.001)", numbers=True)
+    scene_obj, spec = declaration(model)
     if tol is not None:
         tol = compare.check_tolerance(tol)
     declared = [c.scenario for c in spec.cases]

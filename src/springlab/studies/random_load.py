@@ -33,9 +33,10 @@ from springlab import display, scenes, tables
 from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError
 from springlab.exact import random_vibration as rv
-from springlab.files import json_ready
+from springlab.files import Output, csv_text, json_ready
 from springlab.scenes.base import Scene
 from springlab.scenes.capabilities.random_load import RandomLoadSpec
+from springlab.scenes.declarations import keyword_parameters, refuse_text
 from springlab.sim.simulate import check_timing, configured, initial_state, integrator_id, quiet_mujoco
 
 from . import answers
@@ -336,6 +337,17 @@ class Ensemble(display.Shown):
             }
         )
 
+    def outputs(self) -> tuple[Output, ...]:
+        """The files `springlab rms --output DIR` writes (springlab.outputs.write): rms.json, rms.csv (one row
+        per record: seed, rms, inside) and rms.png."""
+        rows = self.rows_shown()
+        columns = {
+            "seed": np.array([r[0] for r in rows], float),
+            "rms": np.array([r[1] for r in rows]),
+            "inside": np.array([float(r[2]) for r in rows]),
+        }
+        return Output.json("rms.json", self.to_dict()), Output("rms.csv", csv_text(columns)), Output("rms.png")
+
     def to_pandas(self) -> pandas.DataFrame:
         """One row per record: seed, rms, inside."""
         return tables.to_pandas(self.to_dict()["records"])
@@ -388,7 +400,7 @@ def records(
 
 
 def ensemble(
-    scene: str | Scene,
+    model: str | Scene,
     scenario: str | None = None,
     *,
     seeds: int | Sequence[int] = SEEDS,
@@ -397,14 +409,14 @@ def ensemble(
     dt: float | None = None,
     level: float = LEVEL,
     executor: Executor | None = None,
-    **parameters: Any,
+    **parameters: float,
 ) -> Ensemble:
-    """Records of a random-load scenario, one per seed, against the exact stationary variance.
+    """Records of a random-load scenario, one per seed, against the exact stationary variance (`springlab.rms`).
 
     Parameters
     ----------
-    scene
-        a scene that declares `random_load`.
+    model
+        a scene that declares `random_load`, or its name.
     scenario
         its random-load scenario (None: the declared one).
     seeds
@@ -426,15 +438,21 @@ def ensemble(
         no random load, an unknown scenario, a bad setting, seeds or level, a seed set as a parameter.
     DivergedError
         a record blew up.
+    TypeError
+        an old keyword spelling (`scene=`) or another study's option.
     """
-    found, spec = declared(scene)
+    parameters = keyword_parameters("rms", parameters)
+    refuse_text(
+        "seeds", seeds, "a count or a sequence of whole numbers, e.g. seeds=40 or seeds=(0, 1, 2)", numbers=True
+    )
+    found, spec = declared(model)
     chosen = found.scenario(scenario or spec.scenario)
     if chosen.name != spec.scenario:
         raise BadInputError(f"{found.name}'s random load is scenario {spec.scenario!r}, not {chosen.name!r}")
     if spec.seed in parameters:
         raise BadInputError(f"{spec.seed} is each record's own; give --seeds N (records 0 ... N - 1) instead")
     seed_list = _seeds(seeds)
-    if not (0.0 < level < 1.0):
+    if isinstance(level, bool) or not isinstance(level, (int, float)) or not (0.0 < level < 1.0):
         raise BadInputError(f"level must lie in (0, 1), got {level!r}")
     default_integrator, default_dt = found.setting(chosen)
     integrator = default_integrator if integrator is None else integrator

@@ -37,11 +37,12 @@ import numpy as np
 from springlab import display, scenes, tables
 from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError
-from springlab.files import json_ready
+from springlab.files import Output, json_ready
 from springlab.runs import compare
 from springlab.runs.run import run_scenario
 from springlab.scenes.base import Scene
 from springlab.scenes.capabilities.refine import RefinableSpec
+from springlab.scenes.declarations import keyword_parameters, refuse_text
 from springlab.sim.batch import TIMING_STEPS, time_run
 from springlab.sim.simulate import INTEGRATORS, MAX_STEPS, check_timing, integrator_id
 
@@ -388,6 +389,10 @@ class Refinement(display.Shown):
             }
         )
 
+    def outputs(self) -> tuple[Output, ...]:
+        """The files `springlab refine --output DIR` writes (springlab.outputs.write): refine.json, refine.png."""
+        return Output.json("refine.json", self.to_dict()), Output("refine.png")
+
     def to_pandas(self) -> pandas.DataFrame:
         """One row per run: refine.json's `runs` columns plus `pareto` (on the front) (needs pandas)."""
         front = {id(r) for r in self.pareto}
@@ -454,7 +459,7 @@ def _plans(
 
 
 def refine(
-    scene: str | Scene,
+    model: str | Scene,
     question: str | None = None,
     *,
     tol: float | None = None,
@@ -463,13 +468,13 @@ def refine(
     duration: float | None = None,
     omega_dt: Sequence[float] = OMEGA_DT,
     executor: Executor | None = None,
-    **parameters: Any,
+    **parameters: float,
 ) -> Refinement:
     """Sweep size x integrator x timestep for one question and, with `tol`, find the cheapest verified setting.
 
     Parameters
     ----------
-    scene
+    model
         scene name or object; it declares `refinable`.
     question
         the quantity to answer (None: the scene's first question).
@@ -496,10 +501,17 @@ def refine(
     Raises
     ------
     BadInputError
-        a scene without a model size, an unknown question or integrator, bad sizes or tolerance.
+        a scene without a model size, an unknown question or integrator, bad sizes or tolerance, the
+        command line's strings ('4,8,16', 'rk4,euler').
+    TypeError
+        an old keyword spelling (`scene=`) or another study's option.
     """
     started = _time.perf_counter()
-    scene_obj = scenes.get(scene) if isinstance(scene, str) else scene
+    parameters = keyword_parameters("refine", parameters)
+    refuse_text("sizes", sizes, "a sequence of whole numbers, e.g. sizes=(4, 8, 16)", numbers=True)
+    refuse_text("integrators", integrators, "a sequence of names, e.g. integrators=['rk4', 'euler']")
+    refuse_text("omega_dt", omega_dt, "a sequence of numbers, e.g. omega_dt=(0.5, 1.0)", numbers=True)
+    scene_obj = scenes.get(model) if isinstance(model, str) else model
     spec = _spec_of(scene_obj)
     try:
         asked = spec.question(question)

@@ -31,8 +31,9 @@ from springlab import display, tables
 from springlab.answer import Answer
 from springlab.errors import BadInputError
 from springlab.exact import random_vibration as rv
-from springlab.files import json_ready
+from springlab.files import Output, json_ready
 from springlab.scenes.base import Case, Scene
+from springlab.scenes.declarations import keyword_parameters, refuse_text
 from springlab.sim.simulate import INTEGRATORS, check_timing, integrator_id
 
 from . import answers
@@ -241,6 +242,11 @@ class RmsSettings(display.Shown):
             }
         )
 
+    def outputs(self) -> tuple[Output, ...]:
+        """The files `springlab rms --settings --output DIR` writes (springlab.outputs.write): rms_settings.json,
+        rms_settings.png."""
+        return Output.json("rms_settings.json", self.to_dict()), Output("rms_settings.png")
+
     def to_pandas(self) -> pandas.DataFrame:
         """One row per setting."""
         return tables.to_pandas(self.to_dict()["rows"])
@@ -323,7 +329,7 @@ def _rows_of_size(
 
 
 def rms_settings(
-    scene: str | Scene,
+    model: str | Scene,
     *,
     tol: float,
     level: float = LEVEL,
@@ -332,14 +338,14 @@ def rms_settings(
     seed_counts: Sequence[int] = SEED_COUNTS,
     record: float | None = None,
     executor: Executor | None = None,
-    **parameters: Any,
+    **parameters: float,
 ) -> RmsSettings:
     """The cheapest (size, integrator, dt, records) whose RMS is within `tol` of the continuum's, verified.
 
     Parameters
     ----------
-    scene
-        a scene that declares `random_load`.
+    model
+        a scene that declares `random_load`, or its name.
     tol
         the relative accuracy [-] of the RMS, > 0.
     level
@@ -360,12 +366,19 @@ def rms_settings(
     Raises
     ------
     BadInputError
-        no random load, a bad tol, level, size, integrator or record, the size or seed set as a parameter.
+        no random load, a bad tol, level, size, integrator or record, the size or seed set as a parameter,
+        the command line's strings.
+    TypeError
+        an old keyword spelling (`scene=`) or another study's option.
     """
-    found, spec = declared(scene)
+    parameters = keyword_parameters("rms_settings", parameters)
+    refuse_text("sizes", sizes, "a sequence of whole numbers, e.g. sizes=(8, 16)", numbers=True)
+    refuse_text("integrators", integrators, "a sequence of names, e.g. integrators=['rk4', 'euler']")
+    refuse_text("seed_counts", seed_counts, "a sequence of whole numbers, e.g. seed_counts=(1, 4, 16)", numbers=True)
+    found, spec = declared(model)
     if not (isinstance(tol, (int, float)) and math.isfinite(tol) and tol > 0):
         raise BadInputError(f"tol must be a finite number > 0 (relative error of the RMS), got {tol!r}")
-    if not (0.0 < level < 1.0):
+    if isinstance(level, bool) or not isinstance(level, (int, float)) or not (0.0 < level < 1.0):
         raise BadInputError(f"level must lie in (0, 1), got {level!r}")
     for name in (spec.size, spec.seed):
         if name and name in parameters:

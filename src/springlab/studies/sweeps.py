@@ -28,10 +28,11 @@ import numpy as np
 from springlab import display, scenes, tables
 from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError, UnknownNameError
-from springlab.files import json_ready
+from springlab.files import Output, json_ready, rows_text
 from springlab.runs.compare import Verdict
 from springlab.runs.run import Result, evaluate, prepare
 from springlab.scenes.base import Case
+from springlab.scenes.declarations import keyword_parameters
 from springlab.sim.batch import run_rollout
 from springlab.sim.simulate import check_timing, integrator_id
 
@@ -46,6 +47,10 @@ if TYPE_CHECKING:
 CHUNK_CONFIGURATIONS = 64
 #: most configurations one sweep may hold
 MAX_CONFIGURATIONS = 10_000_000
+#: one axis of `sweep(vary=...)`: (low, high, n) or (low, high, n, "log"), n None with `samples`
+AxisSpec = tuple[float, float, int | None] | tuple[float, float, int | None, str]
+#: the options renamed in issue 32, old keyword -> new
+RENAMED = {"seed": "sample_seed"}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -423,6 +428,11 @@ class Sweep(display.Shown):
             }
         )
 
+    def outputs(self) -> tuple[Output, ...]:
+        """The files `springlab sweep --output DIR` writes (springlab.outputs.write): sweep.csv (header, then one
+        row per configuration, numbers in their shortest exact form) and sweep.png (its quantity given to the writer)."""
+        return Output("sweep.csv", rows_text(*self.table())), Output("sweep.png")
+
     def to_pandas(self) -> pandas.DataFrame:
         """sweep.csv as a DataFrame, one row per configuration: varied parameters, quantities,
         `<column>_max_rel` errors, passed, diverged, detail (None/NaN where a configuration has no value;
@@ -515,7 +525,8 @@ def run_chunk(payload: SweepChunk, nthread: int = 0) -> list[dict[str, Any]]:
             "detail": "",
         }
         rows.append(row)
-        case = Case.compiled(scene, chosen, params)
+        # built here, not taken from Case.compiled's shared cases: the rollout below writes into the model
+        case = Case(scene, chosen, params, scene.build(params, chosen))
         try:
             job = case.job(integrator, dt, steps)
         except BadInputError as error:  # e.g. a bump that lifts the car off its springs: a row, not a failed sweep
@@ -590,34 +601,34 @@ def _scalars(quantities: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def sweep(
-    scene: str,
+    model: str,
     scenario: str | None = None,
     *,
-    vary: Mapping[str, Any] | Sequence[str],
+    vary: Mapping[str, AxisSpec],
     samples: int | None = None,
-    seed: int = 0,
+    sample_seed: int = 0,
     integrator: str | None = None,
     dt: float | None = None,
     duration: float | None = None,
     chunk_size: int = CHUNK_CONFIGURATIONS,
     executor: Executor | None = None,
-    **parameters: Any,
+    **parameters: float,
 ) -> Sweep:
     """Run a scenario over a grid (or random samples) of parameters, batched; one row per configuration.
 
     Parameters
     ----------
-    scene
+    model
         scene name (see `springlab list`).
     scenario
         scenario name (None: the scene's default).
     vary
-        parameter -> (low, high, n) or (low, high, n, "log") [parameter's unit], or a list of
-        'NAME=LOW:HIGH:N[:log]' strings. n may be None when `samples` is given.
+        parameter -> (low, high, n) or (low, high, n, "log") [parameter's unit]; n may be None when
+        `samples` is given. (The command line's 'NAME=LOW:HIGH:N[:log]' is parsed by `parse_axis`.)
     samples
         draw this many random points in the box instead of the full grid.
-    seed
-        seed of the random points.
+    sample_seed
+        seed of the random points (`seed` before issue 32: a scene's parameter may be named seed).
     integrator, dt, duration
         the setting (None: the scene's validated one, as `springlab run`).
     chunk_size
@@ -635,10 +646,14 @@ def sweep(
     Raises
     ------
     BadInputError
-        unknown names, bad ranges, a configuration with non-physical values.
+        unknown names, bad ranges, a configuration with non-physical values, the command line's strings.
+    TypeError
+        an old keyword spelling (`seed=` where the scene has no parameter seed, `scene=`).
     """
     started = _time.perf_counter()
-    scene_obj, chosen, _ = prepare(scene, scenario, parameters)
+    scene_obj = scenes.get(model) if isinstance(model, str) else model
+    parameters = keyword_parameters("sweep", parameters, declared=scene_obj.parameters, renamed=RENAMED)
+    scene_obj, chosen, _ = prepare(scene_obj, scenario, parameters)
     axes = _axes(vary)
     for axis in axes:
         if axis.name not in scene_obj.parameters:
@@ -653,7 +668,7 @@ def sweep(
     dt = default_dt if dt is None else dt
     duration = chosen.duration if duration is None else duration
     check_timing(dt, duration)
-    values = configurations(axes, samples, seed)
+    values = configurations(axes, samples, sample_seed)
     count = len(next(iter(values.values())))
     overrides = []
     for i in range(count):
@@ -699,16 +714,22 @@ def sweep(
     )
 
 
-def _axes(vary: Mapping[str, Any] | Sequence[str]) -> list[Axis]:
-    if isinstance(vary, Mapping):
-        axes = []
-        for name, spec in vary.items():
-            spec = tuple(spec)
-            if len(spec) not in (3, 4) or (len(spec) == 4 and spec[3] != "log"):
-                raise BadInputError(f"vary[{name!r}] takes (low, high, n) or (low, high, n, 'log'), got {spec!r}")
-            axes.append(make_axis(name, float(spec[0]), float(spec[1]), spec[2], len(spec) == 4))
-    else:
-        axes = [parse_axis(text) for text in vary]
+def _axes(vary: Mapping[str, AxisSpec]) -> list[Axis]:
+    if not isinstance(vary, Mapping):
+        raise BadInputError(
+            "vary takes a mapping, parameter -> (low, high, n) or (low, high, n, 'log'), e.g. vary={'damping':"
+            f" (0.5, 40.0, 30, 'log')}}, not {vary!r} (the command line's NAME=LOW:HIGH:N[:log] is parse_axis's)"
+        )
+    axes = []
+    for name, given in vary.items():
+        if isinstance(given, str):
+            raise BadInputError(f"vary[{name!r}] takes (low, high, n) or (low, high, n, 'log'), got {given!r}")
+        spec: tuple[Any, ...] = tuple(given)
+        if len(spec) not in (3, 4) or (len(spec) == 4 and spec[3] != "log"):
+            raise BadInputError(f"vary[{name!r}] takes (low, high, n) or (low, high, n, 'log'), got {spec!r}")
+        if any(isinstance(v, str) for v in spec[:3]):
+            raise BadInputError(f"vary[{name!r}] takes numbers (low, high, n), not strings: got {spec!r}")
+        axes.append(make_axis(name, float(spec[0]), float(spec[1]), spec[2], len(spec) == 4))
     if not axes:
         raise BadInputError("a sweep needs at least one --vary NAME=LOW:HIGH:N[:log]")
     names = [a.name for a in axes]

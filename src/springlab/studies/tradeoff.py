@@ -25,11 +25,12 @@ import numpy as np
 from springlab import display, scenes, tables
 from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError
-from springlab.files import json_ready
+from springlab.files import Output, json_ready
 from springlab.runs import compare
 from springlab.runs.compare import Verdict
 from springlab.runs.run import evaluate, run_scenario
 from springlab.scenes.base import Case, Scenario, Scene
+from springlab.scenes.declarations import keyword_parameters
 from springlab.sim.batch import TIMING_STEPS, run_batched, time_run
 from springlab.sim.simulate import INTEGRATORS, ORDERS, Setup, check_timing, integrator_id
 
@@ -284,6 +285,10 @@ class Tradeoff(display.Shown):
                 "sweep_wall_time_s": self.sweep_wall_time_s,
             }
         )
+
+    def outputs(self) -> tuple[Output, ...]:
+        """The files `springlab tradeoff --output DIR` writes (springlab.outputs.write): tradeoff.json, tradeoff.png."""
+        return Output.json("tradeoff.json", self.to_dict()), Output("tradeoff.png")
 
     def to_pandas(self) -> pandas.DataFrame:
         """One row per run: tradeoff.json's `runs` columns plus `pareto` (on the Pareto front) (needs pandas)."""
@@ -649,19 +654,50 @@ def recommend(result: Tradeoff, tol: float, *, timing_repeats: int = 3) -> Recom
 
 
 def tradeoff(
-    scene: str | Scene,
+    model: str | Scene,
     scenario: str | None = None,
     *,
     tol: float | None = None,
     duration: float | None = None,
     executor: Executor | None = None,
-    **parameters: Any,
+    **parameters: float,
 ) -> Tradeoff:
-    """`sweep` (its grid on `executor`, None: locally) plus, with `tol` [-], the verified cheapest
-    setting that meets it (`recommend`)."""
+    """Error against cost of every integrator and timestep on one scenario, and the cheapest verified setting.
+
+    `sweep` (its grid on `executor`) plus, with `tol`, the verified cheapest setting that meets it
+    (`recommend`), ranked by counted work so the same call gives the same pick (`springlab tradeoff`).
+
+    Parameters
+    ----------
+    model
+        scene name (see `springlab list`) or a Scene.
+    scenario
+        scenario name (None: the scene's default); it needs an exact reference.
+    tol
+        relative error [-] the recommended setting must meet (None: no recommendation).
+    duration
+        simulated time [s] (None: the scenario's).
+    executor
+        where the grid's chunks run (None: locally); the numbers are the same wherever they ran.
+    **parameters
+        scene parameters in SI units, e.g. mass=2.0 [kg].
+
+    Returns
+    -------
+    Tradeoff
+        runs, orders, the Pareto front, and with `tol` the `recommendation`; `to_dict()` is tradeoff.json.
+
+    Raises
+    ------
+    BadInputError
+        unknown names, non-physical values, a bad tol, a scenario without exact reference.
+    TypeError
+        an old keyword spelling (`scene=`) or another study's option.
+    """
+    overrides = keyword_parameters("tradeoff", parameters)
     if tol is not None:
         tol = compare.check_tolerance(tol)
     started = _time.perf_counter()
-    result = sweep(scene, scenario, duration=duration, executor=executor, **parameters)
+    result = sweep(model, scenario, duration=duration, executor=executor, **overrides)
     recommendation = recommend(result, tol) if tol is not None else None
     return dataclasses.replace(result, recommendation=recommendation, sweep_wall_time_s=_time.perf_counter() - started)

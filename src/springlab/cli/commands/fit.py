@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import pathlib
 
 from springlab import scenes
 from springlab.cli import options
 from springlab.cli import text as cli_text
-from springlab.errors import ExitCode
+from springlab.errors import BadInputError, ExitCode
 
 NAME = "fit"
 HELP = "identify a scene's parameters from a recorded signal (CSV)"
@@ -60,11 +59,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print fit.json")
 
 
+def _free(items: list[str]) -> list[str] | None:
+    """--free's NAME[,NAME...] (repeatable) -> the names (None: not given)."""
+    if not items:
+        return None
+    names = [name.strip() for item in items for name in item.split(",") if name.strip()]
+    if not names:
+        raise BadInputError("--free needs at least one name")
+    return names
+
+
 def main(args: argparse.Namespace) -> int:
     # here, not at the top: mujoco.sysid and scipy load only for fits; `from .fit import`, because
     # springlab.fit (the attribute) is the function once springlab/__init__ has run
-    from springlab.plots.fit import plot_fit
-    from springlab.studies.fit.fit import fit, write
+    from springlab import outputs
+    from springlab.studies.fit import data as fit_data
+    from springlab.studies.fit.fit import fit
 
     options.check_output(args)
     with options.executor(args) as executor:
@@ -72,8 +82,8 @@ def main(args: argparse.Namespace) -> int:
             args.scene,
             args.data,
             args.scenario,
-            map=args.map,
-            free=args.free or None,
+            map=fit_data.parse_map(args.map),
+            free=_free(args.free),
             scale=args.scale,
             time_scale=args.time_scale,
             start=args.start,
@@ -84,8 +94,7 @@ def main(args: argparse.Namespace) -> int:
             **options.parse_sets(args.set),
         )
     if args.output:
-        write(result, args.output)
-        plot_fit(result, pathlib.Path(args.output) / "fit.png")
+        outputs.write(result, args.output)
     if args.json:
         options.print_json(result.to_dict())
     else:

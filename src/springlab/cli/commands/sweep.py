@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 
+from springlab import outputs
 from springlab.cli import model_text, options
 from springlab.cli import text as cli_text
 from springlab.errors import BadInputError, ExitCode
@@ -44,8 +45,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print the sweep (setting, counts, every row) as JSON")
 
 
+def _vary(texts: list[str]) -> dict[str, tuple[float, float, int | None] | tuple[float, float, int | None, str]]:
+    """--vary's 'NAME=LOW:HIGH:N[:log]' texts -> sweep's typed `vary` mapping (each text checked)."""
+    from springlab.studies import sweeps
+
+    axes = [sweeps.parse_axis(text) for text in texts]
+    names = [axis.name for axis in axes]
+    if len(set(names)) != len(names):
+        raise BadInputError(f"a parameter is varied twice: {', '.join(names)}")
+    return {a.name: (a.low, a.high, a.count, "log") if a.log else (a.low, a.high, a.count) for a in axes}
+
+
 def main(args: argparse.Namespace) -> int:
-    from springlab.plots import sweep as sweep_plot
     from springlab.studies import sweeps
 
     if model_files.is_model_file(args.scene):
@@ -57,9 +68,9 @@ def main(args: argparse.Namespace) -> int:
         result = sweeps.sweep(
             args.scene,
             args.scenario,
-            vary=args.vary,
+            vary=_vary(args.vary),
             samples=args.samples,
-            seed=args.seed,
+            sample_seed=args.seed,
             integrator=args.integrator,
             dt=args.dt,
             duration=args.duration,
@@ -67,7 +78,7 @@ def main(args: argparse.Namespace) -> int:
             **options.parse_sets(args.set),
         )
     if args.output:
-        sweep_plot.write(result, args.output, args.quantity)
+        outputs.write(result, args.output, quantity=args.quantity)
     if args.json:
         options.print_json(result.to_dict())
         return ExitCode.OK
@@ -77,7 +88,6 @@ def main(args: argparse.Namespace) -> int:
 
 def _model_file(args: argparse.Namespace) -> int:
     """`sweep MODEL.xml`: its options and named attributes over the grid, each row what `run MODEL.xml` measures."""
-    from springlab.plots import sweep as sweep_plot
     from springlab.studies.model_sweep import default_quantity, model_sweep
 
     options.refuse_scene_options(args, "scenario", "set")
@@ -99,7 +109,7 @@ def _model_file(args: argparse.Namespace) -> int:
     if quantity not in known:
         raise BadInputError(f"unknown --quantity {quantity!r}; valid: {', '.join(known)}")
     if args.output:
-        sweep_plot.write(result, args.output, quantity)
+        outputs.write(result, args.output, quantity=quantity)
     if args.json:
         options.print_json(result.to_dict())
         return ExitCode.OK

@@ -440,7 +440,7 @@ def _breakaway_checks(case: Case, trajectory: Trajectory) -> list[Check]:
     drive = answers.drive_of(case.model, trajectory.dt)
     half_dt = trajectory.dt / 2
     duration = float(trajectory.time[-1])
-    finer = case.simulate(trajectory.integrator, half_dt, duration)
+    finer = case.simulate(trajectory.integrator, half_dt, duration, keep=True)
     columns = [case.joint_columns(run) for run in (trajectory, finer)]
     coarse, fine = (
         answers.simulated_events(lumped, answers.drive_of(case.model, run.dt), run, cols[TOP], cols[BIT])

@@ -512,7 +512,7 @@ class Friction(Scene):
         model, scenario = case.model, case.scenario
         x, v = case.joint_columns(trajectory)[ALONG]
         exact = self.motion(case, float(trajectory.time[-1]))
-        half = case.simulate(trajectory.integrator, trajectory.dt / 2, float(trajectory.time[-1]))
+        half = case.simulate(trajectory.integrator, trajectory.dt / 2, float(trajectory.time[-1]), keep=True)
         xh, vh = case.joint_columns(half)[ALONG]
         n = min(len(x), (len(xh) + 1) // 2)
         ref_x, ref_v = exact.state(trajectory.time)

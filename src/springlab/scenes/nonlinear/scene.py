@@ -495,6 +495,9 @@ class Nonlinear(Scene):
         """Another run of the case at another setting, optionally from another block state or from a full
         (qpos, qvel) state (the case's model is not changed: simulate steps a copy)."""
         params = case.params
+        if state is None and x0 is None and v0 is None:
+            # the scenario's own start: a verification run (dt/2, dt/4), kept on the case for the next verdict
+            return case.simulate(integrator, dt, duration, keep=True)
         if state is not None:
             qpos, qvel = state
             setup = Setup(qpos=qpos, qvel=qvel, control=self._setup(case, 0.0, 0.0).control)
@@ -511,7 +514,7 @@ class Nonlinear(Scene):
     def _orbit(self, case: Case) -> dict:
         """The unforced, undamped motion through (x0, v0) (springlab.scenes.nonlinear.orbits.orbit)."""
         m, k1, k3, d = case.physical()
-        return orbit(m, k1, k3, case.params["x0"], case.params["v0"])
+        return dict(case.memo("orbit", lambda: orbit(m, k1, k3, case.params["x0"], case.params["v0"])))
 
     def quantities(self, case: Case, trajectory: Trajectory) -> dict:
         model, params = case.model, case.params
@@ -593,7 +596,8 @@ class Nonlinear(Scene):
     def checks(self, case: Case, trajectory: Trajectory) -> list[Check]:
         model, params = case.model, case.params
         m, k1, k3, d = case.physical()
-        out = self._linearization_checks(case)
+        # the case's own (MuJoCo's qacc at its equilibria): computed once per case
+        out = list(case.memo("linearization_checks", lambda: tuple(self._linearization_checks(case))))
         integrator, dt = trajectory.integrator, trajectory.dt
         order = ORDERS[integrator]
         unforced = d == 0 and self._forcing(params) == "none"

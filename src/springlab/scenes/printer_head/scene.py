@@ -492,7 +492,9 @@ class PrinterHead(Scene):
             "natural_frequency_hz": omega_n / (2 * math.pi),
             "damping_ratio": zeta,
         }
-        lin_omega, lin_zeta, _ = linearized_mode(model, trajectory.integrator, dt)
+        lin_omega, lin_zeta, _ = case.memo(
+            ("linearized_mode", trajectory.integrator, dt), lambda: linearized_mode(model, trajectory.integrator, dt)
+        )
         out["linearized_natural_frequency_hz"] = lin_omega / (2 * math.pi)
         out["linearized_damping_ratio"] = lin_zeta
         out["omega_n_rad_s"] = omega_n

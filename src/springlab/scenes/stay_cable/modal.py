@@ -26,8 +26,8 @@ import dataclasses
 import math
 
 import numpy as np
-import scipy.linalg
 
+from springlab.exact import linear
 from springlab.exact.cable import LumpedCable
 from springlab.sim.simulate import ORDERS
 
@@ -93,7 +93,7 @@ class Mode:
 
 def modes(lumped: LumpedCable) -> list[Mode]:
     """The oscillatory modes of the N-element model, slowest first (by Im lambda), each with its left eigenvector."""
-    values, left, right = scipy.linalg.eig(lumped.state_matrix(), left=True, right=True)
+    values, left, right = linear.eigen(lumped.state_matrix(), vectors=True)
     scale = float(np.max(np.abs(values)))
     oscillatory = [i for i in range(len(values)) if values[i].imag > 64 * _EPS * scale]
     oscillatory.sort(key=lambda i: values[i].imag)

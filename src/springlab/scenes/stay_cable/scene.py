@@ -175,17 +175,17 @@ class StayCable(Scene):
         "damper": (
             "Which damper coefficient damps the stay's first mode most at this position, and how much damping does"
             " it buy?",
-            "At a = {damper_node_position_m:.3g} m the best damper is {optimal_damper_n_s_m_continuum:.4g} N s/m"
-            " (the rule sqrt(T m) L / (π a): {optimal_damper_n_s_m_universal:.4g} N s/m); it gives mode 1 a damping"
-            " ratio of {max_damping_ratio_continuum:.4g} (rule a / 2L: {max_damping_ratio_universal:.4g}). This"
-            " damper ({damper_coefficient:.4g} N s/m) gives {mode_1_damping_ratio_continuum:.6g} on the cable,"
-            " exactly {mode_1_damping_ratio_exact:.6g} on the {n_elements:.0f}-node model; the run measures"
-            " {mode_1_damping_ratio:.6g}.",
+            "At a = {damper_node_position_m:.3g} m the best damper is {optimal_damper_n_s_m_continuum:.4g ~N s/m}"
+            " (the rule sqrt(T m) L / (π a): {optimal_damper_n_s_m_universal:.4g ~N s/m}); it gives mode 1 a damping"
+            " ratio of {max_damping_ratio_continuum:.4g %} (rule a / 2L: {max_damping_ratio_universal:.4g %}). This"
+            " damper ({damper_coefficient:.4g ~N s/m}) gives {mode_1_damping_ratio_continuum:.6g %} on the cable,"
+            " exactly {mode_1_damping_ratio_exact:.6g %} on the {n_elements:.0f}-node model; the run measures"
+            " {mode_1_damping_ratio:.6g %}.",
         ),
         "wind": (
             "How much does the stay vibrate in the wind, and how much does its damper help?",
             "Mid-span RMS deflection {rms_displacement_m_exact:.3g ~m} exactly with the damper"
-            " ({damper_coefficient:.3g} N s/m at {damper_position:.3g} m), {rms_displacement_m_no_damper:.3g ~m}"
+            " ({damper_coefficient:.3g ~N s/m} at {damper_position:.3g} m), {rms_displacement_m_no_damper:.3g ~m}"
             " without it: the damper cuts it {rms_reduction_factor:.3g} times. This {duration_s:.4g} s record"
             " measured {rms_displacement_m:.3g ~m} (95 % of such records fall within {rms_low_m:.3g ~m} to"
             " {rms_high_m:.3g ~m}; hold {variance_hold_error:+.1e}, integrator {variance_integrator_error:+.1e} of the"
@@ -195,8 +195,8 @@ class StayCable(Scene):
             "How fast does rain-wind vibration grow, and what is the smallest damper that stops it?",
             "Without a damper mode {growing_mode:.0f} grows at {growth_rate_1_s_exact:.7g} 1/s exactly (doubling every"
             " {doubling_time_s:.3g} s; the run measures {growth_rate_1_s:.7g} 1/s); a damper of at least"
-            " {stabilising_damper_n_s_m:.4g} N s/m at {damper_node_position_m:.3g} m stops it (the universal curve"
-            " says {stabilising_damper_n_s_m_universal:.4g} N s/m).",
+            " {stabilising_damper_n_s_m:.4g ~N s/m} at {damper_node_position_m:.3g} m stops it (the universal curve"
+            " says {stabilising_damper_n_s_m_universal:.4g ~N s/m}).",
         ),
     }
     figure = staticmethod(figures.panels)

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 from springlab import display, tables
 from springlab.answer import Answer
 from springlab.exact.linearize import Linearization
+from springlab.files import Output
 from springlab.sim.simulate import Setup
 from springlab.studies import answers
 from springlab.studies.settings import COST_BASIS, Recommendation, Run
@@ -131,7 +132,7 @@ class Audit(display.Shown):
         )
         limit = self.stability[own.integrator]
         if not own.stable:
-            state = "is unstable (a run of it blows up)"
+            state = f"is unstable (a run of it {own.behaviour})"
         elif limit.limit_dt_s is not None and limit.confirmed and own.margin is not None:
             state = (
                 f"is stable with margin {say('own_margin', own.margin, spec='.3g')}x (its limit"
@@ -145,12 +146,20 @@ class Audit(display.Shown):
             else f"{say('own_error', own.error, spec='.2g')}, {'within' if own.error <= self.tol else 'outside'} {tolerance}"
         )
         head = f"Its own setting {state}; its error is {error}."
+        creep = self.point_state.creep
+        if creep:  # the sweep's errors are against the same soft-friction model: they cannot see its creep
+            head += (
+                f" {creep[0].body!r} creeps at {say('creep_speed_m_s', creep[0].speed_m_s, 'mm/s')} though Coulomb"
+                " friction holds it: MuJoCo's soft-friction model error, which no integrator or timestep removes"
+                " (springlab friction-settings measures it and finds the settings that stop it)."
+            )
         if not pick.found or pick.dt is None:
             return say.answer(question, f"{head} No verified setting meets {tolerance}.")
+        caveat = ", against a converged run of the same soft-friction model: it does not see the creep" if creep else ""
         return say.answer(
             question,
             f"{head} The cheapest verified setting within {tolerance} is {pick.integrator} at"
-            f" {say.dt('dt_s', pick.dt)}, error {say('error', pick.error or 0.0, spec='.2g')}.",
+            f" {say.dt('dt_s', pick.dt)}, error {say('error', pick.error or 0.0, spec='.2g')}{caveat}.",
         )
 
     @property
@@ -227,6 +236,10 @@ class Audit(display.Shown):
             "cost_basis": COST_BASIS,
             "timings_s": self.timings.to_dict(),
         }
+
+    def outputs(self) -> tuple[Output, ...]:
+        """The files `springlab audit --output DIR` writes (springlab.outputs.write): audit.json, audit.png."""
+        return Output.json("audit.json", self.to_dict()), Output("audit.png")
 
     def to_pandas(self) -> pandas.DataFrame:
         """The sweep as a DataFrame, one row per (integrator, dt): the rows of `to_dict()["sweep"]`

@@ -446,11 +446,11 @@ def run_sobol(
     scene: str | Scene,
     base_samples: int = DEFAULT_BASE_SAMPLES,
     *,
-    seed: int = 0,
+    sobol_seed: int = 0,
     omega_dt: float = moves.OMEGA_DT,
     executor: Executor | None = None,
     chunk_size: int = CHUNK_CONFIGURATIONS,
-    **overrides: Any,
+    **overrides: float,
 ) -> SobolStudy:
     """Sobol indices of a scene's positioning time over the inputs its design declares (`DesignSpec.sobol`).
 
@@ -460,8 +460,9 @@ def run_sobol(
         a scene that declares a design question, or its name.
     base_samples
         N, a power of 2; the study runs N (D + 2) simulations (the printer head's default: 114,688).
-    seed
-        seed of the scrambled Sobol' sequence and of the bootstrap.
+    sobol_seed
+        seed of the scrambled Sobol' sequence and of the bootstrap (`seed` before issue 32: the printer
+        head has a parameter seed).
     omega_dt
         omega_n dt [-] of every simulation, as the design study.
     executor
@@ -487,7 +488,7 @@ def run_sobol(
     moves.spanned(centre, inputs, np.zeros(1), study="Sobol", verb="varies")  # every default > 0
     spans = {p.name: p.span for p in (*spec.properties, *inputs)}
     space = problem(names)
-    rows = sample(space, base_samples, seed)
+    rows = sample(space, base_samples, sobol_seed)
     start = _time.perf_counter()
     times = evaluate(
         positioning_chunk,
@@ -519,8 +520,8 @@ def run_sobol(
         ranges={n: (centre[n] / spans[n], centre[n] * spans[n]) for n in names},
         base_samples=base_samples,
         runs=len(rows),
-        seed=seed,
-        indices=analyze(space, censored, seed),
+        seed=sobol_seed,
+        indices=analyze(space, censored, sobol_seed),
         positioning_time_s=censored,
         unsettled=unsettled,
         elasticities=elasticities,

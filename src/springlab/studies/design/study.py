@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import pathlib
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
@@ -46,8 +45,10 @@ import numpy as np
 from springlab import display, files, tables
 from springlab.answer import Answer
 from springlab.errors import BadInputError
+from springlab.files import Output
 from springlab.scenes.base import Scene
 from springlab.scenes.capabilities.design import DesignSpec
+from springlab.scenes.declarations import keyword_parameters
 from springlab.studies import answers
 from springlab.studies.executor import Executor
 
@@ -69,10 +70,10 @@ __all__ = [
     "configurations",
     "declaration",
     "dense_plane",
+    "design",
     "design_scenes",
     "make_grids",
     "run_study",
-    "write",
 ]
 
 #: default grid points per property (7^4 = 2401 configurations of the printer head)
@@ -80,6 +81,8 @@ DEFAULT_LEVELS = 7
 #: default grid points per property of the dense plane over the two most influential properties
 #: (31^2 = 961 more configurations; 0: plot the coarse grid's slice instead)
 PLANE_LEVELS = 31
+#: the options renamed in issue 32, old keyword -> new
+RENAMED = {"seed": "sobol_seed"}
 #: the per-configuration columns of configurations.csv after the properties, in order
 _COLUMNS = (
     "natural_frequency_hz",
@@ -366,6 +369,16 @@ class Study(display.Shown):
             },
         )
 
+    def outputs(self) -> tuple[Output, ...]:
+        """The files `springlab design --output DIR` writes (springlab.outputs.write): design.json (`to_dict()`,
+        with `sobol` where the study has it), configurations.csv, design.png and, with a Sobol study, sobol.png."""
+        written = (
+            Output.json("design.json", self.to_dict()),
+            Output("configurations.csv", files.csv_text(self.columns)),
+            Output("design.png"),
+        )
+        return written if self.sobol is None else (*written, Output("sobol.png"))
+
     def _facts(self) -> dict[str, Any]:
         """to_dict's entries before JSON (an unsettled time still inf), for the answer's words."""
         names = self.design.names
@@ -457,8 +470,8 @@ def configurations(grids: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
 # -- the study -------------------------------------------------------------------------
 
 
-def run_study(
-    scene: str | Scene,
+def design(
+    model: str | Scene,
     *,
     levels: int = DEFAULT_LEVELS,
     plane_levels: int = PLANE_LEVELS,
@@ -466,14 +479,16 @@ def run_study(
     omega_dt: float = OMEGA_DT,
     executor: Executor | None = None,
     sobol: int | None = None,
-    seed: int = 0,
-    **overrides: Any,
+    sobol_seed: int = 0,
+    **parameters: float,
 ) -> Study:
     """Sweep a scene's declared properties, simulate every configuration, and estimate each analytically.
 
+    `springlab design`; `run_study` is its name before issue 32.
+
     Parameters
     ----------
-    scene
+    model
         a scene that declares a design question (`Scene.design`), or its name (`design_scenes()`).
     levels
         odd number of grid points per property (levels^D configurations for D properties).
@@ -488,11 +503,18 @@ def run_study(
         where the chunks run (None: locally on `nthread` threads); the numbers are the same.
     sobol
         also the Sobol indices with this many base samples N (a power of 2; `Study.sobol`), None: not.
-    seed
-        seed of the Sobol sequence and bootstrap.
-    **overrides
+    sobol_seed
+        seed of the Sobol sequence and bootstrap (`seed` before issue 32: the printer head has a
+        parameter seed).
+    **parameters
         scene parameters to start from (SI), e.g. move_distance=0.2 [m]; a declared derived
         property too (the printer head's damping_ratio).
+
+    Returns
+    -------
+    Study
+        every configuration's simulated and estimated times, the ranking, the dense plane and the Sobol
+        indices where asked; `to_dict()` is design.json.
 
     Raises
     ------
@@ -500,8 +522,11 @@ def run_study(
         an unknown scene, a scene without a design question, or an unknown parameter.
     BadInputError
         bad levels, threads, Sobol samples or parameter values.
+    TypeError
+        an old keyword spelling (`scene=`, `seed=` where the scene has no parameter seed).
     """
-    found, spec = declaration(scene)
+    found, spec = declaration(model)
+    overrides = keyword_parameters("design", parameters, declared=found.parameters, renamed=RENAMED)
     if not isinstance(nthread, (int, np.integer)) or nthread < 0:
         raise BadInputError(f"threads must be an integer >= 0 (0: one per CPU), got {nthread!r}")
     if not (isinstance(omega_dt, (int, float)) and 0 < omega_dt <= 1.0):
@@ -541,8 +566,12 @@ def run_study(
     plane = dense_plane(study, plane_levels, omega_dt=omega_dt, executor=executor) if plane_levels else None
     indices = None
     if sobol is not None:
-        indices = run_sobol(found, sobol, seed=seed, omega_dt=omega_dt, executor=executor, **overrides)
+        indices = run_sobol(found, sobol, sobol_seed=sobol_seed, omega_dt=omega_dt, executor=executor, **overrides)
     return dataclasses.replace(study, plane=plane, sobol=indices)
+
+
+#: the design study's name before issue 32 (scripts and the command line call it)
+run_study = design
 
 
 def dense_plane(
@@ -595,16 +624,3 @@ def _regression(
 
 
 # -- files ---------------------------------------------------------------------------------
-
-
-def write(study: Study, directory: str | pathlib.Path) -> list[pathlib.Path]:
-    """Write design.json (`study.to_dict()`, with `sobol` where the study has it) and configurations.csv
-    into `directory`; the chart, design.png, is springlab.plots.design.plot's (the caller draws it)."""
-    folder = files.prepare_directory(directory)
-    return files.write_text_files(
-        folder,
-        {
-            "design.json": files.dumps(study.to_dict()) + "\n",
-            "configurations.csv": files.csv_text(study.columns),
-        },
-    )

@@ -32,9 +32,10 @@ import dataclasses
 import math
 import os
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Any, TypeAlias
+from typing import TYPE_CHECKING, TypeAlias
 
 import numpy as np
+import numpy.typing as npt
 
 from springlab.errors import BadInputError
 
@@ -44,7 +45,7 @@ if TYPE_CHECKING:  # annotations only: a DataFrame is read without importing pan
     import pandas
 
 #: what a record is read from: a CSV file's path, a mapping of column name -> array, or a pandas DataFrame
-DataSource: TypeAlias = "str | os.PathLike[str] | Mapping[str, Any] | pandas.DataFrame"
+DataSource: TypeAlias = "str | os.PathLike[str] | Mapping[str, npt.ArrayLike] | pandas.DataFrame"
 
 #: signal suffixes and the SI unit of each
 SIGNALS = {"pos": "m", "vel": "m/s", "acc": "m/s^2"}

@@ -15,8 +15,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import os
-import pathlib
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -26,6 +24,7 @@ from springlab import progress, scenes
 from springlab.errors import BadInputError, ParameterError, SpringlabError
 from springlab.runs.run import Result, run_scenario
 from springlab.scenes.base import Scenario, Scene
+from springlab.scenes.declarations import keyword_parameters
 from springlab.studies.executor import Executor
 from springlab.studies.fit import data as fit_data
 from springlab.studies.fit import reductions
@@ -46,11 +45,11 @@ def _canonical(name: str) -> str:
 
 
 def fit(
-    scene: str,
+    model: str,
     data: fit_data.DataSource,
     scenario: str | None = None,
     *,
-    map: Mapping[str, str] | Sequence[str] | None = None,  # noqa: A002 - the CLI's --map
+    map: Mapping[str, str] | None = None,  # noqa: A002 - the CLI's --map
     free: Sequence[str] | None = None,
     scale: float | None = None,
     time_scale: float | None = None,
@@ -62,13 +61,13 @@ def fit(
     scheduler: str | None = None,
     executor: Executor | None = None,
     show_progress: bool | None = None,
-    **parameters: Any,
+    **parameters: float,
 ) -> FitResult:
-    """Identify `scene` from the record in `data` (a CSV file, a mapping of arrays or a DataFrame).
+    """Identify the scene `model` from the record in `data` (a CSV file, a mapping of arrays or a DataFrame).
 
     Parameters
     ----------
-    scene
+    model
         A scene that declares a fit (`Scene.fit`; `fittable()` lists them).
     data
         A CSV file with a header, a mapping of column name -> array ({'time': t, 'slider_pos': x}) or a
@@ -79,7 +78,7 @@ def fit(
     map
         Column -> springlab name, e.g. {'t': 'time', 'x_mm': 'slider_pos'}.
     free
-        Names to fit (None: the scene's declared default; see springlab.studies.fit.models).
+        Names to fit, e.g. ['omega_n', 'zeta'] (None: the scene's declared default; see springlab.studies.fit.models).
     scale
         Factor [SI per unit of the data] applied to the signal, e.g. 0.001 for mm (None: the unit the
         column states, else SI). Given, it wins over the column's unit.
@@ -114,12 +113,12 @@ def fit(
     Raises
     ------
     BadInputError
-        Bad file or names, or a free set the record cannot identify.
+        Bad file or names, a free set the record cannot identify, the command line's strings, an
+        executor and workers/scheduler. (TypeError: an old keyword spelling or another study's option.)
     """
+    parameters = _typed(parameters, map, free, executor is not None and (workers, scheduler) != (None, None))
     starts = fit_starts.check_count(starts)
-    if executor is not None and (workers is not None or scheduler is not None):
-        raise BadInputError("give an executor or workers/scheduler, not both")
-    scene_obj, how = _fitted_scene(scene)
+    scene_obj, how = _fitted_scene(model)
     scenario = how.scenarios[0] if scenario is None else scenario
     chosen = _fitted_scenario(scene_obj, how, scenario)
     nuisance = _nuisance(scene_obj, parameters)
@@ -129,7 +128,7 @@ def fit(
     record = fit_data.load(
         data,
         (how.joint,),
-        mapping=fit_data.parse_map(map),
+        mapping={} if map is None else {str(k): str(v) for k, v in map.items()},
         scale=scale,
         time_scale=time_scale,
         start=start,
@@ -380,13 +379,30 @@ def _free_names(how: FitModel, free: Sequence[str] | None, degree: int | None, r
         return how.free_by_default(record.signal)
     names = []
     for item in free:
-        for name in str(item).split(","):
-            name = _canonical(name.strip())
-            if name and name not in names:
-                names.append(name)
+        name = _canonical(str(item).strip())
+        if name and name not in names:
+            names.append(name)
     if not names:
         raise BadInputError("--free needs at least one name")
     return names
+
+
+def _typed(parameters: Mapping[str, Any], mapping: object, free: object, two_executors: bool) -> dict[str, Any]:
+    """The scene's parameters (old spellings refused), after refusing the command line's strings (the library
+    takes a mapping and a sequence of names; `springlab fit` parses --map's COLUMN=NAME and --free's NAME,NAME)
+    and an executor given beside workers or a scheduler."""
+    if two_executors:
+        raise BadInputError("give an executor or workers/scheduler, not both")
+    if mapping is not None and not isinstance(mapping, Mapping):
+        raise BadInputError(
+            f"map takes a mapping of file column -> springlab name, e.g. map={{'t': 'time'}}, not {mapping!r}"
+            " (the command line's COLUMN=NAME is springlab fit --map's)"
+        )
+    if isinstance(free, str) or (free is not None and any("," in str(name) for name in free)):  # type: ignore[attr-defined]
+        raise BadInputError(
+            f"free takes a sequence of names, e.g. free=['omega_n', 'zeta'], not the command line's {free!r}"
+        )
+    return keyword_parameters("fit", parameters)
 
 
 def _finish(
@@ -528,14 +544,3 @@ def _scene_run(
     except SpringlabError as error:
         return None, f"the identified scene could not be run: {error}"
     return run, note
-
-
-def write(result: FitResult, directory: str | os.PathLike) -> list[pathlib.Path]:
-    """Write fit.json and the identified scene's trajectory.csv / summary.json into `directory` (all or none)."""
-    from springlab import files
-
-    texts = {"fit.json": files.dumps(result.to_dict()) + "\n"}
-    if result.run is not None:
-        texts["trajectory.csv"] = files.csv_text(result.run.columns())
-        texts["summary.json"] = files.dumps(result.run.summary) + "\n"
-    return files.write_text_files(directory, texts)

@@ -18,6 +18,7 @@ from springlab.errors import BadInputError
 from springlab.exact.harmonic_balance import Duffing, cubic_oscillator
 from springlab.exact.linearize import FD_STEP, Linearization
 from springlab.exact.model_at_point import ModelAtPoint
+from springlab.scenes.declarations import keyword_parameters
 from springlab.sim.simulate import INTEGRATORS, integrator_id
 from springlab.studies.executor import Executor
 
@@ -191,8 +192,11 @@ def frequency(
     ------
     BadInputError
         unknown names, an empty or inverted band, a band above Nyquist of dt, a bad number.
+    TypeError
+        an old keyword spelling (`parameters={...}`) or another study's option.
     """
     started = _time.perf_counter()
+    parameters = keyword_parameters("frequency", parameters)
     _refuse_command_line_strings(band=band, amplitudes=amplitudes, integrators=integrators)
     source = load_source(model, scenario, parameters)
     integrator = source.integrator if integrator is None else integrator
