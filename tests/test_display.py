@@ -24,6 +24,7 @@ import re
 import struct
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -47,6 +48,9 @@ from test_report import _browse_until, _chromium
 #: a nine-node stay cable with a damper: a random-load ensemble and its settings study in about a second
 GRIPPER = pathlib.Path(__file__).parent / "data" / "pinch_gripper.xml"
 SHORT_CABLE = {"n_elements": 9, "damper_position": 30.0, "damper_coefficient": 4e4, "structural_damping_ratio": 0.01}
+
+#: a model file nobody wrote a scene for (two fingers squeezing a box): springlab.run of it is a ModelRun
+GRIPPER = Path(__file__).parent / "data" / "gripper.xml"
 
 #: lines of a plain repr at most: the verdict, its reason, the figures
 REPR_LINES = 3
@@ -87,6 +91,7 @@ def results(stability_report, shipped_audit):
         "ZetaFamily": run_zeta_family("slider", "free", zetas=(0.0, 0.5), duration=1.0),
         "PhaseFamily": run_phase_family(result),
         "Ensemble": random_load.ensemble("stay_cable", seeds=2, record=20.0, **SHORT_CABLE),
+        "ModelRun": springlab.run(str(GRIPPER), duration=0.2),
         "RmsSettings": rms_settings.rms_settings(
             "stay_cable", tol=0.5, integrators=("implicitfast",), seed_counts=(1,), record=20.0, sizes=(9,)
         ),
@@ -117,7 +122,7 @@ def test_every_top_level_result_shows_itself_and_this_test_builds_each(results):
     shown = {cls.__name__ for cls in _shown_classes()}
     returned = {"Result", "ValidationRow", "Sweep", "Tradeoff", "FitResult", "Audit", "StabilityReport"}
     returned |= {"FrequencyResponse", "Study", "SobolStudy", "FrictionSettings", "Refinement"}
-    returned |= {"ZetaFamily", "PhaseFamily", "Ensemble", "RmsSettings"}
+    returned |= {"ZetaFamily", "PhaseFamily", "Ensemble", "RmsSettings", "ModelRun"}
     assert returned <= shown, "a result the public functions return has no display"
     assert shown == set(results), "a new Shown class joins the `results` fixture"
 
