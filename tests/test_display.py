@@ -19,11 +19,11 @@ import csv
 import html
 import io
 import math
+import pathlib
 import re
 import struct
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -37,17 +37,17 @@ from springlab.studies import random_load, rms_settings
 from springlab.studies.design import run_study
 from springlab.studies.families import run_phase_family, run_zeta_family
 from springlab.studies.friction_settings import friction_settings
+from springlab.studies.model_sweep import model_sweep
 from springlab.studies.model_tradeoff import model_tradeoff
 from springlab.studies.refine import refine
 from springlab.studies.tradeoff import tradeoff
 from test_layers import layer_of
 from test_report import _browse_until, _chromium
 
+#: a model file nobody wrote a scene for (tests/data/pinch_gripper.xml): its run, sweep and trade-off
+PINCH = pathlib.Path(__file__).parent / "data" / "pinch_gripper.xml"
 #: a nine-node stay cable with a damper: a random-load ensemble and its settings study in about a second
 SHORT_CABLE = {"n_elements": 9, "damper_position": 30.0, "damper_coefficient": 4e4, "structural_damping_ratio": 0.01}
-
-#: a model file nobody wrote a scene for (two fingers squeezing a box): springlab.run of it is a ModelRun
-GRIPPER = Path(__file__).parent / "data" / "gripper.xml"
 
 #: lines of a plain repr at most: the verdict, its reason, the figures
 REPR_LINES = 3
@@ -88,11 +88,13 @@ def results(stability_report, shipped_audit):
         "ZetaFamily": run_zeta_family("slider", "free", zetas=(0.0, 0.5), duration=1.0),
         "PhaseFamily": run_phase_family(result),
         "Ensemble": random_load.ensemble("stay_cable", seeds=2, record=20.0, **SHORT_CABLE),
-        "ModelRun": springlab.run(str(GRIPPER), duration=0.2),
-        "ModelTradeoff": model_tradeoff(GRIPPER, tol=1e-2, duration=0.2, integrators=["euler"], dts=[2e-3, 1e-3]),
+        "ModelRun": springlab.run(str(PINCH), keyframe="open", duration=0.2),
         "RmsSettings": rms_settings.rms_settings(
             "stay_cable", tol=0.5, integrators=("implicitfast",), seed_counts=(1,), record=20.0, sizes=(9,)
         ),
+        # a model file's sweep and trade-off (tests/data/pinch_gripper.xml: the box falls freely from 'open')
+        "ModelSweep": model_sweep(PINCH, keyframe="open", vary=["opt.timestep=0.001:0.004:4"], duration=0.2),
+        "ModelTradeoff": model_tradeoff(PINCH, keyframe="open", duration=0.2, integrators=["euler", "rk4"]),
     }
     assert {type(r).__name__ for r in built.values()} == set(built)
     return built
@@ -117,7 +119,7 @@ def test_every_top_level_result_shows_itself_and_this_test_builds_each(results):
     returned = {"Result", "ValidationRow", "Sweep", "Tradeoff", "FitResult", "Audit", "StabilityReport"}
     returned |= {"FrequencyResponse", "Study", "SobolStudy", "FrictionSettings", "Refinement"}
     returned |= {"ZetaFamily", "PhaseFamily", "Ensemble", "RmsSettings", "ModelRun"}
-    returned |= {"ModelTradeoff"}
+    returned |= {"ModelSweep", "ModelTradeoff"}
     assert returned <= shown, "a result the public functions return has no display"
     assert shown == set(results), "a new Shown class joins the `results` fixture"
 

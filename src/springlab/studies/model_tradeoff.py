@@ -207,7 +207,7 @@ class ModelTradeoff(display.Shown):
         return display.Summary(
             "ModelTradeoff",
             f"{self.model} from {self.start}",
-            None if pick is None else ("meets tol" if pick.found else "no setting meets tol"),
+            "not validated" if pick is None else ("meets tol" if pick.found else "no setting meets tol"),
             None if pick is None else pick.found,
             REFERENCE_NOTE,
             (
