@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from springlab import scenes
+from springlab import outputs, scenes
 from springlab.cli.main import main
 from springlab.errors import UnknownNameError
 from springlab.scenes.capabilities.design import DesignSpec
@@ -218,7 +218,7 @@ def test_to_dict_carries_the_attributes(small_study):
 
 def test_to_pandas_has_a_row_per_configuration_as_configurations_csv(small_study, tmp_path):
     frame = small_study.to_pandas()
-    design.write(small_study, tmp_path / "d")
+    outputs.write(small_study, tmp_path / "d")
     lines = (tmp_path / "d" / "configurations.csv").read_text().splitlines()
     assert lines[0].split(",") == list(frame.columns)
     assert len(frame) == small_study.size == len(lines) - 1

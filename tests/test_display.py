@@ -19,6 +19,7 @@ import csv
 import html
 import io
 import math
+import pathlib
 import re
 import struct
 import subprocess
@@ -28,23 +29,23 @@ import numpy as np
 import pytest
 
 import springlab
-from springlab import display, files
+from springlab import display, files, outputs
 from springlab.plots import figures
-from springlab.plots import frequency as plots_frequency
-from springlab.plots import friction_settings as plots_friction
-from springlab.plots import sweep as plots_sweep
-from springlab.runs.run import ValidationRow, run_scenario, write_run
+from springlab.runs.run import ValidationRow, run_scenario
 from springlab.scenes import get
 from springlab.studies import random_load, rms_settings
 from springlab.studies.design import run_study
-from springlab.studies.design import study as design_study
 from springlab.studies.families import run_phase_family, run_zeta_family
 from springlab.studies.friction_settings import friction_settings
+from springlab.studies.model_sweep import model_sweep
+from springlab.studies.model_tradeoff import model_tradeoff
 from springlab.studies.refine import refine
 from springlab.studies.tradeoff import tradeoff
 from test_layers import layer_of
 from test_report import _browse_until, _chromium
 
+#: a model file nobody wrote a scene for (tests/data/pinch_gripper.xml): its run, sweep and trade-off
+PINCH = pathlib.Path(__file__).parent / "data" / "pinch_gripper.xml"
 #: a nine-node stay cable with a damper: a random-load ensemble and its settings study in about a second
 SHORT_CABLE = {"n_elements": 9, "damper_position": 30.0, "damper_coefficient": 4e4, "structural_damping_ratio": 0.01}
 
@@ -87,9 +88,13 @@ def results(stability_report, shipped_audit):
         "ZetaFamily": run_zeta_family("slider", "free", zetas=(0.0, 0.5), duration=1.0),
         "PhaseFamily": run_phase_family(result),
         "Ensemble": random_load.ensemble("stay_cable", seeds=2, record=20.0, **SHORT_CABLE),
+        "ModelRun": springlab.run(str(PINCH), keyframe="open", duration=0.2),
         "RmsSettings": rms_settings.rms_settings(
             "stay_cable", tol=0.5, integrators=("implicitfast",), seed_counts=(1,), record=20.0, sizes=(9,)
         ),
+        # a model file's sweep and trade-off (tests/data/pinch_gripper.xml: the box falls freely from 'open')
+        "ModelSweep": model_sweep(PINCH, keyframe="open", vary=["opt.timestep=0.001:0.004:4"], duration=0.2),
+        "ModelTradeoff": model_tradeoff(PINCH, keyframe="open", duration=0.2, integrators=["euler", "rk4"]),
     }
     assert {type(r).__name__ for r in built.values()} == set(built)
     return built
@@ -113,7 +118,8 @@ def test_every_top_level_result_shows_itself_and_this_test_builds_each(results):
     shown = {cls.__name__ for cls in _shown_classes()}
     returned = {"Result", "ValidationRow", "Sweep", "Tradeoff", "FitResult", "Audit", "StabilityReport"}
     returned |= {"FrequencyResponse", "Study", "SobolStudy", "FrictionSettings", "Refinement"}
-    returned |= {"ZetaFamily", "PhaseFamily", "Ensemble", "RmsSettings"}
+    returned |= {"ZetaFamily", "PhaseFamily", "Ensemble", "RmsSettings", "ModelRun"}
+    returned |= {"ModelSweep", "ModelTradeoff"}
     assert returned <= shown, "a result the public functions return has no display"
     assert shown == set(results), "a new Shown class joins the `results` fixture"
 
@@ -326,16 +332,16 @@ def _assert_exact(cells: list[str], values) -> None:
 @pytest.mark.slow
 def test_every_csv_reads_back_exactly_in_the_shortest_form(results, tmp_path):
     run = results["Result"]
-    write_run(tmp_path / "run", run)
+    outputs.write(run, tmp_path / "run")
     header, body = _read(tmp_path / "run" / "trajectory.csv")
-    columns = run._csv_columns()  # what write_run writes: time is k dt, exactly
+    columns = run._csv_columns()  # what outputs.write writes: time is k dt, exactly
     assert header == list(columns)
     for i, name in enumerate(header):
         _assert_exact([row[i] for row in body], columns[name])
     assert body[20][0] == "0.1"  # 20 x 0.005 s is the double nearest 0.1: %.17g wrote 0.10000000000000001
 
     sweep = results["Sweep"]
-    plots_sweep.write(sweep, tmp_path / "sweep")
+    outputs.write(sweep, tmp_path / "sweep")
     header, body = _read(tmp_path / "sweep" / "sweep.csv")
     expected_header, expected = sweep.table()
     assert header == expected_header
@@ -344,21 +350,21 @@ def test_every_csv_reads_back_exactly_in_the_shortest_form(results, tmp_path):
             _assert_exact([row[i] for row in body], [line[i] for line in expected])
 
     response = results["FrequencyResponse"]
-    plots_frequency.write_frequency(response, tmp_path / "frequency")
+    outputs.write(response, tmp_path / "frequency")
     header, body = _read(tmp_path / "frequency" / "frequency.csv")
     for i, (name, values) in enumerate(response.rows().items()):
         assert header[i] == name
         _assert_exact([row[i] for row in body], values)
 
     study = results["Study"]
-    design_study.write(study, tmp_path / "design")
+    outputs.write(study, tmp_path / "design")
     header, body = _read(tmp_path / "design" / "configurations.csv")
     for i, (name, values) in enumerate(study.columns.items()):
         assert header[i] == name
         _assert_exact([row[i] for row in body], values)
 
     friction = results["FrictionSettings"]
-    plots_friction.write(friction, tmp_path / "friction")
+    outputs.write(friction, tmp_path / "friction")
     header, body = _read(tmp_path / "friction" / "friction_settings.csv")
     memory = [r.row() for case in friction.cases for r in case.runs]
     numeric = 0

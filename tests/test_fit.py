@@ -368,12 +368,12 @@ def test_car_intervals_cover_the_truth_95_percent_of_the_time(tmp_path):
 
 
 def test_fit_json_has_the_contract_keys(tmp_path):
-    from springlab.studies.fit.fit import write as write_fit
+    from springlab import outputs
 
     t = np.arange(0, 1, 2e-3)
     x, _, _ = free_decay(t, 20.0, 0.05, 0.05, 0.0)
     result = fit("slider", write(tmp_path / "d.csv", {"time": t, "slider_pos": x}))
-    write_fit(result, tmp_path / "out")
+    outputs.write(result, tmp_path / "out")
     doc = json.loads((tmp_path / "out" / "fit.json").read_text())
     for key in ("scene", "scenario", "free", "estimates", "derived", "residual_rms", "samples", "time_span_s"):
         assert key in doc

@@ -29,6 +29,7 @@ LAYERS: dict[str, tuple[str, ...]] = {
     "studies": ("studies",),
     "plots": ("plots",),
     "render": ("render",),
+    "outputs": ("outputs",),
     "front": ("cli", "demo", "__init__", "__main__"),
 }
 ORDER = list(LAYERS)

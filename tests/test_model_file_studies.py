@@ -141,6 +141,28 @@ def test_bad_input_to_a_model_sweep_is_one_line_exit_2_nothing_written(vary, mes
     assert not out.exists()
 
 
+@pytest.mark.parametrize(
+    ("arguments", "message"),
+    [
+        (["missing.xml"], "no such model file 'missing.xml'"),
+        ([str(GRIPPER), "--keyframe", "grip"], "unknown keyframe 'grip'"),
+        ([str(GRIPPER), "--duration", "-1"], "duration must be a finite number > 0 s"),
+        ([str(GRIPPER), "--set", "mass=2"], "--set applies to a scene"),
+        ([str(GRIPPER), "--quantity", "box_speed"], "unknown --quantity 'box_speed'"),
+        (["slider", "--keyframe", "0"], "--keyframe applies to a model file"),
+    ],
+)
+def test_other_bad_input_to_a_model_sweep_is_one_line_exit_2_nothing_written(arguments, message, tmp_path, capsys):
+    out = tmp_path / "out"
+    vary = "opt.impratio=1:2:2" if arguments[0] != "slider" else "mass=1:2:2"
+    short = [] if "--duration" in arguments else ["--duration", "0.1"]
+    command = ["sweep", *arguments, "--vary", vary, *short]
+    assert main([*command, "--output", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err
+    assert not out.exists()
+
+
 def _closed_form(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The damped oscillator released from X0 at rest: x(t) [m], v(t) [m/s]."""
     omega = math.sqrt(K / M)

@@ -181,6 +181,7 @@ def test_tradeoff_stability_and_design_charts_leave_the_callers_backend_alone(tm
         "import sys, matplotlib\n"
         "matplotlib.use('svg')\n"
         "import numpy as np\n"
+        "from springlab import outputs\n"
         "from springlab.plots import charts, design as design_chart\n"
         "from springlab.studies import stability, tradeoff\n"
         "from springlab.studies.design import study as design\n"
@@ -193,7 +194,7 @@ def test_tradeoff_stability_and_design_charts_leave_the_callers_backend_alone(tm
         " 'grows', 0.01, 0.0)\n"
         "amplification = stability.AmplificationMap(np.array([0.0, 1.0]), np.geomspace(0.01, 1e3, 4),"
         " {'rk4': np.full((2, 4), 0.5)})\n"
-        f"charts.write_stability(report, amplification, {str(tmp_path / 's')!r})\n"
+        f"outputs.write(report, {str(tmp_path / 's')!r}, amplification=amplification)\n"
         "assert matplotlib.get_backend() == 'svg', matplotlib.get_backend()\n"
         "assert 'matplotlib.pyplot' not in sys.modules, 'pyplot imported'\n"
     )

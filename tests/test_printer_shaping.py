@@ -350,3 +350,29 @@ def test_minimum_time_move_settles_by_the_damped_ring_down():
     last_outside = tau[np.flatnonzero(np.abs(free) > BAND)[-1]]
     assert fastest + last_outside <= got <= fastest + last_outside + 1e-8
     assert round(got, 4) == 0.0748
+
+
+@pytest.mark.parametrize("zeta", [0.0, 0.03, 0.4])
+def test_peak_after_is_the_free_vibrations_continuous_maximum(zeta):
+    """positioning.peak_after (the residual amplitude's `_exact`) against a dense grid over the first damped
+    period refined by a bounded scalar search on each grid maximum's neighbourhood (scipy, independent)."""
+    import scipy.optimize
+
+    omega = 2 * math.pi * 195.0
+    rng = np.random.default_rng(7)
+    s = complex(-zeta * omega, omega * math.sqrt(1 - zeta**2))
+    for phasor in rng.normal(size=8) + 1j * rng.normal(size=8):
+
+        def negative(tau, z=phasor):
+            return -abs((z * np.exp(s * tau)).real)
+
+        # later extrema decay (or repeat when undamped): the largest lies in [0, one damped period]
+        period = 2 * math.pi / s.imag
+        grid = np.linspace(0.0, period, 4001)
+        values = -np.array([negative(t) for t in grid])
+        k = int(np.argmax(values))
+        low, high = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
+        found = scipy.optimize.minimize_scalar(negative, bounds=(low, high), method="bounded", options={"xatol": 1e-15})
+        independent = max(values[0], -float(found.fun))
+        # the search's tau is good to ~1e-15 s; the value's error is second order in it, round-off eps |Z|
+        assert positioning.peak_after(phasor, omega, zeta) == pytest.approx(independent, rel=1e-9)

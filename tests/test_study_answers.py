@@ -138,7 +138,7 @@ def test_tradeoff_answers_with_the_verified_pick_and_the_orders_and_prints_them_
 
 
 def test_tradeoff_without_tol_answers_with_the_orders():
-    data = tradeoff.tradeoff("slider", "free", duration=0.5, integrators=("euler", "rk4")).to_dict()
+    data = tradeoff.sweep("slider", "free", duration=0.5, integrators=("euler", "rk4")).to_dict()
     best = min(
         (r for r in data["runs"] if not r["diverged"] and not r["beyond_limit"]), key=lambda r: r["max_rel_error"]
     )

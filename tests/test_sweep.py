@@ -13,10 +13,10 @@ import pandas
 import pytest
 
 import springlab
+from springlab import outputs
 from springlab.cli.main import main
 from springlab.errors import BadInputError, DivergedError
 from springlab.exact.limits import stability_limit
-from springlab.plots import sweep as sweep_plot
 from springlab.studies import sweeps
 from springlab.studies.sweeps import configurations, parse_axis
 
@@ -162,5 +162,5 @@ def test_cli_writes_the_csv_and_the_plot_and_json_is_silent_on_stderr(tmp_path, 
 def test_plot_rejects_an_unknown_quantity_and_leaves_no_file(tmp_path):
     result = springlab.sweep("slider", "free", vary={"damping": (1.0, 2.0, 2)})
     with pytest.raises(BadInputError, match="unknown quantity"):
-        sweep_plot.write(result, tmp_path, quantity="nonsense")
+        outputs.write(result, tmp_path, quantity="nonsense")
     assert list(tmp_path.iterdir()) == []

@@ -2,17 +2,22 @@
 
 Every file is written to a temporary name in its target folder and renamed
 into place, so an interrupted or failed write never leaves a partial file.
+`Output` is how a result declares one file it writes (springlab.outputs.write writes them all);
+`write_all` writes a set of files all or nothing.
 """
 
 from __future__ import annotations
 
 import contextlib
+import csv
+import dataclasses
+import io
 import json
 import math
 import os
 import pathlib
 import secrets
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -148,6 +153,27 @@ def csv_text(columns: Mapping[str, np.ndarray], every: int = 1) -> str:
     return "\n".join(lines) + "\n"
 
 
+def rows_text(header: Sequence[str], rows: Iterable[Sequence[Any]]) -> str:
+    """CSV of a header and rows of mixed cells (the csv module's quoting): true/false for booleans, floats in
+    their shortest exact form (`number_text`), integers as integers, anything else as its text."""
+
+    def cell(value: Any) -> str:
+        if isinstance(value, (bool, np.bool_)):
+            return "true" if value else "false"
+        if isinstance(value, (float, np.floating)):
+            return number_text(value)
+        if isinstance(value, (int, np.integer)):
+            return str(int(value))
+        return str(value)
+
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(header)
+    for line in rows:
+        writer.writerow([cell(value) for value in line])
+    return buffer.getvalue()
+
+
 def write_text_files(directory: str | os.PathLike, files: Mapping[str, str]) -> list[pathlib.Path]:
     """Write name -> text into `directory`; all files appear, or none of them do."""
     path = prepare_directory(directory)
@@ -162,3 +188,85 @@ def write_text_files(directory: str | os.PathLike, files: Mapping[str, str]) -> 
             done.unlink(missing_ok=True)
         raise
     return written
+
+
+#: the kinds of file a result writes, by suffix: text (JSON, CSV) it gives itself, figures and videos drawn above it
+OUTPUT_KINDS = {"json": "text", "csv": "text", "png": "drawn", "mp4": "drawn"}
+
+
+@dataclasses.dataclass(frozen=True)
+class Output:
+    """One file a result writes into its folder; springlab.outputs.write writes every file a result declares.
+
+    Attributes
+    ----------
+    name
+        the file name, e.g. 'tradeoff.json'; its suffix is its kind: .json, .csv, .png or .mp4.
+    text
+        the file's text for .json and .csv; None for .png and .mp4, which the outputs layer draws (the
+        results live below the plots and cannot draw themselves).
+    """
+
+    name: str
+    text: str | None = None
+
+    def __post_init__(self) -> None:
+        kind = OUTPUT_KINDS.get(self.kind)
+        if kind is None:
+            raise ValueError(f"{self.name}: a result writes {', '.join('.' + k for k in OUTPUT_KINDS)} files")
+        if (kind == "text") != (self.text is not None):
+            raise ValueError(f"{self.name}: a .json or .csv file carries its text, a .png or .mp4 file none")
+
+    @property
+    def kind(self) -> str:
+        """'json', 'csv', 'png' or 'mp4' (the name's suffix)."""
+        return pathlib.PurePath(self.name).suffix.lstrip(".")
+
+    @classmethod
+    def json(cls, name: str, value: Any) -> Output:
+        """A JSON file of `value` (`dumps`: inf and nan as null), ending in a newline."""
+        return cls(name, dumps(value) + "\n")
+
+
+def write_all(
+    directory: str | os.PathLike, writers: Mapping[str, Callable[[pathlib.Path], object]]
+) -> list[pathlib.Path]:
+    """Write a set of files into `directory`, all or nothing.
+
+    Each writer is called with a temporary path beside its file (hidden, same suffix) and writes the file
+    there; only when every one has written are they renamed into place. On any error (a writer's, or a
+    rename's) the temporaries and the files already renamed are removed, so no partial set is left.
+
+    Parameters
+    ----------
+    directory
+        the folder (created with its parents; BadInputError if it cannot be).
+    writers
+        file name -> a function writing that file's content at the path it is given.
+
+    Returns
+    -------
+    list[pathlib.Path]
+        the written files, in the order of `writers`.
+    """
+    folder = prepare_directory(directory)
+    temporaries: dict[pathlib.Path, pathlib.Path] = {}
+    renamed: list[pathlib.Path] = []
+    try:
+        for name, write in writers.items():
+            target = folder / name
+            try:
+                temporaries[target] = temporary_beside(target)
+            except OSError as error:
+                raise BadInputError(f"cannot write {str(target)!r}: {error.strerror or error}") from None
+            write(temporaries[target])
+        for target, temporary in temporaries.items():
+            os.replace(temporary, target)
+            renamed.append(target)
+    except BaseException:
+        for temporary in temporaries.values():
+            temporary.unlink(missing_ok=True)
+        for target in renamed:
+            target.unlink(missing_ok=True)
+        raise
+    return list(temporaries)

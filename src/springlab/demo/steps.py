@@ -17,9 +17,9 @@ import pathlib
 import time
 from collections.abc import Callable
 
-from springlab import files, progress, scenes
+from springlab import files, outputs, progress, scenes
 from springlab.errors import BadInputError
-from springlab.runs.run import ValidationRow, write_run
+from springlab.runs.run import ValidationRow
 from springlab.studies import auto, families
 from springlab.studies.families import PhaseFamily
 
@@ -36,7 +36,7 @@ def core_step(state: DemoState) -> list[Artifact]:
             if scenario.exact:
                 state.validation.append(ValidationRow.of(result))
             folder = pathlib.Path(scene.name) / scenario.name
-            write_run(state.out / folder, result)
+            outputs.write(result, state.out / folder)
             written.append(Artifact(str(folder / "trajectory.csv"), "data", "trajectory", scene.name, scenario.name))
             written.append(Artifact(str(folder / "summary.json"), "data", "summary", scene.name, scenario.name))
     files.write_text_files(
@@ -165,16 +165,15 @@ def run_demo(out: str | pathlib.Path, log: Callable[[str], None] = print) -> Dem
 
 def tradeoff_step(state: DemoState) -> list[Artifact]:
     """The slider's speed-accuracy trade (with the setting for 1e-6) and the stability map, extremes, energy."""
-    from springlab.plots import charts
     from springlab.studies import (
         stability,
         tradeoff,  # here: mujoco.batch and matplotlib only when this step runs
     )
 
     result = tradeoff.tradeoff("slider", "free", tol=1e-6)
-    charts.write_tradeoff(result, state.out / "tradeoff")
+    outputs.write(result, state.out / "tradeoff")
     report = stability.stability_report()
-    charts.write_stability(report, stability.amplification_map(), state.out / "stability")
+    outputs.write(report, state.out / "stability", amplification=stability.amplification_map())
     return [
         Artifact(
             "tradeoff/tradeoff.json",
@@ -207,12 +206,10 @@ def tradeoff_step(state: DemoState) -> list[Artifact]:
 
 def design_step(state: DemoState) -> list[Artifact]:
     """The printer head's design study: 7^4 = 2401 configurations, plus a 31 x 31 plane for the plot."""
-    from springlab.plots import design as design_chart  # here: mujoco.batch is only needed by this step
-    from springlab.studies.design import study as design
+    from springlab.studies.design import study as design  # here: mujoco.batch is only needed by this step
 
     study = design.run_study("printer_head")
-    design.write(study, state.out / "design")
-    design_chart.plot(study, state.out / "design" / "design.png")
+    outputs.write(study, state.out / "design")
     state.timings.append(("design sweep (batched MuJoCo)", study.wall_time_s))
     return [
         Artifact(
@@ -326,7 +323,6 @@ DEMO_REFINE_TOL = 1e-3
 def refine_step(state: DemoState) -> list[Artifact]:
     """How much model each question needs, for every scene whose model size is a parameter (`Scene.refinable`):
     the first declared question at DEMO_REFINE_TOL over its first DEMO_REFINE_SIZES sizes."""
-    from springlab.plots import refine as refine_chart  # here: matplotlib only when this step runs
     from springlab.studies import refine
 
     written = []
@@ -335,7 +331,7 @@ def refine_step(state: DemoState) -> list[Artifact]:
         assert spec is not None  # refinable_scenes lists only scenes that declare it
         study = refine.refine(name, tol=DEMO_REFINE_TOL, sizes=spec.sizes[:DEMO_REFINE_SIZES])
         folder = pathlib.Path("refine") / name
-        refine_chart.write_refine(study, state.out / folder)
+        outputs.write(study, state.out / folder)
         state.timings.append((f"refine {name} ({study.quantity})", study.sweep_wall_time_s))
         pick = study.recommendation
         answer = (
@@ -360,11 +356,10 @@ def refine_step(state: DemoState) -> list[Artifact]:
 
 def audit_step(state: DemoState) -> list[Artifact]:
     """`springlab audit` on the car's model, as any MJCF would be: modes, limits, error vs cost."""
-    from springlab.plots import audit as charts_audit  # here: matplotlib only when this step runs
     from springlab.studies.audit.audit import audit
 
     result = audit("car")
-    charts_audit.write_audit(result, state.out / "audit")
+    outputs.write(result, state.out / "audit")
     state.timings.append(("audit of the car model (springlab audit)", result.timings.total_s))
     return [
         Artifact(
@@ -386,7 +381,6 @@ FRICTION_QUESTION = "How much does MuJoCo's friction drift, and what does it cos
 
 def friction_step(state: DemoState) -> list[Artifact]:
     """Every scene that declares dry friction (Scene.dry_friction): a smaller friction-settings study for 1e-2."""
-    from springlab.plots import friction_settings as chart  # here: matplotlib only when this step runs
     from springlab.studies import friction_settings
 
     written = []
@@ -405,7 +399,7 @@ def friction_step(state: DemoState) -> list[Artifact]:
             values=values,
         )
         folder = pathlib.Path(scene.name) / "friction_settings"
-        chart.write(study, state.out / folder)
+        outputs.write(study, state.out / folder)
         state.timings.append((f"friction settings of {scene.name} ({study.runs} runs)", study.wall_time_s))
         written += [
             Artifact(
@@ -436,7 +430,6 @@ def frequency_step(state: DemoState) -> list[Artifact]:
     """Every scene's frequency questions (`Scene.frequency`): bode.png, frequency.json and frequency.csv under
     out/<scene>/frequency/<scenario>/, and the verdict (the band the scene's setting reproduces, the largest dt
     per integrator, the resonances and what they mean) as the answer, in the scene's section of the report."""
-    from springlab.plots import frequency as chart  # here: matplotlib only when this step runs
     from springlab.studies import frequency
 
     written = []
@@ -447,7 +440,7 @@ def frequency_step(state: DemoState) -> list[Artifact]:
                 scene.name, scenario, points=DEMO_FREQUENCY_POINTS, integrators=DEMO_FREQUENCY_INTEGRATORS
             )
             folder = pathlib.Path(scene.name) / "frequency" / scenario
-            chart.write_frequency(result, state.out / folder)
+            outputs.write(result, state.out / folder)
             state.timings.append((f"frequency response of {scene.name}/{scenario}", time.perf_counter() - start))
             question = (
                 f"Frequency response ({scenario}), {result.description}: up to which frequency does"
@@ -475,7 +468,6 @@ def random_load_step(state: DemoState) -> list[Artifact]:
     """Every scene with a scenario under a random load (`Scene.random_load`): DEMO_SEEDS seeded records against
     the exact RMS and their intervals (springlab.studies.random_load), rms.png and rms.json under
     out/<scene>/rms/, the answer in the scene's section of the report."""
-    from springlab.plots import random_load as chart  # here: matplotlib only when this step runs
     from springlab.studies import random_load
 
     written = []
@@ -485,7 +477,7 @@ def random_load_step(state: DemoState) -> list[Artifact]:
             continue
         result = random_load.ensemble(scene.name, seeds=DEMO_SEEDS)
         folder = pathlib.Path(scene.name) / "rms"
-        chart.write_ensemble(result, state.out / folder)
+        outputs.write(result, state.out / folder)
         state.timings.append((f"{DEMO_SEEDS} records of {scene.name}/{spec.scenario}", result.wall_time_s))
         written += [
             Artifact(str(folder / "rms.png"), "plot", result.question, scene.name, spec.scenario, answer=result.answer),

@@ -19,7 +19,6 @@ import math
 import pathlib
 from typing import TYPE_CHECKING
 
-from springlab import files
 from springlab.studies.audit.results import Audit
 
 from .charts import _COLORS, _figure, _save
@@ -172,15 +171,3 @@ def _cost_panel(result: Audit, ax) -> None:
     if high > 1e3:  # a run that left the physics (error 1e30) would flatten every other curve
         ax.set_ylim(low, 1e3)
         ax.annotate("errors above 1e3 off the top", (0.02, 0.97), xycoords="axes fraction", fontsize=7, va="top")
-
-
-def write_audit(result: Audit, directory: str | pathlib.Path) -> list[pathlib.Path]:
-    """Write DIR/audit.json and DIR/audit.png; both appear, or neither does."""
-    written = files.write_text_files(directory, {"audit.json": files.dumps(result.to_dict()) + "\n"})
-    try:
-        written.append(plot_audit(result, pathlib.Path(directory) / "audit.png"))
-    except BaseException:
-        for path in written:
-            path.unlink(missing_ok=True)
-        raise
-    return written

@@ -242,30 +242,3 @@ def energy_figure(series: EnergyHistories) -> Figure:
         f"undamped {series.scene}, omega*dt = y = {y:g}: energy from qpos/qvel vs each step map's exact formula"
     )
     return fig
-
-
-def write_tradeoff(result: Tradeoff, directory: str | pathlib.Path) -> list[pathlib.Path]:
-    """Write DIR/tradeoff.json and DIR/tradeoff.png."""
-    written = files.write_text_files(directory, {"tradeoff.json": files.dumps(result.to_dict()) + "\n"})
-    written.append(plot_tradeoff(result, pathlib.Path(directory) / "tradeoff.png"))
-    return written
-
-
-def write_stability(
-    report: StabilityReport, amplification: AmplificationMap, directory: str | pathlib.Path
-) -> list[pathlib.Path]:
-    """Write DIR/stability.json, DIR/stability.png (map) and DIR/energy.png.
-
-    Parameters
-    ----------
-    report
-        `stability.stability_report`.
-    amplification
-        `stability.amplification_map`, drawn in stability.png.
-    directory
-        the output folder.
-    """
-    written = files.write_text_files(directory, {"stability.json": files.dumps(report.to_dict()) + "\n"})
-    written.append(plot_stability(report, amplification, pathlib.Path(directory) / "stability.png"))
-    written.append(plot_energy(report.energy_histories, pathlib.Path(directory) / "energy.png"))
-    return written

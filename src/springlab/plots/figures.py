@@ -19,6 +19,7 @@ from springlab.studies.families import PhaseFamily, ZetaFamily
 from springlab.studies.fit.results import FitResult
 from springlab.studies.frequency import FrequencyResponse
 from springlab.studies.friction_settings import FrictionSettings
+from springlab.studies.model_sweep import ModelSweep
 from springlab.studies.refine import Refinement
 from springlab.studies.stability import StabilityReport
 from springlab.studies.sweeps import Sweep
@@ -42,6 +43,7 @@ DRAWERS: dict[type, Callable[..., Figure]] = {
     ZetaFamily: run.zeta_family,
     PhaseFamily: run.phase_family,
     Sweep: sweep.sweep_figure,
+    ModelSweep: sweep.sweep_figure,
     Tradeoff: charts.tradeoff_figure,
     StabilityReport: _stability,
     FitResult: fit.fit_figure,

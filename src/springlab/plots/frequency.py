@@ -17,7 +17,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from springlab import files
 from springlab.studies.frequency import FrequencyResponse
 
 from .charts import _COLORS, _save
@@ -187,35 +186,3 @@ def _draw_sweeps(result: FrequencyResponse, mag_ax, phase_ax) -> None:
         mag_ax.loglog(
             f_points, h_points, ".", color="0.5", markersize=1.5, label=f"harmonic balance at {amplitude:g} {unit}"
         )
-
-
-def write_frequency(result: FrequencyResponse, directory: str | pathlib.Path) -> list[pathlib.Path]:
-    """Write DIR/frequency.json, frequency.csv, bode.png (and sinestream.csv after a sinestream or a sweep);
-    all appear, or none does.
-
-    Parameters
-    ----------
-    result
-        the frequency response.
-    directory
-        where to write.
-
-    Returns
-    -------
-    list[pathlib.Path]
-        the written files.
-    """
-    texts = {
-        "frequency.json": files.dumps(result.to_dict()) + "\n",
-        "frequency.csv": files.csv_text(result.rows()),
-    }
-    if result.sinestreams or result.sweeps:
-        texts["sinestream.csv"] = files.csv_text(result.sweep_rows())
-    written = files.write_text_files(directory, texts)
-    try:
-        written.append(plot_bode(result, pathlib.Path(directory) / "bode.png"))
-    except BaseException:
-        for path in written:
-            path.unlink(missing_ok=True)
-        raise
-    return written

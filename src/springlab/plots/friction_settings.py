@@ -17,8 +17,6 @@ import pathlib
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-import numpy as np
-
 from springlab import files
 from springlab.studies.friction_settings import MODEL_INTEGRATOR, CaseStudy, FrictionSettings, ModelError
 
@@ -142,30 +140,3 @@ def friction_figure(study: FrictionSettings) -> Figure:
         _dt_panel(case, dt_ax, study.tol)
     figure.suptitle(f"{study.scene}: MuJoCo's friction settings, error vs cost ({study.runs} runs)")
     return figure
-
-
-def write(study: FrictionSettings, directory: str | pathlib.Path) -> list[pathlib.Path]:
-    """Write DIR/friction_settings.json (the study), DIR/friction_settings.csv (one row per run) and
-    DIR/friction_settings.png; return their paths."""
-    rows = [r.row() for case in study.cases for r in case.runs]
-    names = list(dict.fromkeys(name for row in rows for name in row))
-    lines = [",".join(names)] + [",".join(_cell(row.get(name)) for name in names) for row in rows]
-    written = files.write_text_files(
-        directory,
-        {
-            "friction_settings.json": files.dumps(study.to_dict()) + "\n",
-            "friction_settings.csv": "\n".join(lines) + "\n",
-        },
-    )
-    written.append(plot(study, pathlib.Path(directory) / "friction_settings.png"))
-    return written
-
-
-def _cell(value) -> str:
-    if value is None:
-        return ""
-    if isinstance(value, (bool, np.bool_)):
-        return str(bool(value)).lower()
-    if isinstance(value, (float, np.floating)):  # np.float64's own repr is `np.float64(0.1)` under numpy 2
-        return files.number_text(value)
-    return str(value)

@@ -6,7 +6,6 @@ from __future__ import annotations
 import pathlib
 from typing import TYPE_CHECKING
 
-from springlab import files
 from springlab.studies.model_tradeoff import ModelTradeoff
 
 from .charts import _COLORS, _STYLES, _figure, _save
@@ -79,8 +78,6 @@ def model_tradeoff_figure(result: ModelTradeoff) -> Figure:
     return fig
 
 
-def write_model_tradeoff(result: ModelTradeoff, directory: str | pathlib.Path) -> list[pathlib.Path]:
-    """Write DIR/tradeoff.json and DIR/tradeoff.png of a model file's trade-off."""
-    written = files.write_text_files(directory, {"tradeoff.json": files.dumps(result.to_dict()) + "\n"})
-    written.append(_save(model_tradeoff_figure(result), pathlib.Path(directory) / "tradeoff.png"))
-    return written
+def plot_model_tradeoff(result: ModelTradeoff, path: str | pathlib.Path) -> pathlib.Path:
+    """Write `model_tradeoff_figure(result)` to `path` (PNG): a model file's tradeoff.png."""
+    return _save(model_tradeoff_figure(result), pathlib.Path(path))

@@ -19,7 +19,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from springlab import files
 from springlab.studies.random_load import Ensemble
 from springlab.studies.rms_settings import RmsSettings
 
@@ -121,23 +120,11 @@ def settings_figure(result: RmsSettings) -> Figure:
     return fig
 
 
-def write_ensemble(result: Ensemble, directory: str | pathlib.Path) -> list[pathlib.Path]:
-    """Write DIR/rms.json, DIR/rms.csv (one row per record) and DIR/rms.png."""
-    rows = result.rows_shown()
-    columns = {
-        "seed": np.array([r[0] for r in rows], float),
-        "rms": np.array([r[1] for r in rows]),
-        "inside": np.array([float(r[2]) for r in rows]),
-    }
-    written = files.write_text_files(
-        directory, {"rms.json": files.dumps(result.to_dict()) + "\n", "rms.csv": files.csv_text(columns)}
-    )
-    written.append(_save(ensemble_figure(result), pathlib.Path(directory) / "rms.png"))
-    return written
+def plot_ensemble(result: Ensemble, path: str | pathlib.Path) -> pathlib.Path:
+    """Write `ensemble_figure(result)` to `path` (PNG): rms.png."""
+    return _save(ensemble_figure(result), pathlib.Path(path))
 
 
-def write_settings(result: RmsSettings, directory: str | pathlib.Path) -> list[pathlib.Path]:
-    """Write DIR/rms_settings.json and DIR/rms_settings.png."""
-    written = files.write_text_files(directory, {"rms_settings.json": files.dumps(result.to_dict()) + "\n"})
-    written.append(_save(settings_figure(result), pathlib.Path(directory) / "rms_settings.png"))
-    return written
+def plot_settings(result: RmsSettings, path: str | pathlib.Path) -> pathlib.Path:
+    """Write `settings_figure(result)` to `path` (PNG): rms_settings.png."""
+    return _save(settings_figure(result), pathlib.Path(path))

@@ -15,7 +15,6 @@ import math
 import pathlib
 from typing import TYPE_CHECKING
 
-from springlab import files
 from springlab.studies.refine import Refinement
 
 from .charts import _COLORS, _figure, _save
@@ -142,10 +141,3 @@ def refine_figure(result: Refinement) -> Figure:
     legend_beside(right, 6.5)
     fig.suptitle(f"{result.scene} / {result.scenario}: how much model does {result.quantity} need?")
     return fig
-
-
-def write_refine(result: Refinement, directory: str | pathlib.Path) -> list[pathlib.Path]:
-    """Write DIR/refine.json and DIR/refine.png."""
-    written = files.write_text_files(directory, {"refine.json": files.dumps(result.to_dict()) + "\n"})
-    written.append(plot_refine(result, pathlib.Path(directory) / "refine.png"))
-    return written

@@ -6,8 +6,6 @@ matplotlib Figure (no pyplot), saved atomically.
 
 from __future__ import annotations
 
-import csv
-import io
 import pathlib
 from typing import TYPE_CHECKING
 
@@ -33,25 +31,6 @@ def default_quantity(sweep: Sweep) -> str:
     if sweep.headline is None:
         raise BadInputError("the sweep has no numeric quantity to plot (every configuration diverged?)")
     return sweep.headline
-
-
-def csv_text(sweep: Sweep) -> str:
-    """sweep.csv: header, then one row per configuration; numbers in their shortest exact form (files.number_text)."""
-    header, body = sweep.table()
-    buffer = io.StringIO()
-    writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(header)
-    for line in body:
-        writer.writerow([_cell(value) for value in line])
-    return buffer.getvalue()
-
-
-def _cell(value) -> str:
-    if isinstance(value, (bool, np.bool_)):
-        return "true" if value else "false"
-    if isinstance(value, (float, np.floating, int, np.integer)):
-        return files.number_text(value) if isinstance(value, (float, np.floating)) else str(int(value))
-    return str(value)
 
 
 def plot(sweep: Sweep, path: str | pathlib.Path, quantity: str | None = None) -> pathlib.Path:
@@ -138,16 +117,3 @@ def sweep_figure(sweep: Sweep, quantity: str | None = None) -> Figure:
             ax.set_yscale("log")
     ax.set_title(title, fontsize=9)
     return fig
-
-
-def write(sweep: Sweep, directory: str | pathlib.Path, quantity: str | None = None) -> list[pathlib.Path]:
-    """Write sweep.csv and sweep.png into `directory`."""
-    folder = files.prepare_directory(directory)
-    png = folder / "sweep.png"
-    plot(sweep, png, quantity)  # first: a bad --quantity leaves no file behind
-    try:
-        written = files.write_text_files(folder, {"sweep.csv": csv_text(sweep)})
-    except BaseException:
-        png.unlink(missing_ok=True)
-        raise
-    return [*written, png]

@@ -17,7 +17,6 @@ from __future__ import annotations
 import copy
 import dataclasses
 import os
-import pathlib
 from typing import TYPE_CHECKING, Any
 
 import mujoco
@@ -27,7 +26,7 @@ from springlab import display, tables
 from springlab.answer import Answer, compose
 from springlab.errors import BadInputError, DivergedError
 from springlab.exact.operating_point import OperatingPoint, operating_point
-from springlab.files import csv_text, dumps, json_ready, write_text_files
+from springlab.files import Output, csv_text, json_ready
 from springlab.sim import model_files
 from springlab.sim.simulate import INTEGRATORS, Trajectory, check_timing, integrator_id, quiet_mujoco, simulate
 
@@ -282,6 +281,11 @@ class ModelRun(display.Shown):
             }
         )
 
+    def outputs(self, every: int = 1) -> tuple[Output, ...]:
+        """The files `springlab run MODEL.xml --output DIR` writes (springlab.outputs.write): trajectory.csv
+        (every `every`-th step, the last always, full precision) and summary.json."""
+        return Output("trajectory.csv", csv_text(self.series(), every)), Output.json("summary.json", self.to_dict())
+
     def to_pandas(self) -> pandas.DataFrame:
         """trajectory.csv as a DataFrame (needs pandas): time [s], then every joint's coordinates (SI)."""
         return tables.to_pandas(self.series())
@@ -375,12 +379,4 @@ def run_model(
         columns=columns,
         measures=measures(model, trajectory),
         trajectory=trajectory,
-    )
-
-
-def write_model_run(directory: str | os.PathLike[str], run: ModelRun, every: int = 1) -> list[pathlib.Path]:
-    """Write a model file's run as DIR/trajectory.csv (every `every`-th step, full precision) and DIR/summary.json."""
-    return write_text_files(
-        directory,
-        {"trajectory.csv": csv_text(run.series(), every), "summary.json": dumps(run.to_dict()) + "\n"},
     )

@@ -15,7 +15,7 @@ import numpy as np
 
 from springlab import display, tables
 from springlab.answer import Answer
-from springlab.files import json_ready
+from springlab.files import Output, csv_text, json_ready
 from springlab.scenes.base import Case, Check
 from springlab.sim.simulate import Trajectory
 
@@ -276,6 +276,22 @@ class Result(display.Shown):
         tolerance_basis, passed, verdict, estimate_range, checks, model_limits, grid_notes (see docs/runs.md).
         """
         return json_ready(self._facts())
+
+    def outputs(self, every: int = 1) -> tuple[Output, ...]:
+        """The files `springlab run --output DIR` writes (springlab.outputs.write): trajectory.csv and summary.json.
+
+        Parameters
+        ----------
+        every
+            keep every `every`-th step in trajectory.csv (the last always), as `--record-every`.
+
+        The time column is k dt [s] for step k, exactly: the state after k steps is the state at k dt
+        (MuJoCo's data.time accumulates dt and drifts by rounding).
+        """
+        return (
+            Output("trajectory.csv", csv_text(self._csv_columns(), every)),
+            Output.json("summary.json", self.to_dict()),
+        )
 
     def columns(self) -> dict[str, np.ndarray]:
         """The series in trajectory.csv's order: time (MuJoCo's clock), <joint>_pos/_vel, then the references."""

@@ -26,8 +26,6 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import math
-import os
-import pathlib
 from collections.abc import Iterator
 from typing import Any
 
@@ -36,7 +34,6 @@ import numpy as np
 from springlab import scenes
 from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError, ParameterError, SpringlabError
-from springlab.files import csv_text, dumps, write_text_files
 from springlab.scenes.base import Case, Check, Scenario, Scene
 from springlab.sim.simulate import (
     INTEGRATORS,
@@ -61,7 +58,6 @@ __all__ = [
     "prepare",
     "run_scenario",
     "scene_and_scenario",
-    "write_run",
 ]
 
 #: a run whose error exceeds this many times its signal has blown up, flagged or not
@@ -386,21 +382,6 @@ def exact_scenarios(scene_names: list[str] | None = None) -> list[tuple[Scene, S
         scene = scenes.get(name)
         pairs.extend((scene, scenario) for scenario in scene.scenarios.values() if scenario.exact)
     return pairs
-
-
-def write_run(directory: str | os.PathLike, result: Result, every: int = 1) -> list[pathlib.Path]:
-    """Write a Result's trajectory.csv and summary.json into `directory`.
-
-    The time column is k dt [s] for step k, exactly: the state after k steps is
-    the state at k dt (MuJoCo's data.time accumulates dt and drifts by rounding).
-    """
-    return write_text_files(
-        directory,
-        {
-            "trajectory.csv": csv_text(result._csv_columns(), every),
-            "summary.json": dumps(result.to_dict()) + "\n",
-        },
-    )
 
 
 def scene_and_scenario(result: Result) -> tuple[Scene, Scenario]:

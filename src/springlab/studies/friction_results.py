@@ -11,9 +11,11 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from springlab import display, tables
 from springlab.answer import Answer
-from springlab.files import json_ready
+from springlab.files import Output, json_ready, number_text
 from springlab.scenes.capabilities.friction import FrictionMeasure, SolverSetting
 
 from . import answers
@@ -612,6 +614,18 @@ class FrictionSettings(display.Shown):
             }
         )
 
+    def outputs(self) -> tuple[Output, ...]:
+        """The files `springlab friction-settings --output DIR` writes (springlab.outputs.write):
+        friction_settings.json, friction_settings.csv (one row per run, `SettingRun.row()`) and friction_settings.png."""
+        rows = [r.row() for case in self.cases for r in case.runs]
+        names = list(dict.fromkeys(name for row in rows for name in row))
+        lines = [",".join(names)] + [",".join(_csv_cell(row.get(name)) for name in names) for row in rows]
+        return (
+            Output.json("friction_settings.json", self.to_dict()),
+            Output("friction_settings.csv", "\n".join(lines) + "\n"),
+            Output("friction_settings.png"),
+        )
+
     def to_pandas(self) -> pandas.DataFrame:
         """One row per run of every case: settings, integrator, dt, steps, wall time, errors (needs pandas)."""
         return tables.to_pandas([r.row() for c in self.cases for r in c.runs])
@@ -640,3 +654,14 @@ def _pick_dict(pick: Recommendation[SettingRun]) -> dict[str, Any]:
     out["run"] = None if pick.row is None else pick.row.to_dict()
     out["floor"] = "" if pick.found else pick.text
     return json_ready(out)
+
+
+def _csv_cell(value: Any) -> str:
+    """friction_settings.csv's text of a value: empty for None, true/false, floats in their shortest exact form."""
+    if value is None:
+        return ""
+    if isinstance(value, (bool, np.bool_)):
+        return str(bool(value)).lower()
+    if isinstance(value, (float, np.floating)):  # np.float64's own repr is `np.float64(0.1)` under numpy 2
+        return number_text(value)
+    return str(value)

@@ -40,6 +40,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from springlab import display
 from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError, UnknownNameError
 from springlab.exact.operating_point import operating_point
@@ -447,6 +448,18 @@ def _configurations(
 class ModelSweep(Sweep):
     """A model file's sweep: a `Sweep` whose `scene` is the file and `scenario` the start, whose rows are measured,
     never validated (`passed` None), and whose answer says so."""
+
+    def _shown(self) -> display.Summary:
+        """The sweep as a notebook shows it: no verdict (nothing validated), the counts, the setting, the rows."""
+        shown = super()._shown()
+        return dataclasses.replace(
+            shown,
+            kind="ModelSweep",
+            title=f"{self.scene} from {self.scenario}",
+            verdict="not validated",
+            ok=None,
+            message=f"{self.size} configurations measured, {self.diverged} diverged (a model file has no exact solution)",
+        )
 
     @property
     def headline(self) -> str | None:

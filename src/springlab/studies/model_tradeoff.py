@@ -33,7 +33,7 @@ from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError
 from springlab.exact.model_at_point import ModelAtPoint
 from springlab.exact.operating_point import operating_point
-from springlab.files import json_ready
+from springlab.files import Output, json_ready
 from springlab.runs import compare
 from springlab.runs.model_run import DEFAULT_DURATION, integrator_name
 from springlab.sim import model_files
@@ -196,13 +196,18 @@ class ModelTradeoff(display.Shown):
             }
         )
 
+    def outputs(self) -> tuple[Output, ...]:
+        """The files `springlab tradeoff MODEL.xml --output DIR` writes (springlab.outputs.write): tradeoff.json,
+        tradeoff.png."""
+        return Output.json("tradeoff.json", self.to_dict()), Output("tradeoff.png")
+
     def _shown(self) -> display.Summary:
         """The study as a notebook shows it: the reference, the own setting, the pick."""
         pick = self.recommendation
         return display.Summary(
             "ModelTradeoff",
             f"{self.model} from {self.start}",
-            None if pick is None else ("meets tol" if pick.found else "no setting meets tol"),
+            "not validated" if pick is None else ("meets tol" if pick.found else "no setting meets tol"),
             None if pick is None else pick.found,
             REFERENCE_NOTE,
             (

@@ -33,7 +33,7 @@ from springlab import display, scenes, tables
 from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError
 from springlab.exact import random_vibration as rv
-from springlab.files import json_ready
+from springlab.files import Output, csv_text, json_ready
 from springlab.scenes.base import Scene
 from springlab.scenes.capabilities.random_load import RandomLoadSpec
 from springlab.scenes.declarations import keyword_parameters, refuse_text
@@ -336,6 +336,17 @@ class Ensemble(display.Shown):
                 "executor": self.executor,
             }
         )
+
+    def outputs(self) -> tuple[Output, ...]:
+        """The files `springlab rms --output DIR` writes (springlab.outputs.write): rms.json, rms.csv (one row
+        per record: seed, rms, inside) and rms.png."""
+        rows = self.rows_shown()
+        columns = {
+            "seed": np.array([r[0] for r in rows], float),
+            "rms": np.array([r[1] for r in rows]),
+            "inside": np.array([float(r[2]) for r in rows]),
+        }
+        return Output.json("rms.json", self.to_dict()), Output("rms.csv", csv_text(columns)), Output("rms.png")
 
     def to_pandas(self) -> pandas.DataFrame:
         """One row per record: seed, rms, inside."""

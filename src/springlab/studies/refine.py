@@ -37,7 +37,7 @@ import numpy as np
 from springlab import display, scenes, tables
 from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError
-from springlab.files import json_ready
+from springlab.files import Output, json_ready
 from springlab.runs import compare
 from springlab.runs.run import run_scenario
 from springlab.scenes.base import Scene
@@ -388,6 +388,10 @@ class Refinement(display.Shown):
                 "sweep_wall_time_s": self.sweep_wall_time_s,
             }
         )
+
+    def outputs(self) -> tuple[Output, ...]:
+        """The files `springlab refine --output DIR` writes (springlab.outputs.write): refine.json, refine.png."""
+        return Output.json("refine.json", self.to_dict()), Output("refine.png")
 
     def to_pandas(self) -> pandas.DataFrame:
         """One row per run: refine.json's `runs` columns plus `pareto` (on the front) (needs pandas)."""

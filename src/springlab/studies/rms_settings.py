@@ -31,7 +31,7 @@ from springlab import display, tables
 from springlab.answer import Answer
 from springlab.errors import BadInputError
 from springlab.exact import random_vibration as rv
-from springlab.files import json_ready
+from springlab.files import Output, json_ready
 from springlab.scenes.base import Case, Scene
 from springlab.scenes.declarations import keyword_parameters, refuse_text
 from springlab.sim.simulate import INTEGRATORS, check_timing, integrator_id
@@ -241,6 +241,11 @@ class RmsSettings(display.Shown):
                 "recommendation": self.recommendation.to_dict(),
             }
         )
+
+    def outputs(self) -> tuple[Output, ...]:
+        """The files `springlab rms --settings --output DIR` writes (springlab.outputs.write): rms_settings.json,
+        rms_settings.png."""
+        return Output.json("rms_settings.json", self.to_dict()), Output("rms_settings.png")
 
     def to_pandas(self) -> pandas.DataFrame:
         """One row per setting."""

@@ -43,6 +43,7 @@ from springlab import display, tables
 from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError
 from springlab.exact.limits import stability_limit
+from springlab.files import Output
 from springlab.sim.batch import RECORD_SPEC, run_batched
 from springlab.sim.simulate import BAD_WARNINGS, INTEGRATORS, integrator_id, quiet_mujoco
 
@@ -677,6 +678,11 @@ class StabilityReport(display.Shown):
             "accuracy_threshold": self.accuracy_threshold,
             "wall_time_s": self.wall_time_s,
         }
+
+    def outputs(self) -> tuple[Output, ...]:
+        """The files `springlab stability --output DIR` writes (springlab.outputs.write): stability.json,
+        stability.png (the amplification map, given to the writer) and energy.png."""
+        return Output.json("stability.json", self.to_dict()), Output("stability.png"), Output("energy.png")
 
     def to_pandas(self, table: StabilityTable = "boundaries") -> pandas.DataFrame:
         """One of the report's tables as a DataFrame, a row per entry of `to_dict()[table]` (pandas is optional).

@@ -28,7 +28,7 @@ import numpy as np
 from springlab import display, scenes, tables
 from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError, UnknownNameError
-from springlab.files import json_ready
+from springlab.files import Output, json_ready, rows_text
 from springlab.runs.compare import Verdict
 from springlab.runs.run import Result, evaluate, prepare
 from springlab.scenes.base import Case
@@ -427,6 +427,11 @@ class Sweep(display.Shown):
                 "rows": [row.to_dict() for row in self.rows],
             }
         )
+
+    def outputs(self) -> tuple[Output, ...]:
+        """The files `springlab sweep --output DIR` writes (springlab.outputs.write): sweep.csv (header, then one
+        row per configuration, numbers in their shortest exact form) and sweep.png (its quantity given to the writer)."""
+        return Output("sweep.csv", rows_text(*self.table())), Output("sweep.png")
 
     def to_pandas(self) -> pandas.DataFrame:
         """sweep.csv as a DataFrame, one row per configuration: varied parameters, quantities,

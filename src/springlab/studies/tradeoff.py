@@ -25,7 +25,7 @@ import numpy as np
 from springlab import display, scenes, tables
 from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError
-from springlab.files import json_ready
+from springlab.files import Output, json_ready
 from springlab.runs import compare
 from springlab.runs.compare import Verdict
 from springlab.runs.run import evaluate, run_scenario
@@ -285,6 +285,10 @@ class Tradeoff(display.Shown):
                 "sweep_wall_time_s": self.sweep_wall_time_s,
             }
         )
+
+    def outputs(self) -> tuple[Output, ...]:
+        """The files `springlab tradeoff --output DIR` writes (springlab.outputs.write): tradeoff.json, tradeoff.png."""
+        return Output.json("tradeoff.json", self.to_dict()), Output("tradeoff.png")
 
     def to_pandas(self) -> pandas.DataFrame:
         """One row per run: tradeoff.json's `runs` columns plus `pareto` (on the Pareto front) (needs pandas)."""

@@ -7,10 +7,10 @@ import math
 
 import numpy as np
 
+from springlab import outputs
 from springlab.cli import options
 from springlab.cli import text as cli_text
 from springlab.errors import BadInputError, ExitCode
-from springlab.plots import audit as charts_audit
 from springlab.sim.simulate import INTEGRATORS
 from springlab.studies.audit.audit import audit as run_audit
 from springlab.studies.audit.options import DEFAULT_PERTURB, DEFAULT_TOL
@@ -100,7 +100,7 @@ def main(args: argparse.Namespace) -> int:
             executor=executor,
         )
     if args.output:
-        charts_audit.write_audit(result, args.output)
+        outputs.write(result, args.output)
     if args.json:
         options.print_json(result.to_dict())
     else:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import pathlib
 
 from springlab import scenes
 from springlab.cli import options
@@ -54,9 +53,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    from springlab.plots import (
-        design as design_chart,  # here, not at the top: mujoco.batch is only needed by this command
-    )
+    from springlab import outputs  # here, not at the top: mujoco.batch is only needed by this command
     from springlab.studies.design import study as design
 
     options.check_output(args)
@@ -78,10 +75,7 @@ def main(args: argparse.Namespace) -> int:
             **overrides,
         )
     if args.output:
-        design.write(study, args.output)
-        design_chart.plot(study, pathlib.Path(args.output) / "design.png")
-        if study.sobol is not None:
-            design_chart.plot_sobol(study.sobol, pathlib.Path(args.output) / "sobol.png")
+        outputs.write(study, args.output)
     if args.json:
         options.print_json(study.to_dict())
     else:

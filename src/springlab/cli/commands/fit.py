@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import pathlib
 
 from springlab import scenes
 from springlab.cli import options
@@ -73,9 +72,9 @@ def _free(items: list[str]) -> list[str] | None:
 def main(args: argparse.Namespace) -> int:
     # here, not at the top: mujoco.sysid and scipy load only for fits; `from .fit import`, because
     # springlab.fit (the attribute) is the function once springlab/__init__ has run
-    from springlab.plots.fit import plot_fit
+    from springlab import outputs
     from springlab.studies.fit import data as fit_data
-    from springlab.studies.fit.fit import fit, write
+    from springlab.studies.fit.fit import fit
 
     options.check_output(args)
     with options.executor(args) as executor:
@@ -95,8 +94,7 @@ def main(args: argparse.Namespace) -> int:
             **options.parse_sets(args.set),
         )
     if args.output:
-        write(result, args.output)
-        plot_fit(result, pathlib.Path(args.output) / "fit.png")
+        outputs.write(result, args.output)
     if args.json:
         options.print_json(result.to_dict())
     else:

@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import argparse
 
+from springlab import outputs
 from springlab.cli import options
 from springlab.cli import text as cli_text
 from springlab.errors import BadInputError, ExitCode
-from springlab.plots import frequency as charts_frequency
 from springlab.sim.simulate import INTEGRATORS
 from springlab.studies.frequency import DEFAULT_POINTS
 from springlab.studies.frequency import DEFAULT_TOL as FREQUENCY_TOL
@@ -112,7 +112,7 @@ def main(args: argparse.Namespace) -> int:
             **options.parse_sets(args.set),
         )
     if args.output:
-        charts_frequency.write_frequency(result, args.output)
+        outputs.write(result, args.output)
     if args.json:
         options.print_json(result.to_dict())
     else:

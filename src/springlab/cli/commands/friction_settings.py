@@ -56,7 +56,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    from springlab.plots import friction_settings as friction_chart  # matplotlib only for this command
+    from springlab import outputs  # matplotlib only for this command
     from springlab.studies import friction_hold, friction_settings
 
     options.check_output(args)
@@ -87,7 +87,7 @@ def main(args: argparse.Namespace) -> int:
                 **options.parse_sets(args.set),
             )
     if args.output:
-        friction_chart.write(study, args.output)
+        outputs.write(study, args.output)
     if args.json:
         options.print_json(study.to_dict())
     else:

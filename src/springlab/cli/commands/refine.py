@@ -34,7 +34,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def main(args: argparse.Namespace) -> int:
     """How much model a question needs: model size x integrator x timestep (springlab.studies.refine)."""
-    from springlab.plots import refine as refine_chart  # matplotlib only when this command draws
+    from springlab import outputs  # matplotlib only when this command draws
     from springlab.studies import refine
 
     options.check_output(args)
@@ -57,7 +57,7 @@ def main(args: argparse.Namespace) -> int:
             **options.parse_sets(args.set),
         )
     if args.output:
-        refine_chart.write_refine(result, args.output)
+        outputs.write(result, args.output)
     if args.json:
         options.print_json(result.to_dict())
     else:

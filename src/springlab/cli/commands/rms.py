@@ -80,9 +80,9 @@ def main(args: argparse.Namespace) -> int:
             **parameters,
         )
     if args.output:
-        from springlab.plots import random_load as chart  # matplotlib only when this command draws
+        from springlab import outputs  # matplotlib only when this command draws
 
-        chart.write_ensemble(result, args.output)
+        outputs.write(result, args.output)
     if args.json:
         options.print_json(result.to_dict())
     else:
@@ -100,9 +100,9 @@ def main(args: argparse.Namespace) -> int:
 def _report_settings(study: RmsSettings, args: argparse.Namespace) -> int:
     """Write, print and judge the settings study: exit 1 when no setting met tol."""
     if args.output:
-        from springlab.plots import random_load as chart  # matplotlib only when this command draws
+        from springlab import outputs  # matplotlib only when this command draws
 
-        chart.write_settings(study, args.output)
+        outputs.write(study, args.output)
     if args.json:
         options.print_json(study.to_dict())
     else:

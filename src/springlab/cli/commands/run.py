@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import argparse
 
+from springlab import outputs
 from springlab.cli import model_text, options
 from springlab.cli import text as cli_text
 from springlab.errors import BadInputError, ExitCode
-from springlab.runs.run import write_run
 from springlab.sim import model_files
 
 NAME = "run"
@@ -36,7 +36,7 @@ def main(args: argparse.Namespace) -> int:
         raise BadInputError(f"--keyframe applies to a model file (MODEL.xml), not to the scene {args.scene!r}")
     result = options.run(args)
     if args.output:
-        write_run(args.output, result, every=args.record_every)
+        outputs.write(result, args.output, every=args.record_every)
     if args.json:
         options.print_json(result.to_dict())
     else:
@@ -47,13 +47,13 @@ def main(args: argparse.Namespace) -> int:
 
 def _model_file(args: argparse.Namespace) -> int:
     """`run MODEL.xml`: the model's motion from its keyframe, written and shown, never validated (exit 0)."""
-    from springlab.runs.model_run import run_model, write_model_run
+    from springlab.runs.model_run import run_model
 
     options.refuse_scene_options(args, "scenario", "set", "tol")
     options.check_output(args)
     run = run_model(args.scene, keyframe=args.keyframe, integrator=args.integrator, dt=args.dt, duration=args.duration)
     if args.output:
-        write_model_run(args.output, run, every=args.record_every)
+        outputs.write(run, args.output, every=args.record_every)
     if args.json:
         options.print_json(run.to_dict())
     else:

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import argparse
 
+from springlab import outputs
 from springlab.cli import options
 from springlab.cli import text as cli_text
 from springlab.errors import ExitCode
-from springlab.plots import charts
 from springlab.studies import stability
 
 NAME = "stability"
@@ -32,7 +32,7 @@ def main(args: argparse.Namespace) -> int:
         amplification = stability.amplification_map(executor=executor) if args.output else None
     if args.output:
         assert amplification is not None  # computed above whenever there is an output folder
-        charts.write_stability(report, amplification, args.output)
+        outputs.write(report, args.output, amplification=amplification)
     if args.json:
         options.print_json(report.to_dict())
     else:

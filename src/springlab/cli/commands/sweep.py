@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 
+from springlab import outputs
 from springlab.cli import model_text, options
 from springlab.cli import text as cli_text
 from springlab.errors import BadInputError, ExitCode
@@ -56,7 +57,6 @@ def _vary(texts: list[str]) -> dict[str, tuple[float, float, int | None] | tuple
 
 
 def main(args: argparse.Namespace) -> int:
-    from springlab.plots import sweep as sweep_plot
     from springlab.studies import sweeps
 
     if model_files.is_model_file(args.scene):
@@ -78,7 +78,7 @@ def main(args: argparse.Namespace) -> int:
             **options.parse_sets(args.set),
         )
     if args.output:
-        sweep_plot.write(result, args.output, args.quantity)
+        outputs.write(result, args.output, quantity=args.quantity)
     if args.json:
         options.print_json(result.to_dict())
         return ExitCode.OK
@@ -88,7 +88,6 @@ def main(args: argparse.Namespace) -> int:
 
 def _model_file(args: argparse.Namespace) -> int:
     """`sweep MODEL.xml`: its options and named attributes over the grid, each row what `run MODEL.xml` measures."""
-    from springlab.plots import sweep as sweep_plot
     from springlab.studies.model_sweep import default_quantity, model_sweep
 
     options.refuse_scene_options(args, "scenario", "set")
@@ -110,7 +109,7 @@ def _model_file(args: argparse.Namespace) -> int:
     if quantity not in known:
         raise BadInputError(f"unknown --quantity {quantity!r}; valid: {', '.join(known)}")
     if args.output:
-        sweep_plot.write(result, args.output, quantity)
+        outputs.write(result, args.output, quantity=quantity)
     if args.json:
         options.print_json(result.to_dict())
         return ExitCode.OK

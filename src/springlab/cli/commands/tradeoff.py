@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import argparse
 
+from springlab import outputs
 from springlab.cli import model_text, options
 from springlab.cli import text as cli_text
 from springlab.errors import BadInputError, ExitCode
-from springlab.plots import charts
 from springlab.sim import model_files
 from springlab.studies import tradeoff
 
@@ -55,7 +55,7 @@ def main(args: argparse.Namespace) -> int:
             **options.parse_sets(args.set),
         )
     if args.output:
-        charts.write_tradeoff(result, args.output)
+        outputs.write(result, args.output)
     if args.json:
         options.print_json(result.to_dict())
     else:
@@ -66,7 +66,6 @@ def main(args: argparse.Namespace) -> int:
 
 def _model_file(args: argparse.Namespace) -> int:
     """`tradeoff MODEL.xml`: every integrator and timestep against a converged run of the same model."""
-    from springlab.plots.model_tradeoff import write_model_tradeoff
     from springlab.studies.model_tradeoff import model_tradeoff
 
     options.refuse_scene_options(args, "scenario", "set")
@@ -82,7 +81,7 @@ def _model_file(args: argparse.Namespace) -> int:
             executor=executor,
         )
     if args.output:
-        write_model_tradeoff(result, args.output)
+        outputs.write(result, args.output)
     if args.json:
         options.print_json(result.to_dict())
     else:

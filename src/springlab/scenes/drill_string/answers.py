@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import hashlib
 import math
 from typing import Any
 
@@ -257,6 +258,28 @@ def continuum_peak(rod: continuum.Rod, drive: Drive, time: np.ndarray) -> float:
     """The largest |speed| [rad/s] of the continuum's free bit over `time` [s]: the modal series of CONTINUUM_MODES
     modes searched on the run's steps, its best refined by a bounded Brent search between the neighbouring steps
     (the series' value to round-off; it differs from the rod's by at most `modal_tail_bound`)."""
+
+    times = np.ascontiguousarray(time, dtype=float)
+    key = (
+        rod,
+        float(drive.acceleration),
+        float(drive.ramp_time),
+        times.shape,
+        hashlib.blake2b(times.tobytes()).digest(),
+    )
+    if key not in _CONTINUUM_PEAKS:  # the same rod and run grid: the same peak (kept for the next verdict)
+        if len(_CONTINUUM_PEAKS) >= 8:
+            _CONTINUUM_PEAKS.pop(next(iter(_CONTINUUM_PEAKS)))
+        _CONTINUUM_PEAKS[key] = _continuum_peak(rod, drive, times)
+    return _CONTINUUM_PEAKS[key]
+
+
+#: the last few `continuum_peak` answers, by rod, drive and run grid
+_CONTINUUM_PEAKS: dict[tuple, float] = {}
+
+
+def _continuum_peak(rod: continuum.Rod, drive: Drive, time: np.ndarray) -> float:
+    """`continuum_peak` computed."""
 
     def speed(t: np.ndarray) -> np.ndarray:
         _, w = rod.modal_spin_up(t, rod.length, drive.acceleration, drive.ramp_time, CONTINUUM_MODES)

@@ -230,6 +230,8 @@ class Rod:
         t = np.ascontiguousarray(time, dtype=float)
         digest = hashlib.blake2b(t.tobytes(), digest_size=16).digest()
         key = (self, digest, t.shape, float(x), float(acceleration), float(ramp_time), int(modes))
+        if t.size < 64:  # a point of a search: cheap, and kept it would push the long series out
+            return self._modal_spin_up(t, float(x), float(acceleration), float(ramp_time), int(modes))
         if key not in _SPIN_UPS:
             _SPIN_UPS[key] = self._modal_spin_up(t, float(x), float(acceleration), float(ramp_time), int(modes))
             while len(_SPIN_UPS) > 8:

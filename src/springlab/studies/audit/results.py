@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 from springlab import display, tables
 from springlab.answer import Answer
 from springlab.exact.linearize import Linearization
+from springlab.files import Output
 from springlab.sim.simulate import Setup
 from springlab.studies import answers
 from springlab.studies.settings import COST_BASIS, Recommendation, Run
@@ -235,6 +236,10 @@ class Audit(display.Shown):
             "cost_basis": COST_BASIS,
             "timings_s": self.timings.to_dict(),
         }
+
+    def outputs(self) -> tuple[Output, ...]:
+        """The files `springlab audit --output DIR` writes (springlab.outputs.write): audit.json, audit.png."""
+        return Output.json("audit.json", self.to_dict()), Output("audit.png")
 
     def to_pandas(self) -> pandas.DataFrame:
         """The sweep as a DataFrame, one row per (integrator, dt): the rows of `to_dict()["sweep"]`

@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import pathlib
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
@@ -46,6 +45,7 @@ import numpy as np
 from springlab import display, files, tables
 from springlab.answer import Answer
 from springlab.errors import BadInputError
+from springlab.files import Output
 from springlab.scenes.base import Scene
 from springlab.scenes.capabilities.design import DesignSpec
 from springlab.scenes.declarations import keyword_parameters
@@ -74,7 +74,6 @@ __all__ = [
     "design_scenes",
     "make_grids",
     "run_study",
-    "write",
 ]
 
 #: default grid points per property (7^4 = 2401 configurations of the printer head)
@@ -370,6 +369,16 @@ class Study(display.Shown):
             },
         )
 
+    def outputs(self) -> tuple[Output, ...]:
+        """The files `springlab design --output DIR` writes (springlab.outputs.write): design.json (`to_dict()`,
+        with `sobol` where the study has it), configurations.csv, design.png and, with a Sobol study, sobol.png."""
+        written = (
+            Output.json("design.json", self.to_dict()),
+            Output("configurations.csv", files.csv_text(self.columns)),
+            Output("design.png"),
+        )
+        return written if self.sobol is None else (*written, Output("sobol.png"))
+
     def _facts(self) -> dict[str, Any]:
         """to_dict's entries before JSON (an unsettled time still inf), for the answer's words."""
         names = self.design.names
@@ -615,16 +624,3 @@ def _regression(
 
 
 # -- files ---------------------------------------------------------------------------------
-
-
-def write(study: Study, directory: str | pathlib.Path) -> list[pathlib.Path]:
-    """Write design.json (`study.to_dict()`, with `sobol` where the study has it) and configurations.csv
-    into `directory`; the chart, design.png, is springlab.plots.design.plot's (the caller draws it)."""
-    folder = files.prepare_directory(directory)
-    return files.write_text_files(
-        folder,
-        {
-            "design.json": files.dumps(study.to_dict()) + "\n",
-            "configurations.csv": files.csv_text(study.columns),
-        },
-    )

@@ -15,8 +15,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import os
-import pathlib
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -546,14 +544,3 @@ def _scene_run(
     except SpringlabError as error:
         return None, f"the identified scene could not be run: {error}"
     return run, note
-
-
-def write(result: FitResult, directory: str | os.PathLike) -> list[pathlib.Path]:
-    """Write fit.json and the identified scene's trajectory.csv / summary.json into `directory` (all or none)."""
-    from springlab import files
-
-    texts = {"fit.json": files.dumps(result.to_dict()) + "\n"}
-    if result.run is not None:
-        texts["trajectory.csv"] = files.csv_text(result.run.columns())
-        texts["summary.json"] = files.dumps(result.run.to_dict()) + "\n"
-    return files.write_text_files(directory, texts)

@@ -20,6 +20,7 @@ import numpy as np
 from springlab import display, files, tables
 from springlab.answer import Answer
 from springlab.exact import analytic
+from springlab.files import Output
 from springlab.runs import compare
 from springlab.studies import answers
 
@@ -247,6 +248,15 @@ class FitResult(display.Shown):
                 "verdict": self.verdict,
             }
         )
+
+    def outputs(self) -> tuple[Output, ...]:
+        """The files `springlab fit --output DIR` writes (springlab.outputs.write): fit.json, the identified
+        scene's run as trajectory.csv (MuJoCo's clock) and summary.json where there is one, and fit.png."""
+        written = [Output.json("fit.json", self.to_dict())]
+        if self.run is not None:
+            written.append(Output("trajectory.csv", files.csv_text(self.run.columns())))
+            written.append(Output.json("summary.json", self.run.to_dict()))
+        return (*written, Output("fit.png"))
 
     def to_pandas(self) -> pandas.DataFrame:
         """The estimates, one row per fitted name: `name`, `value`, `ci95_low`, `ci95_high`, `unit` (pandas optional)."""

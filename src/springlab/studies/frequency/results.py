@@ -13,6 +13,7 @@ import numpy as np
 from springlab import display, tables
 from springlab.answer import Answer
 from springlab.exact.harmonic_balance import Duffing
+from springlab.files import Output, csv_text
 from springlab.studies import answers
 
 if TYPE_CHECKING:
@@ -540,6 +541,14 @@ class FrequencyResponse(display.Shown):
             "warnings": list(self.warnings),
             "wall_time_s": self.wall_time_s,
         }
+
+    def outputs(self) -> tuple[Output, ...]:
+        """The files `springlab frequency --output DIR` writes (springlab.outputs.write): frequency.json,
+        frequency.csv (`rows()`), sinestream.csv (`sweep_rows()`, after a sinestream or a sweep) and bode.png."""
+        written = [Output.json("frequency.json", self.to_dict()), Output("frequency.csv", csv_text(self.rows()))]
+        if self.sinestreams or self.sweeps:
+            written.append(Output("sinestream.csv", csv_text(self.sweep_rows())))
+        return (*written, Output("bode.png"))
 
     def to_pandas(self) -> pandas.DataFrame:
         """The rows of frequency.csv as a DataFrame (needs pandas)."""
