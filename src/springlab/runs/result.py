@@ -280,13 +280,13 @@ class Result(display.Shown):
     def outputs(self, every: int = 1) -> tuple[Output, ...]:
         """The files `springlab run --output DIR` writes (springlab.outputs.write): trajectory.csv and summary.json.
 
+        The time column is k dt [s] for step k, exactly: the state after k steps is the state at k dt
+        (MuJoCo's data.time accumulates dt and drifts by rounding).
+
         Parameters
         ----------
         every
             keep every `every`-th step in trajectory.csv (the last always), as `--record-every`.
-
-        The time column is k dt [s] for step k, exactly: the state after k steps is the state at k dt
-        (MuJoCo's data.time accumulates dt and drifts by rounding).
         """
         return (
             Output("trajectory.csv", csv_text(self._csv_columns(), every)),
