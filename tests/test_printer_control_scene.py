@@ -14,7 +14,6 @@ import math
 import subprocess
 import sys
 
-import mujoco
 import numpy as np
 import pytest
 import scipy.integrate
@@ -25,31 +24,13 @@ import springlab.sim.model_files
 from springlab.exact import sampled_loop
 from test_printer_feedback import PERIOD, REFERENCE, SUBSTEPS, _rk4_loop_bound
 from test_printer_feedback import _reference_loop as _feedback_reference_loop
+from test_printer_shaping import BAND, DISTANCE, F_N, FORCE, M_C, M_M, MU, OMEGA, TOTAL, ZETA, C, K
 
 EPS = np.finfo(float).eps
 DT = 1e-4
 
 
-def _defaults():
-    """(m_c, m_m, k, c, drive force, move distance, band) read from the shipped MJCF."""
-    model = mujoco.MjModel.from_xml_path(str(springlab.sim.model_files.path("printer_head")))
-    belt = model.tendon("belt").id
-    return (
-        float(model.body("carriage").mass[0]),
-        float(model.body("motor").mass[0]),
-        float(model.tendon_stiffness[belt]),
-        float(model.tendon_damping[belt]),
-        float(model.actuator("drive").ctrlrange[1]),
-        float(model.numeric("move_distance").data[0]),
-        float(model.numeric("positioning_band").data[0]),
-    )
-
-
-M_C, M_M, K, C, FORCE, DISTANCE, BAND = _defaults()
-TOTAL, MU = M_C + M_M, M_C * M_M / (M_C + M_M)
-OMEGA = math.sqrt(K / MU)
-ZETA = C / (2 * math.sqrt(K * MU))
-F_N = OMEGA / (2 * math.pi)
+# the belt's constants as the shaping tests read them from the shipped MJCF (one reading for both files)
 
 
 def _plant(stiffness=K, damping=C):
