@@ -63,7 +63,7 @@ def scenario_run():
 @pytest.fixture(scope="session")
 def default_design_study():
     """The printer head's design study on its default grid (7^4 = 2401 configurations, no plane): computed
-    once per test run and read by tests/test_design.py and test_printer_head_settling.py (10-25 s)."""
+    once per test run and read by tests/studies/design/test_design.py and test_printer_head_settling.py (10-25 s)."""
     from springlab.studies.design import run_study
 
     return run_study("printer_head", plane_levels=0)
@@ -73,7 +73,7 @@ def default_design_study():
 def small_design_study():
     """The printer head's design study on 3^4 = 81 configurations (the grid's corners and centre), with a
     9 x 9 plane and Sobol indices from N = 8 base samples: computed once per test run (its readers share one
-    xdist group, below) and read by tests/test_design.py, test_sobol.py and test_executor.py."""
+    xdist group, below) and read by tests/studies/design/test_design.py, test_sobol.py and test_executor.py."""
     from springlab.studies.design import run_study
 
     return run_study("printer_head", levels=3, plane_levels=9, sobol=8)

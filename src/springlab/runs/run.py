@@ -87,7 +87,7 @@ def run_scenario(
     dt: float | None = None,
     duration: float | None = None,
     tol: float | None = None,
-    **parameters: Any,
+    **parameters: float,
 ) -> Result:
     """Simulate a scenario headless in MuJoCo and compare it with its exact solution.
 
