@@ -95,7 +95,7 @@ def results(stability_report, shipped_audit):
             "stay_cable", tol=0.5, integrators=("implicitfast",), seed_counts=(1,), record=20.0, sizes=(9,)
         ),
         # a model file's sweep and trade-off (tests/data/pinch_gripper.xml: the box falls freely from 'open')
-        "ModelSweep": model_sweep(PINCH, keyframe="open", vary=["opt.timestep=0.001:0.004:4"], duration=0.2),
+        "ModelSweep": model_sweep(PINCH, keyframe="open", vary={"opt.timestep": (0.001, 0.004, 4)}, duration=0.2),
         "ModelTradeoff": model_tradeoff(PINCH, keyframe="open", duration=0.2, integrators=["euler", "rk4"]),
     }
     assert {type(r).__name__ for r in built.values()} == set(built)

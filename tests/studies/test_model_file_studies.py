@@ -56,7 +56,9 @@ def _box_excursions(model: mujoco.MjModel, steps: int, key: int) -> float:
 
 def test_sweep_rows_equal_plain_mj_step_loops_with_the_option_and_the_attribute_set():
     duration = 0.2
-    sweep = model_sweep(GRIPPER, vary=["opt.impratio=1:10:2", "joint.left.damping=0.5:2:2"], duration=duration)
+    sweep = model_sweep(
+        GRIPPER, vary={"opt.impratio": (1.0, 10.0, 2), "joint.left.damping": (0.5, 2.0, 2)}, duration=duration
+    )
     assert sweep.size == 4 and sweep.diverged == 0 and sweep.scenario == "keyframe 'squeeze'"
     for i, row in enumerate(sweep.rows):
         model = mujoco.MjModel.from_xml_path(str(GRIPPER))
@@ -69,7 +71,7 @@ def test_sweep_rows_equal_plain_mj_step_loops_with_the_option_and_the_attribute_
 
 def test_free_fall_over_each_timestep_is_eulers_closed_form():
     duration = 0.12
-    sweep = model_sweep(GRIPPER, keyframe="open", vary=["opt.timestep=0.001:0.004:4"], duration=duration)
+    sweep = model_sweep(GRIPPER, keyframe="open", vary={"opt.timestep": (0.001, 0.004, 4)}, duration=duration)
     for dt, row in zip(sweep.values["opt.timestep"], sweep.rows):
         n = round(duration / dt)
         # MuJoCo's Euler updates the velocity first: z_n = z0 - g dt^2 n (n + 1) / 2
@@ -82,7 +84,7 @@ def test_a_heavier_box_falls_as_fast_and_a_named_integrator_is_its_closed_form()
     sweep = model_sweep(
         GRIPPER,
         keyframe="open",
-        vary=["body.box.mass=0.1:10:3:log", "opt.integrator=rk4,euler"],
+        vary={"body.box.mass": (0.1, 10.0, 3, "log"), "opt.integrator": ("rk4", "euler")},
         duration=duration,
         dt=1e-3,
     )
@@ -277,7 +279,7 @@ def test_frequency_of_a_smooth_scene_at_rest_has_no_warnings(capsys):
 def test_a_model_sweep_on_two_dask_workers_equals_the_local_one():
     from springlab.studies.executor import Executor
 
-    vary = ["opt.impratio=1:10:3", "joint.left.damping=0.5:2:2"]
+    vary = {"opt.impratio": (1.0, 10.0, 3), "joint.left.damping": (0.5, 2.0, 2)}
     local = model_sweep(GRIPPER, vary=vary, duration=0.1, chunk_size=2)
     with Executor(workers=2, progress=False) as executor:
         shipped = model_sweep(GRIPPER, vary=vary, duration=0.1, chunk_size=2, executor=executor)

@@ -18,13 +18,13 @@ from springlab.cli.main import main
 from springlab.errors import BadInputError, DivergedError
 from springlab.exact.limits import stability_limit
 from springlab.studies import sweeps
-from springlab.studies.sweeps import configurations, parse_axis
+from springlab.studies.sweeps import configurations, make_axis
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
 def test_grid_is_the_full_factorial_with_the_last_axis_fastest():
-    axes = [parse_axis("mass=1:4:4:log"), parse_axis("damping=0:2:3")]
+    axes = [make_axis("mass", 1.0, 4.0, 4, log=True), make_axis("damping", 0.0, 2.0, 3)]
     values = configurations(axes)
     # log spacing: equal ratios (4^(1/3)); linear: equal steps
     assert np.allclose(values["mass"][::3], [1.0, 4 ** (1 / 3), 4 ** (2 / 3), 4.0], rtol=1e-15)
@@ -33,9 +33,9 @@ def test_grid_is_the_full_factorial_with_the_last_axis_fastest():
 
 
 def test_random_samples_stay_in_the_box_and_repeat_with_the_seed():
-    axes = [parse_axis("mass=0.5:2:log"), parse_axis("damping=1:3")]
-    first = configurations(axes, samples=200, seed=7)
-    again = configurations(axes, samples=200, seed=7)
+    axes = [make_axis("mass", 0.5, 2.0, None, log=True), make_axis("damping", 1.0, 3.0, None)]
+    first = configurations(axes, samples=200, sample_seed=7)
+    again = configurations(axes, samples=200, sample_seed=7)
     assert all(np.array_equal(first[n], again[n]) for n in first)
     assert first["mass"].min() >= 0.5 and first["mass"].max() <= 2.0
     assert first["damping"].min() >= 1.0 and first["damping"].max() <= 3.0
