@@ -11,8 +11,6 @@ held to bounds derived from RK4's order as in tests/scenes/printer_head/test_pri
 
 import json
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -421,12 +419,6 @@ def test_resonance_interval_covers_the_belt_in_38_of_40_seeds():
 # -- bad input --------------------------------------------------------------------------------------------------
 
 
-def _cli(*argv):
-    return subprocess.run(
-        [sys.executable, "-m", "springlab", *argv], capture_output=True, text=True, timeout=120, check=False
-    )
-
-
 @pytest.mark.parametrize(
     "argv, message",
     [
@@ -443,19 +435,20 @@ def _cli(*argv):
         ),
     ],
 )
-def test_bad_control_input_is_one_line_exit_2_nothing_written(tmp_path, argv, message):
+def test_bad_control_input_is_one_line_exit_2_nothing_written(tmp_path, argv, message, cli):
+    # in process (the command line's own entry point; an interpreter per case cost 0.7 s of imports)
     out = tmp_path / "out"
-    proc = _cli("run", "printer_head", *argv, "--output", str(out))
-    assert proc.returncode == 2, proc.stderr
-    lines = proc.stderr.strip().splitlines()
+    code, _, err = cli("run", "printer_head", *argv, "--output", out)
+    assert code == 2, err
+    lines = err.strip().splitlines()
     assert len(lines) == 1 and message in lines[0], lines
     assert not out.exists() or not any(out.iterdir())
 
 
-def test_control_scenarios_write_their_answer_quantities(tmp_path):
-    proc = _cli("run", "printer_head", "move_zv", "--duration", "0.1", "--json")
-    assert proc.returncode == 0, proc.stderr
-    quantities = json.loads(proc.stdout)["quantities"]
+def test_control_scenarios_write_their_answer_quantities(cli):
+    code, out, err = cli("run", "printer_head", "move_zv", "--duration", "0.1", "--json")
+    assert code == 0, err
+    quantities = json.loads(out)["quantities"]
     assert {"residual_amplitude_m", "residual_amplitude_m_exact", "positioning_time_s", "shaper_duration_s"} <= set(
         quantities
     )
