@@ -364,6 +364,17 @@ def test_the_variance_interval_is_a_scaled_chi_square():
     assert short.high - 2.0 > 2.0 - short.low
 
 
+@pytest.mark.parametrize("nu", [0.7, 3.0, 50.0, 20000.0])
+def test_the_interval_quantiles_are_scipy_stats_chi_square_to_the_bit(nu):
+    import scipy.stats  # the reference: springlab computes the quantile without importing scipy.stats
+
+    spread = math.sqrt(2 * 2.0**2 / nu)
+    interval = rv.variance_interval(2.0, spread, 0.99)
+    reference_nu = 2 * 2.0**2 / spread**2
+    assert interval.low == 2.0 * float(scipy.stats.chi2.ppf((1 - 0.99) / 2, reference_nu)) / reference_nu
+    assert interval.high == 2.0 * float(scipy.stats.chi2.ppf((1 + 0.99) / 2, reference_nu)) / reference_nu
+
+
 # -- bad input -------------------------------------------------------------------------------------------------
 
 

@@ -184,17 +184,16 @@ def test_design_json_has_the_documented_shape(capsys, tmp_path):
     assert json.loads((tmp_path / "d" / "design.json").read_text())["configurations"] == 81
 
 
-def _cli_with(study, monkeypatch, capsys, *argv):
+def _cli_with(study, monkeypatch, cli, *argv):
     """`springlab design printer_head ARGV` with the study it computes replaced by `study`: (code, out)."""
     monkeypatch.setattr(design, "run_study", lambda *args, **kwargs: study)
-    code = main(["design", "printer_head", *argv])
-    out, err = capsys.readouterr()
+    code, out, err = cli("design", "printer_head", *argv)
     assert code == 0, err
     return code, out
 
 
-def test_to_dict_is_what_design_json_prints_and_design_json_holds(small_study, monkeypatch, capsys, tmp_path):
-    _, out = _cli_with(small_study, monkeypatch, capsys, "--json", "--output", str(tmp_path / "d"))
+def test_to_dict_is_what_design_json_prints_and_design_json_holds(small_study, monkeypatch, cli, tmp_path):
+    _, out = _cli_with(small_study, monkeypatch, cli, "--json", "--output", str(tmp_path / "d"))
     assert json.loads(out) == small_study.to_dict()
     assert json.loads((tmp_path / "d" / "design.json").read_text()) == small_study.to_dict()
     # JSON-ready already: a round trip through json changes nothing, the sobol entry included
@@ -243,8 +242,8 @@ def test_a_study_cannot_be_changed_once_returned(small_study):
         small_study.sobol.runs = 0
 
 
-def test_design_text_answers_both_questions(small_study, monkeypatch, capsys):
-    _, out = _cli_with(small_study, monkeypatch, capsys, "--plane", "0")
+def test_design_text_answers_both_questions(small_study, monkeypatch, cli):
+    _, out = _cli_with(small_study, monkeypatch, cli, "--plane", "0")
     assert "How fast?" in out and "Which properties?" in out
     assert small_study.answer in out and small_study.sobol.answer in out
     # the design table lists every property once, in the ranking's order (the Sobol table follows it)

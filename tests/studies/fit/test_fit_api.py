@@ -46,7 +46,7 @@ def _polynomial(path):
     return path
 
 
-def _cli_fit(monkeypatch, capsys, *argv):
+def _cli_fit(monkeypatch, cli, *argv):
     """Run `springlab fit ARGV`; return (exit code, stdout, stderr, the FitResult the command printed)."""
     made = []
     original = fit_module.fit
@@ -56,8 +56,7 @@ def _cli_fit(monkeypatch, capsys, *argv):
         return made[-1]
 
     monkeypatch.setattr(fit_module, "fit", keep)
-    code = main(["fit", *(str(a) for a in argv)])
-    out, err = capsys.readouterr()
+    code, out, err = cli("fit", *argv)
     return code, out, err, made[-1] if made else None
 
 
@@ -71,12 +70,12 @@ def slider_fit(tmp_path_factory):
 
 
 @pytest.mark.parametrize("kind", ["oscillator", "polynomial"])
-def test_to_dict_is_what_fit_json_prints_and_fit_json_holds(tmp_path, monkeypatch, capsys, kind):
+def test_to_dict_is_what_fit_json_prints_and_fit_json_holds(tmp_path, monkeypatch, cli, kind):
     if kind == "oscillator":
         argv = ["slider", _decay(tmp_path / "d.csv"), "--set", "mass=2"]
     else:
         argv = ["kinematics", _polynomial(tmp_path / "d.csv")]
-    code, out, err, result = _cli_fit(monkeypatch, capsys, *argv, "--json", "--output", tmp_path / "out")
+    code, out, err, result = _cli_fit(monkeypatch, cli, *argv, "--json", "--output", tmp_path / "out")
     assert code == 0 and err == ""
     assert result.kind == kind
     printed = json.loads(out)
