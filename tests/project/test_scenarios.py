@@ -12,8 +12,8 @@ SCRIPTS = sorted((ROOT / "scenarios").glob("*.py"))
 #: scripts that take more than ~5 s on one core (a chaotic run)
 SLOW = {"nonlinear_forced_duffing"}
 #: arguments that keep a script's run short where its default is a whole study: the design study's 3^4
-#: grid instead of 7^4 (the same code path; its physics is tested in tests/studies/design/test_design.py), one carriage's
-#: answer table instead of two (tests/scenes/printer_head/test_printer_control_scene.py runs both)
+#: grid instead of 7^4 (the same code path; its physics is tested in tests/studies/design/test_design.py), one
+#: carriage's answer table instead of two (tests/scenes/printer_head/test_printer_control_scene.py runs both)
 ARGS = {"printer_which_properties": ["--levels", "3"], "printer_positioning_table": ["--preset", "inkjet"]}
 
 

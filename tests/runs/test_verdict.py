@@ -83,11 +83,8 @@ def test_a_system_without_nonzero_modes_is_inside_at_every_dt():
         ("validate", "printer_head", "--integrator", "euler"),
     ],
 )
-def test_runs_far_outside_the_estimates_range_are_not_validated_and_exit_1(argv, capsys):
-    from springlab.cli.main import main
-
-    code = main(list(argv))
-    out, err = capsys.readouterr()
+def test_runs_far_outside_the_estimates_range_are_not_validated_and_exit_1(argv, cli):
+    code, out, err = cli(*argv)
     assert code == 1, err
     assert "not validated" in out
     assert "is inside" in out  # the basis line names a dt that would be
