@@ -92,7 +92,7 @@ def slider_sweep() -> None:
     chosen = scene.scenario("free")
     dt, duration = chosen.dt or scene.dt, chosen.duration
     steps = round(duration / dt)
-    values = sweeps.configurations([sweeps.parse_axis(v) for v in vary])
+    values = sweeps.configurations([sweeps.typed_axis(name, spec) for name, spec in vary.items()])
     n = len(values["damping"])
     cases = [scene.case(chosen, {k: float(values[k][i]) for k in values}) for i in range(n)]
     params, models = [case.params for case in cases], [case.model for case in cases]

@@ -8,6 +8,8 @@ import os
 import mujoco
 import pytest
 
+from helpers.cli import CliResult
+
 os.environ.setdefault("MUJOCO_GL", "egl")
 
 
@@ -18,6 +20,23 @@ def _ignore_warning(message: str) -> None:
 
 
 mujoco.set_mju_user_warning(_ignore_warning)
+
+
+@pytest.fixture
+def cli(capsys):
+    """`springlab ARGV` in this process: `cli("run", "slider", "--output", tmp_path)` calls
+    springlab.cli.main.main with every argument as a string and returns a frozen CliResult(code, out, err) of
+    what that command printed (output printed before the call is dropped). A test that needs a real process
+    (signals, the interpreter's warnings, a working directory) runs `python -m springlab` itself."""
+    from springlab.cli.main import main
+
+    def run(*argv: object) -> CliResult:
+        capsys.readouterr()
+        code = main([str(a) for a in argv])
+        out, err = capsys.readouterr()
+        return CliResult(code, out, err)
+
+    return run
 
 
 @pytest.fixture(scope="session")
@@ -63,7 +82,7 @@ def scenario_run():
 @pytest.fixture(scope="session")
 def default_design_study():
     """The printer head's design study on its default grid (7^4 = 2401 configurations, no plane): computed
-    once per test run and read by tests/test_design.py and test_printer_head_settling.py (10-25 s)."""
+    once per test run and read by tests/studies/design/test_design.py and test_printer_head_settling.py (10-25 s)."""
     from springlab.studies.design import run_study
 
     return run_study("printer_head", plane_levels=0)
@@ -73,7 +92,7 @@ def default_design_study():
 def small_design_study():
     """The printer head's design study on 3^4 = 81 configurations (the grid's corners and centre), with a
     9 x 9 plane and Sobol indices from N = 8 base samples: computed once per test run (its readers share one
-    xdist group, below) and read by tests/test_design.py, test_sobol.py and test_executor.py."""
+    xdist group, below) and read by tests/studies/design/test_design.py, test_sobol.py and test_executor.py."""
     from springlab.studies.design import run_study
 
     return run_study("printer_head", levels=3, plane_levels=9, sobol=8)

@@ -10,7 +10,7 @@ summary the same way for every result, in text and in HTML, escaping every strin
 `springlab.plots`, which imports the result classes, so the results cannot import it. As pandas'
 `DataFrame.plot` finds its plotting backend, `plot` imports the module named by `PLOTTING` when a figure
 is asked for (never at import time), and that module's `figure(result)` picks the drawing function by the
-result's type. Importing a result never imports matplotlib; tests/test_display.py checks that `PLOTTING`
+result's type. Importing a result never imports matplotlib; tests/results/test_display.py checks that `PLOTTING`
 is in the plots layer and draws every result class that has `plot`.
 """
 

@@ -4,7 +4,7 @@
   validated integrator and timestep unless --integrator, --dt or auto say otherwise), so its verdict
   is printed before the window opens. The window then steps the same compiled model from the same
   initial state with the same controls, one `mj_step` per physics step, as `mujoco.rollout` did
-  (tests/test_view.py checks the live states against the run's, step by step), and starts again
+  (tests/cli/test_view.py checks the live states against the run's, step by step), and starts again
   where the run ended. A model file runs at the setting its `<option>` declares (or --integrator,
   --dt), from its first keyframe (else `qpos0`), without end.
 * **Real time.** Simulated time follows the wall clock (divided by --slow-motion); a model that

@@ -110,7 +110,7 @@ def last_exit_after(phasor: complex, omega: float, zeta: float, band: float) -> 
     The extrema of the free vibration are a half damped period apart; the last one beyond the band is found in
     closed form, the exit is the root between it and the next zero (where |x| decreases monotonically).
     """
-    import scipy.optimize  # here: scipy.optimize costs every command start-up time (tests/test_cli_usage.py)
+    import scipy.optimize  # here: scipy.optimize costs every command start-up time (tests/cli/test_cli_usage.py)
 
     if peak_after(phasor, omega, zeta) <= band:
         return 0.0
@@ -164,7 +164,7 @@ def quietest_move_time(omega: float, zeta: float, distance: float, band: float) 
     band
         Half-width of the positioning band [m].
     """
-    import scipy.optimize  # here: scipy.optimize costs every command start-up time (tests/test_cli_usage.py)
+    import scipy.optimize  # here: scipy.optimize costs every command start-up time (tests/cli/test_cli_usage.py)
 
     s = _root(omega, zeta)
     bound = scipy.optimize.brentq(
@@ -214,7 +214,7 @@ def positioning_time(omega: float, zeta: float, breaks: np.ndarray, acceleration
     (`carriage_deviation`) on a grid of 1/256 of a damped period, its last exit located on the cubic Hermite
     interpolant (exact.events) and refined on the exact motion by Brent's method.
     """
-    import scipy.optimize  # here: scipy.optimize costs every command start-up time (tests/test_cli_usage.py)
+    import scipy.optimize  # here: scipy.optimize costs every command start-up time (tests/cli/test_cli_usage.py)
 
     end = float(breaks[-1])
     after = last_exit_after(residual_phasor(omega, zeta, breaks, accelerations), omega, zeta, band)

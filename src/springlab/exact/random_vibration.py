@@ -309,6 +309,14 @@ class VarianceInterval:
         return estimate * self.variance / self.high, estimate * self.variance / self.low
 
 
+def _chi2_ppf(probability: float, degrees_of_freedom: float) -> float:
+    """The chi-square quantile [-]: 2 P^-1(nu/2, q), the regularized gamma's inverse, as scipy.stats.chi2.ppf computes
+    it (the same bits) without importing scipy.stats (a quarter to most of a second of a cold validate)."""
+    import scipy.special  # here, as before scipy.stats: the scene registry imports this module
+
+    return float(2.0 * scipy.special.gammaincinv(degrees_of_freedom / 2.0, probability))
+
+
 def variance_interval(variance: float, spread: float, level: float) -> VarianceInterval:
     """The `level` interval of an estimated variance whose exact value is `variance` and scatter `spread`.
 
@@ -323,11 +331,9 @@ def variance_interval(variance: float, spread: float, level: float) -> VarianceI
     """
     if not (0.0 < level < 1.0):
         raise BadInputError(f"the confidence level must lie in (0, 1), got {level!r}")
-    import scipy.stats  # on first use: the scene registry imports this module, and every command the registry
-
     nu = 2.0 * variance**2 / spread**2
-    low = variance * float(scipy.stats.chi2.ppf((1.0 - level) / 2.0, nu)) / nu
-    high = variance * float(scipy.stats.chi2.ppf((1.0 + level) / 2.0, nu)) / nu
+    low = variance * _chi2_ppf((1.0 - level) / 2.0, nu) / nu
+    high = variance * _chi2_ppf((1.0 + level) / 2.0, nu) / nu
     return VarianceInterval(float(variance), float(spread), float(level), low, high)
 
 

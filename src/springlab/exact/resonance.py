@@ -57,7 +57,7 @@ def chirp(amplitude: float, low_hz: float, high_hz: float, duration: float, dt: 
 
 def _discrete(omega: float, zeta: float, inverse_mass: float, dt: float) -> tuple[np.ndarray, np.ndarray]:
     """(b, a) of the exact ZOH discretization of G at step dt: y_k = C x_k, x_{k+1} = Phi x_k + Gamma F_k."""
-    from scipy import signal  # here: scipy.signal loads scipy.optimize and scipy.stats (tests/test_cli_usage.py)
+    from scipy import signal  # here: scipy.signal loads scipy.optimize and scipy.stats (tests/cli/test_cli_usage.py)
 
     a = np.array([[0.0, 1.0], [-(omega**2), -2 * zeta * omega]])
     block = np.zeros((3, 3))
@@ -77,7 +77,7 @@ def accelerance_response(
     Sample j is the acceleration at t = j every dt, before that step's force acts on the carriage (the belt
     has no feedthrough), from rest.
     """
-    from scipy import signal  # here: scipy.signal loads scipy.optimize and scipy.stats (tests/test_cli_usage.py)
+    from scipy import signal  # here: scipy.signal loads scipy.optimize and scipy.stats (tests/cli/test_cli_usage.py)
 
     b, a = _discrete(omega, zeta, inverse_mass, dt)
     return signal.lfilter(b, a, force)[::every]
@@ -156,7 +156,7 @@ def fit_resonance(
         A record too short for three parameters, a fit that leaves the physical range, or a resonance outside
         the swept band (the band missed it).
     """
-    import scipy.optimize  # here: scipy.optimize costs every command start-up time (tests/test_cli_usage.py)
+    import scipy.optimize  # here: scipy.optimize costs every command start-up time (tests/cli/test_cli_usage.py)
 
     acceleration = np.asarray(acceleration, dtype=float)
     if acceleration.size < 10 or len(force) < (acceleration.size - 1) * every + 1:

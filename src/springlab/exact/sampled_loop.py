@@ -259,7 +259,7 @@ def margins(
         {"gain_margin_db", "phase_margin_deg", "phase_crossover_hz", "gain_crossover_hz"}; inf and nan where
         there is no crossover.
     """
-    import scipy.optimize  # here: scipy.optimize costs every command start-up time (tests/test_cli_usage.py)
+    import scipy.optimize  # here: scipy.optimize costs every command start-up time (tests/cli/test_cli_usage.py)
 
     nyquist = 0.5 / pid.period
     grid = np.geomspace(lowest_hz, nyquist * (1 - 1e-9), points)

@@ -258,7 +258,7 @@ def ei(frequency_hz: float, damping_ratio: float, tolerance: float = EI_TOLERANC
     ValueError
         Outside those ranges, or if Newton's method does not reach the equations to 1e-12.
     """
-    import scipy.optimize  # here: scipy.optimize costs every command start-up time (tests/test_cli_usage.py)
+    import scipy.optimize  # here: scipy.optimize costs every command start-up time (tests/cli/test_cli_usage.py)
 
     omega_s, _ = _check_design(frequency_hz, damping_ratio)
     if not (0 < tolerance <= 0.25):
@@ -352,7 +352,7 @@ def insensitivity(shaper: Shaper, level: float = EI_TOLERANCE, damping_ratio: fl
     refined by bisection) that contains the design frequency; an EI shaper's V(f_s) = V_tol counts as inside a
     band of level V_tol (to 1e-9 of it).
     """
-    import scipy.optimize  # here: scipy.optimize costs every command start-up time (tests/test_cli_usage.py)
+    import scipy.optimize  # here: scipy.optimize costs every command start-up time (tests/cli/test_cli_usage.py)
 
     errors = np.linspace(-0.6, 0.6, 12001)
     vibration = shaper.vibration(shaper.frequency_hz * (1 + errors), damping_ratio)

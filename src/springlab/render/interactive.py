@@ -7,7 +7,7 @@ exact solution, with the error and springlab's verdict (web/exact.js ports the c
 tolerance and the range of the error estimate). The page writes the parameters into the MJCF text
 (`InteractiveSpec.edits`, the same values `Scene.edit` sets through MjSpec) rather than into the
 compiled model's arrays, so it steps the model springlab's Python run steps: the initial settings
-agree with `springlab run` to the last digit (tests/test_interactive.py).
+agree with `springlab run` to the last digit (tests/render/test_interactive.py).
 
 MuJoCo's WebAssembly build is the npm package `mujoco-js`, pinned (MUJOCO_JS_VERSION) and checked
 against MUJOCO_JS_SHA256, fetched once with `npm pack` into the user's cache folder (never by the

@@ -34,6 +34,7 @@ import numpy as np
 from springlab import scenes
 from springlab.answer import Answer
 from springlab.errors import BadInputError, DivergedError, ParameterError, SpringlabError
+from springlab.exact.linear import single_threaded_blas
 from springlab.scenes.base import Case, Check, Scenario, Scene
 from springlab.sim.simulate import (
     INTEGRATORS,
@@ -86,7 +87,7 @@ def run_scenario(
     dt: float | None = None,
     duration: float | None = None,
     tol: float | None = None,
-    **parameters: Any,
+    **parameters: float,
 ) -> Result:
     """Simulate a scenario headless in MuJoCo and compare it with its exact solution.
 
@@ -135,7 +136,9 @@ def run_scenario(
     steps = check_timing(dt, duration)
     if tol is not None:
         tol = compare.check_tolerance(tol)
-    with _within_double_precision(scene_obj, chosen, params):
+    # the exact side on one BLAS thread (exact.linear.single_threaded_blas): a cold validate spent more CPU in
+    # OpenBLAS's threads waiting on each other (the stay cable's 198-state Lyapunov solves) than in MuJoCo
+    with single_threaded_blas(), _within_double_precision(scene_obj, chosen, params):
         case = Case.compiled(scene_obj, chosen, params)
         setup = case.setup(steps, dt)
         try:
@@ -174,8 +177,15 @@ def evaluate(case: Case, trajectory: Trajectory, tol: float | None = None, *, ch
     Shared by `run` and the batched studies (springlab.studies.tradeoff, springlab.studies.extremes), so every path judges a run
     the same way. Raises DivergedError for a run whose error dwarfs its signal. `checks=False` leaves
     the scene's checks out (a study that measures the same claims itself over many runs, e.g.
-    springlab.studies.friction_settings, verifies its pick with a full run).
+    springlab.studies.friction_settings, verifies its pick with a full run). The exact side runs on one BLAS
+    thread, as `run_scenario`'s: the same numbers on any machine, whatever its cores.
     """
+    with single_threaded_blas():
+        return _evaluate(case, trajectory, tol, checks=checks)
+
+
+def _evaluate(case: Case, trajectory: Trajectory, tol: float | None, *, checks: bool) -> Result:
+    """`evaluate`'s body (on one BLAS thread)."""
     scene, scenario, params = case.scene, case.scenario, case.params
     columns = case.joint_columns(trajectory)
     pos = {j: c[0] for j, c in columns.items()}

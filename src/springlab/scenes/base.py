@@ -320,7 +320,7 @@ class Scene:
             try:
                 return spec.compile()
             except ValueError as error:
-                # a backstop: each parameter's range should catch this first (tests/test_cli_inputs.py)
+                # a backstop: each parameter's range should catch this first (tests/cli/test_cli_inputs.py)
                 reason = str(error).splitlines()[0].removeprefix("Error: ")
                 raise ParameterError(
                     f"MuJoCo cannot compile {self.name} {scenario.name} with these parameters: {reason}"

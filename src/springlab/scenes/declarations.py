@@ -22,7 +22,7 @@ from springlab.errors import BadInputError, ParameterError
 #: Every name a public study (springlab.run, validate, sweep, tradeoff, design, fit, stability, refine,
 #: friction_settings, rms, rms_settings, frequency, audit) takes besides a scene's parameters, and the names
 #: their first argument and parameters had before issue 32. A scene parameter named like one would be taken
-#: for the option (or refused), so no scene may declare one: tests/test_api.py holds every scene and every
+#: for the option (or refused), so no scene may declare one: tests/studies/test_api.py holds every scene and every
 #: study's signature to this set, and a study's new option is added here.
 STUDY_OPTIONS: frozenset[str] = frozenset(
     {

@@ -34,8 +34,8 @@ import math
 import os
 import re
 import time as _time
-from collections.abc import Sequence
-from typing import Any
+from collections.abc import Mapping, Sequence
+from typing import Any, cast
 
 import mujoco
 import numpy as np
@@ -52,7 +52,7 @@ from springlab.sim.simulate import INTEGRATORS, Setup, check_timing, integrator_
 from . import answers
 from .audit.ship import Shipped, compiled, ship
 from .executor import Executor, chunked, resolve
-from .sweeps import CHUNK_CONFIGURATIONS, MAX_CONFIGURATIONS, Axis, Sweep, SweepRow, make_axis
+from .sweeps import CHUNK_CONFIGURATIONS, MAX_CONFIGURATIONS, Axis, AxisSpec, Sweep, SweepRow, make_axis, typed_axis
 
 #: numeric options a sweep may vary -> (smallest valid value, whether it must exceed it, whether an integer)
 OPTIONS: dict[str, tuple[float, bool, bool]] = {
@@ -110,10 +110,15 @@ _OBJECTS = {
     "actuator": mujoco.mjtObj.mjOBJ_ACTUATOR,
 }
 _NAME = re.compile(r"^(?P<kind>\w+)\.(?P<element>.+)\.(?P<attribute>\w+)(\[(?P<index>\d+)\])?$")
-_FORM = (
+FORM = (
     "--vary on a model file takes opt.OPTION (timestep, impratio, tolerance, iterations, ls_iterations,"
     " noslip_iterations, noslip_tolerance, o_margin; integrator and cone by name) or KIND.NAME.ATTRIBUTE[INDEX]"
     f" with KIND one of {', '.join(ATTRIBUTES)}"
+)
+#: the typed form of one `vary` entry
+_TYPED = (
+    "(low, high, n) or (low, high, n, 'log'), or names for opt.integrator and opt.cone, e.g."
+    " vary={'opt.impratio': (1.0, 100.0, 5, 'log'), 'opt.integrator': ('euler', 'rk4')}"
 )
 
 
@@ -199,7 +204,7 @@ def target(model: mujoco.MjModel, name: str) -> Target:
         raise UnknownNameError("option to vary", option, [*OPTIONS, *CHOICES])
     match = _NAME.match(name)
     if match is None:
-        raise BadInputError(f"{_FORM}; got {name!r}")
+        raise BadInputError(f"{FORM}; got {name!r}")
     kind, element, attribute = match["kind"], match["element"], match["attribute"]
     if kind not in ATTRIBUTES:
         raise UnknownNameError("element kind", kind, ATTRIBUTES)
@@ -226,21 +231,31 @@ def target(model: mujoco.MjModel, name: str) -> Target:
     return Target(name, field=field, rows=rows, index=index)
 
 
-def _axis(model: mujoco.MjModel, text: str) -> tuple[Axis, Target, list[float] | None]:
-    """(axis, target, the chosen enum values for a named option or None) of one --vary string."""
-    from .sweeps import parse_axis
+def _axes(
+    model: mujoco.MjModel, vary: Mapping[str, AxisSpec | Sequence[str]]
+) -> list[tuple[Axis, Target, list[float] | None]]:
+    """(axis, target, the chosen enum values for a named option or None) of each entry of `vary`."""
+    if not isinstance(vary, Mapping):
+        raise BadInputError(
+            f"vary takes a mapping, name -> {_TYPED}, not {vary!r} (the command line's NAME=LOW:HIGH:N[:log] is"
+            " springlab sweep --vary's)"
+        )
+    if not vary:
+        raise BadInputError(f"a sweep needs at least one --vary NAME=LOW:HIGH:N[:log] ({FORM})")
+    return [_axis(model, str(name), given) for name, given in vary.items()]
 
-    name, sep, spec = str(text).partition("=")
-    name = name.strip()
-    if not sep or not name:
-        raise BadInputError(f"--vary takes NAME=LOW:HIGH:N[:log] (a model file: {_FORM}); got {text!r}")
+
+def _axis(model: mujoco.MjModel, name: str, given: AxisSpec | Sequence[str]) -> tuple[Axis, Target, list[float] | None]:
+    """(axis, target, the chosen enum values for a named option or None) of `vary[name]`."""
     aim = target(model, name)
     if aim.choices is None:
-        axis = parse_axis(text)
+        axis = typed_axis(name, cast(AxisSpec, given))
         for value in (axis.low, axis.high):
             aim.check(value)
         return axis, aim, None
-    picked = [part.strip() for part in spec.split(",") if part.strip()]
+    if isinstance(given, (str, bytes)) or not all(isinstance(label, str) for label in given):
+        raise BadInputError(f"vary[{name!r}] takes a sequence of names, e.g. ('euler', 'rk4'), got {given!r}")
+    picked = [str(label) for label in given]
     unknown = [p for p in picked if p not in aim.choices]
     if not picked or unknown:
         raise UnknownNameError(name, unknown[0] if unknown else "", aim.choices)
@@ -312,10 +327,10 @@ def run_model_chunk(payload: ModelSweepChunk, nthread: int = 0) -> list[dict[str
 def model_sweep(
     path: str | os.PathLike[str],
     *,
-    vary: Sequence[str],
+    vary: Mapping[str, AxisSpec | Sequence[str]],
     keyframe: str | None = None,
     samples: int | None = None,
-    seed: int = 0,
+    sample_seed: int = 0,
     integrator: str | None = None,
     dt: float | None = None,
     duration: float | None = None,
@@ -329,14 +344,15 @@ def model_sweep(
     path
         an MJCF (or URDF MuJoCo loads) file.
     vary
-        'NAME=LOW:HIGH:N[:log]' strings (N may be left out with `samples`); 'opt.integrator=euler,rk4' and
-        'opt.cone=pyramidal,elliptic' take names (see the module docstring for NAME).
+        NAME -> (low, high, n) or (low, high, n, "log") [NAME's unit] (n may be None with `samples`);
+        opt.integrator and opt.cone take a sequence of names instead, e.g. ("euler", "rk4") (see the module
+        docstring for NAME). The command line's 'NAME=LOW:HIGH:N[:log]' strings are a BadInputError.
     keyframe
         where every run starts (None: the first keyframe, else qpos0 at rest); its controls are held.
     samples
         draw this many random points in the box instead of the full grid (a named option: uniformly).
-    seed
-        seed of the random points.
+    sample_seed
+        seed of the random points (as `springlab.sweep`'s; `seed` before issue 32).
     integrator, dt
         the setting of the configurations that do not vary it (None: the model's own).
     duration
@@ -361,12 +377,8 @@ def model_sweep(
     text = os.fspath(path)
     model = model_files.load(text)
     start = operating_point(model, keyframe)
-    if not vary:
-        raise BadInputError(f"a sweep needs at least one --vary NAME=LOW:HIGH:N[:log] ({_FORM})")
-    parsed = [_axis(model, spec) for spec in vary]
+    parsed = _axes(model, vary)
     names = [axis.name for axis, _, _ in parsed]
-    if len(set(names)) != len(names):
-        raise BadInputError(f"a name is varied twice: {', '.join(names)}")
     if integrator == "auto":
         raise BadInputError("a sweep runs one setting for every configuration; name an integrator, not 'auto'")
     integrator = integrator_name(model) if integrator is None else integrator
@@ -374,7 +386,7 @@ def model_sweep(
     dt = float(model.opt.timestep) if dt is None else dt
     duration = DEFAULT_DURATION if duration is None else duration
     check_timing(dt, duration)
-    values = _configurations(parsed, samples, seed)
+    values = _configurations(parsed, samples, sample_seed)
     count = len(values[names[0]])
     for (_, aim, _), column in zip(parsed, values.values()):
         for value in column:
@@ -417,7 +429,7 @@ def model_sweep(
 
 
 def _configurations(
-    parsed: Sequence[tuple[Axis, Target, list[float] | None]], samples: int | None, seed: int
+    parsed: Sequence[tuple[Axis, Target, list[float] | None]], samples: int | None, sample_seed: int
 ) -> dict[str, np.ndarray]:
     """Name -> (n,) values: the full grid (last axis fastest) or `samples` random points; a named option
     takes its listed values (uniformly drawn among them with `samples`)."""
@@ -425,7 +437,7 @@ def _configurations(
     if samples is not None:
         if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 1:
             raise BadInputError(f"--samples must be an integer >= 1, got {samples!r}")
-        unit = np.random.default_rng(seed).random((int(samples), len(axes)))
+        unit = np.random.default_rng(sample_seed).random((int(samples), len(axes)))
         out = {}
         for j, (axis, _, codes) in enumerate(parsed):
             if codes is None:

@@ -12,7 +12,7 @@ undamped energy of every integrator against its exact discrete-map formula
 `springlab stability`'s JSON.
 
 The MuJoCo step maps on the 1-DOF oscillator (omega = sqrt(k/m), zeta =
-d/(2 sqrt(k m)), y = omega*dt, measured in tests/test_stability.py):
+d/(2 sqrt(k m)), y = omega*dt, measured in tests/studies/test_stability.py):
 
 * euler, implicit, implicitfast: identical; semi-implicit (symplectic) Euler
   with implicit joint damping, v' = (v - dt k/m x)/(1 + 2 zeta y),

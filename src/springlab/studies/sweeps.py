@@ -83,34 +83,8 @@ class Axis:
         return {"name": self.name, "low": self.low, "high": self.high, "count": self.count, "log": self.log}
 
 
-def parse_axis(text: str) -> Axis:
-    """'NAME=LOW:HIGH:N[:log]' (N may be left out for --samples) -> Axis.
-
-    Raises
-    ------
-    BadInputError
-        the text does not have that form, or the numbers make no range.
-    """
-    name, sep, spec = str(text).partition("=")
-    form = "--vary takes NAME=LOW:HIGH:N[:log], e.g. damping=0.5:40:30:log"
-    if not sep or not name.strip():
-        raise BadInputError(f"{form}; got {text!r}")
-    parts = spec.split(":")
-    log = bool(parts) and parts[-1].strip().lower() == "log"
-    if log:
-        parts = parts[:-1]
-    if len(parts) not in (2, 3):
-        raise BadInputError(f"{form}; got {text!r}")
-    try:
-        low, high = float(parts[0]), float(parts[1])
-        count = int(parts[2]) if len(parts) == 3 else None
-    except ValueError:
-        raise BadInputError(f"{form} (LOW, HIGH numbers, N an integer); got {text!r}") from None
-    return make_axis(name.strip(), low, high, count, log)
-
-
 def make_axis(name: str, low: float, high: float, count: int | None, log: bool = False) -> Axis:
-    """A checked Axis (see parse_axis)."""
+    """A checked Axis: finite ends, N a whole number >= 1 (or None: sampled), a log range above zero."""
     if not (math.isfinite(low) and math.isfinite(high)):
         raise BadInputError(f"--vary {name}: LOW and HIGH must be finite numbers, got {low!r}, {high!r}")
     if count is not None and (isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1):
@@ -445,16 +419,16 @@ def _is_number(value: Any) -> bool:
     return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
 
 
-def configurations(axes: Sequence[Axis], samples: int | None = None, seed: int = 0) -> dict[str, np.ndarray]:
+def configurations(axes: Sequence[Axis], samples: int | None = None, sample_seed: int = 0) -> dict[str, np.ndarray]:
     """Varied parameter -> (n,) values: the full grid (last axis fastest), or `samples` random points.
 
     Random points are uniform in each range (log-uniform on a log axis) from numpy's
-    PCG64 seeded with `seed`, so a sampled sweep is reproducible.
+    PCG64 seeded with `sample_seed`, so a sampled sweep is reproducible.
     """
     if samples is not None:
         if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 1:
             raise BadInputError(f"--samples must be an integer >= 1, got {samples!r}")
-        unit = np.random.default_rng(seed).random((int(samples), len(axes)))
+        unit = np.random.default_rng(sample_seed).random((int(samples), len(axes)))
         return {axis.name: axis.sample(unit[:, j]) for j, axis in enumerate(axes)}
     missing = [a.name for a in axes if a.count is None]
     if missing:
@@ -624,7 +598,7 @@ def sweep(
         scenario name (None: the scene's default).
     vary
         parameter -> (low, high, n) or (low, high, n, "log") [parameter's unit]; n may be None when
-        `samples` is given. (The command line's 'NAME=LOW:HIGH:N[:log]' is parsed by `parse_axis`.)
+        `samples` is given. (A string, the command line's 'NAME=LOW:HIGH:N[:log]', is a BadInputError.)
     samples
         draw this many random points in the box instead of the full grid.
     sample_seed
@@ -718,21 +692,35 @@ def _axes(vary: Mapping[str, AxisSpec]) -> list[Axis]:
     if not isinstance(vary, Mapping):
         raise BadInputError(
             "vary takes a mapping, parameter -> (low, high, n) or (low, high, n, 'log'), e.g. vary={'damping':"
-            f" (0.5, 40.0, 30, 'log')}}, not {vary!r} (the command line's NAME=LOW:HIGH:N[:log] is parse_axis's)"
+            f" (0.5, 40.0, 30, 'log')}}, not {vary!r} (the command line's NAME=LOW:HIGH:N[:log] is springlab"
+            " sweep --vary's)"
         )
-    axes = []
-    for name, given in vary.items():
-        if isinstance(given, str):
-            raise BadInputError(f"vary[{name!r}] takes (low, high, n) or (low, high, n, 'log'), got {given!r}")
-        spec: tuple[Any, ...] = tuple(given)
-        if len(spec) not in (3, 4) or (len(spec) == 4 and spec[3] != "log"):
-            raise BadInputError(f"vary[{name!r}] takes (low, high, n) or (low, high, n, 'log'), got {spec!r}")
-        if any(isinstance(v, str) for v in spec[:3]):
-            raise BadInputError(f"vary[{name!r}] takes numbers (low, high, n), not strings: got {spec!r}")
-        axes.append(make_axis(name, float(spec[0]), float(spec[1]), spec[2], len(spec) == 4))
+    axes = [typed_axis(name, given) for name, given in vary.items()]
     if not axes:
         raise BadInputError("a sweep needs at least one --vary NAME=LOW:HIGH:N[:log]")
-    names = [a.name for a in axes]
-    if len(set(names)) != len(names):
-        raise BadInputError(f"a parameter is varied twice: {', '.join(names)}")
     return axes
+
+
+def typed_axis(name: str, given: AxisSpec) -> Axis:
+    """The checked Axis of `vary[name]`, (low, high, n) or (low, high, n, 'log') [parameter's unit].
+
+    Raises
+    ------
+    BadInputError
+        a string (the command line's LOW:HIGH:N), another shape, strings among the numbers, a bad range.
+    """
+    form = "takes (low, high, n) or (low, high, n, 'log')"
+    if isinstance(given, (str, bytes)):
+        raise BadInputError(f"vary[{name!r}] {form}, not the command line's string {given!r}")
+    spec: tuple[object, ...] = tuple(given)
+    if len(spec) not in (3, 4) or (len(spec) == 4 and spec[3] != "log"):
+        raise BadInputError(f"vary[{name!r}] {form}, got {spec!r}")
+    low, high, count = spec[:3]
+    if any(isinstance(v, (str, bytes)) for v in spec[:3]):
+        raise BadInputError(f"vary[{name!r}] takes numbers (low, high, n), not strings: got {spec!r}")
+    number = (int, float, np.integer, np.floating)
+    if not isinstance(low, number) or not isinstance(high, number):
+        raise BadInputError(f"vary[{name!r}] {form} with numbers low and high, got {spec!r}")
+    if count is not None and not isinstance(count, (int, np.integer)):
+        raise BadInputError(f"--vary {name}: N must be an integer >= 1, got {count!r}")
+    return make_axis(name, float(low), float(high), None if count is None else int(count), len(spec) == 4)

@@ -59,6 +59,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print fit.json")
 
 
+def _map(items: list[str]) -> dict[str, str]:
+    """--map's COLUMN=NAME (repeatable) -> {file column: springlab name}."""
+    mapping = {}
+    for item in items:
+        column, sep, name = str(item).partition("=")
+        if not sep or not column.strip() or not name.strip():
+            raise BadInputError(f"--map takes COLUMN=NAME (e.g. t=time, x=slider_pos), got {item!r}")
+        mapping[column.strip()] = name.strip()
+    return mapping
+
+
 def _free(items: list[str]) -> list[str] | None:
     """--free's NAME[,NAME...] (repeatable) -> the names (None: not given)."""
     if not items:
@@ -73,7 +84,6 @@ def main(args: argparse.Namespace) -> int:
     # here, not at the top: mujoco.sysid and scipy load only for fits; `from .fit import`, because
     # springlab.fit (the attribute) is the function once springlab/__init__ has run
     from springlab import outputs
-    from springlab.studies.fit import data as fit_data
     from springlab.studies.fit.fit import fit
 
     options.check_output(args)
@@ -82,7 +92,7 @@ def main(args: argparse.Namespace) -> int:
             args.scene,
             args.data,
             args.scenario,
-            map=fit_data.parse_map(args.map),
+            map=_map(args.map),
             free=_free(args.free),
             scale=args.scale,
             time_scale=args.time_scale,

@@ -45,15 +45,67 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print the sweep (setting, counts, every row) as JSON")
 
 
-def _vary(texts: list[str]) -> dict[str, tuple[float, float, int | None] | tuple[float, float, int | None, str]]:
-    """--vary's 'NAME=LOW:HIGH:N[:log]' texts -> sweep's typed `vary` mapping (each text checked)."""
-    from springlab.studies import sweeps
+#: one axis of the library's `vary`: (low, high, n) or (low, high, n, "log"), n None with --samples
+AxisSpec = tuple[float, float, int | None] | tuple[float, float, int | None, str]
+_AXIS_FORM = "--vary takes NAME=LOW:HIGH:N[:log], e.g. damping=0.5:40:30:log"
 
-    axes = [sweeps.parse_axis(text) for text in texts]
-    names = [axis.name for axis in axes]
+
+def parse_axis(text: str) -> tuple[str, AxisSpec]:
+    """'NAME=LOW:HIGH:N[:log]' (N may be left out for --samples) -> (NAME, the library's checked axis tuple).
+
+    Raises
+    ------
+    BadInputError
+        the text does not have that form, or the numbers make no range.
+    """
+    from springlab.studies.sweeps import make_axis
+
+    name, sep, spec = str(text).partition("=")
+    if not sep or not name.strip():
+        raise BadInputError(f"{_AXIS_FORM}; got {text!r}")
+    parts = spec.split(":")
+    log = bool(parts) and parts[-1].strip().lower() == "log"
+    if log:
+        parts = parts[:-1]
+    if len(parts) not in (2, 3):
+        raise BadInputError(f"{_AXIS_FORM}; got {text!r}")
+    try:
+        low, high = float(parts[0]), float(parts[1])
+        count = int(parts[2]) if len(parts) == 3 else None
+    except ValueError:
+        raise BadInputError(f"{_AXIS_FORM} (LOW, HIGH numbers, N an integer); got {text!r}") from None
+    axis = make_axis(name.strip(), low, high, count, log)
+    return axis.name, (axis.low, axis.high, axis.count, "log") if axis.log else (axis.low, axis.high, axis.count)
+
+
+def _vary(texts: list[str]) -> dict[str, AxisSpec]:
+    """--vary's 'NAME=LOW:HIGH:N[:log]' texts -> sweep's typed `vary` mapping (each text checked)."""
+    axes = [parse_axis(text) for text in texts]
+    names = [name for name, _ in axes]
     if len(set(names)) != len(names):
         raise BadInputError(f"a parameter is varied twice: {', '.join(names)}")
-    return {a.name: (a.low, a.high, a.count, "log") if a.log else (a.low, a.high, a.count) for a in axes}
+    return dict(axes)
+
+
+def _model_vary(texts: list[str]) -> dict[str, AxisSpec | tuple[str, ...]]:
+    """--vary on a model file -> model_sweep's typed `vary`: 'NAME=LOW:HIGH:N[:log]' an axis tuple,
+    'opt.integrator=euler,rk4' and 'opt.cone=pyramidal,elliptic' a tuple of names."""
+    from springlab.studies.model_sweep import CHOICES, FORM
+
+    vary: list[tuple[str, AxisSpec | tuple[str, ...]]] = []
+    for text in texts:
+        name, sep, spec = str(text).partition("=")
+        name = name.strip()
+        if not sep or not name:
+            raise BadInputError(f"--vary takes NAME=LOW:HIGH:N[:log] (a model file: {FORM}); got {text!r}")
+        if name.removeprefix("opt.") in CHOICES:
+            vary.append((name, tuple(part.strip() for part in spec.split(",") if part.strip())))
+        else:
+            vary.append(parse_axis(text))
+    names = [name for name, _ in vary]
+    if len(set(names)) != len(names):
+        raise BadInputError(f"a name is varied twice: {', '.join(names)}")
+    return dict(vary)
 
 
 def main(args: argparse.Namespace) -> int:
@@ -95,10 +147,10 @@ def _model_file(args: argparse.Namespace) -> int:
     with options.executor(args) as executor:
         result = model_sweep(
             args.scene,
-            vary=args.vary,
+            vary=_model_vary(args.vary),
             keyframe=args.keyframe,
             samples=args.samples,
-            seed=args.seed,
+            sample_seed=args.seed,
             integrator=args.integrator,
             dt=args.dt,
             duration=args.duration,

@@ -4,7 +4,7 @@
  *   springlab/exact/analytic.py   free_response, step_response (_fundamental, _unit_step_displacement)
  *   springlab/runs/compare.py     predicted_error, tolerances, mode_factor, estimate_range
  *   springlab/runs/run.py         evaluate (errors, blow-up ratio, verdict)
- * tests/test_interactive.py compares them with the Python on a grid of parameters. A classic script
+ * tests/render/test_interactive.py compares them with the Python on a grid of parameters. A classic script
  * (the page opens from file://): it defines springlabExact, and module.exports under node.
  */
 (function (root) {

@@ -50,7 +50,7 @@ class MjcfEdit:
     """One value written into the MJCF text, the browser's form of a line of `Scene.edit`.
 
     The page edits the scene's MJCF file as text (an XML attribute) and recompiles it, so the model it
-    steps is the one `Scene.build` makes; tests/test_interactive.py compiles both and compares them.
+    steps is the one `Scene.build` makes; tests/render/test_interactive.py compiles both and compares them.
 
     Attributes
     ----------

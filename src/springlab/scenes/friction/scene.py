@@ -109,7 +109,7 @@ CONTACT_DECAY = Variant(CONTACT_FRICTION, spring=True)
 HOLD = Variant(CONTACT_FRICTION, spring=False, holds=True)
 SLIDE = Variant(CONTACT_FRICTION, spring=False, holds=False)
 
-#: the settings that act only on contacts (MuJoCo's docs; tests/test_friction_mujoco.py checks them)
+#: the settings that act only on contacts (MuJoCo's docs; tests/scenes/friction/test_friction_mujoco.py checks them)
 CONTACT_ONLY = ("impratio", "elliptic_cone")
 #: the friction-settings study's grid (docs/scenes/friction.md explains the choice of values)
 SETTINGS = (
@@ -653,7 +653,7 @@ def resting_height(model: mujoco.MjModel, qpos: np.ndarray, qvel: np.ndarray) ->
     Starting there, the run has no settling transient of the normal contact that the exact motion
     (a rigid surface) does not have.
     """
-    from scipy import optimize  # here: the command line starts without scipy (tests/test_cli_usage.py)
+    from scipy import optimize  # here: the command line starts without scipy (tests/cli/test_cli_usage.py)
 
     data = mujoco.MjData(model)
     adr, dof = model.joint(NORMAL).qposadr[0], model.joint(NORMAL).dofadr[0]

@@ -43,7 +43,7 @@ def dress_as_bus(spec: mujoco.MjSpec) -> None:
 
     Visual only: the new geoms inherit the model's default (no contact) and the
     body's explicit ``<inertial>`` keeps its mass and inertia, so a run's
-    numbers are unchanged (tests/test_render_physics.py checks the picture).
+    numbers are unchanged (tests/render/test_render_physics.py checks the picture).
     """
     vehicle = spec.body("vehicle")
     for name in CAR_GEOMS:

@@ -32,7 +32,7 @@ amplitude at omega_dt = 0.1), and the exit time that interpolant's root
 = 1.25e-3 of the amplitude, and whether a peak that passes the band by less
 than that counts decides half a period of settling time: 8 of the 2401 default
 configurations were early by 1.8-4.9 ms (peaks 1.2e-4 and 7.5e-4 above the
-band; tests/test_printer_head_settling.py). Every configuration now settles
+band; tests/scenes/printer_head/test_printer_head_settling.py). Every configuration now settles
 within 2.3 us of the exact motion's last exit; between omega_dt = 0.1 and 0.2,
 5 differ by more than one step (26 when read at the samples): the peaks
 1.2e-4 above the band, within RK4's error at 0.2 (16 times its error at 0.1).

@@ -66,7 +66,7 @@ stays within |X - target| + (m_m / M) sqrt(2 E / k) of the target for ever;
 a run that ends before that bound is inside the band reports
 settled_for_good = False and settling_time_s = inf.
 
-Measured on mujoco 4.0 (tests/test_printer_head_integrators.py): RK4 treats the
+Measured on mujoco 4.0 (tests/scenes/printer_head/test_printer_head_integrators.py): RK4 treats the
 belt like any force; `euler` treats TENDON damping explicitly (unlike joint
 damping), so its stability limit on the belt mode is omega dt < 2 sqrt(zeta^2 +
 1) - 2 zeta, below the joint-damping limit 2 sqrt(zeta^2 + 1) + 2 zeta;
@@ -152,7 +152,7 @@ def _released_at(params: Mapping[str, float], x0: float) -> dict[str, float]:
     return dict(params) | {"deflection": -x0 * total / params["motor_mass"]}
 
 
-#: the loops' default gains and rate: the motor's (collocated) as in tests/test_printer_feedback.py; the
+#: the loops' default gains and rate: the motor's (collocated) as in tests/scenes/printer_head/test_printer_feedback.py; the
 #: carriage's lower, because across the belt the motor's gains are unstable (its boundary is 0.59 of them)
 _LOOP_GAINS = {
     "motor": {"kp": 2000.0, "kd": 30.0, "ki": 0.0, "control_rate_hz": 5000.0},

@@ -120,21 +120,6 @@ class Record:
         return self.time - self.origin
 
 
-def parse_map(items: Sequence[str] | Mapping[str, str] | None) -> dict[str, str]:
-    """`['t=time', 'x=slider_pos']` (or a dict) -> {file column: springlab name}."""
-    if items is None:
-        return {}
-    if isinstance(items, Mapping):
-        return {str(k): str(v) for k, v in items.items()}
-    mapping = {}
-    for item in items:
-        column, sep, name = str(item).partition("=")
-        if not sep or not column.strip() or not name.strip():
-            raise BadInputError(f"--map takes COLUMN=NAME (e.g. t=time, x=slider_pos), got {item!r}")
-        mapping[column.strip()] = name.strip()
-    return mapping
-
-
 def load(
     data: DataSource,
     joints: Sequence[str],

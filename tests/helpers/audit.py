@@ -1,0 +1,84 @@
+"""The audit's claims checked on runs made here (mujoco.rollout, not springlab's runner): shared by the audit's
+tests on robots written here (tests/studies/audit/test_audit_robots.py) and on dm_control's suite."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+from mujoco import rollout
+
+from springlab.sim.simulate import INTEGRATORS
+
+_FULL = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
+
+
+def rollout_run(model, integrator, dt, steps, qpos, qvel, ctrl=None):
+    """(qpos, qvel) at every step of a run, stepped by mujoco.rollout (not springlab's runner); NaN rows after
+    MuJoCo flags a blow-up."""
+    work = model.__copy__()
+    work.opt.integrator, work.opt.timestep = INTEGRATORS[integrator], dt
+    data = mujoco.MjData(work)
+    data.qpos[:], data.qvel[:] = qpos, qvel
+    state0 = np.empty(mujoco.mj_stateSize(work, _FULL))
+    mujoco.mj_getState(work, data, state0, _FULL)
+    control = np.tile(np.asarray(ctrl, float), (1, steps, 1)) if work.nu else None
+    states, _ = rollout.rollout(work, data, state0[None], control, nstep=steps)
+    states = np.concatenate([state0[None], states[0]])
+    qp, qv = states[:, 1 : 1 + work.nq], states[:, 1 + work.nq : 1 + work.nq + work.nv]
+    times = states[:, 0]
+    reset = np.flatnonzero(np.diff(times) < 0)  # MuJoCo resets a run it flags: time goes back to 0
+    if reset.size:
+        qp, qv = qp.copy(), qv.copy()
+        qp[reset[0] + 1 :] = np.nan
+        qv[reset[0] + 1 :] = np.nan
+    return qp, qv
+
+
+def check_limits_honest(result, model):
+    """Every reported limit is confirmed by runs or labelled unconfirmed; a brute-force limit's bracket holds
+    in runs made here; the own setting is unstable only if a run of it blows up."""
+    for name, limit in result.stability.items():
+        data = limit.to_dict()
+        if limit.limit_dt_s is None:
+            continue
+        assert data["confirmed"] in (True, False), name
+        if not limit.confirmed:
+            assert "UNCONFIRMED" in result.message or name != result.own.integrator
+        if limit.method == "nonlinear runs" and limit.confirmed:
+            steps = lambda dt: max(2000, math.ceil(result.duration / dt))  # noqa: E731 - the audit's run length
+            start = result.start
+            below = rollout_run(
+                model,
+                name,
+                limit.runs_bounded_dt_s,
+                steps(limit.runs_bounded_dt_s),
+                start.qpos,
+                start.qvel,
+                start.control,
+            )
+            above = rollout_run(
+                model,
+                name,
+                limit.runs_blew_up_dt_s,
+                steps(limit.runs_blew_up_dt_s),
+                start.qpos,
+                start.qvel,
+                start.control,
+            )
+            assert np.isfinite(below[1]).all(), name
+            bounded_speed = np.max(np.abs(below[1]))
+            assert not np.isfinite(above[1]).all() or np.max(np.abs(above[1])) > 10 * bounded_speed, name
+    own = result.own
+    if not own.stable:
+        run = rollout_run(
+            model,
+            own.integrator,
+            own.dt,
+            max(2000, math.ceil(result.duration / own.dt)),
+            result.start.qpos,
+            result.start.qvel,
+            result.start.control,
+        )
+        assert not np.isfinite(run[1]).all(), "called unstable, but a run of it stays finite"
