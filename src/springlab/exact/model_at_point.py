@@ -34,7 +34,7 @@ from springlab.exact.linearize import (
     step_input_column,
 )
 from springlab.exact.operating_point import OperatingPoint, operating_point, settle
-from springlab.sim.simulate import integrator_id, quiet_mujoco
+from springlab.sim.simulate import Setup, Trajectory, integrator_id, quiet_mujoco, simulate
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -133,6 +133,29 @@ class ModelAtPoint:
         data = mujoco.MjData(work)
         self.point.load(work, data)
         return work, data
+
+    def simulate(self, integrator: str, dt: float, duration: float, start: Setup | None = None) -> Trajectory:
+        """A run of the model with `integrator` at timestep `dt` [s] over `duration` [s] from `start` (None: the
+        point itself, its control held) (`springlab.sim.simulate.simulate`: the model is not modified).
+
+        Raises
+        ------
+        DivergedError
+            the run blew up.
+        """
+        if start is None:
+            point = self.point
+            start = Setup(point.qpos, point.qvel, point.act, point.ctrl if self.model.nu else None)
+        return simulate(
+            self.model,
+            integrator=integrator,
+            dt=dt,
+            duration=duration,
+            qpos=start.qpos,
+            qvel=start.qvel,
+            act=start.act,
+            control=start.control,
+        )
 
     def one_step_map(
         self, integrator: str, dt: float, scratch: tuple[mujoco.MjModel, mujoco.MjData] | None = None
