@@ -29,7 +29,7 @@ from springlab.exact.linearize import (
     Linearization,
     input_column,
     linearize,
-    one_step_map,
+    map_on,
     sensor_rows,
     step_input_column,
 )
@@ -161,12 +161,10 @@ class ModelAtPoint:
         self, integrator: str, dt: float, scratch: tuple[mujoco.MjModel, mujoco.MjData] | None = None
     ) -> np.ndarray:
         """MuJoCo's one-step map Phi (n, n) of `integrator` at timestep `dt` [s] at the point
-        (`springlab.exact.linearize.one_step_map`); `scratch`: a pair from `scratch()` reused across calls
+        (`springlab.exact.linearize.map_on`); `scratch`: a pair from `scratch()` reused across calls
         (its model takes the integrator and timestep), so a scan over dt copies the model once."""
-        if scratch is None:
-            return one_step_map(self.model, integrator, dt, self.point, step=self.step)
-        work, data = scratch
-        return one_step_map(work, integrator, dt, self.point, step=self.step, data=data, copy_model=False)
+        work, data = self.scratch() if scratch is None else scratch
+        return map_on(work, integrator_id(integrator), dt, self.point, step=self.step, data=data)
 
     def input_column(self, kind: str, index: int) -> np.ndarray:
         """b = d(dx/dt)/du (n,) of input `kind` ('ctrl' or 'force') `index` at the point [1/s per input unit]
