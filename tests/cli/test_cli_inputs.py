@@ -168,12 +168,9 @@ def test_a_divergence_within_the_stability_limit_never_advises_a_smaller_dt():
         ("run", "nonlinear", "--set", "x0=1e300"),
     ],
 )
-def test_values_at_the_edge_of_double_precision_get_one_line_and_no_warning(argv, capsys):
+def test_values_at_the_edge_of_double_precision_get_one_line_and_no_warning(argv, cli):
     # each value is inside its stated range; their products leave double precision or MuJoCo's caps
-    from springlab.cli.main import main
-
-    code = main(list(argv))
-    err = capsys.readouterr().err
+    code, _, err = cli(*argv)
     assert code in (2, 3), err
     assert len(err.strip().splitlines()) == 1 and "Traceback" not in err and "Warning" not in err
     assert any(why in err for why in ("double precision", "mjMAXVAL", "stability limit"))

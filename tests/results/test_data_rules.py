@@ -107,9 +107,8 @@ def test_a_carriage_that_never_settles_writes_null_and_a_false_flag(tmp_path, ca
     assert math.isinf(springlab.run("printer_head", "settle", belt_damping=0.0).quantities["settling_time_s"])
 
 
-def test_the_validation_table_names_what_each_error_measures(capsys):
-    code = main(["validate", "nonlinear", "slider"])
-    out, _ = capsys.readouterr()
+def test_the_validation_table_names_what_each_error_measures(cli):
+    code, out, _ = cli("validate", "nonlinear", "slider")
     assert code == 0
     header, *lines = out.splitlines()
     assert "error of" in header and "max rel err" not in header

@@ -5,8 +5,6 @@ import json
 
 import pytest
 
-from helpers.paths import ROOT
-
 
 @pytest.mark.parametrize(
     "scenario, joints",
@@ -58,19 +56,6 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, cli, argv,
     assert code == 2
     assert message in err and err.count("\n") == 1 and "Traceback" not in err
     assert not (tmp_path / "d").exists()
-
-
-def test_the_textbook_script_prints_the_three_answers(tmp_path):
-    import subprocess
-    import sys
-
-    script = ROOT / "scenarios" / "car_push_release.py"
-    out = subprocess.run(
-        [sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=300
-    ).stdout
-    assert "= 2.4525 mm" in out and "97.5475 mm above the ground" in out
-    assert "x_s = 100.0000 mm, A = -2.4525 mm" in out and "omega = sqrt(k/m) = 31.6228 rad/s" in out
-    assert "an ellipse centred at (x_s, 0)" in out and "omega |A| = 0.07755 m/s" in out
 
 
 def test_a_tire_that_leaves_the_road_is_written_but_not_validated(tmp_path, cli):

@@ -441,23 +441,18 @@ def test_forced_runs_are_checked_at_the_integrators_own_order():
 # -- the check mechanism ---------------------------------------------------------------------------
 
 
-def test_a_failed_check_flags_the_run_and_the_cli_exits_1(capsys):
-    from springlab.cli.main import main
-
-    code = main(["run", "nonlinear", "softening", "--integrator", "euler", "--duration", "2"])
-    out = capsys.readouterr().out
+def test_a_failed_check_flags_the_run_and_the_cli_exits_1(cli):
+    code, out, _ = cli("run", "nonlinear", "softening", "--integrator", "euler", "--duration", "2")
     assert code == 1
     assert "check energy_drift_relative" in out and "FAIL" in out
 
 
-def test_a_plot_of_a_run_that_fails_its_checks_says_which_and_exits_1(tmp_path, capsys):
+def test_a_plot_of_a_run_that_fails_its_checks_says_which_and_exits_1(tmp_path, cli):
     # held to its checks alone, the run has no tolerance of compared columns: the note names the failed checks
     # (this raised TypeError formatting the absent tolerance before results were objects)
-    from springlab.cli.main import main
 
     argv = ["plot", "nonlinear", "softening", "--integrator", "euler", "--duration", "2"]
-    code = main([*argv, "--output", str(tmp_path / "time.png")])
-    err = capsys.readouterr().err
+    code, _, err = cli(*argv, "--output", str(tmp_path / "time.png"))
     assert code == 1 and (tmp_path / "time.png").is_file()
     (line,) = err.strip().splitlines()
     assert line.startswith("note: nonlinear/softening is outside its tolerance (check energy_drift_relative: error")

@@ -5,14 +5,12 @@ References: the two-mass model's exact motion under a force held over each step,
 augmented system (q_c, q_m, v_c, v_m, F) stepped here; each shaper's defining equations in cos/sin form; the
 sampled loop's law written out from the docstring (a set point on a bang-bang path, its force, its rate and the
 belt's quasi-static stretch fed forward, the force clipped at the limit) and its Gamma by quadrature. MuJoCo is
-held to bounds derived from RK4's order as in tests/scenes/printer_head/test_printer_shaping.py: per step |R(z) - e^z| <=
-|z|^5 / 120 / (1 - |z| / 6), z = omega dt, times the belt mode's distance from the step's equilibrium.
+held to bounds derived from RK4's order as in tests/scenes/printer_head/test_printer_shaping.py: per step |R(z) - e^z|
+<= |z|^5 / 120 / (1 - |z| / 6), z = omega dt, times the belt mode's distance from the step's equilibrium.
 """
 
 import json
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -421,12 +419,6 @@ def test_resonance_interval_covers_the_belt_in_38_of_40_seeds():
 # -- bad input --------------------------------------------------------------------------------------------------
 
 
-def _cli(*argv):
-    return subprocess.run(
-        [sys.executable, "-m", "springlab", *argv], capture_output=True, text=True, timeout=120, check=False
-    )
-
-
 @pytest.mark.parametrize(
     "argv, message",
     [
@@ -443,19 +435,19 @@ def _cli(*argv):
         ),
     ],
 )
-def test_bad_control_input_is_one_line_exit_2_nothing_written(tmp_path, argv, message):
+def test_bad_control_input_is_one_line_exit_2_nothing_written(tmp_path, cli, argv, message):
     out = tmp_path / "out"
-    proc = _cli("run", "printer_head", *argv, "--output", str(out))
-    assert proc.returncode == 2, proc.stderr
-    lines = proc.stderr.strip().splitlines()
+    proc = cli("run", "printer_head", *argv, "--output", str(out))
+    assert proc.code == 2, proc.err
+    lines = proc.err.strip().splitlines()
     assert len(lines) == 1 and message in lines[0], lines
     assert not out.exists() or not any(out.iterdir())
 
 
-def test_control_scenarios_write_their_answer_quantities(tmp_path):
-    proc = _cli("run", "printer_head", "move_zv", "--duration", "0.1", "--json")
-    assert proc.returncode == 0, proc.stderr
-    quantities = json.loads(proc.stdout)["quantities"]
+def test_control_scenarios_write_their_answer_quantities(cli):
+    proc = cli("run", "printer_head", "move_zv", "--duration", "0.1", "--json")
+    assert proc.code == 0, proc.err
+    quantities = json.loads(proc.out)["quantities"]
     assert {"residual_amplitude_m", "residual_amplitude_m_exact", "positioning_time_s", "shaper_duration_s"} <= set(
         quantities
     )
@@ -492,8 +484,9 @@ def test_answer_tables_are_verified_and_shaping_wins_on_both_carriages():
 
 @pytest.mark.slow
 def test_answer_table_quiet_move_is_the_exact_quiet_time():
-    """The table's quietest move runs at the force that makes it last T_q = 0.0890 s (tests/scenes/printer_head/test_printer_shaping.py
-    scans it), rounded up to whole steps, and is positioned by then."""
+    """The table's quietest move runs at the force that makes it last T_q = 0.0890 s
+    (tests/scenes/printer_head/test_printer_shaping.py scans it), rounded up to whole steps, and is positioned by
+    then."""
     from springlab.scenes.printer_head import answers
 
     table = answers.positioning_table("inkjet")

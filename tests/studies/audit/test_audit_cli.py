@@ -76,7 +76,7 @@ def test_the_same_audit_command_twice_gives_the_same_recommendation_and_front(tm
         (["PENDULUM", "--settle", "-1"], "settle must be"),
     ],
 )
-def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys, args, message):
+def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, cli, args, message):
     broken = tmp_path / "broken.xml"
     broken.write_text("<mujoco><worldbody><body><joint type='hinge'/></body></worldbody>")
     pendulum = tmp_path / "pendulum.xml"
@@ -85,8 +85,7 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys, args,
     limited.write_text(pendulum_xml().replace('axis="0 1 0"', 'axis="0 1 0" range="-20 20"'))
     paths = {"BROKEN": str(broken), "PENDULUM": str(pendulum), "LIMITED": str(limited)}
     out = tmp_path / "out"
-    code = main(["audit", *[paths.get(a, a) for a in args], "--output", str(out)])
-    err = capsys.readouterr().err
+    code, _, err = cli("audit", *[paths.get(a, a) for a in args], "--output", str(out))
     assert code == 2
     assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
     assert not out.exists() or not any(out.iterdir())

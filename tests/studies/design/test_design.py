@@ -17,7 +17,6 @@ import pytest
 import scipy.linalg
 
 from springlab import outputs, scenes
-from springlab.cli.main import main
 from springlab.errors import UnknownNameError
 from springlab.scenes.capabilities.design import DesignSpec
 from springlab.studies.design import study as design
@@ -144,11 +143,10 @@ def test_default_configuration_settles_as_the_exact_trajectory_says(small_study)
 
 
 @pytest.mark.slow
-def test_design_json_has_the_documented_shape(capsys, tmp_path):
+def test_design_json_has_the_documented_shape(cli, tmp_path):
     # end to end: the command line's arguments reach the study (levels, plane, Sobol samples)
     argv = ["design", "printer_head", "--levels", "3", "--plane", "5", "--sobol", "8", "--json"]
-    code = main([*argv, "--output", str(tmp_path / "d")])
-    out, err = capsys.readouterr()
+    code, out, err = cli(*argv, "--output", str(tmp_path / "d"))
     assert code == 0, err
     summary = json.loads(out)
     for key in (
@@ -262,9 +260,8 @@ def test_design_text_answers_both_questions(small_study, monkeypatch, cli):
         (["design", "printer_head", "--levels", "3", "--set", "belt_damping=0"], "belt_damping"),
     ],
 )
-def test_design_bad_input_exits_2_with_one_line(argv, needle, capsys):
-    code = main(argv)
-    out, err = capsys.readouterr()
+def test_design_bad_input_exits_2_with_one_line(argv, needle, cli):
+    code, out, err = cli(*argv)
     assert code == 2
     assert out == ""
     assert len(err.strip().splitlines()) == 1

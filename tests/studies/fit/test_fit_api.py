@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from springlab import scenes
-from springlab.cli.main import build_parser, main
+from springlab.cli.main import build_parser
 from springlab.errors import BadInputError
 from springlab.scenes.capabilities.fit import OscillatorFit, PolynomialFit
 from springlab.studies.fit import fit as fit_module
@@ -133,15 +133,14 @@ def _fit_subparser() -> argparse.ArgumentParser:
     return commands.choices["fit"]
 
 
-def test_the_cli_lists_the_scenes_that_declare_a_fit(tmp_path, capsys):
+def test_the_cli_lists_the_scenes_that_declare_a_fit(tmp_path, cli):
     declared = {name for name, scene in scenes.SCENES.items() if scene.fit}
     assert declared and declared != set(scenes.SCENES)  # some scenes can be fitted and some cannot
     assert set(fittable()) == declared
     scene_help = next(a.help for a in _fit_subparser()._actions if a.dest == "scene")
     assert set(re.split(r", | or ", scene_help)) == declared
     unfit = next(name for name, scene in scenes.SCENES.items() if scene.fit is None)
-    code = main(["fit", unfit, str(_decay(tmp_path / "d.csv"))])
-    err = capsys.readouterr().err
+    code, _, err = cli("fit", unfit, str(_decay(tmp_path / "d.csv")))
     listed = re.search(r"valid: (.*) \(", err)
     assert code == 2 and listed is not None and set(listed.group(1).split(", ")) == declared
 

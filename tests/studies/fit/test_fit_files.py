@@ -18,7 +18,6 @@ import math
 import numpy as np
 import pytest
 
-from springlab.cli.main import main
 from springlab.errors import BadInputError
 from springlab.studies.fit import data as fit_data
 from springlab.studies.fit import reader
@@ -190,11 +189,10 @@ def _with(line_number: int, new: str) -> str:
         ("time,slider_pos\n\0\0", (), "not a text file"),
     ],
 )
-def test_a_file_it_cannot_read_is_one_line_exit_2(tmp_path, capsys, content, extra, message):
+def test_a_file_it_cannot_read_is_one_line_exit_2(tmp_path, cli, content, extra, message):
     path = tmp_path / "d.csv"
     path.write_text(content)
-    code = main(["fit", "slider", str(path), "--output", str(tmp_path / "out"), *extra])
-    out, err = capsys.readouterr()
+    code, out, err = cli("fit", "slider", str(path), "--output", str(tmp_path / "out"), *extra)
     assert code == 2 and err.count("\n") == 1 and message in err, err
     assert "Traceback" not in err and not (tmp_path / "out").exists()
 
@@ -221,7 +219,7 @@ def test_a_ragged_row_past_the_first_block_is_named_by_its_line(tmp_path, monkey
         ("time,slider_pos_mm\ns,m", {}, "its name says 'mm', the units row 'm': no unit applied"),
     ],
 )
-def test_a_unit_that_cannot_be_applied_is_a_one_line_warning(tmp_path, capsys, header, mapping, warning):
+def test_a_unit_that_cannot_be_applied_is_a_one_line_warning(tmp_path, cli, header, mapping, warning):
     path = tmp_path / "d.csv"
     path.write_text(text(header))
     record = fit_data.load(path, ("slider",), mapping=mapping)
@@ -229,8 +227,7 @@ def test_a_unit_that_cannot_be_applied_is_a_one_line_warning(tmp_path, capsys, h
     warnings = [note for note in record.notes if note.startswith("warning: ")]
     assert len(warnings) == 1 and warning in warnings[0] and "FACTOR if it is not" in warnings[0]
     if not mapping:  # on the terminal: one line
-        code = main(["fit", "slider", str(path)])
-        out, _ = capsys.readouterr()
+        code, out, _ = cli("fit", "slider", str(path))
         assert code in (0, 1) and [line for line in out.splitlines() if "warning" in line] == [f"  {warnings[0]}"]
 
 
@@ -247,14 +244,23 @@ def test_an_explicit_factor_wins_over_the_columns_unit_and_says_so(tmp_path):
     assert "--scale wins over 'disp_mm''s mm" in wins.notes[0] and "--time-scale wins" in wins.notes[0]
 
 
-def test_time_scale_turns_a_millisecond_record_into_the_tidy_fit(tmp_path, capsys):
+def test_time_scale_turns_a_millisecond_record_into_the_tidy_fit(tmp_path, cli):
     path = tmp_path / "d.csv"
     path.write_text(text("t,x", factors=(1e-3, 1e-3)))
-    code = main(
-        ["fit", "slider", str(path), "--map", "t=time", "--map", "x=slider_pos"]
-        + ["--time-scale", "0.001", "--scale", "0.001", "--json"]
+    code, out, err = cli(
+        "fit",
+        "slider",
+        path,
+        "--map",
+        "t=time",
+        "--map",
+        "x=slider_pos",
+        "--time-scale",
+        "0.001",
+        "--scale",
+        "0.001",
+        "--json",
     )
-    out, err = capsys.readouterr()
     doc = json.loads(out)
     assert code in (0, 1) and err == ""
     assert doc["estimates"] == tidy_fit(1e-3, 1e-3).to_dict()["estimates"]
