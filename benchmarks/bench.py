@@ -204,6 +204,37 @@ def simulate_row() -> Row:
     )
 
 
+def sobol_row(base_samples: int = 256) -> Row:
+    """The printer head's Sobol study on one thread against a plain rollout of the same steps (bench_sobol.py)."""
+    import bench_sobol
+    from springlab.studies.design import moves, sobol
+    from springlab.studies.executor import Executor
+
+    base, values = bench_sobol.study_values(base_samples)
+    steps = np.asarray(moves.simulate(bench_sobol.SCENE, base, values, nthread=1).steps)
+    runs = len(steps)
+
+    def path():
+        sobol.run_sobol(bench_sobol.SCENE, base_samples, executor=Executor(nthread=1, progress=False))
+
+    timings = alternately(path, bench_sobol.raw_rollout(base, values, steps), 2)
+    default_runs = bench_sobol.default_runs()
+    minutes = timings[1] / runs * default_runs / 2 / 60
+    row = Row(
+        "design printer_head --sobol",
+        f"{runs} runs (N = {base_samples}), {int(steps.sum())} steps rk4, one thread",
+        *timings[:2],
+        "rollout",
+        *timings[2:],
+        1.3,
+        "(set)",
+        f"{timings[1] / runs * 1e3:.2f} ms CPU per run: {default_runs:,} runs on 2 idle cores {minutes:.1f} min"
+        " (CPU x runs / 2; the LocalCluster scaling and the 64-core projection: bench_sobol.py below)",
+    )
+    print(f"  {row.name}: {row.ratio:.2f}", flush=True)
+    return row
+
+
 def command_row(name: str, argv: list[str], work: str, budget: float, basis: str, *, cold: bool = True) -> Row:
     """A whole command in this process against the time it spent inside MuJoCo."""
     from springlab.cli.main import main
@@ -332,6 +363,8 @@ def main(argv: list[str] | None = None) -> int:
     rows += run_rows(only)
     if not only or "simulate" in only:
         rows.append(simulate_row())
+    if not only or "sobol" in only:
+        rows.append(sobol_row())
     for name, command, work, budget, basis in COMMANDS:
         if not only or name in only:
             rows.append(command_row(name, command, work, budget, basis))
