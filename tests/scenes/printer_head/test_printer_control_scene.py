@@ -407,12 +407,30 @@ def test_resonance_test_measures_the_belt_within_its_interval_and_chooses_zv():
     assert q["accelerometer_noise_fitted_m_s2"] == pytest.approx(0.5, rel=5 / math.sqrt(2 * samples))
 
 
-@pytest.mark.slow
 def test_resonance_interval_covers_the_belt_in_38_of_40_seeds():
-    covered = 0
-    for seed in range(40):
-        low, high = springlab.run("printer_head", "resonance_test", seed=seed).quantities["belt_frequency_hz_ci95"]
-        covered += low <= F_N <= high
+    # the seed draws the accelerometer's noise and nothing else: the chirp and the belt's response are one MuJoCo
+    # run whatever the seed (asserted below), so each seed's interval is the scene's fit of that run's readings
+    # with the seed's noise, done here as the scene does it (scenes/printer_head/resonance_test.py) and held bit
+    # for bit to the interval springlab.run reports for two seeds; 40 runs of 0.25 s became one run and 40 fits
+    from springlab.exact import resonance
+    from springlab.scenes.printer_head.control import ACCELEROMETER
+    from springlab.scenes.printer_head.resonance_test import ResonanceTest
+
+    first, second = (springlab.run("printer_head", "resonance_test", seed=seed) for seed in (0, 1))
+    np.testing.assert_array_equal(first.trajectory.sensordata, second.trajectory.sensordata)
+    p, dt, steps = first.parameters, first.dt, len(first.time) - 1
+    every = ResonanceTest.every(p, dt)
+    force = ResonanceTest.sweep(p, steps, dt)
+    readings = first.trajectory.sensordata[:steps:every, int(first.model.sensor(ACCELEROMETER).adr[0])]
+
+    def interval(seed: int) -> list[float]:
+        noise = p["accelerometer_noise"] * np.random.default_rng(seed).standard_normal(readings.size)
+        fit = resonance.fit_resonance(force, readings + noise, dt, every, (p["sweep_low_hz"], p["sweep_high_hz"]))
+        return list(fit.frequency_ci95)
+
+    assert interval(0) == first.quantities["belt_frequency_hz_ci95"]
+    assert interval(1) == second.quantities["belt_frequency_hz_ci95"]
+    covered = sum(low <= F_N <= high for low, high in map(interval, range(40)))
     assert covered >= 38
 
 
