@@ -272,7 +272,7 @@ COMMANDS = [
         3.0,
         "(set)",
     ),
-    ("tradeoff", ["tradeoff", "slider", "free", "--output", "{out}"], "every integrator and dt", 6.0, "(set)"),
+    ("tradeoff", ["tradeoff", "slider", "free", "--output", "{out}"], "every integrator and dt", 2.5, "(set)"),
     # mostly exact work (the step maps' eigenvalues, bisected limits): its MuJoCo calls are a small floor
     ("stability", ["stability", "--output", "{out}"], "the stability limits", 250.0, "(set)"),
     (
@@ -288,14 +288,14 @@ COMMANDS = [
         "design --sobol",
         ["design", "printer_head", "--sobol", "256", "--output", "{out}"],
         "the design study and a Sobol analysis of 256 base samples (issue 37's is 16384: benchmarks/bench_executor.py)",
-        3.0,
+        1.6,
         "(set)",
     ),
     (
         "refine",
         ["refine", "drill_string", "--output", "{out}"],
         "the drill string's element counts and settings for its question",
-        3.0,
+        1.6,
         "(set)",
     ),
 ]
@@ -307,7 +307,7 @@ def audit_command() -> tuple[str, list[str], str, float, str]:
 
     humanoid = pathlib.Path(dm_control.__file__).parent / "suite" / "humanoid.xml"
     argv = ["audit", str(humanoid), "--settle", "3", "--tol", "1e-2", "--output", "{out}"]
-    return "audit humanoid", argv, "dm_control's humanoid, 27 DOF on the floor, 5 integrators", 3.0, "(set)"
+    return "audit humanoid", argv, "dm_control's humanoid, 27 DOF on the floor, 5 integrators", 1.6, "(set)"
 
 
 #: a line a bench_*.py script prints to add a row to the table: the prefix, then the row's fields as JSON

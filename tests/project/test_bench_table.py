@@ -53,13 +53,18 @@ def test_a_script_adds_rows_by_printing_them_and_its_other_lines_stay_text(bench
 
 
 def test_the_table_shows_paths_relative_to_the_checkout_and_no_temporary_folder(bench):
+    import sysconfig
     import tempfile
 
     _, paths = bench
-    text = f"friction-settings {ROOT / 'tests' / 'data' / 'gripper.xml'} --output {tempfile.gettempdir()}/tmpab12/x"
+    installed = sysconfig.get_paths()["purelib"]
+    text = (
+        f"friction-settings {ROOT / 'tests' / 'data' / 'gripper.xml'} --output {tempfile.gettempdir()}/tmpab12/x;"
+        f" audit {installed}/dm_control/suite/humanoid.xml"
+    )
     shown = paths.shown(text)
-    assert str(ROOT) not in shown and tempfile.gettempdir() + "/" not in shown
-    assert "tests/data/gripper.xml" in shown
+    assert str(ROOT) not in shown and tempfile.gettempdir() + "/" not in shown and installed not in shown
+    assert "tests/data/gripper.xml" in shown and "site-packages/dm_control/suite/humanoid.xml" in shown
 
 
 def test_every_row_group_and_script_is_listed_with_a_rough_time_and_unknown_names_are_refused():
