@@ -185,6 +185,7 @@ class _MediaBeside:
         for zeta in self.zetas:
             written += zeta.result()
         self.pool.shutdown()
+        _release()
         seconds = time.perf_counter() - self.started
         self.state.artifacts[self.artifact_at : self.artifact_at] = written
         self.state.timings[self.timing_at : self.timing_at] = [*timings, ("media_step", seconds)]
@@ -195,6 +196,13 @@ class _MediaBeside:
         self.pool.shutdown(wait=False, cancel_futures=True)
         for process in list(getattr(self.pool, "_processes", {}).values()):
             process.terminate()
+        _release()
+
+
+def _release() -> None:
+    """Let go of the state the workers were forked with (they have their own copy)."""
+    global _FORKED
+    _FORKED = None
 
 
 def report_step(state: DemoState) -> list[Artifact]:
