@@ -218,6 +218,36 @@ def simulate_row() -> Row:
     )
 
 
+def sobol_row(base_samples: int = 256) -> Row:
+    """The printer head's Sobol study on one thread against a plain rollout of the same steps (bench_sobol.py)."""
+    import bench_sobol
+    from springlab.studies.design import moves, sobol
+    from springlab.studies.executor import Executor
+
+    base, values = bench_sobol.study_values(base_samples)
+    steps = np.asarray(moves.simulate(bench_sobol.SCENE, base, values, nthread=1).steps)
+    runs = len(steps)
+
+    def path():
+        sobol.run_sobol(bench_sobol.SCENE, base_samples, executor=Executor(nthread=1, progress=False))
+
+    timings = alternately(path, bench_sobol.raw_rollout(base, values, steps), 2)
+    default_runs = bench_sobol.default_runs()
+    minutes = timings[1] / runs * default_runs / 2 / 60
+    row = Row(
+        "design printer_head --sobol",
+        f"{runs} runs (N = {base_samples}), {int(steps.sum())} steps rk4, one thread",
+        *timings[:2],
+        "rollout",
+        *timings[2:],
+        1.3,
+        "(set)",
+        f"{timings[1] / runs * 1e3:.2f} ms CPU per run: {default_runs:,} runs on 2 idle cores {minutes:.1f} min"
+        " (CPU x runs / 2; the LocalCluster scaling and the 64-core projection: bench_sobol.py below)",
+    )
+    return row
+
+
 def command_row(name: str, argv: list[str], work: str, budget: float, basis: str, *, cold: bool = True) -> Row:
     """A whole command in this process against the time it spent inside MuJoCo (springlab's caches cleared first
     unless `cold` is False; the modules other rows imported stay imported: `validate` is the fresh-interpreter row)."""
@@ -284,13 +314,6 @@ COMMANDS = [
     ),
     ("rms stay_cable", ["rms", "stay_cable", "--output", "{out}"], "random load, stay cable", 3.0, "(set)"),
     ("design printer_head", ["design", "printer_head", "--output", "{out}"], "the design study", 3.0, "(set)"),
-    (
-        "design --sobol",
-        ["design", "printer_head", "--sobol", "256", "--output", "{out}"],
-        "the design study and a Sobol analysis of 256 base samples (issue 37's is 16384: benchmarks/bench_executor.py)",
-        1.6,
-        "(set)",
-    ),
     (
         "refine",
         ["refine", "drill_string", "--output", "{out}"],
@@ -409,6 +432,7 @@ def benches(selected: set[str] | None) -> list[Bench]:
     out = [
         Bench("run", 45, lambda folder: run_rows(selected)),
         Bench("simulate", 3, lambda folder: [simulate_row()]),
+        Bench("sobol", 70, lambda folder: [sobol_row()]),
         Bench("validate", 35, lambda folder: paths.validate_rows()),
         *(Bench(name, estimate, _command(name)) for name, estimate in _COMMAND_ESTIMATES.items()),
         Bench("audit humanoid", 60, lambda folder: [command_row(*audit_command())]),
@@ -432,7 +456,6 @@ _COMMAND_ESTIMATES = {
     "friction-settings gripper": 12,
     "rms stay_cable": 150,
     "design printer_head": 25,
-    "design --sobol": 45,
     "refine": 30,
 }
 #: rough wall time [s] of each older script on an idle 2-core machine (their own budgets and docs)
@@ -450,6 +473,7 @@ SCRIPT_ESTIMATES = {
     "bench_printer_control": 60,
     "bench_render": 90,
     "bench_simulate": 30,
+    "bench_sobol": 150,
     "bench_stability_limit": 30,
     "bench_stay_cable": 90,
     "bench_tradeoff": 60,

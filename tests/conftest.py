@@ -8,6 +8,8 @@ import os
 import mujoco
 import pytest
 
+from helpers.cli import CliResult
+
 os.environ.setdefault("MUJOCO_GL", "egl")
 
 
@@ -18,6 +20,23 @@ def _ignore_warning(message: str) -> None:
 
 
 mujoco.set_mju_user_warning(_ignore_warning)
+
+
+@pytest.fixture
+def cli(capsys):
+    """`springlab ARGV` in this process: `cli("run", "slider", "--output", tmp_path)` calls
+    springlab.cli.main.main with every argument as a string and returns a frozen CliResult(code, out, err) of
+    what that command printed (output printed before the call is dropped). A test that needs a real process
+    (signals, the interpreter's warnings, a working directory) runs `python -m springlab` itself."""
+    from springlab.cli.main import main
+
+    def run(*argv: object) -> CliResult:
+        capsys.readouterr()
+        code = main([str(a) for a in argv])
+        out, err = capsys.readouterr()
+        return CliResult(code, out, err)
+
+    return run
 
 
 @pytest.fixture(scope="session")

@@ -10,17 +10,10 @@ import numpy as np
 import pytest
 
 from helpers.contract import SUMMARY_KEYS
-from springlab.cli.main import main
 
 
-def _run(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def test_run_exercise_writes_the_csv_and_json_contract(tmp_path, capsys):
-    code, out, err = _run(capsys, "run", "slider", "exercise", "--output", str(tmp_path / "d"))
+def test_run_exercise_writes_the_csv_and_json_contract(tmp_path, cli):
+    code, out, err = cli("run", "slider", "exercise", "--output", str(tmp_path / "d"))
     assert code == 0, err
     with open(tmp_path / "d" / "trajectory.csv") as handle:
         rows = list(csv.reader(handle))
@@ -36,25 +29,24 @@ def test_run_exercise_writes_the_csv_and_json_contract(tmp_path, capsys):
     assert set(summary["errors"]) == {"slider_pos", "slider_vel"}
 
 
-def test_run_json_prints_the_summary(capsys):
-    code, out, _ = _run(capsys, "run", "slider", "--json", "--duration", "0.5")
+def test_run_json_prints_the_summary(cli):
+    code, out, _ = cli("run", "slider", "--json", "--duration", "0.5")
     assert code == 0
     assert json.loads(out)["scenario"] == "free"
 
 
-def test_record_every_thins_the_csv(tmp_path, capsys):
-    code, _, _ = _run(
-        capsys, "run", "slider", "--duration", "1", "--dt", "0.001", "--record-every", "10", "--output", str(tmp_path)
+def test_record_every_thins_the_csv(tmp_path, cli):
+    code, _, _ = cli(
+        "run", "slider", "--duration", "1", "--dt", "0.001", "--record-every", "10", "--output", str(tmp_path)
     )
     assert code == 0
     lines = (tmp_path / "trajectory.csv").read_text().splitlines()
     assert len(lines) == 1 + 101
 
 
-def test_an_inaccurate_run_is_written_flagged_and_exits_1(tmp_path, capsys):
+def test_an_inaccurate_run_is_written_flagged_and_exits_1(tmp_path, cli):
     # first-order euler at 10 ms cannot meet a 1e-6 demand: a result, clearly flagged
-    code, out, _ = _run(
-        capsys,
+    code, out, _ = cli(
         "run",
         "slider",
         "undamped",
@@ -100,26 +92,25 @@ def test_an_inaccurate_run_is_written_flagged_and_exits_1(tmp_path, capsys):
         (["plot", "slider", "--kind", "pie", "--output", "p.png"], "invalid choice: 'pie'"),
     ],
 )
-def test_bad_input_exits_2_with_one_line_naming_what_is_valid(argv, needle, capsys):
-    code, out, err = _run(capsys, *argv)
+def test_bad_input_exits_2_with_one_line_naming_what_is_valid(argv, needle, cli):
+    code, out, err = cli(*argv)
     assert code == 2
     assert needle in err
     assert len(err.strip().splitlines()) == 1
     assert "Traceback" not in err
 
 
-def test_unwritable_output_is_a_clear_error_and_leaves_nothing(tmp_path, capsys):
+def test_unwritable_output_is_a_clear_error_and_leaves_nothing(tmp_path, cli):
     blocker = tmp_path / "file"
     blocker.write_text("x")
-    code, _, err = _run(capsys, "run", "slider", "--duration", "0.1", "--output", str(blocker / "sub"))
+    code, _, err = cli("run", "slider", "--duration", "0.1", "--output", str(blocker / "sub"))
     assert code == 2
     assert "cannot create output directory" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]
 
 
-def test_divergence_exits_3_names_the_limit_and_writes_nothing(tmp_path, capsys):
-    code, _, err = _run(
-        capsys,
+def test_divergence_exits_3_names_the_limit_and_writes_nothing(tmp_path, cli):
+    code, _, err = cli(
         "run",
         "slider",
         "--integrator",
@@ -165,25 +156,25 @@ def test_console_script_prints_no_traceback_and_leaves_no_mujoco_log(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_validate_is_green_and_json_lists_every_exact_scenario(capsys):
-    code, out, _ = _run(capsys, "validate", "slider", "--json")
+def test_validate_is_green_and_json_lists_every_exact_scenario(cli):
+    code, out, _ = cli("validate", "slider", "--json")
     rows = json.loads(out)
     assert code == 0
     assert {r["scenario"] for r in rows} >= {"free", "step", "harmonic", "exercise", "critical"}
     assert all(r["passed"] and r["max_rel_error"] <= r["tolerance"] for r in rows)
 
 
-def test_list_json_names_scenes_scenarios_and_units(capsys):
-    code, out, _ = _run(capsys, "list", "--json")
+def test_list_json_names_scenes_scenarios_and_units(cli):
+    code, out, _ = cli("list", "--json")
     catalogue = json.loads(out)
     slider = next(s for s in catalogue if s["scene"] == "slider")
     assert slider["parameters"]["mass"]["unit"] == "kg"
     assert "exercise" in slider["scenarios"]
 
 
-def test_outputs_get_ordinary_file_permissions(tmp_path, capsys):
+def test_outputs_get_ordinary_file_permissions(tmp_path, cli):
     # written through a temporary file and renamed: the result must not inherit mkstemp's 0600
-    code, _, _ = _run(capsys, "run", "slider", "--duration", "0.1", "--output", str(tmp_path))
+    code, _, _ = cli("run", "slider", "--duration", "0.1", "--output", str(tmp_path))
     assert code == 0
     umask = os.umask(0)
     os.umask(umask)

@@ -9,7 +9,7 @@ import pytest
 import springlab
 from helpers.paths import ROOT
 from springlab import scenes
-from springlab.cli.main import build_parser, main
+from springlab.cli.main import build_parser
 from springlab.demo import steps as demo
 from springlab.sim import model_files
 from springlab.studies.design import study as design
@@ -18,14 +18,8 @@ from springlab.studies.design import study as design
 EXAMPLE_CSV = ROOT / "docs" / "examples" / "decay_mm.csv"
 
 
-def _run(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def test_version_prints_the_package_version(capsys):
-    code, out, _ = _run(capsys, "--version")
+def test_version_prints_the_package_version(cli):
+    code, out, _ = cli("--version")
     assert code == 0 and out.strip() == f"springlab {springlab.__version__}"
 
 
@@ -35,15 +29,15 @@ def test_help_speaks_to_users_first():
     assert "vibration" in first and "exact solution" in build_parser().format_help()
 
 
-def test_a_scenario_typed_after_the_options_is_the_scenario(capsys):
-    code, out, err = _run(capsys, "run", "slider", "--set", "x0=0.05", "--duration", "0.5", "harmonic", "--json")
+def test_a_scenario_typed_after_the_options_is_the_scenario(cli):
+    code, out, err = cli("run", "slider", "--set", "x0=0.05", "--duration", "0.5", "harmonic", "--json")
     assert code == 0, err
     summary = json.loads(out)
     assert summary["scenario"] == "harmonic" and summary["parameters"]["x0"] == 0.05
 
 
-def test_an_extra_positional_is_still_refused_in_one_line(capsys):
-    code, _, err = _run(capsys, "run", "slider", "free", "extra")
+def test_an_extra_positional_is_still_refused_in_one_line(cli):
+    code, _, err = cli("run", "slider", "free", "extra")
     assert code == 2 and "unrecognized arguments: extra" in err and len(err.strip().splitlines()) == 1
 
 
@@ -58,7 +52,7 @@ def test_an_extra_positional_is_still_refused_in_one_line(capsys):
         (["fit", "slider", str(EXAMPLE_CSV)], "springlab.studies.fit.fit", "fit"),
     ],
 )
-def test_an_unwritable_output_fails_before_any_computing(tmp_path, capsys, monkeypatch, command, module, function):
+def test_an_unwritable_output_fails_before_any_computing(tmp_path, cli, monkeypatch, command, module, function):
     import importlib
 
     def must_not_run(*args, **kwargs):
@@ -67,7 +61,7 @@ def test_an_unwritable_output_fails_before_any_computing(tmp_path, capsys, monke
     monkeypatch.setattr(importlib.import_module(module), function, must_not_run)
     blocker = tmp_path / "file"
     blocker.write_text("a file, not a folder")
-    code, out, err = _run(capsys, *command, "--output", str(blocker / "sub"))
+    code, out, err = cli(*command, "--output", str(blocker / "sub"))
     assert code == 2 and "cannot write into output directory" in err and out == ""
     assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]
 
@@ -79,8 +73,8 @@ def test_the_output_check_leaves_no_folder_behind(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_list_shows_each_scenarios_validated_dt(capsys):
-    code, out, _ = _run(capsys, "list", "--json")
+def test_list_shows_each_scenarios_validated_dt(cli):
+    code, out, _ = cli("list", "--json")
     assert code == 0
     catalogue = {entry["scene"]: entry for entry in json.loads(out)}
     for scene in scenes.SCENES.values():
@@ -89,13 +83,13 @@ def test_list_shows_each_scenarios_validated_dt(capsys):
             # the dt `run` uses when none is given
             assert setting["dt"] == (scenario.dt or scene.dt)
     # the slider's undamped scenario validates at 2.5 ms, not the scene's 2 ms: the text says so too
-    code, out, _ = _run(capsys, "list")
+    code, out, _ = cli("list")
     line = next(line for line in out.splitlines() if line.strip().startswith("undamped"))
     assert "2.5 ms" in line
 
 
-def test_list_dt_is_the_dt_run_uses(capsys):
-    code, out, _ = _run(capsys, "list", "--json")
+def test_list_dt_is_the_dt_run_uses(cli):
+    code, out, _ = cli("list", "--json")
     setting = {e["scene"]: e for e in json.loads(out)}["slider"]["scenario_settings"]["undamped"]
     assert springlab.run("slider", "undamped", duration=0.1).to_dict()["dt"] == setting["dt"]
 
@@ -108,13 +102,13 @@ def test_design_accepts_the_damping_ratio_its_table_shows():
     assert scenes.get("printer_head").design.hooks.defaults(base)["damping_ratio"] == pytest.approx(0.1, rel=1e-14)
 
 
-def test_design_refuses_both_names_for_the_damping(capsys):
-    code, _, err = _run(capsys, "design", "printer_head", "--set", "damping_ratio=0.1", "--set", "belt_damping=3")
+def test_design_refuses_both_names_for_the_damping(cli):
+    code, _, err = cli("design", "printer_head", "--set", "damping_ratio=0.1", "--set", "belt_damping=3")
     assert code == 2 and "damping_ratio or belt_damping" in err
 
 
-def test_zeta_plot_of_a_two_mode_scene_says_it_needs_one_mode(tmp_path, capsys):
-    code, _, err = _run(capsys, "plot", "car", "pitch_heave", "--kind", "zeta", "--output", str(tmp_path / "z.png"))
+def test_zeta_plot_of_a_two_mode_scene_says_it_needs_one_mode(tmp_path, cli):
+    code, _, err = cli("plot", "car", "pitch_heave", "--kind", "zeta", "--output", str(tmp_path / "z.png"))
     assert code == 2 and "needs a one-mode scene" in err and "2 modes" in err
     assert "does not apply" not in err
 
@@ -147,7 +141,7 @@ def test_the_rk4_limit_costs_a_vectorised_scan_not_thousands_of_calls(monkeypatc
     assert len(calls) <= 5 * (1 + 60)
 
 
-def test_stability_output_writes_its_three_files(tmp_path, capsys, monkeypatch, stability_report):
+def test_stability_output_writes_its_three_files(tmp_path, cli, monkeypatch, stability_report):
     import numpy as np
 
     from springlab.studies import stability
@@ -156,14 +150,14 @@ def test_stability_output_writes_its_three_files(tmp_path, capsys, monkeypatch, 
     small = stability.amplification_map(zetas=[0.0, 1.0], omega_dts=np.geomspace(1e-2, 1e3, 8))
     monkeypatch.setattr(stability, "stability_report", lambda **options: stability_report)
     monkeypatch.setattr(stability, "amplification_map", lambda **options: small)
-    code, _, err = _run(capsys, "stability", "--output", str(tmp_path))
+    code, _, err = cli("stability", "--output", str(tmp_path))
     assert code == 0, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["energy.png", "stability.json", "stability.png"]
 
 
-def test_no_stray_files_in_the_working_directory(tmp_path, monkeypatch, capsys):
+def test_no_stray_files_in_the_working_directory(tmp_path, monkeypatch, cli):
     monkeypatch.chdir(tmp_path)
-    _run(capsys, "run", "slider", "--set", "damping=1e300")
+    cli("run", "slider", "--set", "damping=1e300")
     assert os.listdir(tmp_path) == [] and not pathlib.Path("MUJOCO_LOG.TXT").exists()
 
 

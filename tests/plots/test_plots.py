@@ -176,7 +176,8 @@ def test_plotting_never_touches_pyplot_global_state():
 @pytest.mark.slow
 def test_tradeoff_stability_and_design_charts_leave_the_callers_backend_alone(tmp_path):
     # a library must not switch a notebook's backend (matplotlib.use) or import pyplot; the charts only need
-    # results to draw: small studies, and a hand-built stability report (tests/studies/test_stability.py checks the real one)
+    # results to draw: small studies, and a hand-built stability report (tests/studies/test_stability.py checks
+    # the real one)
     code = (
         "import sys, matplotlib\n"
         "matplotlib.use('svg')\n"

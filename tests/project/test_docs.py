@@ -61,12 +61,17 @@ def _quick_start() -> list[list[str]]:
 
 
 @pytest.mark.slow
-def test_readme_quick_start_commands_run(tmp_path):
+def test_readme_quick_start_commands_run(tmp_path, monkeypatch, cli):
+    # each command as `springlab` runs it, in this process (the interpreter's start-up is
+    # tests/cli/test_cli.py's), in a fresh folder as a newcomer would; the first also in a process of its own
     commands = _quick_start()
     assert len(commands) >= 3
+    monkeypatch.chdir(tmp_path)
     for args in commands:
-        proc = subprocess.run(
-            [sys.executable, "-m", "springlab", *args], cwd=tmp_path, capture_output=True, text=True, timeout=600
-        )
-        assert proc.returncode == 0, f"springlab {' '.join(args)} exited {proc.returncode}: {proc.stderr}"
-        assert "Traceback" not in proc.stderr
+        done = cli(*args)
+        assert done.code == 0, f"springlab {' '.join(args)} exited {done.code}: {done.err}"
+        assert "Traceback" not in done.err
+    proc = subprocess.run(
+        [sys.executable, "-m", "springlab", *commands[0]], cwd=tmp_path, capture_output=True, text=True, timeout=600
+    )
+    assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr

@@ -11,6 +11,7 @@ still a dependency, only a later one), so the check runs without importing sprin
 from __future__ import annotations
 
 import ast
+import functools
 import pathlib
 
 import pytest
@@ -27,6 +28,12 @@ STUDY_PACKAGES = ("audit", "design", "fit", "frequency")
 
 def modules() -> dict[str, pathlib.Path]:
     """Dotted module name (relative to springlab) -> source file, for every module of the package."""
+    return dict(_modules())
+
+
+@functools.cache
+def _modules() -> dict[str, pathlib.Path]:
+    # read once per test process: the tests below walk the same tree (the source does not change meanwhile)
     out = {}
     for path in sorted(PACKAGE.rglob("*.py")):
         parts = path.relative_to(PACKAGE).with_suffix("").parts
@@ -43,7 +50,7 @@ def imports(module: str, path: pathlib.Path, known: set[str]) -> set[str]:
     else:
         package = module.split(".")[:-1]
     found = set()
-    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+    for node in ast.walk(parsed(path)):
         if isinstance(node, ast.Import):
             for alias in node.names:
                 if alias.name == "springlab" or alias.name.startswith("springlab."):
@@ -66,9 +73,20 @@ def imports(module: str, path: pathlib.Path, known: set[str]) -> set[str]:
     return found
 
 
+@functools.cache
+def parsed(path: pathlib.Path) -> ast.Module:
+    """The syntax tree of one source file, parsed once per test process (the checks only read it)."""
+    return ast.parse(path.read_text(), str(path))
+
+
 def graph() -> dict[str, set[str]]:
+    return {name: set(targets) for name, targets in _graph().items()}
+
+
+@functools.cache
+def _graph() -> dict[str, frozenset[str]]:
     found = modules()
-    return {name: imports(name, path, set(found)) for name, path in found.items()}
+    return {name: frozenset(imports(name, path, set(found))) for name, path in found.items()}
 
 
 def test_the_import_graph_is_read_from_the_source():
@@ -147,7 +165,7 @@ LAZY_IMPORTS = {("display", "plots.figures"): "a result's .plot() looks up its d
 def lazy_imports(module: str, path: pathlib.Path) -> set[str]:
     """The springlab modules `module` imports by name: `importlib.import_module(X)` with X a string constant or
     a module-level constant holding one (a name built at run time, like the scene discovery's, is no edge)."""
-    tree = ast.parse(path.read_text(), str(path))
+    tree = parsed(path)
     constants = {
         target.id: node.value.value
         for node in tree.body
@@ -211,10 +229,11 @@ def test_nothing_outside_the_scenes_names_a_scene():
     scene declares. The command line's argument defaults and help are the one exception (front layer)."""
     names = _scene_names()
     found = []
+    edges = graph()
     for module, path in modules().items():
         if layer_of(module) in ("scenes", "front"):
             continue
-        tree = ast.parse(path.read_text(), str(path))
+        tree = parsed(path)
         docstrings = {
             id(node.body[0].value)
             for node in ast.walk(tree)
@@ -231,7 +250,7 @@ def test_nothing_outside_the_scenes_names_a_scene():
                     node = node.value
                 if isinstance(node, ast.Constant) and node.value in names and id(node) not in docstrings:
                     found.append(f"{module}:{node.lineno} names scene {node.value!r}")
-        for target in imports(module, path, set(modules())):
+        for target in edges[module]:
             parts = target.split(".")
             if parts[0] == "scenes" and len(parts) > 1 and parts[1] in names:
                 found.append(f"{module} imports springlab.{target}")

@@ -6,33 +6,57 @@ import sys
 import pytest
 
 from helpers.paths import ROOT
+from helpers.scripts import run_scripts
 
 SCRIPTS = sorted((ROOT / "scenarios").glob("*.py"))
 #: scripts that take more than ~5 s on one core (a chaotic run)
 SLOW = {"nonlinear_forced_duffing"}
 #: arguments that keep a script's run short where its default is a whole study: the design study's 3^4
-#: grid instead of 7^4 (the same code path; its physics is tested in tests/studies/design/test_design.py), one carriage's
-#: answer table instead of two (tests/scenes/printer_head/test_printer_control_scene.py runs both)
+#: grid instead of 7^4 (the same code path; its physics is tested in tests/studies/design/test_design.py), one
+#: carriage's answer table instead of two (tests/scenes/printer_head/test_printer_control_scene.py runs both)
 ARGS = {"printer_which_properties": ["--levels", "3"], "printer_positioning_table": ["--preset", "inkjet"]}
 
 
-@pytest.mark.parametrize(
-    "script",
-    [pytest.param(p, marks=pytest.mark.slow) if p.stem in SLOW else p for p in SCRIPTS],
-    ids=lambda p: p.stem,
-)
-def test_scenario_script_runs_headless(script, tmp_path):
-    command = [sys.executable, str(script), *ARGS.get(script.stem, [])]
-    proc = subprocess.run(command, cwd=tmp_path, capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    assert proc.stdout.strip()
-    assert "Traceback" not in proc.stderr
+@pytest.fixture(scope="module")
+def ran(tmp_path_factory):
+    """Every script but the slow ones, each in a process and an empty folder of its own (helpers/scripts.py)."""
+    quick = [p for p in SCRIPTS if p.stem not in SLOW]
+    return run_scripts(quick, ARGS, tmp_path_factory.mktemp("scenarios"))
 
 
-def test_exercise_script_prints_the_textbook_answer(tmp_path):
-    script = next(s for s in SCRIPTS if s.stem == "under_or_overdamped")
-    out = subprocess.run(
-        [sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=300
-    ).stdout
+def _assert_answered(code, out, err):
+    assert code == 0, err
+    assert out.strip()
+    assert "Traceback" not in err
+
+
+@pytest.mark.parametrize("script", [p for p in SCRIPTS if p.stem not in SLOW], ids=lambda p: p.stem)
+def test_scenario_script_runs_headless(script, ran):
+    _assert_answered(*ran[script.stem])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("script", [p for p in SCRIPTS if p.stem in SLOW], ids=lambda p: p.stem)
+def test_slow_scenario_script_runs_headless(script, tmp_path):
+    proc = subprocess.run(
+        [sys.executable, str(script), *ARGS.get(script.stem, [])],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    _assert_answered(proc.returncode, proc.stdout, proc.stderr)
+
+
+def test_exercise_script_prints_the_textbook_answer(ran):
+    out = ran["under_or_overdamped"].out
     assert "overdamped" in out
     assert "x(t) = 10 e^(-1 t) + -5 e^(-2 t)" in out
+
+
+def test_the_car_script_prints_the_three_answers(ran):
+    # Chapter 5.3's car on its springs: the static sag, the release's amplitude and frequency, the phase ellipse
+    out = ran["car_push_release"].out
+    assert "= 2.4525 mm" in out and "97.5475 mm above the ground" in out
+    assert "x_s = 100.0000 mm, A = -2.4525 mm" in out and "omega = sqrt(k/m) = 31.6228 rad/s" in out
+    assert "an ellipse centred at (x_s, 0)" in out and "omega |A| = 0.07755 m/s" in out

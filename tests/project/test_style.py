@@ -7,6 +7,7 @@ mypy (`make lint`) checks that the annotations are right; this checks that the p
 from __future__ import annotations
 
 import ast
+import functools
 import re
 
 from helpers.layers import LAYERS
@@ -21,11 +22,13 @@ MAX_FUNCTION_LINES = 120
 GOOGLE_SECTION = re.compile(r"^\s*(Args|Arguments|Returns|Yields|Raises|Attributes|Keyword Args):\s*$", re.M)
 
 
-def _sources() -> list[tuple[str, ast.Module]]:
-    """Every module of the package, parsed: no module is exempt."""
-    return [
+@functools.cache
+def _sources() -> tuple[tuple[str, ast.Module], ...]:
+    """Every module of the package, parsed once per test process (the checks only read the trees): no module is
+    exempt."""
+    return tuple(
         (p.relative_to(PACKAGE).as_posix(), ast.parse(p.read_text(), str(p))) for p in sorted(PACKAGE.rglob("*.py"))
-    ]
+    )
 
 
 def _docstrings(tree: ast.Module):

@@ -230,10 +230,9 @@ def test_render_command_writes_a_composite_video(tmp_path, capsys):
         (["--output", "v.mp4", "--set", "mass=-1"], "mass must be a finite number >= 1e-15 kg"),
     ],
 )
-def test_render_command_bad_input_exits_2_with_one_line(tmp_path, capsys, monkeypatch, argv, message):
+def test_render_command_bad_input_exits_2_with_one_line(tmp_path, cli, monkeypatch, argv, message):
     monkeypatch.chdir(tmp_path)
-    code = main(["render", "slider", *argv])
-    err = capsys.readouterr().err
+    code, _, err = cli("render", "slider", *argv)
     assert code == 2 and message in err and len(err.strip().splitlines()) == 1
     assert list(tmp_path.iterdir()) == []
 

@@ -1,7 +1,7 @@
 """Every result serialises one way, with one name: `to_dict()` (issue 20, "Results as objects").
 
-Read from the source with `ast`, like tests/project/test_layers.py and tests/project/test_style.py, over the whole package:
-no function or method anywhere in src/springlab is named `as_dict`, `as_json`, `report_json` or `summary`
+Read from the source with `ast`, like tests/project/test_layers.py and tests/project/test_style.py, over the whole
+package: no function or method anywhere in src/springlab is named `as_dict`, `as_json`, `report_json` or `summary`
 (a `summary` *property* is data, kept on `Result` for scripts written against `result.summary`); every class
 with a `to_dict` is a frozen dataclass; the result classes below have `to_dict`, and those that hold rows
 `to_pandas`; pandas is imported only by springlab.tables.

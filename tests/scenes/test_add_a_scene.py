@@ -42,9 +42,11 @@ def checkout(tmp_path_factory):
 
 
 #: runs springlab's command line in this process once per command, in the copy's interpreter: one import
-#: of springlab for all the commands instead of one per command (each import costs about a second)
+#: of springlab for all the commands instead of one per command (each import costs about a second); it also
+#: says which springlab that was
 DRIVER = """
 import contextlib, io, json, sys
+import springlab
 from springlab.cli.main import main
 outcomes = []
 for argv in json.loads(sys.stdin.read()):
@@ -52,7 +54,7 @@ for argv in json.loads(sys.stdin.read()):
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         code = main(argv)
     outcomes.append([code, out.getvalue(), err.getvalue()])
-print(json.dumps(outcomes))
+print(json.dumps({"springlab": springlab.__file__, "outcomes": outcomes}))
 """
 
 
@@ -69,17 +71,9 @@ def _springlab(checkout: pathlib.Path, *commands: list[str]) -> list[tuple[int, 
         timeout=900,
     )
     assert done.returncode == 0, done.stderr
-    assert json.loads(
-        subprocess.run(  # the copy's springlab is the one that ran, not the checkout's
-            [sys.executable, "-c", "import springlab, json; print(json.dumps(springlab.__file__))"],
-            cwd=checkout,
-            env=env,
-            capture_output=True,
-            text=True,
-            timeout=120,
-        ).stdout
-    ).startswith(str(checkout))
-    return [tuple(outcome) for outcome in json.loads(done.stdout)]
+    ran = json.loads(done.stdout)
+    assert ran["springlab"].startswith(str(checkout))  # the copy's springlab is the one that ran, not the checkout's
+    return [tuple(outcome) for outcome in ran["outcomes"]]
 
 
 def _json(outcome: tuple[int, str, str]):
@@ -99,16 +93,18 @@ def _without_timing(value):
 @pytest.mark.slow
 def test_a_scene_added_as_a_model_and_a_folder_serves_every_command(checkout, tmp_path):
     trajectory = tmp_path / "run"
-    listed, twin, slider, rows, plotted, tradeoff, audit, written = _springlab(
+    # one interpreter for every command: the fit reads the record the run before it wrote
+    listed, twin, slider, rows, plotted, tradeoff, audit, written, fitted = _springlab(
         checkout,
         ["list", "--json"],
         ["run", NAME, "free", "--json"],
         ["run", "slider", "free", "--json"],
         ["validate", NAME, "--json"],
         ["plot", NAME, "--kind", "zeta", "--output", str(tmp_path / "z.png")],
-        ["tradeoff", NAME, "free", "--tol", "1e-6", "--json"],
+        ["tradeoff", NAME, "free", "--tol", "1e-6", "--duration", "0.5", "--json"],  # a tenth: wiring
         ["audit", str(checkout / "models" / f"{NAME}.xml"), "--json"],
         ["run", NAME, "free", "--output", str(trajectory)],
+        ["fit", NAME, str(trajectory / "trajectory.csv"), "--json"],
     )
     listed = _json(listed)
     assert [entry["scene"] for entry in listed][-1] == NAME and "slider" in [entry["scene"] for entry in listed]
@@ -128,7 +124,6 @@ def test_a_scene_added_as_a_model_and_a_folder_serves_every_command(checkout, tm
 
     # a declared capability is all a study needs: the twin can be fitted because the slider can
     assert written[0] == 0
-    (fitted,) = _springlab(checkout, ["fit", NAME, str(trajectory / "trajectory.csv"), "--json"])
     fitted, truth = _json(fitted), twin["parameters"]
     assert fitted["scene"] == NAME and fitted["converged"] is True
     # wiring, not accuracy (tests/studies/fit/test_fit.py holds the fit to its intervals): the record is a validated

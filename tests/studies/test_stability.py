@@ -20,7 +20,6 @@ from scipy.optimize import brentq
 
 from helpers.contract import plain_json
 from springlab import files, scenes
-from springlab.cli.main import main
 from springlab.errors import BadInputError
 from springlab.exact.limits import stability_limit
 from springlab.sim.simulate import INTEGRATORS, simulate
@@ -251,60 +250,53 @@ def _fast_mode(scenario):
 
 @pytest.mark.parametrize("scenario", ["free", "undamped", "critical", "overdamped", "step", "harmonic"])
 @pytest.mark.parametrize("integrator", ["euler", "implicit", "implicitfast", "rk4"])
-def test_a_diverged_run_always_exits_3_and_writes_nothing(tmp_path, capsys, integrator, scenario):
+def test_a_diverged_run_always_exits_3_and_writes_nothing(tmp_path, cli, integrator, scenario):
     # 5 % past the tightest mode's limit, 3000 steps: the growth must be caught, however MuJoCo reacts
     dt = 1.05 * min(stability_limit(integrator, zeta) / omega for omega, zeta in _fast_mode(scenario))
     dt = float(dt)
     out = tmp_path / "d"
-    code = main(
-        [
-            "run",
-            "slider",
-            scenario,
-            "--integrator",
-            integrator,
-            "--dt",
-            repr(dt),
-            "--duration",
-            repr(3000 * dt),
-            "--output",
-            str(out),
-        ]
+    code, _, err = cli(
+        "run",
+        "slider",
+        scenario,
+        "--integrator",
+        integrator,
+        "--dt",
+        repr(dt),
+        "--duration",
+        repr(3000 * dt),
+        "--output",
+        str(out),
     )
-    err = capsys.readouterr().err
     assert code == 3, err
     assert err.count("\n") == 1 and "diverged" in err and "Traceback" not in err
     assert not out.exists() or not any(out.iterdir())
 
 
 @pytest.mark.parametrize("integrator", list(INTEGRATORS))
-def test_a_run_beyond_mujocos_value_limit_exits_3_for_every_integrator(capsys, integrator):
-    code = main(
-        [
-            "run",
-            "slider",
-            "free",
-            "--integrator",
-            integrator,
-            "--dt",
-            "1e-8",
-            "--duration",
-            "1e-5",
-            "--set",
-            "stiffness=1e12",
-            "--set",
-            "x0=0.1",
-        ]
+def test_a_run_beyond_mujocos_value_limit_exits_3_for_every_integrator(cli, integrator):
+    code, _, err = cli(
+        "run",
+        "slider",
+        "free",
+        "--integrator",
+        integrator,
+        "--dt",
+        "1e-8",
+        "--duration",
+        "1e-5",
+        "--set",
+        "stiffness=1e12",
+        "--set",
+        "x0=0.1",
     )
-    err = capsys.readouterr().err
     assert code == 3 and "diverged" in err
 
 
 @pytest.mark.slow
-def test_stability_cli_prints_json_and_writes_the_charts(tmp_path, capsys, monkeypatch, report):
+def test_stability_cli_prints_json_and_writes_the_charts(tmp_path, cli, monkeypatch, report):
     monkeypatch.setattr(stability, "stability_report", lambda full=False, executor=None: report)
-    code = main(["stability", "--json", "--output", str(tmp_path / "s")])
-    out, err = capsys.readouterr()
+    code, out, err = cli("stability", "--json", "--output", str(tmp_path / "s"))
     assert code == 0, err
     data = json.loads(out)
     assert data == files.json_ready(report.to_dict())  # --json prints the report's to_dict(), inf as null

@@ -96,9 +96,8 @@ def test_a_diverged_configuration_is_a_marked_row_and_run_refuses_it():
         ("mass=0:1:3", "configuration 0 (mass=0): mass must be a finite number"),
     ],
 )
-def test_bad_ranges_are_one_line_errors_and_write_nothing(tmp_path, capsys, vary, message):
-    code = main(["sweep", "slider", "free", "--vary", vary, "--output", str(tmp_path / "out")])
-    err = capsys.readouterr().err
+def test_bad_ranges_are_one_line_errors_and_write_nothing(tmp_path, cli, vary, message):
+    code, _, err = cli("sweep", "slider", "free", "--vary", vary, "--output", str(tmp_path / "out"))
     assert code == 2
     assert message in err and err.count("\n") == 1 and "Traceback" not in err
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())

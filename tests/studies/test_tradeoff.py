@@ -181,25 +181,13 @@ def test_auto_rejects_incomplete_requests_with_one_clear_line(kwargs, match):
         springlab.run("slider", "exercise", integrator="auto", **kwargs)
 
 
-def test_tradeoff_cli_json_and_outputs_follow_the_contract(tmp_path, capsys, monkeypatch):
+def test_tradeoff_cli_json_and_outputs_follow_the_contract(tmp_path, cli, monkeypatch):
     computed = []
     original = tradeoff.tradeoff
     monkeypatch.setattr(tradeoff, "tradeoff", lambda *a, **k: computed.append(original(*a, **k)) or computed[-1])
-    code = main(
-        [
-            "tradeoff",
-            "slider",
-            "exercise",
-            "--tol",
-            "1e-4",
-            "--duration",
-            "2",
-            "--json",
-            "--output",
-            str(tmp_path / "t"),
-        ]
+    code, out, err = cli(
+        "tradeoff", "slider", "exercise", "--tol", "1e-4", "--duration", "2", "--json", "--output", str(tmp_path / "t")
     )
-    out, err = capsys.readouterr()
     assert code == 0, err
     data = json.loads(out)
     assert {"runs", "orders", "pareto", "recommendation"} <= set(data)
@@ -234,9 +222,8 @@ def test_tradeoff_cli_rejects_a_scenario_without_exact_reference_or_unknown_name
     assert "tol must be" in capsys.readouterr().err
 
 
-def test_run_auto_cli_with_unreachable_tol_exits_2_naming_the_best_reachable(capsys):
-    code = main(["run", "slider", "exercise", "--integrator", "auto", "--tol", "1e-18"])
-    err = capsys.readouterr().err
+def test_run_auto_cli_with_unreachable_tol_exits_2_naming_the_best_reachable(cli):
+    code, _, err = cli("run", "slider", "exercise", "--integrator", "auto", "--tol", "1e-18")
     assert code == 2
     assert err.count("\n") == 1 and "best reached" in err
 

@@ -325,7 +325,7 @@ def run_model_chunk(payload: ModelSweepChunk, nthread: int = 0) -> list[dict[str
 
 
 def model_sweep(
-    path: str | os.PathLike[str],
+    model: str | os.PathLike[str],
     *,
     vary: Mapping[str, AxisSpec | Sequence[str]],
     keyframe: str | None = None,
@@ -341,8 +341,8 @@ def model_sweep(
 
     Parameters
     ----------
-    path
-        an MJCF (or URDF MuJoCo loads) file.
+    model
+        the path of an MJCF (or URDF MuJoCo loads) file.
     vary
         NAME -> (low, high, n) or (low, high, n, "log") [NAME's unit] (n may be None with `samples`);
         opt.integrator and opt.cone take a sequence of names instead, e.g. ("euler", "rk4") (see the module
@@ -374,16 +374,16 @@ def model_sweep(
         no such file or keyframe, an unknown name (the message lists the valid ones), a bad range or value.
     """
     started = _time.perf_counter()
-    text = os.fspath(path)
-    model = model_files.load(text)
-    start = operating_point(model, keyframe)
-    parsed = _axes(model, vary)
+    text = os.fspath(model)
+    mj_model = model_files.load(text)
+    start = operating_point(mj_model, keyframe)
+    parsed = _axes(mj_model, vary)
     names = [axis.name for axis, _, _ in parsed]
     if integrator == "auto":
         raise BadInputError("a sweep runs one setting for every configuration; name an integrator, not 'auto'")
-    integrator = integrator_name(model) if integrator is None else integrator
+    integrator = integrator_name(mj_model) if integrator is None else integrator
     integrator_id(integrator)
-    dt = float(model.opt.timestep) if dt is None else dt
+    dt = float(mj_model.opt.timestep) if dt is None else dt
     duration = DEFAULT_DURATION if duration is None else duration
     check_timing(dt, duration)
     values = _configurations(parsed, samples, sample_seed)
@@ -394,7 +394,7 @@ def model_sweep(
         if aim.option == "timestep":
             check_timing(float(np.min(column)), duration)
     runner = resolve(executor)
-    source: str | Shipped = ship(("path", text), model) if runner.distributed else text
+    source: str | Shipped = ship(("path", text), mj_model) if runner.distributed else text
     pieces = chunked(count, chunk_size)
     payloads = [
         ModelSweepChunk(

@@ -232,7 +232,7 @@ def _run(
 
 
 def model_tradeoff(
-    path: str | os.PathLike[str],
+    model: str | os.PathLike[str],
     *,
     keyframe: str | int | None = None,
     tol: float | None = None,
@@ -245,8 +245,8 @@ def model_tradeoff(
 
     Parameters
     ----------
-    path
-        an MJCF (or URDF MuJoCo loads) file.
+    model
+        the path of an MJCF (or URDF MuJoCo loads) file.
     keyframe
         where every run starts (None: the first keyframe, else qpos0 at rest); its controls are held.
     tol
@@ -273,13 +273,13 @@ def model_tradeoff(
         no such file or keyframe, a bad tol, duration, integrator or timestep, or a reference that cannot converge.
     """
     started = _time.perf_counter()
-    text = os.fspath(path)
-    model = model_files.load(text)
-    point = operating_point(model, keyframe)
+    text = os.fspath(model)
+    mj_model = model_files.load(text)
+    point = operating_point(mj_model, keyframe)
     if tol is not None and not (compare.check_tolerance(tol) < 1.0):
         raise BadInputError(f"tol must be in (0, 1) (a relative error), got {tol!r}")
     duration = DEFAULT_DURATION if duration is None else duration
-    own = Setting(integrator_name(model), float(model.opt.timestep))
+    own = Setting(integrator_name(mj_model), float(mj_model.opt.timestep))
     check_timing(own.dt, duration)
     names = list(dict.fromkeys(integrators)) if integrators else list(INTEGRATORS)
     for name in names:
@@ -288,15 +288,15 @@ def model_tradeoff(
     for dt in grid:
         check_timing(dt, duration)
     spacing = checkpoint_spacing([*grid, own.dt], duration)
-    start = Setup(qpos=point.qpos, qvel=point.qvel, act=point.act, control=point.ctrl if model.nu else None)
-    at = ModelAtPoint(model, point)
-    runner = Runner(executor, ship(("path", text), model) if executor is not None and executor.distributed else None)
-    outcomes = sweep_runs(model, start, names, grid, duration, extra=[(own.integrator, own.dt)], run=runner)
+    start = Setup(qpos=point.qpos, qvel=point.qvel, act=point.act, control=point.ctrl if mj_model.nu else None)
+    at = ModelAtPoint(mj_model, point)
+    runner = Runner(executor, ship(("path", text), mj_model) if executor is not None and executor.distributed else None)
+    outcomes = sweep_runs(mj_model, start, names, grid, duration, extra=[(own.integrator, own.dt)], run=runner)
     step = reference_step([*grid, own.dt], spacing)
     finest = outcomes.get(("rk4", 2 * step))
     coarse = finest if isinstance(finest, Trajectory) else None
     reference = converged_reference(at, start, step, duration, tol or DEFAULT_TOL, coarse=coarse, run=runner)
-    work = work_per_evaluation(model)
+    work = work_per_evaluation(mj_model)
     by_setting = {s: _run(Setting(*s), o, at, reference, work) for s, o in outcomes.items()}
     runs = tuple(by_setting[(name, dt)] for name in names for dt in grid)
     own_run = by_setting[(own.integrator, own.dt)]
@@ -306,7 +306,7 @@ def model_tradeoff(
         recommendation = cheapest_verified(
             runs,
             tol,
-            lambda row: _verify(model, start, row, duration, at, reference, tol),
+            lambda row: _verify(mj_model, start, row, duration, at, reference, tol),
             budget=tol - reference.error_estimate,
             error_words="error against the converged run of the same model",
         )

@@ -5,15 +5,6 @@ import json
 
 import pytest
 
-from helpers.paths import ROOT
-from springlab.cli.main import main
-
-
-def _run(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
-
 
 @pytest.mark.parametrize(
     "scenario, joints",
@@ -23,8 +14,8 @@ def _run(capsys, *argv):
         ("road_bump", ["heave", "wheel"]),
     ],
 )
-def test_trajectory_has_the_scenarios_joints_and_their_references(tmp_path, capsys, scenario, joints):
-    code, _, err = _run(capsys, "run", "car", scenario, "--duration", "0.6", "--output", str(tmp_path))
+def test_trajectory_has_the_scenarios_joints_and_their_references(tmp_path, cli, scenario, joints):
+    code, _, err = cli("run", "car", scenario, "--duration", "0.6", "--output", str(tmp_path))
     assert code == 0, err
     with open(tmp_path / "trajectory.csv") as handle:
         header = next(csv.reader(handle))
@@ -35,8 +26,8 @@ def test_trajectory_has_the_scenarios_joints_and_their_references(tmp_path, caps
     assert summary["passed"] is True
 
 
-def test_validate_car_passes_every_scenario(capsys):
-    code, out, _ = _run(capsys, "validate", "car", "--json")
+def test_validate_car_passes_every_scenario(cli):
+    code, out, _ = cli("validate", "car", "--json")
     rows = json.loads(out)
     assert code == 0
     assert [r["scenario"] for r in rows] == ["push_release", "damped_release", "pitch_heave", "road_bump"]
@@ -45,8 +36,8 @@ def test_validate_car_passes_every_scenario(capsys):
     assert all(r["tolerance"] <= 1e-6 for r in rows)
 
 
-def test_run_prints_the_textbook_answers(capsys):
-    code, out, _ = _run(capsys, "run", "car", "push_release")
+def test_run_prints_the_textbook_answers(cli):
+    code, out, _ = cli("run", "car", "push_release")
     assert code == 0
     assert "static_sag_m               0.0024525" in out
     assert "height_before_release_m    0.0975475" in out
@@ -60,30 +51,17 @@ def test_run_prints_the_textbook_answers(capsys):
         (["--set", "bump_height=0.2"], "through the ground"),
     ],
 )
-def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, argv, message):
-    code, out, err = _run(capsys, "run", "car", "road_bump", *argv, "--output", str(tmp_path / "d"))
+def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, cli, argv, message):
+    code, out, err = cli("run", "car", "road_bump", *argv, "--output", str(tmp_path / "d"))
     assert code == 2
     assert message in err and err.count("\n") == 1 and "Traceback" not in err
     assert not (tmp_path / "d").exists()
 
 
-def test_the_textbook_script_prints_the_three_answers(tmp_path):
-    import subprocess
-    import sys
-
-    script = ROOT / "scenarios" / "car_push_release.py"
-    out = subprocess.run(
-        [sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=300
-    ).stdout
-    assert "= 2.4525 mm" in out and "97.5475 mm above the ground" in out
-    assert "x_s = 100.0000 mm, A = -2.4525 mm" in out and "omega = sqrt(k/m) = 31.6228 rad/s" in out
-    assert "an ellipse centred at (x_s, 0)" in out and "omega |A| = 0.07755 m/s" in out
-
-
-def test_a_tire_that_leaves_the_road_is_written_but_not_validated(tmp_path, capsys):
+def test_a_tire_that_leaves_the_road_is_written_but_not_validated(tmp_path, cli):
     # the linear tire would pull on the road after 0.0273 s: the outputs are a result, exit 1 says not to trust it
     argv = ["run", "car", "road_bump", "--set", "bump_height=0.03", "--set", "bump_length=0.3", "--set", "speed=10"]
-    code, out, err = _run(capsys, *argv, "--output", str(tmp_path))
+    code, out, err = cli(*argv, "--output", str(tmp_path))
     assert code == 1
     assert "not validated: outside the scene's model" in out and "PASS" not in out
     (line,) = err.strip().splitlines()

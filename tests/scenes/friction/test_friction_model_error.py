@@ -46,8 +46,8 @@ def test_the_decays_error_converges_in_dt_to_a_model_error_far_above_the_integra
 
 
 def test_a_held_blocks_creep_is_the_same_at_every_timestep():
-    # a fixed point of MuJoCo's step (tests/scenes/friction/test_friction_mujoco.py derives it): equal at every dt and for
-    # every integrator to the solver's early termination at MuJoCo's default tolerance 1e-8 (rel 1e-6 here)
+    # a fixed point of MuJoCo's step (tests/scenes/friction/test_friction_mujoco.py derives it): equal at every dt and
+    # for every integrator to the solver's early termination at MuJoCo's default tolerance 1e-8 (rel 1e-6 here)
     creeps = [
         springlab.run("friction", "incline_hold", integrator=integrator, dt=dt, **CONTACT_DEFAULTS).quantities[
             "creep_velocity_m_s"

@@ -4,24 +4,15 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
 import springlab
-from springlab.cli.main import main
 from springlab.errors import ParameterError
 from springlab.runs.compare import CERTIFIED_CAP, Verdict
 
 MUJOCO_DEFAULTS = {"solref_timeconst": 0.02, "solimp_d0": 0.9, "noslip_iterations": 0.0}
-
-
-def _springlab(*argv, cwd=None):
-    return subprocess.run(
-        [sys.executable, "-m", "springlab", *argv], capture_output=True, text=True, timeout=600, cwd=cwd
-    )
 
 
 def test_every_scenario_validates_at_its_validated_setting():
@@ -100,12 +91,11 @@ def test_the_decays_count_their_half_cycles_against_the_exact_ones():
         (["friction-settings", "slider"], "declares no dry-friction cases"),
     ],
 )
-def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path, argv, fragment, capsys, monkeypatch):
+def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path, argv, fragment, cli, monkeypatch):
     # in process (the command line's own entry point): an interpreter per case cost a second each
     monkeypatch.chdir(tmp_path)
     out = tmp_path / "out"
-    code = main([*argv, "--output", str(out)])
-    err = capsys.readouterr().err
+    code, _, err = cli(*argv, "--output", out)
     assert code == 2, err
     lines = err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("springlab: error:") and fragment in lines[0], err
@@ -119,10 +109,10 @@ def test_the_contradiction_errors_come_from_the_api_too():
         springlab.run("friction", "incline_slide", stiffness=10.0)
 
 
-def test_run_json_carries_each_quantity_with_its_exact_value(tmp_path):
-    done = _springlab("run", "friction", "incline_slide", "--json", "--output", str(tmp_path / "slide"))
-    summary = json.loads(done.stdout)
-    assert done.returncode == 0, done.stderr
+def test_run_json_carries_each_quantity_with_its_exact_value(tmp_path, cli):
+    done = cli("run", "friction", "incline_slide", "--json", "--output", tmp_path / "slide")
+    assert done.code == 0, done.err
+    summary = json.loads(done.out)
     q = summary["quantities"]
     for name in ("acceleration_m_s2", "distance_m"):
         assert math.isfinite(q[name]) and math.isfinite(q[f"{name}_exact"])

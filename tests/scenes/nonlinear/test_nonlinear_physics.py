@@ -356,11 +356,16 @@ def test_twin_runs_separate_like_the_variational_equation(forced):
         atol=1e-14,
         method="DOP853",
     )
-    twin = springlab.run("nonlinear", "forced_duffing", x0=p["x0"] + 1e-9, duration=t_end)
-    lead = springlab.run("nonlinear", "forced_duffing", duration=t_end)
+    # the scene's own runs at the scenario's setting, without springlab.run's chaos figures (1.3 s a run)
+    setting = forced.to_dict()
+    integrator, dt = setting["integrator"], setting["dt"]
+    twin = SCENE.case("forced_duffing", {"x0": p["x0"] + 1e-9}).simulate(integrator, dt, t_end)
+    lead_case = SCENE.case("forced_duffing", {})
+    lead = lead_case.simulate(integrator, dt, t_end)
+    block = lead_case.model.joint("block").qposadr[0]
     for when in (4.0, 6.0, 8.0):
-        i = int(round(when / lead.to_dict()["dt"]))
-        separation = twin.pos["block"][i] - lead.pos["block"][i]
+        i = int(round(when / dt))
+        separation = twin.qpos[i, block] - lead.qpos[i, block]
         assert separation == pytest.approx(1e-9 * sol.sol(when)[2], rel=1e-3)
 
 
@@ -441,23 +446,18 @@ def test_forced_runs_are_checked_at_the_integrators_own_order():
 # -- the check mechanism ---------------------------------------------------------------------------
 
 
-def test_a_failed_check_flags_the_run_and_the_cli_exits_1(capsys):
-    from springlab.cli.main import main
-
-    code = main(["run", "nonlinear", "softening", "--integrator", "euler", "--duration", "2"])
-    out = capsys.readouterr().out
+def test_a_failed_check_flags_the_run_and_the_cli_exits_1(cli):
+    code, out, _ = cli("run", "nonlinear", "softening", "--integrator", "euler", "--duration", "2")
     assert code == 1
     assert "check energy_drift_relative" in out and "FAIL" in out
 
 
-def test_a_plot_of_a_run_that_fails_its_checks_says_which_and_exits_1(tmp_path, capsys):
+def test_a_plot_of_a_run_that_fails_its_checks_says_which_and_exits_1(tmp_path, cli):
     # held to its checks alone, the run has no tolerance of compared columns: the note names the failed checks
     # (this raised TypeError formatting the absent tolerance before results were objects)
-    from springlab.cli.main import main
 
     argv = ["plot", "nonlinear", "softening", "--integrator", "euler", "--duration", "2"]
-    code = main([*argv, "--output", str(tmp_path / "time.png")])
-    err = capsys.readouterr().err
+    code, _, err = cli(*argv, "--output", str(tmp_path / "time.png"))
     assert code == 1 and (tmp_path / "time.png").is_file()
     (line,) = err.strip().splitlines()
     assert line.startswith("note: nonlinear/softening is outside its tolerance (check energy_drift_relative: error")

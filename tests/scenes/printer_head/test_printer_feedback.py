@@ -4,8 +4,8 @@ and MuJoCo running the loop (raw mujoco: mj_forward, sensordata, mj_step with ns
 References: the zero-order-hold map by scipy.linalg.expm and scipy.integrate.quad_vec; the controller's
 difference equation and the loop transfer written out here; the closed loop's poles checked as roots of
 1 + L(z) with that L. The MuJoCo loop is held to a bound derived from RK4's order (the module docstring of
-tests/scenes/printer_head/test_printer_shaping.py): each sample adds at most N |R(z) - e^z| |eta_k - eta_eq| to the belt mode's
-coordinate eta (N steps of dt per sample, z = lambda dt, eta_eq the equilibrium under the held force), and
+tests/scenes/printer_head/test_printer_shaping.py): each sample adds at most N |R(z) - e^z| |eta_k - eta_eq| to the belt
+mode's coordinate eta (N steps of dt per sample, z = lambda dt, eta_eq the equilibrium under the held force), and
 that error reaches the encoder through the exact closed loop's powers, sum_j |C A_cl^(k-1-j) W| delta_j.
 """
 

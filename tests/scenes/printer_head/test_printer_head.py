@@ -16,7 +16,6 @@ import scipy.linalg
 
 import springlab
 import springlab.sim.model_files
-from springlab.cli.main import main
 
 BELT = np.array([[1.0, -1.0], [-1.0, 1.0]])  # the belt stretches by q_m - q_c
 
@@ -248,9 +247,8 @@ def test_positioning_time_estimate_is_the_runs_move_time_plus_the_estimated_sett
         (["run", "printer_head", "jump"], "move"),
     ],
 )
-def test_non_physical_values_exit_2_with_one_line(argv, needle, capsys):
-    code = main(argv)
-    out, err = capsys.readouterr()
+def test_non_physical_values_exit_2_with_one_line(argv, needle, cli):
+    code, out, err = cli(*argv)
     assert code == 2
     assert out == ""
     assert len(err.strip().splitlines()) == 1

@@ -261,6 +261,7 @@ def test_the_coarse_design_grid_settles_when_the_exact_motion_does(small_design_
 
 @pytest.mark.slow
 def test_the_whole_design_grid_settles_when_the_exact_motion_does(default_design_study):
-    study = default_design_study  # all 2401 configurations, shared with tests/studies/design/test_design.py (tests/conftest.py)
+    # all 2401 configurations, shared with tests/studies/design/test_design.py (tests/conftest.py)
+    study = default_design_study
     differences = _check_batched(study.base, study.values, study.positioning_time_s, study.dt_s)
     assert len(differences) == 2401

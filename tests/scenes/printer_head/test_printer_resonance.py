@@ -86,9 +86,10 @@ def _expm_envelope(m_c, m_m, k, c, segments):
 
 
 def _rk4_acceleration_bound(model, force):
-    """Bound [m/s^2] per step on RK4's error in the carriage acceleration (tests/scenes/printer_head/test_printer_shaping.py's
-    argument: each step adds |R(z) - e^z| |eta - eta_eq| to the belt mode's coordinate, which decays by |R(z)|
-    per step after; the acceleration is -Re((omega^2 + 2 zeta omega s) eta))."""
+    """Bound [m/s^2] per step on RK4's error in the carriage acceleration
+    (tests/scenes/printer_head/test_printer_shaping.py's argument: each step adds |R(z) - e^z| |eta - eta_eq| to the
+    belt mode's coordinate, which decays by |R(z)| per step after; the acceleration is
+    -Re((omega^2 + 2 zeta omega s) eta))."""
     m_c, m_m, k, c, omega, zeta = _truth(model)
     s = complex(-zeta * omega, omega * math.sqrt(1 - zeta**2))
     z = s * DT

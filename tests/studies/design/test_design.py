@@ -17,7 +17,6 @@ import pytest
 import scipy.linalg
 
 from springlab import outputs, scenes
-from springlab.cli.main import main
 from springlab.errors import UnknownNameError
 from springlab.scenes.capabilities.design import DesignSpec
 from springlab.studies.design import study as design
@@ -143,13 +142,30 @@ def test_default_configuration_settles_as_the_exact_trajectory_says(small_study)
     assert last_exit <= study.positioning_time_s[i] <= last_exit + dt
 
 
-@pytest.mark.slow
-def test_design_json_has_the_documented_shape(capsys, tmp_path):
-    # end to end: the command line's arguments reach the study (levels, plane, Sobol samples)
-    argv = ["design", "printer_head", "--levels", "3", "--plane", "5", "--sobol", "8", "--json"]
-    code = main([*argv, "--output", str(tmp_path / "d")])
-    out, err = capsys.readouterr()
+def test_design_json_has_the_documented_shape(cli, tmp_path, monkeypatch, small_study):
+    # the command line's arguments reach the study (levels, plane, Sobol samples, the library's defaults for the
+    # rest), and the study they ask for is the session's small one (tests/conftest.py: the same call, computed
+    # once; it cost this test 6 s to run it again)
+    asked = {}
+
+    def recorded(model, **options):
+        asked.update(options, model=model)
+        return small_study
+
+    monkeypatch.setattr(design, "run_study", recorded)
+    argv = ["design", "printer_head", "--levels", "3", "--plane", "9", "--sobol", "8", "--json"]
+    code, out, err = cli(*argv, "--output", str(tmp_path / "d"))
     assert code == 0, err
+    executor = asked.pop("executor")
+    assert executor is not None and not executor.distributed  # where the chunks run: here
+    assert asked == {
+        "model": "printer_head",
+        "levels": 3,
+        "plane_levels": 9,
+        "sobol": 8,
+        "sobol_seed": 0,
+        "omega_dt": design.OMEGA_DT,
+    }  # conftest's run_study("printer_head", levels=3, plane_levels=9, sobol=8): the rest its defaults
     summary = json.loads(out)
     for key in (
         "scene",
@@ -170,7 +186,7 @@ def test_design_json_has_the_documented_shape(capsys, tmp_path):
         "sobol",
     ):
         assert key in summary
-    assert summary["configurations"] == 81 and summary["levels"] == 3 and summary["plane"]["levels"] == 5
+    assert summary["configurations"] == 81 and summary["levels"] == 3 and summary["plane"]["levels"] == 9
     assert set(summary["elasticities"]) == set(PROPERTIES)
     assert summary["sobol"]["runs"] == 8 * 7
     default = summary["default"]
@@ -184,17 +200,16 @@ def test_design_json_has_the_documented_shape(capsys, tmp_path):
     assert json.loads((tmp_path / "d" / "design.json").read_text())["configurations"] == 81
 
 
-def _cli_with(study, monkeypatch, capsys, *argv):
+def _cli_with(study, monkeypatch, cli, *argv):
     """`springlab design printer_head ARGV` with the study it computes replaced by `study`: (code, out)."""
     monkeypatch.setattr(design, "run_study", lambda *args, **kwargs: study)
-    code = main(["design", "printer_head", *argv])
-    out, err = capsys.readouterr()
+    code, out, err = cli("design", "printer_head", *argv)
     assert code == 0, err
     return code, out
 
 
-def test_to_dict_is_what_design_json_prints_and_design_json_holds(small_study, monkeypatch, capsys, tmp_path):
-    _, out = _cli_with(small_study, monkeypatch, capsys, "--json", "--output", str(tmp_path / "d"))
+def test_to_dict_is_what_design_json_prints_and_design_json_holds(small_study, monkeypatch, cli, tmp_path):
+    _, out = _cli_with(small_study, monkeypatch, cli, "--json", "--output", str(tmp_path / "d"))
     assert json.loads(out) == small_study.to_dict()
     assert json.loads((tmp_path / "d" / "design.json").read_text()) == small_study.to_dict()
     # JSON-ready already: a round trip through json changes nothing, the sobol entry included
@@ -243,8 +258,8 @@ def test_a_study_cannot_be_changed_once_returned(small_study):
         small_study.sobol.runs = 0
 
 
-def test_design_text_answers_both_questions(small_study, monkeypatch, capsys):
-    _, out = _cli_with(small_study, monkeypatch, capsys, "--plane", "0")
+def test_design_text_answers_both_questions(small_study, monkeypatch, cli):
+    _, out = _cli_with(small_study, monkeypatch, cli, "--plane", "0")
     assert "How fast?" in out and "Which properties?" in out
     assert small_study.answer in out and small_study.sobol.answer in out
     # the design table lists every property once, in the ranking's order (the Sobol table follows it)
@@ -263,9 +278,8 @@ def test_design_text_answers_both_questions(small_study, monkeypatch, capsys):
         (["design", "printer_head", "--levels", "3", "--set", "belt_damping=0"], "belt_damping"),
     ],
 )
-def test_design_bad_input_exits_2_with_one_line(argv, needle, capsys):
-    code = main(argv)
-    out, err = capsys.readouterr()
+def test_design_bad_input_exits_2_with_one_line(argv, needle, cli):
+    code, out, err = cli(*argv)
     assert code == 2
     assert out == ""
     assert len(err.strip().splitlines()) == 1

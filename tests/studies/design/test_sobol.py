@@ -10,7 +10,6 @@ import math
 
 import pytest
 
-from springlab.cli.main import main
 from springlab.errors import BadInputError
 from springlab.studies.design import sobol
 
@@ -62,7 +61,8 @@ def test_base_samples_must_be_a_power_of_two(n):
 
 
 def test_design_sobol_json_has_the_documented_entry(small_design_study):
-    # the entry `design --sobol 8 --json` prints (tests/studies/design/test_design.py: to_dict is what the command prints)
+    # the entry `design --sobol 8 --json` prints (tests/studies/design/test_design.py: to_dict is what the
+    # command prints)
     entry = small_design_study.to_dict()["sobol"]
     assert {"parameters", "S1", "S1_conf", "ST", "ST_conf", "runs"} <= set(entry)
     assert entry["runs"] == 8 * 7
@@ -97,7 +97,6 @@ def test_sobol_result_cannot_be_changed_once_returned(small_design_study):
         study.positioning_time_s[0] = 0.0
 
 
-def test_design_sobol_refuses_a_bad_n_before_simulating(capsys):
-    code = main(["design", "printer_head", "--sobol", "10"])
-    err = capsys.readouterr().err
+def test_design_sobol_refuses_a_bad_n_before_simulating(cli):
+    code, _, err = cli("design", "printer_head", "--sobol", "10")
     assert code == 2 and "power of 2" in err and err.count("\n") == 1

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from springlab import scenes
-from springlab.cli.main import build_parser, main
+from springlab.cli.main import build_parser
 from springlab.errors import BadInputError
 from springlab.scenes.capabilities.fit import OscillatorFit, PolynomialFit
 from springlab.studies.fit import fit as fit_module
@@ -46,7 +46,7 @@ def _polynomial(path):
     return path
 
 
-def _cli_fit(monkeypatch, capsys, *argv):
+def _cli_fit(monkeypatch, cli, *argv):
     """Run `springlab fit ARGV`; return (exit code, stdout, stderr, the FitResult the command printed)."""
     made = []
     original = fit_module.fit
@@ -56,8 +56,7 @@ def _cli_fit(monkeypatch, capsys, *argv):
         return made[-1]
 
     monkeypatch.setattr(fit_module, "fit", keep)
-    code = main(["fit", *(str(a) for a in argv)])
-    out, err = capsys.readouterr()
+    code, out, err = cli("fit", *argv)
     return code, out, err, made[-1] if made else None
 
 
@@ -71,12 +70,12 @@ def slider_fit(tmp_path_factory):
 
 
 @pytest.mark.parametrize("kind", ["oscillator", "polynomial"])
-def test_to_dict_is_what_fit_json_prints_and_fit_json_holds(tmp_path, monkeypatch, capsys, kind):
+def test_to_dict_is_what_fit_json_prints_and_fit_json_holds(tmp_path, monkeypatch, cli, kind):
     if kind == "oscillator":
         argv = ["slider", _decay(tmp_path / "d.csv"), "--set", "mass=2"]
     else:
         argv = ["kinematics", _polynomial(tmp_path / "d.csv")]
-    code, out, err, result = _cli_fit(monkeypatch, capsys, *argv, "--json", "--output", tmp_path / "out")
+    code, out, err, result = _cli_fit(monkeypatch, cli, *argv, "--json", "--output", tmp_path / "out")
     assert code == 0 and err == ""
     assert result.kind == kind
     printed = json.loads(out)
@@ -134,15 +133,14 @@ def _fit_subparser() -> argparse.ArgumentParser:
     return commands.choices["fit"]
 
 
-def test_the_cli_lists_the_scenes_that_declare_a_fit(tmp_path, capsys):
+def test_the_cli_lists_the_scenes_that_declare_a_fit(tmp_path, cli):
     declared = {name for name, scene in scenes.SCENES.items() if scene.fit}
     assert declared and declared != set(scenes.SCENES)  # some scenes can be fitted and some cannot
     assert set(fittable()) == declared
     scene_help = next(a.help for a in _fit_subparser()._actions if a.dest == "scene")
     assert set(re.split(r", | or ", scene_help)) == declared
     unfit = next(name for name, scene in scenes.SCENES.items() if scene.fit is None)
-    code = main(["fit", unfit, str(_decay(tmp_path / "d.csv"))])
-    err = capsys.readouterr().err
+    code, _, err = cli("fit", unfit, str(_decay(tmp_path / "d.csv")))
     listed = re.search(r"valid: (.*) \(", err)
     assert code == 2 and listed is not None and set(listed.group(1).split(", ")) == declared
 

@@ -8,14 +8,6 @@ import math
 import numpy as np
 import pytest
 
-from springlab.cli.main import main
-
-
-def _run(capsys, *argv):
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
-
 
 def _decay_csv(path, header="time,slider_pos", n=1000):
     t = np.arange(n) * 2e-3
@@ -26,9 +18,9 @@ def _decay_csv(path, header="time,slider_pos", n=1000):
     return path
 
 
-def test_fit_writes_its_outputs_and_prints_the_verdict(tmp_path, capsys):
+def test_fit_writes_its_outputs_and_prints_the_verdict(tmp_path, cli):
     data = _decay_csv(tmp_path / "d.csv")
-    code, out, err = _run(capsys, "fit", "slider", data, "--set", "mass=2", "--output", tmp_path / "out")
+    code, out, err = cli("fit", "slider", data, "--set", "mass=2", "--output", tmp_path / "out")
     assert code == 0, err
     assert err == ""
     assert "ω_n = 20.0" in out and "underdamped" in out
@@ -39,9 +31,9 @@ def test_fit_writes_its_outputs_and_prints_the_verdict(tmp_path, capsys):
     assert abs(doc["estimates"]["omega_n"]["value"] / 20.0 - 1) < 1e-6
 
 
-def test_fit_json_prints_fit_json(tmp_path, capsys):
+def test_fit_json_prints_fit_json(tmp_path, cli):
     data = _decay_csv(tmp_path / "d.csv", header="t,x")
-    code, out, err = _run(capsys, "fit", "slider", data, "--map", "t=time", "--map", "x=slider_pos", "--json")
+    code, out, err = cli("fit", "slider", data, "--map", "t=time", "--map", "x=slider_pos", "--json")
     assert code == 0, err
     assert json.loads(out)["signal"] == "slider_pos"
 
@@ -77,19 +69,19 @@ def test_fit_json_prints_fit_json(tmp_path, capsys):
         ),
     ],
 )
-def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys, content, extra, message):
+def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, cli, content, extra, message):
     data = tmp_path / "d.csv"
     if content is not None:
         data.write_text(content)
-    code, out, err = _run(capsys, "fit", "slider", data, "--output", tmp_path / "out", *extra)
+    code, out, err = cli("fit", "slider", data, "--output", tmp_path / "out", *extra)
     assert code == 2
     assert err.count("\n") == 1 and message in err and "Traceback" not in err
     assert not (tmp_path / "out").exists()
 
 
-def test_unknown_scene_and_scenario_are_bad_input(tmp_path, capsys):
+def test_unknown_scene_and_scenario_are_bad_input(tmp_path, cli):
     data = _decay_csv(tmp_path / "d.csv")
-    code, _, err = _run(capsys, "fit", "nonlinear", data)
+    code, _, err = cli("fit", "nonlinear", data)
     assert code == 2 and "cannot be fitted" in err
-    code, _, err = _run(capsys, "fit", "slider", data, "--scenario", "harmonic")
+    code, _, err = cli("fit", "slider", data, "--scenario", "harmonic")
     assert code == 2 and "a fit takes one of" in err

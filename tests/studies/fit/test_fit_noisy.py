@@ -78,12 +78,11 @@ def test_a_noisy_release_at_zero_is_not_taken_for_a_hold_and_x0_v0_cover_the_tru
     assert 0.88 <= covered / 100 <= 0.99
 
 
-def test_the_release_decision_is_stated_on_the_terminal_and_in_fit_json(tmp_path, capsys):
+def test_the_release_decision_is_stated_on_the_terminal_and_in_fit_json(tmp_path, cli):
     t = np.arange(0, 3, 2e-3)
     x, _ = free_decay(t, OMEGA, ZETA, X0, 0.0)
     data = write(tmp_path / "d.csv", t, x + np.random.default_rng(3).normal(0, 1e-3, t.size))
-    code = main(["fit", "slider", data, "--output", str(tmp_path / "out")])
-    out = capsys.readouterr().out
+    code, out, _ = cli("fit", "slider", data, "--output", str(tmp_path / "out"))
     release = json.loads((tmp_path / "out" / "fit.json").read_text())["release"]
     assert code == 0
     assert release["decision"] == "moving" and release["start_s"] == 0.0

@@ -16,7 +16,6 @@ import numpy as np
 import pytest
 
 import springlab  # noqa: F401 - loads springlab.fit the module
-from springlab.cli.main import main
 from springlab.errors import BadInputError
 from springlab.studies.executor import Executor
 from springlab.studies.fit import starts as fit_starts
@@ -95,11 +94,12 @@ def test_best_start_recovers_the_truth_and_starts_elsewhere_cost_more(tmp_path):
 
 
 @pytest.mark.slow
-def test_local_and_local_cluster_give_identical_starts(tmp_path, capsys):
+def test_local_and_local_cluster_give_identical_starts(tmp_path, cli):
     data = _ring_down(tmp_path / "ring.csv", n=400)
     local = fit_module.fit("slider", data, mass=MASS, starts=3, run_scene=False)
-    code = main(["fit", "slider", str(data), "--set", f"mass={MASS}", "--starts", "3", "--workers", "2", "--json"])
-    out, err = capsys.readouterr()
+    code, out, err = cli(
+        "fit", "slider", str(data), "--set", f"mass={MASS}", "--starts", "3", "--workers", "2", "--json"
+    )
     assert code == 0 and err == ""
     remote = json.loads(out)
     assert remote["starts"]["executor"] == "2 local dask workers" and local.starts["executor"] == "local"
@@ -111,10 +111,11 @@ def test_local_and_local_cluster_give_identical_starts(tmp_path, capsys):
     assert remote["starts"]["best"] == local.starts["best"]
 
 
-def test_cli_prints_one_line_about_the_starts(tmp_path, capsys):
+def test_cli_prints_one_line_about_the_starts(tmp_path, cli):
     data = _ring_down(tmp_path / "ring.csv", n=300, noise=0.0005)
-    code = main(["fit", "slider", str(data), "--set", f"mass={MASS}", "--starts", "2", "--output", str(tmp_path / "o")])
-    out, err = capsys.readouterr()
+    code, out, err = cli(
+        "fit", "slider", str(data), "--set", f"mass={MASS}", "--starts", "2", "--output", str(tmp_path / "o")
+    )
     assert code == 0 and err == ""
     assert sum(line.startswith("  starts: 2 on local") for line in out.splitlines()) == 1
     doc = json.loads((tmp_path / "o" / "fit.json").read_text())

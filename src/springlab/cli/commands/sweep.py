@@ -4,6 +4,7 @@ MJCF options and named attributes."""
 from __future__ import annotations
 
 import argparse
+from typing import TYPE_CHECKING
 
 from springlab import outputs
 from springlab.cli import model_text, options
@@ -11,6 +12,9 @@ from springlab.cli import text as cli_text
 from springlab.errors import BadInputError, ExitCode
 from springlab.sim import model_files
 from springlab.sim.simulate import INTEGRATORS
+
+if TYPE_CHECKING:
+    from springlab.studies.sweeps import AxisSpec
 
 NAME = "sweep"
 HELP = "run a scenario (or MODEL.xml: its options, named attributes) over a grid of parameters, batched"
@@ -45,8 +49,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print the sweep (setting, counts, every row) as JSON")
 
 
-#: one axis of the library's `vary`: (low, high, n) or (low, high, n, "log"), n None with --samples
-AxisSpec = tuple[float, float, int | None] | tuple[float, float, int | None, str]
 _AXIS_FORM = "--vary takes NAME=LOW:HIGH:N[:log], e.g. damping=0.5:40:30:log"
 
 

@@ -152,8 +152,8 @@ def _released_at(params: Mapping[str, float], x0: float) -> dict[str, float]:
     return dict(params) | {"deflection": -x0 * total / params["motor_mass"]}
 
 
-#: the loops' default gains and rate: the motor's (collocated) as in tests/scenes/printer_head/test_printer_feedback.py; the
-#: carriage's lower, because across the belt the motor's gains are unstable (its boundary is 0.59 of them)
+#: the loops' default gains and rate: the motor's (collocated) as in tests/scenes/printer_head/test_printer_feedback.py;
+#: the carriage's lower, because across the belt the motor's gains are unstable (its boundary is 0.59 of them)
 _LOOP_GAINS = {
     "motor": {"kp": 2000.0, "kd": 30.0, "ki": 0.0, "control_rate_hz": 5000.0},
     "carriage": {"kp": 500.0, "kd": 15.0, "ki": 0.0, "control_rate_hz": 5000.0},
