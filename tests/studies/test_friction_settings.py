@@ -6,8 +6,6 @@ from __future__ import annotations
 import json
 import math
 import random
-import subprocess
-import sys
 
 import pytest
 
@@ -144,32 +142,25 @@ def test_bad_arguments_are_bad_input():
         friction_settings("friction", values={"mass": (1.0,)})
 
 
-def test_the_command_prints_json_and_writes_its_files(tmp_path):
+def test_the_command_prints_json_and_writes_its_files(tmp_path, cli):
+    # in this process (an interpreter's start-up was most of this test; tests/cli/ start real ones)
     out = tmp_path / "settings"
-    done = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "springlab",
-            "friction-settings",
-            "friction",
-            "coulomb_decay",
-            "--integrators",
-            "rk4",
-            "--dt",
-            "0.001,0.0005",
-            "--tol",
-            "1e-2",
-            "--json",
-            "--output",
-            str(out),
-        ],
-        capture_output=True,
-        text=True,
-        timeout=600,
+    done = cli(
+        "friction-settings",
+        "friction",
+        "coulomb_decay",
+        "--integrators",
+        "rk4",
+        "--dt",
+        "0.001,0.0005",
+        "--tol",
+        "1e-2",
+        "--json",
+        "--output",
+        out,
     )
-    assert done.returncode == 0, done.stderr
-    data = json.loads(done.stdout)
+    assert done.code == 0, done.err
+    data = json.loads(done.out)
     assert set(data) >= {"scene", "tol", "integrators", "dts", "mujoco_default", "runs", "cases", "cost_basis"}
     case = data["cases"][0]
     assert set(case) >= {"default_model_error", "model_errors", "pareto", "pick", "answer", "runs"}
@@ -207,7 +198,7 @@ def test_the_demo_answers_how_much_mujocos_friction_drifts_and_what_stopping_it_
     # and its two largest timesteps: still a measured convergence, the same section and answer lines; and of
     # the swept settings NoSlip alone (the one that stops a creep) beside MuJoCo's defaults of the others: every
     # case keeps its default run, its model error and a pick or floor, so its line (the grid of every setting
-    # is small_study's above; the contact cases' 2^5 settings were 9 of this test's 10 s)
+    # is small_study's above; the contact cases' 2^5 settings were 6.4 of the study's 6.7 s of CPU)
     from springlab.studies import friction_settings as study_module
 
     full = study_module.friction_settings

@@ -392,16 +392,37 @@ def one_step_map(
         dt not a finite number > 0.
     """
     kind = integrator_id(integrator)
-    if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
-        raise BadInputError(f"dt must be a finite number > 0 s, got {dt!r}")
     point = _point_or_default(model, point)
     work = copy.copy(model) if copy_model else model
+    return map_on(work, kind, dt, point, step=step, data=data)
+
+
+def map_on(
+    work: mujoco.MjModel,
+    kind: int,
+    dt: float,
+    point: OperatingPoint,
+    *,
+    step: float = FD_STEP,
+    data: mujoco.MjData | None = None,
+) -> np.ndarray:
+    """`one_step_map` on `work` itself (it takes MuJoCo's integrator `kind` and the timestep `dt` [s]) at
+    `point`: for a caller that owns a scratch copy and has resolved the integrator's name once
+    (`springlab.exact.model_at_point.ModelAtPoint.one_step_map`). `data`: optional scratch for `work`.
+
+    Raises
+    ------
+    BadInputError
+        dt not a finite number > 0.
+    """
+    if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
+        raise BadInputError(f"dt must be a finite number > 0 s, got {dt!r}")
     work.opt.integrator = kind
     work.opt.timestep = dt
     data = mujoco.MjData(work) if data is None else data
     n = 2 * work.nv + work.na
     with quiet_mujoco():
-        if integrator == "rk4":
+        if kind == int(mujoco.mjtIntegrator.mjINT_RK4):
             return _rk4_map(work, data, point, step)
         point.load(work, data)
         mujoco.mj_forward(work, data)

@@ -29,12 +29,12 @@ from springlab.exact.linearize import (
     Linearization,
     input_column,
     linearize,
-    one_step_map,
+    map_on,
     sensor_rows,
     step_input_column,
 )
 from springlab.exact.operating_point import OperatingPoint, operating_point, settle
-from springlab.sim.simulate import integrator_id, quiet_mujoco
+from springlab.sim.simulate import Setup, Trajectory, integrator_id, quiet_mujoco, simulate
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -134,16 +134,37 @@ class ModelAtPoint:
         self.point.load(work, data)
         return work, data
 
+    def simulate(self, integrator: str, dt: float, duration: float, start: Setup | None = None) -> Trajectory:
+        """A run of the model with `integrator` at timestep `dt` [s] over `duration` [s] from `start` (None: the
+        point itself, its control held) (`springlab.sim.simulate.simulate`: the model is not modified).
+
+        Raises
+        ------
+        DivergedError
+            the run blew up.
+        """
+        if start is None:
+            point = self.point
+            start = Setup(point.qpos, point.qvel, point.act, point.ctrl if self.model.nu else None)
+        return simulate(
+            self.model,
+            integrator=integrator,
+            dt=dt,
+            duration=duration,
+            qpos=start.qpos,
+            qvel=start.qvel,
+            act=start.act,
+            control=start.control,
+        )
+
     def one_step_map(
         self, integrator: str, dt: float, scratch: tuple[mujoco.MjModel, mujoco.MjData] | None = None
     ) -> np.ndarray:
         """MuJoCo's one-step map Phi (n, n) of `integrator` at timestep `dt` [s] at the point
-        (`springlab.exact.linearize.one_step_map`); `scratch`: a pair from `scratch()` reused across calls
+        (`springlab.exact.linearize.map_on`); `scratch`: a pair from `scratch()` reused across calls
         (its model takes the integrator and timestep), so a scan over dt copies the model once."""
-        if scratch is None:
-            return one_step_map(self.model, integrator, dt, self.point, step=self.step)
-        work, data = scratch
-        return one_step_map(work, integrator, dt, self.point, step=self.step, data=data, copy_model=False)
+        work, data = self.scratch() if scratch is None else scratch
+        return map_on(work, integrator_id(integrator), dt, self.point, step=self.step, data=data)
 
     def input_column(self, kind: str, index: int) -> np.ndarray:
         """b = d(dx/dt)/du (n,) of input `kind` ('ctrl' or 'force') `index` at the point [1/s per input unit]

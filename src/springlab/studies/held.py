@@ -19,6 +19,7 @@ import mujoco
 import numpy as np
 
 from springlab.errors import BadInputError
+from springlab.exact.model_at_point import ModelAtPoint
 from springlab.exact.operating_point import OperatingPoint, operating_point
 from springlab.scenes.capabilities.friction import CONTACT_FRICTION, JOINT_FRICTION, SolverSetting
 from springlab.sim.simulate import Trajectory, simulate
@@ -241,26 +242,25 @@ def find_hold(
     BadInputError
         an unknown keyframe or body, a body without joints or without dry friction, a model without dry friction.
     """
-    point = operating_point(model, keyframe)
-    plan, settings, skipped = plan_at(model, label, point, bodies=bodies, hold_s=hold_s)
-    return plan, settings, skipped, point
+    at = ModelAtPoint(model, operating_point(model, keyframe))
+    plan, settings, skipped = plan_at(at, label, bodies=bodies, hold_s=hold_s)
+    return plan, settings, skipped, at.point
 
 
 def plan_at(
-    model: mujoco.MjModel, label: str, point: OperatingPoint, *, bodies: Sequence[str] = (), hold_s: float
+    at: ModelAtPoint, label: str, *, bodies: Sequence[str] = (), hold_s: float
 ) -> tuple[HoldPlan, tuple[SolverSetting, ...], tuple[str, ...]]:
-    """`find_hold` at a given operating point (a keyframe, or where the audit let the model settle): the plan,
-    the settings to sweep and those not swept (why).
+    """`find_hold` at a model at a given operating point (a keyframe, or where the audit let the model settle):
+    the plan, the settings to sweep and those not swept (why). What touches what is read from the forward pass
+    at the point that `at` keeps (`ModelAtPoint.data`), so a caller that has it computes it once.
 
     Raises
     ------
     BadInputError
         an unknown body, a body without joints or without dry friction, a model without dry friction there.
     """
-    data = mujoco.MjData(model)
-    point.load(model, data)
-    mujoco.mj_forward(model, data)
-    touching = _touching(model, data)
+    model, point = at.model, at.point
+    touching = _touching(model, at.data)
     chosen = _chosen_bodies(model, label, point, touching, bodies)
     body_geoms = tuple(tuple(g for g in range(model.ngeom) if model.geom_bodyid[g] == b) for b in chosen)
     holders = tuple(tuple(sorted(touching.get(b, set()))) for b in chosen)

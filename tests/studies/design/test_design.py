@@ -142,12 +142,30 @@ def test_default_configuration_settles_as_the_exact_trajectory_says(small_study)
     assert last_exit <= study.positioning_time_s[i] <= last_exit + dt
 
 
-@pytest.mark.slow
-def test_design_json_has_the_documented_shape(cli, tmp_path):
-    # end to end: the command line's arguments reach the study (levels, plane, Sobol samples)
-    argv = ["design", "printer_head", "--levels", "3", "--plane", "5", "--sobol", "8", "--json"]
+def test_design_json_has_the_documented_shape(cli, tmp_path, monkeypatch, small_study):
+    # the command line's arguments reach the study (levels, plane, Sobol samples, the library's defaults for the
+    # rest), and the study they ask for is the session's small one (tests/conftest.py: the same call, computed
+    # once; it cost this test 6 s to run it again)
+    asked = {}
+
+    def recorded(model, **options):
+        asked.update(options, model=model)
+        return small_study
+
+    monkeypatch.setattr(design, "run_study", recorded)
+    argv = ["design", "printer_head", "--levels", "3", "--plane", "9", "--sobol", "8", "--json"]
     code, out, err = cli(*argv, "--output", str(tmp_path / "d"))
     assert code == 0, err
+    executor = asked.pop("executor")
+    assert executor is not None and not executor.distributed  # where the chunks run: here
+    assert asked == {
+        "model": "printer_head",
+        "levels": 3,
+        "plane_levels": 9,
+        "sobol": 8,
+        "sobol_seed": 0,
+        "omega_dt": design.OMEGA_DT,
+    }  # conftest's run_study("printer_head", levels=3, plane_levels=9, sobol=8): the rest its defaults
     summary = json.loads(out)
     for key in (
         "scene",
@@ -168,7 +186,7 @@ def test_design_json_has_the_documented_shape(cli, tmp_path):
         "sobol",
     ):
         assert key in summary
-    assert summary["configurations"] == 81 and summary["levels"] == 3 and summary["plane"]["levels"] == 5
+    assert summary["configurations"] == 81 and summary["levels"] == 3 and summary["plane"]["levels"] == 9
     assert set(summary["elasticities"]) == set(PROPERTIES)
     assert summary["sobol"]["runs"] == 8 * 7
     default = summary["default"]

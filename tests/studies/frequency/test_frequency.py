@@ -16,6 +16,7 @@ import json
 import math
 import re
 
+import mujoco
 import numpy as np
 import pytest
 
@@ -264,13 +265,13 @@ def test_one_linearization_and_one_map_per_setting_at_the_operating_point(monkey
     from springlab.exact import model_at_point
 
     asked = []
-    differenced = model_at_point.one_step_map
+    differenced = model_at_point.map_on
 
-    def one_step_map(model, integrator, dt, point=None, **options):
-        asked.append((integrator, dt, options.get("step")))
-        return differenced(model, integrator, dt, point, **options)
+    def map_on(work, kind, dt, point, **options):
+        asked.append((kind, dt, options.get("step")))
+        return differenced(work, kind, dt, point, **options)
 
-    monkeypatch.setattr(model_at_point, "one_step_map", one_step_map)
+    monkeypatch.setattr(model_at_point, "map_on", map_on)
     profile = cProfile.Profile()
     profile.enable()
     # euler at 0.5 ms misses tol inside the band: the band's edge is bisected in frequency at that one setting
@@ -287,8 +288,9 @@ def test_one_linearization_and_one_map_per_setting_at_the_operating_point(monkey
     assert calls["eig"] == 1  # the settling time of both sinestreams reads the one eigenbasis
     assert calls["input_column"] == 1
     step = linearize_module.FD_STEP
-    assert sorted(set(asked)) == sorted(asked) == [("euler", 5e-4, step), ("euler", 5e-4, 2 * step)]
-    assert calls["one_step_map"] == calls["step_input_column"] == len(asked)
+    euler = int(mujoco.mjtIntegrator.mjINT_EULER)
+    assert sorted(set(asked)) == sorted(asked) == [(euler, 5e-4, step), (euler, 5e-4, 2 * step)]
+    assert calls["map_on"] == calls["step_input_column"] == len(asked)
 
 
 _TWO_MASSES = """<mujoco>

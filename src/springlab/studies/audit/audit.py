@@ -32,7 +32,7 @@ import numpy as np
 from springlab.errors import DivergedError
 from springlab.exact.model_at_point import ModelAtPoint
 from springlab.sim.batch import Job
-from springlab.sim.simulate import INTEGRATORS, Setup, Trajectory, simulate
+from springlab.sim.simulate import INTEGRATORS, Setup, Trajectory
 from springlab.studies.executor import Executor
 from springlab.studies.settings import (
     Recommendation,
@@ -466,16 +466,7 @@ def _recommend(
 
     def verify(row: Run) -> Verification:
         try:
-            trajectory = simulate(
-                at.model.__copy__(),
-                integrator=row.integrator,
-                dt=row.dt,
-                duration=duration,
-                qpos=start.qpos,
-                qvel=start.qvel,
-                act=start.act,
-                control=start.control,
-            )
+            trajectory = at.simulate(row.integrator, row.dt, duration, start)
         except DivergedError:
             return Verification(False, None)
         error = run_error(at, trajectory, reference)

@@ -19,8 +19,8 @@ import numpy as np
 
 from springlab.errors import BadInputError, DivergedError
 from springlab.exact.model_at_point import ModelAtPoint
-from springlab.sim.simulate import INTEGRATORS, Trajectory, simulate
-from springlab.studies.held import coulomb_margin, plan_at, run_hold
+from springlab.sim.simulate import INTEGRATORS, Trajectory
+from springlab.studies.held import coulomb_margin, plan_at, track
 
 #: settling longer "measurably helps" when the motion over the second half of a run from the point is at most
 #: this fraction of the motion over its first half (it is dying out)
@@ -71,38 +71,26 @@ def creep_at(at: ModelAtPoint, duration: float, drift_limit: float) -> tuple[tup
     The findings, and whether the motion of the run's second half is at most SETTLING_HELPS of its first half's
     (`_settling_helps`; None: the run diverged).
     """
-    model, point = at.model, at.point
+    model = at.model
     integrator, dt = _NAMES[int(model.opt.integrator)], float(model.opt.timestep)
     try:
-        plan, _, _ = plan_at(model, "the model", point, hold_s=duration)
+        plan, _, _ = plan_at(at, "the model", hold_s=duration)
     except BadInputError:  # no dry friction holds a body here
         plan = None
-    try:
-        if plan is not None:
-            trajectory, tracks, _ = run_hold(model, plan, integrator, dt, duration)
-        else:
-            trajectory = simulate(
-                model,
-                integrator=integrator,
-                dt=dt,
-                duration=duration,
-                qpos=point.qpos,
-                qvel=point.qvel,
-                act=point.act,
-                control=point.ctrl if model.nu else None,
-            )
-            tracks = []
+    try:  # the same run whether or not a body is held (held.run_hold's: from the point, controls held)
+        trajectory = at.simulate(integrator, dt, duration)
+        tracks = track(model, trajectory, plan) if plan is not None else []
     except DivergedError:
         return (), None
     findings = []
     if plan is not None:
-        for j, track in enumerate(tracks):
-            if track.slip_m <= drift_limit:
+        for j, body in enumerate(tracks):
+            if body.slip_m <= drift_limit:
                 continue
-            margin = coulomb_margin(model, trajectory, plan, j, track.margin_state)
+            margin = coulomb_margin(model, trajectory, plan, j, body.margin_state)
             if margin is not None and margin > 1:
                 name = model.body(plan.bodies[j]).name or str(plan.bodies[j])
-                findings.append(CreepFinding(name, track.creep_velocity_m_s, margin, track.lost_at_s))
+                findings.append(CreepFinding(name, body.creep_velocity_m_s, margin, body.lost_at_s))
     return tuple(findings), _settling_helps(model, trajectory)
 
 
