@@ -13,7 +13,8 @@ the same work costs without springlab around it:
   included): the rollouts of the same steps on the same compiled models.
 * `import`: `import mujoco, numpy` in a fresh interpreter, against `import springlab`.
 * `numpy` (exact-only work: the bare numpy/scipy cost of the same answer), `ffmpeg` (ffmpeg's own encoding of as
-  many frames), `real time` (the live viewer), `inside MuJoCo + ffmpeg` (the demo): benchmarks/paths.py.
+  many frames), `real time` (the live viewer), `issue 37's 150 s` (the demo: its wall time against the target):
+  benchmarks/paths.py.
 
 `validate` runs cold in a fresh interpreter: its row is the command's work (every compile, exact precomputation
 and lazy import) against its rollouts, and `validate start-up` is the interpreter and the imports before it, a

@@ -1,10 +1,10 @@
 """The rows of `make bench` beyond `run` and the in-process commands: each a user-facing path with its floor.
 
-benchmarks/bench.py lists them (`BENCHES`) and writes the table; this module measures them. Every function
+benchmarks/bench.py lists them (`benches`) and writes the table; this module measures them. Every function
 returns `bench.Row`s. The floors (module docstring of bench.py): `inside MuJoCo` (the same run's time in
 MuJoCo's rollout, batch rollout and mj_step calls), `rollout` (a plain rollout of the same steps), `numpy`
 (the bare numpy/scipy cost of the same exact work), `ffmpeg` (ffmpeg's own encoding of as many frames of the
-same size), `real time` (the simulated time itself, for the live viewer).
+same size), `real time` (the simulated time itself, for the live viewer), issue 37's 150 s for the demo's wall time.
 
 Paths in the table are repository-relative (`shown`), so the table reads the same on any machine.
 """
@@ -109,26 +109,26 @@ def validate_rows() -> list[Row]:
 
 
 def demo_row() -> Row:
-    """`springlab demo` in a fresh interpreter: its wall time against issue 37's 2.5 minutes, its CPU (ffmpeg's
-    encoding included) against the time inside MuJoCo and ffmpeg's."""
+    """`springlab demo` in a fresh interpreter against issue 37's target: 2.5 minutes of wall time on 2 cores.
+
+    A wall-time row: the demo draws in worker processes beside its studies and encodes in ffmpeg's, so its work is
+    spread over processes whose MuJoCo time this process cannot count; the CPU column is all of theirs."""
     with tempfile.TemporaryDirectory() as folder:
-        before = children_cpu()
         measured, wall, cpu = fresh(["demo", "--output", folder])
-        ffmpeg = children_cpu() - before - cpu  # the grandchildren (ffmpeg) are counted with the child
         files = sum(1 for p in pathlib.Path(folder).rglob("*") if p.is_file())
-    floor = measured["mujoco_cpu"] + max(ffmpeg, 0.0)
     return Row(
         "demo",
         f"`springlab demo`: every step, {files} files",
         wall,
         cpu,
-        "inside MuJoCo + ffmpeg",
+        "issue 37's 150 s",
+        150.0,
         float("nan"),
-        floor,
-        6.0,
-        "(set)",
-        f"exit {measured['code']}; wall {wall:.1f} s against issue 37's 150 s on 2 cores; CPU of the process and its"
-        f" ffmpeg encoders; start-up {measured['startup_cpu']:.2f} s CPU",
+        1.0,
+        "issue 37",
+        f"exit {measured['code']}; ratio = wall time / 150 s (on an idle 2-core machine); CPU of the process, its"
+        f" media workers and ffmpeg; inside MuJoCo in the main process {measured['mujoco_cpu']:.1f} s CPU",
+        on_wall=True,
     )
 
 
