@@ -8,16 +8,25 @@ the same work costs without springlab around it:
 
 * `rollout`: a plain `mujoco.rollout` of the same steps on the same compiled model (configured and its MjData
   made beforehand), measured alternately with the path, best of several.
-* `inside MuJoCo`: for a whole command, the time the same run of it spent inside MuJoCo's `rollout` and
-  `mj_step` calls (counted by wrapping them; every simulation the command does, verification runs included).
+* `inside MuJoCo`: for a whole command, the time the same run of it spent inside MuJoCo's `rollout`, batch
+  `rollout` and `mj_step` calls (counted by wrapping them; every simulation the command does, verification runs
+  included): the rollouts of the same steps on the same compiled models.
 * `import`: `import mujoco, numpy` in a fresh interpreter, against `import springlab`.
+* `numpy` (exact-only work: the bare numpy/scipy cost of the same answer), `ffmpeg` (ffmpeg's own encoding of as
+  many frames), `real time` (the live viewer), `issue 37's 150 s` (the demo: its wall time against the target):
+  benchmarks/paths.py.
+
+`validate` runs cold in a fresh interpreter: its row is the command's work (every compile, exact precomputation
+and lazy import) against its rollouts, and `validate start-up` is the interpreter and the imports before it, a
+row of its own. The other commands run in this process with springlab's caches cleared (`forget_cases`).
 
 Ratios are taken on CPU time: the machine running the benchmark may be shared, and CPU time is what the
 load disturbs least (wall times are in the table too). A row's budget is issue 37's target where it names one
 (`run` 1.3, drill-string spin-up 2, `simulate` 1 / 0.9, `validate` 1.2); elsewhere the ratio measured when the
 row was added with room for noise, marked `(set)`.
 
-Run: PYTHONPATH=src python benchmarks/bench.py [--only NAME,...] [--no-scripts] [--output DIR]
+Run: PYTHONPATH=src python benchmarks/bench.py [--list] [--only NAME,...] [--skip NAME,...] [--no-scripts]
+[--output DIR]. A script may add rows to the table: a line `BENCH_ROW {json of Row's fields}` in its output.
 """
 
 from __future__ import annotations
@@ -62,10 +71,13 @@ class Row:
     budget: float
     budget_basis: str
     note: str = ""
+    #: the ratio on wall times (a path whose CPU is in another process: the browser, real time)
+    on_wall: bool = False
 
     @property
     def ratio(self) -> float:
-        return self.cpu_s / self.floor_cpu_s if self.floor_cpu_s > 0 else float("inf")
+        mine, floor = (self.wall_s, self.floor_wall_s) if self.on_wall else (self.cpu_s, self.floor_cpu_s)
+        return mine / floor if floor > 0 else float("inf")
 
     def to_dict(self) -> dict:
         out = dataclasses.asdict(self)
@@ -92,7 +104,9 @@ def alternately(path: Callable[[], object], floor: Callable[[], object], repeat:
 
 @contextlib.contextmanager
 def inside_mujoco() -> Iterator[list[float]]:
-    """Count the wall and CPU time [s] spent inside mujoco.rollout.rollout and mujoco.mj_step."""
+    """Count the wall and CPU time [s] spent inside mujoco.rollout.rollout, mujoco.mj_step and the batch's rollout.
+
+    The calls run MuJoCo's own threads: their CPU time is this process's over the call, the threads' included."""
     spent = [0.0, 0.0]
 
     def timed(fn: Callable) -> Callable:
@@ -107,12 +121,14 @@ def inside_mujoco() -> Iterator[list[float]]:
 
         return wrapper
 
-    originals = (rollout.rollout, mujoco.mj_step)
-    rollout.rollout, mujoco.mj_step = timed(originals[0]), timed(originals[1])
+    from mujoco import batch
+
+    originals = (rollout.rollout, mujoco.mj_step, batch.Batch.rollout)
+    rollout.rollout, mujoco.mj_step, batch.Batch.rollout = (timed(fn) for fn in originals)
     try:
         yield spent
     finally:
-        rollout.rollout, mujoco.mj_step = originals
+        rollout.rollout, mujoco.mj_step, batch.Batch.rollout = originals
 
 
 def forget_cases() -> None:
@@ -156,7 +172,7 @@ def run_rows(only: set[str] | None) -> list[Row]:
     cases = [(name, None) for name in scenes.SCENES] + [("drill_string", "spin_up")]
     for name, scenario in cases:
         label = f"run {name}" + (f" {scenario}" if scenario else "")
-        if only and label not in only and "run" not in only:
+        if only and label not in only and "run" not in only:  # `--only "run slider"`: one of them
             continue
         forget_cases()
         wall, cpu = _clock()
@@ -177,7 +193,6 @@ def run_rows(only: set[str] | None) -> list[Row]:
                 f"first call {first[0]:.3g} s wall, {first[1]:.3g} s CPU (compile and exact precomputations)",
             )
         )
-        print(f"  {rows[-1].name}: {rows[-1].ratio:.2f}", flush=True)
     return rows
 
 
@@ -231,26 +246,36 @@ def sobol_row(base_samples: int = 256) -> Row:
         f"{timings[1] / runs * 1e3:.2f} ms CPU per run: {default_runs:,} runs on 2 idle cores {minutes:.1f} min"
         " (CPU x runs / 2; the LocalCluster scaling and the 64-core projection: bench_sobol.py below)",
     )
-    print(f"  {row.name}: {row.ratio:.2f}", flush=True)
     return row
 
 
 def command_row(name: str, argv: list[str], work: str, budget: float, basis: str, *, cold: bool = True) -> Row:
-    """A whole command in this process against the time it spent inside MuJoCo."""
+    """A whole command in this process against the time it spent inside MuJoCo (springlab's caches cleared first
+    unless `cold` is False; the modules other rows imported stay imported: `validate` is the fresh-interpreter row)."""
+    from paths import shown
     from springlab.cli.main import main
 
     with tempfile.TemporaryDirectory() as folder:
-        argv = [a.replace("{out}", folder) for a in argv]
+        concrete = [a.replace("{out}", folder) for a in argv]
         if cold:
             forget_cases()
         with contextlib.redirect_stdout(open(os.devnull, "w")), inside_mujoco() as spent:
             wall, cpu = _clock()
-            code = main(argv)
+            code = main(concrete)
             wall_end, cpu_end = _clock()
     row = Row(name, work, wall_end - wall, cpu_end - cpu, "inside MuJoCo", spent[0], spent[1], budget, basis)
-    row.note = f"exit {code}; " + " ".join(argv)
-    print(f"  {name}: {row.ratio:.2f}", flush=True)
+    row.note = f"exit {code}; springlab " + shown(" ".join(argv).replace("{out}", "OUT"))
     return row
+
+
+def fresh_import_cpu(code: str, repeat: int = 5) -> float:
+    """CPU time [s] of a fresh interpreter running `code` (the interpreter's start included), best of `repeat`."""
+    best = np.inf
+    for _ in range(repeat):
+        script = f"import time;{code};print(time.process_time())"
+        out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True).stdout
+        best = min(best, float(out))
+    return best
 
 
 def import_row() -> Row:
@@ -259,9 +284,7 @@ def import_row() -> Row:
     def timed(code: str) -> tuple[float, float]:
         best = (np.inf, np.inf)
         for _ in range(5):
-            script = (
-                f"import time,resource;w=time.perf_counter();{code};print(time.perf_counter()-w, time.process_time())"
-            )
+            script = f"import time;w=time.perf_counter();{code};print(time.perf_counter()-w, time.process_time())"
             out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True).stdout
             wall, cpu = map(float, out.split())
             best = (min(best[0], wall), min(best[1], cpu))
@@ -271,8 +294,8 @@ def import_row() -> Row:
     return Row("import springlab", "a fresh interpreter", *mine, "import", *floor, 5.0, "(set)")
 
 
+#: (row name, argv with {out} for a temporary folder, work, budget, basis): commands measured in this process
 COMMANDS = [
-    ("validate", ["validate"], "every exact scenario, cold", VALIDATE_BUDGET, "issue 37"),
     (
         "sweep",
         ["sweep", "slider", "free", "--vary", "stiffness=10:1000:1000:log", "--output", "{out}"],
@@ -280,7 +303,7 @@ COMMANDS = [
         3.0,
         "(set)",
     ),
-    ("tradeoff", ["tradeoff", "slider", "free", "--output", "{out}"], "every integrator and dt", 6.0, "(set)"),
+    ("tradeoff", ["tradeoff", "slider", "free", "--output", "{out}"], "every integrator and dt", 2.5, "(set)"),
     # mostly exact work (the step maps' eigenvalues, bisected limits): its MuJoCo calls are a small floor
     ("stability", ["stability", "--output", "{out}"], "the stability limits", 250.0, "(set)"),
     (
@@ -292,13 +315,45 @@ COMMANDS = [
     ),
     ("rms stay_cable", ["rms", "stay_cable", "--output", "{out}"], "random load, stay cable", 3.0, "(set)"),
     ("design printer_head", ["design", "printer_head", "--output", "{out}"], "the design study", 3.0, "(set)"),
+    (
+        "refine",
+        ["refine", "drill_string", "--output", "{out}"],
+        "the drill string's element counts and settings for its question",
+        1.6,
+        "(set)",
+    ),
 ]
 
 
-def scripts(timeout: float) -> list[tuple[str, float, str]]:
-    """Every older benchmarks/bench_*.py as it prints itself: (name, wall [s], its output)."""
+def audit_command() -> tuple[str, list[str], str, float, str]:
+    """The audit of dm_control's humanoid (27 DOF, lying on the floor after 3 s), as bench_audit.py runs it."""
+    import dm_control
+
+    humanoid = pathlib.Path(dm_control.__file__).parent / "suite" / "humanoid.xml"
+    argv = ["audit", str(humanoid), "--settle", "3", "--tol", "1e-2", "--output", "{out}"]
+    return "audit humanoid", argv, "dm_control's humanoid, 27 DOF on the floor, 5 integrators", 1.6, "(set)"
+
+
+#: a line a bench_*.py script prints to add a row to the table: the prefix, then the row's fields as JSON
+ROW_PREFIX = "BENCH_ROW "
+
+
+def script_rows(text: str) -> list[Row]:
+    """The rows a script printed (`ROW_PREFIX` lines: Row's fields as JSON)."""
+    rows = []
+    for line in text.splitlines():
+        if line.startswith(ROW_PREFIX):
+            fields = json.loads(line[len(ROW_PREFIX) :])
+            rows.append(Row(**{k: v for k, v in fields.items() if k in Row.__dataclass_fields__}))
+    return rows
+
+
+def scripts(timeout: float, chosen: list[str]) -> list[tuple[str, float, str]]:
+    """The older benchmarks/bench_*.py in `chosen`, as each prints itself: (name, wall [s], its output)."""
     out = []
     for script in sorted(HERE.glob("bench_*.py")):
+        if script.stem not in chosen:
+            continue
         start = time.perf_counter()
         try:
             done = subprocess.run(
@@ -332,15 +387,18 @@ def markdown(rows: list[Row], where: dict, reports: list[tuple[str, float, str]]
         f"`make bench` (benchmarks/bench.py) on {where['platform']}, {where['cpus']} CPUs, Python {where['python']},"
         f" MuJoCo {where['mujoco']}, {where['date_utc']} UTC; load average at the end"
         f" {', '.join(f'{x:.1f}' for x in where['load_average_1_5_15'])}. Ratio = CPU time / the floor's CPU time;"
-        " `python benchmarks/check.py` fails when one is over its budget.",
+        " `python benchmarks/check.py` fails when one is over its budget. The floor column is the floor's CPU time,"
+        " or its wall time where marked (a path whose CPU is in another process: the browser, the live viewer)."
+        " `python benchmarks/bench.py --list` gives each row group's rough wall time; `--only`, `--skip` choose.",
         "",
-        "| path | work | wall [s] | CPU [s] | floor | floor CPU [s] | ratio | budget | note |",
+        "| path | work | wall [s] | CPU [s] | floor | floor [s] | ratio | budget | note |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         over = " **over**" if r.ratio > r.budget else ""
         lines.append(
-            f"| {r.name} | {r.work} | {r.wall_s:.4g} | {r.cpu_s:.4g} | {r.floor} | {r.floor_cpu_s:.4g} |"
+            f"| {r.name} | {r.work} | {r.wall_s:.4g} | {r.cpu_s:.4g} | {r.floor} |"
+            f" {(r.floor_wall_s if r.on_wall else r.floor_cpu_s):.4g}{' wall' if r.on_wall else ''} |"
             f" {r.ratio:.2f}{over} | {r.budget:.2f} {r.budget_basis} | {r.note} |"
         )
     if reports:
@@ -350,27 +408,126 @@ def markdown(rows: list[Row], where: dict, reports: list[tuple[str, float, str]]
     return "\n".join(lines) + "\n"
 
 
+@dataclasses.dataclass(frozen=True)
+class Bench:
+    """A named group of rows (what --only and --skip take), with a rough wall time [s] on an idle 2-core machine."""
+
+    name: str
+    estimate_s: float
+    measure: Callable[[pathlib.Path], list[Row]]
+
+
+def _command(name: str) -> Callable[[pathlib.Path], list[Row]]:
+    spec = next(c for c in COMMANDS if c[0] == name)
+    return lambda folder: [command_row(*spec)]
+
+
+def benches(selected: set[str] | None) -> list[Bench]:
+    """Every row group of the table, in the table's order; then one per older bench_*.py script."""
+    import paths
+
+    def view(folder: pathlib.Path) -> list[Row]:
+        row = paths.view_row()
+        return [row] if row else []
+
+    out = [
+        Bench("run", 45, lambda folder: run_rows(selected)),
+        Bench("simulate", 3, lambda folder: [simulate_row()]),
+        Bench("sobol", 70, lambda folder: [sobol_row()]),
+        Bench("validate", 35, lambda folder: paths.validate_rows()),
+        *(Bench(name, estimate, _command(name)) for name, estimate in _COMMAND_ESTIMATES.items()),
+        Bench("audit humanoid", 60, lambda folder: [command_row(*audit_command())]),
+        Bench("fit", 40, paths.fit_rows),
+        Bench("frequency chain", 10, lambda folder: [paths.frequency_chain_row()]),
+        Bench("frequency sinestream", 30, lambda folder: [paths.sinestream_row()]),
+        Bench("render", 15, lambda folder: [paths.render_row(folder)]),
+        Bench("interactive", 25, paths.interactive_rows),
+        Bench("view", 10, view),
+        Bench("demo", 200, lambda folder: [paths.demo_row()]),
+        Bench("import", 10, lambda folder: [import_row()]),
+    ]
+    return out
+
+
+#: rough wall time [s] of each in-process command row on an idle 2-core machine (from the tables measured so far)
+_COMMAND_ESTIMATES = {
+    "sweep": 20,
+    "tradeoff": 8,
+    "stability": 15,
+    "friction-settings gripper": 12,
+    "rms stay_cable": 150,
+    "design printer_head": 25,
+    "refine": 30,
+}
+#: rough wall time [s] of each older script on an idle 2-core machine (their own budgets and docs)
+SCRIPT_ESTIMATES = {
+    "bench_audit": 120,
+    "bench_creep": 240,
+    "bench_design": 90,
+    "bench_drill_string": 180,
+    "bench_executor": 120,
+    "bench_fit": 20,
+    "bench_fit_bigfile": 90,
+    "bench_frequency": 120,
+    "bench_friction": 360,
+    "bench_growth": 150,
+    "bench_printer_control": 60,
+    "bench_render": 90,
+    "bench_simulate": 30,
+    "bench_sobol": 150,
+    "bench_stability_limit": 30,
+    "bench_stay_cable": 90,
+    "bench_tradeoff": 60,
+}
+
+
+def _chosen(name: str, only: set[str] | None, skip: set[str]) -> bool:
+    if name in skip:
+        return False
+    if only is None:
+        return True
+    return name in only or (name == "run" and any(o.startswith("run ") for o in only))
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--only", default="", help="comma-separated row names (run, simulate, import, or a command)")
+    parser.add_argument("--only", default="", help="comma-separated row groups to run (see --list)")
+    parser.add_argument("--skip", default="", help="comma-separated row groups to leave out (see --list)")
+    parser.add_argument("--list", action="store_true", help="list the row groups with their rough wall times, and stop")
     parser.add_argument("--no-scripts", action="store_true", help="leave out the bench_*.py scripts")
     parser.add_argument("--script-timeout", type=float, default=900.0)
     parser.add_argument("--output", default=str(HERE), help="where results.md and results.json go")
     args = parser.parse_args(argv)
     only = {s.strip() for s in args.only.split(",") if s.strip()} or None
+    skip = {s.strip() for s in args.skip.split(",") if s.strip()}
+    groups = [b for b in benches(only) if _chosen(b.name, only, skip)]
+    known = {b.name for b in benches(None)} | set(SCRIPT_ESTIMATES)
+    unknown = sorted((only or set()) - known - {o for o in (only or set()) if o.startswith("run ")} | (skip - known))
+    if unknown:
+        parser.error(f"unknown row groups {', '.join(unknown)}; valid: {', '.join(sorted(known))}")
+    chosen_scripts = [] if args.no_scripts else [n for n in SCRIPT_ESTIMATES if _chosen(n, only, skip)]
+    estimate = sum(b.estimate_s for b in groups) + sum(SCRIPT_ESTIMATES[n] for n in chosen_scripts)
+    if args.list:
+        for b in benches(None):
+            print(f"{b.name:28s} ~{b.estimate_s:5.0f} s")
+        for name, seconds in SCRIPT_ESTIMATES.items():
+            print(f"{name:28s} ~{seconds:5.0f} s  (a script: its own output below the table)")
+        print(f"chosen: about {estimate / 60:.0f} minutes on an idle 2-core machine (rough)")
+        return 0
+    print(f"rows (about {estimate / 60:.0f} minutes on an idle 2-core machine, rough):", flush=True)
     rows: list[Row] = []
-    print("rows:", flush=True)
-    rows += run_rows(only)
-    if not only or "simulate" in only:
-        rows.append(simulate_row())
-    if not only or "sobol" in only:
-        rows.append(sobol_row())
-    for name, command, work, budget, basis in COMMANDS:
-        if not only or name in only:
-            rows.append(command_row(name, command, work, budget, basis))
-    if not only or "import" in only:
-        rows.append(import_row())
-    reports = [] if args.no_scripts or only else scripts(args.script_timeout)
+    with tempfile.TemporaryDirectory() as scratch:
+        for group in groups:
+            start = time.perf_counter()
+            found = group.measure(pathlib.Path(scratch))
+            rows += found
+            ratios = ", ".join(f"{r.name} {r.ratio:.2f}" for r in found)
+            print(
+                f"  {group.name} ({time.perf_counter() - start:.0f} s, ~{group.estimate_s:.0f}): {ratios}", flush=True
+            )
+    reports = scripts(args.script_timeout, chosen_scripts)
+    for _, _, text in reports:
+        rows += script_rows(text)
     where = machine()
     folder = pathlib.Path(args.output)
     folder.mkdir(parents=True, exist_ok=True)

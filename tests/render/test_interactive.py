@@ -13,7 +13,6 @@ code, and the final positions agree to the last bit (asserted to 1e-12 of the mo
 bound, and bit for bit at the initial settings).
 """
 
-import fcntl
 import functools
 import http.server
 import json
@@ -23,14 +22,13 @@ import re
 import shutil
 import subprocess
 import threading
-import time
 import xml.etree.ElementTree as ElementTree
 
 import mujoco
 import numpy as np
 import pytest
 
-from helpers.browser import CHROMIUM_FLAGS, find_chromium
+from helpers.browser import RESULT_AFTER, DevTools, find_chromium
 from springlab import scenes
 from springlab.errors import BadInputError, DivergedError
 from springlab.render import interactive
@@ -65,106 +63,10 @@ def pages(tmp_path_factory):
     return pages
 
 
-class _DevTools:
-    """Headless Chromium over --remote-debugging-pipe (fd 3 commands in, fd 4 answers out)."""
-
-    def __init__(self, chromium: str, profile) -> None:
-        commands_in, self._commands = os.pipe()
-        self._answers, answers_out = os.pipe()
-        # the child's ends above fd 10 first, so that moving them to 3 and 4 cannot overwrite one another
-        ends = [fcntl.fcntl(fd, fcntl.F_DUPFD_CLOEXEC, 10) for fd in (commands_in, answers_out)]
-        os.close(commands_in)
-        os.close(answers_out)
-
-        def wire() -> None:
-            os.dup2(ends[0], 3)
-            os.dup2(ends[1], 4)
-
-        self.process = subprocess.Popen(
-            [chromium, *CHROMIUM_FLAGS, "--remote-debugging-pipe", f"--user-data-dir={profile}", "about:blank"],
-            stdin=subprocess.DEVNULL,
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
-            close_fds=False,
-            preexec_fn=wire,
-        )
-        for fd in ends:
-            os.close(fd)
-        self._buffer = b""
-        self._id = 0
-        self.targets: dict[str, str] = {}
-
-    def call(self, method: str, params: dict | None = None, session: str | None = None) -> dict:
-        self._id += 1
-        message = {"id": self._id, "method": method, "params": params or {}}
-        if session:
-            message["sessionId"] = session
-        os.write(self._commands, json.dumps(message).encode() + b"\0")
-        while True:
-            while b"\0" not in self._buffer:
-                chunk = os.read(self._answers, 1 << 16)
-                assert chunk, "chromium closed its DevTools pipe"
-                self._buffer += chunk
-            raw, self._buffer = self._buffer.split(b"\0", 1)
-            answer = json.loads(raw)
-            if answer.get("id") == self._id:
-                if "error" in answer:
-                    raise RuntimeError(answer["error"]["message"])
-                return answer["result"]
-
-    def open(self, url: str) -> str:
-        """A new tab showing `url`, its document loaded (the session id)."""
-        target = self.call("Target.createTarget", {"url": "about:blank"})["targetId"]
-        session = self.call("Target.attachToTarget", {"targetId": target, "flatten": True})["sessionId"]
-        self.targets[session] = target
-        self.call("Page.navigate", {"url": url}, session)
-        deadline = time.monotonic() + 120
-        while time.monotonic() < deadline:
-            try:  # until the evaluation runs in the page itself, not in about:blank on its way out
-                if self.evaluate(session, "location.href + ' ' + document.readyState") == f"{url} complete":
-                    return session
-            except RuntimeError:
-                pass
-            time.sleep(0.02)
-        raise AssertionError(f"{url} did not load")
-
-    def evaluate(self, session: str, expression: str):
-        answer = self.call(
-            "Runtime.evaluate", {"expression": expression, "awaitPromise": True, "returnByValue": True}, session
-        )
-        assert "exceptionDetails" not in answer, answer["exceptionDetails"]
-        return answer["result"].get("value")
-
-    def close(self) -> None:
-        """Browser.close: chromium ends its renderers itself (terminate only if it does not)."""
-        try:
-            self.call("Browser.close")
-            self.process.wait(timeout=30)
-        except (RuntimeError, AssertionError, subprocess.TimeoutExpired):
-            self.process.terminate()
-            self.process.wait(timeout=30)
-        os.close(self._commands)
-        os.close(self._answers)
-
-
-#: resolves with #result's data- attributes once the page has published run number `after` + 1 or later
-_RESULT = """new Promise((resolve, reject) => {{
-  const start = Date.now();
-  (function poll() {{
-    const r = document.getElementById('result');
-    if (r && r.dataset.verdict === 'error') reject(new Error(document.getElementById('status').textContent));
-    else if (r && Number(r.dataset.run || 0) > {after})
-      resolve(Object.fromEntries([...r.attributes].filter(a => a.name.startsWith('data-')).map(a => [a.name.slice(5), a.value])));
-    else if (Date.now() - start > 120000) reject(new Error('no result'));
-    else setTimeout(poll, 10);
-  }})();
-}})"""
-
-
 @pytest.fixture(scope="module")
 def browser(tmp_path_factory):
     chromium = find_chromium()
-    tools = _DevTools(chromium, tmp_path_factory.mktemp("chromium-profile"))
+    tools = DevTools(chromium, tmp_path_factory.mktemp("chromium-profile"))
     yield tools
     tools.close()
 
@@ -199,7 +101,7 @@ def test_every_page_from_file_agrees_with_python_at_its_initial_settings(pages, 
     for (scene_name, name), page in pages.items():
         scene = scenes.get(scene_name)
         session = browser.open(page.path.as_uri())
-        initial = browser.evaluate(session, _RESULT.format(after=0))
+        initial = browser.evaluate(session, RESULT_AFTER.format(after=0))
         scenario = scene.scenario(name)
         assert (initial["scene"], initial["scenario"]) == (scene_name, name)
         assert initial["integrator"] == scene.integrator
@@ -218,7 +120,7 @@ def test_slider_moves_agree_with_python_and_a_dt_past_the_stability_limit_diverg
     and the page's MJCF edit compiles to the model Scene.edit builds through MjSpec."""
     scene = scenes.get("slider")
     session = browser.open(pages["slider", "free"].path.as_uri())
-    initial = browser.evaluate(session, _RESULT.format(after=0))
+    initial = browser.evaluate(session, RESULT_AFTER.format(after=0))
     params = json.loads(initial["parameters"]) | {"mass": 2.5, "stiffness": 40.0, "damping": 0.7}
     xml = browser.evaluate(session, f"window.springlabPage.editedMjcf({json.dumps(params)})")
     _assert_same_model(mujoco.MjModel.from_xml_string(xml), scene.build(params, scene.scenario("free")))
@@ -228,7 +130,7 @@ def test_slider_moves_agree_with_python_and_a_dt_past_the_stability_limit_diverg
         "(() => { const set = (id, v) => { const e = document.getElementById(id); e.value = String(v);"
         " e.dispatchEvent(new Event('input')); };"
         " set('zeta', 0.3); set('stiffness', 2.4); set('dt', Math.log10(0.02)); set('integrator', 'euler');"
-        f" return {_RESULT.format(after=1)}; }})()",
+        f" return {RESULT_AFTER.format(after=1)}; }})()",
     )
     assert moved["integrator"] == "euler" and abs(float(moved["dt"]) - 0.02) < 0.001
     moved_params = json.loads(moved["parameters"])
@@ -240,7 +142,7 @@ def test_slider_moves_agree_with_python_and_a_dt_past_the_stability_limit_diverg
         session,
         "(() => { const e = document.getElementById('dt'); e.value = e.max; e.dispatchEvent(new Event('input'));"
         " const i = document.getElementById('integrator'); i.value = 'rk4'; i.dispatchEvent(new Event('input'));"
-        f" return {_RESULT.format(after=2)}; }})()",
+        f" return {RESULT_AFTER.format(after=2)}; }})()",
     )
     # the slider's top, 0.49 s on its 0.01-decade steps
     assert blown["verdict"] == "diverged" and float(blown["dt"]) > 0.45
@@ -256,13 +158,13 @@ def test_car_release_moves_agree_with_python(pages, browser):
     """The car's damped release at a moved damping ratio, mass and dt: the spring's relaxed length and the
     pushed-down start follow the mass and stiffness in the page as in Release.edit and Release.setup."""
     session = browser.open(pages["car", "damped_release"].path.as_uri())
-    browser.evaluate(session, _RESULT.format(after=0))
+    browser.evaluate(session, RESULT_AFTER.format(after=0))
     moved = browser.evaluate(
         session,
         "(() => { const set = (id, v) => { const e = document.getElementById(id); e.value = String(v);"
         " e.dispatchEvent(new Event('input')); };"
         " set('zeta', 0.55); set('mass', 3.3); set('dt', Math.log10(0.01));"
-        f" return {_RESULT.format(after=1)}; }})()",
+        f" return {RESULT_AFTER.format(after=1)}; }})()",
     )
     params = json.loads(moved["parameters"])
     # the mass slider's 0.01-decade steps start at its declared 250 kg: 10^3.3 snaps to 10^3.298
@@ -279,7 +181,7 @@ def test_a_page_served_over_http_computes_the_same_run(pages, browser):
     thread.start()
     try:
         session = browser.open(f"http://127.0.0.1:{server.server_address[1]}/{pages['slider', 'free'].path.name}")
-        served = browser.evaluate(session, _RESULT.format(after=0))
+        served = browser.evaluate(session, RESULT_AFTER.format(after=0))
     finally:
         server.shutdown()
         server.server_close()

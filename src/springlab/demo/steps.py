@@ -13,12 +13,16 @@ are being replaced); the marker goes only after the new index.html is in place.
 
 from __future__ import annotations
 
+import concurrent.futures
+import multiprocessing
+import os
 import pathlib
 import time
 from collections.abc import Callable
 
 from springlab import files, outputs, progress, scenes
 from springlab.errors import BadInputError
+from springlab.exact.linear import single_threaded_blas
 from springlab.runs.run import ValidationRow
 from springlab.studies import auto, families
 from springlab.studies.families import PhaseFamily
@@ -57,69 +61,148 @@ def media_step(state: DemoState) -> list[Artifact]:
 
     Videos are 480 x 360 (+ a 360 x 360 phase panel) at 30 fps and show at
     most the first DEMO_CLIP_SECONDS of a run, which keeps the demo within a
-    few minutes on two cores.
+    few minutes on two cores. `run_demo` draws them in worker processes beside
+    the steps after this one (`_MediaBeside`): the same files, listed in the same order.
     """
+    written = []
+    films = progress.bar(len(state.results), description="demo: filming", unit="video")  # on a terminal only
+    for key in state.results:
+        artifacts, timing = _film(state, key)
+        written += artifacts
+        state.timings.append(timing)
+        films.update(1)
+    films.close()
+    for name in scenes.SCENES:
+        written += _zeta_family(state, name)
+    return written
+
+
+def _film(state: DemoState, key: tuple[str, str]) -> tuple[list[Artifact], tuple[str, float]]:
+    """One run's composite video and plots (media_step's part for it): its artifacts and (what, wall time [s])."""
     # GL and matplotlib are imported only when the demo draws
-    from springlab.plots import run as plots
     from springlab.render import scale as render_scale
     from springlab.render.media import default_slow_motion, plot_files, render_run
 
-    written = []
-    films = progress.bar(len(state.results), description="demo: filming", unit="video")  # on a terminal only
-    for (scene_name, scenario_name), result in state.results.items():
-        folder = state.out / scene_name / scenario_name
-        start = time.perf_counter()
-        video = folder / "video.mp4"
-        slow = default_slow_motion(result, float(result.time[-1]), DEMO_VIDEO["fps"])
-        clip = min(DEMO_CLIP_SECONDS / slow, float(result.time[-1]))
-        info = render_run(
-            result,
-            video,
-            fps=DEMO_VIDEO["fps"],
-            width=DEMO_VIDEO["width"],
-            height=DEMO_VIDEO["height"],
-            duration=clip,
-            composite=True,
-            progress=False,
-            slow_motion=slow,
+    scene_name, scenario_name = key
+    result = state.results[key]
+    folder = state.out / scene_name / scenario_name
+    start = time.perf_counter()
+    video = folder / "video.mp4"
+    slow = default_slow_motion(result, float(result.time[-1]), DEMO_VIDEO["fps"])
+    clip = min(DEMO_CLIP_SECONDS / slow, float(result.time[-1]))
+    info = render_run(
+        result,
+        video,
+        fps=DEMO_VIDEO["fps"],
+        width=DEMO_VIDEO["width"],
+        height=DEMO_VIDEO["height"],
+        duration=clip,
+        composite=True,
+        progress=False,
+        slow_motion=slow,
+    )
+    shown = "" if clip >= float(result.time[-1]) else f", first {clip:g} s of {float(result.time[-1]):g} s"
+    shown += "".join(", " + note for note in render_scale.labels(info["slow_motion"], info["exaggeration"]))
+    written = [
+        Artifact(
+            str(video.relative_to(state.out)),
+            "video",
+            f"3D scene beside its phase-plane trace, {info['fps']:g} fps{shown}",
+            scene_name,
+            scenario_name,
         )
-        shown = "" if clip >= float(result.time[-1]) else f", first {clip:g} s of {float(result.time[-1]):g} s"
-        shown += "".join(", " + note for note in render_scale.labels(info["slow_motion"], info["exaggeration"]))
-        written.append(
-            Artifact(
-                str(video.relative_to(state.out)),
-                "video",
-                f"3D scene beside its phase-plane trace, {info['fps']:g} fps{shown}",
-                scene_name,
-                scenario_name,
-            )
-        )
-        try:
-            family: PhaseFamily | None = families.run_phase_family(result)
-        except BadInputError:
-            family = None  # no phase plane with an equilibrium for this scenario
-        for path, _, title in plot_files(result, folder, state.out, family):
-            written.append(Artifact(path, "plot", title, scene_name, scenario_name))
-        state.timings.append((f"media {scene_name}/{scenario_name}", time.perf_counter() - start))
-        films.update(1)
-    films.close()
-    for scene in scenes.SCENES.values():
-        target = state.out / scene.name / "zeta_family.png"
-        try:
-            zetas = families.run_zeta_family(scene.name, scene.default_scenario)
-        except BadInputError:
-            continue  # no damping parameter, no exact linear reference, or several modes
-        plots.save(plots.zeta_family(zetas), target)
-        written.append(
-            Artifact(
-                str(target.relative_to(state.out)),
-                "plot",
-                "the damping ratio from 0 to 2 (the chapter's zeta slider)",
-                scene.name,
-                scene.default_scenario,
-            )
-        )
-    return written
+    ]
+    try:
+        family: PhaseFamily | None = families.run_phase_family(result)
+    except BadInputError:
+        family = None  # no phase plane with an equilibrium for this scenario
+    for path, _, title in plot_files(result, folder, state.out, family):
+        written.append(Artifact(path, "plot", title, scene_name, scenario_name))
+    return written, (f"media {scene_name}/{scenario_name}", time.perf_counter() - start)
+
+
+def _zeta_family(state: DemoState, name: str) -> list[Artifact]:
+    """A scene's zeta family plot (none for a scene without a damping parameter or a single-mode reference)."""
+    from springlab.plots import run as plots
+
+    scene = scenes.SCENES[name]
+    target = state.out / scene.name / "zeta_family.png"
+    try:
+        zetas = families.run_zeta_family(scene.name, scene.default_scenario)
+    except BadInputError:
+        return []  # no damping parameter, no exact linear reference, or several modes
+    plots.save(plots.zeta_family(zetas), target)
+    title = "the damping ratio from 0 to 2 (the chapter's zeta slider)"
+    return [Artifact(str(target.relative_to(state.out)), "plot", title, scene.name, scene.default_scenario)]
+
+
+#: worker processes that draw the media beside the later steps (`_MediaBeside`; at most the machine's CPUs)
+MEDIA_WORKERS = 2
+#: the state the media workers read: forked with them, so nothing but a run's key crosses to a worker
+_FORKED: DemoState | None = None
+
+
+def _film_job(key: tuple[str, str]) -> tuple[list[Artifact], tuple[str, float]]:
+    assert _FORKED is not None, "a media worker is forked after _MediaBeside sets the state"
+    return _film(_FORKED, key)
+
+
+def _zeta_job(name: str) -> list[Artifact]:
+    assert _FORKED is not None, "a media worker is forked after _MediaBeside sets the state"
+    return _zeta_family(_FORKED, name)
+
+
+class _MediaBeside:
+    """media_step in forked worker processes while the demo's later steps run in this one.
+
+    Drawing (OpenGL in software, ffmpeg, matplotlib) and the studies after it each keep about one core busy, so
+    side by side they fill two: the demo took 199 s on an idle 2-core machine with them one after the other.
+    The workers are forked after the core step (the runs they draw are in the forked memory; no GL context
+    exists yet in this process) and write the same files media_step writes; `finish` puts their artifacts and
+    timings where media_step's would be, so the report is the same.
+    """
+
+    def __init__(self, state: DemoState) -> None:
+        global _FORKED
+        _FORKED = state
+        self.state = state
+        self.artifact_at, self.timing_at = len(state.artifacts), len(state.timings)
+        self.started = time.perf_counter()
+        workers = max(1, min(MEDIA_WORKERS, os.cpu_count() or 1))
+        context = multiprocessing.get_context("fork")
+        self.pool = concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=context)
+        self.films = [self.pool.submit(_film_job, key) for key in state.results]
+        self.zetas = [self.pool.submit(_zeta_job, name) for name in scenes.SCENES]
+
+    def finish(self) -> float:
+        """Wait for the workers; put the artifacts and timings in place. Returns the step's wall time [s]."""
+        written: list[Artifact] = []
+        timings: list[tuple[str, float]] = []
+        for film in self.films:
+            artifacts, timing = film.result()
+            written += artifacts
+            timings.append(timing)
+        for zeta in self.zetas:
+            written += zeta.result()
+        self.pool.shutdown()
+        _release()
+        seconds = time.perf_counter() - self.started
+        self.state.artifacts[self.artifact_at : self.artifact_at] = written
+        self.state.timings[self.timing_at : self.timing_at] = [*timings, ("media_step", seconds)]
+        return seconds
+
+    def stop(self) -> None:
+        """End the workers now (the demo was interrupted or failed): nothing more is drawn."""
+        self.pool.shutdown(wait=False, cancel_futures=True)
+        for process in list(getattr(self.pool, "_processes", {}).values()):
+            process.terminate()
+        _release()
+
+
+def _release() -> None:
+    """Let go of the state the workers were forked with (they have their own copy)."""
+    global _FORKED
+    _FORKED = None
 
 
 def report_step(state: DemoState) -> list[Artifact]:
@@ -153,12 +236,30 @@ def run_demo(out: str | pathlib.Path, log: Callable[[str], None] = print) -> Dem
         },
     )
     (state.out / REPORT_NAME).unlink(missing_ok=True)  # a stale report would describe files being replaced
-    for step in [*STEPS, *FINAL_STEPS]:
-        start = time.perf_counter()
-        state.artifacts.extend(step(state))
-        seconds = time.perf_counter() - start
-        state.timings.append((step.__name__, seconds))
-        log(f"demo: {step.__name__} done in {seconds:.1f} s")
+    media: _MediaBeside | None = None
+    # one BLAS thread (exact.linear.single_threaded_blas): the media workers and the studies fill the cores, and
+    # OpenBLAS's own threads on top of them wait on each other (the stay cable's Lyapunov solves took several times
+    # their CPU); the same numbers on any machine, whatever its cores
+    with single_threaded_blas():
+        try:
+            for step in [*STEPS, *FINAL_STEPS]:
+                if step is media_step:
+                    media = _MediaBeside(state)  # drawn beside the steps after it
+                    continue
+                if media is not None and step in FINAL_STEPS:
+                    log(f"demo: media_step done in {media.finish():.1f} s (beside the steps after it)")
+                    media = None
+                start = time.perf_counter()
+                state.artifacts.extend(step(state))
+                seconds = time.perf_counter() - start
+                state.timings.append((step.__name__, seconds))
+                log(f"demo: {step.__name__} done in {seconds:.1f} s")
+            if media is not None:  # no final step: the media are still part of the demo
+                log(f"demo: media_step done in {media.finish():.1f} s (beside the steps after it)")
+                media = None
+        finally:
+            if media is not None:
+                media.stop()
     (state.out / INCOMPLETE_MARKER).unlink(missing_ok=True)
     return state
 
