@@ -389,7 +389,13 @@ def markdown(rows: list[Row], where: dict, reports: list[tuple[str, float, str]]
         f" {', '.join(f'{x:.1f}' for x in where['load_average_1_5_15'])}. Ratio = CPU time / the floor's CPU time;"
         " `python benchmarks/check.py` fails when one is over its budget. The floor column is the floor's CPU time,"
         " or its wall time where marked (a path whose CPU is in another process: the browser, the live viewer)."
-        " `python benchmarks/bench.py --list` gives each row group's rough wall time; `--only`, `--skip` choose.",
+        " `python benchmarks/bench.py --list` gives each row group's rough wall time; `--only`, `--skip` choose."
+        + (
+            f" This table was run as `python benchmarks/bench.py {where['arguments']}`: the rows and scripts it left out"
+            " are absent."
+            if where.get("arguments")
+            else ""
+        ),
         "",
         "| path | work | wall [s] | CPU [s] | floor | floor [s] | ratio | budget | note |",
         "|---|---|---|---|---|---|---|---|---|",
@@ -529,6 +535,12 @@ def main(argv: list[str] | None = None) -> int:
     for _, _, text in reports:
         rows += script_rows(text)
     where = machine()
+    # a partial run says so in its header: a table from --only/--skip/--no-scripts is not the whole `make bench`
+    where["arguments"] = " ".join(
+        [f"--only {args.only}"] * bool(args.only)
+        + [f"--skip {args.skip}"] * bool(args.skip)
+        + ["--no-scripts"] * args.no_scripts
+    )
     folder = pathlib.Path(args.output)
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "results.json").write_text(

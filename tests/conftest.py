@@ -40,6 +40,18 @@ def cli(capsys):
 
 
 @pytest.fixture(scope="session")
+def dask_cluster():
+    """A dask LocalCluster of 2 worker processes (one thread each), started on first use and shared by every
+    test that compares a study on dask workers with the same study run locally (each start costs 1-2 s of
+    process spawning and imports). The tests only submit work to it; one that kills a worker starts its own."""
+    pytest.importorskip("distributed", reason="the distributed extra (make test installs it)")
+    from springlab.studies.executor import Executor
+
+    with Executor(workers=2, progress=False) as executor:
+        yield executor
+
+
+@pytest.fixture(scope="session")
 def stability_report():
     """`springlab stability`'s default report (a springlab.studies.stability.StabilityReport), computed once."""
     from springlab.studies import stability

@@ -174,14 +174,11 @@ def test_the_command_prints_json_and_writes_its_files(tmp_path, cli):
 
 
 @pytest.mark.slow
-def test_the_study_gives_the_same_errors_on_dask_workers(monkeypatch):
-    from springlab.studies.executor import Executor
-
+def test_the_study_gives_the_same_errors_on_dask_workers(monkeypatch, dask_cluster):
     monkeypatch.setattr(study_module, "CHUNK_RUNS", 5)  # 16 runs: four chunks travel
     arguments = dict(integrators=("rk4",), dts=(1e-3, 5e-4), values=ENDS)
     local = friction_settings("friction", ["coulomb_decay"], **arguments)
-    with Executor(workers=2, progress=False) as executor:
-        remote = friction_settings("friction", ["coulomb_decay"], executor=executor, **arguments)
+    remote = friction_settings("friction", ["coulomb_decay"], executor=dask_cluster, **arguments)  # 2 workers
     assert len(local.cases[0].runs) == 16
     assert [r.max_rel_error for r in local.cases[0].runs] == [r.max_rel_error for r in remote.cases[0].runs]
     assert [r.values for r in local.cases[0].runs] == [r.values for r in remote.cases[0].runs]

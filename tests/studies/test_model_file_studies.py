@@ -276,13 +276,10 @@ def test_frequency_of_a_smooth_scene_at_rest_has_no_warnings(capsys):
 
 
 @pytest.mark.slow
-def test_a_model_sweep_on_two_dask_workers_equals_the_local_one():
-    from springlab.studies.executor import Executor
-
+def test_a_model_sweep_on_two_dask_workers_equals_the_local_one(dask_cluster):
     vary = {"opt.impratio": (1.0, 10.0, 3), "joint.left.damping": (0.5, 2.0, 2)}
     local = model_sweep(GRIPPER, vary=vary, duration=0.1, chunk_size=2)
-    with Executor(workers=2, progress=False) as executor:
-        shipped = model_sweep(GRIPPER, vary=vary, duration=0.1, chunk_size=2, executor=executor)
+    shipped = model_sweep(GRIPPER, vary=vary, duration=0.1, chunk_size=2, executor=dask_cluster)
     assert shipped.chunks == 3 and "dask" in shipped.executor
     assert [row.to_dict() for row in shipped.rows] == [row.to_dict() for row in local.rows]
 

@@ -36,10 +36,9 @@ COSTS = {"euler": 1.0e-6, "implicit": 1.3e-6, "implicitfast": 1.1e-6, "rk4": 3.9
 
 
 @pytest.fixture(scope="module")
-def cluster():
-    """A LocalCluster of 2 worker processes (one thread each), shared by the module's tests."""
-    with Executor(workers=2, progress=False) as executor:
-        yield executor
+def cluster(dask_cluster):
+    """The session's LocalCluster of 2 worker processes (one thread each; tests/conftest.py)."""
+    return dask_cluster
 
 
 @pytest.fixture
