@@ -104,20 +104,31 @@ def test_a_scheduler_killed_mid_sweep_is_one_line_exit_2_and_no_file(tmp_path):
     assert after_kill < 10.0
 
 
+def _wait_for_workers(address: str, timeout: float) -> tuple[ClusterError, float]:
+    """The ClusterError of a 3-chunk map on the scheduler at `address`, and the seconds it took."""
+    start = time.perf_counter()
+    with pytest.raises(ClusterError) as raised:
+        with Executor(scheduler=address, timeout=timeout, progress=False) as executor:
+            executor.map(ping, [1, 2, 3])
+    return raised.value, time.perf_counter() - start
+
+
 def test_a_scheduler_without_workers_is_a_cluster_error_after_the_timeout():
     cluster, address = _start_cluster()  # no worker: dask would wait for one forever
     try:
-        start = time.perf_counter()
         # 5 s: also the connection's own timeout; 2 s was missed on localhost at a load average of 18 (six
         # test runs on 2 cores: "no answer"), and the wait is idle time, not CPU
-        with pytest.raises(ClusterError, match="has had no worker for 5 s") as raised:
-            with Executor(scheduler=address, timeout=5.0, progress=False) as executor:
-                executor.map(ping, [1, 2, 3])
-        elapsed = time.perf_counter() - start
+        error, elapsed = _wait_for_workers(address, 5.0)
+        if "(no answer)" in str(error):
+            # at a load average of 20 the scheduler's process once left the client's ask for its workers
+            # unanswered for the whole 5 s (a lost connection, also one ClusterError line): the machine's
+            # delay, not the claim; once more, and a second "no answer" fails below
+            error, elapsed = _wait_for_workers(address, 5.0)
     finally:
         cluster.kill()
         cluster.wait()
-    assert "after 0 of 3 chunks" in str(raised.value) and "\n" not in str(raised.value)
+    assert "has had no worker for 5 s" in str(error), error
+    assert "after 0 of 3 chunks" in str(error) and "\n" not in str(error)
     # the timeout, plus one look for workers a second (WORKER_POLL_S) and the connection's set-up
     assert 5.0 <= elapsed < 5.0 + 1.0 + 10.0
 
