@@ -1,16 +1,14 @@
 """Every script in scenarios/ runs headless through the public API and prints its answer."""
 
-import subprocess
-import sys
-
 import pytest
 
 from helpers.paths import ROOT
 from helpers.scripts import run_scripts
 
 SCRIPTS = sorted((ROOT / "scenarios").glob("*.py"))
-#: scripts that take more than ~5 s on one core (a chaotic run)
-SLOW = {"nonlinear_forced_duffing"}
+#: the scripts over ~1.5 s on one core (a chaotic run; the stay cable's four runs of 49 elements, the drill
+#: string's breakaway, the printer's answer table): 10 s together, the quick loop runs the other 17 (3 s)
+SLOW = {"nonlinear_forced_duffing", "stay_cable_damper", "drill_string_bit_friction", "printer_positioning_table"}
 #: arguments that keep a script's run short where its default is a whole study: the design study's 3^4
 #: grid instead of 7^4 (the same code path; its physics is tested in tests/studies/design/test_design.py), one
 #: carriage's answer table instead of two (tests/scenes/printer_head/test_printer_control_scene.py runs both)
@@ -35,17 +33,17 @@ def test_scenario_script_runs_headless(script, ran):
     _assert_answered(*ran[script.stem])
 
 
+@pytest.fixture(scope="module")
+def ran_slow(tmp_path_factory):
+    """The slow scripts, as `ran` runs the others (one interpreter, a fork each)."""
+    slow = [p for p in SCRIPTS if p.stem in SLOW]
+    return run_scripts(slow, ARGS, tmp_path_factory.mktemp("slow_scenarios"))
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("script", [p for p in SCRIPTS if p.stem in SLOW], ids=lambda p: p.stem)
-def test_slow_scenario_script_runs_headless(script, tmp_path):
-    proc = subprocess.run(
-        [sys.executable, str(script), *ARGS.get(script.stem, [])],
-        cwd=tmp_path,
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
-    _assert_answered(proc.returncode, proc.stdout, proc.stderr)
+def test_slow_scenario_script_runs_headless(script, ran_slow):
+    _assert_answered(*ran_slow[script.stem])
 
 
 def test_exercise_script_prints_the_textbook_answer(ran):

@@ -113,6 +113,7 @@ def _wait_for_workers(address: str, timeout: float) -> tuple[ClusterError, float
     return raised.value, time.perf_counter() - start
 
 
+@pytest.mark.slow  # 6 s: an interpreter starts the scheduler, then the 5 s timeout is waited out
 def test_a_scheduler_without_workers_is_a_cluster_error_after_the_timeout():
     cluster, address = _start_cluster()  # no worker: dask would wait for one forever
     try:

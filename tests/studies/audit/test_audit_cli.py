@@ -37,6 +37,7 @@ def test_a_setting_that_misses_tol_is_a_finding_exit_1_with_outputs(tmp_path, ca
     assert "misses tol" in capsys.readouterr().out
 
 
+@pytest.mark.slow  # 4-5 s: a second full slider audit, by the command (the quick loop runs the command above)
 def test_the_same_audit_command_twice_gives_the_same_recommendation_and_front(tmp_path, capsys, shipped_audit):
     # a real audit, real timers: in the slider's sweep euler, implicit and implicitfast are equal in error
     # and in counted work at every dt, so only their measured times told them apart when the front read them.
