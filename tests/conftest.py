@@ -113,27 +113,47 @@ def small_design_study():
 _TESTS = os.path.dirname(os.path.abspath(__file__))
 
 
-def _shared_fixture(item: pytest.Item) -> str | None:
-    """The shared fixture of this test suite that `item` reads, as a group name: a session-scoped one first
-    (a module fixture built on it then joins its group), else the first module-scoped one."""
+def _shared_fixtures(item: pytest.Item) -> tuple[list[str], str | None]:
+    """The shared fixtures of this test suite that `item` reads: every session-scoped one, and the first
+    module-scoped one as a group name of its own (module.name)."""
     infos = getattr(item, "_fixtureinfo", None)
-    found: dict[str, str] = {}
+    session: list[str] = []
+    module: str | None = None
     for name in getattr(infos, "names_closure", ()):
         definitions = infos.name2fixturedefs.get(name)
         if not definitions:
             continue
         definition = definitions[-1]
         source = os.path.abspath(inspect.getfile(definition.func))
-        if definition.scope in ("module", "session") and source.startswith(_TESTS):
-            group = name if definition.scope == "session" else f"{item.module.__name__}.{name}"
-            found.setdefault(definition.scope, group)
-    return found.get("session", found.get("module"))
+        if source.startswith(_TESTS):
+            if definition.scope == "session":
+                session.append(name)
+            elif definition.scope == "module" and module is None:
+                module = f"{item.module.__name__}.{name}"
+    return session, module
 
 
-def pytest_itemcollected(item: pytest.Item) -> None:
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     """Under `pytest -n N --dist loadgroup` (make test), the tests that read one shared study run on one
-    worker, so the study is computed once, not once per worker (a session fixture is per process). Marked
-    as each test is collected: xdist reads the groups in its own pytest_collection_modifyitems."""
-    group = _shared_fixture(item)
-    if group is not None:
-        item.add_marker(pytest.mark.xdist_group(group))
+    worker, so the study is computed once, not once per worker (a session fixture is per process). A test
+    that reads two session fixtures joins their groups into one (else the second would be computed on a
+    second worker too), a test with only a module-scoped one groups by it. Marked before xdist reads the
+    groups in its own pytest_collection_modifyitems (tryfirst)."""
+    parent: dict[str, str] = {}
+
+    def root(name: str) -> str:
+        while parent.setdefault(name, name) != name:
+            name = parent[name]
+        return name
+
+    found = [_shared_fixtures(item) for item in items]
+    for session, _ in found:
+        for other in session[1:]:
+            first, second = root(session[0]), root(other)
+            if first != second:
+                parent[max(first, second)] = min(first, second)  # the same root whatever the order of the tests
+    for item, (session, module) in zip(items, found):
+        group = root(session[0]) if session else module
+        if group is not None:
+            item.add_marker(pytest.mark.xdist_group(group))
