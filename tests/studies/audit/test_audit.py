@@ -37,15 +37,6 @@ from springlab.studies.audit.limits import stability_limits
 LIMIT_RELATIVE = 1e-3
 
 
-@pytest.fixture
-def untimed(monkeypatch):
-    """The audit's timer (about 2 s of best-of-3 runs per audit) returns one constant: it only fills the wall
-    times reported beside each run, the pick ranks counted work (test_the_pick_is_the_cheapest_in_counted_work_
-    and_no_timer_moves_it, on the real timer), and the tests using this read no wall time."""
-    module = importlib.import_module("springlab.studies.audit.audit")  # the package's `audit` attribute is the function
-    monkeypatch.setattr(module, "cost_per_step", lambda model, start, name, dt: 1e-6)
-
-
 @pytest.fixture(scope="module")
 def chain_audit():
     return audit(mujoco.MjModel.from_xml_string(chain_xml(4, 100.0, 1.0, 0.0)), tol=1e-3)

@@ -77,7 +77,7 @@ def _error(model, qpos, qvel, ref_qpos, ref_qvel, origin):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(CASES))
-def test_dm_control_model_audits_and_its_recommendation_meets_tol(name):
+def test_dm_control_model_audits_and_its_recommendation_meets_tol(name, untimed):
     duration, tol = CASES[name]
     path = SUITE / f"{name}.xml"
     result = audit(str(path), tol=tol, duration=duration)
@@ -107,7 +107,7 @@ ROBOTS = {
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(ROBOTS))
-def test_robot_audit_reports_its_constraints_and_claims_only_what_runs_confirm(name):
+def test_robot_audit_reports_its_constraints_and_claims_only_what_runs_confirm(name, untimed):
     settle, duration, tol = ROBOTS[name]
     path = SUITE / f"{name}.xml"
     result = audit(str(path), settle_s=settle, tol=tol, duration=duration)

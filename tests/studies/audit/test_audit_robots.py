@@ -136,7 +136,7 @@ def _brute_limit(model, integrator, guess):
 
 
 @pytest.mark.slow
-def test_joint_limits_active_at_the_start_are_reported_and_never_a_false_unstable():
+def test_joint_limits_active_at_the_start_are_reported_and_never_a_false_unstable(untimed):
     model = _model(ant_xml())
     result = audit(model, duration=0.5, integrators=["rk4", "implicit"])
     state = result.point_state
@@ -152,7 +152,7 @@ def test_joint_limits_active_at_the_start_are_reported_and_never_a_false_unstabl
 
 
 @pytest.mark.slow
-def test_an_equality_constraint_is_reported_and_the_recommendation_meets_tol_with_motion_excited():
+def test_an_equality_constraint_is_reported_and_the_recommendation_meets_tol_with_motion_excited(untimed):
     model = _model(coupled_xml())
     tol = 1e-3
     result = audit(model, tol=tol, duration=0.5, integrators=["euler", "rk4"])
@@ -176,7 +176,7 @@ def test_an_equality_constraint_is_reported_and_the_recommendation_meets_tol_wit
 # -- the operating point ---------------------------------------------------------------------------------
 
 
-def test_a_keyframe_away_from_equilibrium_is_warned_and_settling_brings_it_to_rest():
+def test_a_keyframe_away_from_equilibrium_is_warned_and_settling_brings_it_to_rest(untimed):
     model = _model(pendulum_xml(damping=0.5, angle=1.0))
     held = audit(model, duration=0.5, integrators=["euler"])
     # held at 1 rad the pendulum accelerates at g sin(1) / l = 16.5 rad/s^2: nowhere near rest
@@ -194,7 +194,7 @@ def test_a_keyframe_away_from_equilibrium_is_warned_and_settling_brings_it_to_re
 # -- excite what can move --------------------------------------------------------------------------------
 
 
-def test_a_model_with_no_position_dependent_force_is_excited_and_its_recommendation_meets_tol():
+def test_a_model_with_no_position_dependent_force_is_excited_and_its_recommendation_meets_tol(untimed):
     model = _model(two_link_xml())
     tol = 1e-3
     result = audit(model, tol=tol, duration=1.0, integrators=["euler", "rk4"])
@@ -218,7 +218,7 @@ def test_a_model_with_no_position_dependent_force_is_excited_and_its_recommendat
     assert _error(model, chosen, reference, result.linear.point.qpos) <= tol
 
 
-def test_a_model_that_does_not_move_verifies_nothing():
+def test_a_model_that_does_not_move_verifies_nothing(untimed):
     result = audit(_model(two_link_xml()), perturb=0.0, duration=0.5, integrators=["euler"])
     assert not result.excitation.any_motion and result.excitation.moved == 0
     assert not result.recommendation.verified and result.recommendation.integrator is None
@@ -228,7 +228,7 @@ def test_a_model_that_does_not_move_verifies_nothing():
 # -- predictions: every explicit force, conservative or an estimate ---------------------------------------
 
 
-def test_discrete_on_a_damped_pendulum_under_gravity_has_euler_s_limit():
+def test_discrete_on_a_damped_pendulum_under_gravity_has_euler_s_limit(untimed):
     # gravity is explicit in discrete (its metric takes springs and damping, not gravity), the joint damping
     # implicit as in euler: omega dt < 2 zeta + 2 sqrt(zeta^2 + 1), omega = sqrt(g / l), zeta = c / (2 I omega)
     c = 0.6
@@ -247,7 +247,7 @@ def test_discrete_on_a_damped_pendulum_under_gravity_has_euler_s_limit():
 
 
 @pytest.mark.slow
-def test_tendon_chain_predictions_are_conservative_or_marked_estimates_against_brute_force():
+def test_tendon_chain_predictions_are_conservative_or_marked_estimates_against_brute_force(untimed):
     model = _model(tendon_chain_xml())
     result = audit(model, duration=1.0, integrators=["euler", "implicit", "rk4", "discrete"])
     for name in ("euler", "implicit", "rk4"):
