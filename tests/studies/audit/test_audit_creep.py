@@ -12,6 +12,7 @@ import mujoco
 import numpy as np
 import pytest
 
+from helpers.audit import stub_the_timer
 from helpers.paths import DATA
 from springlab.studies.audit.audit import audit
 
@@ -21,7 +22,9 @@ SETTLE_S = 4.0
 
 @pytest.fixture(scope="module")
 def gripper_audit():
-    return audit(str(GRIPPER), settle_s=SETTLE_S, tol=1e-2, integrators=["euler", "rk4"], dts=[0.004, 0.002])
+    with pytest.MonkeyPatch.context() as patch:
+        stub_the_timer(patch)  # the module's tests read no wall time
+        return audit(str(GRIPPER), settle_s=SETTLE_S, tol=1e-2, integrators=["euler", "rk4"], dts=[0.004, 0.002])
 
 
 def plain_creep(settle_s: float, duration: float) -> float:
@@ -70,7 +73,7 @@ def _oscillator(damping: float) -> str:
 
 
 @pytest.mark.parametrize(("damping", "helps"), [(0.0, False), (8.0, True)])
-def test_settle_longer_is_advised_only_where_the_motion_dies_out(tmp_path, damping, helps):
+def test_settle_longer_is_advised_only_where_the_motion_dies_out(tmp_path, damping, helps, untimed):
     # zeta = c / (2 sqrt(k m)) = 0.2: over 0.5 s the amplitude falls by exp(-zeta omega 0.5) = exp(-2), far below
     # half; undamped it keeps its amplitude, so its second half moves as much as its first
     path = tmp_path / "oscillator.xml"
