@@ -32,7 +32,6 @@ Run: PYTHONPATH=src python benchmarks/bench.py [--list] [--only NAME,...] [--ski
 from __future__ import annotations
 
 import argparse
-import contextlib
 import dataclasses
 import json
 import os
@@ -42,125 +41,31 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 
 import mujoco
 import numpy as np
 from mujoco import rollout
 
-HERE = pathlib.Path(__file__).resolve().parent
-ROOT = HERE.parent
-#: the issue's targets
-RUN_BUDGET = 1.3
-SPIN_UP_BUDGET = 2.0
-SIMULATE_BUDGET = 1 / 0.9
-VALIDATE_BUDGET = 1.2
-
-
-@dataclasses.dataclass
-class Row:
-    """One measured path: its time, its floor's, their ratio and its budget."""
-
-    name: str
-    work: str
-    wall_s: float
-    cpu_s: float
-    floor: str
-    floor_wall_s: float
-    floor_cpu_s: float
-    budget: float
-    budget_basis: str
-    note: str = ""
-    #: the ratio on wall times (a path whose CPU is in another process: the browser, real time)
-    on_wall: bool = False
-
-    @property
-    def ratio(self) -> float:
-        mine, floor = (self.wall_s, self.floor_wall_s) if self.on_wall else (self.cpu_s, self.floor_cpu_s)
-        return mine / floor if floor > 0 else float("inf")
-
-    def to_dict(self) -> dict:
-        out = dataclasses.asdict(self)
-        out["ratio"] = self.ratio
-        return out
-
-
-def _clock() -> tuple[float, float]:
-    return time.perf_counter(), time.process_time()
-
-
-def alternately(path: Callable[[], object], floor: Callable[[], object], repeat: int) -> tuple[float, ...]:
-    """(wall, cpu) of path and of floor [s], each the best of `repeat`, measured alternately."""
-    best = [np.inf] * 4
-    for _ in range(repeat):
-        for k, fn in ((0, path), (2, floor)):
-            wall, cpu = _clock()
-            fn()
-            wall_end, cpu_end = _clock()
-            best[k] = min(best[k], wall_end - wall)
-            best[k + 1] = min(best[k + 1], cpu_end - cpu)
-    return tuple(best)
-
-
-@contextlib.contextmanager
-def inside_mujoco() -> Iterator[list[float]]:
-    """Count the wall and CPU time [s] spent inside mujoco.rollout.rollout, mujoco.mj_step and the batch's rollout.
-
-    The calls run MuJoCo's own threads: their CPU time is this process's over the call, the threads' included."""
-    spent = [0.0, 0.0]
-
-    def timed(fn: Callable) -> Callable:
-        def wrapper(*args, **kwargs):
-            wall, cpu = _clock()
-            try:
-                return fn(*args, **kwargs)
-            finally:
-                wall_end, cpu_end = _clock()
-                spent[0] += wall_end - wall
-                spent[1] += cpu_end - cpu
-
-        return wrapper
-
-    from mujoco import batch
-
-    originals = (rollout.rollout, mujoco.mj_step, batch.Batch.rollout)
-    rollout.rollout, mujoco.mj_step, batch.Batch.rollout = (timed(fn) for fn in originals)
-    try:
-        yield spent
-    finally:
-        rollout.rollout, mujoco.mj_step, batch.Batch.rollout = originals
-
-
-def forget_cases() -> None:
-    """Drop what springlab keeps per parameter set, so the next call is a first call."""
-    from springlab.exact import linear
-    from springlab.runs import compare
-    from springlab.scenes import base
-    from springlab.scenes.drill_string import continuum
-
-    base._COMPILED.clear()
-    base._WORK.__dict__.clear()
-    compare._estimate_range.cache_clear()
-    continuum._roots.cache_clear()
-    continuum._SPIN_UPS.clear()
-    linear._EIGEN.clear()
-
+from measure import (  # noqa: F401 (bench.Row, bench.forget_cases: the names the tests and scripts read here)
+    HERE,
+    ROOT,
+    RUN_BUDGET,
+    SIMULATE_BUDGET,
+    SPIN_UP_BUDGET,
+    VALIDATE_BUDGET,
+    Row,
+    _clock,
+    alternately,
+    command_row,
+    forget_cases,
+    fresh_import_cpu,
+    inside_mujoco,
+    raw_rollout,
+    shown,
+)
 
 # -- rows ---------------------------------------------------------------------------------------------------
-
-
-def raw_rollout(result) -> Callable[[], object]:
-    """A plain rollout of a result's steps on a configured copy of its compiled model."""
-    from springlab.sim.simulate import configured, initial_state
-
-    case = result.case
-    model = configured(case.model, result.integrator, result.dt)
-    data = mujoco.MjData(model)
-    setup = case.setup(result.steps, result.dt)
-    state = initial_state(model, setup.qpos, setup.qvel, setup.act)[None]
-    control = np.zeros((result.steps, model.nu)) if setup.control is None else np.asarray(setup.control, float)
-    control = np.ascontiguousarray(np.broadcast_to(control, (result.steps, model.nu)))[None]
-    return lambda: rollout.rollout(model, data, state, control, nstep=result.steps)
 
 
 def run_rows(only: set[str] | None) -> list[Row]:
@@ -247,35 +152,6 @@ def sobol_row(base_samples: int = 256) -> Row:
         " (CPU x runs / 2; the LocalCluster scaling and the 64-core projection: bench_sobol.py below)",
     )
     return row
-
-
-def command_row(name: str, argv: list[str], work: str, budget: float, basis: str, *, cold: bool = True) -> Row:
-    """A whole command in this process against the time it spent inside MuJoCo (springlab's caches cleared first
-    unless `cold` is False; the modules other rows imported stay imported: `validate` is the fresh-interpreter row)."""
-    from paths import shown
-    from springlab.cli.main import main
-
-    with tempfile.TemporaryDirectory() as folder:
-        concrete = [a.replace("{out}", folder) for a in argv]
-        if cold:
-            forget_cases()
-        with contextlib.redirect_stdout(open(os.devnull, "w")), inside_mujoco() as spent:
-            wall, cpu = _clock()
-            code = main(concrete)
-            wall_end, cpu_end = _clock()
-    row = Row(name, work, wall_end - wall, cpu_end - cpu, "inside MuJoCo", spent[0], spent[1], budget, basis)
-    row.note = f"exit {code}; springlab " + shown(" ".join(argv).replace("{out}", "OUT"))
-    return row
-
-
-def fresh_import_cpu(code: str, repeat: int = 5) -> float:
-    """CPU time [s] of a fresh interpreter running `code` (the interpreter's start included), best of `repeat`."""
-    best = np.inf
-    for _ in range(repeat):
-        script = f"import time;{code};print(time.process_time())"
-        out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True).stdout
-        best = min(best, float(out))
-    return best
 
 
 def import_row() -> Row:

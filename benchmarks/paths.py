@@ -1,7 +1,7 @@
 """The rows of `make bench` beyond `run` and the in-process commands: each a user-facing path with its floor.
 
 benchmarks/bench.py lists them (`benches`) and writes the table; this module measures them. Every function
-returns `bench.Row`s. The floors (module docstring of bench.py): `inside MuJoCo` (the same run's time in
+returns `measure.Row`s. The floors (module docstring of bench.py): `inside MuJoCo` (the same run's time in
 MuJoCo's rollout, batch rollout and mj_step calls), `rollout` (a plain rollout of the same steps), `numpy`
 (the bare numpy/scipy cost of the same exact work), `ffmpeg` (ffmpeg's own encoding of as many frames of the
 same size), `real time` (the simulated time itself, for the live viewer), issue 37's 150 s for the demo's wall time.
@@ -25,30 +25,21 @@ from collections.abc import Callable
 import mujoco
 import numpy as np
 
-import bench
-from bench import ROOT, Row
+import measure
+from measure import ROOT, Row
 
 #: a fresh interpreter that runs one springlab command with MuJoCo's calls timed, and prints what it measured
 _CHILD = """
 import json, os, sys, time, contextlib
 sys.path.insert(0, {benchmarks!r})
-import bench
+import measure
 from springlab.cli.main import main
 started_cpu, started = time.process_time(), time.perf_counter()
-with open(os.devnull, "w") as sink, contextlib.redirect_stdout(sink), bench.inside_mujoco() as spent:
+with open(os.devnull, "w") as sink, contextlib.redirect_stdout(sink), measure.inside_mujoco() as spent:
     code = main({argv!r})
 wall, cpu = time.perf_counter() - started, time.process_time() - started_cpu
 print(json.dumps(dict(code=code, startup_cpu=started_cpu, wall=wall, cpu=cpu, mujoco_wall=spent[0], mujoco_cpu=spent[1])))
 """
-
-
-def shown(text: str) -> str:
-    """`text` with this checkout's, the installed packages' and the temporary folders' paths made machine-independent."""
-    import sysconfig
-
-    text = text.replace(str(ROOT) + os.sep, "")
-    text = text.replace(sysconfig.get_paths()["purelib"] + os.sep, "site-packages" + os.sep)
-    return text.replace(tempfile.gettempdir() + os.sep, "TMP" + os.sep)
 
 
 def children_cpu() -> float:
@@ -61,7 +52,7 @@ def children_cpu() -> float:
 
 def fresh(argv: list[str]) -> tuple[dict, float, float]:
     """Run `springlab ARGV` in a fresh interpreter: (its measurements, parent-side wall [s], its whole CPU [s])."""
-    code = _CHILD.format(benchmarks=str(bench.HERE), argv=argv)
+    code = _CHILD.format(benchmarks=str(measure.HERE), argv=argv)
     env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
     before_cpu, start = children_cpu(), time.perf_counter()
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=False)
@@ -75,7 +66,7 @@ def validate_rows() -> list[Row]:
     """`springlab validate` cold, in a fresh interpreter: the command's work against its rollouts, and its
     start-up (the interpreter and `import springlab.cli.main`) against `import mujoco, numpy`, apart."""
     measured, wall, _ = fresh(["validate"])
-    startup_floor = bench.fresh_import_cpu("import mujoco, numpy")
+    startup_floor = measure.fresh_import_cpu("import mujoco, numpy")
     whole = measured["startup_cpu"] + measured["cpu"]
     return [
         Row(
@@ -86,7 +77,7 @@ def validate_rows() -> list[Row]:
             "inside MuJoCo",
             measured["mujoco_wall"],
             measured["mujoco_cpu"],
-            bench.VALIDATE_BUDGET,
+            measure.VALIDATE_BUDGET,
             "issue 37",
             f"exit {measured['code']}; the floor is the same run's rollouts (the same steps on the same compiled"
             f" models); the whole process, start-up included: {whole:.3g} s CPU,"
@@ -137,25 +128,25 @@ def demo_row() -> Row:
 
 def timed(fn: Callable[[], object]) -> tuple[object, float, float, float, float]:
     """(fn(), wall, cpu with the children's, MuJoCo's wall, MuJoCo's cpu) [s] of one call."""
-    with bench.inside_mujoco() as spent:
+    with measure.inside_mujoco() as spent:
         before = children_cpu()
-        wall, cpu = bench._clock()
+        wall, cpu = measure._clock()
         out = fn()
-        wall_end, cpu_end = bench._clock()
+        wall_end, cpu_end = measure._clock()
         children = children_cpu() - before
     return out, wall_end - wall, cpu_end - cpu + children, spent[0], spent[1]
 
 
 def study_row(name: str, work: str, fn: Callable[[], object], budget: float, note: str = "") -> Row:
     """A study called in this process, cold (springlab's caches cleared), against its time inside MuJoCo."""
-    bench.forget_cases()
+    measure.forget_cases()
     _, wall, cpu, floor_wall, floor_cpu = timed(fn)
     return Row(name, work, wall, cpu, "inside MuJoCo", floor_wall, floor_cpu, budget, "(set)", note)
 
 
 def chain_xml(n: int) -> str:
     """n masses in a row on slide joints, springs and dampers between neighbours (bench_frequency.py's chain)."""
-    sys.path.insert(0, str(bench.HERE))
+    sys.path.insert(0, str(measure.HERE))
     from bench_frequency import chain_xml as xml
 
     return xml(n)
@@ -196,7 +187,7 @@ def frequency_chain_row() -> Row:
         for w in omegas:
             np.linalg.solve(np.exp(1j * w * model.opt.timestep) * np.eye(2 * n) - phi, gamma)
 
-    timings = bench.alternately(path, floor, 3)
+    timings = measure.alternately(path, floor, 3)
     return Row(
         "frequency chain",
         f"{n}-DOF chain, 500 frequencies: exact and discrete responses, resonances, band (no integrator search)",
@@ -241,11 +232,13 @@ def fit_rows(folder: pathlib.Path) -> list[Row]:
         )
         argv = ["fit", "slider", str(data), "--set", f"mass={mass:g}", "--output", str(folder / f"out-{samples}")]
         budget = 20.0 if floor_reads else 7.0  # the optimizer's Python between rollouts; the reader's parsing
-        row = bench.command_row(label, argv, f"{samples} samples, slider, free stiffness and damping", budget, "(set)")
+        row = measure.command_row(
+            label, argv, f"{samples} samples, slider, free stiffness and damping", budget, "(set)"
+        )
         if floor_reads:  # reading the file is part of the floor: numpy.loadtxt of it at once
-            start_wall, start_cpu = bench._clock()
+            start_wall, start_cpu = measure._clock()
             np.loadtxt(data, delimiter=",", skiprows=1)
-            end_wall, end_cpu = bench._clock()
+            end_wall, end_cpu = measure._clock()
             row.floor = "inside MuJoCo + numpy.loadtxt"
             row.floor_wall_s += end_wall - start_wall
             row.floor_cpu_s += end_cpu - start_cpu
@@ -346,7 +339,7 @@ def interactive_rows(folder: pathlib.Path) -> list[Row]:
 
     page = interactive.write_interactive("slider", "free", folder / "page")[0]
     result = springlab.run("slider", "free")
-    rollout = bench.raw_rollout(result)
+    rollout = measure.raw_rollout(result)
     best = [np.inf] * 2
     for _ in range(3):
         wall = time.perf_counter()

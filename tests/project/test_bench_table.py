@@ -56,13 +56,13 @@ def test_the_table_shows_paths_relative_to_the_checkout_and_no_temporary_folder(
     import sysconfig
     import tempfile
 
-    _, paths = bench
+    module, _ = bench
     installed = sysconfig.get_paths()["purelib"]
     text = (
         f"friction-settings {ROOT / 'tests' / 'data' / 'gripper.xml'} --output {tempfile.gettempdir()}/tmpab12/x;"
         f" audit {installed}/dm_control/suite/humanoid.xml"
     )
-    shown = paths.shown(text)
+    shown = module.shown(text)
     assert str(ROOT) not in shown and tempfile.gettempdir() + "/" not in shown and installed not in shown
     assert "tests/data/gripper.xml" in shown and "site-packages/dm_control/suite/humanoid.xml" in shown
 
