@@ -19,7 +19,7 @@ from collections.abc import Callable
 import numpy as np
 
 import springlab
-from bench import forget_cases
+from measure import forget_cases
 from springlab.studies.design import run_study
 
 

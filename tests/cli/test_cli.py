@@ -11,6 +11,9 @@ import pytest
 
 from helpers.contract import SUMMARY_KEYS
 
+#: euler at omega dt = 3 on the slider: past euler's stability limit, so the run diverges (exit 3)
+DIVERGING_RUN = ("run", "slider", "--integrator", "euler", "--dt", "0.3", "--duration", "60")
+
 
 def test_run_exercise_writes_the_csv_and_json_contract(tmp_path, cli):
     code, out, err = cli("run", "slider", "exercise", "--output", str(tmp_path / "d"))
@@ -110,18 +113,7 @@ def test_unwritable_output_is_a_clear_error_and_leaves_nothing(tmp_path, cli):
 
 
 def test_divergence_exits_3_names_the_limit_and_writes_nothing(tmp_path, cli):
-    code, _, err = cli(
-        "run",
-        "slider",
-        "--integrator",
-        "euler",
-        "--dt",
-        "0.3",
-        "--duration",
-        "60",
-        "--output",
-        str(tmp_path / "d"),
-    )
+    code, _, err = cli(*DIVERGING_RUN, "--output", str(tmp_path / "d"))
     assert code == 3
     assert "omega*dt = 3 exceeds the euler stability limit" in err
     assert len(err.strip().splitlines()) == 1
@@ -131,19 +123,7 @@ def test_divergence_exits_3_names_the_limit_and_writes_nothing(tmp_path, cli):
 def test_console_script_prints_no_traceback_and_leaves_no_mujoco_log(tmp_path):
     env = dict(os.environ)
     proc = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "springlab.cli.main",
-            "run",
-            "slider",
-            "--integrator",
-            "euler",
-            "--dt",
-            "0.3",
-            "--duration",
-            "60",
-        ],
+        [sys.executable, "-m", "springlab.cli.main", *DIVERGING_RUN],
         cwd=tmp_path,
         capture_output=True,
         text=True,
