@@ -17,9 +17,11 @@ os.wait4, as `/usr/bin/time -v` reports it):
    optimization, the rest of the result, the closed-form cross-check within it) timed and their peak
    resident memory sampled every 5 ms.
 
-Readers are timed best of --repeat (alternating), the whole fit once.
+Readers are timed best of --repeat (alternating), the whole fit once. Row of `make bench`'s table: `fit reader`
+(springlab's reader against numpy.loadtxt of the whole file, CPU above the imports' floor). `make bench` runs it
+with --readers-only --repeat 2: the whole fit of the 2-million-row file is the table's `fit 2M rows` row.
 
-Run: python benchmarks/bench_fit_bigfile.py [--rows 2000000] [--repeat 3] [--no-per-sample]
+Run: python benchmarks/bench_fit_bigfile.py [--rows 2000000] [--repeat 3] [--no-per-sample] [--readers-only]
 (numbers depend on the load; the per-sample fit of 2 million rows takes about a minute and 1.2 GB)
 """
 
@@ -38,7 +40,17 @@ from typing import Any
 
 import numpy as np
 
+from measure import Row, emit
+
 TARGET_S, TARGET_MB = 30.0, 300.0
+IMPORTS = "imports only (the floor)"
+OURS = "springlab's reader (numpy.loadtxt in 4 MiB blocks)"
+LOADTXT = "numpy.loadtxt, whole file at once"
+#: springlab's reader against loadtxt of the whole file: the same parser over 4 MiB blocks, and per block what loadtxt
+#: does not do (the blocks' line ends, comment lines, ragged rows and text cells named by line, the time checked
+#: monotone and finite, the pieces joined): loadtxt's C parser is fast (about 4 ns a byte), so these checks in numpy
+#: over the same bytes cost a few times it; 4 (3.4 measured on a shared machine, CPU, best of 2)
+READER_BUDGET = 4.0
 SETUP = "import springlab.studies.fit.fit\n"
 READERS = {
     "imports only (the floor)": "",
@@ -107,6 +119,12 @@ sys.exit(main(ARGS))
 
 def measure(argv: list[str], stdout: Any = None) -> tuple[float, float, int]:
     """Wall time [s], peak resident memory [MB] and exit status of a child process (its stdout to `stdout`)."""
+    wall, peak, code, _ = measure_with_cpu(argv, stdout)
+    return wall, peak, code
+
+
+def measure_with_cpu(argv: list[str], stdout: Any = None) -> tuple[float, float, int, float]:
+    """`measure`'s wall time [s], peak memory [MB] and exit status, and the child's CPU time [s]."""
     start = time.perf_counter()
     child = subprocess.Popen(argv, stdout=stdout or subprocess.DEVNULL, stderr=subprocess.PIPE)
     _, status, usage = os.wait4(child.pid, 0)
@@ -114,7 +132,28 @@ def measure(argv: list[str], stdout: Any = None) -> tuple[float, float, int]:
     child.returncode = os.waitstatus_to_exitcode(status)  # wait4 reaped it: tell Popen
     if child.returncode not in (0, 1):
         sys.exit(f"{argv[-1][:60]!r} failed (exit {child.returncode}): {child.stderr.read().decode()[-400:]}")
-    return wall, usage.ru_maxrss / 1024.0, child.returncode  # ru_maxrss is in KiB on Linux
+    # ru_maxrss is in KiB on Linux
+    return wall, usage.ru_maxrss / 1024.0, child.returncode, usage.ru_utime + usage.ru_stime
+
+
+def reader_row(rows: int, size: int, best: dict[str, tuple[float, float, float]]) -> Row:
+    """springlab's reader against numpy.loadtxt of the whole file, each above the imports' floor."""
+    floor_s, floor_mb, floor_cpu = best[IMPORTS]
+    ours, loadtxt = best[OURS], best[LOADTXT]
+    return Row(
+        "fit reader",
+        f"a {rows}-row CSV ({size / 1e6:.0f} MB) read to arrays, in a fresh interpreter",
+        ours[0] - floor_s,
+        ours[2] - floor_cpu,
+        "numpy.loadtxt",
+        loadtxt[0] - floor_s,
+        loadtxt[2] - floor_cpu,
+        READER_BUDGET,
+        "(set)",
+        "bench_fit_bigfile.py: springlab.studies.fit.data.load (numpy.loadtxt over 4 MiB blocks) against"
+        " numpy.loadtxt of the whole file at once, each less the interpreter and imports alone; peak memory above"
+        f" those {ours[1] - floor_mb:.0f} MB against {loadtxt[1] - floor_mb:.0f} MB",
+    )
 
 
 def write_record(path: pathlib.Path, rows: int) -> None:
@@ -133,6 +172,7 @@ def main() -> None:
     parser.add_argument("--rows", type=int, default=2_000_000)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--no-per-sample", dest="per_sample", action="store_false", help="skip the per-sample fit")
+    parser.add_argument("--readers-only", action="store_true", help="only the readers (1-4), no fit")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as folder:
         path = pathlib.Path(folder) / "big.csv"
@@ -141,25 +181,27 @@ def main() -> None:
         print(
             f"record: {args.rows} rows, {size / 1e6:.1f} MB ({size / args.rows:.1f} B per row), {os.cpu_count()} cores"
         )
-        best: dict[str, tuple[float, float]] = {}
+        best: dict[str, tuple[float, float, float]] = {}
         for _ in range(args.repeat):  # alternate, so a change of load hits every reader alike
             for name, code in READERS.items():
                 source = f"PATH = {str(path)!r}\nROWS = {args.rows}\n" + SETUP + code
-                wall, peak, _ = measure([sys.executable, "-c", source])
-                old = best.get(name, (math.inf, math.inf))
-                best[name] = (min(old[0], wall), min(old[1], peak))
-        floor_s, floor_mb = best["imports only (the floor)"]
+                wall, peak, _, cpu = measure_with_cpu([sys.executable, "-c", source])
+                old = best.get(name, (math.inf, math.inf, math.inf))
+                best[name] = (min(old[0], wall), min(old[1], peak), min(old[2], cpu))
+        floor_s, floor_mb, _ = best[IMPORTS]
         print(f"{'reading (best of ' + str(args.repeat) + ')':<56} {'wall':>8} {'peak RSS':>10} {'above floor':>12}")
-        for name, (wall, peak) in best.items():
+        for name, (wall, peak, _) in best.items():
             extra = "" if name.startswith("imports") else f"{peak - floor_mb:8.0f} MB"
             print(f"  {name:<54} {wall:6.2f} s {peak:7.0f} MB {extra:>12}")
-        ours = best["springlab's reader (numpy.loadtxt in 4 MiB blocks)"]
-        before = best["the reader before (csv module rows, float() per cell)"]
+        ours, before = best[OURS], best["the reader before (csv module rows, float() per cell)"]
         print(
             f"  reader before / springlab's: {(before[0] - floor_s) / max(ours[0] - floor_s, 1e-9):.1f}x the time,"
             f" {(before[1] - floor_mb) / max(ours[1] - floor_mb, 1e-9):.1f}x the memory above the floor;"
             f" springlab's holds {(ours[1] - floor_mb) * 1e6 / args.rows:.0f} B per row at its peak"
         )
+        emit(reader_row(args.rows, size, best))
+        if args.readers_only:
+            return
         fits = {}
         for per_sample in (False, True) if args.per_sample else (False,):
             out = pathlib.Path(folder) / f"fit-{per_sample}.json"
