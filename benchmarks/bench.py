@@ -317,33 +317,34 @@ def benches(selected: set[str] | None) -> list[Bench]:
         return [row] if row else []
 
     out = [
-        Bench("run", 45, lambda folder: run_rows(selected)),
+        Bench("run", 30, lambda folder: run_rows(selected)),
         Bench("simulate", 3, lambda folder: [simulate_row()]),
-        Bench("sobol", 70, lambda folder: [sobol_row()]),
-        Bench("validate", 35, lambda folder: paths.validate_rows()),
+        Bench("sobol", 60, lambda folder: [sobol_row()]),
+        Bench("validate", 25, lambda folder: paths.validate_rows()),
         *(Bench(name, estimate, _command(name)) for name, estimate in _COMMAND_ESTIMATES.items()),
-        Bench("audit humanoid", 60, lambda folder: [command_row(*audit_command())]),
-        Bench("fit", 40, paths.fit_rows),
-        Bench("frequency chain", 10, lambda folder: [paths.frequency_chain_row()]),
-        Bench("frequency sinestream", 30, lambda folder: [paths.sinestream_row()]),
-        Bench("render", 15, lambda folder: [paths.render_row(folder)]),
-        Bench("interactive", 25, paths.interactive_rows),
+        Bench("audit humanoid", 12, lambda folder: [command_row(*audit_command())]),
+        Bench("fit", 30, paths.fit_rows),
+        Bench("frequency chain", 5, lambda folder: [paths.frequency_chain_row()]),
+        Bench("frequency sinestream", 5, lambda folder: [paths.sinestream_row()]),
+        Bench("render", 6, lambda folder: [paths.render_row(folder)]),
+        Bench("interactive", 15, paths.interactive_rows),
         Bench("view", 10, view),
-        Bench("demo", 200, lambda folder: [paths.demo_row()]),
-        Bench("import", 10, lambda folder: [import_row()]),
+        Bench("demo", 150, lambda folder: [paths.demo_row()]),
+        Bench("import", 8, lambda folder: [import_row()]),
     ]
     return out
 
 
-#: rough wall time [s] of each in-process command row on an idle 2-core machine (from the tables measured so far)
+#: rough wall time [s] of each in-process command row on an idle 2-core machine (the idle clean-clone table of c8cf198:
+#: the command's wall time, with room for a first call's imports)
 _COMMAND_ESTIMATES = {
-    "sweep": 20,
-    "tradeoff": 8,
-    "stability": 15,
-    "friction-settings gripper": 12,
-    "rms stay_cable": 150,
-    "design printer_head": 25,
-    "refine": 30,
+    "sweep": 10,
+    "tradeoff": 5,
+    "stability": 6,
+    "friction-settings gripper": 6,
+    "rms stay_cable": 60,
+    "design printer_head": 15,
+    "refine": 35,
 }
 
 
@@ -361,24 +362,24 @@ class Script:
 #: every older script: how `make bench` runs it (estimates: idle 2-core wall times, the scripts' CPU time when they
 #: were measured on a shared machine; a skipped script's is its own default run's)
 SCRIPTS = {
-    "bench_audit": Script((), 60),
-    "bench_creep": Script(("--skip-full",), 15),
+    "bench_audit": Script((), 35),
+    "bench_creep": Script(("--skip-full",), 20),
     "bench_design": Script((), 90, "the table's `design printer_head` and `--sobol` rows time the same batched moves"),
-    "bench_drill_string": Script(("--quick",), 120),
-    "bench_executor": Script(("chunks",), 35),
+    "bench_drill_string": Script(("--quick",), 60),
+    "bench_executor": Script(("chunks",), 30),
     "bench_fit": Script((), 20, "the table's `fit 10 s at 1 kHz` row times the same fit of the same record"),
-    "bench_fit_bigfile": Script((), 90),
-    "bench_frequency": Script((), 120),
-    "bench_friction": Script(("--skip-full",), 15),
-    "bench_growth": Script(("--quick",), 150),
-    "bench_printer_control": Script((), 60),
-    "bench_render": Script((), 90),
+    "bench_fit_bigfile": Script(("--readers-only", "--repeat", "2"), 25),
+    "bench_frequency": Script(("duffing",), 20),
+    "bench_friction": Script(("--skip-full",), 20),
+    "bench_growth": Script(("--quick",), 60),
+    "bench_printer_control": Script((), 10),
+    "bench_render": Script(("--end-to-end-only", "--repeat", "2"), 30),
     "bench_simulate": Script((), 10),
-    "bench_sobol": Script(("64",), 150),
+    "bench_sobol": Script(("64",), 45),
     "bench_stability_limit": Script(
         (), 30, "the table's `stability` row times the chart these limits are drawn on, in the whole command"
     ),
-    "bench_stay_cable": Script(("--exact-only",), 90),
+    "bench_stay_cable": Script(("--exact-only",), 60),
     "bench_tradeoff": Script((), 25),
 }
 
