@@ -25,8 +25,14 @@ load disturbs least (wall times are in the table too). A row's budget is issue 3
 (`run` 1.3, drill-string spin-up 2, `simulate` 1 / 0.9, `validate` 1.2); elsewhere the ratio measured when the
 row was added with room for noise, marked `(set)`.
 
+The older benchmarks/bench_*.py scripts run after the rows, each with its arguments in SCRIPTS (a smaller size, or
+only the parts no row above measures; the size is in its rows' work), and their output is pasted below the table.
+Each adds its headline measurements to the table as rows: a line `BENCH_ROW {json of Row's fields}` in its output
+(`measure.emit`), against the same floors. A script that only repeats what a row above measures is left out of the
+default run (SCRIPTS says which row; `--only NAME` runs it at its own default size).
+
 Run: PYTHONPATH=src python benchmarks/bench.py [--list] [--only NAME,...] [--skip NAME,...] [--no-scripts]
-[--output DIR]. A script may add rows to the table: a line `BENCH_ROW {json of Row's fields}` in its output.
+[--output DIR].
 """
 
 from __future__ import annotations
@@ -59,6 +65,7 @@ from measure import (  # noqa: F401 (bench.Row, bench.forget_cases: the names th
     _clock,
     alternately,
     command_row,
+    emit,
     forget_cases,
     fresh_import_cpu,
     inside_mujoco,
