@@ -1,10 +1,12 @@
-"""Where the audit's runs start, what the start moves, and whether the operating point is at rest.
+"""The audit's start judged: the perturbation it may take, what the start moves, whether the point is at rest.
 
-The start: a shipped scene's scenario state where it differs from the operating point; otherwise the operating
-point perturbed along every degree of freedom, velocity and control (`start_of`). The excitation: which
-degrees of freedom a fine run from the start moves (`excitation`): those it leaves still are verified by no
-error. The point: what constrains it and the motion, and whether its drift over the duration keeps it from rest
-(`point_report`, from the facts springlab.exact.point_facts measured).
+The start itself (a shipped scene's scenario state where it differs from the operating point, otherwise the
+operating point perturbed along every degree of freedom, velocity and control) is made where the other facts at
+the point are measured (springlab.exact.point_facts.start_near); `check_perturbation` refuses a perturbation the
+model's joints cannot take, before anything is computed. The excitation: which degrees of freedom a fine run
+from the start moves (`excitation`): those it leaves still are verified by no error. The point: what constrains
+it and the motion, and whether its drift over the duration keeps it from rest (`point_report`, from
+`PointFacts`).
 """
 
 from __future__ import annotations
