@@ -360,7 +360,7 @@ class WaveSolution:
         self.friction = float(friction_torque)
         self.alpha = float(acceleration)
         self.ramp = float(ramp_time)
-        self._pieces: list[tuple[float, float, object]] = []  # (start, end, dense w or None for stuck)
+        self._pieces: list[tuple[float, float, object]] = []  # (start, end, w(t) or None for stuck)
         self._starts: list[float] = []
 
     # -- the history ------------------------------------------------------------------
@@ -373,7 +373,7 @@ class WaveSolution:
         start, end, dense = self._pieces[i]
         if dense is None:
             return 0.0
-        return float(dense(min(max(t, start), end))[0])  # type: ignore[operator]
+        return dense(min(max(t, start), end))  # type: ignore[operator]
 
     def incoming(self, t: float) -> float:
         """F(t) [rad/s], the wave arriving at the bit: sum_k Omega(t - (2k+1) tau) - sum_{k>=1} w(t - 2k tau)."""
@@ -381,7 +381,8 @@ class WaveSolution:
         total = 0.0
         k = 0
         while t - (2 * k + 1) * tau > 0:
-            total += float(top_speed(t - (2 * k + 1) * tau, self.alpha, self.ramp))
+            # top_speed of a positive time, in floats: numpy's scalar clip costs more than the rest of the sum
+            total += self.alpha * min(t - (2 * k + 1) * tau, self.ramp)
             k += 1
         k = 1
         while t - 2 * k * tau > 0:
@@ -467,7 +468,7 @@ class WaveSolution:
                     rate, (t, end), [w], method="DOP853", rtol=WAVE_RTOL, atol=WAVE_ATOL * scale, dense_output=True
                 )
             stop = float(found.t[-1])
-            self._append(t, stop, found.sol)
+            self._append(t, stop, _history(found.sol))
             times.extend(float(s) for s in found.t[1:])
             speeds.extend(float(v) for v in found.y[0, 1:])
             t, w = stop, float(found.y[0, -1])
@@ -501,3 +502,45 @@ class WaveSolution:
             if -found.fun > best:
                 best_t, best = float(found.x), float(-found.fun)
         return best_t, best
+
+
+class _DenseSpeed:
+    """w(t) [rad/s] of one DOP853 piece: its dense output evaluated in Python floats, the same bits as scipy's.
+
+    The delay equation reads its own history at every right-hand side (about 55,000 reads per breakaway);
+    scipy's OdeSolution takes a numpy round trip per read (a 0-d array, a search, a 1-element polynomial). Here
+    the search is `bisect_left` (numpy's searchsorted with side='left') and each step's polynomial is
+    Dop853DenseOutput's own Horner-like sequence on floats: the same IEEE operations in the same order, so the
+    history, and everything integrated from it, is bit for bit what scipy's evaluation gives.
+    """
+
+    def __init__(self, times: list[float], steps: list[tuple[float, float, tuple[float, ...], float]]):
+        self._times = times  # step boundaries, increasing
+        self._steps = steps  # per step: (t_old, h, the F rows' values last first, y_old)
+
+    def __call__(self, t: float) -> float:
+        segment = min(max(bisect.bisect_left(self._times, t) - 1, 0), len(self._steps) - 1)
+        t_old, h, coefficients, y_old = self._steps[segment]
+        x = (t - t_old) / h
+        y = 0.0
+        for i, f in enumerate(coefficients):
+            y += f
+            y *= x if i % 2 == 0 else 1 - x
+        return y + y_old
+
+
+def _history(solution: object) -> object:
+    """A piece's w(t) for `WaveSolution.speed`: `_DenseSpeed` of a DOP853 OdeSolution, else the solution itself."""
+    interpolants = getattr(solution, "interpolants", None)
+    ts = np.asarray(getattr(solution, "ts", ()), float)
+    if (
+        not interpolants
+        or not all(type(step).__name__ == "Dop853DenseOutput" for step in interpolants)
+        or not (ts.size == len(interpolants) + 1 and np.all(np.diff(ts) > 0))
+    ):
+        return lambda t: float(solution(t)[0])  # type: ignore[operator]
+    steps = [
+        (float(step.t_old), float(step.h), tuple(float(f[0]) for f in reversed(step.F)), float(step.y_old[0]))
+        for step in interpolants
+    ]
+    return _DenseSpeed([float(v) for v in ts], steps)
