@@ -26,11 +26,14 @@ import dm_control
 import mujoco
 import numpy as np
 
+from springlab.exact.constraints import watch
+from springlab.exact.map_limits import map_limit
 from springlab.exact.model_at_point import ModelAtPoint
+from springlab.exact.predicted_limits import predictions
 from springlab.sim import batch
 from springlab.sim.simulate import INTEGRATORS, Setup, quiet_mujoco
 from springlab.studies.audit.audit import audit
-from springlab.studies.audit.limits import RunProbe, stability_limits, watch
+from springlab.studies.audit.limits import CONFIRM_ABOVE, RunProbe, stability_limits
 from timing import best_of
 
 HUMANOID = pathlib.Path(dm_control.__file__).parent / "suite" / "humanoid.xml"
@@ -47,10 +50,12 @@ def limits_two_ways(model) -> None:
     found: dict[str, dict] = {}
 
     def linear_path():
-        found["map"] = stability_limits(at, list(INTEGRATORS), 1.0, smooth=True)
+        predicted = predictions(at, list(INTEGRATORS))
+        maps = {name: map_limit(at, name, 1.0, p.limit_s, CONFIRM_ABOVE) for name, p in predicted.items()}
+        found["map"] = stability_limits(at, predicted, maps)
 
     def brute_force():
-        found["runs"] = stability_limits(at, list(INTEGRATORS), 1.0, smooth=False, probe=probe)
+        found["runs"] = stability_limits(at, predictions(at, list(INTEGRATORS)), None, probe=probe)
 
     linear_s, brute_s = math.inf, math.inf
     for _ in range(3):  # alternating, so both see the same load
