@@ -113,7 +113,7 @@ def _roots(mu: float, count: int) -> np.ndarray:
 
 
 #: the last few start-up series (`Rod.modal_spin_up`), by rod, times and drive
-_SPIN_UPS: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
+_SPIN_UPS: dict[tuple, tuple[np.ndarray | None, np.ndarray]] = {}
 
 
 @dataclasses.dataclass(frozen=True)
