@@ -153,8 +153,9 @@ def confirm(
 
     `maps`: each integrator's measured map, read at CONFIRM_ABOVE x its limit (`PointFacts.maps`). Per limit
     four runs, batched: the operating point as it is and perturbed by CONFIRM_SIZE along the most unstable
-    eigenvector of Phi(CONFIRM_ABOVE x limit), at CONFIRM_BELOW and CONFIRM_ABOVE x the limit. Confirmed: above, the deviation grows beyond GROWTH_SEEN x the exact flow's growth (or the
-    run blows up); below, it does not. `run` runs the jobs (default: one batch.run_batched call on
+    eigenvector of Phi(CONFIRM_ABOVE x limit), at CONFIRM_BELOW and CONFIRM_ABOVE x the limit. Confirmed:
+    above, the deviation grows beyond GROWTH_SEEN x the exact flow's growth (or the run blows up); below, it
+    does not. `run` runs the jobs (default: one batch.run_batched call on
     `nthread` threads; the audit passes springlab.studies.audit.ship.Runner, which may send them to dask workers).
     """
     model, point, linear = at.model, at.point, at.linear
@@ -324,13 +325,13 @@ def stability_limits(
     """Predicted, measured and confirmed limits per integrator of `predicted`; each margin over the model's own
     timestep.
 
-    `predicted`: each integrator's closed-form limit (`predict.predictions`). `maps`: their measured one-step-map
-    limits (`PointFacts.maps`, read at CONFIRM_ABOVE x each limit), None where something is active at the
-    operating point or along the motion: contacts, limits, equality constraints and dry friction make the map
-    a different function at every step, so it is not the dynamics. A measured limit is confirmed by runs
-    (`confirm`); with a `probe`, every limit without a map, and a map limit that runs do not confirm, comes
-    from brute-force runs (`run_limits`). Without a probe an unconfirmed map limit stays as measured, labelled
-    unconfirmed.
+    `predicted`: each integrator's closed-form limit (springlab.exact.predicted_limits.predictions). `maps`:
+    their measured one-step-map limits (`PointFacts.maps`, read at CONFIRM_ABOVE x each limit), None where
+    something is active at the operating point or along the motion: contacts, limits, equality constraints and
+    dry friction make the map a different function at every step, so it is not the dynamics. A measured limit
+    is confirmed by runs (`confirm`); with a `probe`, every limit without a map, and a map limit that runs do
+    not confirm, comes from brute-force runs (`run_limits`). Without a probe an unconfirmed map limit stays as
+    measured, labelled unconfirmed.
     """
     run = run or (lambda jobs: run_batched(jobs, nthread=nthread))
     smooth = maps is not None
