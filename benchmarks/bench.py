@@ -297,7 +297,11 @@ def markdown(rows: list[Row], where: dict, reports: list[tuple[str, float, str]]
     if reports:
         lines += ["", "## The scripts (benchmarks/bench_*.py), as they print", ""]
         for name, wall, text in reports:
-            lines += [f"### {name} ({wall:.1f} s)", "", "```", text.rstrip(), "```", ""]
+            # its rows are in the table above: the JSON lines are left out of what it printed
+            printed = "\n".join(line for line in text.splitlines() if not line.startswith(ROW_PREFIX))
+            found = len(script_rows(text))
+            rows_in_table = f"; its {found} row{'s' * (found != 1)} in the table" if found else ""
+            lines += [f"### {name} ({wall:.1f} s{rows_in_table})", "", "```", printed.rstrip(), "```", ""]
     return "\n".join(lines) + "\n"
 
 

@@ -94,6 +94,17 @@ def test_a_row_a_script_emits_reads_back_as_the_same_row_nan_included(bench, cap
     assert back.name == row.name and back.on_wall and back.ratio == row.ratio and back.cpu_s != back.cpu_s
 
 
+def test_the_table_pastes_a_scripts_output_without_its_row_lines_and_counts_them(bench):
+    module, _ = bench
+    row = _row(module, name="fit reader")
+    text = f"1. a line of its own\n{module.ROW_PREFIX}{json.dumps(row.to_dict())}\n2. another\n"
+    where = {"platform": "p", "cpus": 2, "python": "3", "mujoco": "4", "date_utc": "d", "load_average_1_5_15": [0] * 3}
+    page = module.markdown(module.script_rows(text), where, [("bench_fit_bigfile.py --readers-only", 12.0, text)])
+    pasted = page.split("### bench_fit_bigfile.py --readers-only (12.0 s; its 1 row in the table)")[1]
+    assert "1. a line of its own\n2. another" in pasted and module.ROW_PREFIX not in pasted
+    assert "| fit reader |" in page.split("###")[0]
+
+
 def test_the_per_run_comparison_sums_every_run_and_prints_a_line_each(bench, capsys):
     """bench_creep's and bench_friction's shared loop, on stand-in callables: what it adds up, not how fast."""
     module, _ = bench
