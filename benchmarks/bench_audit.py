@@ -101,6 +101,8 @@ def batched_vs_loop(model, dts, point) -> None:
             "mj_step loop",
             plain,
             plain_cpu,
+            # the batch's CPU (both threads) against one thread's Python loop: the same steps, so at most a run's
+            # 1.3 for the batch's setup and divergence checks (the loop's Python per step makes it nearer 1 or below)
             measure.RUN_BUDGET,
             "(set), as a run's",
             "bench_audit.py: springlab.sim.batch.run_batched (one mujoco.batch.Batch, all CPUs: CPU of all threads)"

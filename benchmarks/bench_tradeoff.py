@@ -83,6 +83,7 @@ def batched_vs_loop() -> None:
             "rollout",
             floor,
             floor_cpu,
+            # beyond the rollouts: the batch's setup per run and its divergence check per segment, as a run's 1.3
             measure.RUN_BUDGET,
             "(set), as a run's",
             "bench_tradeoff.py: springlab.sim.batch.run_batched on one thread (one mujoco.batch.Batch, per-run"
