@@ -7,10 +7,11 @@
    steps from the audit's start, five integrators batched per round); the ratio.
 2. The sweep's runs, batched (springlab.sim.batch.run_batched: one mujoco.batch.Batch, all CPUs) against
    a plain Python loop of mujoco.mj_step over the same (integrator, dt) settings, side by side; the
-   ratio. (On the grid's 8 coarsest timesteps x 5 integrators, to keep the plain loop short.)
+   ratio (CPU times: the row `audit humanoid runs, batched` of `make bench`'s table). (On the grid's 8 coarsest
+   timesteps x 5 integrators, to keep the plain loop short.)
 3. The whole audit (`springlab audit humanoid.xml --settle 3 --tol 1e-2`), 5 integrators x 12 timesteps
    (+ the model's own), 1 s of motion, against the issue's budget of 2 minutes on 2 cores, with the wall
-   time of each stage.
+   time of each stage (the table's `audit humanoid` row times the same command against its time inside MuJoCo).
 
 Run: python benchmarks/bench_audit.py   (needs dm_control, the `test` extra)
 """
@@ -26,11 +27,15 @@ import dm_control
 import mujoco
 import numpy as np
 
+import measure
+from springlab.exact.constraints import watch
+from springlab.exact.map_limits import map_limit
 from springlab.exact.model_at_point import ModelAtPoint
+from springlab.exact.predicted_limits import predictions
 from springlab.sim import batch
 from springlab.sim.simulate import INTEGRATORS, Setup, quiet_mujoco
 from springlab.studies.audit.audit import audit
-from springlab.studies.audit.limits import RunProbe, stability_limits, watch
+from springlab.studies.audit.limits import CONFIRM_ABOVE, RunProbe, stability_limits
 from timing import best_of
 
 HUMANOID = pathlib.Path(dm_control.__file__).parent / "suite" / "humanoid.xml"
@@ -47,10 +52,12 @@ def limits_two_ways(model) -> None:
     found: dict[str, dict] = {}
 
     def linear_path():
-        found["map"] = stability_limits(at, list(INTEGRATORS), 1.0, smooth=True)
+        predicted = predictions(at, list(INTEGRATORS))
+        maps = {name: map_limit(at, name, 1.0, p.limit_s, CONFIRM_ABOVE) for name, p in predicted.items()}
+        found["map"] = stability_limits(at, predicted, maps)
 
     def brute_force():
-        found["runs"] = stability_limits(at, list(INTEGRATORS), 1.0, smooth=False, probe=probe)
+        found["runs"] = stability_limits(at, predictions(at, list(INTEGRATORS)), None, probe=probe)
 
     linear_s, brute_s = math.inf, math.inf
     for _ in range(3):  # alternating, so both see the same load
@@ -82,10 +89,24 @@ def batched_vs_loop(model, dts, point) -> None:
                 mujoco.mj_step(work, data)
 
     with quiet_mujoco():  # the coarsest runs blow up (that is the point of them): no warning text
-        batched = best_of(lambda: batch.run_batched(jobs), repeat=1)
-        plain = best_of(loop, repeat=1)
+        (batched, batched_cpu), (plain, plain_cpu) = measure.side_by_side([lambda: batch.run_batched(jobs), loop], 1)
     print(f"2. {len(jobs)} runs, {steps} steps: batched {batched:.2f} s, plain mj_step loop {plain:.2f} s")
     print(f"   ratio loop / batched: {plain / batched:.2f}x ({os.cpu_count()} CPUs)")
+    measure.emit(
+        measure.Row(
+            "audit humanoid runs, batched",
+            f"{len(jobs)} runs of 1 s (5 integrators x the grid's {len(dts)} coarsest timesteps), {steps} steps",
+            batched,
+            batched_cpu,
+            "mj_step loop",
+            plain,
+            plain_cpu,
+            measure.RUN_BUDGET,
+            "(set), as a run's",
+            "bench_audit.py: springlab.sim.batch.run_batched (one mujoco.batch.Batch, all CPUs: CPU of all threads)"
+            " against a plain mj_step loop over the same settings and steps on copies of the same compiled model",
+        )
+    )
 
 
 def main() -> None:

@@ -302,11 +302,17 @@ TEXT_TIMINGS: tuple[tuple[str, str, str], ...] = (
     (r"^render", rf"^(wrote .* speed\)) in {_NUMBER} s \({_NUMBER} frames/s\)$", r"\1 in <timing>"),
     # tradeoff and refine: "65 runs over 2 s in 1.7 s"
     (r"^(tradeoff|refine)", rf"^(.* \d+ runs over {_NUMBER} s) in {_NUMBER} s$", r"\1 in <timing>"),
-    # tradeoff's table: wall [ms], wall/sim s and the Pareto mark (front membership is chosen by wall time)
+    # tradeoff's table: wall [ms] and wall/sim s (the work column and the Pareto mark, by counted work, stay)
     (
         r"^tradeoff",
-        rf"^(  \w+ +{_NUMBER} +\d+ +(?:{_NUMBER}|diverged)) +{_NUMBER} +{_NUMBER}ms  [* ] {{5}}  (.*)$",
-        r"\1 <timing> <timing> <pareto> \2",
+        rf"^(  \w+ +{_NUMBER} +\d+ +(?:{_NUMBER}|diverged) +{_NUMBER}) +{_NUMBER} +{_NUMBER}ms(  .*)$",
+        r"\1 <timing> <timing>\2",
+    ),
+    # the pick's sentence (tradeoff's and refine's "tol ...", friction-settings' "pick: ..."): its run's time
+    (
+        r"^(tradeoff|refine|friction_settings)",
+        rf"^(  .*) Measured time of its run: {_NUMBER} ms\.(.*)$",
+        r"\1 Measured time of its run: <timing>.\2",
     ),
     (r"^stability", rf"^done in {_NUMBER} s$", "done in <timing>"),
     # sweep: "6 configurations (...) in 0.36 s on local (17/s, 1 chunks)"
@@ -330,13 +336,14 @@ TEXT_TIMINGS: tuple[tuple[str, str, str], ...] = (
     (r"^refine", r"^( +\d+ +[0-9.e+-]+ +(?:[0-9.e+-]+|-))  .*$", r"\1 <timing>"),
     (r"^refine", r"^(  (?:cost per step ~|per simulated second at the stability limit:)).*$", r"\1 <timing>"),
     # the timings inside the lines TEXT_CHOSEN moves apart, so that section shows what was chosen
-    (r"^(tradeoff|refine)", rf"^(  tol .*)[,;] {_NUMBER} ms\)$", r"\1; <timing>)"),
-    (r"^refine", rf"^(    \w+ = \d+ .*\)) {_NUMBER} ms$", r"\1 <timing>"),
+    # refine's Pareto front rows: "... error 1.5e-02) work 312, 0.132 ms" (the work stays)
+    (r"^refine", rf"^(    \w+ = \d+ .*\) work {_NUMBER},) {_NUMBER} ms$", r"\1 <timing> ms"),
     (r"^audit", rf"^(cheapest meeting tol .*) at {_NUMBER}x the cost of yours(.*)$", r"\1 at <timing> the cost\2"),
     (r"^friction_settings", rf"^(.*), (?:{_NUMBER}x the cost of MuJoCo's defaults|cost unknown)\.$", r"\1, <timing>."),
+    # friction-settings' Pareto front: "... rk4  0.001  3.51e-03  1.2e+04  17.56" (cpu [ms] masked, the work stays)
     (
         r"^friction_settings",
-        rf"^(  .*  (?:euler|implicit|implicitfast|rk4|discrete) +{_NUMBER} +{_NUMBER}) +{_NUMBER}$",
+        rf"^(  .*  (?:euler|implicit|implicitfast|rk4|discrete) +{_NUMBER} +{_NUMBER} +{_NUMBER}) +{_NUMBER}$",
         r"\1 <timing>",
     ),
 )

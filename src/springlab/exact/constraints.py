@@ -2,16 +2,22 @@
 
 * `active_constraints(model, data)`: the named elements active after a forward pass.
 * `ConstraintState` / `summarize_constraints`: what is active at one state, or along a run (their union).
+* `watch(model, start, duration)`: a fine run from a state, stepped here to collect what becomes active along it.
 
 `springlab.exact.model_at_point.ModelAtPoint.constraints` is what constrains a model at its operating point.
 """
 
 from __future__ import annotations
 
+import copy
 import dataclasses
+import math
 from typing import Any
 
 import mujoco
+import numpy as np
+
+from springlab.sim.simulate import BAD_WARNINGS, Setup, integrator_id, quiet_mujoco
 
 _CNSTR = mujoco.mjtConstraint
 #: constraint row types by what they are, for people (contacts are counted per contact, not per row)
@@ -59,6 +65,10 @@ class ConstraintState:
     def smooth(self) -> bool:
         """No constraint, contact or dry friction is active: the dynamics is one smooth function there."""
         return not self.elements
+
+    def drift(self, duration: float) -> float:
+        """How far the state moves by itself over `duration` [s], |qvel| T + |qacc| T^2 / 2 [m or rad]."""
+        return self.max_abs_qvel * duration + 0.5 * self.max_abs_qacc * duration**2
 
     def describe(self) -> str:
         """'3 contacts, 4 joint limits (with dry friction)' or 'nothing active', for people."""
@@ -131,3 +141,69 @@ def summarize_constraints(elements: set[str], dry: set[str], qvel: float, qacc: 
         kind = "dry friction" if label.startswith("dry friction") else label.split(" '")[0]
         counts[kind] = counts.get(kind, 0) + 1
     return ConstraintState(tuple(sorted(elements)), counts, tuple(sorted(dry)), float(qvel), float(qacc))
+
+
+@dataclasses.dataclass(frozen=True)
+class Watch:
+    """A fine run from a start: its peak speed and every constraint active along it (`watch`).
+
+    Attributes
+    ----------
+    peak_speed
+        max |qvel| over the run [m/s or rad/s].
+    along
+        the union of the constraints active at its steps (`ConstraintState`).
+    dt
+        its timestep [s] (RK4).
+    diverged
+        whether it blew up (its figures then cover the steps before).
+    """
+
+    peak_speed: float
+    along: ConstraintState
+    dt: float
+    diverged: bool
+
+
+#: the fine watch run's timestep: the model's own / WATCH_REFINE (again, if that blows up)
+WATCH_REFINE = 4
+
+
+def watch(model: mujoco.MjModel, start: Setup, duration: float) -> Watch:
+    """RK4 at the model's own timestep / WATCH_REFINE from `start` for `duration` [s], stepped here to
+    read the constraints active at every step (contacts that begin, limits that engage)."""
+    work = copy.copy(model)
+    work.opt.integrator = integrator_id("rk4")
+    dt = float(model.opt.timestep) / WATCH_REFINE
+    for _ in range(2):
+        work.opt.timestep = dt
+        data = mujoco.MjData(work)
+        elements: set[str] = set()
+        dry: set[str] = set()
+        peak_v = peak_a = 0.0
+        diverged = False
+        with quiet_mujoco():
+            mujoco.mj_resetData(work, data)
+            data.qpos[:] = start.qpos if start.qpos is not None else work.qpos0
+            if start.qvel is not None:
+                data.qvel[:] = start.qvel
+            if start.act is not None and work.na:
+                data.act[:] = start.act
+            if start.control is not None and work.nu:
+                data.ctrl[:] = np.atleast_2d(start.control)[0]
+            for _ in range(max(1, round(duration / dt))):
+                mujoco.mj_step(work, data)  # leaves the constraints and qacc of the state it started from
+                if data.nefc:
+                    found, friction = active_constraints(work, data)
+                    elements |= found
+                    dry |= friction
+                peak_a = max(peak_a, float(np.max(np.abs(data.qacc), initial=0.0)))
+                speed = float(np.max(np.abs(data.qvel), initial=0.0))
+                if not math.isfinite(speed) or any(data.warning[w].number for w in BAD_WARNINGS):
+                    diverged = True
+                    break
+                peak_v = max(peak_v, speed)
+        if not diverged:
+            break
+        dt /= WATCH_REFINE
+    return Watch(peak_v, summarize_constraints(elements, dry, peak_v, peak_a), dt, diverged)

@@ -312,9 +312,14 @@ class Scene:
     def edit(self, spec: mujoco.MjSpec, params: dict[str, float], scenario: Scenario) -> None:
         """Apply parameters to the spec (override)."""
 
+    def editable_spec(self) -> mujoco.MjSpec:
+        """The MjSpec `build` hands to `edit`: `model_spec()` (override where `edit` replaces most of the model and a
+        spec without that part, kept per process, saves removing it on every compile)."""
+        return self.model_spec()
+
     def build(self, params: dict[str, float], scenario: Scenario) -> mujoco.MjModel:
         """Compile the model for these parameters and scenario."""
-        spec = self.model_spec()
+        spec = self.editable_spec()
         self.edit(spec, params, scenario)
         with quiet_mujoco():
             try:

@@ -5,7 +5,7 @@ and `springlab tradeoff` already measure; printer_head, whose belt damping lives
 for where each integrator puts it); nonlinear (its linearization's undamped oscillator); kinematics (all
 rigid: no limit).
 
-Tolerances: the measured limit is bisected to a ratio of 1 + 1e-4 (audit_limits.LIMIT_PRECISION) on a
+Tolerances: the measured limit is bisected to a ratio of 1 + 1e-4 (springlab.exact.map_limits.LIMIT_PRECISION) on a
 map good to ~1e-10, so 1e-3 relative to the closed form is wide; the contract asks agreement with
 stability/tradeoff within 0.5 % (limits) and 0.1 (orders).
 """
@@ -28,11 +28,13 @@ from helpers.contract import plain_json
 from helpers.linear_models import chain_frequencies, chain_xml, pendulum_xml
 from springlab.errors import BadInputError, UnknownNameError
 from springlab.exact.limits import stability_limit
+from springlab.exact.map_limits import map_limit
 from springlab.exact.model_at_point import ModelAtPoint
+from springlab.exact.predicted_limits import predictions
 from springlab.sim import model_files
 from springlab.studies import stability, tradeoff
 from springlab.studies.audit.audit import INTEGRATORS, audit
-from springlab.studies.audit.limits import stability_limits
+from springlab.studies.audit.limits import CONFIRM_ABOVE, stability_limits
 
 LIMIT_RELATIVE = 1e-3
 
@@ -378,7 +380,10 @@ def test_limits_split_joint_and_tendon_damping_as_each_integrator_does():
         f' damping="{2 * zeta_tendon * omega}"><joint joint="x" coef="1"/></fixed></tendon></mujoco>'
     )
     model = mujoco.MjModel.from_xml_string(xml)
-    limits = stability_limits(ModelAtPoint.at(model), ("euler", "implicit", "implicitfast"), 10.0)
+    at = ModelAtPoint.at(model)
+    predicted = predictions(at, ("euler", "implicit", "implicitfast"))
+    maps = {name: map_limit(at, name, 10.0, p.limit_s, CONFIRM_ABOVE) for name, p in predicted.items()}
+    limits = stability_limits(at, predicted, maps)
 
     def bound(s):
         return 2 * s + 2 * math.hypot(s, 1.0)

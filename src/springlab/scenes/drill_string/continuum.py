@@ -113,7 +113,7 @@ def _roots(mu: float, count: int) -> np.ndarray:
 
 
 #: the last few start-up series (`Rod.modal_spin_up`), by rod, times and drive
-_SPIN_UPS: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
+_SPIN_UPS: dict[tuple, tuple[np.ndarray | None, np.ndarray]] = {}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -227,22 +227,39 @@ class Rod:
         at constant speed. theta = theta_top + u, u = a(t) u_s(x) + sum_n (P_n alpha / K_n) sin(beta_n x)
         [cos w_n t - H(t - T_r) cos w_n (t - T_r)]; `modal_tail_bound` bounds what the truncation leaves out.
         """
+        angle, speed = self._kept_spin_up(time, x, acceleration, ramp_time, modes, with_angle=True)
+        assert angle is not None
+        return angle, speed
+
+    def modal_spin_up_speed(
+        self, time: np.ndarray, x: float, acceleration: float, ramp_time: float, modes: int
+    ) -> np.ndarray:
+        """The speed [rad/s] of `modal_spin_up` alone (the same values, bit for bit; the angle's three products of
+        the times x modes tables left out)."""
+        return self._kept_spin_up(time, x, acceleration, ramp_time, modes, with_angle=False)[1]
+
+    def _kept_spin_up(
+        self, time: np.ndarray, x: float, acceleration: float, ramp_time: float, modes: int, *, with_angle: bool
+    ) -> tuple[np.ndarray | None, np.ndarray]:
+        """`_modal_spin_up`, kept in `_SPIN_UPS` for long grids of times; copies of the kept arrays."""
         t = np.ascontiguousarray(time, dtype=float)
-        digest = hashlib.blake2b(t.tobytes(), digest_size=16).digest()
-        key = (self, digest, t.shape, float(x), float(acceleration), float(ramp_time), int(modes))
+        args = (float(x), float(acceleration), float(ramp_time), int(modes))
         if t.size < 64:  # a point of a search: cheap, and kept it would push the long series out
-            return self._modal_spin_up(t, float(x), float(acceleration), float(ramp_time), int(modes))
+            return self._modal_spin_up(t, *args, with_angle=with_angle)
+        digest = hashlib.blake2b(t.tobytes(), digest_size=16).digest()
+        key = (self, digest, t.shape, *args, with_angle)
         if key not in _SPIN_UPS:
-            _SPIN_UPS[key] = self._modal_spin_up(t, float(x), float(acceleration), float(ramp_time), int(modes))
+            _SPIN_UPS[key] = self._modal_spin_up(t, *args, with_angle=with_angle)
             while len(_SPIN_UPS) > 8:
                 _SPIN_UPS.pop(next(iter(_SPIN_UPS)))
         angle, speed = _SPIN_UPS[key]
-        return angle.copy(), speed.copy()
+        return None if angle is None else angle.copy(), speed.copy()
 
     def _modal_spin_up(
-        self, t: np.ndarray, x: float, acceleration: float, ramp_time: float, modes: int
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """`modal_spin_up` computed (times x modes sines: a third of a second at 1500 x 4096)."""
+        self, t: np.ndarray, x: float, acceleration: float, ramp_time: float, modes: int, *, with_angle: bool
+    ) -> tuple[np.ndarray | None, np.ndarray]:
+        """`modal_spin_up` computed (times x modes sines: a third of a second at 1500 x 4096); the angle None
+        unless `with_angle`."""
         alpha, ramp = acceleration, ramp_time
         on = t < ramp
         top_angle = np.where(on, 0.5 * alpha * t**2, 0.5 * alpha * ramp**2 + alpha * ramp * (t - ramp))
@@ -254,6 +271,7 @@ class Rod:
         amplitude = alpha * (self.density * self.polar_moment / betas) / (omegas**2 * self.modal_masses(betas))
         amplitude *= np.sin(betas * x)
         switched = ~on
+        any_switched = bool(switched.any())
         for chunk in range(0, modes, 512):  # (times x modes) in slices keeps memory flat
             part = slice(chunk, chunk + 512)
             w, a = omegas[part], amplitude[part]
@@ -262,10 +280,13 @@ class Rod:
             # after the ramp, cos w(t - T_r) = cos wt cos wT_r + sin wt sin wT_r (and sin likewise):
             # two (times x modes) tables of sines instead of four
             cos_r, sin_r = np.cos(w * ramp), np.sin(w * ramp)
-            angle += cos @ a - np.where(switched, cos @ (a * cos_r) + sin @ (a * sin_r), 0.0)
+            if with_angle:
+                angle += cos @ a - np.where(switched, cos @ (a * cos_r) + sin @ (a * sin_r), 0.0)
             aw = a * w
-            speed += -(sin @ aw) + np.where(switched, sin @ (aw * cos_r) - cos @ (aw * sin_r), 0.0)
-        return angle, speed
+            # before the ramp's end the switched terms are where()'s 0.0: added as such, not computed
+            after = np.where(switched, sin @ (aw * cos_r) - cos @ (aw * sin_r), 0.0) if any_switched else 0.0
+            speed += -(sin @ aw) + after
+        return (angle if with_angle else None), speed
 
 
 def top_speed(time: np.ndarray | float, acceleration: float, ramp_time: float) -> np.ndarray:
@@ -360,7 +381,7 @@ class WaveSolution:
         self.friction = float(friction_torque)
         self.alpha = float(acceleration)
         self.ramp = float(ramp_time)
-        self._pieces: list[tuple[float, float, object]] = []  # (start, end, dense w or None for stuck)
+        self._pieces: list[tuple[float, float, object]] = []  # (start, end, w(t) or None for stuck)
         self._starts: list[float] = []
 
     # -- the history ------------------------------------------------------------------
@@ -373,7 +394,7 @@ class WaveSolution:
         start, end, dense = self._pieces[i]
         if dense is None:
             return 0.0
-        return float(dense(min(max(t, start), end))[0])  # type: ignore[operator]
+        return dense(min(max(t, start), end))  # type: ignore[operator]
 
     def incoming(self, t: float) -> float:
         """F(t) [rad/s], the wave arriving at the bit: sum_k Omega(t - (2k+1) tau) - sum_{k>=1} w(t - 2k tau)."""
@@ -381,7 +402,8 @@ class WaveSolution:
         total = 0.0
         k = 0
         while t - (2 * k + 1) * tau > 0:
-            total += float(top_speed(t - (2 * k + 1) * tau, self.alpha, self.ramp))
+            # top_speed of a positive time, in floats: numpy's scalar clip costs more than the rest of the sum
+            total += self.alpha * min(t - (2 * k + 1) * tau, self.ramp)
             k += 1
         k = 1
         while t - 2 * k * tau > 0:
@@ -467,7 +489,7 @@ class WaveSolution:
                     rate, (t, end), [w], method="DOP853", rtol=WAVE_RTOL, atol=WAVE_ATOL * scale, dense_output=True
                 )
             stop = float(found.t[-1])
-            self._append(t, stop, found.sol)
+            self._append(t, stop, _history(found.sol))
             times.extend(float(s) for s in found.t[1:])
             speeds.extend(float(v) for v in found.y[0, 1:])
             t, w = stop, float(found.y[0, -1])
@@ -501,3 +523,45 @@ class WaveSolution:
             if -found.fun > best:
                 best_t, best = float(found.x), float(-found.fun)
         return best_t, best
+
+
+class _DenseSpeed:
+    """w(t) [rad/s] of one DOP853 piece: its dense output evaluated in Python floats, the same bits as scipy's.
+
+    The delay equation reads its own history at every right-hand side (about 55,000 reads per breakaway);
+    scipy's OdeSolution takes a numpy round trip per read (a 0-d array, a search, a 1-element polynomial). Here
+    the search is `bisect_left` (numpy's searchsorted with side='left') and each step's polynomial is
+    Dop853DenseOutput's own Horner-like sequence on floats: the same IEEE operations in the same order, so the
+    history, and everything integrated from it, is bit for bit what scipy's evaluation gives.
+    """
+
+    def __init__(self, times: list[float], steps: list[tuple[float, float, tuple[float, ...], float]]):
+        self._times = times  # step boundaries, increasing
+        self._steps = steps  # per step: (t_old, h, the F rows' values last first, y_old)
+
+    def __call__(self, t: float) -> float:
+        segment = min(max(bisect.bisect_left(self._times, t) - 1, 0), len(self._steps) - 1)
+        t_old, h, coefficients, y_old = self._steps[segment]
+        x = (t - t_old) / h
+        y = 0.0
+        for i, f in enumerate(coefficients):
+            y += f
+            y *= x if i % 2 == 0 else 1 - x
+        return y + y_old
+
+
+def _history(solution: object) -> object:
+    """A piece's w(t) for `WaveSolution.speed`: `_DenseSpeed` of a DOP853 OdeSolution, else the solution itself."""
+    interpolants = getattr(solution, "interpolants", None)
+    ts = np.asarray(getattr(solution, "ts", ()), float)
+    if (
+        not interpolants
+        or not all(type(step).__name__ == "Dop853DenseOutput" for step in interpolants)
+        or not (ts.size == len(interpolants) + 1 and np.all(np.diff(ts) > 0))
+    ):
+        return lambda t: float(solution(t)[0])  # type: ignore[operator]
+    steps = [
+        (float(step.t_old), float(step.h), tuple(float(f[0]) for f in reversed(step.F)), float(step.y_old[0]))
+        for step in interpolants
+    ]
+    return _DenseSpeed([float(v) for v in ts], steps)

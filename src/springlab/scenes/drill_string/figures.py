@@ -79,7 +79,7 @@ def panels(case: CaseView, trajectory: Trajectory) -> tuple[Panel, ...]:
     if scenario == "spin_up":
         flow = ModalFlow.of(np.diag(lumped.mass), lumped.stiffness)
         _, exact_v = answers.linear_samples(lumped, flow, drive, sample)
-        _, continuum_v = rod.modal_spin_up(
+        continuum_v = rod.modal_spin_up_speed(
             sample, rod.length, drive.acceleration, drive.ramp_time, answers.CONTINUUM_MODES
         )
         curves.append(Curve(f"bit, {lumped.size - 1} elements exact", sample, exact_v[:, -1] / answers.RPM, "exact"))

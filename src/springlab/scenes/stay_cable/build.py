@@ -94,8 +94,8 @@ def scaffold() -> mujoco.MjSpec:
     return spec
 
 
-def _clear(spec: mujoco.MjSpec) -> None:
-    """Remove a previous cable (its bodies, tendons and actuators) from `spec`."""
+def remove_cable(spec: mujoco.MjSpec) -> None:
+    """Remove a previous cable (its bodies, tendons and actuators) from `spec` (nothing if it has none)."""
     for actuator in list(spec.actuators):
         spec.delete(actuator)
     for tendon in list(spec.tendons):
@@ -149,7 +149,7 @@ def generate(spec: mujoco.MjSpec, params: dict[str, float]) -> None:
     scale = DRAWN_LENGTH / cable.length
     # short enough for a 480-pixel frame: drawn 1:50 along, 1:1 across, so the deflection is 50x the length's scale
     spec.text("note:length").data = f"length 1:{1 / scale:.3g}, deflection 1:1 ({1 / scale:.3g}x exaggerated)"
-    _clear(spec)
+    remove_cable(spec)
     for j in range(1, n + 1):
         body = spec.worldbody.add_body(name=f"n{j}", pos=[j * cable.spacing(n) * scale, 0.0, 0.0])
         body.explicitinertial = True

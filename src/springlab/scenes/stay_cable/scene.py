@@ -33,7 +33,9 @@ which implicitfast integrates implicitly; RK4 would need dt < 1.7 ms).
 
 from __future__ import annotations
 
+import functools
 import math
+import weakref
 from typing import Any
 
 import mujoco
@@ -41,8 +43,9 @@ import numpy as np
 
 from springlab.errors import ParameterError
 from springlab.exact.cable import whole_elements
-from springlab.scenes.base import Case, Check, Parameter, Reference, Scenario, Scene
+from springlab.scenes.base import Case, Check, Parameter, Reference, Scenario, Scene, parsed_spec
 from springlab.scenes.capabilities.random_load import RandomLoadSpec
+from springlab.sim import model_files
 from springlab.sim.simulate import ROUNDOFF_PER_STEP, Setup, Trajectory
 
 from . import answers, build, figures, modal, stationary
@@ -239,6 +242,11 @@ class StayCable(Scene):
     def edit(self, spec: mujoco.MjSpec, params: dict[str, float], scenario: Scenario) -> None:
         build.generate(spec, params)
 
+    def editable_spec(self) -> mujoco.MjSpec:
+        """The shipped model without its cable (kept per process): `generate` writes every cable anew, and removing
+        the shipped one element by element cost 70 ms of every compile (the same compiled model, byte for byte)."""
+        return _without_cable(str(model_files.path(self.name))).copy()
+
     @staticmethod
     def physical(model: mujoco.MjModel) -> tuple[float, ...]:
         """(L [m], T [N], m [kg/m], N [-], a of the damper's node [m], c_d [N s/m]) read back from the model."""
@@ -315,7 +323,7 @@ class StayCable(Scene):
             out.update(_wind_quantities(case, trajectory))
             return out
         mode, _ = _free_mode(case)
-        measured = modal.measured_value(mode, trajectory.qpos, trajectory.qvel, trajectory.steps * trajectory.dt)
+        measured = _measured(case, mode, trajectory)
         if name == "rain_wind":
             out.update(_rain_wind_quantities(case, mode, measured))
             return out
@@ -336,7 +344,7 @@ class StayCable(Scene):
         if case.scenario.name == "wind":
             return [_rms_check(case, trajectory)]
         mode, _ = _free_mode(case)
-        measured = modal.measured_value(mode, trajectory.qpos, trajectory.qvel, trajectory.steps * trajectory.dt)
+        measured = _measured(case, mode, trajectory)
         bound = modal.value_error_bound(mode, trajectory.integrator, trajectory.dt)
         basis = modal.error_basis(trajectory.integrator)
         if case.scenario.name == "rain_wind":
@@ -370,6 +378,14 @@ def _roundoff(case: Case, pos: dict[str, np.ndarray], dt: float) -> dict[str, fl
     return {f"{joint}_vel": per_step for joint in pos}
 
 
+@functools.cache
+def _without_cable(path: str) -> mujoco.MjSpec:
+    """The MjSpec of the model file at `path` with its cable removed (`StayCable.editable_spec`); callers copy it."""
+    spec = parsed_spec(path).copy()
+    build.remove_cable(spec)
+    return spec
+
+
 def _free_mode(case: Case) -> tuple[modal.Mode, int]:
     """(the mode a free scenario starts in, the node (1 ... N) where it is largest), once per case: mode 1, or
     in `rain_wind` the fastest-growing mode."""
@@ -381,6 +397,21 @@ def _free_mode(case: Case) -> tuple[modal.Mode, int]:
         return mode, int(np.argmax(np.abs(mode.right[:n]))) + 1
 
     return case.memo("free_mode", compute)
+
+
+def _measured(case: Case, mode: modal.Mode, trajectory: Trajectory) -> complex:
+    """lambda [1/s] the run measures (modal.measured_value), once per run: its quantities and its checks both ask,
+    and the modal filter over the whole record (24,000 x 198 complex at rain_wind's) costs a tenth of a second.
+
+    Kept on the case for the last run only, by identity (a weak reference: the case never keeps a record alive).
+    """
+    kept: list = case.memo("measured_run", lambda: [None])
+    last = kept[0]
+    if last is not None and last[0]() is trajectory and last[1] is mode:
+        return last[2]
+    value = modal.measured_value(mode, trajectory.qpos, trajectory.qvel, trajectory.steps * trajectory.dt)
+    kept[0] = (weakref.ref(trajectory), mode, value)
+    return value
 
 
 def _damper_quantities(case: Case, mode: modal.Mode, measured: complex) -> dict[str, Any]:

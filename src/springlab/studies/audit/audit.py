@@ -4,17 +4,21 @@ it is, and what accuracy each setting buys for its compute.
 1. Linear analysis at the operating point (springlab.exact.model_at_point): modes [Hz], damping ratios, the
    physically unstable ones, the fastest.
 2. Stability limits per integrator (springlab.studies.audit.limits): predicted from the modes
-   (springlab.studies.audit.predict), measured on MuJoCo's one-step map, confirmed by runs of the nonlinear
-   model just below and above; the margin of the model's own timestep; constraint time constants shorter
-   than 2 dt.
+   (springlab.exact.predicted_limits), measured on MuJoCo's one-step map (springlab.exact.map_limits),
+   confirmed by runs of the nonlinear model just below and above; the margin of the model's own timestep;
+   constraint time constants shorter than 2 dt.
 3. Accuracy vs cost (springlab.studies.audit.sweep): every integrator over a timestep grid from the perturbed
-   operating point (springlab.studies.audit.start), batched, against the exact solution of the linearization
-   (linear models) or a converged RK4 reference; observed orders, the Pareto front, and the cheapest setting
-   meeting tol, verified by a run of its own.
+   operating point (springlab.exact.point_facts.start_near), batched, against the exact solution of the
+   linearization (linear models) or a converged RK4 reference; observed orders, the Pareto front, and the
+   cheapest setting meeting tol, verified by a run of its own.
 
-`audit(model, ...)` runs these as named steps and returns an `Audit` (springlab.studies.audit.results), whose
-words are springlab.studies.audit.text; the options are checked first (springlab.studies.audit.options), the
-model loaded once (springlab.studies.audit.source) and held at its operating point once (`ModelAtPoint`).
+`audit(model, ...)` checks the options (springlab.studies.audit.options), loads the model once
+(springlab.studies.audit.source), then gathers the facts at the operating point in one pass below the study: the
+model held there once (`ModelAtPoint`), what its modes predict, where the runs start, and what MuJoCo does there
+(springlab.exact.point_facts.PointFacts: the fine run from the start, the run from the point left alone, the
+one-step-map limits). The named steps that follow judge those facts and run what they call for (confirmations,
+the sweep, the reference), and return an `Audit` (springlab.studies.audit.results), whose words are
+springlab.studies.audit.text.
 """
 
 from __future__ import annotations
@@ -31,6 +35,8 @@ import numpy as np
 
 from springlab.errors import DivergedError
 from springlab.exact.model_at_point import ModelAtPoint
+from springlab.exact.point_facts import PointFacts, Start, start_near
+from springlab.exact.predicted_limits import Prediction, predictions
 from springlab.sim.batch import Job
 from springlab.sim.simulate import INTEGRATORS, Setup, Trajectory
 from springlab.studies.executor import Executor
@@ -48,13 +54,13 @@ from springlab.studies.settings import (
 )
 
 from .creep import creep_at
-from .limits import ConstraintFlag, Limit, RunProbe, constraint_flags, stability_limits, watch
+from .limits import CONFIRM_ABOVE, ConstraintFlag, Limit, RunProbe, constraint_flags, stability_limits
 from .options import DEFAULT_PERTURB, DEFAULT_TOL, Options, check_options, resolve_duration
 from .parts import Excitation, Linearity, OwnSetting, PointReport, ReferenceUsed, Timings
 from .results import Audit
 from .ship import Runner, ship
 from .source import Source, load
-from .start import REST_FRACTION, Start, excitation, point_report, start_of
+from .start import REST_FRACTION, check_perturbation, excitation, point_report, rest_within
 from .sweep import (
     MAX_SAMPLES,
     REFERENCE_FRACTION,
@@ -147,10 +153,23 @@ def audit(
     options = check_options(tol=tol, perturb=perturb, settle_s=settle_s, integrators=integrators, dts=dts)
     source = load(model)
     runs_for = resolve_duration(duration, source.duration)
-    at = ModelAtPoint.at(source.model, keyframe, settle_s=options.settle_s)
-    start = start_of(at, options.perturb, runs_for, source)
+    check_perturbation(source.model, options.perturb)
     run = _runner(source, executor, nthread)
-    limits = _limits(at, start, options, runs_for, run)
+    # the facts first: the point, what its modes predict, where runs start, what MuJoCo does there (one pass)
+    at = ModelAtPoint.at(source.model, keyframe, settle_s=options.settle_s)
+    names = list(dict.fromkeys([*options.integrators, _NAMES[int(at.model.opt.integrator)]]))
+    predicted = predictions(at, names)
+    start = start_near(at, options.perturb, runs_for, source.start)
+    facts = PointFacts.measure(
+        at,
+        start.setup,
+        runs_for,
+        guesses={name: prediction.limit_s for name, prediction in predicted.items()},
+        above=CONFIRM_ABOVE,
+        rest_within=rest_within(options.perturb),
+    )
+    # then the verdicts on them, and the runs they call for
+    limits = _limits(at, start, options, facts, predicted, runs_for, run)
     clock.stamp("limits")
     swept = _sweep(at, start.setup, options, limits.limits, runs_for, run)
     clock.stamp("sweep")
@@ -220,23 +239,29 @@ class _Limits:
     flags: tuple[ConstraintFlag, ...]
 
 
-def _limits(at: ModelAtPoint, start: Start, options: Options, duration: float, run: Runner) -> _Limits:
-    """Step 2: the constraint settings the model's own timestep breaks; a fine run from the start (what it
-    activates, its peak speed); then every swept integrator's and the model's own integrator's stability
-    limit (`limits.stability_limits`)."""
+def _limits(
+    at: ModelAtPoint,
+    start: Start,
+    options: Options,
+    facts: PointFacts,
+    predicted: Mapping[str, Prediction],
+    duration: float,
+    run: Runner,
+) -> _Limits:
+    """Step 2: the constraint settings the model's own timestep breaks; the operating point's state (what is
+    active there and along the fine run from the start, its creep); then every swept integrator's and the model's
+    own integrator's stability limit (`limits.stability_limits`: the map's, confirmed by runs, or runs')."""
     model = at.model
     flags = tuple(constraint_flags(model, float(model.opt.timestep)))
-    seen = watch(model, start.setup, duration)
-    point_state = point_report(at, seen, options.settle_s, options.perturb, duration)
+    point_state = point_report(at, facts, options.settle_s, options.perturb)
     if not point_state.at_rest:  # what keeps it moving: creep under dry friction, or motion that dies out
-        creep, helps = creep_at(at, duration, REST_FRACTION * options.perturb)
+        creep, helps = creep_at(at, facts.rest, duration, REST_FRACTION * options.perturb)
         point_state = dataclasses.replace(point_state, creep=creep, settling_helps=helps)
     qvel = start.setup.qvel
     start_speed = float(abs(qvel).max(initial=0.0)) if qvel is not None else 0.0
     gravity = float(math.hypot(*model.opt.gravity))
-    probe = RunProbe(start.setup, duration, max(seen.peak_speed, start_speed), gravity, duration / 10)
-    names = list(dict.fromkeys([*options.integrators, _NAMES[int(model.opt.integrator)]]))
-    limits = stability_limits(at, names, duration, run=run, smooth=point_state.linear_map, probe=probe)
+    probe = RunProbe(start.setup, duration, max(facts.watch.peak_speed, start_speed), gravity, duration / 10)
+    limits = stability_limits(at, predicted, facts.maps, run=run, probe=probe)
     return _Limits(limits, point_state, probe, flags)
 
 

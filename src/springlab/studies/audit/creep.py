@@ -4,9 +4,9 @@ A body that Coulomb friction holds (its margin above 1: friction could carry mor
 but that MuJoCo lets slide at a steady speed is creeping: MuJoCo's soft-friction model error. A converged run of
 the same model creeps just as much, so the sweep's errors (against such a run, or the linearization) cannot see
 it, and no integrator or timestep removes it; `springlab friction-settings MODEL.xml` measures it and finds the
-settings that stop it. `creep_at` runs the model's own setting from the operating point, unperturbed, controls
-held, over the audit's duration, and reads off both findings (springlab.studies.held: what dry friction holds,
-each body's slip, its Coulomb margin).
+settings that stop it. `creep_at` reads both findings off the run of the model's own setting from the operating
+point, unperturbed, controls held, over the audit's duration (springlab.exact.point_facts measures it;
+springlab.studies.held: what dry friction holds, each body's slip, its Coulomb margin).
 """
 
 from __future__ import annotations
@@ -19,13 +19,12 @@ import numpy as np
 
 from springlab.errors import BadInputError, DivergedError
 from springlab.exact.model_at_point import ModelAtPoint
-from springlab.sim.simulate import INTEGRATORS, Trajectory
+from springlab.sim.simulate import Trajectory
 from springlab.studies.held import coulomb_margin, plan_at, track
 
 #: settling longer "measurably helps" when the motion over the second half of a run from the point is at most
 #: this fraction of the motion over its first half (it is dying out)
 SETTLING_HELPS = 0.5
-_NAMES = {value: name for name, value in INTEGRATORS.items()}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -54,44 +53,44 @@ class CreepFinding:
         return dataclasses.asdict(self)
 
 
-def creep_at(at: ModelAtPoint, duration: float, drift_limit: float) -> tuple[tuple[CreepFinding, ...], bool | None]:
+def creep_at(
+    at: ModelAtPoint, rest: Trajectory | DivergedError | None, duration: float, drift_limit: float
+) -> tuple[tuple[CreepFinding, ...], bool | None]:
     """(the creeping bodies, whether settling longer measurably helps) at the operating point.
 
     Parameters
     ----------
     at
         the model at its operating point.
+    rest
+        the run from the point at the model's own setting over the audit's duration (`PointFacts.rest`), or the
+        DivergedError it raised.
     duration
-        the run's length [s] (the audit's).
+        the audit's duration [s] (the hold the plan states).
     drift_limit
         a body creeps when it slips more than this over the run [m] (the audit's rest threshold).
 
     Returns
     -------
     The findings, and whether the motion of the run's second half is at most SETTLING_HELPS of its first half's
-    (`_settling_helps`; None: the run diverged).
+    (`_settling_helps`; None: the run diverged, or was not run).
     """
+    if not isinstance(rest, Trajectory):
+        return (), None
     model = at.model
-    integrator, dt = _NAMES[int(model.opt.integrator)], float(model.opt.timestep)
     try:
         plan, _, _ = plan_at(at, "the model", hold_s=duration)
     except BadInputError:  # no dry friction holds a body here
-        plan = None
-    try:  # the same run whether or not a body is held (held.run_hold's: from the point, controls held)
-        trajectory = at.simulate(integrator, dt, duration)
-        tracks = track(model, trajectory, plan) if plan is not None else []
-    except DivergedError:
-        return (), None
+        return (), _settling_helps(model, rest)
     findings = []
-    if plan is not None:
-        for j, body in enumerate(tracks):
-            if body.slip_m <= drift_limit:
-                continue
-            margin = coulomb_margin(model, trajectory, plan, j, body.margin_state)
-            if margin is not None and margin > 1:
-                name = model.body(plan.bodies[j]).name or str(plan.bodies[j])
-                findings.append(CreepFinding(name, body.creep_velocity_m_s, margin, body.lost_at_s))
-    return tuple(findings), _settling_helps(model, trajectory)
+    for j, body in enumerate(track(model, rest, plan)):
+        if body.slip_m <= drift_limit:
+            continue
+        margin = coulomb_margin(model, rest, plan, j, body.margin_state)
+        if margin is not None and margin > 1:
+            name = model.body(plan.bodies[j]).name or str(plan.bodies[j])
+            findings.append(CreepFinding(name, body.creep_velocity_m_s, margin, body.lost_at_s))
+    return tuple(findings), _settling_helps(model, rest)
 
 
 def _settling_helps(model: mujoco.MjModel, trajectory: Trajectory) -> bool:

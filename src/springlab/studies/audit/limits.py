@@ -1,51 +1,32 @@
 """Stability limits of any model, per integrator: predicted from its modes, measured on its one-step map,
 confirmed on the nonlinear model; and the constraint settings a timestep breaks.
 
-Numerical instability, as measured here: at timestep dt the one-step map Phi(dt) (springlab.exact.linearize)
-amplifies some mode more than the exact flow does, spectral radius
-rho(Phi) > (1 + MAP_MARGIN) max(1, exp(sigma dt)), with sigma the largest growth rate of the
-continuous linearization (0 unless the model is physically unstable: an upright pole *should* fall,
-and that is no integrator's fault). MAP_MARGIN covers the finite differences: a Jordan block's
-double eigenvalue 1 (a free body, an unsprung direction) moves by sqrt(error) ~ 1e-5.
-
-The measured limit is the smallest such dt: a doubling scan from SCAN_START / |lambda|_max, then a
-geometric bisection to a ratio of 1 + LIMIT_PRECISION.
-
-The closed-form prediction from the modes (springlab.studies.audit.predict) seeds the measurement: it is
-tried first as a bracket of the measured limit.
+The closed-form prediction from the modes (springlab.exact.predicted_limits) seeds the measurement of MuJoCo's
+one-step map (springlab.exact.map_limits: the smallest dt at which it grows beyond the exact flow), which
+`springlab.exact.point_facts.PointFacts` gathers with the other facts at the point. This module judges those
+facts: runs of the nonlinear model just below and above each measured limit confirm it (`confirm`); where
+the map is not the dynamics, or runs do not confirm it, runs from the audit's start bracket the limit
+(`run_limits`).
 """
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 import math
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any
 
 import mujoco
 import numpy as np
 
 from springlab.errors import DivergedError
-from springlab.exact.constraints import ConstraintState, active_constraints, summarize_constraints
+from springlab.exact.map_limits import MapLimit
 from springlab.exact.model_at_point import ModelAtPoint
 from springlab.exact.operating_point import OperatingPoint
+from springlab.exact.predicted_limits import Prediction
 from springlab.sim.batch import Job, run_batched
-from springlab.sim.simulate import BAD_WARNINGS, Setup, Trajectory, integrator_id, quiet_mujoco
+from springlab.sim.simulate import Setup, Trajectory
 
-from .predict import IMPLICIT_DAMPING_INTEGRATORS, explicit_stiffness, implicit_damping, predict
-
-#: growth of the one-step map beyond the exact flow's that counts as numerical instability [-]
-MAP_MARGIN = 1e-4
-#: the scan starts at SCAN_START / |lambda|_max and doubles ...
-SCAN_START = 0.01
-#: ... up to SCAN_STOP / |lambda|_max (or SCAN_STOP_S without a mode) [s]
-SCAN_STOP = 1e4
-SCAN_STOP_S = 10.0
-#: bisection down to this ratio between stable and unstable timesteps
-LIMIT_PRECISION = 1e-4
-#: a predicted limit p is first bracketed by [p / GUESS_BRACKET, p * GUESS_BRACKET]
-GUESS_BRACKET = 1.01
 #: confirmation runs at these fractions of the measured limit
 CONFIRM_BELOW, CONFIRM_ABOVE = 0.98, 1.02
 #: a confirmation run "grows" when its deviation from the unperturbed run grows GROWTH_SEEN x beyond the
@@ -152,94 +133,6 @@ class ConstraintFlag:
         return dataclasses.asdict(self)
 
 
-class _MapProbe:
-    """rho(Phi(dt)) relative to the exact flow's growth, per dt [s], for one integrator.
-
-    For a physically stable model the exact flow grows nowhere, so the excess is rho(Phi) itself.
-    With a physically unstable mode each eigenvalue mu of Phi is compared with exp(lambda dt) of the
-    continuous mode its eigenvector lies along (largest coefficient in A's eigenvector basis), so an
-    upright pole's fall does not hide a fast mode's numerical growth.
-    """
-
-    def __init__(self, at: ModelAtPoint, integrator: str):
-        self.at, self.integrator = at, integrator
-        linear = at.linear
-        self.sigma = linear.max_growth_rate
-        self.scratch = at.workspace  # one copy of the model for every map at this point
-        self.basis = None
-        if linear.physically_unstable:
-            values, vectors = linear.eigenvectors
-            self.rates = np.maximum(values.real, 0.0)
-            self.basis = np.linalg.pinv(vectors)
-
-    def map(self, dt: float) -> np.ndarray:
-        return self.at.one_step_map(self.integrator, dt, self.scratch)
-
-    def excess(self, dt: float, phi: np.ndarray | None = None) -> tuple[float, np.ndarray | None, float]:
-        """(max |mu| / exact growth of its mode [-], that mu's eigenvector, that |mu| [-]); the first > 1 +
-        MAP_MARGIN is numerical growth."""
-        phi = self.map(dt) if phi is None else phi
-        if not np.isfinite(phi).all():
-            return math.inf, None, math.inf
-        if not phi.size:
-            return 0.0, None, 0.0
-        values, vectors = np.linalg.eig(phi)
-        if self.basis is None:
-            ratios = np.abs(values)
-        else:
-            modes = np.argmax(np.abs(self.basis @ vectors), axis=0)
-            ratios = np.abs(values) * np.exp(-self.rates[modes] * dt)  # no overflow for fast physical growth
-        worst = int(np.argmax(ratios))
-        return float(ratios[worst]), vectors[:, worst], float(np.abs(values[worst]))
-
-    def unstable(self, dt: float) -> bool:
-        return self.excess(dt)[0] > 1 + MAP_MARGIN
-
-
-def measured_limit(
-    at: ModelAtPoint,
-    integrator: str,
-    scale_s: float,
-    stop_s: float,
-    guess_s: float | None = None,
-) -> float | None:
-    """The smallest dt [s] at which `integrator`'s measured one-step map grows (module docstring), or None.
-
-    scale_s: the model's fastest time scale 1/|lambda|_max [s] (or its own timestep without a mode);
-    stop_s: the largest dt worth scanning [s] (a run's duration); guess_s: a predicted limit [s], tried
-    first as a bracket [guess / GUESS_BRACKET, guess * GUESS_BRACKET] (it only saves map evaluations: a
-    wrong guess falls back to the doubling scan from its stable side).
-    """
-    probe = _MapProbe(at, integrator)
-    stop = min(SCAN_STOP * scale_s, stop_s)
-    low, high = 0.0, None
-    if guess_s is not None and GUESS_BRACKET * guess_s < stop:
-        # a good prediction brackets the limit in two maps; a wrong one only costs those two
-        below, above = guess_s / GUESS_BRACKET, min(guess_s * GUESS_BRACKET, stop)
-        if probe.unstable(below):
-            high = below
-        elif probe.unstable(above):
-            low, high = below, above
-        else:
-            low = above
-    if high is None:
-        dt = min(2 * low if low else SCAN_START * scale_s, stop)
-        while not probe.unstable(dt):
-            if dt >= stop:
-                return None
-            low, dt = dt, min(2 * dt, stop)
-        high = dt
-    if low == 0.0:  # unstable at the first probe: go down
-        floor = 1e-6 * high
-        while high > floor and probe.unstable(high / 2):
-            high /= 2
-        low = high / 2
-    while high / low > 1 + LIMIT_PRECISION:
-        mid = math.sqrt(low * high)
-        low, high = (low, mid) if probe.unstable(mid) else (mid, high)
-    return math.sqrt(low * high)
-
-
 def _deviation(model: mujoco.MjModel, run_a, run_b) -> float:
     """||x_a - x_b||_inf at the end of two runs, in the tangent space."""
     dq = np.zeros(model.nv)
@@ -250,6 +143,7 @@ def _deviation(model: mujoco.MjModel, run_a, run_b) -> float:
 def confirm(
     at: ModelAtPoint,
     limits: Iterable[Limit],
+    maps: Mapping[str, MapLimit],
     *,
     nthread: int = 0,
     run: Callable[[Sequence[Job]], list] | None = None,
@@ -257,10 +151,11 @@ def confirm(
     """Run the nonlinear model just below and just above each measured limit: the limits with `confirmed`,
     `detail` and `growth_per_step_above` filled in (in the order given).
 
-    Per limit four runs, batched: the operating point as it is and perturbed by CONFIRM_SIZE along the
-    most unstable eigenvector of Phi(CONFIRM_ABOVE x limit), at CONFIRM_BELOW and CONFIRM_ABOVE x the
-    limit. Confirmed: above, the deviation grows beyond GROWTH_SEEN x the exact flow's growth (or the
-    run blows up); below, it does not. `run` runs the jobs (default: one batch.run_batched call on
+    `maps`: each integrator's measured map, read at CONFIRM_ABOVE x its limit (`PointFacts.maps`). Per limit
+    four runs, batched: the operating point as it is and perturbed by CONFIRM_SIZE along the most unstable
+    eigenvector of Phi(CONFIRM_ABOVE x limit), at CONFIRM_BELOW and CONFIRM_ABOVE x the limit. Confirmed:
+    above, the deviation grows beyond GROWTH_SEEN x the exact flow's growth (or the run blows up); below, it
+    does not. `run` runs the jobs (default: one batch.run_batched call on
     `nthread` threads; the audit passes springlab.studies.audit.ship.Runner, which may send them to dask workers).
     """
     model, point, linear = at.model, at.point, at.linear
@@ -278,11 +173,11 @@ def confirm(
                     " so no timestep makes the map grow; nothing to confirm"
                 )
             continue
-        probe = _MapProbe(at, limit.integrator)
-        above = CONFIRM_ABOVE * measured
-        growth, vector, size = probe.excess(above)
+        read = maps[limit.integrator]
+        above, growth, vector, size = read.above_s, read.growth_above, read.direction_above, read.size_above
+        assert above is not None and growth is not None and size is not None, "a measured map is read above it"
         found[index]["growth_per_step_above"] = growth
-        physical = math.exp(min(probe.sigma * above, 700.0))
+        physical = math.exp(min(linear.max_growth_rate * above, 700.0))
         if vector is None or CONFIRM_MAX_STEPS * math.log(max(size / physical, 1e-300)) < math.log(GROWTH_SEEN):
             # the model's own growth per step outruns the numerical one: a run cannot tell them apart
             found[index]["detail"] = (
@@ -378,72 +273,6 @@ class RunProbe:
         return not float(np.max(np.abs(outcome.qvel), initial=0.0)) <= bound
 
 
-@dataclasses.dataclass(frozen=True)
-class Watch:
-    """A fine run from the audit's start: its peak speed and every constraint active along it.
-
-    Attributes
-    ----------
-    peak_speed
-        max |qvel| over the run [m/s or rad/s].
-    along
-        the union of the constraints active at its steps (`ConstraintState`).
-    dt
-        its timestep [s] (RK4).
-    diverged
-        whether it blew up (its figures then cover the steps before).
-    """
-
-    peak_speed: float
-    along: ConstraintState
-    dt: float
-    diverged: bool
-
-
-#: the fine watch run's timestep: the model's own / WATCH_REFINE (again, if that blows up)
-WATCH_REFINE = 4
-
-
-def watch(model: mujoco.MjModel, start: Setup, duration: float) -> Watch:
-    """RK4 at the model's own timestep / WATCH_REFINE from `start` for `duration` [s], stepped here to
-    read the constraints active at every step (contacts that begin, limits that engage)."""
-    work = copy.copy(model)
-    work.opt.integrator = integrator_id("rk4")
-    dt = float(model.opt.timestep) / WATCH_REFINE
-    for _ in range(2):
-        work.opt.timestep = dt
-        data = mujoco.MjData(work)
-        elements: set[str] = set()
-        dry: set[str] = set()
-        peak_v = peak_a = 0.0
-        diverged = False
-        with quiet_mujoco():
-            mujoco.mj_resetData(work, data)
-            data.qpos[:] = start.qpos if start.qpos is not None else work.qpos0
-            if start.qvel is not None:
-                data.qvel[:] = start.qvel
-            if start.act is not None and work.na:
-                data.act[:] = start.act
-            if start.control is not None and work.nu:
-                data.ctrl[:] = np.atleast_2d(start.control)[0]
-            for _ in range(max(1, round(duration / dt))):
-                mujoco.mj_step(work, data)  # leaves the constraints and qacc of the state it started from
-                if data.nefc:
-                    found, friction = active_constraints(work, data)
-                    elements |= found
-                    dry |= friction
-                peak_a = max(peak_a, float(np.max(np.abs(data.qacc), initial=0.0)))
-                speed = float(np.max(np.abs(data.qvel), initial=0.0))
-                if not math.isfinite(speed) or any(data.warning[w].number for w in BAD_WARNINGS):
-                    diverged = True
-                    break
-                peak_v = max(peak_v, speed)
-        if not diverged:
-            break
-        dt /= WATCH_REFINE
-    return Watch(peak_v, summarize_constraints(elements, dry, peak_v, peak_a), dt, diverged)
-
-
 def run_limits(
     model: mujoco.MjModel,
     probe: RunProbe,
@@ -486,52 +315,43 @@ def run_limits(
 
 def stability_limits(
     at: ModelAtPoint,
-    integrators: Iterable[str],
-    stop_s: float,
+    predicted: Mapping[str, Prediction],
+    maps: Mapping[str, MapLimit] | None,
     *,
     nthread: int = 0,
     run: Callable[[Sequence[Job]], list] | None = None,
-    smooth: bool = True,
     probe: RunProbe | None = None,
 ) -> dict[str, Limit]:
-    """Predicted, measured and confirmed limits per integrator name; each margin over the model's own timestep.
+    """Predicted, measured and confirmed limits per integrator of `predicted`; each margin over the model's own
+    timestep.
 
-    `smooth`: nothing constrains the model at its operating point or along its motion, so MuJoCo's
-    one-step map there is the dynamics: its limit is measured (scanned up to `stop_s` [s]) and confirmed
-    by runs (`confirm`). Otherwise the map is not measured (contacts, limits, equality constraints and
-    dry friction make it a different function at every step) and, with a `probe`, every limit comes from
-    brute-force runs (`run_limits`); a map limit that runs do not confirm falls back to them as well.
-    Without a probe an unconfirmed map limit stays as measured, labelled unconfirmed.
+    `predicted`: each integrator's closed-form limit (springlab.exact.predicted_limits.predictions). `maps`:
+    their measured one-step-map limits (`PointFacts.maps`, read at CONFIRM_ABOVE x each limit), None where
+    something is active at the operating point or along the motion: contacts, limits, equality constraints and
+    dry friction make the map a different function at every step, so it is not the dynamics. A measured limit
+    is confirmed by runs (`confirm`); with a `probe`, every limit without a map, and a map limit that runs do
+    not confirm, comes from brute-force runs (`run_limits`). Without a probe an unconfirmed map limit stays as
+    measured, labelled unconfirmed.
     """
     run = run or (lambda jobs: run_batched(jobs, nthread=nthread))
-    model, linear = at.model, at.linear
-    fastest = linear.fastest
-    scale = 1.0 / fastest.rate_rad_s if fastest is not None else model.opt.timestep
-    own_dt = float(model.opt.timestep)
-    names = list(integrators)
-    spring = None
-    if "discrete" in names:
-        spring = linear.K - explicit_stiffness(at)
+    smooth = maps is not None
+    own_dt = float(at.model.opt.timestep)
     limits = []
-    for name in names:
-        damping = None
-        if name in IMPLICIT_DAMPING_INTEGRATORS or name == "discrete":
-            damping = implicit_damping(at, "implicitfast" if name == "discrete" else name)
-        prediction = predict(linear, name, damping, spring if name == "discrete" else None)
+    for name, prediction in predicted.items():
         kind = "exact" if prediction.exact and smooth else "estimate"
-        measured = measured_limit(at, name, scale, stop_s, prediction.limit_s) if smooth else None
+        measured = maps[name].limit_s if maps is not None else None
         limits.append(
             Limit(
                 name, prediction.limit_s, measured, limit_dt_s=measured, prediction=kind if prediction.limit_s else None
             )
         )
-    if smooth:
-        limits = confirm(at, limits, run=run)
+    if maps is not None:
+        limits = confirm(at, limits, maps, run=run)
     fallback = [lim for lim in limits if not smooth or (lim.limit_dt_measured_s is not None and not lim.confirmed)]
     if probe is not None and fallback:
         # an unconfirmed map limit is bracketed too (runs of RUN_MIN_STEPS cost the same at any timestep)
         above = {lim.integrator: 2 * lim.limit_dt_measured_s for lim in fallback if lim.limit_dt_measured_s}
-        brackets = run_limits(model, probe, [lim.integrator for lim in fallback], own_dt, run, above)
+        brackets = run_limits(at.model, probe, [lim.integrator for lim in fallback], own_dt, run, above)
         limits = [
             _from_runs(lim, *brackets[lim.integrator], probe, own_dt, smooth) if lim.integrator in brackets else lim
             for lim in limits

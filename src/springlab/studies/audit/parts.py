@@ -126,7 +126,7 @@ class PointReport:
     at_point
         the constraints, contacts and dry friction active at the operating point.
     along_motion
-        those active at any step of a fine run from the start (`limits.watch`).
+        those active at any step of a fine run from the start (`springlab.exact.constraints.watch`).
     at_rest
         |qvel| T + |qacc| T^2 / 2 (T the duration) within REST_FRACTION x perturb: an equilibrium.
     drift_m

@@ -1,107 +1,39 @@
-"""Where the audit's runs start, what the start moves, and whether the operating point is at rest.
+"""The audit's start judged: the perturbation it may take, what the start moves, whether the point is at rest.
 
-The start: a shipped scene's scenario state where it differs from the operating point; otherwise the operating
-point perturbed along every degree of freedom, velocity and control (`start_of`). The excitation: which
-degrees of freedom a fine run from the start moves (`excitation`): those it leaves still are verified by no
-error. The point: what constrains it and the motion, and its drift over the duration (`point_report`).
+The start itself (a shipped scene's scenario state where it differs from the operating point, otherwise the
+operating point perturbed along every degree of freedom, velocity and control) is made where the other facts at
+the point are measured (springlab.exact.point_facts.start_near); `check_perturbation` refuses a perturbation the
+model's joints cannot take, before anything is computed. The excitation: which degrees of freedom a fine run
+from the start moves (`excitation`): those it leaves still are verified by no error. The point: what constrains
+it and the motion, and whether its drift over the duration keeps it from rest (`point_report`, from
+`PointFacts`).
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import mujoco
 import numpy as np
 
 from springlab.errors import BadInputError, DivergedError
-from springlab.exact.constraints import ConstraintState
 from springlab.exact.model_at_point import ModelAtPoint
-from springlab.sim.simulate import Setup, Trajectory, beyond_mujoco_limits
+from springlab.exact.point_facts import PointFacts, Start
+from springlab.sim.simulate import Trajectory
 
-from .limits import Watch
 from .parts import Excitation, PointReport
-from .source import Source
 
 #: a degree of freedom "moved" when the fine run from the start changes it by more than this x perturb
 MOTION_FRACTION = 1e-2
 #: the operating point is "at rest" when its drift, |qvel| T + |qacc| T^2 / 2 over the duration T, stays
 #: within this x perturb (the motion the audit itself starts)
 REST_FRACTION = 1.0
-#: where a start comes from
-PERTURBED, SCENARIO_START = "perturbed operating point", "scenario start"
 
 
-@dataclasses.dataclass(frozen=True)
-class Start:
-    """Where every run of the audit starts.
-
-    Attributes
-    ----------
-    setup
-        the initial state and held control of every run.
-    control_offset
-        every actuator's control offset as a fraction of its half range [-] (None: no actuator, or a scene's
-        scenario start).
-    source
-        PERTURBED ("perturbed operating point") or SCENARIO_START ("scenario start").
-    """
-
-    setup: Setup
-    control_offset: float | None
-    source: str
-
-    @property
-    def perturbed(self) -> bool:
-        """Whether the start is the perturbed operating point (not a scene's scenario start)."""
-        return self.source == PERTURBED
-
-
-def start_of(at: ModelAtPoint, perturb: float, duration: float, source: Source) -> Start:
-    """Every run's start (`Start`): a scene's scenario state where it differs from the operating point, else
-    the perturbed operating point (`perturbed_start`); either checked against the model's valid range
-    (`check_perturbation`)."""
-    point = at.point
-    start = None
-    if source.start is not None and source.start.qpos is not None:
-        qvel = np.asarray(source.start.qvel if source.start.qvel is not None else point.qvel, float)
-        qpos = np.asarray(source.start.qpos, float)
-        if np.any(qpos != point.qpos) or np.any(qvel != point.qvel):  # a scenario driven by inputs alone does not
-            start = Start(Setup(qpos, qvel, point.act, point.ctrl), None, SCENARIO_START)  # move here: perturb it
-    start = start or perturbed_start(at, perturb, duration)
-    check_perturbation(at.model, perturb, start.setup)
-    return start
-
-
-def perturbed_start(at: ModelAtPoint, perturb: float, duration: float) -> Start:
-    """The operating point moved by between perturb / 2 and perturb [m or rad] along every degree of freedom,
-    given a velocity of between perturb / duration / 2 and perturb / duration [m/s or rad/s] along every one
-    (so a model with no position-dependent force moves too), and, for an actuated model, every control offset
-    by perturb x its half range (1 where unlimited), held. Signs and sizes are seeded, so audits repeat."""
-    model, point = at.model, at.point
-    rng = np.random.default_rng(0)
-
-    def pattern(size: int) -> np.ndarray:
-        return rng.uniform(0.5, 1.0, size) * rng.choice([-1.0, 1.0], size)
-
-    qpos = point.qpos.copy()
-    mujoco.mj_integratePos(model, qpos, perturb * pattern(model.nv), 1.0)
-    qvel = point.qvel + perturb / duration * pattern(model.nv)
-    ctrl = point.ctrl.copy()
-    offset = None
-    if model.nu and perturb > 0:
-        offset = perturb
-        low, high = model.actuator_ctrlrange[:, 0], model.actuator_ctrlrange[:, 1]
-        limited = np.asarray(model.actuator_ctrllimited, bool) & (high > low)
-        half = np.where(limited, 0.5 * (high - low), 1.0)
-        ctrl = ctrl + perturb * half * pattern(model.nu)
-        ctrl = np.where(limited, np.clip(ctrl, low, high), ctrl)
-    return Start(Setup(qpos, qvel, point.act.copy(), ctrl), offset, PERTURBED)
-
-
-def check_perturbation(model: mujoco.MjModel, perturb: float, start: Setup) -> None:
-    """BadInputError when `perturb` [m or rad] leaves the model's valid range: a rotation of pi or more, more
-    than half of a limited joint's range, or a start MuJoCo itself rejects (past 1e10)."""
+def check_perturbation(model: mujoco.MjModel, perturb: float) -> None:
+    """BadInputError when `perturb` [m or rad] leaves the model's valid range: a rotation of pi or more, or more
+    than half of a limited joint's range (checked before anything is computed; a start MuJoCo itself rejects,
+    past 1e10, is refused where it is made: springlab.exact.point_facts.start_near)."""
     rotational = {int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_BALL), int(mujoco.mjtJoint.mjJNT_FREE)}
     if perturb >= math.pi and any(int(t) in rotational for t in model.jnt_type):
         raise BadInputError(
@@ -120,14 +52,6 @@ def check_perturbation(model: mujoco.MjModel, perturb: float, start: Setup) -> N
                     f"--perturb {perturb:g} is at least half the range of joint {name!r} ({span:g}); use a value below"
                     f" {span / 2:g}"
                 )
-    bad = beyond_mujoco_limits(model, start.qpos, start.qvel, start.act, start.control)
-    if bad is not None:
-        raise BadInputError(f"--perturb {perturb:g} gives {bad} at the start, past MuJoCo's limit; use a smaller one")
-
-
-def drift(point_state: ConstraintState, duration: float) -> float:
-    """How far the operating point moves by itself over `duration` [m or rad]: |qvel| T + |qacc| T^2 / 2."""
-    return point_state.max_abs_qvel * duration + 0.5 * point_state.max_abs_qacc * duration**2
 
 
 def excitation(
@@ -163,17 +87,21 @@ def _moved(model: mujoco.MjModel, probe: Trajectory | DivergedError, perturb: fl
     return int(np.count_nonzero(change > threshold)), tuple(still)
 
 
-def point_report(at: ModelAtPoint, seen: Watch, settle_s: float | None, perturb: float, duration: float) -> PointReport:
+def point_report(at: ModelAtPoint, facts: PointFacts, settle_s: float | None, perturb: float) -> PointReport:
     """The operating point's state: what constrains it (`at.constraints`) and the motion from the start
-    (`seen`, `limits.watch`), whether it is at rest (its drift within REST_FRACTION x perturb) and whether the
-    one-step map is the dynamics (nothing active at either)."""
-    at_point = at.constraints
-    moves = drift(at_point, duration)
+    (`facts.watch`), whether it is at rest (its drift within REST_FRACTION x perturb: `rest_within`) and whether
+    the one-step map is the dynamics (nothing active at either)."""
     return PointReport(
         settle_s=settle_s,
-        at_point=at_point,
-        along_motion=seen.along,
-        at_rest=moves <= REST_FRACTION * max(perturb, 1e-12),
-        drift_m=moves,
-        linear_map=at_point.smooth and seen.along.smooth,
+        at_point=at.constraints,
+        along_motion=facts.watch.along,
+        at_rest=facts.drift_m <= rest_within(perturb),
+        drift_m=facts.drift_m,
+        linear_map=facts.smooth,
     )
+
+
+def rest_within(perturb: float) -> float:
+    """The drift [m or rad] within which the operating point is at rest: REST_FRACTION x perturb (the motion the
+    audit itself starts)."""
+    return REST_FRACTION * max(perturb, 1e-12)

@@ -19,7 +19,8 @@ the first dt at which |R(dt lambda)| > 1 for a stable lambda (2.83/omega undampe
 `predict(linear, integrator, damping, spring)` gives the smallest per-mode limit and whether it is the
 linearization's exact limit (every mode kept to itself) or an estimate; `implicit_damping` and
 `explicit_stiffness` read what each integrator treats implicitly from MuJoCo at the operating point.
-springlab.studies.audit.limits measures and confirms what this predicts.
+`predictions` gives them per integrator; springlab.exact.map_limits measures them on MuJoCo's one-step map and
+springlab.studies.audit.limits confirms them.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
+from collections.abc import Iterable
 
 import mujoco
 import numpy as np
@@ -253,3 +255,18 @@ def predict(
         limits.append(_scalar_limit(max(k, 0.0), c, float(phi @ implicit_d @ phi), k_i))
     finite = [limit for limit in limits if math.isfinite(limit)]
     return Prediction(min(finite) if finite else None, exact)
+
+
+def predictions(at: ModelAtPoint, integrators: Iterable[str]) -> dict[str, Prediction]:
+    """integrator -> its closed-form limit at the operating point (`predict`), each with what it treats
+    implicitly: `implicit_damping` for euler, implicit and implicitfast (and discrete, whose velocity update is
+    implicitfast's), and the stiffness discrete makes implicit (K - `explicit_stiffness`)."""
+    names = list(integrators)
+    spring = at.linear.K - explicit_stiffness(at) if "discrete" in names else None
+    out = {}
+    for name in names:
+        damping = None
+        if name in IMPLICIT_DAMPING_INTEGRATORS or name == "discrete":
+            damping = implicit_damping(at, "implicitfast" if name == "discrete" else name)
+        out[name] = predict(at.linear, name, damping, spring if name == "discrete" else None)
+    return out
