@@ -22,8 +22,9 @@ row of its own. The other commands run in this process with springlab's caches c
 
 Ratios are taken on CPU time: the machine running the benchmark may be shared, and CPU time is what the
 load disturbs least (wall times are in the table too). A row's budget is issue 37's target where it names one
-(`run` 1.3, drill-string spin-up 2, `simulate` 1 / 0.9, `validate` 1.2); elsewhere the ratio measured when the
-row was added with room for noise, marked `(set)`.
+(`run` 1.3, drill-string spin-up 2, `simulate` 1 / 0.9, `validate` 1.2); elsewhere it is marked `(set)`: for the
+rows here the ratio measured when the row was added with room for noise, for the scripts' rows what the path is
+expected to cost against its floor, its reason beside the number in the script.
 
 The older benchmarks/bench_*.py scripts run after the rows, each with its arguments in SCRIPTS (a smaller size, or
 only the parts no row above measures; the size is in its rows' work), and their output is pasted below the table.
