@@ -1,5 +1,6 @@
 """The simulate path: same numbers as a plain mj_step loop, deterministic, never a silent blow-up."""
 
+import copy
 import math
 
 import mujoco
@@ -84,3 +85,44 @@ def test_rk4_limit_is_2_sqrt2_undamped():
     # |1 - y^2/2 + y^4/24 + i(y - y^3/6)| = 1 at y = 2 sqrt(2)
     assert stability_limit("rk4", 0.0) == pytest.approx(2 * math.sqrt(2), rel=1e-9)
     assert math.isinf(stability_limit("discrete", 3.0))
+
+
+def _plain_loop(model, integrator, dt, steps, setup):
+    """qpos of `steps` mj_steps on a fresh MjData of a copy of `model` set to `integrator` and `dt`."""
+    work = copy.copy(model)
+    work.opt.integrator, work.opt.timestep = INTEGRATORS[integrator], dt
+    data = mujoco.MjData(work)
+    data.qpos[:], data.qvel[:] = setup.qpos, setup.qvel
+    controls = np.broadcast_to(np.atleast_2d(setup.control), (steps, work.nu)) if work.nu else None
+    qpos = [data.qpos.copy()]
+    for k in range(steps):
+        if controls is not None:
+            data.ctrl[:] = controls[k]  # row k held over step k, as simulate's controls
+        mujoco.mj_step(work, data)
+        qpos.append(data.qpos.copy())
+    return np.array(qpos)
+
+
+def test_runs_on_the_threads_spare_data_equal_runs_on_fresh_data_across_models():
+    # simulate keeps one scratch MjData per thread between runs: a run after a run of another model of the same
+    # layout (another stiffness, another timestep), of another layout (the 33-DOF drill string), or after a
+    # blow-up must be the run on a fresh MjData, bit for bit
+    case, slider = _slider_model("step")
+    stiffer = copy.copy(slider)
+    stiffer.jnt_stiffness[:] *= 9.0
+    drill = scenes.get("drill_string").case("breakaway")
+    order = [(slider, case, "rk4", 1e-3), (stiffer, case, "euler", 2e-3), (drill.model, drill, "rk4", 1e-3)]
+    with pytest.raises(DivergedError):  # leaves the spare holding a blown-up state
+        simulate(stiffer, integrator="euler", dt=1.0, duration=50.0, qvel=[1.0])
+    for model, scenario_case, integrator, dt in order + order[::-1]:
+        setup = scenario_case.setup(300, dt)
+        run = simulate(
+            model,
+            integrator=integrator,
+            dt=dt,
+            duration=300 * dt,
+            qpos=setup.qpos,
+            qvel=setup.qvel,
+            control=setup.control if model.nu else None,
+        )
+        np.testing.assert_array_equal(run.qpos, _plain_loop(model, integrator, dt, 300, setup))
