@@ -22,11 +22,18 @@ row of its own. The other commands run in this process with springlab's caches c
 
 Ratios are taken on CPU time: the machine running the benchmark may be shared, and CPU time is what the
 load disturbs least (wall times are in the table too). A row's budget is issue 37's target where it names one
-(`run` 1.3, drill-string spin-up 2, `simulate` 1 / 0.9, `validate` 1.2); elsewhere the ratio measured when the
-row was added with room for noise, marked `(set)`.
+(`run` 1.3, drill-string spin-up 2, `simulate` 1 / 0.9, `validate` 1.2); elsewhere it is marked `(set)`: for the
+rows here the ratio measured when the row was added with room for noise, for the scripts' rows what the path is
+expected to cost against its floor, its reason beside the number in the script.
+
+The older benchmarks/bench_*.py scripts run after the rows, each with its arguments in SCRIPTS (a smaller size, or
+only the parts no row above measures; the size is in its rows' work), and their output is pasted below the table.
+Each adds its headline measurements to the table as rows: a line `BENCH_ROW {json of Row's fields}` in its output
+(`measure.emit`), against the same floors. A script that only repeats what a row above measures is left out of the
+default run (SCRIPTS says which row; `--only NAME` runs it at its own default size).
 
 Run: PYTHONPATH=src python benchmarks/bench.py [--list] [--only NAME,...] [--skip NAME,...] [--no-scripts]
-[--output DIR]. A script may add rows to the table: a line `BENCH_ROW {json of Row's fields}` in its output.
+[--output DIR].
 """
 
 from __future__ import annotations
@@ -50,6 +57,7 @@ from mujoco import rollout
 from measure import (  # noqa: F401 (bench.Row, bench.forget_cases: the names the tests and scripts read here)
     HERE,
     ROOT,
+    ROW_PREFIX,
     RUN_BUDGET,
     SIMULATE_BUDGET,
     SPIN_UP_BUDGET,
@@ -58,6 +66,7 @@ from measure import (  # noqa: F401 (bench.Row, bench.forget_cases: the names th
     _clock,
     alternately,
     command_row,
+    emit,
     forget_cases,
     fresh_import_cpu,
     inside_mujoco,
@@ -210,10 +219,6 @@ def audit_command() -> tuple[str, list[str], str, float, str]:
     return "audit humanoid", argv, "dm_control's humanoid, 27 DOF on the floor, 5 integrators", 1.6, "(set)"
 
 
-#: a line a bench_*.py script prints to add a row to the table: the prefix, then the row's fields as JSON
-ROW_PREFIX = "BENCH_ROW "
-
-
 def script_rows(text: str) -> list[Row]:
     """The rows a script printed (`ROW_PREFIX` lines: Row's fields as JSON)."""
     rows = []
@@ -225,21 +230,28 @@ def script_rows(text: str) -> list[Row]:
 
 
 def scripts(timeout: float, chosen: list[str]) -> list[tuple[str, float, str]]:
-    """The older benchmarks/bench_*.py in `chosen`, as each prints itself: (name, wall [s], its output)."""
+    """The older benchmarks/bench_*.py in `chosen` with their arguments (SCRIPTS), as each prints itself: (name and
+    arguments, wall [s], its output)."""
     out = []
     for script in sorted(HERE.glob("bench_*.py")):
         if script.stem not in chosen:
             continue
+        arguments = list(SCRIPTS[script.stem].arguments)
         start = time.perf_counter()
         try:
             done = subprocess.run(
-                [sys.executable, str(script)], capture_output=True, text=True, timeout=timeout, cwd=ROOT, check=False
+                [sys.executable, str(script), *arguments],
+                capture_output=True,
+                text=True,
+                timeout=timeout,
+                cwd=ROOT,
+                check=False,
             )
             text = done.stdout + (f"\n(exit {done.returncode})\n{done.stderr[-2000:]}" if done.returncode else "")
         except subprocess.TimeoutExpired:
             text = f"(stopped after {timeout:g} s)"
-        out.append((script.name, time.perf_counter() - start, text))
-        print(f"  {script.name}: {out[-1][1]:.1f} s", flush=True)
+        out.append((" ".join([script.name, *arguments]), time.perf_counter() - start, text))
+        print(f"  {out[-1][0]}: {out[-1][1]:.1f} s", flush=True)
     return out
 
 
@@ -286,7 +298,11 @@ def markdown(rows: list[Row], where: dict, reports: list[tuple[str, float, str]]
     if reports:
         lines += ["", "## The scripts (benchmarks/bench_*.py), as they print", ""]
         for name, wall, text in reports:
-            lines += [f"### {name} ({wall:.1f} s)", "", "```", text.rstrip(), "```", ""]
+            # its rows are in the table above: the JSON lines are left out of what it printed
+            printed = "\n".join(line for line in text.splitlines() if not line.startswith(ROW_PREFIX))
+            found = len(script_rows(text))
+            rows_in_table = f"; its {found} row{'s' * (found != 1)} in the table" if found else ""
+            lines += [f"### {name} ({wall:.1f} s{rows_in_table})", "", "```", printed.rstrip(), "```", ""]
     return "\n".join(lines) + "\n"
 
 
@@ -313,61 +329,83 @@ def benches(selected: set[str] | None) -> list[Bench]:
         return [row] if row else []
 
     out = [
-        Bench("run", 45, lambda folder: run_rows(selected)),
+        Bench("run", 30, lambda folder: run_rows(selected)),
         Bench("simulate", 3, lambda folder: [simulate_row()]),
-        Bench("sobol", 70, lambda folder: [sobol_row()]),
-        Bench("validate", 35, lambda folder: paths.validate_rows()),
+        Bench("sobol", 60, lambda folder: [sobol_row()]),
+        Bench("validate", 25, lambda folder: paths.validate_rows()),
         *(Bench(name, estimate, _command(name)) for name, estimate in _COMMAND_ESTIMATES.items()),
-        Bench("audit humanoid", 60, lambda folder: [command_row(*audit_command())]),
-        Bench("fit", 40, paths.fit_rows),
-        Bench("frequency chain", 10, lambda folder: [paths.frequency_chain_row()]),
-        Bench("frequency sinestream", 30, lambda folder: [paths.sinestream_row()]),
-        Bench("render", 15, lambda folder: [paths.render_row(folder)]),
-        Bench("interactive", 25, paths.interactive_rows),
+        Bench("audit humanoid", 12, lambda folder: [command_row(*audit_command())]),
+        Bench("fit", 30, paths.fit_rows),
+        Bench("frequency chain", 5, lambda folder: [paths.frequency_chain_row()]),
+        Bench("frequency sinestream", 5, lambda folder: [paths.sinestream_row()]),
+        Bench("render", 6, lambda folder: [paths.render_row(folder)]),
+        Bench("interactive", 15, paths.interactive_rows),
         Bench("view", 10, view),
-        Bench("demo", 200, lambda folder: [paths.demo_row()]),
-        Bench("import", 10, lambda folder: [import_row()]),
+        Bench("demo", 150, lambda folder: [paths.demo_row()]),
+        Bench("import", 8, lambda folder: [import_row()]),
     ]
     return out
 
 
-#: rough wall time [s] of each in-process command row on an idle 2-core machine (from the tables measured so far)
+#: rough wall time [s] of each in-process command row on an idle 2-core machine (the idle clean-clone table of c8cf198:
+#: the command's wall time, with room for a first call's imports)
 _COMMAND_ESTIMATES = {
-    "sweep": 20,
-    "tradeoff": 8,
-    "stability": 15,
-    "friction-settings gripper": 12,
-    "rms stay_cable": 150,
-    "design printer_head": 25,
-    "refine": 30,
+    "sweep": 10,
+    "tradeoff": 5,
+    "stability": 6,
+    "friction-settings gripper": 6,
+    "rms stay_cable": 60,
+    "design printer_head": 15,
+    "refine": 35,
 }
-#: rough wall time [s] of each older script on an idle 2-core machine (their own budgets and docs)
-SCRIPT_ESTIMATES = {
-    "bench_audit": 120,
-    "bench_creep": 240,
-    "bench_design": 90,
-    "bench_drill_string": 180,
-    "bench_executor": 120,
-    "bench_fit": 20,
-    "bench_fit_bigfile": 90,
-    "bench_frequency": 120,
-    "bench_friction": 360,
-    "bench_growth": 150,
-    "bench_printer_control": 60,
-    "bench_render": 90,
-    "bench_simulate": 30,
-    "bench_sobol": 150,
-    "bench_stability_limit": 30,
-    "bench_stay_cable": 90,
-    "bench_tradeoff": 60,
+
+
+@dataclasses.dataclass(frozen=True)
+class Script:
+    """An older benchmarks/bench_*.py as `make bench` runs it: its arguments there (a smaller size is stated in its
+    rows' work), its rough wall time [s] with them on an idle 2-core machine, and why it is left out of the default
+    run if it is (a table row measures the same; `--only NAME` still runs it, at its own default size)."""
+
+    arguments: tuple[str, ...]
+    estimate_s: float
+    skipped: str = ""
+
+
+#: every older script: how `make bench` runs it (estimates: idle 2-core wall times, the scripts' CPU time when they
+#: were measured on a shared machine; a skipped script's is its own default run's)
+SCRIPTS = {
+    "bench_audit": Script((), 35),
+    "bench_creep": Script(("--skip-full",), 20),
+    "bench_design": Script((), 90, "the table's `design printer_head` and `--sobol` rows time the same batched moves"),
+    "bench_drill_string": Script(("--quick",), 60),
+    "bench_executor": Script(("chunks",), 30),
+    "bench_fit": Script((), 20, "the table's `fit 10 s at 1 kHz` row times the same fit of the same record"),
+    "bench_fit_bigfile": Script(("--readers-only", "--repeat", "2"), 25),
+    "bench_frequency": Script(("duffing",), 20),
+    "bench_friction": Script(("--skip-full",), 20),
+    "bench_growth": Script(("--quick",), 60),
+    "bench_printer_control": Script((), 10),
+    "bench_render": Script(("--end-to-end-only", "--repeat", "2"), 30),
+    "bench_simulate": Script((), 10),
+    "bench_sobol": Script(("64",), 45),
+    "bench_stability_limit": Script(
+        (), 30, "the table's `stability` row times the chart these limits are drawn on, in the whole command"
+    ),
+    "bench_stay_cable": Script(("--exact-only",), 60),
+    "bench_tradeoff": Script((), 25),
 }
+
+
+def default_scripts() -> list[str]:
+    """The scripts `make bench` runs (those not skipped)."""
+    return [name for name, script in SCRIPTS.items() if not script.skipped]
 
 
 def _chosen(name: str, only: set[str] | None, skip: set[str]) -> bool:
     if name in skip:
         return False
     if only is None:
-        return True
+        return name not in SCRIPTS or not SCRIPTS[name].skipped
     return name in only or (name == "run" and any(o.startswith("run ") for o in only))
 
 
@@ -383,17 +421,20 @@ def main(argv: list[str] | None = None) -> int:
     only = {s.strip() for s in args.only.split(",") if s.strip()} or None
     skip = {s.strip() for s in args.skip.split(",") if s.strip()}
     groups = [b for b in benches(only) if _chosen(b.name, only, skip)]
-    known = {b.name for b in benches(None)} | set(SCRIPT_ESTIMATES)
+    known = {b.name for b in benches(None)} | set(SCRIPTS)
     unknown = sorted((only or set()) - known - {o for o in (only or set()) if o.startswith("run ")} | (skip - known))
     if unknown:
         parser.error(f"unknown row groups {', '.join(unknown)}; valid: {', '.join(sorted(known))}")
-    chosen_scripts = [] if args.no_scripts else [n for n in SCRIPT_ESTIMATES if _chosen(n, only, skip)]
-    estimate = sum(b.estimate_s for b in groups) + sum(SCRIPT_ESTIMATES[n] for n in chosen_scripts)
+    chosen_scripts = [] if args.no_scripts else [n for n in SCRIPTS if _chosen(n, only, skip)]
+    estimate = sum(b.estimate_s for b in groups) + sum(SCRIPTS[n].estimate_s for n in chosen_scripts)
     if args.list:
         for b in benches(None):
             print(f"{b.name:28s} ~{b.estimate_s:5.0f} s")
-        for name, seconds in SCRIPT_ESTIMATES.items():
-            print(f"{name:28s} ~{seconds:5.0f} s  (a script: its own output below the table)")
+        for name, script in SCRIPTS.items():
+            how = " ".join(["python", f"benchmarks/{name}.py", *script.arguments])
+            if script.skipped:
+                how = f"not in the default run: {script.skipped}; --only {name} runs it"
+            print(f"{name:28s} ~{script.estimate_s:5.0f} s  (a script, its rows and its own output: {how})")
         print(f"chosen: about {estimate / 60:.0f} minutes on an idle 2-core machine (rough)")
         return 0
     print(f"rows (about {estimate / 60:.0f} minutes on an idle 2-core machine, rough):", flush=True)

@@ -7,10 +7,11 @@
    steps from the audit's start, five integrators batched per round); the ratio.
 2. The sweep's runs, batched (springlab.sim.batch.run_batched: one mujoco.batch.Batch, all CPUs) against
    a plain Python loop of mujoco.mj_step over the same (integrator, dt) settings, side by side; the
-   ratio. (On the grid's 8 coarsest timesteps x 5 integrators, to keep the plain loop short.)
+   ratio (CPU times: the row `audit humanoid runs, batched` of `make bench`'s table). (On the grid's 8 coarsest
+   timesteps x 5 integrators, to keep the plain loop short.)
 3. The whole audit (`springlab audit humanoid.xml --settle 3 --tol 1e-2`), 5 integrators x 12 timesteps
    (+ the model's own), 1 s of motion, against the issue's budget of 2 minutes on 2 cores, with the wall
-   time of each stage.
+   time of each stage (the table's `audit humanoid` row times the same command against its time inside MuJoCo).
 
 Run: python benchmarks/bench_audit.py   (needs dm_control, the `test` extra)
 """
@@ -26,6 +27,7 @@ import dm_control
 import mujoco
 import numpy as np
 
+import measure
 from springlab.exact.constraints import watch
 from springlab.exact.map_limits import map_limit
 from springlab.exact.model_at_point import ModelAtPoint
@@ -87,10 +89,26 @@ def batched_vs_loop(model, dts, point) -> None:
                 mujoco.mj_step(work, data)
 
     with quiet_mujoco():  # the coarsest runs blow up (that is the point of them): no warning text
-        batched = best_of(lambda: batch.run_batched(jobs), repeat=1)
-        plain = best_of(loop, repeat=1)
+        (batched, batched_cpu), (plain, plain_cpu) = measure.side_by_side([lambda: batch.run_batched(jobs), loop], 1)
     print(f"2. {len(jobs)} runs, {steps} steps: batched {batched:.2f} s, plain mj_step loop {plain:.2f} s")
     print(f"   ratio loop / batched: {plain / batched:.2f}x ({os.cpu_count()} CPUs)")
+    measure.emit(
+        measure.Row(
+            "audit humanoid runs, batched",
+            f"{len(jobs)} runs of 1 s (5 integrators x the grid's {len(dts)} coarsest timesteps), {steps} steps",
+            batched,
+            batched_cpu,
+            "mj_step loop",
+            plain,
+            plain_cpu,
+            # the batch's CPU (both threads) against one thread's Python loop: the same steps, so at most a run's
+            # 1.3 for the batch's setup and divergence checks (the loop's Python per step makes it nearer 1 or below)
+            measure.RUN_BUDGET,
+            "(set), as a run's",
+            "bench_audit.py: springlab.sim.batch.run_batched (one mujoco.batch.Batch, all CPUs: CPU of all threads)"
+            " against a plain mj_step loop over the same settings and steps on copies of the same compiled model",
+        )
+    )
 
 
 def main() -> None:

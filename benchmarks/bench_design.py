@@ -10,6 +10,11 @@ set before every step. The loop runs on an evenly spaced subset and its time is
 scaled per configuration; the ratio is configurations/s batched over looped.
 Also the batch on one thread, to separate threading from the batching itself.
 
+Its row, `design printer_head moves, batched`, is the batch on one thread against a plain rollout of the same
+configurations for the same steps. Not in `make bench`'s default run: the table's `design printer_head` (the whole
+command against its time inside MuJoCo) and `design printer_head --sobol` (the same batched moves against the same
+rollout) rows measure the same path; `bench.py --only bench_design` runs it.
+
 Run: PYTHONPATH=src python benchmarks/bench_design.py [levels] [loop subset]
 """
 
@@ -22,6 +27,8 @@ import time
 import mujoco
 import numpy as np
 
+import bench_sobol
+import measure
 from springlab import scenes
 from springlab.scenes.printer_head import design as printer_design
 from springlab.sim.simulate import quiet_mujoco
@@ -61,9 +68,10 @@ def main() -> None:
     start = time.perf_counter()
     runs = design_moves.simulate("printer_head", base, values)  # all threads
     wall = time.perf_counter() - start
-    start = time.perf_counter()
-    design_moves.simulate("printer_head", base, values, nthread=1)
-    single_wall = time.perf_counter() - start
+    floor = bench_sobol.raw_rollout(base, values, np.asarray(runs.steps))
+    (single_wall, single_cpu), (floor_wall, floor_cpu) = measure.side_by_side(
+        [lambda: design_moves.simulate("printer_head", base, values, nthread=1), floor], 1
+    )
     steps = int(runs.steps.sum())
     indices = np.linspace(0, n - 1, min(subset, n)).astype(int)
     loop_wall = loop_configurations(base, values, runs, indices)
@@ -90,6 +98,22 @@ def main() -> None:
     print(
         f"  loop measured on {len(indices)} configurations, {loop_steps} steps in {loop_wall:.2f} s;"
         f" the sweep is {steps} steps ({steps / n:.0f} per configuration)"
+    )
+    measure.emit(
+        measure.Row(
+            "design printer_head moves, batched",
+            f"{n} configurations ({levels}^4), {steps} steps rk4, one thread",
+            single_wall,
+            single_cpu,
+            "rollout",
+            floor_wall,
+            floor_cpu,
+            1.3,
+            "(set), as `design printer_head --sobol`'s",
+            "bench_design.py: the design hook's batched moves on one thread (settling certified and stopped per"
+            " simulation) against a plain one-thread rollout of the same configurations for the same steps"
+            " (bench_sobol.raw_rollout)",
+        )
     )
 
 

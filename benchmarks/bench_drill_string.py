@@ -12,6 +12,10 @@
    `springlab.run` (reference, quantities, checks), and a plain Python mj_step loop on the same model and
    setting; their wall times and ratios.
 
+Rows of `make bench`'s table: `drill string step N = ..., tendons` (part 1: the largest N's cost per step against
+N = 64's scaled linearly) and `run drill_string modes N = 256` (part 2's run against a plain rollout of the same
+steps on the same model). `make bench` runs it with --quick (N up to 512, three integrators in the refine).
+
 Run: python benchmarks/bench_drill_string.py [--figure docs/images/drill_string_scale.png] [--quick]
 """
 
@@ -23,11 +27,13 @@ import time
 
 import mujoco
 import numpy as np
+from mujoco import rollout
 
+import measure
 import springlab
 from springlab import scenes
 from springlab.scenes.drill_string import build
-from springlab.sim.simulate import configured, simulate
+from springlab.sim.simulate import configured, initial_state, simulate
 from springlab.studies import refine
 from timing import best_of
 
@@ -36,6 +42,12 @@ SIZES = (8, 16, 32, 64, 128, 256, 512, 1024, 2048, 4096)
 STEP_BUDGET_S = 0.05
 #: ... or its timing has taken more than this [s] in total
 ENCODING_BUDGET_S = 30.0
+#: the growth row: the largest N's cost per step against this N's scaled linearly
+GROWTH_FROM = 64
+#: ... within this: the tendon encoding is linear in N (a diagonal mass matrix, each tendon two rotors), MuJoCo's
+#: fixed cost per step makes small N dearer per element (so the ratio sits at or below 1); above 1.5 the growth
+#: is superlinear (a denser matrix or a solver's iterations growing with N)
+GROWTH_BUDGET = 1.5
 
 
 def _model(size: int, encoding: str) -> mujoco.MjModel:
@@ -99,6 +111,23 @@ def scale(figure: str | None, sizes: tuple[int, ...]) -> None:
     if "tendons" in exponents:
         print(
             f"   the physical limit is linear in N (p = 1): the tendon encoding's p - 1 = {exponents['tendons'] - 1:+.2f}"
+        )
+        largest = max(times["tendons"])
+        measure.emit(
+            measure.Row(
+                f"drill string step N = {largest}, tendons",
+                f"one RK4 step of the {largest}-element string (the scene's encoding), plain mj_step loop",
+                times["tendons"][largest],
+                float("nan"),
+                f"linear in N from N = {GROWTH_FROM}",
+                times["tendons"][GROWTH_FROM] * largest / GROWTH_FROM,
+                float("nan"),
+                GROWTH_BUDGET,
+                "(set)",
+                f"bench_drill_string.py: the cost per step against N = {GROWTH_FROM}'s scaled linearly (the physical"
+                f" limit: each element touches two rotors); fitted exponent {exponents['tendons']:.2f} for N >= 64",
+                on_wall=True,
+            )
         )
     if figure:
         from matplotlib.figure import Figure
@@ -176,10 +205,18 @@ def cheapest_at_256(quick: bool) -> None:
         for _ in range(steps):
             mujoco.mj_step(raw, data)
 
-    timings = {}
-    for _ in range(3):  # alternate, best of 3 each
-        for name, function in (("plain", plain_loop), ("simulate", springlab_simulate), ("run", springlab_run)):
-            timings[name] = min(timings.get(name, math.inf), best_of(function, repeat=1))
+    floor = rollout.rollout
+    state = initial_state(raw, setup.qpos, setup.qvel)[None]
+    control = np.zeros((steps, raw.nu)) if setup.control is None else np.asarray(setup.control, float)
+    control = np.ascontiguousarray(np.broadcast_to(control, (steps, raw.nu)))[None]
+    floor_data = mujoco.MjData(raw)
+    names = ("plain", "simulate", "run", "rollout")
+    measured = measure.side_by_side(  # in turn, best of 3 each
+        [plain_loop, springlab_simulate, springlab_run, lambda: floor(raw, floor_data, state, control, nstep=steps)],
+        3,
+    )
+    timings = {name: wall for name, (wall, _) in zip(names, measured)}
+    cpu = {name: used for name, (_, used) in zip(names, measured)}
     print(f"   {steps} steps; plain mj_step loop {timings['plain']:.3f} s")
     print(
         f"   springlab simulate (one rollout) {timings['simulate']:.3f} s: {timings['simulate'] / timings['plain']:.2f} x the loop"
@@ -187,6 +224,23 @@ def cheapest_at_256(quick: bool) -> None:
     print(
         f"   springlab.run (+ exact reference, quantities, checks) {timings['run']:.3f} s:"
         f" {timings['run'] / timings['plain']:.2f} x the loop"
+    )
+    measure.emit(
+        measure.Row(
+            f"run drill_string modes N = {size}",
+            f"{steps} steps {pick.integrator} dt={pick.dt:.4g} s (the cheapest setting meeting {tol:g} on f1),"
+            " verdict and exact reference",
+            timings["run"],
+            cpu["run"],
+            "rollout",
+            timings["rollout"],
+            cpu["rollout"],
+            measure.SPIN_UP_BUDGET,
+            "issue 37, as the spin-up's",
+            f"bench_drill_string.py: springlab.run (the exact reference of {2 * size + 2} states at every step, the"
+            f" error estimate over its modes, the quantities and the f1 check) against a plain rollout of the same"
+            f" steps on the same configured model; simulate {cpu['simulate'] / cpu['rollout']:.2f}x the rollout",
+        )
     )
 
 

@@ -14,7 +14,13 @@
 4. `springlab.run` over the bare simulation (target <= 1.15), and what the
    cached spec saves per run.
 
-Run: python benchmarks/bench_executor.py   (numbers depend on the load of the machine)
+`make bench` runs `bench_executor.py chunks`: part 3's first comparison alone, its row `sweep chunks, batched`.
+Parts 1 and 2 are what bench_sobol.py measures on the Sobol study (the LocalCluster's scaling and the 64-core
+projection), the rest of 3 is the table's `sweep` row (the whole command against its time inside MuJoCo) and 4 is
+its `run` rows (every scene's default run against its raw rollout).
+
+Run: python benchmarks/bench_executor.py [design] [sweep | chunks] [run]   (numbers depend on the load of the machine;
+no part named: design, sweep and run)
 """
 
 from __future__ import annotations
@@ -27,6 +33,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
+import measure
 from springlab import scenes
 from springlab.exact import analytic
 from springlab.runs.run import run_scenario
@@ -86,7 +93,7 @@ def sobol_projection(measured: dict[str, float]) -> None:
     print(f"   projected on 64 cores (per-core rate, + overhead per task): {cluster:.0f} s")
 
 
-def slider_sweep() -> None:
+def slider_sweep(whole_sweep: bool = True) -> None:
     vary = {"damping": (0.5, 40.0, 25, "log"), "stiffness": (100.0, 2000.0, 40)}
     scene = scenes.get("slider")
     chosen = scene.scenario("free")
@@ -110,14 +117,31 @@ def slider_sweep() -> None:
         m.opt.timestep = dt
     datas = [mujoco.MjData(models[0]) for _ in range(nthread)]
     states = np.stack([initial_state(m, s.qpos, s.qvel) for m, s in zip(models, setups)])
-    raw, ours = math.inf, math.inf
     with rollout.Rollout(nthread=nthread) as pool:
-        for _ in range(3):  # interleaved, so both see the same load
-            raw = min(raw, best_of(lambda: pool.rollout(models, datas, states, nstep=steps), repeat=1))
-            ours = min(ours, best_of(springlab_batched, repeat=1))
-    whole = best_of(lambda: sweeps.sweep("slider", "free", vary=vary), repeat=1)
+        # interleaved, so both see the same load
+        (raw, raw_cpu), (ours, ours_cpu) = measure.side_by_side(
+            [lambda: pool.rollout(models, datas, states, nstep=steps), springlab_batched], 3
+        )
     print(f"   raw threaded rollout ({nthread} threads):   {raw:.3f} s")
     print(f"   springlab batched chunks:             {ours:.3f} s   raw / springlab = {raw / ours:.2f} (target >= 0.9)")
+    measure.emit(
+        measure.Row(
+            "sweep chunks, batched",
+            f"slider free: {n} configurations x {steps} steps rk4, {nthread} threads",
+            ours,
+            ours_cpu,
+            "rollout",
+            raw,
+            raw_cpu,
+            measure.SIMULATE_BUDGET,
+            "issue 37, as simulate's",
+            "bench_executor.py: the sweep's chunks through springlab.sim.batch.run_rollout against a raw threaded"
+            " mujoco.rollout of the same compiled models and steps (CPU of all threads)",
+        )
+    )
+    if not whole_sweep:
+        return
+    whole = best_of(lambda: sweeps.sweep("slider", "free", vary=vary), repeat=1)
     print(f"   whole sweep (build, run, evaluate):   {whole:.3f} s   ({n / whole:.0f} configurations/s)")
     result = sweeps.sweep("slider", "free", vary=vary)
     target = np.array([max(row.errors.values()) for row in result.rows])
@@ -180,10 +204,10 @@ def run_overhead() -> None:
 if __name__ == "__main__":  # LocalCluster workers are spawned processes: they re-import this file
     import sys
 
-    parts = set(sys.argv[1:]) or {"design", "sweep", "run"}  # e.g. `bench_executor.py sweep run`
+    parts = set(sys.argv[1:]) or {"design", "sweep", "run"}  # e.g. `bench_executor.py sweep run`, or `chunks`
     if "design" in parts:
         sobol_projection(design_throughput())
-    if "sweep" in parts:
-        slider_sweep()
+    if "sweep" in parts or "chunks" in parts:
+        slider_sweep(whole_sweep="sweep" in parts)
     if "run" in parts:
         run_overhead()

@@ -4,6 +4,10 @@ Prints the wall time of the whole fit (best of 3), the number of MuJoCo
 rollouts it took and the time per rollout, beside one plain run of the same
 motion (springlab.sim.simulate on the fit's grid) for the ratio.
 
+Its row, `fit slider 10 s at 1 kHz, in process`, is one fit against its time inside MuJoCo. Not in `make bench`'s
+default run: the table's `fit 10 s at 1 kHz` row runs the same fit of the same record through the command
+(`bench.py --only bench_fit` runs it).
+
 Run: python benchmarks/bench_fit.py
 """
 
@@ -18,6 +22,7 @@ import springlab
 from springlab.sim.simulate import simulate
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
+from measure import Row, emit, inside_mujoco  # noqa: E402
 from timing import best_of  # noqa: E402
 
 TARGET_S = 2.0
@@ -38,6 +43,8 @@ with tempfile.TemporaryDirectory() as folder:
         cpu.append(time.process_time() - start_cpu)
 
     wall = best_of(one_fit, repeat=3)
+    with inside_mujoco() as spent:  # one more, its time inside MuJoCo counted: the row's floor
+        fit_wall = best_of(one_fit, repeat=1)
     start = time.perf_counter()
     springlab.fit("slider", data, mass=m)  # with the identified scene's run, as the CLI does
     wall_with_run = time.perf_counter() - start
@@ -59,4 +66,19 @@ print(
 )
 print(
     f"  one plain springlab.sim.simulate of the same grid: {plain * 1e3:.2f} ms; fit / plain run = {wall / plain:.0f}"
+)
+emit(
+    Row(
+        "fit slider 10 s at 1 kHz, in process",
+        f"{t.size} samples, free stiffness and damping, no scene run after it",
+        fit_wall,
+        cpu[-1],
+        "inside MuJoCo",
+        spent[0],
+        spent[1],
+        7.0,
+        "(set), as `fit 10 s at 1 kHz`'s",
+        "bench_fit.py: springlab.fit (the optimizer's Python between rollouts, the intervals and the closed-form"
+        " cross-check) against the time it spent inside MuJoCo's rollouts",
+    )
 )

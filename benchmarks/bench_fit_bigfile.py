@@ -17,9 +17,11 @@ os.wait4, as `/usr/bin/time -v` reports it):
    optimization, the rest of the result, the closed-form cross-check within it) timed and their peak
    resident memory sampled every 5 ms.
 
-Readers are timed best of --repeat (alternating), the whole fit once.
+Readers are timed best of --repeat (alternating), the whole fit once. Row of `make bench`'s table: `fit reader`
+(springlab's reader against numpy.loadtxt of the whole file, CPU above the imports' floor). `make bench` runs it
+with --readers-only --repeat 2: the whole fit of the 2-million-row file is the table's `fit 2M rows` row.
 
-Run: python benchmarks/bench_fit_bigfile.py [--rows 2000000] [--repeat 3] [--no-per-sample]
+Run: python benchmarks/bench_fit_bigfile.py [--rows 2000000] [--repeat 3] [--no-per-sample] [--readers-only]
 (numbers depend on the load; the per-sample fit of 2 million rows takes about a minute and 1.2 GB)
 """
 
@@ -38,8 +40,22 @@ from typing import Any
 
 import numpy as np
 
+from measure import Row, emit
+
 TARGET_S, TARGET_MB = 30.0, 300.0
+IMPORTS = "imports only (the floor)"
+OURS = "springlab's reader (numpy.loadtxt in 4 MiB blocks)"
+LOADTXT = "numpy.loadtxt, whole file at once"
+#: springlab's reader against loadtxt of the whole file: loadtxt's parse of every block, and before it half a dozen
+#: numpy passes over the block's bytes and lines that loadtxt does not make (newlines, separators, comment marks,
+#: each line's fields counted by searchsorted, so a ragged row or a text cell is named by its line), then the pieces
+#: joined: each pass about as dear as the parse of the two numbers a line, so about 3x (3.1 and 3.4 measured, CPU)
+READER_BUDGET = 4.0
 SETUP = "import springlab.studies.fit.fit\n"
+#: a reader's code with its reading timed: the child prints the wall and CPU time [s] of it last
+TIMED = "import time\n_wall, _cpu = time.perf_counter(), time.process_time()\n{code}" + (
+    "print(time.perf_counter() - _wall, time.process_time() - _cpu)\n"
+)
 READERS = {
     "imports only (the floor)": "",
     "springlab's reader (numpy.loadtxt in 4 MiB blocks)": (
@@ -107,6 +123,13 @@ sys.exit(main(ARGS))
 
 def measure(argv: list[str], stdout: Any = None) -> tuple[float, float, int]:
     """Wall time [s], peak resident memory [MB] and exit status of a child process (its stdout to `stdout`)."""
+    wall, peak, code, _ = measure_with_cpu(argv, stdout)
+    return wall, peak, code
+
+
+def measure_with_cpu(argv: list[str], stdout: Any = None) -> tuple[float, float, int, tuple[float, float]]:
+    """`measure`'s wall time [s], peak memory [MB] and exit status, and with stdout=subprocess.PIPE what the child
+    printed last: the wall and CPU time [s] of its timed part (`TIMED`; else nan)."""
     start = time.perf_counter()
     child = subprocess.Popen(argv, stdout=stdout or subprocess.DEVNULL, stderr=subprocess.PIPE)
     _, status, usage = os.wait4(child.pid, 0)
@@ -114,7 +137,32 @@ def measure(argv: list[str], stdout: Any = None) -> tuple[float, float, int]:
     child.returncode = os.waitstatus_to_exitcode(status)  # wait4 reaped it: tell Popen
     if child.returncode not in (0, 1):
         sys.exit(f"{argv[-1][:60]!r} failed (exit {child.returncode}): {child.stderr.read().decode()[-400:]}")
-    return wall, usage.ru_maxrss / 1024.0, child.returncode  # ru_maxrss is in KiB on Linux
+    read = (math.nan, math.nan)
+    if stdout is subprocess.PIPE:  # one short line: read after the child ended
+        printed = child.stdout.read().decode().split()
+        read = (float(printed[-2]), float(printed[-1])) if len(printed) >= 2 else read
+    return wall, usage.ru_maxrss / 1024.0, child.returncode, read  # ru_maxrss is in KiB on Linux
+
+
+def reader_row(rows: int, size: int, best: dict[str, tuple[float, float, float, float]]) -> Row:
+    """springlab's reader against numpy.loadtxt of the whole file: the reading alone, timed in the child."""
+    floor_mb = best[IMPORTS][1]
+    ours, loadtxt = best[OURS], best[LOADTXT]
+    return Row(
+        "fit reader",
+        f"a {rows}-row CSV ({size / 1e6:.0f} MB) read to arrays, in a fresh interpreter",
+        ours[2],
+        ours[3],
+        "numpy.loadtxt",
+        loadtxt[2],
+        loadtxt[3],
+        READER_BUDGET,
+        "(set)",
+        "bench_fit_bigfile.py: springlab.studies.fit.data.load (numpy.loadtxt over 4 MiB blocks) against"
+        " numpy.loadtxt of the whole file at once, the reading alone (timed in the child, after the imports);"
+        f" peak memory above the interpreter and imports {ours[1] - floor_mb:.0f} MB against"
+        f" {loadtxt[1] - floor_mb:.0f} MB",
+    )
 
 
 def write_record(path: pathlib.Path, rows: int) -> None:
@@ -133,6 +181,7 @@ def main() -> None:
     parser.add_argument("--rows", type=int, default=2_000_000)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--no-per-sample", dest="per_sample", action="store_false", help="skip the per-sample fit")
+    parser.add_argument("--readers-only", action="store_true", help="only the readers (1-4), no fit")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as folder:
         path = pathlib.Path(folder) / "big.csv"
@@ -141,25 +190,27 @@ def main() -> None:
         print(
             f"record: {args.rows} rows, {size / 1e6:.1f} MB ({size / args.rows:.1f} B per row), {os.cpu_count()} cores"
         )
-        best: dict[str, tuple[float, float]] = {}
+        best: dict[str, tuple[float, float, float, float]] = {}
         for _ in range(args.repeat):  # alternate, so a change of load hits every reader alike
             for name, code in READERS.items():
-                source = f"PATH = {str(path)!r}\nROWS = {args.rows}\n" + SETUP + code
-                wall, peak, _ = measure([sys.executable, "-c", source])
-                old = best.get(name, (math.inf, math.inf))
-                best[name] = (min(old[0], wall), min(old[1], peak))
-        floor_s, floor_mb = best["imports only (the floor)"]
+                source = f"PATH = {str(path)!r}\nROWS = {args.rows}\n" + SETUP + TIMED.format(code=code)
+                wall, peak, _, read = measure_with_cpu([sys.executable, "-c", source], subprocess.PIPE)
+                old = best.get(name, (math.inf,) * 4)
+                best[name] = (min(old[0], wall), min(old[1], peak), min(old[2], read[0]), min(old[3], read[1]))
+        floor_s, floor_mb, _, _ = best[IMPORTS]
         print(f"{'reading (best of ' + str(args.repeat) + ')':<56} {'wall':>8} {'peak RSS':>10} {'above floor':>12}")
-        for name, (wall, peak) in best.items():
+        for name, (wall, peak, _, _) in best.items():
             extra = "" if name.startswith("imports") else f"{peak - floor_mb:8.0f} MB"
             print(f"  {name:<54} {wall:6.2f} s {peak:7.0f} MB {extra:>12}")
-        ours = best["springlab's reader (numpy.loadtxt in 4 MiB blocks)"]
-        before = best["the reader before (csv module rows, float() per cell)"]
+        ours, before = best[OURS], best["the reader before (csv module rows, float() per cell)"]
         print(
             f"  reader before / springlab's: {(before[0] - floor_s) / max(ours[0] - floor_s, 1e-9):.1f}x the time,"
             f" {(before[1] - floor_mb) / max(ours[1] - floor_mb, 1e-9):.1f}x the memory above the floor;"
             f" springlab's holds {(ours[1] - floor_mb) * 1e6 / args.rows:.0f} B per row at its peak"
         )
+        emit(reader_row(args.rows, size, best))
+        if args.readers_only:
+            return
         fits = {}
         for per_sample in (False, True) if args.per_sample else (False,):
             out = pathlib.Path(folder) / f"fit-{per_sample}.json"

@@ -10,7 +10,11 @@
 3. The docs' Duffing jump (issue 23 item 4): 31 frequencies swept up and down with continuation, each sine
    from the last's state, and the harmonic-balance comparison, against the same plain loop over its steps.
 
-Run: python benchmarks/bench_frequency.py
+Row of `make bench`'s table: `frequency nonlinear sweep` (part 3, against its time inside MuJoCo). Parts 1 and 2
+are the table's `frequency chain` and `frequency sinestream` rows (the chain without the search, the sinestream
+against its time inside MuJoCo): `make bench` runs `bench_frequency.py duffing`.
+
+Run: python benchmarks/bench_frequency.py [chain] [sinestream] [duffing]   (none named: all three)
 """
 
 from __future__ import annotations
@@ -21,10 +25,18 @@ import time
 import mujoco
 import numpy as np
 
+import measure
 import springlab
 from timing import best_of
 
 N_MASSES = 24
+#: the sweep against its rollouts: each frequency's steps are one batched rollout from the last one's state; beyond
+#: them each window is demodulated by numpy.linalg.lstsq over its samples (in a profile as long as the rollouts:
+#: 6.6 of 14.9 s; a projection onto the window's sines and cosines would cost a fraction, in
+#: springlab/studies/frequency/sinestream.py) and the harmonic balance solved along the branch (0.7 s): about 2.1x
+SWEEP_BUDGET = 2.5
+#: parts, by name on the command line (none named: all)
+PARTS = ("chain", "sinestream", "duffing")
 
 
 def chain_xml(n: int) -> str:
@@ -114,8 +126,9 @@ def sweep_of_the_duffing_spring() -> None:
             "nonlinear", integrators=(), sines=31, amplitudes=(2.0,), sweep="both", **args
         )
 
-    base = best_of(analysis_only, repeat=3)
-    total = best_of(with_sweep, repeat=1)
+    ((base, base_cpu),) = measure.side_by_side([analysis_only], 3)
+    with measure.inside_mujoco() as spent:
+        ((total, total_cpu),) = measure.side_by_side([with_sweep], 1)
     result = found["sweep"]
     steps = sum(b.steps for b in result.sweeps)
     share = 20_000
@@ -130,9 +143,34 @@ def sweep_of_the_duffing_spring() -> None:
         f" ratio loop / sweep: {loop / (total - base):.1f}x"
     )
     print(f"   every point within its harmonic-balance bound: {result.sweeps_agree}")
+    measure.emit(
+        measure.Row(
+            "frequency nonlinear sweep",
+            f"Duffing spring, 31 frequencies up and down at 2 N with continuation, {steps} rk4 steps at 1 ms, and the"
+            " harmonic balance",
+            total - base,
+            total_cpu - base_cpu,
+            "inside MuJoCo",
+            spent[0],
+            spent[1],
+            SWEEP_BUDGET,
+            "(set)",
+            "bench_frequency.py: the sweeps and the harmonic-balance comparison (the whole analysis less the same"
+            " analysis without them) against the time the whole analysis spent inside MuJoCo's rollouts;"
+            f" a plain Python mj_step loop over the same steps {loop:.2f} s",
+        )
+    )
 
 
 if __name__ == "__main__":
-    responses_of_a_large_model()
-    sinestream_of_the_printer_head()
-    sweep_of_the_duffing_spring()
+    import sys
+
+    parts = set(sys.argv[1:]) or set(PARTS)
+    if parts - set(PARTS):
+        sys.exit(f"unknown parts {', '.join(sorted(parts - set(PARTS)))}; valid: {', '.join(PARTS)}")
+    if "chain" in parts:
+        responses_of_a_large_model()
+    if "sinestream" in parts:
+        sinestream_of_the_printer_head()
+    if "duffing" in parts:
+        sweep_of_the_duffing_spring()

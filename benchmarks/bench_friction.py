@@ -3,11 +3,15 @@
 1. Cost per run: the study's chunk (springlab.studies.friction_settings.settings_chunk: build the model,
    set it up, one mujoco.rollout call, compare with the exact answer, measure the events) against a plain
    Python loop of mujoco.mj_step on the same compiled model, the same settings and steps, recording qpos
-   and qvel; measured alternately, best of 3, on 16 configurations spread over the four cases, the
-   integrators and the timesteps.
+   and qvel, and against a plain mujoco.rollout of the same steps on the same compiled model (the floor: the
+   table's row `friction-settings friction, per run`); measured in turn, best of 3 (measure.per_run_comparison,
+   bench_creep.py's loop too), on 16 configurations spread over the four cases, the integrators and the timesteps.
 2. The full sweep (`springlab friction-settings friction --tol 1e-2 --workers 2`: 4,560 runs, the picks
    verified) against its 5-minute budget on 2 cores, with the machine's load average beside it (a machine
    shared with other jobs stretches the wall time, not the CPU time each run reports).
+
+`make bench` runs it with --skip-full (part 2 alone takes minutes; the table's `friction-settings gripper` row
+runs the whole command on a model file).
 
 Run: python benchmarks/bench_friction.py [--skip-full]
 """
@@ -20,13 +24,14 @@ import time
 
 import mujoco
 import numpy as np
+from mujoco import rollout
 
+import measure
 from springlab import scenes
 from springlab.scenes import get
-from springlab.sim.simulate import INTEGRATORS, check_timing
+from springlab.sim.simulate import INTEGRATORS, check_timing, initial_state
 from springlab.studies import friction_settings
 from springlab.studies.executor import Executor
-from timing import best_of
 
 #: (scenario, integrator, dt [s]) of the per-run comparison, each at MuJoCo's defaults and at the last values
 SAMPLE = [
@@ -39,6 +44,10 @@ SAMPLE = [
     ("incline_slide", "implicitfast", 5e-4),
     ("incline_slide", "rk4", 1e-3),
 ]
+#: the chunk's budget over the plain rollout of its steps: beyond the rollout it builds the case from the scene's
+#: MJCF (parse and compile, a few ms a run), evaluates the exact answer at every recorded step and measures the
+#: events; on runs of 1e3 to 1e5 steps that is tens of percent, not a multiple
+CHUNK_BUDGET = 1.6
 
 
 def _settings(scenario: str, last: bool) -> dict[str, float]:
@@ -48,7 +57,8 @@ def _settings(scenario: str, last: bool) -> dict[str, float]:
 
 
 def _plain_loop(scenario: str, integrator: str, dt: float, settings: dict[str, float]):
-    """The same run as a plain mj_step loop: build once (outside the timing), then step and record."""
+    """The same run as a plain mj_step loop (build once, outside the timing, then step and record), and as a plain
+    rollout of the same steps on the same model (the floor)."""
     case = scenes.case("friction", scenario, settings)
     model, chosen = case.model, case.scenario
     model.opt.integrator, model.opt.timestep = INTEGRATORS[integrator], dt
@@ -65,35 +75,52 @@ def _plain_loop(scenario: str, integrator: str, dt: float, settings: dict[str, f
             qpos[i], qvel[i] = data.qpos, data.qvel
         return qpos, qvel
 
-    return run, steps
+    state = initial_state(model, setup.qpos, setup.qvel, setup.act)[None]
+    control = np.zeros((steps, model.nu)) if setup.control is None else np.asarray(setup.control, float)
+    control = np.ascontiguousarray(np.broadcast_to(control, (steps, model.nu)))[None]
+    floor_data = mujoco.MjData(model)
+
+    def floor():
+        return rollout.rollout(model, floor_data, state, control, nstep=steps)
+
+    return run, floor, steps
 
 
 def per_run() -> float:
-    """Print the per-run comparison; return the mean ratio springlab / plain loop."""
+    """Print the per-run comparison and emit its row; return the mean ratio springlab / plain loop."""
     print("1) cost per run: the study's chunk (build, set up, rollout, compare, measure) vs a plain mj_step loop")
-    ratios = []
+    runs = []
     for scenario, integrator, dt in SAMPLE:
         for last in (False, True):
             settings = _settings(scenario, last)
-            loop, steps = _plain_loop(scenario, integrator, dt, settings)
+            loop, floor, steps = _plain_loop(scenario, integrator, dt, settings)
             duration = get("friction").scenario(scenario).duration
             case = get("friction").dry_friction.case(scenario)
             payload = friction_settings.chunk_of("friction", case, {}, duration, [[(settings, integrator, dt)]])
-            # alternately: one of each, three times, the best of each kept
-            study_times, loop_times = [], []
-            for _ in range(3):
-                study_times.append(best_of(lambda p=payload: friction_settings.settings_chunk(p, nthread=1), repeat=1))
-                loop_times.append(best_of(loop, repeat=1))
-            study, plain = min(study_times), min(loop_times)
-            ratios.append(study / plain)
             which = "last values" if last else "MuJoCo's defaults"
-            print(
-                f"   {scenario:<14}{integrator:<13}dt {dt:<8g}{which:<18}{steps:>7} steps"
-                f"  study {study * 1e3:8.2f} ms  plain loop {plain * 1e3:8.2f} ms  ratio {study / plain:5.2f}"
-            )
-    mean = float(np.mean(ratios))
-    print(f"   mean ratio study/plain loop {mean:.2f} (below 1: the rollout's C loop beats Python's mj_step calls)")
-    return mean
+            label = f"{scenario:<14}{integrator:<13}dt {dt:<8g}{which:<18}"
+            study = lambda p=payload: friction_settings.settings_chunk(p, nthread=1)  # noqa: E731
+            runs.append(measure.PerRun(label, steps, study, loop, floor))
+    found = measure.per_run_comparison(runs, steps_width=7)
+    measure.emit(
+        measure.Row(
+            "friction-settings friction, per run",
+            f"{found['runs']} sweep runs over the four cases (euler, implicitfast, discrete, rk4; MuJoCo's defaults"
+            f" and the last swept values), {found['steps']} steps in all",
+            found["study_wall"],
+            found["study_cpu"],
+            "rollout",
+            found["rollout_wall"],
+            found["rollout_cpu"],
+            CHUNK_BUDGET,
+            "(set)",
+            "bench_friction.py: the study's chunk (the case built from the scene's MJCF, set up, one rollout, compared"
+            " with its exact answer, its events measured) against a plain rollout of the same steps on the same"
+            f" compiled model; a plain Python mj_step loop recording every step costs"
+            f" {found['loop_cpu'] / found['rollout_cpu']:.2f}x the rollout",
+        )
+    )
+    return found["mean_ratio"]
 
 
 def full_sweep() -> None:

@@ -5,6 +5,10 @@ For each size: CPU time [s] of the call (best of `--repeat`), and for the sweep 
 memory (numpy's arrays included) during it. The exponent is the least-squares slope of log(CPU) on log(size)
 over the sizes at or above the middle one (small sizes carry a fixed cost that bends the line).
 
+Rows of `make bench`'s table: `sweep slider free, growth`, `design printer_head, growth` and `run drill_string
+modes, growth` (the largest size's CPU against the middle size's scaled linearly; the sweep's memory in its note).
+`make bench` runs it with --quick (the sizes are in each row's work).
+
 Run: PYTHONPATH=src python benchmarks/bench_growth.py [--figure docs/images/cost_growth.png] [--quick]
 """
 
@@ -19,8 +23,14 @@ from collections.abc import Callable
 import numpy as np
 
 import springlab
-from measure import forget_cases
+from measure import Row, emit, forget_cases
 from springlab.studies.design import run_study
+
+#: the largest size's CPU against the middle one's scaled linearly: sweep and design are linear in their runs (no
+#: per-run cost grows with the study), the drill string's first run at most linear in its elements at these sizes
+#: (its fixed cost, the compile and the exact reference, still dominates); 1.3 is an exponent of about 1.1 over the
+#: full run's 16x and 1.2 over --quick's 4x: a per-run cost that grows with the work shows
+GROWTH_BUDGET = 1.3
 
 
 def cpu_of(fn: Callable[[], object], repeat: int) -> float:
@@ -48,6 +58,25 @@ def exponent(sizes: list[int], costs: list[float]) -> float:
     half = len(sizes) // 2
     x, y = np.log(sizes[half:]), np.log(costs[half:])
     return float(np.polyfit(x, y, 1)[0])
+
+
+def growth_row(name: str, sizes: list[int], costs: list[float], extra: str = "") -> Row:
+    """The largest size's CPU against the middle size's scaled linearly: over GROWTH_BUDGET, cost grows faster than
+    the work."""
+    half = len(sizes) // 2
+    path, unit = name.split(" (")
+    return Row(
+        f"{path}, growth",
+        f"{unit.rstrip(')')} {', '.join(map(str, sizes))}: CPU at {sizes[-1]}",
+        float("nan"),
+        costs[-1],
+        f"linear from {sizes[half]}",
+        float("nan"),
+        costs[half] * sizes[-1] / sizes[half],
+        GROWTH_BUDGET,
+        "(set)",
+        f"bench_growth.py: fitted exponent {exponent(sizes, costs):.2f} over the upper half of the sizes{extra}",
+    )
 
 
 def sweep_growth(sizes: list[int], repeat: int) -> tuple[list[float], list[float]]:
@@ -99,6 +128,10 @@ def main() -> None:
         print(f"{name:<40}  fitted exponent {exponent(list(sizes), costs):.2f}")
     print("sweep peak traced memory [MB]: " + ", ".join(f"{n}: {m:.1f}" for n, m in zip(sweep_sizes, sweep_mb)))
     print(f"  memory exponent {exponent(sweep_sizes, sweep_mb):.2f} (0: flat in the number of runs)")
+    memory = f"; the sweep's peak traced memory {sweep_mb[0]:.1f} MB at {sweep_sizes[0]}, {sweep_mb[-1]:.1f} MB at"
+    memory += f" {sweep_sizes[-1]} (exponent {exponent(sweep_sizes, sweep_mb):.2f})"
+    for (name, sizes, costs), extra in zip(rows, (memory, "", "")):
+        emit(growth_row(name, list(sizes), costs, extra))
 
     if args.figure:
         import matplotlib

@@ -13,6 +13,9 @@
    run), and the stepping of one simulated second of `feedback_motor` (the controller in Case.simulate's loop,
    every step recorded) against `move`'s (one rollout).
 
+Rows of `make bench`'s table: `printer head sampled PD loop` (part 2: the sampled loop against the open-loop
+rollout of the same steps) and `run printer_head resonance_test` (part 3's run against its time inside MuJoCo).
+
 Run: PYTHONPATH=src python benchmarks/bench_printer_control.py
 """
 
@@ -25,6 +28,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
+import measure
 import springlab
 import springlab.sim.model_files
 from springlab.exact import positioning, resonance, sampled_loop, shaping
@@ -32,6 +36,15 @@ from springlab.scenes.printer_head import control
 from springlab.sim.sampled import run_sampled
 
 DT = 1e-4
+#: the sampled loop against the open-loop rollout of the same steps: per 0.2 ms sample a Python law, mj_forward and
+#: a 2-step mj_step call (tens of microseconds of Python and bindings against two RK4 steps of about 5 us): 5x
+SAMPLED_BUDGET = 5.0
+#: the resonance test's run against its rollouts (the chirp and the verifying move): beyond them the chirp's exact
+#: held response (20000 samples of a two-mass model), the fit of the belt mode to the noisy record and the choice
+#: among four shapers (closed forms): a run's 1.3 and that much again
+RESONANCE_BUDGET = 2.0
+#: warm runs of the resonance test averaged in its row
+WARM_RUNS = 3
 
 
 def _initial(model: mujoco.MjModel) -> np.ndarray:
@@ -77,8 +90,8 @@ def resonance_test_to_verified_move() -> tuple[float, str, float]:
     return time.perf_counter() - start, chosen.name, residual
 
 
-def one_second(kind: str) -> float:
-    """Wall time [s] of one simulated second of `kind`: "sampled", "position actuator" or "open loop"."""
+def one_second(kind: str) -> tuple[float, float]:
+    """Wall and CPU time [s] of one simulated second of `kind`: "sampled", "position actuator" or "open loop"."""
     samples, substeps = 5000, 2
     if kind == "sampled":
         spec = mujoco.MjSpec.from_file(str(springlab.sim.model_files.path("printer_head")))
@@ -87,7 +100,7 @@ def one_second(kind: str) -> float:
         model.opt.timestep = DT
         law = sampled_loop.PidLaw(sampled_loop.Pid(2000.0, 30.0, 0.0, substeps * DT))
         address = model.sensor("motor_encoder").adr[0]
-        start = time.perf_counter()
+        start, start_cpu = time.perf_counter(), time.process_time()
         run_sampled(
             model,
             mujoco.MjData(model),
@@ -95,7 +108,7 @@ def one_second(kind: str) -> float:
             steps_per_sample=substeps,
             samples=samples,
         )
-        return time.perf_counter() - start
+        return time.perf_counter() - start, time.process_time() - start_cpu
     spec = mujoco.MjSpec.from_file(str(springlab.sim.model_files.path("printer_head")))
     if kind == "position actuator":
         spec.delete(spec.actuator("drive"))
@@ -104,9 +117,9 @@ def one_second(kind: str) -> float:
     model = spec.compile()
     model.opt.timestep = DT
     command = np.full((1, samples * substeps, 1), 1e-3 if kind == "position actuator" else 1.0)
-    start = time.perf_counter()
+    start, start_cpu = time.perf_counter(), time.process_time()
     rollout.rollout(model, mujoco.MjData(model), _initial(model), command)
-    return time.perf_counter() - start
+    return time.perf_counter() - start, time.process_time() - start_cpu
 
 
 def scene_second(scenario: str) -> float:
@@ -124,10 +137,9 @@ def main() -> None:
         f" (chose {chosen}; the verified move rings {residual * 1e6:.3g} um after it ends)"
     )
     kinds = ("sampled", "position actuator", "open loop")
-    best = dict.fromkeys(kinds, math.inf)
-    for _ in range(5):
-        for kind in kinds:
-            best[kind] = min(best[kind], one_second(kind))
+    timings = {kind: [one_second(kind) for _ in range(5)] for kind in kinds}
+    best = {kind: min(wall for wall, _ in timings[kind]) for kind in kinds}
+    best_cpu = {kind: min(cpu for _, cpu in timings[kind]) for kind in kinds}
     for kind in kinds:
         print(f"one simulated second, {kind:>17}: {best[kind] * 1e3:7.1f} ms")
     print(
@@ -137,11 +149,49 @@ def main() -> None:
     start = time.perf_counter()
     result = springlab.run("printer_head", "resonance_test")
     elapsed = time.perf_counter() - start
+    with measure.inside_mujoco() as spent:  # warm: the compile and the exact precomputations kept, as run's rows
+        start, start_cpu = time.perf_counter(), time.process_time()
+        for _ in range(WARM_RUNS):
+            springlab.run("printer_head", "resonance_test")
+        warm, warm_cpu = time.perf_counter() - start, time.process_time() - start_cpu
     q = result.quantities
     print(
         f"springlab run printer_head resonance_test (chirp, exact reference, fit, choice, verifying run):"
         f" {elapsed:.2f} s; measured {q['belt_frequency_hz_measured']:.4f} Hz"
         f" (+-{q['belt_frequency_ci95_width_hz'] / 2:.4f}), chose {q['chosen_shaper']}, {result.verdict}"
+    )
+    measure.emit(
+        measure.Row(
+            "printer head sampled PD loop",
+            "one simulated second at 5 kHz, 10000 rk4 steps at 0.1 ms (mj_forward, a Python law and mj_step(nstep=2)"
+            " per sample)",
+            best["sampled"],
+            best_cpu["sampled"],
+            "rollout",
+            best["open loop"],
+            best_cpu["open loop"],
+            SAMPLED_BUDGET,
+            "(set)",
+            "bench_printer_control.py: springlab.sim.sampled.run_sampled against one rollout of the open-loop move's"
+            " 10000 steps on the same model, best of 5 each, measured in turn; MuJoCo's position actuator (the"
+            f" continuous PD in one rollout) {best['position actuator'] * 1e3:.1f} ms",
+        )
+    )
+    measure.emit(
+        measure.Row(
+            "run printer_head resonance_test",
+            f"chirp, exact held reference, fit, shaper choice and the verifying move_{q['chosen_shaper']} run",
+            warm / WARM_RUNS,
+            warm_cpu / WARM_RUNS,
+            "inside MuJoCo",
+            spent[0] / WARM_RUNS,
+            spent[1] / WARM_RUNS,
+            RESONANCE_BUDGET,
+            "(set)",
+            f"bench_printer_control.py: `springlab.run` end to end, the mean of {WARM_RUNS} calls after a first one"
+            f" ({elapsed:.3g} s wall: the compile and the exact precomputations), against the time they spent inside"
+            " MuJoCo's rollouts",
+        )
     )
     scene = {name: min(scene_second(name) for _ in range(5)) for name in ("feedback_motor", "move")}
     print(

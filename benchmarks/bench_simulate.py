@@ -1,7 +1,9 @@
 """Speed of springlab's simulate path, side by side in one run.
 
 1. springlab.sim.simulate vs raw mujoco.rollout on the same compiled slider model
-   and integrator (steps/s and their ratio; the target is >= 0.9).
+   and integrator (steps/s and their ratio; the target is >= 0.9); euler's and
+   implicitfast's are rows of `make bench`'s table (rk4's is the table's own
+   `simulate slider`).
 2. The slider's default validated setting (rk4, 2 ms) on `free` against
    scipy's solve_ivp methods tuned to the same accuracy (max relative error
    <= 1e-6 against the exact solution): wall time of each.
@@ -15,6 +17,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
+import measure
 import springlab
 from springlab import scenes
 from springlab.exact import analytic
@@ -32,8 +35,9 @@ def simulate_vs_rollout() -> None:
     print(f"1) simulate vs raw rollout, slider, {steps} steps per run")
     print(f"   {'integrator':<13}{'springlab steps/s':>20}{'raw rollout steps/s':>22}{'ratio':>8}")
     for integrator in ("rk4", "euler", "implicitfast"):
-        springlab_time = best_of(
-            lambda: simulate(
+
+        def path(integrator=integrator):
+            simulate(
                 model,
                 integrator=integrator,
                 dt=dt,
@@ -42,17 +46,37 @@ def simulate_vs_rollout() -> None:
                 qvel=setup.qvel,
                 control=setup.control,
             )
-        )
+
         # the raw side gets its own model with the same setting (simulate never modifies its input)
         raw = configured(model, integrator, dt)
         data = mujoco.MjData(raw)
         state0 = initial_state(raw, setup.qpos, setup.qvel)
         control = np.zeros((1, steps, raw.nu))
-        raw_time = best_of(lambda: rollout.rollout(raw, data, state0[None], control, nstep=steps))
+
+        def floor(raw=raw, data=data, state0=state0, control=control):
+            rollout.rollout(raw, data, state0[None], control, nstep=steps)
+
+        (springlab_time, springlab_cpu), (raw_time, raw_cpu) = measure.side_by_side([path, floor], 7)
         print(
             f"   {integrator:<13}{steps / springlab_time:>20,.0f}{steps / raw_time:>22,.0f}"
             f"{raw_time / springlab_time:>8.2f}"
         )
+        if integrator != "rk4":  # rk4's row is the table's own `simulate slider`
+            measure.emit(
+                measure.Row(
+                    f"simulate slider {integrator}",
+                    f"{steps} steps {integrator} dt={dt:g} s",
+                    springlab_time,
+                    springlab_cpu,
+                    "rollout",
+                    raw_time,
+                    raw_cpu,
+                    measure.SIMULATE_BUDGET,
+                    "issue 37",
+                    "bench_simulate.py: springlab.sim.simulate against a plain rollout of the same steps on the same"
+                    " configured model, in turn, best of 7",
+                )
+            )
 
 
 def default_setting_vs_scipy() -> None:

@@ -15,6 +15,10 @@ scaling on a dask LocalCluster, and its projection to the default 114,688 runs a
    CPU time per run (simulation) plus the analysis at that size; on 64 cores, 64 single-threaded dask
    workers, from the per-worker time of a chunk plus the per-task overhead (module `projection`).
 
+Part 1 at N = 256 is the table's row `design printer_head --sobol` (bench.py's sobol_row); this script adds the
+row `design printer_head --sobol, LocalCluster` (part 2's 2 workers, their CPU against part 1's rollout, the
+projections in its note). `make bench` runs it at N = 64 (448 runs), stated in the row's work.
+
 Run: PYTHONPATH=src python benchmarks/bench_sobol.py [N] [--no-cluster]   (N: base samples, default 256)
 """
 
@@ -30,6 +34,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
+import measure
 from springlab import scenes
 from springlab.scenes.base import Case
 from springlab.scenes.printer_head import design as printer_design
@@ -39,6 +44,9 @@ from springlab.studies.executor import Executor, ping
 SCENE = "printer_head"
 #: cores of the cluster the study is projected to
 CLUSTER_CORES = 64
+#: the workers' CPU over a plain rollout of the same steps: the study's own (the table's one-thread row: 1.3) and,
+#: per chunk of 256 runs (about 1.5 s of CPU), its pickling and dask's bookkeeping (milliseconds): within 1.5
+CLUSTER_BUDGET = 1.5
 
 
 def default_runs() -> int:
@@ -144,7 +152,13 @@ def cost_per_run(base_samples: int) -> dict[str, float]:
     ):
         print(f"   {label:<44}{wall:>10.2f}{cpu:>10.2f}{cpu / runs * 1e3:>14.3f}{cpu / steps.sum() * 1e9:>9.0f}")
     print(f"   ratio (CPU): {best[1] / best[3]:.2f}")
-    return {"runs": runs, "cpu_per_run_s": best[1] / runs, "floor_cpu_per_run_s": best[3] / runs, "study": study}
+    return {
+        "runs": runs,
+        "cpu_per_run_s": best[1] / runs,
+        "floor_cpu_per_run_s": best[3] / runs,
+        "floor_wall_per_run_s": best[2] / runs,
+        "study": study,
+    }
 
 
 def analysis_cost() -> float:
@@ -179,18 +193,17 @@ def cluster(base_samples: int, reference: sobol.SobolStudy) -> dict[str, float]:
     return out
 
 
-def projection(cost: dict[str, float], measured: dict[str, float] | None, analysis_s: float) -> None:
-    """Part 3: the default study on this machine's 2 idle cores and on a 64-core cluster (printed)."""
+def projection(cost: dict[str, float], measured: dict[str, float] | None, analysis_s: float) -> str:
+    """Part 3: the default study on this machine's 2 idle cores and on a 64-core cluster (printed; returned in a
+    line for the table's note)."""
     runs = default_runs()
     chunks = math.ceil(runs / sobol.CHUNK_CONFIGURATIONS)
     cpu = cost["cpu_per_run_s"]
     print(f"3) the default study: {runs:,} runs in {chunks} chunks of {sobol.CHUNK_CONFIGURATIONS}")
-    print(
-        f"   2 idle cores (CPU per run x runs / 2 + analysis {analysis_s:.1f} s):"
-        f" {(cpu * runs / 2 + analysis_s) / 60:.1f} min"
-    )
+    here = (cpu * runs / 2 + analysis_s) / 60
+    print(f"   2 idle cores (CPU per run x runs / 2 + analysis {analysis_s:.1f} s): {here:.1f} min")
     if measured is None:
-        return
+        return f"{runs:,} runs projected on 2 idle cores {here:.1f} min"
     # a chunk on a worker: the workers' CPU per run on the 2-worker cluster (simulation, pickling, dask's own)
     chunk_s = measured["worker_cpu_2"] / cost["runs"] * sobol.CHUNK_CONFIGURATIONS
     overhead = measured["task_2"]
@@ -199,6 +212,28 @@ def projection(cost: dict[str, float], measured: dict[str, float] | None, analys
         f"   {CLUSTER_CORES} single-threaded workers: {rounds} rounds of {CLUSTER_CORES} chunks x ({chunk_s:.2f} s of"
         f" CPU + {overhead * 1e3:.1f} ms per task) + analysis {analysis_s:.1f} s ="
         f" {rounds * (chunk_s + overhead) + analysis_s:.0f} s (cluster start and imports not counted)"
+    )
+    return (
+        f"{runs:,} runs projected on 2 idle cores {here:.1f} min, on {CLUSTER_CORES} single-threaded dask workers"
+        f" {rounds * (chunk_s + overhead) + analysis_s:.0f} s"
+    )
+
+
+def cluster_row(cost: dict[str, float], measured: dict[str, float], projected: str) -> measure.Row:
+    """The study on the 2-worker LocalCluster: the workers' CPU against a plain rollout of the same steps."""
+    runs = cost["runs"]
+    return measure.Row(
+        "design printer_head --sobol, LocalCluster",
+        f"{runs} runs (N = {runs // (len(scenes.get(SCENE).design.sobol) + 2)}), 2 single-threaded dask workers",
+        measured["wall_2"],
+        measured["worker_cpu_2"],
+        "rollout",
+        cost["floor_wall_per_run_s"] * runs,
+        cost["floor_cpu_per_run_s"] * runs,
+        CLUSTER_BUDGET,
+        "(set)",
+        f"bench_sobol.py: the workers' CPU against a plain one-thread rollout of the same steps; scaling 1 -> 2"
+        f" workers {measured['wall_1'] / (2 * measured['wall_2']):.0%}; {projected}",
     )
 
 
@@ -219,7 +254,9 @@ def main(argv: list[str]) -> None:
                 f" local run; per-task overhead {measured[f'task_{workers}'] * 1e3:.1f} ms"
             )
         print(f"   scaling 1 -> 2 workers: {measured['wall_1'] / (2 * measured['wall_2']):.0%}")
-    projection(cost, measured, analysis_cost())
+    projected = projection(cost, measured, analysis_cost())
+    if measured is not None:
+        measure.emit(cluster_row(cost, measured, projected))
 
 
 if __name__ == "__main__":  # LocalCluster workers are spawned processes: they re-import this file

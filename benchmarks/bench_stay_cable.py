@@ -16,6 +16,10 @@
    same controls and starts (one core: what a user would write). Then the per-step overhead apart from the
    threads: 4 seeds on one thread each way, alternately, best of 2.
 
+Rows of `make bench`'s table: `stay cable covariance` (part 1 at N = 400, against scipy) and, from part 3,
+`stay cable wind records` (against their time inside MuJoCo). `make bench` runs it with --exact-only: part 3 is
+what the table's `rms stay_cable` row measures (the same records through the command) and takes minutes.
+
 Run: python benchmarks/bench_stay_cable.py [--records-only | --exact-only]
 """
 
@@ -29,6 +33,7 @@ import mujoco
 import numpy as np
 import scipy.linalg
 
+import measure
 from springlab import scenes
 from springlab.exact import cable as cb
 from springlab.exact import random_vibration as rv
@@ -39,6 +44,13 @@ from springlab.studies.executor import Executor
 from timing import best_of
 
 CABLE = cb.TautCable(300.0, 6.1e6, 70.0)
+#: the structured covariance against scipy's general Lyapunov solve at N = 400: it eigen-decomposes the 400 x 400
+#: symmetric pair instead of taking the Schur form of the 800 x 800 state matrix (about 8x fewer flops, a
+#: symmetric solver besides) and adds the damper's rank-one term: at least 4x under scipy's
+COVARIANCE_BUDGET = 0.25
+#: the records against their time inside MuJoCo (the table's `rms stay_cable` row's budget): the seeded wind, the
+#: exact answers and the variances' intervals beside the rollouts
+RECORDS_BUDGET = 3.0
 DAMPER_POSITION, DAMPER, STRUCTURAL, INTENSITY = 6.0, 3.3e5, 0.001, 30.0
 
 
@@ -74,13 +86,15 @@ def covariance_timings() -> None:
     for n in (100, 200, 400):
         model, b, alpha, factor = _problem(n)
         a, w = model.state_matrix(), np.array([[INTENSITY]])
-        structured = best_of(
-            lambda m=model, b=b, al=alpha, f=factor: rv.second_order_covariance(
-                m.mass, m.stiffness, al, f, np.array([DAMPER]), b, w
-            ),
-            repeat=5,
+        (structured, structured_cpu), (bartels, bartels_cpu) = measure.side_by_side(
+            [
+                lambda m=model, b=b, al=alpha, f=factor, w=w: rv.second_order_covariance(
+                    m.mass, m.stiffness, al, f, np.array([DAMPER]), b, w
+                ),
+                lambda a=a, b=b, w=w: rv.continuous_covariance(a, b @ w @ b.T),
+            ],
+            3,
         )
-        bartels = best_of(lambda a=a, b=b: rv.continuous_covariance(a, b @ w @ b.T), repeat=3)
         held = best_of(lambda a=a, b=b: rv.held_covariance(a, b, w, 0.01), repeat=1)
         errors = ""
         if n <= 100:
@@ -92,6 +106,22 @@ def covariance_timings() -> None:
                 f"structured {np.max(np.abs(p1 - brute) / scale):.1e}, scipy {np.max(np.abs(p2 - brute) / scale):.1e}"
             )
         print(f"{n:>5} {structured:>15.3f} {bartels:>10.3f} {bartels / structured:>7.1f} {held:>15.3f}  {errors}")
+    measure.emit(
+        measure.Row(
+            "stay cable covariance",
+            f"the exact stationary covariance of the {n}-element cable ({2 * n} states), uniform white wind, a damper",
+            structured,
+            structured_cpu,
+            "scipy",
+            bartels,
+            bartels_cpu,
+            COVARIANCE_BUDGET,
+            "(set)",
+            "bench_stay_cable.py: springlab.exact.random_vibration.second_order_covariance (the undamped modes and"
+            " the damper's low-rank term) against scipy's Bartels-Stewart (solve_continuous_lyapunov) on the same"
+            " state matrix, in turn, best of 3; CPU of all BLAS threads",
+        )
+    )
 
 
 def universal_range() -> None:
@@ -165,9 +195,10 @@ def wind_records() -> None:
         f" variance bias is under {RECORD_BIAS:.0%}: {integrator} at dt = {dt:.4g} s (bias {pick.error:.3%}, chosen"
         f" in {choose:.1f} s from the exact biases)"
     )
-    start = time.perf_counter()
-    study = random_load.ensemble("stay_cable", seeds=RECORD_SEEDS, integrator=integrator, dt=dt, **params)
-    study_s = time.perf_counter() - start
+    with measure.inside_mujoco() as spent:
+        start, start_cpu = time.perf_counter(), time.process_time()
+        study = random_load.ensemble("stay_cable", seeds=RECORD_SEEDS, integrator=integrator, dt=dt, **params)
+        study_s, study_cpu = time.perf_counter() - start, time.process_time() - start_cpu
     print(
         f"  springlab (random_load.ensemble, 2 threads): {study_s:.1f} s in all ({study.wall_time_s:.1f} s of records,"
         f" {study.exact_time_s:.1f} s of exact answers); {study.inside} of {RECORD_SEEDS} inside their 99 % interval"
@@ -187,6 +218,21 @@ def wind_records() -> None:
         )
     loop = best_of(lambda: plain_loop(case, integrator, dt, steps, few), repeat=2)
     print(f"  one thread each, 4 seeds: springlab {threads:.1f} s, loop {loop:.1f} s, ratio {threads / loop:.2f}")
+    measure.emit(
+        measure.Row(
+            "stay cable wind records",
+            f"N = {RECORD_NODES}, {RECORD_SEEDS} seeds x {RECORD_S:g} s, {integrator} at dt = {dt:.4g} s, 2 threads",
+            study_s,
+            study_cpu,
+            "inside MuJoCo",
+            spent[0],
+            spent[1],
+            RECORDS_BUDGET,
+            "(set), as `rms stay_cable`'s",
+            "bench_stay_cable.py: random_load.ensemble (the records, their exact answers and intervals) against the"
+            f" time it spent inside MuJoCo's rollouts; a plain Python mj_step loop over the same steps {loop_s:.1f} s",
+        )
+    )
 
 
 if __name__ == "__main__":

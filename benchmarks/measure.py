@@ -9,13 +9,14 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import json
 import os
 import pathlib
 import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Sequence
 
 import mujoco
 import numpy as np
@@ -58,21 +59,73 @@ class Row:
         return out
 
 
+#: a line a bench_*.py script prints to add a row to the table: the prefix, then the row's fields as JSON
+ROW_PREFIX = "BENCH_ROW "
+
+
+def emit(row: Row) -> None:
+    """Print `row` as a line of the table (`ROW_PREFIX` and its fields as JSON): bench.py reads it from a script's output."""
+    print(ROW_PREFIX + json.dumps(dataclasses.asdict(row)), flush=True)
+
+
 def _clock() -> tuple[float, float]:
     return time.perf_counter(), time.process_time()
 
 
 def alternately(path: Callable[[], object], floor: Callable[[], object], repeat: int) -> tuple[float, ...]:
     """(wall, cpu) of path and of floor [s], each the best of `repeat`, measured alternately."""
-    best = [np.inf] * 4
+    (path_wall, path_cpu), (floor_wall, floor_cpu) = side_by_side([path, floor], repeat)
+    return path_wall, path_cpu, floor_wall, floor_cpu
+
+
+def side_by_side(functions: Sequence[Callable[[], object]], repeat: int) -> list[tuple[float, float]]:
+    """(wall, cpu) [s] of each function, the best of `repeat`, measured in turn (one of each, `repeat` times), so a
+    change of the machine's load hits all of them alike."""
+    best = [[np.inf, np.inf] for _ in functions]
     for _ in range(repeat):
-        for k, fn in ((0, path), (2, floor)):
+        for k, fn in enumerate(functions):
             wall, cpu = _clock()
             fn()
             wall_end, cpu_end = _clock()
-            best[k] = min(best[k], wall_end - wall)
-            best[k + 1] = min(best[k + 1], cpu_end - cpu)
-    return tuple(best)
+            best[k][0] = min(best[k][0], wall_end - wall)
+            best[k][1] = min(best[k][1], cpu_end - cpu)
+    return [(wall, cpu) for wall, cpu in best]
+
+
+@dataclasses.dataclass(frozen=True)
+class PerRun:
+    """One configuration of a study's per-run comparison (bench_creep.py, bench_friction.py): its label as printed,
+    its steps, the study's own chunk, a plain Python mj_step loop recording every step, and a plain rollout (the
+    floor) of the same steps on the same configured model."""
+
+    label: str
+    steps: int
+    study: Callable[[], object]
+    plain_loop: Callable[[], object]
+    rollout: Callable[[], object]
+
+
+def per_run_comparison(runs: Iterable[PerRun], steps_width: int, repeat: int = 3) -> dict[str, float]:
+    """Time each run's study, plain loop and rollout in turn (best of `repeat`), print a line per run (wall times, as
+    the scripts always printed) and the mean ratio study / plain loop; return the sums over the runs: `study_wall`,
+    `study_cpu`, `loop_wall`, `loop_cpu`, `rollout_wall`, `rollout_cpu` [s], `steps`, `runs` and `mean_ratio`."""
+    totals = dict.fromkeys(("study_wall", "study_cpu", "loop_wall", "loop_cpu", "rollout_wall", "rollout_cpu"), 0.0)
+    ratios, steps = [], 0
+    for run in runs:
+        (study, study_cpu), (plain, plain_cpu), (floor, floor_cpu) = side_by_side(
+            [run.study, run.plain_loop, run.rollout], repeat
+        )
+        for key, value in zip(totals, (study, study_cpu, plain, plain_cpu, floor, floor_cpu)):
+            totals[key] += value
+        ratios.append(study / plain)
+        steps += run.steps
+        print(
+            f"   {run.label}{run.steps:>{steps_width}} steps  study {study * 1e3:8.2f} ms"
+            f"  plain loop {plain * 1e3:8.2f} ms  ratio {study / plain:5.2f}"
+        )
+    mean = float(np.mean(ratios))
+    print(f"   mean ratio study/plain loop {mean:.2f} (below 1: the rollout's C loop beats Python's mj_step calls)")
+    return totals | {"steps": steps, "runs": len(ratios), "mean_ratio": mean}
 
 
 @contextlib.contextmanager
@@ -131,6 +184,27 @@ def raw_rollout(result) -> Callable[[], object]:
     control = np.zeros((result.steps, model.nu)) if setup.control is None else np.asarray(setup.control, float)
     control = np.ascontiguousarray(np.broadcast_to(control, (result.steps, model.nu)))[None]
     return lambda: rollout.rollout(model, data, state, control, nstep=result.steps)
+
+
+def jobs_rollout(jobs) -> Callable[[], object]:
+    """A plain one-thread rollout of each of `springlab.sim.batch.Job`s' steps, each on a configured copy of its
+    compiled model (its integrator and timestep), from its initial state with its controls: the floor of a batch."""
+    from springlab.sim.simulate import configured, initial_state
+
+    inputs = []
+    for job in jobs:
+        model = configured(job.model, job.integrator, job.dt)
+        setup = job.setup
+        state = initial_state(model, setup.qpos, setup.qvel, setup.act)[None]
+        control = np.zeros((job.steps, model.nu)) if setup.control is None else np.asarray(setup.control, float)
+        control = np.ascontiguousarray(np.broadcast_to(control, (job.steps, model.nu)))[None]
+        inputs.append((model, mujoco.MjData(model), state, control, job.steps))
+
+    def run() -> None:
+        for model, data, state, control, steps in inputs:
+            rollout.rollout(model, data, state, control, nstep=steps)
+
+    return run
 
 
 def command_row(name: str, argv: list[str], work: str, budget: float, basis: str, *, cold: bool = True) -> Row:

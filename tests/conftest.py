@@ -39,16 +39,45 @@ def cli(capsys):
     return run
 
 
+#: the tests of this process that read `dask_cluster` and have not finished yet (pytest_collection_finish fills
+#: it, pytest_runtest_teardown empties it); the cluster shuts down when the last of them is done
+_CLUSTER_READERS: set[str] = set()
+_CLUSTER: list = []
+
+
 @pytest.fixture(scope="session")
 def dask_cluster():
     """A dask LocalCluster of 2 worker processes (one thread each), started on first use and shared by every
     test that compares a study on dask workers with the same study run locally (each start costs 1-2 s of
-    process spawning and imports). The tests only submit work to it; one that kills a worker starts its own."""
+    process spawning and imports). The tests only submit work to it; one that kills a worker starts its own.
+    It closes after the last test of this process that reads it (pytest_runtest_teardown below), not at the
+    session's end: an idle cluster (its scheduler's thread here, two nannies, two workers) costs about 6 % of
+    a core in heartbeats, some 10 s of CPU over a full run."""
     pytest.importorskip("distributed", reason="the distributed extra (make test installs it)")
     from springlab.studies.executor import Executor
 
     with Executor(workers=2, progress=False) as executor:
-        yield executor
+        _CLUSTER.append(executor)
+        try:
+            yield executor
+        finally:
+            _CLUSTER.clear()
+
+
+def pytest_collection_finish(session: pytest.Session) -> None:
+    """The tests this process will run that read the session's cluster (all of them under --dist loadgroup,
+    which keeps the fixture's readers on one worker; elsewhere the cluster closes at the session's end)."""
+    _CLUSTER_READERS.update(item.nodeid for item in session.items if "dask_cluster" in item.fixturenames)
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_runtest_teardown(item: pytest.Item) -> None:
+    """Close the session's cluster once every test that reads it has run (its fixture's own exit, later,
+    finds it closed: Executor.close is idempotent)."""
+    if item.nodeid in _CLUSTER_READERS:
+        _CLUSTER_READERS.discard(item.nodeid)
+        if not _CLUSTER_READERS and _CLUSTER:
+            _CLUSTER[0].close()
 
 
 @pytest.fixture(scope="session")

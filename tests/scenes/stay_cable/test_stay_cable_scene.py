@@ -35,7 +35,6 @@ from springlab.scenes.stay_cable import answers, build, stationary
 from springlab.scenes.stay_cable.readback import CableModel
 from springlab.sim import model_files
 from springlab.studies import random_load, rms_settings
-from springlab.studies.executor import Executor
 
 EPS = float(np.finfo(float).eps)
 SCENE = get("stay_cable")
@@ -225,12 +224,12 @@ def test_forty_seeded_records_fall_inside_their_own_99_percent_interval():
 
 
 @pytest.mark.slow
-def test_a_seeds_record_is_the_same_in_the_study_as_in_a_run_and_on_a_cluster():
+def test_a_seeds_record_is_the_same_in_the_study_as_in_a_run_and_on_a_cluster(dask_cluster):
     study = random_load.ensemble("stay_cable", seeds=[3, 5], record=20.0, **WINDY)
     alone = springlab.run("stay_cable", "wind", duration=20.0, seed=5, **WINDY)
     assert study.variances[1] == pytest.approx(alone.quantities["rms_displacement_m"] ** 2, rel=1e-13)
-    with Executor(workers=2, progress=False) as cluster:
-        distributed = random_load.ensemble("stay_cable", seeds=[3, 5], record=20.0, executor=cluster, **WINDY)
+    # the session's LocalCluster of 2 worker processes (tests/conftest.py), not a start of its own
+    distributed = random_load.ensemble("stay_cable", seeds=[3, 5], record=20.0, executor=dask_cluster, **WINDY)
     assert distributed.variances == study.variances
 
 
