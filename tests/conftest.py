@@ -162,13 +162,26 @@ def _shared_fixtures(item: pytest.Item) -> tuple[list[str], str | None]:
     return session, module
 
 
-@pytest.hookimpl(tryfirst=True)
-def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+@pytest.hookimpl(wrapper=True, tryfirst=True)
+def pytest_collection_modifyitems(items: list[pytest.Item]):
+    """Group the tests that share a study (`_group_shared_studies`, before every other plugin's hook: xdist
+    reads the groups in its own), then, after every other plugin's hook (pytest-randomly's shuffle among
+    them), move the tests marked slow to the front, in their shuffled order. xdist hands out the shared
+    groups first, then the single tests in this order: a 10-15 s test dealt last kept one worker busy that
+    long after the other had finished (up to 15 s of a 2-worker run's wall time), dealt first the short
+    tests fill in behind it."""
+    _group_shared_studies(items)
+    result = yield
+    items.sort(key=lambda item: item.get_closest_marker("slow") is None)  # stable: random within each part
+    return result
+
+
+def _group_shared_studies(items: list[pytest.Item]) -> None:
     """Under `pytest -n N --dist loadgroup` (make test), the tests that read one shared study run on one
     worker, so the study is computed once, not once per worker (a session fixture is per process). A test
     that reads two session fixtures joins their groups into one (else the second would be computed on a
     second worker too), a test with only a module-scoped one groups by it. Marked before xdist reads the
-    groups in its own pytest_collection_modifyitems (tryfirst)."""
+    groups in its own pytest_collection_modifyitems."""
     parent: dict[str, str] = {}
 
     def root(name: str) -> str:

@@ -16,10 +16,9 @@ import pathlib
 
 import pytest
 
+from helpers import source
 from helpers.layers import LAYERS, ORDER, layer_of
-from helpers.paths import ROOT
-
-PACKAGE = ROOT / "src" / "springlab"
+from helpers.source import PACKAGE
 
 #: the study packages: each answers its own question and none imports another (they share the
 #: modules at the root of studies/: the executor, convergence, tradeoff ...)
@@ -35,7 +34,7 @@ def modules() -> dict[str, pathlib.Path]:
 def _modules() -> dict[str, pathlib.Path]:
     # read once per test process: the tests below walk the same tree (the source does not change meanwhile)
     out = {}
-    for path in sorted(PACKAGE.rglob("*.py")):
+    for path in source.source_files():
         parts = path.relative_to(PACKAGE).with_suffix("").parts
         if parts[-1] == "__init__" and len(parts) > 1:
             parts = parts[:-1]
@@ -50,7 +49,7 @@ def imports(module: str, path: pathlib.Path, known: set[str]) -> set[str]:
     else:
         package = module.split(".")[:-1]
     found = set()
-    for node in ast.walk(parsed(path)):
+    for node in source.nodes(path):
         if isinstance(node, ast.Import):
             for alias in node.names:
                 if alias.name == "springlab" or alias.name.startswith("springlab."):
@@ -73,10 +72,10 @@ def imports(module: str, path: pathlib.Path, known: set[str]) -> set[str]:
     return found
 
 
-@functools.cache
 def parsed(path: pathlib.Path) -> ast.Module:
-    """The syntax tree of one source file, parsed once per test process (the checks only read it)."""
-    return ast.parse(path.read_text(), str(path))
+    """The syntax tree of one source file, parsed once per test process (helpers/source.py: the checks only
+    read it)."""
+    return source.tree(path)
 
 
 def graph() -> dict[str, set[str]]:
@@ -174,7 +173,7 @@ def lazy_imports(module: str, path: pathlib.Path) -> set[str]:
         if isinstance(target, ast.Name) and isinstance(node.value.value, str)
     }
     found = set()
-    for node in ast.walk(tree):
+    for node in source.nodes(path):
         if not (isinstance(node, ast.Call) and node.args):
             continue
         called = node.func
@@ -233,16 +232,15 @@ def test_nothing_outside_the_scenes_names_a_scene():
     for module, path in modules().items():
         if layer_of(module) in ("scenes", "front"):
             continue
-        tree = parsed(path)
         docstrings = {
             id(node.body[0].value)
-            for node in ast.walk(tree)
+            for node in source.nodes(path)
             if isinstance(node, ast.Module | ast.ClassDef | ast.FunctionDef | ast.AsyncFunctionDef)
             and node.body
             and isinstance(node.body[0], ast.Expr)
             and isinstance(node.body[0].value, ast.Constant)
         }
-        for parent in ast.walk(tree):
+        for parent in source.nodes(path):
             if not isinstance(parent, NAMING_PARENTS):
                 continue  # e.g. the word 'nonlinear' chosen by a conditional expression for a message
             for node in ast.iter_child_nodes(parent):

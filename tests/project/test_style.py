@@ -7,9 +7,10 @@ mypy (`make lint`) checks that the annotations are right; this checks that the p
 from __future__ import annotations
 
 import ast
-import functools
+import pathlib
 import re
 
+from helpers import source
 from helpers.layers import LAYERS
 from helpers.paths import ROOT
 
@@ -22,17 +23,14 @@ MAX_FUNCTION_LINES = 120
 GOOGLE_SECTION = re.compile(r"^\s*(Args|Arguments|Returns|Yields|Raises|Attributes|Keyword Args):\s*$", re.M)
 
 
-@functools.cache
-def _sources() -> tuple[tuple[str, ast.Module], ...]:
-    """Every module of the package, parsed once per test process (the checks only read the trees): no module is
+def _sources() -> tuple[tuple[str, pathlib.Path], ...]:
+    """Every module of the package (its trees parsed once per test process, helpers/source.py): no module is
     exempt."""
-    return tuple(
-        (p.relative_to(PACKAGE).as_posix(), ast.parse(p.read_text(), str(p))) for p in sorted(PACKAGE.rglob("*.py"))
-    )
+    return tuple((p.relative_to(PACKAGE).as_posix(), p) for p in source.source_files())
 
 
-def _docstrings(tree: ast.Module):
-    for node in ast.walk(tree):
+def _docstrings(path: pathlib.Path):
+    for node in source.nodes(path):
         if isinstance(node, ast.Module | ast.ClassDef | ast.FunctionDef | ast.AsyncFunctionDef):
             doc = ast.get_docstring(node, clean=False)
             if doc:
@@ -51,8 +49,8 @@ def _public_functions(body: list[ast.stmt], public: bool = True):
 def test_docstrings_use_numpy_sections_only():
     found = [
         f"{name}:{line}: {match.group(1)}:"
-        for name, tree in _sources()
-        for line, doc in _docstrings(tree)
+        for name, path in _sources()
+        for line, doc in _docstrings(path)
         for match in GOOGLE_SECTION.finditer(doc)
     ]
     assert not found, "Google-style sections; write Parameters / Returns / Raises with dashes:\n" + "\n".join(found)
@@ -60,8 +58,8 @@ def test_docstrings_use_numpy_sections_only():
 
 def test_public_functions_have_type_hints():
     missing = []
-    for name, tree in _sources():
-        for node in _public_functions(tree.body):
+    for name, path in _sources():
+        for node in _public_functions(source.tree(path).body):
             args = node.args
             params = [a for a in [*args.posonlyargs, *args.args, *args.kwonlyargs] if a.arg not in ("self", "cls")]
             params += [a for a in (args.vararg, args.kwarg) if a is not None]
@@ -109,8 +107,8 @@ def test_no_module_over_750_lines():
 def test_no_function_over_120_lines():
     over = [
         f"{name}:{node.lineno} {node.name}: {node.end_lineno - node.lineno + 1} lines"
-        for name, tree in _sources()
-        for node in ast.walk(tree)
+        for name, path in _sources()
+        for node in source.nodes(path)
         if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef)
         and node.end_lineno is not None
         and node.end_lineno - node.lineno + 1 > MAX_FUNCTION_LINES

@@ -12,13 +12,12 @@ import json
 import numpy as np
 import pytest
 
-from helpers.paths import ROOT
+from helpers import source
+from helpers.source import PACKAGE
 from springlab import files, outputs
 from springlab.errors import BadInputError
 from springlab.runs.run import run_scenario
 from springlab.studies import tradeoff
-
-PACKAGE = ROOT / "src" / "springlab"
 
 #: the writers the one writer replaced (issue 32): none may come back under its old name
 OLD_WRITERS = {
@@ -100,8 +99,8 @@ def test_every_declared_figure_has_its_drawing():
     """Each `outputs()` names its drawn files as literals: each has an entry in outputs.DRAWN."""
     drawn = {name for _, name in outputs.DRAWN}
     declared = set()
-    for path in PACKAGE.rglob("*.py"):
-        for node in ast.walk(ast.parse(path.read_text())):
+    for path in source.source_files():
+        for node in source.nodes(path):  # parsed once per test process (helpers/source.py)
             if isinstance(node, ast.FunctionDef) and node.name == "outputs":
                 for call in ast.walk(node):
                     if (
@@ -118,11 +117,11 @@ def test_every_declared_figure_has_its_drawing():
 
 def test_the_old_writers_are_gone_and_the_commands_write_through_outputs():
     for module, names in OLD_WRITERS.items():
-        tree = ast.parse((PACKAGE / module).read_text())
+        tree = source.tree(PACKAGE / module)
         defined = {n.name for n in tree.body if isinstance(n, ast.FunctionDef)}
         assert not names & defined, f"{module} still defines {sorted(names & defined)}: write with springlab.outputs"
     folders = {"run", "tradeoff", "stability", "sweep", "design", "audit", "fit", "frequency", "refine"}
     folders |= {"friction_settings", "rms"}
     for name in sorted(folders):
-        source = (PACKAGE / "cli" / "commands" / f"{name}.py").read_text()
-        assert "outputs.write(" in source, f"`springlab {name} --output DIR` does not write through springlab.outputs"
+        text = (PACKAGE / "cli" / "commands" / f"{name}.py").read_text()
+        assert "outputs.write(" in text, f"`springlab {name} --output DIR` does not write through springlab.outputs"

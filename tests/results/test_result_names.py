@@ -10,11 +10,9 @@ with a `to_dict` is a frozen dataclass; the result classes below have `to_dict`,
 from __future__ import annotations
 
 import ast
-import functools
 
-from helpers.paths import ROOT
-
-PACKAGE = ROOT / "src" / "springlab"
+from helpers import source
+from helpers.source import PACKAGE
 
 #: the old names of serialisation (and of a study's report): gone from the package
 OLD_NAMES = {"as_dict", "as_json", "report_json", "summary"}
@@ -61,9 +59,9 @@ ROWS = {
 }
 
 
-@functools.cache  # the four tests read one parse of the package (1.1 s each); none changes a tree
 def _modules() -> dict[str, ast.Module]:
-    return {p.relative_to(PACKAGE).as_posix(): ast.parse(p.read_text(), str(p)) for p in sorted(PACKAGE.rglob("*.py"))}
+    # one parse of the package per test process, shared with the other readers of the source (helpers/source.py)
+    return source.trees()
 
 
 def _definitions(body: list[ast.stmt], prefix: str = ""):
@@ -135,16 +133,17 @@ def test_the_result_classes_have_to_dict_and_those_with_rows_to_pandas():
 def test_pandas_is_imported_only_by_springlab_tables():
     """Outside tables.py, pandas appears only under `if TYPE_CHECKING:` (annotations of to_pandas)."""
     found = []
-    for module, tree in _modules().items():
+    for path in source.source_files():
+        module = path.relative_to(PACKAGE).as_posix()
         if module == "tables.py":
             continue
         typing_only = {
             id(inner)
-            for node in ast.walk(tree)
+            for node in source.nodes(path)
             if isinstance(node, ast.If) and ast.unparse(node.test) in ("TYPE_CHECKING", "typing.TYPE_CHECKING")
             for inner in ast.walk(node)
         }
-        for node in ast.walk(tree):
+        for node in source.nodes(path):
             names = []
             if isinstance(node, ast.Import):
                 names = [alias.name for alias in node.names]

@@ -12,6 +12,7 @@ import ast
 import dataclasses
 import importlib
 import inspect
+import pathlib
 import subprocess
 import sys
 import typing
@@ -20,6 +21,7 @@ import numpy as np
 import pytest
 
 import springlab
+from helpers import source
 from springlab import scenes
 from springlab.errors import BadInputError
 from springlab.scenes.declarations import STUDY_OPTIONS
@@ -196,8 +198,10 @@ def _type_checking_names() -> dict[str, object]:
     names: dict[str, object] = {}
     for module in [m for name, m in sorted(sys.modules.items()) if name.startswith("springlab") and m is not None]:
         names.update({k: v for k, v in vars(module).items() if inspect.ismodule(v) and k not in names})
-        source = inspect.getsource(module) if getattr(module, "__file__", "").endswith(".py") else ""
-        for node in ast.parse(source).body:
+        path = getattr(module, "__file__", None) or ""
+        # the module's syntax tree, parsed once per test process with the other readers' (helpers/source.py)
+        body = source.tree(pathlib.Path(path)).body if path.endswith(".py") else []
+        for node in body:
             if isinstance(node, ast.If) and ast.unparse(node.test) in ("TYPE_CHECKING", "typing.TYPE_CHECKING"):
                 found: dict[str, object] = {"__name__": module.__name__, "__package__": module.__package__}
                 exec(compile(ast.Module(body=node.body, type_ignores=[]), module.__name__, "exec"), found)
