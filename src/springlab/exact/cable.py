@@ -304,32 +304,41 @@ class LumpedCable:
         return float(np.max(linear.eigen(self.state_matrix())[0].real))
 
 
-def stabilising_damper(model: LumpedCable, node: int, *, rtol: float = 1e-12) -> tuple[float, float]:
-    """The smallest damper [N s/m] at `node` that stops every mode of `model` from growing, and the best one.
+def stabilising_damper(model: LumpedCable, node: int, *, guess: float, rtol: float = 1e-12) -> float:
+    """The smallest damper [N s/m] at `node` that stops every mode of `model` from growing.
 
-    The growth rate g(c) = max Re(lambda) falls from g(0) as the damper grows, reaches its least value at
-    c_best and rises again (a damper too stiff pins the cable: a node at the damper). The answer is the
-    lower root of g(c) = 0 on (0, c_best] (Brent's method to `rtol`); c_best comes from a bounded search on
-    log c. Returns (c_stop, c_best) [N s/m]; c_stop = 0 if the model does not grow, nan if no damper there
-    stops it.
+    The growth rate g(c) = max Re(lambda) falls from g(0) as the damper grows, and rises again once the damper
+    pins the cable (a node at the damper). The answer is the lower root of g(c) = 0: bracketed by walking up
+    from guess / 2 in steps of 1.25 until g < 0 (from far below when g(guess / 2) < 0 already), then Brent's
+    method to `rtol`. Returns 0 if the model does not grow, nan if no damper up to 3000 times the nodes'
+    impedance stops it.
+
+    Parameters
+    ----------
+    guess
+        a damper [N s/m] near the answer, e.g. the universal curve's estimate (nan: start the walk far below).
     """
     if model.growth_rate() <= 0.0:
-        return 0.0, math.nan
+        return 0.0
 
     def growth(log_c: float) -> float:
         return model.with_damper(node, math.exp(log_c)).growth_rate()
 
     # the damper's scale: sqrt(k m) of a node, times N (the impedance sqrt(T m) is (N + 1) of these)
-    scale = math.sqrt(float(model.stiffness[0, 0]) * float(model.mass[0])) * model.size
-    best = _optimize().minimize_scalar(
-        growth, bounds=(math.log(scale) - 12.0, math.log(scale) + 8.0), method="bounded", options={"xatol": 1e-6}
-    )
-    c_best = math.exp(float(best.x))
-    if float(best.fun) > 0.0:
-        return math.nan, c_best
-    low = math.log(scale) - 40.0
-    root = _optimize().brentq(growth, low, float(best.x), xtol=1e-14, rtol=max(rtol, 4 * _EPS))
-    return math.exp(root), c_best
+    log_scale = math.log(math.sqrt(float(model.stiffness[0, 0]) * float(model.mass[0])) * model.size)
+    far_below, top = log_scale - 40.0, log_scale + 8.0
+    low = math.log(guess / 2.0) if math.isfinite(guess) and guess > 0 else log_scale - 12.0
+    step = math.log(1.25) if math.isfinite(guess) and guess > 0 else math.log(2.0)
+    if growth(low) <= 0.0:
+        low, high = far_below, low
+    else:
+        high = low + step
+        while growth(high) > 0.0:
+            if high > top:
+                return math.nan
+            low, high = high, high + step
+    root = _optimize().brentq(growth, low, high, xtol=1e-14, rtol=max(rtol, 4 * _EPS))
+    return math.exp(root)
 
 
 # -- the continuum with a damper: the transcendental equation ---------------------------------------------------

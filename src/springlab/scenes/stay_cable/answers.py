@@ -101,8 +101,6 @@ class Stabilising:
     coefficient
         c_stop [N s/m] of the N-element model (the lower root of its growth rate, Brent to 1e-12): 0 when the
         cable without a damper does not grow; nan when no damper there stops it.
-    best
-        the damper [N s/m] that makes the growth rate least (nan when the cable does not grow).
     universal
         the universal curve's estimate [N s/m]: each growing mode k's deficit -zeta_k met by the lower root of
         (a / L) kappa / (1 + kappa^2), kappa = eta k pi a / L (nan when the deficit exceeds the curve's maximum).
@@ -111,7 +109,6 @@ class Stabilising:
     """
 
     coefficient: float
-    best: float
     universal: float
     growth_without: float
 
@@ -119,7 +116,6 @@ class Stabilising:
 def stabilising(cable: CableModel) -> Stabilising:
     """The damper that stops rain-wind's growth at the damper's node (see Stabilising)."""
     bare = cable.without_damper()
-    c_stop, c_best = cb.stabilising_damper(bare, cable.damper_node)
     position = cable.damper_node * cable.cable.spacing(cable.size)
     ratio = position / cable.cable.length
     needed = 0.0
@@ -132,4 +128,5 @@ def stabilising(cable: CableModel) -> Stabilising:
             break
         kappa = (1.0 - math.sqrt(1.0 - 4.0 * deficit**2)) / (2.0 * deficit)
         needed = max(needed, kappa / (mode.number * math.pi * ratio) * cable.cable.impedance)
-    return Stabilising(c_stop, c_best, needed, bare.growth_rate())
+    c_stop = cb.stabilising_damper(bare, cable.damper_node, guess=needed)
+    return Stabilising(c_stop, needed, bare.growth_rate())

@@ -267,11 +267,8 @@ def _growth_curve(case: CaseView, trajectory: Trajectory) -> Panel:
     cable = cable_model(case)
     stop = case.memo("stabilising", lambda: answers.stabilising(cable))
     bare = cable.without_damper()
-    reference = (
-        stop.best
-        if math.isfinite(stop.best)
-        else cable.cable.impedance / (math.pi * cable.damper_position / cable.cable.length)
-    )
+    # around mode 1's optimum on the universal curve: the stopping damper lies below it, the pinned cable above
+    reference = cable.cable.impedance / (math.pi * cable.damper_position / cable.cable.length)
     coefficients = reference * np.logspace(-2.5, 1.0, CURVE_POINTS)
     rates = [bare.with_damper(cable.damper_node, c).growth_rate() for c in coefficients]
     marks = []

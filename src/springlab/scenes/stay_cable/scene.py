@@ -454,7 +454,6 @@ def _rain_wind_quantities(case: Case, mode: modal.Mode, measured: complex) -> di
         "growth_rate_1_s_no_damper": stop.growth_without,
         "stabilising_damper_n_s_m": stop.coefficient,
         "stabilising_damper_n_s_m_universal": stop.universal,
-        "least_growth_damper_n_s_m": stop.best,
     }
 
 
