@@ -28,7 +28,7 @@ from springlab.errors import BadInputError, DivergedError
 from springlab.exact.constraints import Watch, watch
 from springlab.exact.map_limits import MapLimit, map_limit
 from springlab.exact.model_at_point import ModelAtPoint
-from springlab.sim.simulate import INTEGRATORS, Setup, Trajectory, beyond_mujoco_limits, simulate
+from springlab.sim.simulate import INTEGRATORS, Setup, Trajectory, beyond_mujoco_limits
 
 _NAMES = {value: name for name, value in INTEGRATORS.items()}
 
@@ -175,18 +175,9 @@ class PointFacts:
         drift = at.constraints.drift(duration)
         rest: Trajectory | DivergedError | None = None
         if drift > rest_within:  # from the point itself, controls held (held.run_hold's run)
-            model, point = at.model, at.point
+            own = at.model.opt
             try:
-                rest = simulate(
-                    model,
-                    integrator=_NAMES[int(model.opt.integrator)],
-                    dt=float(model.opt.timestep),
-                    duration=duration,
-                    qpos=point.qpos,
-                    qvel=point.qvel,
-                    act=point.act,
-                    control=point.ctrl if model.nu else None,
-                )
+                rest = at.simulate(_NAMES[int(own.integrator)], float(own.timestep), duration)
             except DivergedError as error:
                 rest = error
         return cls(seen, drift, rest, maps)
