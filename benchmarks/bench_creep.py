@@ -89,20 +89,14 @@ def per_run() -> float:
             runs.append(measure.PerRun(label, steps, lambda p=payload: friction_hold.hold_chunk(p), loop, floor))
     found = measure.per_run_comparison(runs, steps_width=6)
     measure.emit(
-        measure.Row(
+        measure.per_run_row(
             "friction-settings gripper, per run",
             f"{found['runs']} sweep runs of {window:g} s (euler and rk4 at 2 and 1 ms, MuJoCo's defaults and the last"
             f" swept values), {found['steps']} steps in all",
-            found["study_wall"],
-            found["study_cpu"],
-            "rollout",
-            found["rollout_wall"],
-            found["rollout_cpu"],
+            found,
             CHUNK_BUDGET,
-            "(set)",
             "bench_creep.py: the study's chunk (settings applied, one rollout, the box's slip and contacts read every"
-            f" 10 ms) against a plain rollout of the same steps on the same configured model; a plain Python mj_step"
-            f" loop recording every step costs {found['loop_cpu'] / found['rollout_cpu']:.2f}x the rollout",
+            " 10 ms) against a plain rollout of the same steps on the same configured model",
         )
     )
     return found["mean_ratio"]

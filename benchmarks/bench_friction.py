@@ -103,21 +103,15 @@ def per_run() -> float:
             runs.append(measure.PerRun(label, steps, study, loop, floor))
     found = measure.per_run_comparison(runs, steps_width=7)
     measure.emit(
-        measure.Row(
+        measure.per_run_row(
             "friction-settings friction, per run",
             f"{found['runs']} sweep runs over the four cases (euler, implicitfast, discrete, rk4; MuJoCo's defaults"
             f" and the last swept values), {found['steps']} steps in all",
-            found["study_wall"],
-            found["study_cpu"],
-            "rollout",
-            found["rollout_wall"],
-            found["rollout_cpu"],
+            found,
             CHUNK_BUDGET,
-            "(set)",
             "bench_friction.py: the study's chunk (the case built from the scene's MJCF, set up, one rollout, compared"
             " with its exact answer, its events measured) against a plain rollout of the same steps on the same"
-            f" compiled model; a plain Python mj_step loop recording every step costs"
-            f" {found['loop_cpu'] / found['rollout_cpu']:.2f}x the rollout",
+            " compiled model",
         )
     )
     return found["mean_ratio"]

@@ -128,6 +128,24 @@ def per_run_comparison(runs: Iterable[PerRun], steps_width: int, repeat: int = 3
     return totals | {"steps": steps, "runs": len(ratios), "mean_ratio": mean}
 
 
+def per_run_row(name: str, work: str, found: dict[str, float], budget: float, note: str) -> Row:
+    """The table's row of a `per_run_comparison` (its sums `found`): the study's chunks against the plain rollouts of
+    the same steps, a budget set by the script, and the plain Python loop's cost beside them in the note."""
+    return Row(
+        name,
+        work,
+        found["study_wall"],
+        found["study_cpu"],
+        "rollout",
+        found["rollout_wall"],
+        found["rollout_cpu"],
+        budget,
+        "(set)",
+        f"{note}; a plain Python mj_step loop recording every step costs"
+        f" {found['loop_cpu'] / found['rollout_cpu']:.2f}x the rollout",
+    )
+
+
 @contextlib.contextmanager
 def inside_mujoco() -> Iterator[list[float]]:
     """Count the wall and CPU time [s] spent inside mujoco.rollout.rollout, mujoco.mj_step and the batch's rollout.
