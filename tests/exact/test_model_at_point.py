@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 from helpers.linear_models import FD_RELATIVE, chain_frequencies, chain_xml, pendulum_xml
+from springlab.errors import UnknownNameError
 from springlab.exact import linearize as linearize_module
 from springlab.exact import model_at_point
 from springlab.exact.model_at_point import ModelAtPoint
@@ -56,6 +57,17 @@ def test_rk4_map_is_r_of_dt_a_with_or_without_a_reused_scratch_and_the_model_is_
     at.one_step_map("euler", 3 * dt, at.workspace)  # the workspace keeps another setting from before
     np.testing.assert_array_equal(at.one_step_map("rk4", dt, at.workspace), fresh)
     assert (int(model.opt.integrator), float(model.opt.timestep)) == own
+
+
+def test_step_maps_resolve_the_name_once_and_give_rk4_s_map_at_each_dt():
+    at = ModelAtPoint.at(mujoco.MjModel.from_xml_string(chain_xml(2, 100.0, 1.0, 0.4)))
+    maps = at.step_maps("rk4", at.workspace)
+    for dt in (1e-3, 0.04):
+        z = dt * at.linear.A
+        expected = np.eye(len(z)) + z + z @ z / 2 + z @ z @ z / 6 + z @ z @ z @ z / 24
+        np.testing.assert_allclose(maps(dt), expected, rtol=FD_RELATIVE, atol=FD_RELATIVE)
+    with pytest.raises(UnknownNameError, match="rk4"):  # the message lists the valid names
+        at.step_maps("rk5")
 
 
 def test_rates_away_from_the_bottom_are_the_pendulum_s_angular_acceleration():

@@ -75,9 +75,8 @@ class _MapProbe:
     """
 
     def __init__(self, at: ModelAtPoint, integrator: str):
-        self.at, self.integrator = at, integrator
         linear = at.linear
-        self.scratch = at.workspace  # one copy of the model for every map at this point
+        self.maps = at.step_maps(integrator, at.workspace)  # one copy of the model for every map at this point
         self.basis = None
         if linear.physically_unstable:
             values, vectors = linear.eigenvectors
@@ -87,7 +86,7 @@ class _MapProbe:
     def excess(self, dt: float) -> tuple[float, np.ndarray | None, float]:
         """(max |mu| / exact growth of its mode [-], that mu's eigenvector, that |mu| [-]); the first > 1 +
         MAP_MARGIN is numerical growth."""
-        phi = self.at.one_step_map(self.integrator, dt, self.scratch)
+        phi = self.maps(dt)
         if not np.isfinite(phi).all():
             return math.inf, None, math.inf
         if not phi.size:

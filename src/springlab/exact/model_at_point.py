@@ -163,8 +163,18 @@ class ModelAtPoint:
         """MuJoCo's one-step map Phi (n, n) of `integrator` at timestep `dt` [s] at the point
         (`springlab.exact.linearize.map_on`); `scratch`: a pair from `scratch()` reused across calls
         (its model takes the integrator and timestep), so a scan over dt copies the model once."""
-        work, data = self.scratch() if scratch is None else scratch
-        return map_on(work, integrator_id(integrator), dt, self.point, step=self.step, data=data)
+        return self.step_maps(integrator, scratch)(dt)
+
+    def step_maps(self, integrator: str, scratch: tuple[mujoco.MjModel, mujoco.MjData] | None = None) -> StepMaps:
+        """`integrator`'s one-step maps at the point as a function of dt (`StepMaps`): its name resolved once,
+        for a scan over many timesteps; `scratch` as in `one_step_map`.
+
+        Raises
+        ------
+        UnknownNameError
+            no such integrator.
+        """
+        return StepMaps(self, integrator_id(integrator), self.scratch() if scratch is None else scratch)
 
     def input_column(self, kind: str, index: int) -> np.ndarray:
         """b = d(dx/dt)/du (n,) of input `kind` ('ctrl' or 'force') `index` at the point [1/s per input unit]
@@ -182,3 +192,34 @@ class ModelAtPoint:
         """(C, d) of the sensors at the point, as one step of `integrator` at `dt` [s] computes them (None:
         the continuous forward pass) (`springlab.exact.linearize.sensor_rows`)."""
         return sensor_rows(self.model, kind, index, self.point, integrator=integrator, dt=dt, step=self.step)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class StepMaps:
+    """One integrator's one-step map Phi(dt) (n, n) at a model's operating point, per timestep dt [s]
+    (`ModelAtPoint.step_maps`): `maps(dt)` steps the scratch pair, which takes the integrator and dt.
+
+    Attributes
+    ----------
+    at
+        the model at its operating point.
+    kind
+        MuJoCo's integrator enum value.
+    scratch
+        the model copy and MjData the maps are taken on (from `ModelAtPoint.scratch`).
+    """
+
+    at: ModelAtPoint
+    kind: int
+    scratch: tuple[mujoco.MjModel, mujoco.MjData]
+
+    def __call__(self, dt: float) -> np.ndarray:
+        """Phi(dt) (n, n) [-] at timestep `dt` [s] (`springlab.exact.linearize.map_on`).
+
+        Raises
+        ------
+        BadInputError
+            dt not a finite number > 0.
+        """
+        work, data = self.scratch
+        return map_on(work, self.kind, dt, self.at.point, step=self.at.step, data=data)
