@@ -347,12 +347,19 @@ def converged_reference(
         levels.append(coarse)
     dt, estimate, diffs = step, math.inf, []
     target = REFERENCE_FRACTION * tol
+    ran: dict[float, Trajectory | DivergedError] = {}  # dt [s] -> its run, including the level run ahead
     while True:
         dts = [dt] if levels else [2 * dt, dt]
         steps = [round(duration / d) for d in dts]
         if max(steps) > REFERENCE_MAX_STEPS:
             break
-        outcomes = run([Job(at.model, "rk4", d, s, start) for d, s in zip(dts, steps)])
+        # an estimate needs two differences, so until three levels the next one always runs: within the cap it
+        # runs in the same batch as these (the finest level would otherwise run alone, on one thread)
+        ahead = [dt / 2] if len(levels) + len(dts) < 3 and round(duration / (dt / 2)) <= REFERENCE_MAX_STEPS else []
+        wanted = [d for d in [*dts, *ahead] if d not in ran]
+        if wanted:
+            ran.update(zip(wanted, run([Job(at.model, "rk4", d, round(duration / d), start) for d in wanted])))
+        outcomes = [ran[d] for d in dts]
         finished = [o for o in outcomes if isinstance(o, Trajectory)]
         if len(finished) < len(outcomes):  # one diverged
             break
