@@ -178,12 +178,14 @@ class Problem:
         stable anywhere in the box)."""
         span = self.span
         reach = 1.1 * span if "delay" in self.free else span
+        described = dt is None  # choose_dt describes the grid at the dt it chooses
         if dt is None:
             dt, self.grid = choose_dt(self, values)
         if stable_rate is not None and stable_rate > 0 and dt > STABLE_RATE_DT / stable_rate:
-            dt = STABLE_RATE_DT / stable_rate
+            dt, described = STABLE_RATE_DT / stable_rate, False
             self.grid["rule"] = f"{self.grid['rule']}; stable at the fastest pole in the starts' box"
-        self.grid.update(_described(self, values, dt))
+        if not described:
+            self.grid.update(_described(self, values, dt))
         self.dt = dt
         self.steps = int(math.ceil(reach / self.dt)) + 3
         if self.steps > 5_000_000:
@@ -625,8 +627,9 @@ def _roundoff(span: float, dt: float, size: float) -> float:
     return compare.ROUNDOFF_PER_STEP * span / dt * size
 
 
-def choose_dt(problem: Problem, values: dict[str, float]) -> tuple[float, dict[str, Any]]:
-    """The grid's timestep [s] for the fit's accuracy at `values`, and how it was chosen (module docstring)."""
+def choose_dt(problem: Problem, values: dict[str, float], describe: bool = True) -> tuple[float, dict[str, Any]]:
+    """The grid's timestep [s] for the fit's accuracy at `values`, and how it was chosen (module docstring), with
+    the grid's description at it (`_described`) unless `describe` is False (`Problem.set_grid` describes it)."""
     span = problem.span
     n = problem.samples
     needed = ACCURACY_IN_SE * problem.noise / math.sqrt(n)
@@ -638,7 +641,7 @@ def choose_dt(problem: Problem, values: dict[str, float]) -> tuple[float, dict[s
     if system is None or rate <= 0:
         dt = span / 200.0
         facts.update(rule="span / 200: the model is a polynomial, which RK4 integrates exactly")
-        return dt, facts | _described(problem, values, dt)
+        return dt, facts | (_described(problem, values, dt) if describe else {})
     eigenvalues = np.linalg.eigvals(system[0])
     exact = OMEGA_DT / rate
     # the bound grows as h^4 (leading order): scale it from the exact grid's
@@ -656,7 +659,7 @@ def choose_dt(problem: Problem, values: dict[str, float]) -> tuple[float, dict[s
         if dt > limit:
             dt, rule = limit, why
     facts["rule"] = rule
-    return dt, facts | _described(problem, values, dt)
+    return dt, facts | (_described(problem, values, dt) if describe else {})
 
 
 def _described(problem: Problem, values: dict[str, float], dt: float) -> dict[str, Any]:
