@@ -8,7 +8,7 @@
   and compared at the recorded times (`modify_residual`);
 * `sysid.optimize` with MuJoCo's Levenberg-Marquardt (`mujoco.minimize`) finds
   the estimate; `check_identifiable` refuses a rank-deficient Jacobian. A candidate
-  whose model or rollout the fit made lately (KEPT) reuses it: the same numbers.
+  whose model or rollout the fit made lately reuses it (`candidates`): the same numbers.
 
 The model is simulated with RK4 on its own even grid, whose timestep follows from the accuracy the fit
 needs, not from the sample rate, and is read at the recorded times by cubic Hermite interpolation of
@@ -64,7 +64,7 @@ from springlab.runs import compare
 from springlab.scenes.base import Case, Reference, Scenario
 from springlab.sim.simulate import quiet_mujoco
 
-from . import reductions
+from . import candidates, reductions
 from .data import Record, noise_level
 from .models import FitModel
 
@@ -94,12 +94,6 @@ READING = {"pos": (1 / 384, 0.0, 4, 0), "vel": (1 / 384, 8 / 135, 4, 1), "acc": 
 IDENTIFIABLE = 1e-9
 #: samples per grid step (on average) from which a long record is fitted on its reduced rows (5 per step at most)
 COMPRESS_PER_STEP = 10
-#: compiled candidates and rollouts a fit keeps: the optimizer's latest points are the ones it asks for again
-#: (a finite-difference Jacobian's columns in x0, v0 and the offset share their point's model, its offset column
-#: and the final residual at the estimate repeat a rollout already made)
-KEPT = 8
-#: ... and at most this many bytes of kept rollouts [B] (a long record's rollouts are large)
-KEPT_BYTES = 2**25
 _FULL = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
 _STATUS = (
     "factorization failed",
@@ -158,10 +152,8 @@ class Problem:
         #: the record reduced to at most 5 rows per grid step (module docstring), or None: fitted per sample
         self.compression: reductions.Grouped | None = None
         self._compressed_delay = 0.0
-        #: the latest compiled candidates, by (dt, scene parameters), and rollouts, by what they depend on
-        #: (`_rollout_key`)
-        self._models: dict[tuple[Any, ...], mujoco.MjModel] = {}
-        self._trajectories: dict[tuple[Any, ...], sysid.SystemTrajectory] = {}
+        #: the latest compiled models and rollouts, and the rollouts' MjData (springlab.studies.fit.candidates)
+        self.kept = candidates.Kept()
         self.set_grid(start)
         # a thread pool costs ~5 ms per rollout call: worth it only for long batches
         self.threads = 2 if self.steps * (len(free) + 1) >= 200_000 and (os.cpu_count() or 1) > 1 else 1
@@ -250,17 +242,17 @@ class Problem:
         return self.compile(scene_params)
 
     def compile(self, scene_params: dict[str, float]) -> mujoco.MjModel:
-        """The candidate's MjModel, set to RK4 at the fit's dt [s] (compiled once for the latest KEPT parameter
-        sets: the model depends on the scene's parameters and dt alone, never on x0, v0 or the offset)."""
-        key = (self.dt, *sorted(scene_params.items()))
-        model = self._models.get(key)
-        if model is None:
+        """The candidate's MjModel, set to RK4 at the fit's dt [s] (the latest ones kept: a model depends on the
+        scene's parameters and dt alone)."""
+
+        def compiled() -> mujoco.MjModel:
             with quiet_mujoco():
                 model = self.spec(scene_params).compile()
             model.opt.integrator = int(mujoco.mjtIntegrator.mjINT_RK4)
             model.opt.timestep = self.dt
-            _keep(self._models, key, model)
-        return model
+            return model
+
+        return self.kept.model(self.dt, scene_params, compiled)
 
     def spec(self, scene_params: dict[str, float]) -> mujoco.MjSpec:
         """The scene's MjSpec with its edits for these parameters and the signal's sensor."""
@@ -313,24 +305,26 @@ class Problem:
         **mappings: Any,
     ) -> Sequence[sysid.SystemTrajectory]:
         """sysid's custom rollout: each candidate from its own initial state and controls. A candidate whose
-        model, initial state and controls equal a kept rollout's (KEPT) is that rollout: the simulation is
-        deterministic, so it is not run again (`rollouts` still counts it: the candidates the optimizer asked for)."""
+        model, initial state and controls equal a kept rollout's is that rollout (springlab.studies.fit.candidates;
+        `rollouts` still counts it: the candidates the optimizer asked for). sysid hands no MjData (`solve` asks
+        for none): the fit's own serve every call."""
         from mujoco import sysid
 
         keys, states, controls = [], [], []
         grid = np.arange(self.steps + 1) * self.dt
+        datas = self.kept.datas(models[0], self.threads)
         for model, params in zip(models, param_dicts):
             values = self.values_of(params)
-            # sysid's MjData for the rollout: the batch's models share its sizes (mujoco.rollout's own premise)
             state, control = self.initial(model, values, datas[0])
-            keys.append(self._rollout_key(values, state, control))
+            scene_params = self.how.scene_params(values, self.base, self.modal)
+            keys.append(candidates.rollout_key(self.dt, self.steps, scene_params, state, control))
             states.append(state)
             controls.append(sysid.TimeSeries(grid, control))
-        mujoco.mj_resetData(models[0], datas[0])  # handed on as sysid made it
-        new = [i for i, key in enumerate(keys) if key not in self._trajectories and key not in keys[:i]]
-        start = _time.perf_counter()
-        out: Sequence[sysid.SystemTrajectory] = []
-        if new:
+        for data in datas:  # handed to the rollout as new ones (a reset MjData is a new one)
+            mujoco.mj_resetData(models[0], data)
+
+        def simulate(new: list[int]) -> Sequence[sysid.SystemTrajectory]:
+            start = _time.perf_counter()
             with quiet_mujoco():
                 out = sysid.sysid_rollout(
                     models=[models[i] for i in new],
@@ -341,19 +335,11 @@ class Problem:
                     rollout_state_mapping=mappings.get("rollout_state_mapping"),
                     ctrl_mapping=mappings.get("ctrl_mapping"),
                 )
-        self.rollout_time += _time.perf_counter() - start
-        self.rollouts += len(models)
-        made = dict(zip((keys[i] for i in new), out))
-        found = [made[key] if key in made else self._trajectories[key] for key in keys]
-        for key, trajectory in made.items():
-            size = sum(s.data.nbytes for s in (trajectory.state, trajectory.sensordata) if s is not None)
-            _keep(self._trajectories, key, trajectory, min(KEPT, KEPT_BYTES // max(size, 1)))
-        return found
+            self.rollout_time += _time.perf_counter() - start
+            return out
 
-    def _rollout_key(self, values: dict[str, float], state: np.ndarray, control: np.ndarray) -> tuple[Any, ...]:
-        """What a rollout depends on: the grid, the model (the scene's parameters), the initial state, the controls."""
-        scene_params = self.how.scene_params(values, self.base, self.modal)
-        return (self.dt, self.steps, *sorted(scene_params.items()), state.tobytes(), control.tobytes())
+        self.rollouts += len(models)
+        return self.kept.rollouts(keys, simulate)
 
     def modify_residual(
         self,
@@ -439,15 +425,6 @@ class Problem:
         return out
 
 
-def _keep(kept: dict[Any, Any], key: Any, value: Any, limit: int = KEPT) -> Any:
-    """Store `value` under `key` in `kept`, dropping the oldest entries beyond `limit` (none kept at 0); return
-    `value`."""
-    kept[key] = value
-    while len(kept) > limit:
-        del kept[next(iter(kept))]
-    return value
-
-
 def hermite(s: np.ndarray, dt: float, y: np.ndarray, dy: np.ndarray) -> np.ndarray:
     """Cubic Hermite interpolation of grid values y (slopes dy) at times s [s] (grid i dt, s >= 0 used)."""
     x = np.clip(s, 0.0, None) / dt
@@ -494,7 +471,7 @@ def solve(problem: Problem, record: Record) -> dict[str, Any]:
         build_model=problem.build_model,
         custom_rollout=problem.rollout,
         modify_residual=problem.modify_residual,
-        n_threads=problem.threads,
+        n_threads=0,  # sysid's MjData: the problem's own (`Problem.kept`)
         resample_true=False,
     )
     params = _parameter_dict(problem)
