@@ -26,3 +26,22 @@ def run_cli(*argv: object) -> CliResult:
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         code = main([str(a) for a in argv])
     return CliResult(code, out.getvalue(), err.getvalue())
+
+
+def computed_once(monkeypatch, where: str) -> list:
+    """Make the function at `where` ("module:name", where the command looks it up) compute on its first call and
+    return that result on every later call, for the rest of the test: a command run twice (its --json and its text)
+    then prints one study's result, paid once. Returns the list of results made (one once the first call returned)."""
+    import importlib
+
+    module_name, name = where.split(":")
+    module = importlib.import_module(module_name)
+    compute, made = getattr(module, name), []
+
+    def once(*args, **kwargs):
+        if not made:
+            made.append(compute(*args, **kwargs))
+        return made[0]
+
+    monkeypatch.setattr(module, name, once)
+    return made

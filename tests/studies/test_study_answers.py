@@ -11,7 +11,6 @@ answer is about (the pick's timestep and error, the sweep's range, the boundarie
 
 from __future__ import annotations
 
-import importlib
 import json
 import math
 import re
@@ -19,6 +18,7 @@ import re
 import numpy as np
 import pytest
 
+from helpers.cli import computed_once
 from springlab.scenes import get
 from springlab.studies import answers, tradeoff
 from springlab.studies.friction_settings import friction_settings
@@ -112,16 +112,7 @@ def assert_prints_its_json_first(cli, monkeypatch, argv: list[str]) -> dict:
     """The command's first two lines are its --json's question and answer (one source of the words). Its study is
     computed once, by the --json run, and the text run prints that same result: the two printers are held to one
     answer, and the study's cost is paid once."""
-    module, name = STUDY_OF[argv[0]].split(":")
-    module = importlib.import_module(module)
-    compute, made = getattr(module, name), []
-
-    def once(*args, **kwargs):
-        if not made:
-            made.append(compute(*args, **kwargs))
-        return made[0]
-
-    monkeypatch.setattr(module, name, once)
+    made = computed_once(monkeypatch, STUDY_OF[argv[0]])
     data = json.loads(cli(*argv, "--json").out)
     lines = cli(*argv).out.splitlines()
     assert len(made) == 1
