@@ -8,7 +8,7 @@ import os
 import mujoco
 import pytest
 
-from helpers.cli import CliResult
+from helpers.cli import CliResult, run_cli
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
@@ -86,6 +86,23 @@ def stability_report():
     from springlab.studies import stability
 
     return stability.stability_report()
+
+
+@pytest.fixture(scope="session")
+def stability_command(stability_report, tmp_path_factory):
+    """`springlab stability --json --output DIR` as a user types it (the default amplification map), its report the
+    session's `stability_report` (the command's own default report, computed once): run once and read by every
+    test of what the command prints and writes (tests/studies/test_stability.py, tests/scenes/test_every_command.py).
+    Returns (CliResult, DIR); the files are read-only, so no reader can change what the next one reads."""
+    from springlab.studies import stability
+
+    out = tmp_path_factory.mktemp("stability") / "out"
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(stability, "stability_report", lambda **options: stability_report)
+        printed = run_cli("stability", "--json", "--output", out)
+    for path in out.iterdir() if out.is_dir() else ():
+        path.chmod(0o444)
+    return printed, out
 
 
 @pytest.fixture(scope="session")

@@ -5,8 +5,8 @@ read a capability (frequency, interactive, fit, design, refine, friction-setting
 phase plane, stability's oscillator) run on every scene that declares it. Each case is one test, named
 `SCENE-COMMAND`, run in this process through `springlab.cli.main.main` (the `cli` fixture) with the cheapest
 options the command takes; it asserts the exit code (0: answered and, where validated, passed), that every file
-the command documents appeared, and that its JSON names the scene. `validate` and `stability` read the runs and
-the report the session computes once for every test (tests/conftest.py: `scenario_run`, `stability_report`), so
+the command documents appeared, and that its JSON names the scene. `validate` reads the runs and `stability` the command's
+run the session computes once for every test (tests/conftest.py: `scenario_run`, `stability_command`), so
 holding each scene to them costs nothing beyond the wiring. The physics of each answer is checked elsewhere
 (tests/scenes/<scene>/); this test holds the wiring, and the last test names any command of the CLI it leaves out.
 """
@@ -22,7 +22,7 @@ from helpers.stay_cable import WINDY
 from springlab import scenes
 from springlab.cli.main import COMMANDS
 from springlab.sim.batch import time_run
-from springlab.studies import auto, stability, tradeoff
+from springlab.studies import auto, tradeoff
 from springlab.studies.tradeoff import sweepable
 
 #: a short render: the 3D view at 64 x 48 for 0.2 s of simulated time (wiring, not pictures)
@@ -190,24 +190,22 @@ OSCILLATORS = [name for name, scene in scenes.SCENES.items() if scene.oscillator
 
 
 @pytest.mark.parametrize("scene_name", OSCILLATORS, ids=[f"{name}-stability" for name in OSCILLATORS])
-def test_every_oscillator_scene_serves_stability(scene_name, cli, monkeypatch, stability_report, tmp_path):
+def test_every_oscillator_scene_serves_stability(scene_name, stability_command):
     """`springlab stability` runs the scene that declares the one-mode oscillator (`Scene.oscillator`, the first
     such scene: springlab.studies.extremes.oscillator_scene): its declaration's names set the free scenario's
     m [kg], k [N/m] and d [N s/m], which read back from its one degree of freedom, and the command writes its
-    three files from the session's report (tests/conftest.py: computed once) and a small amplification map. The
-    report is of "the unit oscillator", so its JSON does not name the scene."""
+    three files: the session's run of it (tests/conftest.py: `stability_command`, from the session's report,
+    computed once, and read by tests/studies/test_stability.py too). The report is of "the unit oscillator", so
+    its JSON does not name the scene."""
     scene = scenes.get(scene_name)
     spec = scene.oscillator
     case = scene.case(spec.free, spec.parameters(mass=2.0, stiffness=50.0, damping=0.3, x0=0.01, v0=-0.02))
     assert case.model.nv == 1, f"{scene_name}'s scenario {spec.free!r} is not one degree of freedom"
     assert spec.constants(case.model) == pytest.approx((2.0, 50.0, 0.3), rel=1e-12)
-    small = stability.amplification_map(zetas=[0.0, 1.0], omega_dts=[1e-2, 1.0, 1e2])
-    monkeypatch.setattr(stability, "stability_report", lambda **options: stability_report)
-    monkeypatch.setattr(stability, "amplification_map", lambda **options: small)
-    printed = cli("stability", "--json", "--output", tmp_path / "out")
+    printed, folder = stability_command
     assert printed.code == 0, printed.err
-    assert json.loads(printed.out) == json.loads((tmp_path / "out" / "stability.json").read_text())
-    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["energy.png", "stability.json", "stability.png"]
+    assert json.loads(printed.out) == json.loads((folder / "stability.json").read_text())
+    assert sorted(p.name for p in folder.iterdir()) == ["energy.png", "stability.json", "stability.png"]
 
 
 def test_every_declared_capability_has_a_command_in_this_test():

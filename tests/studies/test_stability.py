@@ -294,9 +294,9 @@ def test_a_run_beyond_mujocos_value_limit_exits_3_for_every_integrator(cli, inte
 
 
 @pytest.mark.slow
-def test_stability_cli_prints_json_and_writes_the_charts(tmp_path, cli, monkeypatch, report):
-    monkeypatch.setattr(stability, "stability_report", lambda full=False, executor=None: report)
-    code, out, err = cli("stability", "--json", "--output", str(tmp_path / "s"))
+def test_stability_cli_prints_json_and_writes_the_charts(stability_command, report):
+    # the session's run of the command (tests/conftest.py), its report the session's `report`
+    (code, out, err), folder = stability_command
     assert code == 0, err
     data = json.loads(out)
     assert data == files.json_ready(report.to_dict())  # --json prints the report's to_dict(), inf as null
@@ -305,9 +305,9 @@ def test_stability_cli_prints_json_and_writes_the_charts(tmp_path, cli, monkeypa
         assert {"integrator", "zeta", "measured_omega_dt", "theory_omega_dt"} <= set(row)
     zetas = {row["zeta"] for row in data["boundaries"]}
     assert {0.0, 0.1, 1.0, 10.0} <= zetas
-    assert json.loads((tmp_path / "s" / "stability.json").read_text()) == data
+    assert json.loads((folder / "stability.json").read_text()) == data
     for name in ("stability.png", "energy.png"):
-        assert (tmp_path / "s" / name).read_bytes()[:8] == PNG_SIGNATURE
+        assert (folder / name).read_bytes()[:8] == PNG_SIGNATURE
 
 
 #: stability.json's keys: the report's to_dict() keeps every one, in this order

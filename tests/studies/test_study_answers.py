@@ -18,6 +18,7 @@ import re
 import numpy as np
 import pytest
 
+from helpers.cli import computed_once
 from springlab.scenes import get
 from springlab.studies import answers, tradeoff
 from springlab.studies.friction_settings import friction_settings
@@ -96,10 +97,25 @@ def assert_answer_from_json(data: dict, **fields: float) -> None:
         assert named[name] == field, (name, named[name], field)
 
 
-def assert_prints_its_json_first(cli, argv: list[str]) -> dict:
-    """The command's first two lines are its --json's question and answer (one source of the words)."""
+#: the study each command computes, where the command looks it up ("module:name")
+STUDY_OF = {
+    "tradeoff": "springlab.studies.tradeoff:tradeoff",
+    "sweep": "springlab.studies.sweeps:sweep",
+    "fit": "springlab.studies.fit.fit:fit",
+    "refine": "springlab.studies.refine:refine",
+    "frequency": "springlab.cli.commands.frequency:run_frequency",
+    "rms": "springlab.studies.random_load:ensemble",
+}
+
+
+def assert_prints_its_json_first(cli, monkeypatch, argv: list[str]) -> dict:
+    """The command's first two lines are its --json's question and answer (one source of the words). Its study is
+    computed once, by the --json run, and the text run prints that same result: the two printers are held to one
+    answer, and the study's cost is paid once."""
+    made = computed_once(monkeypatch, STUDY_OF[argv[0]])
     data = json.loads(cli(*argv, "--json").out)
     lines = cli(*argv).out.splitlines()
+    assert len(made) == 1
     assert lines[:2] == [f"Question: {data['question']}", f"Answer: {data['answer']}"]
     return data
 
@@ -125,8 +141,10 @@ def test_the_reader_reads_units_and_precision_back():
     assert say.answer("Q?", "A.").numbers == {"dt_s": 0.002, "creep_velocity_m_s": 5.21e-4}
 
 
-def test_tradeoff_answers_with_the_verified_pick_and_the_orders_and_prints_them_first(cli):
-    data = assert_prints_its_json_first(cli, ["tradeoff", "slider", "free", "--tol", "1e-4", "--duration", "0.5"])
+def test_tradeoff_answers_with_the_verified_pick_and_the_orders_and_prints_them_first(cli, monkeypatch):
+    data = assert_prints_its_json_first(
+        cli, monkeypatch, ["tradeoff", "slider", "free", "--tol", "1e-4", "--duration", "0.5"]
+    )
     pick = data["recommendation"]
     assert_answer_from_json(
         data, dt_s=pick["dt"], max_rel_error=pick["max_rel_error"], order_rk4=data["orders"]["rk4"], cost=pick["cost"]
@@ -156,9 +174,10 @@ def test_stability_answers_with_the_undamped_limits(stability_report):
     assert_answer_from_json(data, **undamped, largest_relative_difference=worst, boundaries=len(data["boundaries"]))
 
 
-def test_sweep_answers_with_its_counts_and_the_headlines_range(cli):
+def test_sweep_answers_with_its_counts_and_the_headlines_range(cli, monkeypatch):
     data = assert_prints_its_json_first(
         cli,
+        monkeypatch,
         ["sweep", "slider", "free", "--vary", "x0=0.01:0.1:3", "--vary", "damping=0.5:40:2:log", "--duration", "0.5"],
     )
     assert data["answer_numbers"]["max_displacement_m_min"] < data["answer_numbers"]["max_displacement_m_max"]
@@ -190,12 +209,12 @@ def test_the_design_study_and_its_sobol_indices_answer_from_their_json(small_des
     )
 
 
-def test_fit_answers_with_its_estimates_and_prints_them_first(tmp_path, cli):
+def test_fit_answers_with_its_estimates_and_prints_them_first(tmp_path, cli, monkeypatch):
     t = np.arange(0.0, 1.0, 0.01)
     decay = 0.05 * np.exp(-0.5 * t) * np.cos(20.0 * t)  # a damped oscillation [m]
     path = tmp_path / "decay.csv"
     path.write_text("time,slider_pos\n" + "".join(f"{float(a)!r},{float(b)!r}\n" for a, b in zip(t, decay)))
-    data = assert_prints_its_json_first(cli, ["fit", "slider", str(path), "--set", "mass=2"])
+    data = assert_prints_its_json_first(cli, monkeypatch, ["fit", "slider", str(path), "--set", "mass=2"])
     assert data["answer"] == data["verdict"]
     assert all(name in data["question"] for name in data["free"])
     omega = data["derived"].get("omega_n_rad_s") or data["estimates"]["omega_n"]
@@ -203,9 +222,9 @@ def test_fit_answers_with_its_estimates_and_prints_them_first(tmp_path, cli):
     assert_answer_from_json(data, **{key: omega["value"]}, residual_rms=data["residual_rms"])
 
 
-def test_refine_answers_with_its_verified_size_integrator_and_timestep(cli):
+def test_refine_answers_with_its_verified_size_integrator_and_timestep(cli, monkeypatch):
     data = assert_prints_its_json_first(
-        cli, ["refine", "drill_string", "--tol", "0.2", "--sizes", "4,8", "--integrators", "euler,rk4"]
+        cli, monkeypatch, ["refine", "drill_string", "--tol", "0.2", "--sizes", "4,8", "--integrators", "euler,rk4"]
     )
     pick = data["recommendation"]
     assert data["quantity"] == "mode_1_frequency_hz"
@@ -227,8 +246,8 @@ def test_audit_answers_with_its_own_setting_and_the_pick(shipped_audit):
     )
 
 
-def test_frequency_answers_with_its_band_resonances_and_cheapest_setting(cli):
-    data = assert_prints_its_json_first(cli, ["frequency", "car"])
+def test_frequency_answers_with_its_band_resonances_and_cheapest_setting(cli, monkeypatch):
+    data = assert_prints_its_json_first(cli, monkeypatch, ["frequency", "car"])
     assert data["resonances"] and data["within_tol_hz"] is not None
     assert_answer_from_json(
         data,
@@ -262,9 +281,11 @@ def test_friction_settings_answers_per_case_and_its_values_carry_units():
         assert any(_matches(value, half, n) for n in numbers_of(case)), f"{words!r} is no number of the case"
 
 
-def test_the_random_load_studies_print_their_json_question_and_answer_first(cli):
+def test_the_random_load_studies_print_their_json_question_and_answer_first(cli, monkeypatch):
     cable = ["--set", "n_elements=9", "--set", "damper_position=30", "--set", "damper_coefficient=4e4"]
-    data = assert_prints_its_json_first(cli, ["rms", "stay_cable", "--seeds", "2", "--record", "20", *cable])
+    data = assert_prints_its_json_first(
+        cli, monkeypatch, ["rms", "stay_cable", "--seeds", "2", "--record", "20", *cable]
+    )
     assert_answer_from_json(data, inside=data["inside"]) if "inside" in data else assert_answer_from_json(data)
 
 

@@ -319,8 +319,9 @@ def _fundamental(t: np.ndarray, sigma: float, wn2: float, b2: float, gamma: floa
 
     if b2 > 0.0:
         osc = ~series
-        C[osc] = np.cos(gamma * t[osc])
-        S[osc] = np.sin(gamma * t[osc]) / gamma
+        zo = z[osc]  # gamma t, formed once
+        C[osc] = np.cos(zo)
+        S[osc] = np.sin(zo) / gamma
         exp_branch = np.zeros(t.shape, dtype=bool)
     else:
         # Overdamped: cosh/sinh only while they cannot overflow or cancel.
@@ -330,11 +331,17 @@ def _fundamental(t: np.ndarray, sigma: float, wn2: float, b2: float, gamma: floa
         exp_branch = z > 1.0
 
     direct = ~exp_branch
-    Ed, Cd, Sd = E[direct], C[direct], S[direct]
-    P[direct] = Ed * (Cd + sigma * Sd)
-    Q[direct] = Ed * Sd
-    dP[direct] = -wn2 * (Ed * Sd)
-    dQ[direct] = Ed * (Cd - sigma * Sd)
+    if np.all(direct):  # every point (always so with beta^2 >= 0): the same products without gathering them
+        P[:] = E * (C + sigma * S)
+        Q[:] = E * S
+        dP[:] = -wn2 * (E * S)
+        dQ[:] = E * (C - sigma * S)
+    else:
+        Ed, Cd, Sd = E[direct], C[direct], S[direct]
+        P[direct] = Ed * (Cd + sigma * Sd)
+        Q[direct] = Ed * Sd
+        dP[direct] = -wn2 * (Ed * Sd)
+        dQ[direct] = Ed * (Cd - sigma * Sd)
     # Fully decayed points (e^{-sigma t} == 0) are exactly at rest even when
     # the phase beta t has overflowed.
     gone = direct & (E == 0.0)

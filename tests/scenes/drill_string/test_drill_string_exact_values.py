@@ -17,7 +17,6 @@ import scipy.integrate
 import scipy.optimize
 
 from springlab.exact.linearize import linearize
-from springlab.runs.run import run_scenario
 from springlab.scenes.drill_string import continuum
 from springlab.scenes.drill_string.answers import rod_of
 
@@ -69,9 +68,9 @@ def _free_start_up(model, acceleration: float, ramp: float, duration: float):
 
 
 @pytest.fixture(scope="module")
-def spin_up():
-    result = run_scenario("drill_string", "spin_up")
-    return result
+def spin_up(scenario_run):
+    """The spin-up at its own settings: the session's run of it (tests/conftest.py)."""
+    return scenario_run("drill_string", "spin_up")
 
 
 @pytest.mark.slow

@@ -183,8 +183,8 @@ def test_the_runs_error_in_dt_is_fourth_order_for_rk4():
 
 
 @pytest.mark.slow
-def test_the_breakaway_run_meets_the_exact_stick_slip_and_the_continuum():
-    result = run_scenario("drill_string", "breakaway")
+def test_the_breakaway_run_meets_the_exact_stick_slip_and_the_continuum(scenario_run):
+    result = scenario_run("drill_string", "breakaway")  # the session's run of the scenario (tests/conftest.py)
     q = result.quantities
     assert result.passed and {c.name for c in result.checks} == {
         "breakaway_time_s",
@@ -200,8 +200,8 @@ def test_the_breakaway_run_meets_the_exact_stick_slip_and_the_continuum():
 
 
 @pytest.mark.slow
-def test_the_spin_up_run_is_exact_and_the_continuum_within_its_discretization():
-    result = run_scenario("drill_string", "spin_up")
+def test_the_spin_up_run_is_exact_and_the_continuum_within_its_discretization(scenario_run):
+    result = scenario_run("drill_string", "spin_up")  # the session's run of the scenario (tests/conftest.py)
     q = result.quantities
     assert result.passed
     # the run's bit speed is the N-element model's to its tolerance; its gap to the continuum is the model's

@@ -7,7 +7,8 @@
   finite-difference columns in one batch) from the candidate's initial state,
   and compared at the recorded times (`modify_residual`);
 * `sysid.optimize` with MuJoCo's Levenberg-Marquardt (`mujoco.minimize`) finds
-  the estimate; `check_identifiable` refuses a rank-deficient Jacobian.
+  the estimate; `check_identifiable` refuses a rank-deficient Jacobian. A candidate
+  whose model or rollout the fit made lately reuses it (`candidates`): the same numbers.
 
 The model is simulated with RK4 on its own even grid, whose timestep follows from the accuracy the fit
 needs, not from the sample rate, and is read at the recorded times by cubic Hermite interpolation of
@@ -63,7 +64,7 @@ from springlab.runs import compare
 from springlab.scenes.base import Case, Reference, Scenario
 from springlab.sim.simulate import quiet_mujoco
 
-from . import reductions
+from . import candidates, reductions
 from .data import Record, noise_level
 from .models import FitModel
 
@@ -151,6 +152,8 @@ class Problem:
         #: the record reduced to at most 5 rows per grid step (module docstring), or None: fitted per sample
         self.compression: reductions.Grouped | None = None
         self._compressed_delay = 0.0
+        #: the latest compiled models and rollouts, and the rollouts' MjData (springlab.studies.fit.candidates)
+        self.kept = candidates.Kept()
         self.set_grid(start)
         # a thread pool costs ~5 ms per rollout call: worth it only for long batches
         self.threads = 2 if self.steps * (len(free) + 1) >= 200_000 and (os.cpu_count() or 1) > 1 else 1
@@ -167,12 +170,14 @@ class Problem:
         stable anywhere in the box)."""
         span = self.span
         reach = 1.1 * span if "delay" in self.free else span
+        described = dt is None  # choose_dt describes the grid at the dt it chooses
         if dt is None:
             dt, self.grid = choose_dt(self, values)
         if stable_rate is not None and stable_rate > 0 and dt > STABLE_RATE_DT / stable_rate:
-            dt = STABLE_RATE_DT / stable_rate
+            dt, described = STABLE_RATE_DT / stable_rate, False
             self.grid["rule"] = f"{self.grid['rule']}; stable at the fastest pole in the starts' box"
-        self.grid.update(_described(self, values, dt))
+        if not described:
+            self.grid.update(_described(self, values, dt))
         self.dt = dt
         self.steps = int(math.ceil(reach / self.dt)) + 3
         if self.steps > 5_000_000:
@@ -237,12 +242,17 @@ class Problem:
         return self.compile(scene_params)
 
     def compile(self, scene_params: dict[str, float]) -> mujoco.MjModel:
-        """The candidate's MjModel, set to RK4 at the fit's dt [s]."""
-        with quiet_mujoco():
-            model = self.spec(scene_params).compile()
-        model.opt.integrator = int(mujoco.mjtIntegrator.mjINT_RK4)
-        model.opt.timestep = self.dt
-        return model
+        """The candidate's MjModel, set to RK4 at the fit's dt [s] (the latest ones kept: a model depends on the
+        scene's parameters and dt alone)."""
+
+        def compiled() -> mujoco.MjModel:
+            with quiet_mujoco():
+                model = self.spec(scene_params).compile()
+            model.opt.integrator = int(mujoco.mjtIntegrator.mjINT_RK4)
+            model.opt.timestep = self.dt
+            return model
+
+        return self.kept.model(self.dt, scene_params, compiled)
 
     def spec(self, scene_params: dict[str, float]) -> mujoco.MjSpec:
         """The scene's MjSpec with its edits for these parameters and the signal's sensor."""
@@ -258,13 +268,20 @@ class Problem:
         )
         return spec
 
-    def initial(self, model: mujoco.MjModel, values: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
-        """(full physics state at t = 0, (steps + 1, nu) controls) of a candidate."""
+    def initial(
+        self, model: mujoco.MjModel, values: dict[str, float], scratch: mujoco.MjData | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(full physics state at t = 0, (steps + 1, nu) controls) of a candidate; `scratch`: an MjData of a model
+        of the same sizes to work in (reset first: a reset MjData is a new one, without the ~0.5 ms of making it)."""
         # the candidate's model carries the fit's sensor besides the scene's physics
         case = Case(self.scene, self.scenario, self.how.scene_params(values, self.base, self.modal), model)
         setup = case.setup(self.steps, self.dt)
         qpos, qvel = self.how.initial(case, values["x0"], values["v0"])
-        data = mujoco.MjData(model)
+        if scratch is None:
+            data = mujoco.MjData(model)
+        else:
+            data = scratch
+            mujoco.mj_resetData(model, data)
         data.qpos[:], data.qvel[:] = qpos, qvel
         if setup.act is not None:
             data.act[:] = setup.act
@@ -287,29 +304,42 @@ class Problem:
         param_dicts: Sequence[sysid.ParameterDict],
         **mappings: Any,
     ) -> Sequence[sysid.SystemTrajectory]:
-        """sysid's custom rollout: each candidate from its own initial state and controls."""
+        """sysid's custom rollout: each candidate from its own initial state and controls. A candidate whose
+        model, initial state and controls equal a kept rollout's is that rollout (springlab.studies.fit.candidates;
+        `rollouts` still counts it: the candidates the optimizer asked for). sysid hands no MjData (`solve` asks
+        for none): the fit's own serve every call."""
         from mujoco import sysid
 
-        states, controls = [], []
+        keys, states, controls = [], [], []
         grid = np.arange(self.steps + 1) * self.dt
+        datas = self.kept.datas(models[0], self.threads)
         for model, params in zip(models, param_dicts):
-            state, control = self.initial(model, self.values_of(params))
+            values = self.values_of(params)
+            state, control = self.initial(model, values, datas[0])
+            scene_params = self.how.scene_params(values, self.base, self.modal)
+            keys.append(candidates.rollout_key(self.dt, self.steps, scene_params, state, control))
             states.append(state)
             controls.append(sysid.TimeSeries(grid, control))
-        start = _time.perf_counter()
-        with quiet_mujoco():
-            out = sysid.sysid_rollout(
-                models=list(models),
-                datas=datas,
-                control_signal=controls,
-                initial_states=states,
-                rollout_signal_mapping=mappings.get("rollout_signal_mapping"),
-                rollout_state_mapping=mappings.get("rollout_state_mapping"),
-                ctrl_mapping=mappings.get("ctrl_mapping"),
-            )
-        self.rollout_time += _time.perf_counter() - start
+        for data in datas:  # handed to the rollout as new ones (a reset MjData is a new one)
+            mujoco.mj_resetData(models[0], data)
+
+        def simulate(new: list[int]) -> Sequence[sysid.SystemTrajectory]:
+            start = _time.perf_counter()
+            with quiet_mujoco():
+                out = sysid.sysid_rollout(
+                    models=[models[i] for i in new],
+                    datas=datas,
+                    control_signal=[controls[i] for i in new],
+                    initial_states=[states[i] for i in new],
+                    rollout_signal_mapping=mappings.get("rollout_signal_mapping"),
+                    rollout_state_mapping=mappings.get("rollout_state_mapping"),
+                    ctrl_mapping=mappings.get("ctrl_mapping"),
+                )
+            self.rollout_time += _time.perf_counter() - start
+            return out
+
         self.rollouts += len(models)
-        return out
+        return self.kept.rollouts(keys, simulate)
 
     def modify_residual(
         self,
@@ -441,7 +471,7 @@ def solve(problem: Problem, record: Record) -> dict[str, Any]:
         build_model=problem.build_model,
         custom_rollout=problem.rollout,
         modify_residual=problem.modify_residual,
-        n_threads=problem.threads,
+        n_threads=0,  # sysid's MjData: the problem's own (`Problem.kept`)
         resample_true=False,
     )
     params = _parameter_dict(problem)
@@ -574,8 +604,9 @@ def _roundoff(span: float, dt: float, size: float) -> float:
     return compare.ROUNDOFF_PER_STEP * span / dt * size
 
 
-def choose_dt(problem: Problem, values: dict[str, float]) -> tuple[float, dict[str, Any]]:
-    """The grid's timestep [s] for the fit's accuracy at `values`, and how it was chosen (module docstring)."""
+def choose_dt(problem: Problem, values: dict[str, float], describe: bool = True) -> tuple[float, dict[str, Any]]:
+    """The grid's timestep [s] for the fit's accuracy at `values`, and how it was chosen (module docstring), with
+    the grid's description at it (`_described`) unless `describe` is False (`Problem.set_grid` describes it)."""
     span = problem.span
     n = problem.samples
     needed = ACCURACY_IN_SE * problem.noise / math.sqrt(n)
@@ -587,7 +618,7 @@ def choose_dt(problem: Problem, values: dict[str, float]) -> tuple[float, dict[s
     if system is None or rate <= 0:
         dt = span / 200.0
         facts.update(rule="span / 200: the model is a polynomial, which RK4 integrates exactly")
-        return dt, facts | _described(problem, values, dt)
+        return dt, facts | (_described(problem, values, dt) if describe else {})
     eigenvalues = np.linalg.eigvals(system[0])
     exact = OMEGA_DT / rate
     # the bound grows as h^4 (leading order): scale it from the exact grid's
@@ -605,7 +636,7 @@ def choose_dt(problem: Problem, values: dict[str, float]) -> tuple[float, dict[s
         if dt > limit:
             dt, rule = limit, why
     facts["rule"] = rule
-    return dt, facts | _described(problem, values, dt)
+    return dt, facts | (_described(problem, values, dt) if describe else {})
 
 
 def _described(problem: Problem, values: dict[str, float], dt: float) -> dict[str, Any]:

@@ -333,9 +333,12 @@ def _identify(
     # the grid was chosen at the start: refine it once where the estimate needs a finer one, or where the
     # simulation, measured against the closed form at the estimate, moves it more than the fit allows
     estimate = problem.values(solved["x"])
-    needed, facts = choose_dt(problem, estimate)
-    ratio = accuracy(problem, solved)["ratio"]
-    if ratio > 1.0 or problem.dt > 1.5 * needed:
+    needed, facts = choose_dt(problem, estimate, describe=False)  # set_grid describes a refined grid
+    numerics = accuracy(problem, solved)
+    ratio = numerics["ratio"]
+    if not (ratio > 1.0 or problem.dt > 1.5 * needed):
+        solved["accuracy"] = numerics  # the estimate's, on the grid it was solved on: `_finish` reads it
+    else:
         problem.start = dict(estimate)
         if ratio > 1.0 and problem.dt * (0.8 / ratio) ** 0.25 < needed:
             # the error grows as dt^4: 0.8 of what the fit allows
@@ -468,7 +471,7 @@ def _finish(
     derived = {k: v for k, v in derived.items() if k not in free and same.get(k) not in free}
     params = how.scene_params(values, problem.base, problem.modal)
     curves = _curves(problem, x, covariance, quantile) if isinstance(how, PolynomialModel) else {}
-    numerics = accuracy(problem, solved)
+    numerics = solved["accuracy"] if "accuracy" in solved else accuracy(problem, solved)
     cross = fit_results.cross_check(problem, x, half, fitted, numerics["effect"], scale)
     judged = fit_results.convergence(problem, solved, covariance, numerics, cross)
     level = values["offset"] + (how.equilibrium(params) if record.signal == "pos" else 0.0)

@@ -34,6 +34,7 @@ moment of the release between samples biases nothing.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from typing import Any
 
@@ -221,87 +222,18 @@ def _change_point(
     exit_: int,
 ) -> tuple[float, float, int]:
     """(F, its false-alarm threshold, the index of the estimated release) on the record's beginning."""
-    import scipy.optimize  # here: scipy.optimize costs start-up time to every command
-
-    modal = how.modal(names)
-    start = how.start(record, base, fixed, names, force)
-    rate = how.fastest_rate(start, base, modal)
-    t_all = record.model_time
-    end = t_all.size
-    if rate > 0:
-        end = int(np.searchsorted(t_all, t_all[exit_] + WINDOW_PERIODS * 2 * math.pi / rate, side="right"))
-    end = max(end, min(t_all.size, 2 * exit_ + 4 * len(names)))
-    stride = max(1, math.ceil(end / MAX_POINTS))
-    rows = np.arange(0, end, stride)
-    t, y = t_all[rows], record.values[rows]
-    candidates = [int(j) for j in range(1, rows.size) if MIN_HELD <= rows[j] <= exit_]
-    if not candidates:
-        raise ValueError("the record is read too sparsely near its start")
-    candidates = candidates[:: max(1, math.ceil(len(candidates) / MAX_CANDIDATES))]
-
-    def values_of(vector: np.ndarray) -> dict[str, float]:
-        values = dict(start, delay=0.0)
-        values.update(zip(names, (float(v) for v in vector)))
-        return values
-
-    def signal(vector: np.ndarray, release: float) -> np.ndarray:
-        """H1(release) at the window's times (H0 when release = 0)."""
-        values = values_of(vector)
-        params = how.scene_params(values, base, modal)
-        s = np.maximum(t - release, 0.0)
-        moving = how.closed_form(s, params, values, record.signal, force)
-        if record.signal == "pos":
-            rest = how.closed_form(np.zeros(1), params, values, record.signal, force)[0]
-        else:
-            rest = values["offset"]
-        return np.where(t < release, rest, moving)
-
-    bounds = np.array([how.bounds(n, start[n], record) for n in names]).T
-    inside = (bounds[0] + 1e-9 * (bounds[1] - bounds[0]), bounds[1] - 1e-9 * (bounds[1] - bounds[0]))
-
-    def fitted(vector: np.ndarray, release: float) -> np.ndarray:
-        """The least-squares estimate of H1(release) (H0 at 0) from `vector` on."""
-        return scipy.optimize.least_squares(
-            lambda v: (signal(v, release) - y) / sigma, np.clip(vector, *inside), bounds=inside, x_scale="jac"
-        ).x
-
-    def residual_sums(
-        x: np.ndarray, release: float, h0: np.ndarray | None = None, spread: float = 1.0
-    ) -> tuple[float, np.ndarray, int]:
-        """H1(release) linearised at x: RSS / sigma^2 of the data, of H0's signal h0 plus each noise draw of
-        standard deviation `spread` sigma (in spread^2 sigma^2; empty without h0), and the residual's degrees of
-        freedom."""
-        steps = np.array([max(abs(v), 1e-3 * _typical(n, y, t)) for n, v in zip(names, x)])
-        steps *= np.array([1.0 if n in LINEAR else 1e-6 for n in names])
-        base_signal = signal(x, release)
-        columns = np.column_stack(
-            [(signal(x + step * np.eye(len(names))[i], release) - base_signal) / step for i, step in enumerate(steps)]
-        )
-        u, s, _ = np.linalg.svd(columns, full_matrices=False)
-        basis = u[:, s > 1e-10 * s[0]] if s.size and s[0] > 0 else u[:, :0]
-        data = (y - base_signal) / sigma
-        explained = basis.T @ data
-        rss, dof = float(data @ data - explained @ explained), t.size - basis.shape[1]
-        if h0 is None:
-            return rss, np.empty(0), dof
-        # |d + e|^2 - |B^T (d + e)|^2 for each draw e, with d the gap between H0's signal and this model's base
-        gap = (h0 - base_signal) / (sigma * spread)
-        # einsum, not BLAS: a threaded BLAS on a busy machine takes 10-40 ms for this 5 x n x DRAWS product
-        projected = np.einsum("ij,ik->jk", basis, noise) + (basis.T @ gap)[:, None]
-        sums = noise_sums + 2.0 * np.einsum("i,ik->k", gap, noise) + gap @ gap - np.sum(projected**2, axis=0)
-        return rss, sums, dof
-
-    x0 = fitted(np.array([start[n] for n in names], float), 0.0)
-    noise = np.random.default_rng(SEED).standard_normal((t.size, DRAWS))
-    noise_sums = np.sum(noise * noise, axis=0)
-    h0 = signal(x0, 0.0)
-    rss0, _, dof0 = residual_sums(x0, 0.0)
+    window = _Window(how, record, base, fixed, names, force, sigma, exit_)
+    t, candidates = window.t, window.candidates
+    x0 = window.fitted(np.array([window.start[n] for n in names], float), 0.0)
+    noise, noise_sums = _draws(t.size)
+    h0 = window.signals(x0, np.zeros(1))[0]
+    [(rss0, _, dof0)] = window.residual_sums(x0, np.zeros(1))
     # the draws' noise: H0's own residual (studentised below, so the record's noise level cancels)
     spread = math.sqrt(max(rss0, 1e-300) / max(dof0, 1))
-    _, noise0, _ = residual_sums(x0, 0.0, h0, spread)
+    [(_, noise0, _)] = window.residual_sums(x0, np.zeros(1), (h0, noise, noise_sums, spread))
     best, best_noise, best_j = -math.inf, np.full(DRAWS, -math.inf), candidates[0]
-    for j in candidates:
-        rss, noise_rss, dof = residual_sums(x0, float(t[j]), h0, spread)
+    sums = window.residual_sums(x0, t[candidates], (h0, noise, noise_sums, spread))
+    for j, (rss, noise_rss, dof) in zip(candidates, sums):
         # F = (RSS_H0 - RSS_H1) / (RSS_H1 / dof): the drop in units of H1's own noise estimate
         statistic = (rss0 - rss) / max(rss / dof, 1e-300)
         if statistic > best:
@@ -312,15 +244,128 @@ def _change_point(
         # H0's estimate is a poor centre for a held record: locate the release with H1 refitted, twice
         coarse = max(1, len(candidates) // 24)
         for _ in range(2):
-            x1 = fitted(x0, float(t[best_j]))
-
-            def misfit(j: int, x1: np.ndarray = x1) -> float:
-                return residual_sums(x1, float(t[j]))[0]
-
-            best_j = min(candidates[::coarse], key=misfit)  # every coarse-th candidate, then its neighbours
+            x1 = window.fitted(x0, float(t[best_j]))
+            best_j = window.least_misfit(x1, candidates[::coarse])  # every coarse-th candidate, then its neighbours
             near = candidates.index(best_j)
-            best_j = min(candidates[max(near - coarse, 0) : near + coarse + 1], key=misfit)
-    return best, threshold, int(rows[best_j])
+            best_j = window.least_misfit(x1, candidates[max(near - coarse, 0) : near + coarse + 1])
+    return best, threshold, int(window.rows[best_j])
+
+
+@functools.lru_cache(maxsize=4)
+def _draws(size: int) -> tuple[np.ndarray, np.ndarray]:
+    """The threshold's pure-noise draws, (size, DRAWS) standard normal from the fixed SEED, and each draw's sum of
+    squares (DRAWS,) [-]: the same for every record of a window's size, made once (read-only)."""
+    noise = np.random.default_rng(SEED).standard_normal((size, DRAWS))
+    sums = np.sum(noise * noise, axis=0)
+    noise.flags.writeable = sums.flags.writeable = False
+    return noise, sums
+
+
+class _Window:
+    """The record's beginning the test looks at (module docstring), and H1(tau) on it for many tau at once."""
+
+    def __init__(
+        self,
+        how: FitModel,
+        record: Record,
+        base: dict[str, float],
+        fixed: dict[str, float],
+        names: list[str],
+        force: float,
+        sigma: float,
+        exit_: int,
+    ):
+        self.how, self.record, self.base, self.names, self.force, self.sigma = how, record, base, names, force, sigma
+        self.modal = how.modal(names)
+        self.start = how.start(record, base, fixed, names, force)
+        rate = how.fastest_rate(self.start, base, self.modal)
+        t_all = record.model_time
+        end = t_all.size
+        if rate > 0:
+            end = int(np.searchsorted(t_all, t_all[exit_] + WINDOW_PERIODS * 2 * math.pi / rate, side="right"))
+        end = max(end, min(t_all.size, 2 * exit_ + 4 * len(names)))
+        stride = max(1, math.ceil(end / MAX_POINTS))
+        #: the window's sample indices in the record, their times since the origin [s] and values [signal unit]
+        self.rows = np.arange(0, end, stride)
+        self.t, self.y = t_all[self.rows], record.values[self.rows]
+        candidates = [int(j) for j in range(1, self.rows.size) if MIN_HELD <= self.rows[j] <= exit_]
+        if not candidates:
+            raise ValueError("the record is read too sparsely near its start")
+        #: the candidate release times' places in the window
+        self.candidates = candidates[:: max(1, math.ceil(len(candidates) / MAX_CANDIDATES))]
+        bounds = np.array([how.bounds(n, self.start[n], record) for n in names]).T
+        self.inside = (bounds[0] + 1e-9 * (bounds[1] - bounds[0]), bounds[1] - 1e-9 * (bounds[1] - bounds[0]))
+
+    def values_of(self, vector: np.ndarray) -> dict[str, float]:
+        """Every fit name's value: the start, with `names` from `vector`."""
+        values = dict(self.start, delay=0.0)
+        values.update(zip(self.names, (float(v) for v in vector)))
+        return values
+
+    def signals(self, vector: np.ndarray, releases: np.ndarray) -> np.ndarray:
+        """(releases, window) H1(release) at the window's times for each release [s] (H0 at 0): one closed-form
+        call for them all, element by element the calls one release at a time would make."""
+        values = self.values_of(vector)
+        params = self.how.scene_params(values, self.base, self.modal)
+        t, signal = self.t, self.record.signal
+        s = np.maximum(t[None, :] - releases[:, None], 0.0)
+        moving = self.how.closed_form(s.ravel(), params, values, signal, self.force).reshape(s.shape)
+        if signal == "pos":
+            rest = self.how.closed_form(np.zeros(1), params, values, signal, self.force)[0]
+        else:
+            rest = values["offset"]
+        return np.where(t[None, :] < releases[:, None], rest, moving)
+
+    def fitted(self, vector: np.ndarray, release: float) -> np.ndarray:
+        """The least-squares estimate of H1(release) (H0 at 0) from `vector` on."""
+        import scipy.optimize  # here: scipy.optimize costs start-up time to every command
+
+        at = np.array([release])
+        return scipy.optimize.least_squares(
+            lambda v: (self.signals(v, at)[0] - self.y) / self.sigma,
+            np.clip(vector, *self.inside),
+            bounds=self.inside,
+            x_scale="jac",
+        ).x
+
+    def least_misfit(self, x: np.ndarray, among: list[int]) -> int:
+        """The candidate of `among` whose H1, linearised at x, leaves the least residual (the first such)."""
+        misfits = [rss for rss, _, _ in self.residual_sums(x, self.t[among])]
+        return among[min(range(len(among)), key=misfits.__getitem__)]
+
+    def residual_sums(
+        self,
+        x: np.ndarray,
+        releases: np.ndarray,
+        draws: tuple[np.ndarray, np.ndarray, np.ndarray, float] | None = None,
+    ) -> list[tuple[float, np.ndarray, int]]:
+        """For each release [s], H1(release) linearised at x: RSS / sigma^2 of the data, of H0's signal h0 plus
+        each noise draw of standard deviation `spread` sigma (in spread^2 sigma^2; empty without `draws`, which
+        are (h0, noise, noise's sums of squares, spread)), and the residual's degrees of freedom."""
+        names, t, y, sigma = self.names, self.t, self.y, self.sigma
+        steps = np.array([max(abs(v), 1e-3 * _typical(n, y, t)) for n, v in zip(names, x)])
+        steps *= np.array([1.0 if n in LINEAR else 1e-6 for n in names])
+        base_signals = self.signals(x, releases)
+        moved = [self.signals(x + step * np.eye(len(names))[i], releases) for i, step in enumerate(steps)]
+        out = []
+        for k, base_signal in enumerate(base_signals):
+            columns = np.column_stack([(moved[i][k] - base_signal) / step for i, step in enumerate(steps)])
+            u, s, _ = np.linalg.svd(columns, full_matrices=False)
+            basis = u[:, s > 1e-10 * s[0]] if s.size and s[0] > 0 else u[:, :0]
+            data = (y - base_signal) / sigma
+            explained = basis.T @ data
+            rss, dof = float(data @ data - explained @ explained), t.size - basis.shape[1]
+            if draws is None:
+                out.append((rss, np.empty(0), dof))
+                continue
+            h0, noise, noise_sums, spread = draws
+            # |d + e|^2 - |B^T (d + e)|^2 for each draw e, with d the gap between H0's signal and this model's base
+            gap = (h0 - base_signal) / (sigma * spread)
+            # einsum, not BLAS: a threaded BLAS on a busy machine takes 10-40 ms for this 5 x n x DRAWS product
+            projected = np.einsum("ij,ik->jk", basis, noise) + (basis.T @ gap)[:, None]
+            sums = noise_sums + 2.0 * np.einsum("i,ik->k", gap, noise) + gap @ gap - np.sum(projected**2, axis=0)
+            out.append((rss, sums, dof))
+        return out
 
 
 def _first_off(y: np.ndarray, level: float, band: float, begin: int = 0) -> int | None:
