@@ -34,6 +34,7 @@ import mujoco
 import numpy as np
 
 from springlab.errors import DivergedError
+from springlab.exact.linear import single_threaded_blas
 from springlab.exact.model_at_point import ModelAtPoint
 from springlab.exact.point_facts import PointFacts, Start, start_near
 from springlab.exact.predicted_limits import Prediction, predictions
@@ -155,28 +156,31 @@ def audit(
     runs_for = resolve_duration(duration, source.duration)
     check_perturbation(source.model, options.perturb)
     run = _runner(source, executor, nthread)
-    # the facts first: the point, what its modes predict, where runs start, what MuJoCo does there (one pass)
-    at = ModelAtPoint.at(source.model, keyframe, settle_s=options.settle_s)
-    names = list(dict.fromkeys([*options.integrators, _NAMES[int(at.model.opt.integrator)]]))
-    predicted = predictions(at, names)
-    start = start_near(at, options.perturb, runs_for, source.start)
-    facts = PointFacts.measure(
-        at,
-        start.setup,
-        runs_for,
-        guesses={name: prediction.limit_s for name, prediction in predicted.items()},
-        above=CONFIRM_ABOVE,
-        rest_within=rest_within(options.perturb),
-    )
-    # then the verdicts on them, and the runs they call for
-    limits = _limits(at, start, options, facts, predicted, runs_for, run)
-    clock.stamp("limits")
-    swept = _sweep(at, start.setup, options, limits.limits, runs_for, run)
-    clock.stamp("sweep")
-    judged = _reference(at, start, options, limits.point_state, swept, run)
-    clock.stamp("reference")
-    scored = _score(at, start, options, limits, swept, judged, run)
-    clock.stamp("end")
+    # the exact side on one BLAS thread (exact.linear.single_threaded_blas): its small solves and expms would
+    # each wait for a second BLAS thread on cores the runs and other processes keep busy
+    with single_threaded_blas():
+        # the facts first: the point, what its modes predict, where runs start, what MuJoCo does there (one pass)
+        at = ModelAtPoint.at(source.model, keyframe, settle_s=options.settle_s)
+        names = list(dict.fromkeys([*options.integrators, _NAMES[int(at.model.opt.integrator)]]))
+        predicted = predictions(at, names)
+        start = start_near(at, options.perturb, runs_for, source.start)
+        facts = PointFacts.measure(
+            at,
+            start.setup,
+            runs_for,
+            guesses={name: prediction.limit_s for name, prediction in predicted.items()},
+            above=CONFIRM_ABOVE,
+            rest_within=rest_within(options.perturb),
+        )
+        # then the verdicts on them, and the runs they call for
+        limits = _limits(at, start, options, facts, predicted, runs_for, run)
+        clock.stamp("limits")
+        swept = _sweep(at, start.setup, options, limits.limits, runs_for, run)
+        clock.stamp("sweep")
+        judged = _reference(at, start, options, limits.point_state, swept, run)
+        clock.stamp("reference")
+        scored = _score(at, start, options, limits, swept, judged, run)
+        clock.stamp("end")
     return Audit(
         model=source.label,
         linear=at.linear,
