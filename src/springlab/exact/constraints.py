@@ -103,35 +103,51 @@ def _name(model: mujoco.MjModel, kind: str, index: int) -> str:
     return str(index)
 
 
-def active_constraints(model: mujoco.MjModel, data: mujoco.MjData) -> tuple[set[str], set[str]]:
+def active_constraints(
+    model: mujoco.MjModel, data: mujoco.MjData, labels: dict[tuple[int, ...], tuple[str, str | None]] | None = None
+) -> tuple[set[str], set[str]]:
     """(active elements, the dry-friction ones among them) after a forward pass in `data`
-    (names as `ConstraintState.elements`)."""
+    (names as `ConstraintState.elements`).
+
+    `labels`: the names of what a row constrains (its type and element, a contact's geoms), kept between
+    the calls along one run (`watch`), which meets the same contacts and limits at many steps."""
+    memo: dict[tuple[int, ...], tuple[str, str | None]] = {} if labels is None else labels
     elements: set[str] = set()
     dry: set[str] = set()
-    for row in range(data.nefc):
-        kind_id, index = int(data.efc_type[row]), int(data.efc_id[row])
+    nefc = data.nefc
+    geoms = data.contact.geom
+    # the rows of one contact (its friction directions) or one element share a type and id: named once
+    for kind_id, index in set(zip(data.efc_type[:nefc].tolist(), data.efc_id[:nefc].tolist())):
         kind = CONSTRAINT_KINDS.get(kind_id, "constraint")
-        if kind == "contact":
-            contact = data.contact[index]
-            a, b = (_name(model, "geom", g) for g in contact.geom)
-            label = f"contact {a!r}/{b!r}"
-            if kind_id in _FRICTIONAL_CONTACTS:
-                dry.add(f"dry friction: contact {a!r}/{b!r}")
-        elif kind_id == int(_CNSTR.mjCNSTR_FRICTION_DOF):
-            joint = int(model.dof_jntid[index])
-            label = f"dry friction: joint {_name(model, 'joint', joint)!r} (frictionloss)"
-            dry.add(label)
-        elif kind_id == int(_CNSTR.mjCNSTR_FRICTION_TENDON):
-            label = f"dry friction: tendon {_name(model, 'tendon', index)!r} (frictionloss)"
-            dry.add(label)
-        elif kind == "joint limit":
-            label = f"joint limit {_name(model, 'joint', index)!r}"
-        elif kind == "tendon limit":
-            label = f"tendon limit {_name(model, 'tendon', index)!r}"
-        else:
-            label = f"equality {_name(model, 'equality', index)!r}"
+        key = (kind_id, *geoms[index].tolist()) if kind == "contact" else (kind_id, index)
+        if key not in memo:
+            memo[key] = _label(model, kind_id, kind, key[1:])
+        label, friction = memo[key]
         elements.add(label)
+        if friction is not None:
+            dry.add(friction)
     return elements, dry
+
+
+def _label(model: mujoco.MjModel, kind_id: int, kind: str, element: tuple[int, ...]) -> tuple[str, str | None]:
+    """The name of a constraint row's element (`ConstraintState.elements`), and its dry-friction name (None: not
+    dry friction); `element`: a contact's two geoms, else the row's id."""
+    if kind == "contact":
+        a, b = (_name(model, "geom", g) for g in element)
+        friction = f"dry friction: contact {a!r}/{b!r}" if kind_id in _FRICTIONAL_CONTACTS else None
+        return f"contact {a!r}/{b!r}", friction
+    (index,) = element
+    if kind_id == int(_CNSTR.mjCNSTR_FRICTION_DOF):
+        label = f"dry friction: joint {_name(model, 'joint', int(model.dof_jntid[index]))!r} (frictionloss)"
+        return label, label
+    if kind_id == int(_CNSTR.mjCNSTR_FRICTION_TENDON):
+        label = f"dry friction: tendon {_name(model, 'tendon', index)!r} (frictionloss)"
+        return label, label
+    if kind == "joint limit":
+        return f"joint limit {_name(model, 'joint', index)!r}", None
+    if kind == "tendon limit":
+        return f"tendon limit {_name(model, 'tendon', index)!r}", None
+    return f"equality {_name(model, 'equality', index)!r}", None
 
 
 def summarize_constraints(elements: set[str], dry: set[str], qvel: float, qacc: float) -> ConstraintState:
@@ -167,6 +183,7 @@ class Watch:
 
 #: the fine watch run's timestep: the model's own / WATCH_REFINE (again, if that blows up)
 WATCH_REFINE = 4
+_BAD = list(BAD_WARNINGS)
 
 
 def watch(model: mujoco.MjModel, start: Setup, duration: float) -> Watch:
@@ -191,15 +208,18 @@ def watch(model: mujoco.MjModel, start: Setup, duration: float) -> Watch:
                 data.act[:] = start.act
             if start.control is not None and work.nu:
                 data.ctrl[:] = np.atleast_2d(start.control)[0]
+            labels: dict[tuple[int, ...], tuple[str, str | None]] = {}
+            # views into `data`, read after every step (the loop is in Python: keep each step's reads few)
+            qacc, qvel, warnings = data.qacc, data.qvel, data.warning.number
             for _ in range(max(1, round(duration / dt))):
                 mujoco.mj_step(work, data)  # leaves the constraints and qacc of the state it started from
                 if data.nefc:
-                    found, friction = active_constraints(work, data)
+                    found, friction = active_constraints(work, data, labels)
                     elements |= found
                     dry |= friction
-                peak_a = max(peak_a, float(np.max(np.abs(data.qacc), initial=0.0)))
-                speed = float(np.max(np.abs(data.qvel), initial=0.0))
-                if not math.isfinite(speed) or any(data.warning[w].number for w in BAD_WARNINGS):
+                peak_a = max(peak_a, float(np.abs(qacc).max(initial=0.0)))
+                speed = float(np.abs(qvel).max(initial=0.0))
+                if not math.isfinite(speed) or warnings[_BAD].any():
                     diverged = True
                     break
                 peak_v = max(peak_v, speed)

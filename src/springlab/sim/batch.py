@@ -141,8 +141,11 @@ def run_batched(jobs: Sequence[Job], *, nthread: int = 0) -> list[Trajectory | D
             batch.set_models(models)
         nq, nv, na = base.nq, base.nv, base.na
         starts = []
+        scratch: dict[int, mujoco.MjData] = {}  # one MjData per model object, reset for each of its jobs
         for i, job in enumerate(jobs):
-            state0 = initial_state(job.model, job.setup.qpos, job.setup.qvel, job.setup.act)
+            if id(job.model) not in scratch:
+                scratch[id(job.model)] = mujoco.MjData(job.model)
+            state0 = initial_state(job.model, job.setup.qpos, job.setup.qvel, job.setup.act, scratch[id(job.model)])
             batch.time[i] = 0.0
             batch.qpos[i] = state0[1 : 1 + nq]
             batch.qvel[i] = state0[1 + nq : 1 + nq + nv]

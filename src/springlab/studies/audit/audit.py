@@ -361,11 +361,13 @@ def _score(
     middle = sorted(dts)[len(dts) // 2]
     per_step = {name: cost_per_step(model, start.setup, name, middle) for name in dict.fromkeys([*names, own_name])}
     work = work_per_evaluation(model)
+    # timestep by timestep: the integrators' runs at one dt share the reference's samples (Reference.sampled)
+    errors = {(name, dt): run_error(at, swept.outcomes[(name, dt)], reference) for dt in dts for name in names}
     runs = []
     for name in names:
         confirmed = limits.limits[name].confirmed_limit_s  # only a confirmed limit makes a run beyond it
         for dt in dts:
-            error = run_error(at, swept.outcomes[(name, dt)], reference)
+            error = errors[(name, dt)]
             steps = round(swept.duration / dt)
             setting = Setting(name, dt)
             cost = counted_cost(name, steps, work)

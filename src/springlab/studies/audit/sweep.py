@@ -20,7 +20,6 @@ from SMOOTH (2^a and 3 x 2^a), whose lcm stays at twice the largest.
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 import math
 from collections.abc import Callable, Mapping, Sequence
@@ -65,6 +64,12 @@ RunJobs = Callable[[Sequence[Job]], list[Trajectory | DivergedError]]
 TIMING_STEPS = 1000
 #: ... or as many more as take at least this long [s]
 TIMING_MIN_S = 0.02
+#: ... up to this many
+TIMING_MAX_STEPS = 64 * TIMING_STEPS
+#: the cost per step is the best of this many runs of that length
+TIMING_REPEATS = 5
+#: a run shorter than TIMING_MIN_S sets the next length: this margin over the length its speed calls for
+TIMING_MARGIN = 1.25
 
 
 def checkpoint_spacing(dts: list[float], duration: float) -> float:
@@ -143,12 +148,33 @@ def _tangent_distance(model: mujoco.MjModel, a: np.ndarray, b: np.ndarray) -> np
     """|a - b|_inf per row of two qpos arrays, differenced in the tangent space."""
     if model.nq == model.nv:  # hinges and slides only: qpos is the tangent coordinate
         return np.max(np.abs(a - b), axis=1, initial=0.0)
-    out = np.empty(len(a))
-    dq = np.zeros(model.nv)
+    dq = np.zeros((len(a), model.nv))  # MuJoCo differences each row (quaternions), numpy takes every max at once
     for i in range(len(a)):
-        mujoco.mj_differentiatePos(model, dq, 1.0, b[i], a[i])
-        out[i] = np.max(np.abs(dq), initial=0.0)
-    return out
+        mujoco.mj_differentiatePos(model, dq[i], 1.0, b[i], a[i])
+    return np.max(np.abs(dq), axis=1, initial=0.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class Sampled:
+    """A reference at a run's sampled steps (`Reference.sampled`).
+
+    Attributes
+    ----------
+    rows
+        the run's step indices where the reference has a state.
+    qpos, qvel
+        the reference's states there [m or rad, m/s or rad/s], one row per index.
+    scale_q
+        max |q_ref - q_op|_inf over them, in the tangent space [m or rad].
+    scale_v
+        max |v_ref|_inf over them [m/s or rad/s].
+    """
+
+    rows: np.ndarray
+    qpos: np.ndarray
+    qvel: np.ndarray
+    scale_q: float
+    scale_v: float
 
 
 class Reference:
@@ -167,9 +193,30 @@ class Reference:
     kind = ""
     error_estimate = 0.0
     dt: float | None = None
+    #: the last `sampled` answer, kept for the next run of the same dt and steps (another integrator's)
+    _last: tuple[tuple[int, float, int], ModelAtPoint, Sampled] | None = None
 
     def states(self, dt: float, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         raise NotImplementedError
+
+    def sampled(self, at: ModelAtPoint, dt: float, steps: int) -> Sampled:
+        """The reference where `run_error` compares a run of `steps` steps of `dt` [s] (`sample_rows`), with
+        its scales about the point of `at`; the last answer is kept, so the runs of every integrator at one dt,
+        compared in turn, share one."""
+        key = (id(at), dt, steps)
+        if self._last is not None and self._last[0] == key:
+            return self._last[2]
+        rows = sample_rows(steps)
+        ref_q, ref_v, kept = self.states(dt, rows)
+        rows = rows[kept]
+        if len(rows) < 2:
+            found = Sampled(rows, ref_q, ref_v, 0.0, 0.0)
+        else:
+            origin = np.broadcast_to(at.point.qpos, ref_q.shape)
+            scale_q = float(np.max(_tangent_distance(at.model, ref_q, origin)))
+            found = Sampled(rows, ref_q, ref_v, scale_q, float(np.max(np.abs(ref_v), initial=0.0)))
+        self._last = (key, at, found)  # `at` held: its id is not reused while the key is kept
+        return found
 
 
 class TrajectoryReference(Reference):
@@ -239,17 +286,13 @@ def run_error(at: ModelAtPoint, outcome: Trajectory | DivergedError, reference: 
     """A run's error [-] (module docstring) at its sampled steps, None if it diverged."""
     if isinstance(outcome, DivergedError):
         return None
-    rows = sample_rows(len(outcome.time) - 1)
-    ref_q, ref_v, kept = reference.states(outcome.dt, rows)
-    rows = rows[kept]
-    if len(rows) < 2:
+    ref = reference.sampled(at, outcome.dt, len(outcome.time) - 1)
+    if len(ref.rows) < 2:
         return None
-    qpos, qvel = outcome.qpos[rows], outcome.qvel[rows]
-    model = at.model
-    scale_q = float(np.max(_tangent_distance(model, ref_q, np.broadcast_to(at.point.qpos, ref_q.shape))))
-    scale_v = float(np.max(np.abs(ref_v), initial=0.0))
-    err_q = float(np.max(_tangent_distance(model, qpos, ref_q)))
-    err_v = float(np.max(np.abs(qvel - ref_v), initial=0.0))
+    qpos, qvel = outcome.qpos[ref.rows], outcome.qvel[ref.rows]
+    scale_q, scale_v = ref.scale_q, ref.scale_v
+    err_q = float(np.max(_tangent_distance(at.model, qpos, ref.qpos)))
+    err_v = float(np.max(np.abs(qvel - ref.qvel), initial=0.0))
     if not (math.isfinite(err_q) and math.isfinite(err_v)):
         return math.inf
     return max(err_q / scale_q if scale_q > 0 else err_q, err_v / scale_v if scale_v > 0 else err_v)
@@ -304,12 +347,19 @@ def converged_reference(
         levels.append(coarse)
     dt, estimate, diffs = step, math.inf, []
     target = REFERENCE_FRACTION * tol
+    ran: dict[float, Trajectory | DivergedError] = {}  # dt [s] -> its run, including the level run ahead
     while True:
         dts = [dt] if levels else [2 * dt, dt]
         steps = [round(duration / d) for d in dts]
         if max(steps) > REFERENCE_MAX_STEPS:
             break
-        outcomes = run([Job(at.model, "rk4", d, s, start) for d, s in zip(dts, steps)])
+        # an estimate needs two differences, so until three levels the next one always runs: within the cap it
+        # runs in the same batch as these (the finest level would otherwise run alone, on one thread)
+        ahead = [dt / 2] if len(levels) + len(dts) < 3 and round(duration / (dt / 2)) <= REFERENCE_MAX_STEPS else []
+        wanted = [d for d in [*dts, *ahead] if d not in ran]
+        if wanted:
+            ran.update(zip(wanted, run([Job(at.model, "rk4", d, round(duration / d), start) for d in wanted])))
+        outcomes = [ran[d] for d in dts]
         finished = [o for o in outcomes if isinstance(o, Trajectory)]
         if len(finished) < len(outcomes):  # one diverged
             break
@@ -368,12 +418,21 @@ def _local(nthread: int) -> RunJobs:
 
 def cost_per_step(model: mujoco.MjModel, start: Setup, integrator: str, dt: float) -> float:
     """Wall time of one step [s] of `integrator` on `model`, run alone on the calling thread (springlab.sim.batch
-    .time_run, best of 5, over TIMING_STEPS steps or as many as take TIMING_MIN_S); a setting's wall time
-    is steps x this (MuJoCo's cost per step does not depend on dt; one long timing per integrator is
-    steadier on a loaded machine than many short ones)."""
+    .time_run): the best of TIMING_REPEATS runs of TIMING_STEPS steps, or of as many as take TIMING_MIN_S (at
+    most TIMING_MAX_STEPS); a setting's wall time is steps x this (MuJoCo's cost per step does not depend on dt;
+    one long timing per integrator is steadier on a loaded machine than many short ones).
+
+    A run shorter than TIMING_MIN_S is not repeated: its speed sets the next length (TIMING_MARGIN x the
+    steps that take TIMING_MIN_S at that speed), and only runs of the final length are repeated.
+    """
     steps = TIMING_STEPS
     while True:
-        seconds = time_run(Job(copy.copy(model), integrator, dt, steps, start), repeats=5, max_steps=steps)
-        if seconds >= TIMING_MIN_S or steps >= 64 * TIMING_STEPS:
-            return seconds / steps
-        steps *= 4
+        job = Job(model, integrator, dt, steps, start)  # time_run runs a copy: `model` is left as it was
+        seconds = time_run(job, repeats=1, max_steps=steps)
+        if seconds >= TIMING_MIN_S or steps >= TIMING_MAX_STEPS:
+            seconds = min(seconds, time_run(job, repeats=TIMING_REPEATS - 1, max_steps=steps))
+            if seconds >= TIMING_MIN_S or steps >= TIMING_MAX_STEPS:
+                return seconds / steps
+        # too short to time (a repeat came in under, on a loaded machine): longer, at the speed just measured
+        wanted = math.ceil(TIMING_MARGIN * steps * TIMING_MIN_S / max(seconds, 1e-12))
+        steps = min(max(wanted, steps + 1), TIMING_MAX_STEPS)
