@@ -242,12 +242,12 @@ class Problem:
         return self.compile(scene_params)
 
     def compile(self, scene_params: dict[str, float]) -> mujoco.MjModel:
-        """The candidate's MjModel, set to RK4 at the fit's dt [s] (the latest ones kept: a model depends on the
-        scene's parameters and dt alone)."""
+        """The candidate's MjModel, set to RK4 at the fit's dt [s] (the latest ones kept: a model depends on dt
+        and the scene parameters the scene's edit reads alone)."""
 
-        def compiled() -> mujoco.MjModel:
+        def compiled(noted: dict[str, float]) -> mujoco.MjModel:
             with quiet_mujoco():
-                model = self.spec(scene_params).compile()
+                model = self.spec(noted).compile()
             model.opt.integrator = int(mujoco.mjtIntegrator.mjINT_RK4)
             model.opt.timestep = self.dt
             return model

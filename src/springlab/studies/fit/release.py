@@ -251,14 +251,24 @@ def _change_point(
     return best, threshold, int(window.rows[best_j])
 
 
-@functools.lru_cache(maxsize=4)
+@functools.lru_cache(maxsize=64)
 def _draws(size: int) -> tuple[np.ndarray, np.ndarray]:
     """The threshold's pure-noise draws, (size, DRAWS) standard normal from the fixed SEED, and each draw's sum of
-    squares (DRAWS,) [-]: the same for every record of a window's size, made once (read-only)."""
-    noise = np.random.default_rng(SEED).standard_normal((size, DRAWS))
+    squares (DRAWS,) [-], read-only: the first `size` rows of one draw of MAX_POINTS rows, made once (the generator
+    fills an array row by row, so they are the numbers a draw of `size` rows gives)."""
+    assert size <= MAX_POINTS, "a window holds at most MAX_POINTS samples"
+    noise = _all_draws()[:size]
     sums = np.sum(noise * noise, axis=0)
-    noise.flags.writeable = sums.flags.writeable = False
+    sums.flags.writeable = False
     return noise, sums
+
+
+@functools.cache
+def _all_draws() -> np.ndarray:
+    """(MAX_POINTS, DRAWS) standard normal draws from SEED, read-only (4.8 MB, made once per process)."""
+    noise = np.random.default_rng(SEED).standard_normal((MAX_POINTS, DRAWS))
+    noise.flags.writeable = False
+    return noise
 
 
 class _Window:
