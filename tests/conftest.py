@@ -122,6 +122,16 @@ def shipped_audit():
 
 
 @pytest.fixture(scope="session")
+def slider_free_sweep():
+    """`tradeoff.sweep("slider", "free", timing_repeats=1)`: the full default slider/free sweep (5 integrators x 13
+    timesteps, one timing repeat to save time), computed once: read by tests/studies/test_tradeoff.py and by the
+    slider audit's agreement with the trade-off (tests/studies/audit/test_audit.py)."""
+    from springlab.studies import tradeoff
+
+    return tradeoff.sweep("slider", "free", timing_repeats=1)
+
+
+@pytest.fixture(scope="session")
 def scenario_run():
     """`run_scenario(scene, scenario)` at the scenario's own settings, computed once per scenario: call the
     fixture with the scene's and the scenario's names (the non-linear scene's chaos figures alone cost 5 s)."""

@@ -27,12 +27,6 @@ RECOMMENDATION_KEYS = {"tol", "integrator", "dt", "max_rel_error", "wall_time_s"
 }
 
 
-@pytest.fixture(scope="module")
-def slider_free_sweep():
-    """The full default slider/free sweep (5 integrators x 13 timesteps), one timing repeat to save time."""
-    return tradeoff.sweep("slider", "free", timing_repeats=1)
-
-
 def _scene_model(scenario, **overrides):
     case = scenes.get("slider").case(scenario, overrides)
     return case, case.model
