@@ -128,9 +128,14 @@ def _sizes() -> Callable[[mujoco.MjModel], tuple[int, ...]]:
     return operator.attrgetter(*(n for n in dir(probe) if n.startswith("n") and type(getattr(probe, n)) is int))
 
 
+def model_sizes(model: mujoco.MjModel) -> tuple[int, ...]:
+    """`model`'s sizes (nq, nv, nbody, ..., narena, nbuffer): what an MjData's layout depends on."""
+    return _sizes()(model)
+
+
 def _layout(model: mujoco.MjModel) -> tuple[int, ...]:
     """What an MjData's memory is laid out by: the model's compilation signature and every size field."""
-    return (model.signature, *_sizes()(model))
+    return (model.signature, *model_sizes(model))
 
 
 @contextlib.contextmanager

@@ -17,13 +17,12 @@ from typing import Any
 
 import mujoco
 
+from springlab.sim.simulate import model_sizes
+
 #: compiled models and rollouts a fit keeps: the optimizer's latest points are the ones it asks for again
 KEPT = 8
 #: ... and at most this many bytes of kept rollouts [B] (a long record's rollouts are large)
 KEPT_BYTES = 2**25
-
-#: per MjModel type, the names of its integer sizes (nq, nv, nbody, ..., nbuffer)
-_SIZE_NAMES: dict[type, tuple[str, ...]] = {}
 
 
 class Kept:
@@ -177,15 +176,6 @@ def _exact_value(values: Mapping[str, Any], name: str) -> str:
     if name == "":
         return repr(sorted(values))
     return repr(values[name]) if name in values else "<absent>"
-
-
-def model_sizes(model: mujoco.MjModel) -> tuple[int, ...]:
-    """`model`'s sizes (nq, nv, nbody, ..., narena, nbuffer): what an MjData's layout depends on."""
-    names = _SIZE_NAMES.get(type(model))
-    if names is None:
-        names = tuple(n for n in dir(model) if n.startswith("n") and type(getattr(model, n)) is int)
-        _SIZE_NAMES[type(model)] = names
-    return tuple(getattr(model, n) for n in names)
 
 
 def _keep(kept: dict[Any, Any], key: Any, value: Any, limit: int) -> Any:
