@@ -181,7 +181,9 @@ def held_start(
             names.append(name)
     try:
         with np.errstate(all="ignore"):  # trial parameters far off may overflow the closed form: rejected, not shown
-            statistic, threshold, release_index = _change_point(how, record, base, fixed, names, force, sigma, exit_)
+            statistic, threshold, release_index = _change_point(
+                _Window(how, record, base, fixed, names, force, sigma, exit_)
+            )
     except (SpringlabError, ValueError, ArithmeticError, np.linalg.LinAlgError) as error:
         return Release("moving", t0, noise=sigma, reason=f"{first}: a held start could not be tested ({error})")
     held = statistic > threshold
@@ -211,20 +213,10 @@ def held_start(
     )
 
 
-def _change_point(
-    how: FitModel,
-    record: Record,
-    base: dict[str, float],
-    fixed: dict[str, float],
-    names: list[str],
-    force: float,
-    sigma: float,
-    exit_: int,
-) -> tuple[float, float, int]:
-    """(F, its false-alarm threshold, the index of the estimated release) on the record's beginning."""
-    window = _Window(how, record, base, fixed, names, force, sigma, exit_)
+def _change_point(window: _Window) -> tuple[float, float, int]:
+    """(F, its false-alarm threshold, the index of the estimated release) on the record's beginning `window`."""
     t, candidates = window.t, window.candidates
-    x0 = window.fitted(np.array([window.start[n] for n in names], float), 0.0)
+    x0 = window.fitted(np.array([window.start[n] for n in window.names], float), 0.0)
     noise, noise_sums = _draws(t.size)
     h0 = window.signals(x0, np.zeros(1))[0]
     [(rss0, _, dof0)] = window.residual_sums(x0, np.zeros(1))
