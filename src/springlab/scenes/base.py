@@ -44,7 +44,7 @@ from springlab.answer import Answer, compose
 from springlab.errors import ParameterError, UnknownNameError
 from springlab.exact.limits import stability_limit
 from springlab.sim import model_files
-from springlab.sim.simulate import Setup, Trajectory, check_timing, configured, quiet_mujoco, simulate
+from springlab.sim.simulate import Setup, Trajectory, check_timing, configured, integrator_id, quiet_mujoco, simulate
 
 from .capabilities.design import DesignSpec
 from .capabilities.drawing import Drawing
@@ -708,9 +708,9 @@ class Case:
         return self.scene.drawing(self)
 
 
-#: per thread, the last few (case model, integrator, dt) -> (its configured copy, its MjData) (`_work`)
+#: per thread, the last few case models -> (its copy, its MjData) (`_work`)
 _WORK = threading.local()
-#: how many the slots hold per thread: a run and its verification run at dt/2 (an MjData may be megabytes)
+#: how many the slots hold per thread: a sweep's cases side by side (an MjData may be megabytes)
 WORK_SLOTS = 2
 
 
@@ -718,12 +718,15 @@ def _work(model: mujoco.MjModel, integrator: str, dt: float) -> tuple[mujoco.MjM
     """A case model's copy set to `integrator` and `dt` [s], and an MjData of it, reused by this thread's next run.
 
     Copying a model and allocating its MjData (its arena: megabytes, zeroed) cost as much as a thousand steps
-    of a small scene; a case's model is never written into (`Case.compiled`), so the copy stays right.
+    of a small scene; a case's model is never written into (`Case.compiled`), so the copy stays right. One copy
+    serves every setting of the case (a sweep's integrators and timesteps, a verdict's run at dt/2): a run sets
+    its integrator and timestep on it, the only fields `configured` sets, and `simulate` resets the MjData
+    before each run, so a run never sees the one before it.
     """
     slots: collections.OrderedDict | None = getattr(_WORK, "slots", None)
     if slots is None:
         slots = _WORK.slots = collections.OrderedDict()
-    key = (id(model), integrator, float(dt))
+    key = id(model)
     kept = slots.get(key)
     if kept is None or kept[0] is not model:
         work = configured(model, integrator, dt)
@@ -731,7 +734,10 @@ def _work(model: mujoco.MjModel, integrator: str, dt: float) -> tuple[mujoco.MjM
         while len(slots) > WORK_SLOTS:
             slots.popitem(last=False)
     slots.move_to_end(key)
-    return kept[1], kept[2]
+    work = kept[1]
+    work.opt.integrator = integrator_id(integrator)
+    work.opt.timestep = dt
+    return work, kept[2]
 
 
 def _case_of(scene: Scene, scenario: str, params: dict[str, float], model: mujoco.MjModel) -> Case:
