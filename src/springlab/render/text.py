@@ -7,6 +7,7 @@ translucent white box, so it reads over any part of the scene.
 
 from __future__ import annotations
 
+import functools
 import importlib.util
 import math
 from collections.abc import Sequence
@@ -22,6 +23,25 @@ __all__ = ["TextOverlay"]
 
 _TEXT_RGB = np.array([20.0, 20.0, 28.0])  # near-black text
 _TEXT_BOX_ALPHA = 0.78  # translucent white box behind the text
+_CHANNELS = np.arange(3)
+
+
+def _composite(region: np.ndarray, coverage: np.ndarray) -> np.ndarray:
+    """Pixels `region` (uint8, ... x 3) under the translucent box and text of `coverage` (uint8, ... x 1, 255 =
+    covered): the box's white at _TEXT_BOX_ALPHA, then the text's colour at the coverage, rounded to bytes."""
+    alpha = coverage.astype(np.float32) * (1.0 / 255.0)
+    mixed = region.astype(np.float32) * (1.0 - _TEXT_BOX_ALPHA) + 255.0 * _TEXT_BOX_ALPHA
+    mixed = mixed * (1.0 - alpha) + _TEXT_RGB * alpha
+    return np.clip(mixed + 0.5, 0, 255).astype(np.uint8)
+
+
+@functools.cache
+def _blend_table() -> np.ndarray:
+    """`_composite` of every (coverage, byte, channel), 256 x 256 x 3: a frame looks its pixels up instead of
+    repeating the arithmetic on its whole box (the same function, so the same bytes)."""
+    coverage = np.arange(256, dtype=np.uint8)[:, None, None]
+    values = np.broadcast_to(np.arange(256, dtype=np.uint8)[None, :, None], (256, 256, 3))
+    return _composite(values, coverage)
 
 
 def _find_font() -> str | None:
@@ -87,12 +107,14 @@ class TextOverlay:
         mask = self._fixed_mask(box_w, box_h).copy()
         draw = ImageDraw.Draw(mask)
         draw.text((self.pad, self.pad + (len(widths) - 1) * self.line_h), time_line, fill=255, font=self.font)
-        alpha = np.asarray(mask, dtype=np.float32)[..., None] * (1.0 / 255.0)
+        coverage = np.asarray(mask)
         y, x = self.margin, self.margin
-        region = view[y : y + box_h, x : x + box_w].astype(np.float32)
-        region = region * (1.0 - _TEXT_BOX_ALPHA) + 255.0 * _TEXT_BOX_ALPHA
-        region = region * (1.0 - alpha) + _TEXT_RGB * alpha
-        view[y : y + box_h, x : x + box_w] = np.clip(region + 0.5, 0, 255).astype(np.uint8)
+        region = view[y : y + box_h, x : x + box_w]
+        table = _blend_table()
+        drawn = table[0, :, 0][region]  # the box alone where no text covers (the same byte in every channel)
+        inked = np.nonzero(coverage)
+        drawn[inked] = table[coverage[inked][:, None], region[inked], _CHANNELS]
+        view[y : y + box_h, x : x + box_w] = drawn
 
     def _fixed_lines(self) -> list[str]:
         """The lines above the time: the label and the notes, empty ones left out."""
