@@ -102,7 +102,7 @@ def validate_rows() -> list[Row]:
 def demo_row() -> Row:
     """`springlab demo` in a fresh interpreter against issue 37's target: 2.5 minutes of wall time on 2 cores.
 
-    A wall-time row: the demo draws in worker processes beside its studies and encodes in ffmpeg's, so its work is
+    A wall-time row: the demo runs its studies and films on worker processes and encodes in ffmpeg's, so its work is
     spread over processes whose MuJoCo time this process cannot count; the CPU column is all of theirs."""
     with tempfile.TemporaryDirectory() as folder:
         measured, wall, cpu = fresh(["demo", "--output", folder])
@@ -118,7 +118,7 @@ def demo_row() -> Row:
         1.0,
         "issue 37",
         f"exit {measured['code']}; ratio = wall time / 150 s (on an idle 2-core machine); CPU of the process, its"
-        f" media workers and ffmpeg; inside MuJoCo in the main process {measured['mujoco_cpu']:.1f} s CPU",
+        f" workers and ffmpeg; inside MuJoCo in the main process (the core step's runs) {measured['mujoco_cpu']:.1f} s CPU",
         on_wall=True,
     )
 

@@ -107,6 +107,7 @@ def test_a_carriage_that_never_settles_writes_null_and_a_false_flag(tmp_path, ca
     assert math.isinf(springlab.run("printer_head", "settle", belt_damping=0.0).quantities["settling_time_s"])
 
 
+@pytest.mark.slow  # the forced Duffing's shared run (4 s of CPU) is its first reader's
 def test_the_validation_table_names_what_each_error_measures(cli, monkeypatch, scenario_run):
     from springlab.studies import auto
 

@@ -27,12 +27,14 @@ DTS = (2e-3, 1e-3, 5e-4)
 
 @pytest.fixture(scope="module")
 def small_study():
-    """The joint decay and the hold on the small grid, picks for 1e-2: computed once for this module."""
+    """The joint decay and the hold on the small grid, picks for 1e-2: computed once for this module (200 runs,
+    5 s of CPU on one core, paid by whichever of its readers comes first: they are all marked slow)."""
     return friction_settings(
         "friction", ["coulomb_decay", "incline_hold"], tol=1e-2, integrators=INTEGRATORS, dts=DTS, values=ENDS
     )
 
 
+@pytest.mark.slow
 def test_the_study_sweeps_only_the_settings_that_act_on_each_cases_friction(small_study):
     joint, hold = small_study.cases
     assert joint.friction == JOINT_FRICTION and hold.friction == CONTACT_FRICTION
@@ -46,6 +48,7 @@ def test_the_study_sweeps_only_the_settings_that_act_on_each_cases_friction(smal
     assert all(b[2] == a[2] / 2 and a[:2] == b[:2] for g in groups for a, b in zip(g, g[1:]))
 
 
+@pytest.mark.slow
 def test_mujocos_defaults_are_the_baseline_and_their_error_is_the_models(small_study):
     integrator, dt = mujoco_defaults()
     assert (integrator, dt) == ("euler", 0.002)  # read from MuJoCo, as MuJoCo's documentation states them
@@ -59,6 +62,7 @@ def test_mujocos_defaults_are_the_baseline_and_their_error_is_the_models(small_s
         assert abs(default.error - model.model_error) <= 0.2 * model.model_error
 
 
+@pytest.mark.slow
 def test_the_pick_is_the_cheapest_verified_run_and_a_run_of_it_passes(small_study):
     for case in small_study.cases:
         pick = case.pick
@@ -90,6 +94,7 @@ def test_the_pick_is_the_cheapest_verified_run_and_a_run_of_it_passes(small_stud
             assert r.cost == pytest.approx(evaluations * dofs * noslip, rel=1e-12)
 
 
+@pytest.mark.slow
 def test_the_pareto_front_is_sorted_and_undominated(small_study):
     for case in small_study.cases:
         front = case.pareto
@@ -100,6 +105,7 @@ def test_the_pareto_front_is_sorted_and_undominated(small_study):
             assert not any(r.cost < point.cost and r.error < point.error for r in runs)
 
 
+@pytest.mark.slow
 def test_the_pick_is_the_same_however_noisy_the_cpu_timer(small_study, monkeypatch):
     # the module's joint decay, timed by the CPU, against the same case and options timed by noise
     first = small_study.cases[0]
@@ -114,6 +120,7 @@ def test_the_pick_is_the_same_however_noisy_the_cpu_timer(small_study, monkeypat
     assert [r.cpu_time_s for r in first.runs] != [r.cpu_time_s for r in second.runs]  # the noise did arrive
 
 
+@pytest.mark.slow
 def test_noslip_makes_a_held_block_stop_creeping(small_study):
     hold = small_study.cases[1]
     stopped = [

@@ -243,6 +243,25 @@ def test_the_advised_settings_are_accurate_when_run_over_the_whole_case(report):
             assert row.duration == pytest.approx(case.duration, rel=0.01)
 
 
+def test_the_advice_is_the_least_counted_work_and_no_timer_changes_it(report, monkeypatch):
+    # the advice ranks settings by counted work (steps x model evaluations per step: rk4 4, the others 1), so a
+    # noisy or busy machine cannot flip it; a timer that returns noise is never asked
+    rng = np.random.default_rng(0)
+    monkeypatch.setattr("springlab.sim.batch.time_run", lambda *args, **kwargs: float(rng.uniform(1e-6, 1.0)))
+    picks = {}
+    for case in extremes.EXTREME_CASES:
+        pick = picks[case.name] = extremes._advice(case, extremes._case_model(case))
+        if pick["integrator"] is None:
+            continue
+        assert any(pick["phrase"] in r.advice for r in report.extremes if r.case == case.name)
+        evaluations = {"rk4": 4, "implicitfast": 1, "discrete": 1}[pick["integrator"]]
+        assert pick["cost"] == pick["steps"] * evaluations
+    overdamped = picks["overdamped"]
+    # zeta = 1e4: backward Euler's damping is unconditionally stable and exact to first order, so it takes the
+    # fewest model evaluations (the implicit Euler family needs a 5x smaller dt for the same accuracy)
+    assert overdamped["integrator"] == "discrete"
+
+
 def _fast_mode(scenario):
     scene = scenes.get("slider")
     return scene.case(scenario).modes()

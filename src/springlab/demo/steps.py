@@ -14,8 +14,6 @@ are being replaced); the marker goes only after the new index.html is in place.
 from __future__ import annotations
 
 import concurrent.futures
-import multiprocessing
-import os
 import pathlib
 import time
 from collections.abc import Callable
@@ -23,20 +21,27 @@ from collections.abc import Callable
 from springlab import files, outputs, progress, scenes
 from springlab.errors import BadInputError
 from springlab.exact.linear import single_threaded_blas
-from springlab.runs.run import ValidationRow
+from springlab.runs.run import Result, ValidationRow
 from springlab.studies import auto, families
 from springlab.studies.families import PhaseFamily
 
+from . import workers
 from .state import Artifact, DemoState
 
 
-def core_step(state: DemoState) -> list[Artifact]:
-    """Validate every scene; run every scenario at its default setting and write its files."""
+def core_step(state: DemoState, each_run: Callable[[tuple[str, str], Result], None] | None = None) -> list[Artifact]:
+    """Validate every scene; run every scenario at its default setting and write its files.
+
+    `each_run(key, result)`, when given, is called with each run as soon as it is made (the demo hands it to
+    the workers that film it).
+    """
     written = []
     for scene in scenes.SCENES.values():
         for scenario in scene.scenarios.values():
             result = auto.run_scene(scene.name, scenario.name)
             state.results[(scene.name, scenario.name)] = result
+            if each_run is not None:
+                each_run((scene.name, scenario.name), result)
             if scenario.exact:
                 state.validation.append(ValidationRow.of(result))
             folder = pathlib.Path(scene.name) / scenario.name
@@ -61,8 +66,9 @@ def media_step(state: DemoState) -> list[Artifact]:
 
     Videos are 480 x 360 (+ a 360 x 360 phase panel) at 30 fps and show at
     most the first DEMO_CLIP_SECONDS of a run, which keeps the demo within a
-    few minutes on two cores. `run_demo` draws them in worker processes beside
-    the steps after this one (`_MediaBeside`): the same files, listed in the same order.
+    few minutes on two cores. `run_demo` draws them on its worker processes
+    (springlab.demo.workers), each run as soon as the core step made it: the
+    same files, listed in the same order.
     """
     written = []
     films = progress.bar(len(state.results), description="demo: filming", unit="video")  # on a terminal only
@@ -136,73 +142,37 @@ def _zeta_family(state: DemoState, name: str) -> list[Artifact]:
     return [Artifact(str(target.relative_to(state.out)), "plot", title, scene.name, scene.default_scenario)]
 
 
-#: worker processes that draw the media beside the later steps (`_MediaBeside`; at most the machine's CPUs)
-MEDIA_WORKERS = 2
-#: the state the media workers read: forked with them, so nothing but a run's key crosses to a worker
-_FORKED: DemoState | None = None
-
-
-def _film_job(key: tuple[str, str]) -> tuple[list[Artifact], tuple[str, float]]:
-    assert _FORKED is not None, "a media worker is forked after _MediaBeside sets the state"
-    return _film(_FORKED, key)
+def _film_job(key: tuple[str, str], result: Result) -> tuple[list[Artifact], tuple[str, float]]:
+    """In a worker: one run's media (the run crosses as an argument; the workers were forked before it existed)."""
+    return _film(DemoState(out=workers.forked_state().out, results={key: result}), key)
 
 
 def _zeta_job(name: str) -> list[Artifact]:
-    assert _FORKED is not None, "a media worker is forked after _MediaBeside sets the state"
-    return _zeta_family(_FORKED, name)
+    """In a worker: a scene's zeta family plot."""
+    return _zeta_family(workers.forked_state(), name)
 
 
-class _MediaBeside:
-    """media_step in forked worker processes while the demo's later steps run in this one.
-
-    Drawing (OpenGL in software, ffmpeg, matplotlib) and the studies after it each keep about one core busy, so
-    side by side they fill two: the demo took 199 s on an idle 2-core machine with them one after the other.
-    The workers are forked after the core step (the runs they draw are in the forked memory; no GL context
-    exists yet in this process) and write the same files media_step writes; `finish` puts their artifacts and
-    timings where media_step's would be, so the report is the same.
-    """
-
-    def __init__(self, state: DemoState) -> None:
-        global _FORKED
-        _FORKED = state
-        self.state = state
-        self.artifact_at, self.timing_at = len(state.artifacts), len(state.timings)
-        self.started = time.perf_counter()
-        workers = max(1, min(MEDIA_WORKERS, os.cpu_count() or 1))
-        context = multiprocessing.get_context("fork")
-        self.pool = concurrent.futures.ProcessPoolExecutor(max_workers=workers, mp_context=context)
-        self.films = [self.pool.submit(_film_job, key) for key in state.results]
-        self.zetas = [self.pool.submit(_zeta_job, name) for name in scenes.SCENES]
-
-    def finish(self) -> float:
-        """Wait for the workers; put the artifacts and timings in place. Returns the step's wall time [s]."""
-        written: list[Artifact] = []
-        timings: list[tuple[str, float]] = []
-        for film in self.films:
-            artifacts, timing = film.result()
-            written += artifacts
-            timings.append(timing)
-        for zeta in self.zetas:
-            written += zeta.result()
-        self.pool.shutdown()
-        _release()
-        seconds = time.perf_counter() - self.started
-        self.state.artifacts[self.artifact_at : self.artifact_at] = written
-        self.state.timings[self.timing_at : self.timing_at] = [*timings, ("media_step", seconds)]
-        return seconds
-
-    def stop(self) -> None:
-        """End the workers now (the demo was interrupted or failed): nothing more is drawn."""
-        self.pool.shutdown(wait=False, cancel_futures=True)
-        for process in list(getattr(self.pool, "_processes", {}).values()):
-            process.terminate()
-        _release()
+def _step_job(step: Callable[[DemoState], list[Artifact]]) -> tuple[list[Artifact], list[tuple[str, float]], float]:
+    """In a worker: one step; its artifacts, the finer timings it reported and its wall time [s]."""
+    state = DemoState(out=workers.forked_state().out)
+    start = time.perf_counter()
+    artifacts = step(state)
+    return artifacts, state.timings, time.perf_counter() - start
 
 
-def _release() -> None:
-    """Let go of the state the workers were forked with (they have their own copy)."""
-    global _FORKED
-    _FORKED = None
+#: the steps the workers start first, longest first (their CPU time [s] on an idle 2-core machine, measured
+#: once): the films, short and many, queue behind them and fill the cores to the end; a step not listed starts
+#: after the listed ones. The order changes only when each file is written, never what it holds.
+STEP_CPU_S: dict[str, float] = {
+    "friction_step": 30.0,
+    "design_step": 22.0,
+    "refine_step": 17.0,
+    "tradeoff_step": 12.0,
+    "random_load_step": 11.0,
+    "frequency_step": 6.0,
+    "audit_step": 3.0,
+    "control_step": 2.5,
+}
 
 
 def report_step(state: DemoState) -> list[Artifact]:
@@ -236,32 +206,63 @@ def run_demo(out: str | pathlib.Path, log: Callable[[str], None] = print) -> Dem
         },
     )
     (state.out / REPORT_NAME).unlink(missing_ok=True)  # a stale report would describe files being replaced
-    media: _MediaBeside | None = None
-    # one BLAS thread (exact.linear.single_threaded_blas): the media workers and the studies fill the cores, and
+    # one BLAS thread (exact.linear.single_threaded_blas): the workers and this process fill the cores, and
     # OpenBLAS's own threads on top of them wait on each other (the stay cable's Lyapunov solves took several times
     # their CPU); the same numbers on any machine, whatever its cores
     with single_threaded_blas():
+        pool = workers.Workers(state)  # forked now, before any run or GL context exists in this process
         try:
-            for step in [*STEPS, *FINAL_STEPS]:
-                if step is media_step:
-                    media = _MediaBeside(state)  # drawn beside the steps after it
-                    continue
-                if media is not None and step in FINAL_STEPS:
-                    log(f"demo: media_step done in {media.finish():.1f} s (beside the steps after it)")
-                    media = None
-                start = time.perf_counter()
-                state.artifacts.extend(step(state))
-                seconds = time.perf_counter() - start
-                state.timings.append((step.__name__, seconds))
-                log(f"demo: {step.__name__} done in {seconds:.1f} s")
-            if media is not None:  # no final step: the media are still part of the demo
-                log(f"demo: media_step done in {media.finish():.1f} s (beside the steps after it)")
-                media = None
-        finally:
-            if media is not None:
-                media.stop()
+            _run_steps(state, pool, log)
+        except BaseException:
+            pool.stop()  # interrupted or failed: nothing more is started, running jobs unwind their files
+            raise
     (state.out / INCOMPLETE_MARKER).unlink(missing_ok=True)
     return state
+
+
+def _run_steps(state: DemoState, pool: workers.Workers, log: Callable[[str], None]) -> None:
+    """Every step on the workers, the core step here (its runs go to the workers to be filmed as they come),
+    then the final steps here; artifacts and timings in STEPS order whatever order the jobs finished in.
+
+    Run one after the other, the demo took 199 s on an idle 2-core machine; with the media on two workers beside
+    the studies it took 136-175 s with one core idle during the core step. Queued on two workers from the start,
+    longest first, the cores stay busy to the end.
+    """
+    side = [step for step in STEPS if step not in (core_step, media_step)]
+    queued = sorted(side, key=lambda step: -STEP_CPU_S.get(step.__name__, 0.0))  # sorted() is stable
+    step_jobs = {step: pool.submit(_step_job, step) for step in queued}
+    zeta_jobs = [pool.submit(_zeta_job, name) for name in scenes.SCENES]
+    film_jobs: list[concurrent.futures.Future[tuple[list[Artifact], tuple[str, float]]]] = []
+    started = time.perf_counter()
+    for step in STEPS:
+        if step is core_step:
+            state.artifacts.extend(
+                core_step(state, lambda key, result: film_jobs.append(pool.submit(_film_job, key, result)))
+            )
+            seconds, where = time.perf_counter() - started, ""
+            state.timings.append(("core_step", seconds))
+        elif step is media_step:
+            for film in film_jobs:
+                artifacts, timing = film.result()
+                state.artifacts.extend(artifacts)
+                state.timings.append(timing)
+            for zeta in zeta_jobs:
+                state.artifacts.extend(zeta.result())
+            seconds, where = time.perf_counter() - started, " (on the workers, from the start)"
+            state.timings.append(("media_step", seconds))
+        else:
+            artifacts, timings, seconds = step_jobs[step].result()
+            where = " (on a worker)"
+            state.artifacts.extend(artifacts)
+            state.timings += [*timings, (step.__name__, seconds)]
+        log(f"demo: {step.__name__} done in {seconds:.1f} s{where}")
+    pool.finish()
+    for step in FINAL_STEPS:
+        start = time.perf_counter()
+        state.artifacts.extend(step(state))
+        seconds = time.perf_counter() - start
+        state.timings.append((step.__name__, seconds))
+        log(f"demo: {step.__name__} done in {seconds:.1f} s")
 
 
 def tradeoff_step(state: DemoState) -> list[Artifact]:

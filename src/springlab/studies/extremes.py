@@ -29,9 +29,10 @@ from springlab.exact.limits import stability_limit
 from springlab.runs.run import evaluate
 from springlab.scenes.base import Case, Scene
 from springlab.scenes.capabilities.oscillator import OscillatorSpec
-from springlab.sim.batch import Job, run_batched, time_run
+from springlab.sim.batch import Job, run_batched
 from springlab.sim.simulate import INTEGRATORS, Trajectory, quiet_mujoco
 
+from .settings import counted_cost
 from .tradeoff import round_down
 
 #: stability_limit scans for rk4; the tables ask for the same few values many times
@@ -50,8 +51,6 @@ VERIFY_STEPS = 200_000
 MUJOCO_MAXVAL = 1e10
 #: integrators the advice chooses from (euler and implicit equal implicitfast on these scenes)
 ADVICE_INTEGRATORS = ("rk4", "implicitfast", "discrete")
-#: steps per integrator of the quick cost calibration behind the advice
-_CALIBRATION_STEPS = 2000
 
 
 @dataclasses.dataclass(frozen=True)
@@ -304,12 +303,15 @@ def predicted_error(
     return max(errors)
 
 
-def _advice(case: ExtremeCase, context: Oscillator, costs: dict[str, float]) -> dict[str, Any]:
+def _advice(case: ExtremeCase, context: Oscillator) -> dict[str, Any]:
     """The cheapest setting predicted (`predicted_error`) to hold ACCURACY/2 over the case's duration.
 
     Per integrator of ADVICE_INTEGRATORS: the largest dt (bisection in log dt,
     at most 0.9x its stability limit) whose predicted error is within half the
-    accuracy threshold; cost = steps x the measured cost per step. For a case
+    accuracy threshold; cost = the counted work (settings.counted_cost: steps x
+    model evaluations per step), so the same case gets the same advice on every
+    run and machine (a measured time per step flipped the overdamped case's
+    advice between discrete and implicitfast on a busy machine). For a case
     beyond MuJoCo's value limit no dt helps, and the advice says so.
     """
     if case.peak_acceleration >= MUJOCO_MAXVAL or case.omega * abs(case.x0) >= MUJOCO_MAXVAL:
@@ -340,13 +342,13 @@ def _advice(case: ExtremeCase, context: Oscillator, costs: dict[str, float]) -> 
             dt = low
         dt = round_down(dt)
         steps = max(1, round(case.duration / dt))
-        cost = steps * costs[name]
-        if best is None or cost < best["cost_s"]:
+        cost = counted_cost(name, steps)
+        if best is None or cost < best["cost"]:
             best = {
                 "integrator": name,
                 "dt": dt,
                 "steps": steps,
-                "cost_s": cost,
+                "cost": cost,
                 "predicted_error": predicted_error(case, name, dt, context),
             }
     assert best is not None, "every integrator has a predicted error"
@@ -440,16 +442,7 @@ def extremes_table(
                 steps = min(max(round(case.duration / dt), MIN_EXTREME_STEPS), MAX_EXTREME_STEPS)
                 jobs.append(context.case.job(name, dt, steps))
                 meta.append(("limit", case, name, fraction, limit, limit_name))
-    costs = {}
-    first = contexts[cases[0].name].case
-    for name in ADVICE_INTEGRATORS:  # cost per step: the same for every case (one model structure)
-        setup = first.setup(_CALIBRATION_STEPS, 1e-3)
-        calm = copy.copy(first.model)  # a calm model for timing: unit oscillator values, no MuJoCo resets
-        calm.body_mass[:] = 1.0
-        calm.jnt_stiffness[:] = 1.0
-        calm.dof_damping[:] = 0.1
-        costs[name] = time_run(Job(calm, name, 1e-3, _CALIBRATION_STEPS, setup)) / _CALIBRATION_STEPS
-    advice = {case.name: _advice(case, contexts[case.name], costs) for case in cases}
+    advice = {case.name: _advice(case, contexts[case.name]) for case in cases}
     for case in cases:
         pick = advice[case.name]
         if pick["integrator"] is None or pick["steps"] > verify_steps:

@@ -382,6 +382,7 @@ def test_forced_duffing_is_chaotic(forced):
     assert observed["reference"] == 4 and abs(observed["value"] - 4) < 0.5
 
 
+@pytest.mark.slow  # the session's forced run (`forced`, 4 s of CPU) is its first reader's: ~5 s with its own ODE
 def test_forced_duffing_separation_time_is_the_converged_one_of_the_exact_system(forced):
     # the exact pair by scipy: x and the gap g = x_twin - x as states of their own (g starts at 1e-9 m, so
     # its absolute tolerance sits 15 orders below it), stopped where |g| first reaches the 0.1 m wells
