@@ -41,6 +41,13 @@ def small_run():
     return run_scenario("slider", "free", duration=0.2)
 
 
+@pytest.fixture(scope="module")
+def small_sweep():
+    """A short slider trade-off sweep (a study the writer writes), once for the tests of its refusals and of a
+    failed drawing, which read no timing: one timing repeat."""
+    return tradeoff.sweep("slider", "free", duration=0.2, timing_repeats=1)
+
+
 def test_a_run_writes_summary_json_as_to_dict_and_the_csv_at_k_dt(small_run, tmp_path):
     written = outputs.write(small_run, tmp_path / "run")
     assert [p.name for p in written] == ["trajectory.csv", "summary.json"]
@@ -52,11 +59,11 @@ def test_a_run_writes_summary_json_as_to_dict_and_the_csv_at_k_dt(small_run, tmp
     np.testing.assert_array_equal(time, np.arange(small_run.steps + 1) * small_run.dt)
 
 
-def test_every_thins_a_runs_csv_and_is_refused_elsewhere(small_run, tmp_path):
+def test_every_thins_a_runs_csv_and_is_refused_elsewhere(small_run, small_sweep, tmp_path):
     outputs.write(small_run, tmp_path, every=7)
     rows = (tmp_path / "trajectory.csv").read_text().splitlines()[1:]
     assert len(rows) == len(files.recorded_rows(small_run.steps + 1, 7))
-    study = tradeoff.sweep("slider", "free", duration=0.2)
+    study = small_sweep
     with pytest.raises(BadInputError, match="every="):
         outputs.write(study, tmp_path / "t", every=2)
     with pytest.raises(BadInputError, match="quantity="):
@@ -64,8 +71,8 @@ def test_every_thins_a_runs_csv_and_is_refused_elsewhere(small_run, tmp_path):
     assert not (tmp_path / "t").exists()
 
 
-def test_a_drawing_that_fails_leaves_no_file_and_no_temporary(tmp_path, monkeypatch):
-    study = tradeoff.sweep("slider", "free", duration=0.2)
+def test_a_drawing_that_fails_leaves_no_file_and_no_temporary(tmp_path, monkeypatch, small_sweep):
+    study = small_sweep
 
     def broken(result, path, options):
         path.write_bytes(b"half a png")

@@ -314,13 +314,20 @@ def run_rollout(
     return results
 
 
-def time_run(job: Job, *, repeats: int = 3, max_steps: int = TIMING_STEPS) -> float:
+def time_run(job: Job, *, repeats: int = 3, max_steps: int = TIMING_STEPS, measured: float | None = None) -> float:
     """Wall time [s] of one job run alone on the calling thread, as `simulate` steps it.
 
     Best of `repeats`; a job longer than `max_steps` is timed over its first
     `max_steps` steps and scaled by steps (MuJoCo's cost per step does not
-    depend on dt or on the state).
+    depend on dt or on the state). `measured`, the wall time [s] of the whole job
+    already measured the same way (a study's own run of it: `Trajectory.wall_time_s`
+    of `simulate` on this thread), counts as one of the repeats: with `repeats` 1 nothing
+    is run again.
     """
+    if measured is not None:
+        if repeats <= 1:
+            return measured
+        return min(measured, time_run(job, repeats=repeats - 1, max_steps=max_steps))
     if job.setup.controller is not None:
         return _time_alone(job, repeats=repeats, max_steps=max_steps)
     model = configured(job.model, job.integrator, job.dt)  # the job's model is left as it was

@@ -452,10 +452,10 @@ class Friction(Scene):
         along = model.joint(ALONG)
         qpos[along.qposadr[0]], qvel[along.dofadr[0]] = params["x0"], params["v0"]
         if model.njnt > 1:
-            # at the run's own dt: MuJoCo raises a solref time constant below 2 dt to 2 dt (refsafe)
-            at_dt = copy.copy(model)
-            at_dt.opt.timestep = dt
-            qpos[model.joint(NORMAL).qposadr[0]] = resting_height(at_dt, qpos, qvel)
+            # kept per dt: a sweep runs every integrator at each dt of a case from the same rest
+            qpos[model.joint(NORMAL).qposadr[0]] = case.memo(
+                ("resting_height", float(dt)), lambda: _resting_height_at(model, qpos, qvel, dt)
+            )
         return Setup(qpos=qpos, qvel=qvel)
 
     # -- physics read back from the compiled model --------------------------------------
@@ -643,6 +643,14 @@ def _incline(model: mujoco.MjModel) -> float:
 def contacts(model: mujoco.MjModel) -> bool:
     """Whether the model's contacts act (the joint-friction variant disables them)."""
     return not model.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
+
+
+def _resting_height_at(model: mujoco.MjModel, qpos: np.ndarray, qvel: np.ndarray, dt: float) -> float:
+    """`resting_height` of a copy of `model` at timestep `dt` [s]: MuJoCo raises a solref time constant below
+    2 dt to 2 dt (refsafe), so the rest depends on the run's own dt."""
+    at_dt = copy.copy(model)
+    at_dt.opt.timestep = dt
+    return resting_height(at_dt, qpos, qvel)
 
 
 def resting_height(model: mujoco.MjModel, qpos: np.ndarray, qvel: np.ndarray) -> float:
