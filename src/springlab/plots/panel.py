@@ -83,6 +83,9 @@ class PhasePanel:
         self._ImageDraw = ImageDraw
         self._last: list[np.ndarray | None] = [None] * len(self.joints)  # each joint's newest pixel
         self._next_sample = 0
+        # contiguous copies: a record's columns are strided views, which numpy copies whole on every search
+        self._time = np.ascontiguousarray(result.time)
+        self._series = [(np.ascontiguousarray(result.pos[j]), np.ascontiguousarray(result.vel[j])) for j in self.joints]
         self._line = max(2, round(2 * scale))
         self._dot = max(4, round(5 * scale))
         self._color = tuple(int(255 * c) for c in matplotlib.colors.to_rgb("C0"))
@@ -94,11 +97,13 @@ class PhasePanel:
 
     def __call__(self, frame: int, t: float) -> np.ndarray:
         """The panel image (height x width x 3 uint8) at time t [s]; frames must come in time order."""
-        time = self.result.time
+        time = self._time
         end = int(np.searchsorted(time, t, side="right"))  # samples with time <= t
-        for index, joint in enumerate(self.joints):
-            x, v = self.result.pos[joint], self.result.vel[joint]
-            xt, vt = float(np.interp(t, time, x)), float(np.interp(t, time, v))
+        # t lies in [time[end - 1], time[end]): np.interp on those two samples is the same arithmetic as on the
+        # whole record, without its pass over a long run each frame
+        near = slice(max(end - 1, 0), end + 1)
+        for index, (x, v) in enumerate(self._series):
+            xt, vt = float(np.interp(t, time[near], x[near])), float(np.interp(t, time[near], v[near]))
             new = self._pixels(
                 index, np.append(x[self._next_sample : end], xt), np.append(v[self._next_sample : end], vt)
             )
