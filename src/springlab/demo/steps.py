@@ -152,26 +152,32 @@ def _zeta_job(name: str) -> list[Artifact]:
     return _zeta_family(workers.forked_state(), name)
 
 
+def _timed(step: Callable[[DemoState], list[Artifact]], state: DemoState) -> tuple[list[Artifact], float]:
+    """One step on `state`: its artifacts and its wall time [s]."""
+    start = time.perf_counter()
+    artifacts = step(state)
+    return artifacts, time.perf_counter() - start
+
+
 def _step_job(step: Callable[[DemoState], list[Artifact]]) -> tuple[list[Artifact], list[tuple[str, float]], float]:
     """In a worker: one step; its artifacts, the finer timings it reported and its wall time [s]."""
     state = DemoState(out=workers.forked_state().out)
-    start = time.perf_counter()
-    artifacts = step(state)
-    return artifacts, state.timings, time.perf_counter() - start
+    artifacts, seconds = _timed(step, state)
+    return artifacts, state.timings, seconds
 
 
-#: the steps the workers start first, longest first (their CPU time [s] on an idle 2-core machine, measured
-#: once): the films, short and many, queue behind them and fill the cores to the end; a step not listed starts
+#: the steps the workers start first, longest first (each step's CPU time [s] alone, measured once on a 2-core
+#: machine): the films, short and many, queue behind them and fill the cores to the end; a step not listed starts
 #: after the listed ones. The order changes only when each file is written, never what it holds.
 STEP_CPU_S: dict[str, float] = {
-    "friction_step": 30.0,
-    "design_step": 22.0,
-    "refine_step": 17.0,
-    "tradeoff_step": 12.0,
-    "random_load_step": 11.0,
-    "frequency_step": 6.0,
-    "audit_step": 3.0,
-    "control_step": 2.5,
+    "design_step": 24.4,
+    "random_load_step": 22.7,
+    "friction_step": 19.6,
+    "tradeoff_step": 9.1,
+    "refine_step": 5.0,
+    "frequency_step": 4.0,
+    "control_step": 3.2,
+    "audit_step": 1.6,
 }
 
 
@@ -258,9 +264,8 @@ def _run_steps(state: DemoState, pool: workers.Workers, log: Callable[[str], Non
         log(f"demo: {step.__name__} done in {seconds:.1f} s{where}")
     pool.finish()
     for step in FINAL_STEPS:
-        start = time.perf_counter()
-        state.artifacts.extend(step(state))
-        seconds = time.perf_counter() - start
+        artifacts, seconds = _timed(step, state)
+        state.artifacts.extend(artifacts)
         state.timings.append((step.__name__, seconds))
         log(f"demo: {step.__name__} done in {seconds:.1f} s")
 
