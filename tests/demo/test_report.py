@@ -16,7 +16,7 @@ from springlab.demo import steps as demo
 from springlab.runs.run import ValidationRow, run_scenario
 
 SCENARIOS = [("slider", "undamped"), ("car", "pitch_heave")]
-CLIP_SECONDS = 1.0
+CLIP_SECONDS = 0.5
 
 
 @pytest.fixture(scope="module")
