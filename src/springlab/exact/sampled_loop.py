@@ -347,15 +347,19 @@ def held_run(
     """
     phi, gamma = zoh(a, b, dt)
     x = np.empty((steps + 1, len(a)))
-    u = np.empty(steps)
     x[0] = x0
+    column = gamma[:, 0]
+    forces = [0.0] * steps
     force = 0.0
+    state = x[0]
+    # one step per pass, the same products as phi @ x_j + gamma u_j; the state carried, not re-read from x
     for j in range(steps):
         if j % steps_per_sample == 0:
             force = float(control(j // steps_per_sample, x[j]))
-        u[j] = force
-        x[j + 1] = phi @ x[j] + gamma[:, 0] * force
-    return x, u
+        forces[j] = force
+        state = phi @ state + column * force
+        x[j + 1] = state
+    return x, np.array(forces, dtype=float)
 
 
 def held_maximum(
@@ -497,8 +501,11 @@ def held_run_error(
     local = -constant * augmented @ power.T
     error = np.zeros_like(states)
     change = 0.0
-    for j in range(len(forces)):
+    column = gamma[:, 0]
+    current = error[0]
+    for j, step_error in enumerate(local):
         if j % steps_per_sample == 0:
             change = 0.0 if response is None else float(response(j // steps_per_sample, error[j]))
-        error[j + 1] = phi @ error[j] + gamma[:, 0] * change + local[j]
+        current = phi @ current + column * change + step_error
+        error[j + 1] = current
     return error
