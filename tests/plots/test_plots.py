@@ -1,5 +1,6 @@
 """Plots carry what they claim: the curves, the exact overlay, the log error axis, the field and equilibria."""
 
+import json
 import math
 import subprocess
 import sys
@@ -164,13 +165,36 @@ def test_plot_command_writes_png_and_svg_and_refuses_other_formats(tmp_path, cap
     assert sorted(p.name for p in tmp_path.iterdir()) == ["p.svg", "t.png"]
 
 
-def test_plotting_never_touches_pyplot_global_state():
+@pytest.fixture(scope="module")
+def fresh_plotting(tmp_path_factory):
+    """One fresh interpreter (a library's effect on a caller's matplotlib shows only from a clean start) that
+    notes the rcParams, draws a run's phase plane and time series and saves one, then prints what the two tests
+    below read: whether pyplot got imported, the rcParams that changed, the axis label's font size (one
+    interpreter for both: each start and import of springlab and matplotlib cost ~1.5 s of CPU)."""
+    png = tmp_path_factory.mktemp("fresh_plotting") / "t.png"
     code = (
-        "import sys, springlab.plots.run as p, springlab.runs.run as a\n"
-        "p.phase_plane(a.run_scenario('slider', 'free'))\n"
-        "assert 'matplotlib.pyplot' not in sys.modules, 'pyplot imported'\n"
+        "import json, sys, matplotlib\n"
+        # the stored values: reading rcParams['backend'] through the mapping would pick a backend and import
+        # pyplot itself; the backend's stored value stays 'not chosen yet' unless something chooses it
+        "stored = lambda: dict(dict.items(matplotlib.rcParams))\n"
+        "before = stored()\n"
+        "import springlab.plots.run as p, springlab.runs.run as a\n"
+        "run = a.run_scenario('slider', 'free', duration=0.2)\n"
+        "p.phase_plane(run)\n"
+        "figure = p.time_series(run)\n"
+        f"p.save(figure, {str(png)!r})\n"
+        "changed = [k for k, v in stored().items() if before[k] != v]\n"
+        "size = figure.axes[0].xaxis.label.get_fontsize()\n"
+        "print(json.dumps({'pyplot': 'matplotlib.pyplot' in sys.modules, 'changed': changed, 'size': size}))\n"
     )
-    subprocess.run([sys.executable, "-c", code], check=True)
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert png.stat().st_size > 0
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def test_plotting_never_touches_pyplot_global_state(fresh_plotting):
+    assert not fresh_plotting["pyplot"], "pyplot imported"
 
 
 @pytest.mark.slow
@@ -205,16 +229,8 @@ def test_tradeoff_stability_and_design_charts_leave_the_callers_backend_alone(tm
         assert (tmp_path / "s" / name).stat().st_size > 0
 
 
-def test_plotting_leaves_the_callers_rcparams_alone_and_still_uses_its_own_style(tmp_path):
-    code = (
-        "import matplotlib\n"
-        "before = dict(matplotlib.rcParams)\n"
-        "import springlab.plots.run as p, springlab.runs.run as a\n"
-        "figure = p.time_series(a.run_scenario('slider', 'free', duration=0.2))\n"
-        f"p.save(figure, {str(tmp_path / 't.png')!r})\n"
-        "changed = [k for k, v in matplotlib.rcParams.items() if before[k] != v]\n"
-        "assert not changed, changed\n"
-        "from springlab.plots.style import STYLE\n"
-        "assert figure.axes[0].xaxis.label.get_fontsize() == STYLE['font.size']\n"
-    )
-    subprocess.run([sys.executable, "-c", code], check=True, timeout=120)
+def test_plotting_leaves_the_callers_rcparams_alone_and_still_uses_its_own_style(fresh_plotting):
+    from springlab.plots.style import STYLE
+
+    assert not fresh_plotting["changed"], fresh_plotting["changed"]
+    assert fresh_plotting["size"] == STYLE["font.size"]

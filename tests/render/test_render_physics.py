@@ -239,10 +239,14 @@ def test_the_tachograph_vehicle_is_drawn_bus_length_against_the_distance_marks(t
     from springlab.scenes.kinematics.bus import BUS_LENGTH
 
     result = run_scenario("kinematics", "tachograph")
-    media.render_run(result, tmp_path / "v.mp4", fps=2, width=640, height=480, duration=12.0, progress=False)
+    # at real speed: frame k shows t = k / 2 s (the default slow motion would stretch 12 s to 120 frames and put
+    # frames 4, 12 and 20 in the first 2 s); the length in pixels does not depend on when a frame is shown
+    media.render_run(
+        result, tmp_path / "v.mp4", fps=2, slow_motion=1, width=640, height=480, duration=12.0, progress=False
+    )
     frames = _decode(tmp_path / "v.mp4")
     checked = 0
-    for frame in frames[[4, 12, 20]]:  # pulling away, cruising, braking
+    for frame in frames[[4, 12, 20]]:  # pulling away, cruising, braking: t = 2, 6, 10 s
         r, g, b = (frame[..., i].astype(int) for i in range(3))
         body = (r > 90) & (r > 2 * g) & (r > 2.5 * b)  # the bus's paint (0.85 0.33 0.18)
         columns, rows = np.flatnonzero(body.any(axis=0)), np.flatnonzero(body.any(axis=1))

@@ -78,7 +78,7 @@ def results(stability_report, shipped_audit):
         "FitResult": springlab.fit("slider", {"time": t, "slider_pos": decay}, mass=2.0),
         "Audit": shipped_audit("slider"),
         "StabilityReport": stability_report,
-        "FrequencyResponse": springlab.frequency("slider"),
+        "FrequencyResponse": springlab.frequency("slider", points=40),  # a fifth of the default 200 frequencies
         "Study": study,
         "SobolStudy": study.sobol,
         "FrictionSettings": friction_settings(

@@ -38,8 +38,8 @@ def _first(spec):
 STEPS = 40
 
 #: a scene's parameters for its cases, where its default model is large for a wiring test: the stay cable's
-#: 99 nodes cost its scene figure 19 s (four free decays of the damper's curve, 45,000 RK4 steps at the
-#: stiffest) and its trade-off 24 s; the nine-node stay of its wind tests runs the same code in a tenth. The drill
+#: 99 nodes cost its damper's scene figure 2.5 s of CPU (four free decays of the damper's curve, 11,600 RK4 steps
+#: at the stiffest) and its trade-off 24 s; the nine-node stay of its wind tests runs the same code in a tenth. The drill
 #: string's 32 elements cost its breakaway (held to checks of its whole 10 s, so never cut short) 1.6 s per run,
 #: plot and render each; 4 elements (its tests' coarse chain, tests/scenes/test_answers.py) cost 0.3 s
 SMALL = {
