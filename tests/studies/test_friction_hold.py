@@ -193,13 +193,15 @@ def test_a_scenes_options_on_a_model_file_are_bad_input():
 def test_the_command_on_a_model_file_prints_json_and_writes_the_scenes_files(tmp_path, monkeypatch, cli):
     out = tmp_path / "hold"
     monkeypatch.chdir(tmp_path)
+    # one integrator: what is checked is what the command prints and writes, not which setting wins (the
+    # module's hold_study sweeps every integrator); rk4 beside it was 2/3 of this test's 4.5 s of CPU
     done = cli(
         "friction-settings",
         GRIPPER,
         "--hold",
         "1",
         "--integrators",
-        "euler,rk4",
+        "euler",
         "--json",
         "--output",
         out,

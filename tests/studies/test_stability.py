@@ -69,10 +69,12 @@ def _independent_limit(integrator, zeta):
         roots = np.roots([1.0, 2 * zeta, 1.0])
 
         def growth(h):
-            z = h * roots
-            return np.max(np.abs(1 + z + z**2 / 2 + z**3 / 6 + z**4 / 24)) - 1
+            z = np.multiply.outer(h, roots)  # the grid's steps at once: one row per h
+            return np.max(np.abs(1 + z + z**2 / 2 + z**3 / 6 + z**4 / 24), axis=-1) - 1
 
         grid = np.geomspace(1e-3, 10.0, 20000)
+        first = grid[np.argmax(growth(grid) > 1e-9)]  # clear growth, not round-off around |R| = 1
+        return brentq(growth, first / (grid[1] / grid[0]), first, xtol=1e-14)
     first = next(h for h in grid if growth(h) > 1e-9)  # clear growth, not round-off around |R| = 1
     return brentq(growth, first / (grid[1] / grid[0]), first, xtol=1e-14)
 

@@ -166,10 +166,22 @@ def _init(scene: mujoco.MjvScene, kind, size, pos, mat, rgba) -> mujoco.MjvGeom 
     return geom
 
 
+#: the placeholder size, position and frame a connector starts from (mjv_connector sets all three); read-only,
+#: made once: a spring is some 80 connectors per frame, and new arrays for each were a third of their cost
+_NOWHERE = np.zeros(3)
+_NOWHERE.flags.writeable = False
+_UNROTATED = np.eye(3).ravel()
+_UNROTATED.flags.writeable = False
+
+
 def _connector(scene: mujoco.MjvScene, kind, width: float, start, end, rgba) -> mujoco.MjvGeom | None:
-    geom = _init(scene, kind, np.zeros(3), np.zeros(3), np.eye(3).ravel(), rgba)
-    if geom is not None:
-        mujoco.mjv_connector(geom, kind, width, np.asarray(start, float), np.asarray(end, float))
+    if scene.ngeom >= scene.maxgeom:
+        return None
+    geom = scene.geoms[scene.ngeom]
+    mujoco.mjv_initGeom(geom, kind, _NOWHERE, _NOWHERE, _UNROTATED, rgba)
+    geom.category = _DECOR
+    scene.ngeom += 1
+    mujoco.mjv_connector(geom, kind, width, np.asarray(start, float), np.asarray(end, float))
     return geom
 
 

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 import springlab  # noqa: F401 - loads springlab.fit the module
+from springlab.cli import options as cli_options
 from springlab.errors import BadInputError
 from springlab.studies.executor import Executor
 from springlab.studies.fit import starts as fit_starts
@@ -94,13 +95,25 @@ def test_best_start_recovers_the_truth_and_starts_elsewhere_cost_more(tmp_path):
 
 
 @pytest.mark.slow
-def test_local_and_local_cluster_give_identical_starts(tmp_path, cli):
+def test_local_and_local_cluster_give_identical_starts(tmp_path, cli, monkeypatch, dask_cluster):
     data = _ring_down(tmp_path / "ring.csv", n=400)
     local = fit_module.fit("slider", data, mass=MASS, starts=3, run_scene=False)
+    # `--workers 2` asks for a local cluster of 2 worker processes; the session's LocalCluster of 2 (tests/conftest.py)
+    # is one, started once for every test that compares a study on workers with the local one (a start of its own
+    # cost this test 7 s of CPU in the workers' imports); the command's `with` leaves it open for the tests after
+    asked = []
+
+    def session_cluster(**arguments):
+        asked.append(arguments)
+        return dask_cluster
+
+    monkeypatch.setattr(cli_options, "Executor", session_cluster)
+    monkeypatch.setattr(dask_cluster, "close", lambda: None)
     code, out, err = cli(
         "fit", "slider", str(data), "--set", f"mass={MASS}", "--starts", "3", "--workers", "2", "--json"
     )
     assert code == 0 and err == ""
+    assert asked == [{"workers": 2, "scheduler": None, "progress": False, "nthread": 0, "quiet": True}]
     remote = json.loads(out)
     assert remote["starts"]["executor"] == "2 local dask workers" and local.starts["executor"] == "local"
     for name, q in local.estimates.items():
