@@ -95,8 +95,9 @@ def accelerance_response(
     forces = padded.reshape(count, block)
     powers = np.empty((block + 1, 2, 2))  # Phi^m, m = 0 ... B, one product at a time (doubling loses a digit)
     powers[0] = np.eye(2)
+    step = np.ascontiguousarray(phi)
     for m in range(block):
-        powers[m + 1] = phi @ powers[m]
+        np.dot(step, powers[m], out=powers[m + 1])  # phi @ powers[m], the same BLAS product, written in place
     rows = np.arange(0, block, every)  # the sampled steps of a block
     impulse = np.einsum("j,mjk,k->m", c, powers[:block], gamma)  # C Phi^m Gamma
     lag = rows[:, None] - 1 - np.arange(block)[None, :]  # m - 1 - i

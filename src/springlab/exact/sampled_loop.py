@@ -346,16 +346,22 @@ def held_run(
         (x at steps 0..steps, (steps + 1, n); u held over each step, (steps,)).
     """
     phi, gamma = zoh(a, b, dt)
+    phi = np.ascontiguousarray(phi)  # the same values: a contiguous matrix makes .dot BLAS's product at once
     x = np.empty((steps + 1, len(a)))
-    u = np.empty(steps)
     x[0] = x0
+    column = gamma[:, 0]
+    forces = [0.0] * steps
     force = 0.0
+    state = x[0]
+    # one step per pass: phi @ x_j + gamma u_j with the state carried, not re-read from x; ndarray.dot is the same
+    # BLAS product as @ (cblas_dgemv of a contiguous matrix and vector) at a third of the call's cost
     for j in range(steps):
         if j % steps_per_sample == 0:
             force = float(control(j // steps_per_sample, x[j]))
-        u[j] = force
-        x[j + 1] = phi @ x[j] + gamma[:, 0] * force
-    return x, u
+        forces[j] = force
+        state = phi.dot(state) + column * force
+        x[j + 1] = state
+    return x, np.array(forces, dtype=float)
 
 
 def held_maximum(
@@ -497,8 +503,11 @@ def held_run_error(
     local = -constant * augmented @ power.T
     error = np.zeros_like(states)
     change = 0.0
-    for j in range(len(forces)):
+    phi, column = np.ascontiguousarray(phi), gamma[:, 0]
+    current = error[0]
+    for j, step_error in enumerate(local):
         if j % steps_per_sample == 0:
             change = 0.0 if response is None else float(response(j // steps_per_sample, error[j]))
-        error[j + 1] = phi @ error[j] + gamma[:, 0] * change + local[j]
+        current = phi.dot(current) + column * change + step_error  # as in held_run
+        error[j + 1] = current
     return error

@@ -75,6 +75,7 @@ def closed_loop(
     states[0] = state0
     flagged = False
     taken = steps
+    counts = data.warning.number  # a view of data's warning counters: read in place each step
     for j in range(steps):
         if j % controller.steps_per_sample == 0:
             mujoco.mj_forward(model, data)
@@ -83,7 +84,7 @@ def closed_loop(
         mujoco.mj_step(model, data)
         sensors[j] = data.sensordata  # mj_step leaves the sensors of the state it started from
         mujoco.mj_getState(model, data, states[j + 1], _FULL)
-        if any(data.warning[w].number for w in BAD_WARNINGS) or not np.all(np.isfinite(states[j + 1])):
+        if any(counts[w] for w in BAD_WARNINGS) or not np.isfinite(states[j + 1]).all():
             flagged, taken = True, j + 1
             break
     with np.errstate(all="ignore"):

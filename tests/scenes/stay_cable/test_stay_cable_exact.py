@@ -319,6 +319,26 @@ def test_the_held_covariance_is_the_long_exact_recursion():
     assert np.max(np.abs(held - recursion) / scale) <= 1e-9
 
 
+def test_the_kept_bilinear_solve_is_scipys_to_the_bit():
+    # a held covariance and its record's two sums solve with one map: the transform and Schur form are kept
+    # (rv._bilinear), and every solve must still be scipy.linalg.solve_discrete_lyapunov's, bit for bit
+    n = 6
+    model, b, w = _windy(n)
+    phi, gamma = rv.zero_order_hold(model.state_matrix(), b, 0.02)
+    first, second = gamma @ (w / 0.02) @ gamma.T, np.outer(phi[:, 1], phi[:, 1])
+    for noise in (first, second, first):  # the third from the kept form
+        solved = rv.solve_discrete_lyapunov(phi, noise)
+        assert np.array_equal(solved, scipy.linalg.solve_discrete_lyapunov(phi, noise))
+        residual = phi @ solved @ phi.T - solved + noise
+        assert np.max(np.abs(residual)) <= 1e-12 * np.max(np.abs(solved))
+    small = phi[:4, :4] * 0.5  # below 10 states: scipy's direct method
+    assert np.array_equal(
+        rv.solve_discrete_lyapunov(small, first[:4, :4]), scipy.linalg.solve_discrete_lyapunov(small, first[:4, :4])
+    )
+    held = rv.held_covariance(model.state_matrix(), b, w, 0.02, (phi, gamma))
+    assert np.array_equal(held, rv.held_covariance(model.state_matrix(), b, w, 0.02))
+
+
 def test_the_holds_effect_on_the_variance_is_second_order_in_dt():
     n = 5
     model, b, w = _windy(n)

@@ -131,8 +131,8 @@ def held_exact(case: CaseView, dt: float) -> tuple[np.ndarray, np.ndarray, np.nd
         intensity = float(case.params["wind_intensity"])
         a, b, w = cable.lumped.state_matrix(), cable.input_matrix(), np.array([[intensity]])
         continuous = case.memo("wind_continuous", lambda: continuous_covariance(cable, intensity))
-        phi, _ = rv.zero_order_hold(a, b, dt)
-        return continuous, rv.held_covariance(a, b, w, dt), phi
+        hold = rv.zero_order_hold(a, b, dt)
+        return continuous, rv.held_covariance(a, b, w, dt, hold), hold[0]
 
     return case.memo(("wind_held", float(dt)), compute)
 
