@@ -19,6 +19,7 @@ from __future__ import annotations
 import collections
 import hashlib
 import math
+from collections.abc import Callable, Hashable
 from typing import Any
 
 import numpy as np
@@ -67,22 +68,41 @@ def eigen(a: np.ndarray, *, vectors: bool = False) -> tuple[np.ndarray, ...]:
         (values,) or (values, left, right) as scipy.linalg.eig returns them, read-only (they are shared).
     """
     matrix = np.ascontiguousarray(a)
-    key = (matrix.dtype.str, matrix.shape, hashlib.blake2b(matrix.tobytes(), digest_size=16).digest(), vectors)
-    kept = _EIGEN.get(key)
-    if kept is None:
+
+    def decompose() -> tuple[np.ndarray, ...]:
         with single_threaded_blas():
             if vectors:
-                values, left, right = scipy.linalg.eig(matrix, left=True, right=True)
-                kept = (values, left, right)
-            else:
-                kept = (scipy.linalg.eigvals(matrix),)
+                return tuple(scipy.linalg.eig(matrix, left=True, right=True))
+            return (scipy.linalg.eigvals(matrix),)
+
+    return kept_by_matrix(_EIGEN, KEPT_EIGEN, matrix, decompose, vectors)
+
+
+def kept_by_matrix(
+    store: collections.OrderedDict[tuple, tuple[np.ndarray, ...]],
+    limit: int,
+    matrix: np.ndarray,
+    compute: Callable[[], tuple[np.ndarray, ...]],
+    *options: Hashable,
+) -> tuple[np.ndarray, ...]:
+    """`compute()`'s arrays for `matrix` (and `options`), kept read-only in `store` for its last `limit` keys.
+
+    The key is the matrix's dtype, shape and a digest of its bytes, so an equal matrix built anew finds them:
+    the exact side's decompositions (`eigen`, random_vibration's bilinear maps) are asked again for the same
+    parameters by each scenario and setting. The arrays are shared, hence read-only.
+    """
+    matrix = np.ascontiguousarray(matrix)
+    key = (matrix.dtype.str, matrix.shape, hashlib.blake2b(matrix.tobytes(), digest_size=16).digest(), *options)
+    kept = store.get(key)
+    if kept is None:
+        kept = compute()
         for array in kept:
             array.setflags(write=False)
-        _EIGEN[key] = kept
-        while len(_EIGEN) > KEPT_EIGEN:
-            _EIGEN.popitem(last=False)
+        store[key] = kept
+        while len(store) > limit:
+            store.popitem(last=False)
     else:
-        _EIGEN.move_to_end(key)
+        store.move_to_end(key)
     return kept
 
 

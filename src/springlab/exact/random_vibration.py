@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import collections
 import dataclasses
-import hashlib
 import math
 import warnings
 from collections.abc import Sequence
@@ -36,6 +35,7 @@ import numpy as np
 import scipy.linalg
 
 from springlab.errors import BadInputError
+from springlab.exact.linear import kept_by_matrix
 
 _EPS = float(np.finfo(float).eps)
 #: the bilinear transform and real Schur form of the last few one-step maps (`_bilinear`), by matrix
@@ -126,25 +126,17 @@ def solve_discrete_lyapunov(transition: np.ndarray, noise: np.ndarray) -> np.nda
 
 def _bilinear(a: np.ndarray) -> tuple[np.ndarray, ...]:
     """((F + I)^-1, (F^H + I)^-1, T, U) with B^H = U T U^T (real Schur) of `solve_discrete_lyapunov`, kept per F."""
-    matrix = np.ascontiguousarray(a)
-    key = (matrix.dtype.str, matrix.shape, hashlib.blake2b(matrix.tobytes(), digest_size=16).digest())
-    kept = _BILINEAR.get(key)
-    if kept is None:
+
+    def transform() -> tuple[np.ndarray, ...]:
         eye = np.eye(a.shape[0])
         a_h = a.conj().transpose()
         plus_h_inverse = np.linalg.inv(a_h + eye)
         b = np.dot(a_h - eye, plus_h_inverse)
         b_h = np.atleast_2d(np.asarray_chkfinite(b.conj().transpose()))
         schur_form, schur_basis = scipy.linalg.schur(b_h, output="real")
-        kept = (np.linalg.inv(a + eye), plus_h_inverse, schur_form, schur_basis)
-        for array in kept:
-            array.setflags(write=False)
-        _BILINEAR[key] = kept
-        while len(_BILINEAR) > KEPT_BILINEAR:
-            _BILINEAR.popitem(last=False)
-    else:
-        _BILINEAR.move_to_end(key)
-    return kept
+        return np.linalg.inv(a + eye), plus_h_inverse, schur_form, schur_basis
+
+    return kept_by_matrix(_BILINEAR, KEPT_BILINEAR, a, transform)
 
 
 def held_covariance(
