@@ -175,13 +175,9 @@ _UNROTATED.flags.writeable = False
 
 
 def _connector(scene: mujoco.MjvScene, kind, width: float, start, end, rgba) -> mujoco.MjvGeom | None:
-    if scene.ngeom >= scene.maxgeom:
-        return None
-    geom = scene.geoms[scene.ngeom]
-    mujoco.mjv_initGeom(geom, kind, _NOWHERE, _NOWHERE, _UNROTATED, rgba)
-    geom.category = _DECOR
-    scene.ngeom += 1
-    mujoco.mjv_connector(geom, kind, width, np.asarray(start, float), np.asarray(end, float))
+    geom = _init(scene, kind, _NOWHERE, _NOWHERE, _UNROTATED, rgba)  # np.asarray passes the float arrays through
+    if geom is not None:
+        mujoco.mjv_connector(geom, kind, width, np.asarray(start, float), np.asarray(end, float))
     return geom
 
 
