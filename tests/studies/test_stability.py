@@ -65,6 +65,7 @@ def _independent_limit(integrator, zeta):
             return np.max(np.abs(np.linalg.eigvals(_theory_map(integrator, zeta, h)))) - 1 - 1e-12
 
         grid = np.geomspace(1e-3, 1e4, 2000)
+        first = next(h for h in grid if growth(h) > 1e-9)  # clear growth, not round-off around |mu| = 1
     else:
         roots = np.roots([1.0, 2 * zeta, 1.0])
 
@@ -73,9 +74,7 @@ def _independent_limit(integrator, zeta):
             return np.max(np.abs(1 + z + z**2 / 2 + z**3 / 6 + z**4 / 24), axis=-1) - 1
 
         grid = np.geomspace(1e-3, 10.0, 20000)
-        first = grid[np.argmax(growth(grid) > 1e-9)]  # clear growth, not round-off around |R| = 1
-        return brentq(growth, first / (grid[1] / grid[0]), first, xtol=1e-14)
-    first = next(h for h in grid if growth(h) > 1e-9)  # clear growth, not round-off around |R| = 1
+        first = grid[np.argmax(growth(grid) > 1e-9)]  # the same first h, the whole grid in one call
     return brentq(growth, first / (grid[1] / grid[0]), first, xtol=1e-14)
 
 
