@@ -9,8 +9,11 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 
 def _rendered(figure):
+    """The Agg renderer of `figure` after a draw that places every artist (the layout engine, each legend's
+    best location, the tick labels) but paints no pixel: the boxes below are the ones a saved figure has,
+    and rasterising them would cost a quarter of each check for pixels nothing here reads."""
     canvas = figure.canvas if isinstance(figure.canvas, FigureCanvasAgg) else FigureCanvasAgg(figure)
-    canvas.draw()
+    figure.draw_without_rendering()
     return canvas.get_renderer()
 
 

@@ -54,7 +54,7 @@ def test_time_series_has_a_column_per_joint_with_its_units():
     assert "position x [m]" in labels and "angle θ [rad]" in labels and "angular velocity ω [rad/s]" in labels
     assert {"joint heave", "joint pitch"} <= {ax.get_title() for ax in figure.axes}
     assert sum(ax.get_yscale() == "log" for ax in figure.axes) == 2
-    figure.canvas.draw()  # legends beside the axes: none covers data
+    figure.draw_without_rendering()  # placed, as when saved (no pixels needed): legends beside the axes cover no data
     legends = [ax.get_legend().get_window_extent() for ax in figure.axes if ax.get_legend()]
     assert legends and not any(box.overlaps(ax.get_window_extent()) for box in legends for ax in figure.axes)
 
@@ -133,7 +133,7 @@ def test_zeta_family_draws_each_damping_ratio_with_its_regime_and_exact_curve():
     assert distances.min() > 0.25
     assert all(matplotlib.colors.to_rgb(line.get_color()) == (1.0, 1.0, 1.0) for line in dashed)
     # the legend sits beside the axes: it covers no data
-    figure.canvas.draw()
+    figure.draw_without_rendering()  # every artist placed as when saved; no pixels needed
     legend_box = figure.legends[0].get_window_extent()
     assert not any(legend_box.overlaps(ax.get_window_extent()) for ax in figure.axes)
     # the critically damped curve is x0 (1 + omega t) e^{-omega t} (eq. 5.16 with v0 = 0)
@@ -200,8 +200,8 @@ def test_plotting_never_touches_pyplot_global_state(fresh_plotting):
 @pytest.mark.slow
 def test_tradeoff_stability_and_design_charts_leave_the_callers_backend_alone(tmp_path):
     # a library must not switch a notebook's backend (matplotlib.use) or import pyplot; the charts only need
-    # results to draw: small studies, and a hand-built stability report (tests/studies/test_stability.py checks
-    # the real one)
+    # results to draw: small studies (each run timed once: the chart reads no wall time), and a hand-built
+    # stability report (tests/studies/test_stability.py checks the real one)
     code = (
         "import sys, matplotlib\n"
         "matplotlib.use('svg')\n"
@@ -210,7 +210,7 @@ def test_tradeoff_stability_and_design_charts_leave_the_callers_backend_alone(tm
         "from springlab.plots import charts, design as design_chart\n"
         "from springlab.studies import stability, tradeoff\n"
         "from springlab.studies.design import study as design\n"
-        f"charts.plot_tradeoff(tradeoff.sweep('slider', 'free', duration=0.5), {str(tmp_path / 't.png')!r})\n"
+        f"charts.plot_tradeoff(tradeoff.sweep('slider', 'free', duration=0.5, timing_repeats=1), {str(tmp_path / 't.png')!r})\n"
         f"design_chart.plot(design.run_study('printer_head', levels=3, plane_levels=5), {str(tmp_path / 'd.png')!r})\n"
         "n = np.arange(4)\n"
         "series = stability.EnergyHistories('oscillator', 0.2, 1.0, n / 3, {'euler': 1 + 0.01 * np.sin(n),"
