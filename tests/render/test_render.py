@@ -20,7 +20,9 @@ from springlab.scenes.capabilities.drawing import Drawing
 
 def _decode(path):
     """(meta, frames (n, h, w, 3) uint8) decoded by ffmpeg itself, independently of the writer."""
-    reader = imageio_ffmpeg.read_frames(str(path))
+    # one decoding thread: the test workers fill the cores already, and H.264 decodes to the same pixels
+    # whatever the threads (ffmpeg's own threads cost a third more CPU on these small videos)
+    reader = imageio_ffmpeg.read_frames(str(path), input_params=["-threads", "1"])
     meta = next(reader)
     width, height = meta["size"]
     frames = [np.frombuffer(raw, np.uint8).reshape(height, width, 3) for raw in reader]
