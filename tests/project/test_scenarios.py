@@ -33,11 +33,19 @@ def test_scenario_script_runs_headless(script, ran):
     _assert_answered(*ran[script.stem])
 
 
+#: the runs a script makes at a scenario's own settings that the session has made already (tests/conftest.py:
+#: `scenario_run`): the script's `springlab.run(scene, scenario)` is handed that Result (helpers/scripts.py), so
+#: the forced Duffing's chaos (4 s of CPU: its twin runs refined three times, 110 s of Lyapunov pairs) is
+#: computed once per session, not again for its script; the script's own lines still run and print
+SERVED = {"nonlinear_forced_duffing": [("nonlinear", "forced_duffing")]}
+
+
 @pytest.fixture(scope="module")
-def ran_slow(tmp_path_factory):
-    """The slow scripts, as `ran` runs the others (one interpreter, a fork each)."""
+def ran_slow(tmp_path_factory, scenario_run):
+    """The slow scripts, as `ran` runs the others (one interpreter, a fork each), with the session's SERVED runs."""
     slow = [p for p in SCRIPTS if p.stem in SLOW]
-    return run_scripts(slow, ARGS, tmp_path_factory.mktemp("slow_scenarios"))
+    served = {stem: {key: scenario_run(*key) for key in keys} for stem, keys in SERVED.items()}
+    return run_scripts(slow, ARGS, tmp_path_factory.mktemp("slow_scenarios"), served=served)
 
 
 @pytest.mark.slow
