@@ -2,6 +2,7 @@
 tests read are computed once per test session (session-scoped fixtures; their results are immutable, so
 sharing them cannot couple the tests)."""
 
+import gc
 import inspect
 import os
 
@@ -68,6 +69,12 @@ def pytest_collection_finish(session: pytest.Session) -> None:
     """The tests this process will run that read the session's cluster (all of them under --dist loadgroup,
     which keeps the fixture's readers on one worker; elsewhere the cluster closes at the session's end)."""
     _CLUSTER_READERS.update(item.nodeid for item in session.items if "dask_cluster" in item.fixturenames)
+    # the collected modules (numpy, scipy, matplotlib, mujoco, dask, the tests) live all session: frozen, the
+    # collector stops scanning them, and a larger first generation collects the arrays' short-lived wrappers
+    # less often; over a full run the collector's CPU fell from 9.2 to 5.0 s (both workers)
+    gc.collect()
+    gc.freeze()
+    gc.set_threshold(10_000, 20, 20)
 
 
 @pytest.hookimpl(trylast=True)
