@@ -95,6 +95,10 @@ def _case(name: str, *argv: str, inputs: tuple[str, ...] = ()) -> Case:
 
 #: every scene of `springlab list`, run at its default scenario
 SCENES = ("slider", "car", "printer_head", "kinematics", "nonlinear", "drill_string", "friction")
+#: the printer head's shaped moves, its feedback loops and its resonance test, run with --json
+PRINTER_CONTROL = ("move_zv", "move_ei", "feedback_motor", "feedback_carriage", "resonance_test")
+#: every stay cable scenario, run with --json
+STAY_CABLE = ("modes", "damper", "wind", "rain_wind")
 TINY_VIDEO = ("--width", "64", "--height", "48", "--duration", "0.2")
 
 #: the fixed list: every command of `springlab --help` but demo (minutes) and view (a window), with its
@@ -115,6 +119,10 @@ CASES: tuple[Case, ...] = (
     _case("run_friction_incline_hold", "run", "friction", "incline_hold", "--json"),
     _case("run_kinematics_tachograph", "run", "kinematics", "tachograph", "--json"),
     _case("run_printer_settle_tol", "run", "printer_head", "settle", "--tol", "1e-3", "--json"),
+    # the scenes landed after the first baseline: their exact sides (eigen-solves, Lyapunov maps, held loops,
+    # the resonance fit) are where a change to the exact layer shows first
+    *(_case(f"run_printer_{name}", "run", "printer_head", name, "--json") for name in PRINTER_CONTROL),
+    *(_case(f"run_stay_cable_{name}", "run", "stay_cable", name, "--json") for name in STAY_CABLE),
     _case("validate_all", "validate"),
     _case("validate_json", "validate", "slider", "kinematics", "--json"),
     _case("validate_override", "validate", "slider", "--integrator", "euler", "--dt", "0.001", "--json"),

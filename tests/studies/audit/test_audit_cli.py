@@ -10,7 +10,7 @@ from helpers.linear_models import chain_xml, pendulum_xml
 from springlab.cli.main import main
 
 
-def test_audit_writes_json_and_png_and_says_the_verdict(tmp_path, capsys):
+def test_audit_writes_json_and_png_and_says_the_verdict(tmp_path, capsys, untimed):
     model = tmp_path / "chain.xml"
     model.write_text(chain_xml(2, 100.0, 1.0, 0.2).replace('gravity="0 0 0"', 'gravity="0 0 0" integrator="RK4"'))
     out = tmp_path / "out"
@@ -27,7 +27,7 @@ def test_audit_writes_json_and_png_and_says_the_verdict(tmp_path, capsys):
     assert sorted(p.name for p in out.iterdir()) == ["audit.json", "audit.png"]
 
 
-def test_a_setting_that_misses_tol_is_a_finding_exit_1_with_outputs(tmp_path, capsys):
+def test_a_setting_that_misses_tol_is_a_finding_exit_1_with_outputs(tmp_path, capsys, untimed):
     model = tmp_path / "chain.xml"
     model.write_text(chain_xml(2, 100.0, 1.0, 0.2))
     out = tmp_path / "out"

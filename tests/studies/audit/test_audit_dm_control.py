@@ -10,7 +10,10 @@ Each audits without error, and its recommended setting meets the tolerance again
 reference computed here: MuJoCo's RK4 at a timestep far below the audit's, run with mujoco.rollout
 (not springlab's runner), itself checked converged (its distance to the run at twice its timestep is
 at most a tenth of tol), and the error measured here at (up to 500 of) the recommended run's
-steps with mj_differentiatePos. Durations: the humanoid and the cheetah first touch the floor at 0.22 s and
+steps with mj_differentiatePos. The reference's step: about half of each case's `reference` step, which
+keeps omega_max h <= 0.02 on the model's fastest mode (RK4's error, (omega h)^4 / 120 per radian, is then
+~1e-9: far inside tol / 10) where the motion is smooth, and is 2e-5 s where contacts take RK4's order
+away; the convergence check measures what the step gives, so a step too coarse fails it, never passes. Durations: the humanoid and the cheetah first touch the floor at 0.22 s and
 0.13 s; the cheetah's run includes its landing, the humanoid's stops before (a falling humanoid's
 contacts are chaotic: no RK4 reference converges in reasonable time, which `springlab audit` reports).
 """
@@ -32,12 +35,16 @@ from springlab.studies.audit.audit import audit
 SUITE = pathlib.Path(dm_control.__file__).parent / "suite"
 _FULL = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
 
+#: the reference step where contacts take RK4's order away (the cheetah's landing, a robot lying on the floor) [s]
+CONTACT_REFERENCE = 2e-5
+
 CASES = {
-    # model: (duration [s], tol [-])
-    "pendulum": (1.0, 1e-3),
-    "cartpole": (1.0, 1e-3),
-    "acrobot": (1.0, 1e-3),
-    "cheetah": (0.3, 2e-2),
+    # model: (duration [s], tol [-], reference step [s]): the smooth ones' fastest modes are 4.6 (pendulum),
+    # 3.9 (cartpole) and 7.2 rad/s (acrobot), so omega_max h <= 0.004 at h ~ 5e-4 s (module docstring)
+    "pendulum": (1.0, 1e-3, 1e-3),
+    "cartpole": (1.0, 1e-3, 1e-3),
+    "acrobot": (1.0, 1e-3, 1e-3),
+    "cheetah": (0.3, 2e-2, CONTACT_REFERENCE),
     # the humanoid: in ROBOTS below, lying on the floor (issue 25), where its contacts are the hard case
 }
 
@@ -78,7 +85,7 @@ def _error(model, qpos, qvel, ref_qpos, ref_qvel, origin):
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(CASES))
 def test_dm_control_model_audits_and_its_recommendation_meets_tol(name, untimed):
-    duration, tol = CASES[name]
+    duration, tol, reference_step = CASES[name]
     path = SUITE / f"{name}.xml"
     result = audit(str(path), tol=tol, duration=duration)
     pick = result.recommendation
@@ -86,7 +93,8 @@ def test_dm_control_model_audits_and_its_recommendation_meets_tol(name, untimed)
     model = mujoco.MjModel.from_xml_path(str(path))
     steps = round(result.duration / pick.dt)
     times = np.arange(0, steps + 1, max(1, steps // 500)) * pick.dt  # the recommended run's steps
-    fine = pick.dt / (2 * max(1, round(pick.dt / 2e-5)))  # RK4 at ~10 us; it and twice it divide the recommended dt
+    # RK4 at about half the case's reference step; it and twice it divide the recommended dt
+    fine = pick.dt / (2 * max(1, round(pick.dt / reference_step)))
     reference = _states(model, "rk4", fine, result.duration, result.start, times)
     coarser = _states(model, "rk4", 2 * fine, result.duration, result.start, times)
     origin = result.linear.point.qpos
@@ -96,19 +104,21 @@ def test_dm_control_model_audits_and_its_recommendation_meets_tol(name, untimed)
 
 
 #: robot models with contacts, joint limits, dry friction or no position-dependent force (the reacher, as the
-#: swimmer): name -> (settle [s], duration [s], tol [-]); the walker and the humanoid audited lying on the floor
+#: swimmer): name -> (settle [s], duration [s], tol [-], reference step [s]); the walker and the humanoid audited
+#: lying on the floor. The reacher's fastest mode is 227 rad/s (omega_max h <= 0.012 at h ~ 5e-5 s), the finger's
+#: 1510 rad/s (0.015 at ~1e-5 s; module docstring)
 ROBOTS = {
-    "reacher": (None, 1.0, 1e-3),
-    "finger": (None, 0.5, 1e-3),
-    "walker": (4.0, 0.5, 1e-2),
-    "humanoid": (3.0, 0.2, 1e-2),
+    "reacher": (None, 1.0, 1e-3, 1e-4),
+    "finger": (None, 0.5, 1e-3, 2e-5),
+    "walker": (4.0, 0.5, 1e-2, CONTACT_REFERENCE),
+    "humanoid": (3.0, 0.2, 1e-2, CONTACT_REFERENCE),
 }
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(ROBOTS))
 def test_robot_audit_reports_its_constraints_and_claims_only_what_runs_confirm(name, untimed):
-    settle, duration, tol = ROBOTS[name]
+    settle, duration, tol, reference_step = ROBOTS[name]
     path = SUITE / f"{name}.xml"
     result = audit(str(path), settle_s=settle, tol=tol, duration=duration)
     model = mujoco.MjModel.from_xml_path(str(path))
@@ -131,7 +141,7 @@ def test_robot_audit_reports_its_constraints_and_claims_only_what_runs_confirm(n
         return
     steps = round(result.duration / pick.dt)
     times = np.arange(0, steps + 1, max(1, steps // 500)) * pick.dt
-    fine = pick.dt / (2 * max(1, round(pick.dt / 2e-5)))  # it and twice it divide the recommended dt
+    fine = pick.dt / (2 * max(1, round(pick.dt / reference_step)))  # it and twice it divide the recommended dt
     reference = _states(model, "rk4", fine, result.duration, result.start, times)
     coarser = _states(model, "rk4", 2 * fine, result.duration, result.start, times)
     origin = result.linear.point.qpos

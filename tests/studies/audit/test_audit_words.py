@@ -76,7 +76,7 @@ def what_the_loop_shows(xml: str) -> str:
     ],
     ids=["pendulum-0.9x", "pendulum-1.08x", "pendulum-1.5x", "chain-1.07x"],
 )
-def test_the_own_settings_word_is_what_a_plain_loop_shows(xml, word):
+def test_the_own_settings_word_is_what_a_plain_loop_shows(xml, word, untimed):
     assert what_the_loop_shows(xml) == word  # the case is what it claims to be, by the test's own loop
     model = mujoco.MjModel.from_xml_string(xml)
     result = audit(model, keyframe=0 if model.nkey else None, integrators=["rk4"], dts=[0.02, 0.01], duration=20.0)
