@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from springlab import outputs, scenes
+from helpers.cli import run_cli
+from springlab import scenes
 from springlab.errors import UnknownNameError
 from springlab.scenes.capabilities.design import DesignSpec
 from springlab.studies.design import study as design
@@ -29,6 +30,30 @@ PROPERTIES = ("belt_stiffness", "carriage_mass", "damping_ratio", "drive_force")
 def small_study(small_design_study):
     """3^4 = 81 configurations: the grid's corners and centre, and a 9 x 9 plane (tests/conftest.py)."""
     return small_design_study
+
+
+@pytest.fixture(scope="module")
+def design_command(small_study, tmp_path_factory):
+    """`springlab design printer_head --levels 3 --plane 9 --sobol 8 --json --output DIR` as a user types it, the
+    study it asks for the session's small one (tests/conftest.py: the same call, computed once): run once and read
+    by every test of what the command prints and writes (each write draws design.png and sobol.png, 0.7-1 s of
+    CPU). Returns (CliResult, DIR, the options the command passed to the study); the files are read-only, so no
+    reader can change what the next one reads."""
+    asked = {}
+
+    def recorded(model, **options):
+        asked.update(options, model=model)
+        return small_study
+
+    out = tmp_path_factory.mktemp("design") / "d"
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(design, "run_study", recorded)
+        printed = run_cli(
+            "design", "printer_head", "--levels", "3", "--plane", "9", "--sobol", "8", "--json", "--output", out
+        )
+    for path in out.iterdir() if out.is_dir() else ():
+        path.chmod(0o444)
+    return printed, out, asked
 
 
 @pytest.fixture(scope="module")
@@ -142,20 +167,13 @@ def test_default_configuration_settles_as_the_exact_trajectory_says(small_study)
     assert last_exit <= study.positioning_time_s[i] <= last_exit + dt
 
 
-def test_design_json_has_the_documented_shape(cli, tmp_path, monkeypatch, small_study):
+def test_design_json_has_the_documented_shape(design_command):
     # the command line's arguments reach the study (levels, plane, Sobol samples, the library's defaults for the
     # rest), and the study they ask for is the session's small one (tests/conftest.py: the same call, computed
     # once; it cost this test 6 s to run it again)
-    asked = {}
-
-    def recorded(model, **options):
-        asked.update(options, model=model)
-        return small_study
-
-    monkeypatch.setattr(design, "run_study", recorded)
-    argv = ["design", "printer_head", "--levels", "3", "--plane", "9", "--sobol", "8", "--json"]
-    code, out, err = cli(*argv, "--output", str(tmp_path / "d"))
+    (code, out, err), folder, asked = design_command
     assert code == 0, err
+    asked = dict(asked)
     executor = asked.pop("executor")
     assert executor is not None and not executor.distributed  # where the chunks run: here
     assert asked == {
@@ -191,13 +209,14 @@ def test_design_json_has_the_documented_shape(cli, tmp_path, monkeypatch, small_
     assert summary["sobol"]["runs"] == 8 * 7
     default = summary["default"]
     assert default["positioning_time_s"] == pytest.approx(default["move_time_s"] + default["settling_time_s"])
-    assert sorted(p.name for p in (tmp_path / "d").iterdir()) == [
+    assert sorted(p.name for p in folder.iterdir()) == [
         "configurations.csv",
         "design.json",
         "design.png",
         "sobol.png",
     ]
-    assert json.loads((tmp_path / "d" / "design.json").read_text())["configurations"] == 81
+    assert all((folder / name).stat().st_size > 0 for name in ("design.png", "sobol.png"))
+    assert json.loads((folder / "design.json").read_text())["configurations"] == 81
 
 
 def _cli_with(study, monkeypatch, cli, *argv):
@@ -208,10 +227,11 @@ def _cli_with(study, monkeypatch, cli, *argv):
     return code, out
 
 
-def test_to_dict_is_what_design_json_prints_and_design_json_holds(small_study, monkeypatch, cli, tmp_path):
-    _, out = _cli_with(small_study, monkeypatch, cli, "--json", "--output", str(tmp_path / "d"))
+def test_to_dict_is_what_design_json_prints_and_design_json_holds(small_study, design_command):
+    (code, out, err), folder, _ = design_command
+    assert code == 0, err
     assert json.loads(out) == small_study.to_dict()
-    assert json.loads((tmp_path / "d" / "design.json").read_text()) == small_study.to_dict()
+    assert json.loads((folder / "design.json").read_text()) == small_study.to_dict()
     # JSON-ready already: a round trip through json changes nothing, the sobol entry included
     assert json.loads(json.dumps(small_study.to_dict())) == small_study.to_dict()
     assert small_study.to_dict()["sobol"] == small_study.sobol.to_dict()
@@ -231,10 +251,10 @@ def test_to_dict_carries_the_attributes(small_study):
     assert summary["plane"]["configurations"] == s.plane.positioning_time_s.size == 81
 
 
-def test_to_pandas_has_a_row_per_configuration_as_configurations_csv(small_study, tmp_path):
+def test_to_pandas_has_a_row_per_configuration_as_configurations_csv(small_study, design_command):
     frame = small_study.to_pandas()
-    outputs.write(small_study, tmp_path / "d")
-    lines = (tmp_path / "d" / "configurations.csv").read_text().splitlines()
+    _, folder, _ = design_command  # the command's folder, written by the one writer (springlab.outputs.write)
+    lines = (folder / "configurations.csv").read_text().splitlines()
     assert lines[0].split(",") == list(frame.columns)
     assert len(frame) == small_study.size == len(lines) - 1
     np.testing.assert_array_equal(frame["positioning_time_s"].to_numpy(), small_study.positioning_time_s)
