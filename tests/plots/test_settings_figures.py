@@ -13,12 +13,12 @@ import numpy as np
 import pytest
 
 from helpers.figures import assert_legends_clear
+from helpers.timing import constant_time_run
 from springlab.plots import charts
 from springlab.plots import friction_settings as friction_chart
 from springlab.plots import refine as refine_chart
 from springlab.plots.settings import BEYOND_STYLE
 from springlab.scenes import get
-from springlab.sim.batch import time_run
 from springlab.studies import refine, tradeoff
 from springlab.studies.friction_settings import friction_settings
 
@@ -43,8 +43,8 @@ def _points(axis, label_start: str) -> list[tuple[float, float]]:
 
 
 def test_the_tradeoff_figure_keeps_its_legends_clear_of_the_marked_points(monkeypatch):
-    # each run's wall time once, not best of three: the figure draws error against counted work, no time
-    monkeypatch.setattr(tradeoff, "time_run", lambda job, **options: time_run(job, **{**options, "repeats": 1}))
+    # no run timed again alone (helpers/timing.py): the figure draws error against counted work, no time
+    monkeypatch.setattr(tradeoff, "time_run", constant_time_run)
     result = tradeoff.tradeoff("slider", "free", tol=1e-4, duration=0.5)
     figure = charts.tradeoff_figure(result)
     assert assert_legends_clear(figure) > len(result.runs)

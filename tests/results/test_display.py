@@ -33,11 +33,11 @@ from helpers.figures import assert_legends_clear
 from helpers.layers import layer_of
 from helpers.paths import DATA
 from helpers.stay_cable import WINDY
+from helpers.timing import constant_time_run
 from springlab import display, files, outputs
 from springlab.plots import figures
 from springlab.runs.run import ValidationRow, run_scenario
 from springlab.scenes import get
-from springlab.sim.batch import time_run
 from springlab.studies import random_load, rms_settings
 from springlab.studies import tradeoff as tradeoff_module
 from springlab.studies.design import run_study
@@ -64,11 +64,11 @@ def _shown_classes() -> set[type]:
     return found
 
 
-def _timed_once(study, *args, **options):
-    """`study(*args, **options)` with each run's wall time measured once, not best of three: nothing here reads
-    a wall time (the pick and the front rank counted work), and the repeats cost a third of a small trade-off."""
+def _untimed(study, *args, **options):
+    """`study(*args, **options)` with no run timed again alone (helpers/timing.py): nothing here reads a wall
+    time (the pick and the front rank counted work), and the timing runs were half of a small trade-off."""
     with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(tradeoff_module, "time_run", lambda job, **kw: time_run(job, **{**kw, "repeats": 1}))
+        patch.setattr(tradeoff_module, "time_run", constant_time_run)
         return study(*args, **options)
 
 
@@ -84,7 +84,7 @@ def results(stability_report, shipped_audit):
         "Result": result,
         "ValidationRow": ValidationRow.of(result),
         "Sweep": springlab.sweep("slider", "free", vary={"damping": (0.5, 40.0, 14, "log")}, duration=0.5),
-        "Tradeoff": _timed_once(tradeoff, "slider", "free", tol=1e-6, duration=0.5),
+        "Tradeoff": _untimed(tradeoff, "slider", "free", tol=1e-6, duration=0.5),
         "FitResult": springlab.fit("slider", {"time": t, "slider_pos": decay}, mass=2.0),
         "Audit": shipped_audit("slider"),
         "StabilityReport": stability_report,

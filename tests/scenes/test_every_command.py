@@ -19,9 +19,9 @@ import pathlib
 import pytest
 
 from helpers.stay_cable import WINDY
+from helpers.timing import constant_time_run
 from springlab import scenes
 from springlab.cli.main import COMMANDS
-from springlab.sim.batch import time_run
 from springlab.studies import auto, tradeoff
 from springlab.studies.tradeoff import sweepable
 
@@ -150,9 +150,9 @@ def _check(cli, scene_name, command, argv, expected, out):
 def test_every_scene_serves_every_command_it_declares(scene_name, command, tmp_path, cli, monkeypatch):
     scene = scenes.get(scene_name)
     if command == "tradeoff":
-        # each run's wall time once, not best of three (as tests/studies/test_tradeoff.py times its sweeps): the
-        # case holds the wiring and reads no timing, and the two extra repeats cost a fifth of each case
-        monkeypatch.setattr(tradeoff, "time_run", lambda job, **options: time_run(job, **{**options, "repeats": 1}))
+        # no run timed again alone (helpers/timing.py; tests/studies/test_tradeoff.py times its sweeps): the case
+        # holds the wiring and reads no timing, and the timing runs cost a fifth of each case
+        monkeypatch.setattr(tradeoff, "time_run", constant_time_run)
     for index, (argv, expected) in enumerate(_cases(scene)[command]):
         out = tmp_path / f"out{index}"
         if "RECORD" in argv:  # a fit reads a record of the scene's own fit scenario
