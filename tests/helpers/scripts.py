@@ -3,8 +3,9 @@ in a process of its own, but without paying the interpreter's start and `import 
 interpreter imports springlab, then forks a child per script that runs it as `__main__` (runpy) with its own
 argv, working folder, stdout and stderr, and exits with the script's exit code. Every script thus starts from the
 state right after `import springlab` and the first lookup of a scene (which imports the scenes' modules: a
-read-only catalogue, CONTRIBUTING), as it would in a fresh interpreter, and no script sees another's. 21 scripts
-at 0.6 s of start-up each were two thirds of test_scenarios' cost.
+read-only catalogue, CONTRIBUTING), with the libraries springlab imports on first use in most runs already loaded
+(threadpoolctl, scipy.optimize), as it would be in a fresh interpreter once those had loaded, and no script sees
+another's. 21 scripts at 0.6 s of start-up each were two thirds of test_scenarios' cost.
 
 A script may be handed results the test session already has (`served`): `springlab.run(scene, scenario)`
 called in it exactly so (no option) returns the session's Result of that call, unpickled in the child, and any
@@ -25,6 +26,7 @@ _DRIVER = r"""
 import json, os, pickle, runpy, sys, traceback
 import springlab  # what every script imports first: paid once, before the forks
 import threadpoolctl  # imported by the first exact reference of any run (springlab.exact.linear)
+import scipy.optimize  # imported on first use by many scenes' exact references and answers (0.25 s per script)
 from springlab import scenes
 
 # the catalogue, found by importing every scene's module on first lookup (read-only): once, not per script
