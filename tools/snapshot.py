@@ -93,7 +93,7 @@ def _case(name: str, *argv: str, inputs: tuple[str, ...] = ()) -> Case:
     return Case(name, (tuple(argv),), inputs)
 
 
-#: every scene of `springlab list`, run at its default scenario
+#: every scene of `springlab list` but the stay cable, run at its default scenario (the stay cable: STAY_CABLE)
 SCENES = ("slider", "car", "printer_head", "kinematics", "nonlinear", "drill_string", "friction")
 #: the printer head's shaped moves, its feedback loops and its resonance test, run with --json
 PRINTER_CONTROL = ("move_zv", "move_ei", "feedback_motor", "feedback_carriage", "resonance_test")

@@ -26,6 +26,7 @@ from scipy.optimize import brentq
 
 from helpers.contract import plain_json
 from helpers.linear_models import chain_frequencies, chain_xml, pendulum_xml
+from helpers.timing import constant_time_run
 from springlab.errors import BadInputError, UnknownNameError
 from springlab.exact.limits import stability_limit
 from springlab.exact.map_limits import map_limit
@@ -365,7 +366,7 @@ def test_a_shipped_scene_audit_agrees_with_stability_and_tradeoff(scene, shipped
     scenario = result.model.split("'")[3]
     shared = (scene, scenario) == ("slider", "free")
     if not shared:
-        monkeypatch.setattr(tradeoff, "time_run", lambda job, repeats: 1e-3)
+        monkeypatch.setattr(tradeoff, "time_run", constant_time_run)
     sweep = slider_free_sweep if shared else tradeoff.sweep(scene, scenario, timing_repeats=1)
     compared = [name for name, order in sweep.orders.items() if order is not None and result.orders[name] is not None]
     assert {"euler", "rk4"} <= set(compared)
@@ -443,7 +444,7 @@ def test_printer_head_audit_places_the_belt_damping_where_each_integrator_does(s
     assert all(result.stability[name].confirmed for name in ("euler", "implicit", "implicitfast", "rk4"))
     # the four integrators compared below; the orders come from the errors alone, so the sweep's timer (half
     # of its cost) is replaced by a constant that leaves them the same
-    monkeypatch.setattr(tradeoff, "time_run", lambda job, repeats: 1e-3)
+    monkeypatch.setattr(tradeoff, "time_run", constant_time_run)
     sweep = tradeoff.sweep(
         "printer_head",
         result.model.split("'")[3],
