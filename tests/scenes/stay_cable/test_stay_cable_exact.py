@@ -163,6 +163,36 @@ def test_the_n_element_complex_modes_converge_to_the_continuum_at_second_order()
     assert np.all(errors[-1] <= 2e-3)
 
 
+@pytest.mark.parametrize("factor", [1e-2, 0.1, 0.5, 1.0, 2.0, 10.0, 100.0])
+def test_newton_on_the_determinant_is_the_dense_eigenvalue(factor):
+    # the damper from a hundredth to a hundred times the universal optimum, modes 1-3 from the continuum's roots
+    n, position = 99, 6.0
+    coefficient = factor * CABLE.impedance / (math.pi * position / CABLE.length)
+    model = cb.LumpedCable.build(
+        CABLE, n, structural_ratio=0.001, damper_position=position, damper_coefficient=coefficient
+    )
+    assert model.is_tridiagonal()
+    values = scipy.linalg.eigvals(model.state_matrix())  # LAPACK's QR algorithm on the 2N x 2N state matrix
+    largest = float(np.max(np.abs(values)))
+    oscillatory = values[values.imag > 64 * EPS * largest]
+    oscillatory = oscillatory[np.argsort(oscillatory.imag)]
+    for mode in (1, 2, 3):
+        found = model.eigenvalue_near(cb.damped_eigenvalue(CABLE, mode, position, coefficient))
+        dense = oscillatory[mode - 1]
+        # the dense value's backward error is a few eps |A| (about N eps |lambda_max| on a well separated mode);
+        # the determinant's terms cancel to (|lambda| / |lambda_max|)^2 of their size, so Newton's own round-off is
+        # about (|lambda_max| / |lambda|)^2 eps |lambda|
+        tolerance = n * EPS * largest + (largest / abs(dense)) ** 2 * EPS * abs(dense)
+        assert abs(found - dense) <= tolerance, (mode, found, dense, tolerance)
+
+
+def test_newton_on_the_determinant_refuses_a_model_that_is_not_tridiagonal():
+    model = cb.LumpedCable.build(CABLE, 19, structural_ratio=0.001, aero_ratio=-0.005, aero_modes=2)
+    assert not model.is_tridiagonal()
+    with pytest.raises(ArithmeticError, match="tridiagonal"):
+        model.eigenvalue_near(1j * float(CABLE.omega(1)[0]))
+
+
 def test_the_model_finds_an_overdamped_motion_beside_a_stiff_damper():
     # eta > 2: the continuum has a real root x = i y (sinh y = eta sinh(r y) sinh((1 - r) y)); the model too
     model = cb.LumpedCable.build(CABLE, 99, damper_position=6.0, damper_coefficient=15.9 * CABLE.impedance)
