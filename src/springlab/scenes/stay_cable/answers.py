@@ -173,5 +173,5 @@ def stabilising(cable: CableModel) -> Stabilising:
             break
         kappa = (1.0 - math.sqrt(1.0 - 4.0 * deficit**2)) / (2.0 * deficit)
         needed = max(needed, kappa / (mode.number * math.pi * ratio) * cable.cable.impedance)
-    c_stop = cb.stabilising_damper(bare, cable.damper_node, guess=needed)
+    c_stop = cb.stabilising_damper(bare, cable.damper_node, guess=needed, tendons=cable.aero)
     return Stabilising(c_stop, needed, bare.growth_rate())
