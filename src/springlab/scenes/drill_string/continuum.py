@@ -462,19 +462,23 @@ class WaveSolution:
         k = 0
         shifted = t - tau
         while shifted > 0:
-            # top_speed of a positive time, in floats: numpy's scalar clip costs more than the rest of the sum
-            total += alpha * min(shifted, ramp)
+            # top_speed of a positive time, in floats: numpy's scalar clip costs more than the rest of the sum, and
+            # min() as a call more than its comparison written out (the same value: min keeps the first of equals)
+            total += alpha * (ramp if ramp < shifted else shifted)
             k += 1
             shifted = t - (2 * k + 1) * tau
         pieces, starts = self._pieces, self._starts
         if not pieces:
             return total
+        find = bisect.bisect_right
         k = 1
         earlier = t - 2 * tau
         while earlier > 0:
-            start, end, dense = pieces[max(bisect.bisect_right(starts, earlier) - 1, 0)]
+            index = find(starts, earlier) - 1
+            start, end, dense = pieces[index if index > 0 else 0]
             if dense is not None:
-                total -= dense(min(max(earlier, start), end))  # type: ignore[operator]
+                inside = start if start > earlier else earlier  # clamped to the piece, as min(max(...)) does
+                total -= dense(end if end < inside else inside)  # type: ignore[operator]
             k += 1
             earlier = t - 2 * k * tau
         return total
@@ -609,13 +613,17 @@ class _DenseSpeed:
         self._last = len(steps) - 1
 
     def __call__(self, t: float) -> float:
-        segment = min(max(bisect.bisect_left(self._times, t) - 1, 0), self._last)
-        t_old, h, coefficients, y_old = self._steps[segment]
+        segment = bisect.bisect_left(self._times, t) - 1
+        segment = 0 if segment < 0 else (self._last if segment > self._last else segment)
+        t_old, h, c, y_old = self._steps[segment]
         x = (t - t_old) / h
         rest = 1 - x
+        if len(c) == 7:  # DOP853's seven rows, the loop below written out: the same operations in the same order
+            y = ((((((0.0 + c[0]) * x + c[1]) * rest + c[2]) * x + c[3]) * rest + c[4]) * x + c[5]) * rest
+            return (y + c[6]) * x + y_old
         y = 0.0
         odd = False
-        for f in coefficients:  # y += f, then y *= x (even rows) or 1 - x (odd rows): scipy's order
+        for f in c:  # y += f, then y *= x (even rows) or 1 - x (odd rows): scipy's order
             y = (y + f) * (rest if odd else x)
             odd = not odd
         return y + y_old
