@@ -46,6 +46,7 @@ __all__ = [
     "closed_loop",
     "critical_gain",
     "held_run",
+    "held_open_run",
     "held_run_error",
     "loop_response",
     "loop_transfer",
@@ -364,6 +365,28 @@ def held_run(
     return x, np.array(forces, dtype=float)
 
 
+def held_open_run(
+    a: np.ndarray, b: np.ndarray, dt: float, x0: np.ndarray, forces: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """`held_run` of an open-loop force sequence u_j [input units] held over step j: (x (m + 1, n), u (m,)).
+
+    The same steps as `held_run(a, b, dt, len(forces), x0, lambda k, x: float(forces[k]))`, bit for bit (phi x_j
+    + gamma u_j, each gamma u_j the same product), with the products formed for every step at once and no call
+    per step: the loop is the step itself.
+    """
+    phi, gamma = zoh(a, b, dt)
+    phi = np.ascontiguousarray(phi)
+    u = np.asarray(forces, dtype=float)
+    pushes = gamma[:, 0][None, :] * u[:, None]  # row j: column * u_j, as held_run forms it
+    x = np.empty((len(u) + 1, len(a)))
+    x[0] = x0
+    state = x[0]
+    for j, push in enumerate(pushes):
+        state = phi.dot(state) + push
+        x[j + 1] = state
+    return x, u.copy()
+
+
 def held_maximum(
     a: np.ndarray, b: np.ndarray, dt: float, states: np.ndarray, forces: np.ndarray, row: np.ndarray
 ) -> float:
@@ -505,9 +528,15 @@ def held_run_error(
     change = 0.0
     phi, column = np.ascontiguousarray(phi), gamma[:, 0]
     current = error[0]
+    if response is None:  # open loop: every change 0, its product column * 0.0 formed once
+        still = column * change
+        for j, step_error in enumerate(local):
+            current = phi.dot(current) + still + step_error
+            error[j + 1] = current
+        return error
     for j, step_error in enumerate(local):
         if j % steps_per_sample == 0:
-            change = 0.0 if response is None else float(response(j // steps_per_sample, error[j]))
+            change = float(response(j // steps_per_sample, error[j]))
         current = phi.dot(current) + column * change + step_error  # as in held_run
         error[j + 1] = current
     return error

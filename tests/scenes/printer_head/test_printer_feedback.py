@@ -57,6 +57,22 @@ def test_zero_order_hold_map_is_the_exponential_and_its_integral():
     assert gamma[:, 0] == pytest.approx(quadrature, rel=1e-12, abs=1e-12 * np.abs(quadrature).max())
 
 
+def test_the_open_loop_held_run_is_the_held_run_bit_for_bit():
+    # a chirp-like force held over each step from a deflected start: the open-loop path (no call per step) makes
+    # the same steps as the general one, and its error propagation without a law the same as the general loop's
+    a, b = control.belt_plant(_model())
+    dt, steps = PERIOD / SUBSTEPS, 3000
+    k = np.arange(steps)
+    force = 3.0 * np.sin(2e-5 * k * k) * np.cos(0.01 * k)
+    start = np.array([1e-3, -2e-3, 0.05, -0.01])
+    states, forces = sampled_loop.held_run(a, b, dt, steps, start, lambda j, x: float(force[j]))
+    open_states, open_forces = sampled_loop.held_open_run(a, b, dt, start, force)
+    assert np.array_equal(open_states, states) and np.array_equal(open_forces, forces)
+    error = sampled_loop.held_run_error(a, b, dt, 4, 1 / 120, states, forces)
+    general = sampled_loop.held_run_error(a, b, dt, 4, 1 / 120, states, forces, response=lambda j, e: 0.0)
+    assert np.array_equal(error, general)
+
+
 @pytest.mark.parametrize(
     ("encoder", "gains"), [("motor", MOTOR_GAINS), ("motor", PID_GAINS), ("carriage", CARRIAGE_GAINS)]
 )
