@@ -111,6 +111,26 @@ def test_closed_loop_poles_are_the_roots_of_one_plus_the_loop_transfer(encoder, 
     assert np.max(np.abs(poles)) < 1
 
 
+@pytest.mark.parametrize(
+    ("encoder", "gains"), [("motor", MOTOR_GAINS), ("motor", PID_GAINS), ("carriage", CARRIAGE_GAINS)]
+)
+def test_the_margins_grid_brackets_by_the_batched_solves_signs(encoder, gains):
+    # margins read their grid only for the signs of Im L, Re L and |L| - 1: the triangular form's grid gives the
+    # batched solves' signs everywhere, and its values are within the solves' conditioning (the belt's rigid-body
+    # double pole at z = 1: cond(z I - Phi) ~ 1 / |z - 1|^2 on the lowest frequency) of theirs
+    a, b = control.belt_plant(_model())
+    phi, gamma = sampled_loop.zoh(a, b, PERIOD)
+    pid = sampled_loop.Pid(*gains, PERIOD)
+    row = control.output_row(encoder)
+    grid = np.geomspace(0.01, 0.5 / PERIOD * (1 - 1e-9), 40001)
+    solved = sampled_loop.loop_response(phi, gamma, row, pid, grid)
+    bracketing = sampled_loop._bracketing_response(phi, gamma, row, pid, grid)
+    for part in (np.imag, np.real, lambda v: np.abs(v) - 1):
+        assert np.array_equal(np.sign(part(bracketing)), np.sign(part(solved)))
+    lowest = abs(np.exp(2j * math.pi * grid[0] * PERIOD) - 1)
+    assert np.max(np.abs(bracketing - solved) / np.abs(solved)) <= 64 * EPS / lowest**2
+
+
 def test_gain_margin_is_where_the_carriage_loop_loses_stability():
     a, b = control.belt_plant(_model())
     phi, gamma = sampled_loop.zoh(a, b, PERIOD)
