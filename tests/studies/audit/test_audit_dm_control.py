@@ -31,6 +31,7 @@ from mujoco import rollout
 from helpers.audit import check_limits_honest
 from springlab.sim.simulate import INTEGRATORS
 from springlab.studies.audit.audit import audit
+from springlab.studies.audit.sweep import default_grid, grid_for
 
 SUITE = pathlib.Path(dm_control.__file__).parent / "suite"
 _FULL = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
@@ -104,23 +105,33 @@ def test_dm_control_model_audits_and_its_recommendation_meets_tol(name, untimed)
 
 
 #: robot models with contacts, joint limits, dry friction or no position-dependent force (the reacher, as the
-#: swimmer): name -> (settle [s], duration [s], tol [-], reference step [s]); the walker and the humanoid audited
-#: lying on the floor. The reacher's fastest mode is 227 rad/s (omega_max h <= 0.012 at h ~ 5e-5 s), the finger's
-#: 1510 rad/s (0.015 at ~1e-5 s; module docstring)
+#: swimmer): name -> (settle [s], duration [s], tol [-], reference step [s], (top [s], n)); the walker and the
+#: humanoid audited lying on the floor. The reacher's fastest mode is 227 rad/s (omega_max h <= 0.012 at h ~ 5e-5 s),
+#: the finger's 1510 rad/s (0.015 at ~1e-5 s; module docstring). (top, n): the sweep runs the n coarsest timesteps
+#: of the audit's default grid (sweep.default_grid below `top`, the grid's largest timestep, asserted to be the
+#: audit's own default below), not the timesteps finer than the recommendation's cheapest rival: each costs more
+#: counted work than the recommendation at every integrator (asserted), so it is never the pick, and the
+#: recommendation is the default grid's. The limits, the constraints and the motion do not depend on the swept
+#: timesteps; the finest were most of the sweep's CPU (the humanoid's 2e-5 and 4e-5 s: 10240 and 5120 steps x 5
+#: integrators of its 15360 x 5 in the sweep)
 ROBOTS = {
-    "reacher": (None, 1.0, 1e-3, 1e-4),
-    "finger": (None, 0.5, 1e-3, 2e-5),
-    "walker": (4.0, 0.5, 1e-2, CONTACT_REFERENCE),
-    "humanoid": (3.0, 0.2, 1e-2, CONTACT_REFERENCE),
+    "reacher": (None, 1.0, 1e-3, 1e-4, (1 / 68, 6)),
+    "finger": (None, 0.5, 1e-3, 2e-5, (0.05, 11)),
+    "walker": (4.0, 0.5, 1e-2, CONTACT_REFERENCE, (0.05, 11)),
+    "humanoid": (3.0, 0.2, 1e-2, CONTACT_REFERENCE, (0.02, 10)),
 }
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", list(ROBOTS))
 def test_robot_audit_reports_its_constraints_and_claims_only_what_runs_confirm(name, untimed):
-    settle, duration, tol, reference_step = ROBOTS[name]
+    settle, duration, tol, reference_step, (top, swept) = ROBOTS[name]
     path = SUITE / f"{name}.xml"
-    result = audit(str(path), settle_s=settle, tol=tol, duration=duration)
+    dts = default_grid(top)[:swept]
+    result = audit(str(path), settle_s=settle, tol=tol, duration=duration, dts=dts)
+    # the swept timesteps are the default grid's coarsest (the audit's own grid at these limits and duration)
+    default = grid_for(result.stability, result.duration, result.own.dt)
+    assert dts == default[:swept]
     model = mujoco.MjModel.from_xml_path(str(path))
     state = result.point_state
     # constraints are reported where MuJoCo has them, and then the limits come from runs
@@ -139,6 +150,12 @@ def test_robot_audit_reports_its_constraints_and_claims_only_what_runs_confirm(n
     if pick.integrator is None:
         assert "no swept setting meets tol" in result.message
         return
+    if swept < len(default):
+        # the default grid's next timestep (and so every finer one) costs more counted work than the pick at
+        # every integrator: steps scale as 1 / dt, each integrator's work per step is fixed
+        finest = min(dts)
+        cheapest = min(run.cost for run in result.runs if run.setting.dt == finest)
+        assert cheapest * finest / default[swept] > pick.row.cost
     steps = round(result.duration / pick.dt)
     times = np.arange(0, steps + 1, max(1, steps // 500)) * pick.dt
     fine = pick.dt / (2 * max(1, round(pick.dt / reference_step)))  # it and twice it divide the recommended dt
