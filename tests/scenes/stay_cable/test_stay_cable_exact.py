@@ -394,6 +394,21 @@ def test_the_structured_covariance_takes_several_low_rank_terms():
     assert np.max(np.abs(structured - brute) / scale) <= 1e-10
 
 
+@pytest.mark.parametrize("aero", [-0.005, 0.0])
+def test_a_one_step_maps_decay_is_read_off_its_bilinear_schur_form(aero):
+    # the cable's exact step maps, growing with rain-wind's negative damping or decaying without it, and maps
+    # pushed onto and past the unit circle: the Schur form's verdict is the eigenvalues' |mu| < 1
+    n = 19
+    model = cb.LumpedCable.build(CABLE, n, structural_ratio=0.001, aero_ratio=aero, aero_modes=1)
+    step = scipy.linalg.expm(model.state_matrix() * 0.05)
+    radius = float(np.max(np.abs(scipy.linalg.eigvals(step))))
+    for scale in (1.0, 0.999, 1.001 / radius, 1.0 / radius - 1e-6):
+        transition = step * scale
+        decays = float(np.max(np.abs(scipy.linalg.eigvals(transition)))) < 1.0
+        assert rv._decays_by_schur(transition) == decays, (aero, scale)
+    assert not rv._decays_by_schur(step[:9, :9])  # under 10 states scipy solves directly: the eigenvalues decide
+
+
 def test_the_held_covariance_is_the_long_exact_recursion():
     n = 5
     model, b, w = _windy(n)

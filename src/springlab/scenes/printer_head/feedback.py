@@ -247,14 +247,8 @@ class Feedback(Variant):
         row = output_row(self.encoder)[0]
         path = planned_path(params, self.encoder)
         if resume is None:
-            start, law, saturated, first = (
-                initial_vector(case),
-                sampled_loop.PidLaw(self.pid(params), params["drive_force"]),
-                [],
-                0,
-            )
-        else:
-            start, law, saturated, first = resume
+            resume = (initial_vector(case), sampled_loop.PidLaw(self.pid(params), params["drive_force"]), [], 0)
+        start, law, saturated, first = resume
 
         def control(k: int, x: np.ndarray) -> float:
             force = law.update(float(row @ x), *path.at(first + k))
