@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -46,6 +47,8 @@ _EPS = float(np.finfo(float).eps)
 _NEWTON_STEPS = 60
 #: continuation points from a tiny damper up to the asked one (geometric in eta)
 _CONTINUATION_POINTS = 48
+#: a Newton step on the lumped determinant this small (relative) is followed by one more, the last
+_CLOSE = 1e-9
 
 
 def _optimize():  # noqa: ANN202 - the module
@@ -303,8 +306,135 @@ class LumpedCable:
         """max Re(lambda) [1/s] over every mode (> 0: the model's own motion grows)."""
         return float(np.max(linear.eigen(self.state_matrix())[0].real))
 
+    def is_tridiagonal(self, tendons: Sequence[tuple[np.ndarray, float]] = ()) -> bool:
+        """Whether K is symmetric tridiagonal and C diagonal once the `tendons`' damping is taken out (`eigenvalue_near`).
 
-def stabilising_damper(model: LumpedCable, node: int, *, guess: float, rtol: float = 1e-12) -> float:
+        The cable with its damper is such a model with no tendons; rain-wind's modal damping adds a tendon per mode,
+        w u u^T with u its coefficients on the nodes and w its damping [N s/m].
+        """
+        return _recurrence_parts(self, tendons) is not None
+
+    def eigenvalue_near(self, start: complex, tendons: Sequence[tuple[np.ndarray, float]] = ()) -> complex:
+        """The eigenvalue lambda [1/s] of (lambda^2 M + lambda C + K) phi = 0 that Newton's method reaches from `start`.
+
+        With K tridiagonal and C = D + U W U^T (D diagonal, U W U^T the `tendons`: `is_tridiagonal`), write
+        T(lambda) = lambda^2 M + lambda D + K. Then det Q = det T det S, S = I + lambda W U^T T^-1 U (r x r, r the
+        tendons), and det T is the product of the pivots r_1 = a_1, r_j = a_j - e_(j-1)^2 / r_(j-1)
+        (a_j = lambda^2 m_j + lambda d_j + k_jj, e_j = k_(j,j+1)). So d ln det Q / d lambda = sum_j r_j' / r_j
+        (the same recurrence differentiated) + trace(S^-1 S'), S' = W (U^T Y - lambda Y^T T' Y), Y = T^-1 U from
+        the same pivots: one Newton step lambda -= 1 / (d ln det Q / d lambda) costs O(N r), where a dense eigensolve
+        of the state matrix costs O(N^3) (a fiftieth of the 198 x 198 one for the scene's 99 nodes). Newton stops
+        one step after a step below `_CLOSE` |lambda|: convergence is quadratic, so what is left is below the
+        determinant's own round-off (its terms a_j cancel to about (omega_1 / omega_N)^2 of their size: lambda is
+        good to about (omega_N / omega_1)^2 eps relative, 3e-14 for the scene's cable, and steps of that size never
+        stop). The root is the one Newton reaches, normally the nearest; a caller that needs a particular mode
+        confirms it (`damper_optimum`, `stabilising_damper` against the dense eigenvalues).
+
+        Raises
+        ------
+        ArithmeticError
+            the model is not of that form, a pivot vanishes, or Newton's step does not fall below `_CLOSE` |lambda|
+            within `_NEWTON_STEPS` steps.
+        """
+        parts = _recurrence_parts(self, tendons)
+        if parts is None:
+            raise ArithmeticError("the determinant's recurrence needs K tridiagonal and C diagonal but for its tendons")
+        lam = complex(start)
+        polished = False
+        for _ in range(_NEWTON_STEPS):
+            total = _log_det_slope(lam, *parts)
+            if total == 0 or not (math.isfinite(total.real) and math.isfinite(total.imag)):
+                raise ArithmeticError(f"the determinant's recurrence broke down at lambda = {lam!r}")
+            step = 1.0 / total
+            lam -= step
+            if polished:
+                return lam
+            polished = abs(step) <= _CLOSE * abs(lam)
+        raise ArithmeticError(f"Newton on the determinant did not converge from lambda = {complex(start)!r}")
+
+
+def _recurrence_parts(model: LumpedCable, tendons: Sequence[tuple[np.ndarray, float]]) -> tuple | None:
+    """(m, k_jj, k_(j,j+1)^2, d, U's columns, w) as lists for `_log_det_slope`, or None if the model is not of the form
+    K tridiagonal, C = D + sum_k w_k u_k u_k^T with D diagonal (the off-diagonal rest within round-off of 0)."""
+    k, c = model.stiffness, model.damping
+    upper, lower = np.diag(k, 1), np.diag(k, -1)
+    if not (
+        np.array_equal(upper, lower) and np.array_equal(k, np.diag(np.diag(k)) + np.diag(upper, 1) + np.diag(lower, -1))
+    ):
+        return None
+    low_rank = np.zeros_like(c)
+    for vector, weight in tendons:  # in the read-back's order, so the sums are its own
+        low_rank += float(weight) * np.outer(vector, vector)
+    rest = c - low_rank
+    off = rest - np.diag(np.diag(rest))
+    if np.max(np.abs(off), initial=0.0) > 4 * len(tendons) * _EPS * np.max(np.abs(c), initial=0.0):
+        return None
+    return (
+        model.mass.tolist(),
+        np.diag(k).tolist(),
+        (upper**2).tolist(),
+        upper.tolist(),
+        np.diag(rest).tolist(),
+        [np.asarray(vector, float).tolist() for vector, _ in tendons],
+        np.array([float(weight) for _, weight in tendons]),
+    )
+
+
+def _log_det_slope(
+    lam: complex,
+    mass: list[float],
+    diagonal: list[float],
+    coupling: list[float],
+    upper: list[float],
+    damping: list[float],
+    vectors: list[list[float]],
+    weights: np.ndarray,
+) -> complex:
+    """d ln det(lambda^2 M + lambda C + K) / d lambda at `lam` (`LumpedCable.eigenvalue_near`)."""
+    n = len(mass)
+    pivot = lam * lam * mass[0] + lam * damping[0] + diagonal[0]
+    slope = 2.0 * lam * mass[0] + damping[0]
+    pivots = [pivot]
+    total = slope / pivot
+    for j in range(1, n):
+        a = lam * lam * mass[j] + lam * damping[j] + diagonal[j]
+        da = 2.0 * lam * mass[j] + damping[j]
+        e2 = coupling[j - 1]
+        pivot, slope = a - e2 / pivot, da + e2 * slope / (pivot * pivot)
+        pivots.append(pivot)
+        total += slope / pivot
+    if not vectors:
+        return total
+    # Y = T^-1 U through T = L diag(r) L^T, L unit lower bidiagonal with L_(j+1, j) = e_j / r_j
+    columns = []
+    for u in vectors:
+        z = [complex(u[0])]
+        for j in range(1, n):
+            z.append(u[j] - upper[j - 1] / pivots[j - 1] * z[j - 1])
+        y = [0j] * n
+        y[n - 1] = z[n - 1] / pivots[n - 1]
+        for j in range(n - 2, -1, -1):
+            y[j] = (z[j] - upper[j] * y[j + 1]) / pivots[j]
+        columns.append(y)
+    ys = np.array(columns).T  # (N, r)
+    us = np.array(vectors).T
+    rates = 2.0 * lam * np.array(mass) + np.array(damping)  # T' = diag(2 lambda m + d)
+    gram = us.T @ ys
+    gram_slope = -(ys.T * rates) @ ys
+    weights_diag = np.diag(weights)
+    s = np.eye(len(vectors)) + lam * weights_diag @ gram
+    s_slope = weights_diag @ (gram + lam * gram_slope)
+    return total + complex(np.trace(np.linalg.solve(s, s_slope)))
+
+
+def stabilising_damper(
+    model: LumpedCable,
+    node: int,
+    *,
+    guess: float,
+    rtol: float = 1e-12,
+    tendons: Sequence[tuple[np.ndarray, float]] = (),
+) -> float:
     """The smallest damper [N s/m] at `node` that stops every mode of `model` from growing.
 
     The growth rate g(c) = max Re(lambda) falls from g(0) as the damper grows, and rises again once the damper
@@ -313,17 +443,38 @@ def stabilising_damper(model: LumpedCable, node: int, *, guess: float, rtol: flo
     method to `rtol`. Returns 0 if the model does not grow, nan if no damper up to 3000 times the nodes'
     impedance stops it.
 
+    Where the model is tridiagonal but for its `tendons` (`LumpedCable.is_tridiagonal`), g follows the modes that
+    grow without the damper, each by Newton on the determinant (`LumpedCable.eigenvalue_near`, from its root at the
+    nearest damper tried so far), a fiftieth of a dense eigensolve each; the root is then confirmed against the
+    dense eigenvalues there (their fastest-growing mode is a followed one, within their error N eps |lambda_max|),
+    and else, as for any other model, g is the dense eigenvalues' largest real part throughout.
+
     Parameters
     ----------
     guess
         a damper [N s/m] near the answer, e.g. the universal curve's estimate (nan: start the walk far below).
+    tendons
+        the damping that is not diagonal, as (u, w) pairs: C = D + sum w u u^T (rain-wind's modal tendons).
     """
     if model.growth_rate() <= 0.0:
         return 0.0
+    if model.is_tridiagonal(tendons):
+        followed = _FollowedGrowth(model, node, tendons)
+        try:
+            log_c = _lower_root(model, followed, guess, rtol)
+            followed.confirm(log_c)
+            return math.exp(log_c)
+        except ArithmeticError:
+            pass  # Newton failed or followed another mode: the dense eigenvalues decide
 
     def growth(log_c: float) -> float:
         return model.with_damper(node, math.exp(log_c)).growth_rate()
 
+    return math.exp(_lower_root(model, growth, guess, rtol))
+
+
+def _lower_root(model: LumpedCable, growth: Callable[[float], float], guess: float, rtol: float) -> float:
+    """ln c [ln N s/m] of the lower root of `growth` (of ln c) for `stabilising_damper`; nan if none up to its top."""
     # the damper's scale: sqrt(k m) of a node, times N (the impedance sqrt(T m) is (N + 1) of these)
     log_scale = math.log(math.sqrt(float(model.stiffness[0, 0]) * float(model.mass[0])) * model.size)
     far_below, top = log_scale - 40.0, log_scale + 8.0
@@ -337,8 +488,35 @@ def stabilising_damper(model: LumpedCable, node: int, *, guess: float, rtol: flo
             if high > top:
                 return math.nan
             low, high = high, high + step
-    root = _optimize().brentq(growth, low, high, xtol=1e-14, rtol=max(rtol, 4 * _EPS))
-    return math.exp(root)
+    return float(_optimize().brentq(growth, low, high, xtol=1e-14, rtol=max(rtol, 4 * _EPS)))
+
+
+class _FollowedGrowth:
+    """g(ln c) of `stabilising_damper` from the modes that grow without the damper, each followed by Newton."""
+
+    def __init__(self, model: LumpedCable, node: int, tendons: Sequence[tuple[np.ndarray, float]]):
+        self.model, self.node, self.tendons = model, node, tendons
+        (values,) = linear.eigen(model.state_matrix())
+        growing = values[(values.real > 0.0) & (values.imag >= 0.0)]
+        self.roots: dict[float, np.ndarray] = {-math.inf: growing}  # ln c -> the followed eigenvalues [1/s]
+
+    def __call__(self, log_c: float) -> float:
+        nearest = min(self.roots, key=lambda tried: abs(tried - log_c))
+        damped = self.model.with_damper(self.node, math.exp(log_c))
+        found = np.array([damped.eigenvalue_near(start, self.tendons) for start in self.roots[nearest]])
+        self.roots[log_c] = found
+        return float(np.max(found.real))
+
+    def confirm(self, log_c: float) -> None:
+        """ArithmeticError unless the dense eigenvalues' fastest-growing mode at ln c is a followed one."""
+        if not math.isfinite(log_c):
+            return  # no damper stops the followed modes, so none stops the model
+        (values,) = linear.eigen(self.model.with_damper(self.node, math.exp(log_c)).state_matrix())
+        top = values[np.argmax(values.real)]
+        followed = self.roots.get(log_c, np.array([], complex))
+        error = self.model.size * _EPS * float(np.max(np.abs(values)))
+        if not followed.size or np.min(np.abs(followed - complex(top.real, abs(top.imag)))) > error:
+            raise ArithmeticError(f"the fastest-growing mode {top!r} at the root is not a followed one")
 
 
 # -- the continuum with a damper: the transcendental equation ---------------------------------------------------

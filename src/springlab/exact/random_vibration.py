@@ -81,13 +81,33 @@ def discrete_covariance(transition: np.ndarray, noise: np.ndarray) -> np.ndarray
     Raises
     ------
     BadInputError
-        F has an eigenvalue on or outside the unit circle.
+        F has an eigenvalue on or outside the unit circle (read off the Schur form the solve takes, else F's
+        eigenvalues: `_decays_by_schur`).
     """
-    worst = float(np.max(np.abs(scipy.linalg.eigvals(transition))))
-    if not worst < 1.0:
-        raise BadInputError(f"the one-step map has no stationary covariance: |mu| = {worst:.15g} >= 1")
+    if not _decays_by_schur(transition):
+        worst = float(np.max(np.abs(scipy.linalg.eigvals(transition))))
+        if not worst < 1.0:
+            raise BadInputError(f"the one-step map has no stationary covariance: |mu| = {worst:.15g} >= 1")
     p = solve_discrete_lyapunov(transition, np.asarray(noise, float))
     return 0.5 * (p + p.T)
+
+
+def _decays_by_schur(transition: np.ndarray) -> bool:
+    """Whether every eigenvalue mu of F has |mu| < 1, read off the Schur form `solve_discrete_lyapunov` takes anyway.
+
+    Its bilinear transform B^H = (F + I)^-1 (F - I) has the eigenvalues (mu - 1) / (mu + 1), inside the left half
+    plane exactly when |mu| < 1, and the real Schur form's diagonal holds their real parts (LAPACK standardizes a
+    2 x 2 block to equal diagonal entries): a dense eigensolve of F fewer. False (so the caller asks the eigenvalues)
+    where the form is not the one the solve uses (under 10 states, complex) or cannot be formed (F + I singular).
+    """
+    a = np.asarray(transition)
+    if a.ndim != 2 or a.shape[0] != a.shape[1] or a.shape[0] < 10 or np.iscomplexobj(a):
+        return False
+    try:
+        schur_form = _bilinear(a)[2]
+    except (np.linalg.LinAlgError, ValueError):
+        return False
+    return bool(np.max(np.diag(schur_form)) < 0.0)
 
 
 def solve_discrete_lyapunov(transition: np.ndarray, noise: np.ndarray) -> np.ndarray:

@@ -163,6 +163,99 @@ def test_the_n_element_complex_modes_converge_to_the_continuum_at_second_order()
     assert np.all(errors[-1] <= 2e-3)
 
 
+@pytest.mark.parametrize("factor", [1e-2, 0.1, 0.5, 1.0, 2.0, 10.0, 100.0])
+def test_newton_on_the_determinant_is_the_dense_eigenvalue(factor):
+    # the damper from a hundredth to a hundred times the universal optimum, modes 1-3 from the continuum's roots
+    n, position = 99, 6.0
+    coefficient = factor * CABLE.impedance / (math.pi * position / CABLE.length)
+    model = cb.LumpedCable.build(
+        CABLE, n, structural_ratio=0.001, damper_position=position, damper_coefficient=coefficient
+    )
+    assert model.is_tridiagonal()
+    values = scipy.linalg.eigvals(model.state_matrix())  # LAPACK's QR algorithm on the 2N x 2N state matrix
+    largest = float(np.max(np.abs(values)))
+    oscillatory = values[values.imag > 64 * EPS * largest]
+    oscillatory = oscillatory[np.argsort(oscillatory.imag)]
+    for mode in (1, 2, 3):
+        found = model.eigenvalue_near(cb.damped_eigenvalue(CABLE, mode, position, coefficient))
+        dense = oscillatory[mode - 1]
+        # the dense value's backward error is a few eps |A| (about N eps |lambda_max| on a well separated mode);
+        # the determinant's terms cancel to (|lambda| / |lambda_max|)^2 of their size, so Newton's own round-off is
+        # about (|lambda_max| / |lambda|)^2 eps |lambda|
+        tolerance = n * EPS * largest + (largest / abs(dense)) ** 2 * EPS * abs(dense)
+        assert abs(found - dense) <= tolerance, (mode, found, dense, tolerance)
+
+
+@pytest.mark.parametrize("factor", [0.0, 0.1, 1.0, 10.0])
+def test_newton_on_the_determinant_with_rain_winds_tendons_is_the_dense_eigenvalue(factor):
+    # C = D + sum_k w_k u_k u_k^T: the damper on its node and two modal tendons of negative damping (modes 1, 2 grow)
+    n, position, ratio = 49, 6.0, -0.005
+    coefficient = factor * CABLE.impedance / (math.pi * position / CABLE.length)
+    model = cb.LumpedCable.build(
+        CABLE,
+        n,
+        structural_ratio=0.001,
+        damper_position=position,
+        damper_coefficient=coefficient,
+        aero_ratio=ratio,
+        aero_modes=2,
+    )
+    tendons = [(cb.mode_shape(n, k), CABLE.aero_mode_damping(n, ratio, k)) for k in (1, 2)]
+    assert model.is_tridiagonal(tendons) and not model.is_tridiagonal()
+    values = scipy.linalg.eigvals(model.state_matrix())
+    largest = float(np.max(np.abs(values)))
+    oscillatory = values[values.imag > 64 * EPS * largest]
+    oscillatory = oscillatory[np.argsort(oscillatory.imag)]
+    for mode in (1, 2, 3):
+        found = model.eigenvalue_near(cb.damped_eigenvalue(CABLE, mode, position, coefficient), tendons)
+        dense = oscillatory[mode - 1]
+        # as above; the tendons' rank-2 correction adds a 2 x 2 solve, its round-off no larger than the pivots'
+        tolerance = n * EPS * largest + (largest / abs(dense)) ** 2 * EPS * abs(dense)
+        assert abs(found - dense) <= tolerance, (mode, found, dense, tolerance)
+
+
+def test_the_stabilising_damper_by_newton_is_the_dense_eigenvalues_root(monkeypatch):
+    n, ratio = 49, -0.005
+    model = cb.LumpedCable.build(CABLE, n, structural_ratio=0.001, aero_ratio=ratio, aero_modes=3)
+    tendons = [(cb.mode_shape(n, k), CABLE.aero_mode_damping(n, ratio, k)) for k in (1, 2, 3)]
+    node = CABLE.damper_node(n, 6.0)
+    confirmed = []
+    confirm = cb._FollowedGrowth.confirm
+
+    def spied(self, log_c):
+        confirm(self, log_c)
+        confirmed.append(log_c)  # reached only when the followed root is the dense eigenvalues' fastest mode
+
+    monkeypatch.setattr(cb._FollowedGrowth, "confirm", spied)
+    by_newton = cb.stabilising_damper(model, node, guess=math.nan, tendons=tendons)
+    assert confirmed == [math.log(by_newton)]
+    by_eigenvalues = cb.stabilising_damper(model, node, guess=math.nan)
+
+    # both are Brent's roots of g(ln c), within 1e-14 + 1e-12 |ln c| of a root each, and each g is good to its
+    # eigenvalues' error: N eps |lambda_max| for the dense ones (Newton's is smaller), over the slope dg / d ln c
+    def growth(c):
+        return float(np.max(scipy.linalg.eigvals(model.with_damper(node, c).state_matrix()).real))
+
+    slope = abs(growth(by_eigenvalues * 1.001) - growth(by_eigenvalues / 1.001)) / (2 * math.log(1.001))
+    largest = float(np.max(np.abs(scipy.linalg.eigvals(model.with_damper(node, by_eigenvalues).state_matrix()))))
+    agree = 2 * (1e-14 + 1e-12 * abs(math.log(by_eigenvalues))) + 2 * n * EPS * largest / slope
+    assert abs(math.log(by_newton / by_eigenvalues)) <= agree
+
+    # where Newton fails, the dense eigenvalues decide, as for a model with no tendons given
+    def fails(self, start, tendons=()):
+        raise ArithmeticError("no")
+
+    monkeypatch.setattr(cb.LumpedCable, "eigenvalue_near", fails)
+    assert cb.stabilising_damper(model, node, guess=math.nan, tendons=tendons) == by_eigenvalues
+
+
+def test_newton_on_the_determinant_refuses_a_model_that_is_not_tridiagonal():
+    model = cb.LumpedCable.build(CABLE, 19, structural_ratio=0.001, aero_ratio=-0.005, aero_modes=2)
+    assert not model.is_tridiagonal()
+    with pytest.raises(ArithmeticError, match="tridiagonal"):
+        model.eigenvalue_near(1j * float(CABLE.omega(1)[0]))
+
+
 def test_the_model_finds_an_overdamped_motion_beside_a_stiff_damper():
     # eta > 2: the continuum has a real root x = i y (sinh y = eta sinh(r y) sinh((1 - r) y)); the model too
     model = cb.LumpedCable.build(CABLE, 99, damper_position=6.0, damper_coefficient=15.9 * CABLE.impedance)
@@ -299,6 +392,21 @@ def test_the_structured_covariance_takes_several_low_rank_terms():
     brute = _integral_by_doubling(model.state_matrix(), b @ w @ b.T, 1e-3, 1e5)
     scale = np.sqrt(np.outer(np.diag(brute), np.diag(brute)))
     assert np.max(np.abs(structured - brute) / scale) <= 1e-10
+
+
+@pytest.mark.parametrize("aero", [-0.005, 0.0])
+def test_a_one_step_maps_decay_is_read_off_its_bilinear_schur_form(aero):
+    # the cable's exact step maps, growing with rain-wind's negative damping or decaying without it, and maps
+    # pushed onto and past the unit circle: the Schur form's verdict is the eigenvalues' |mu| < 1
+    n = 19
+    model = cb.LumpedCable.build(CABLE, n, structural_ratio=0.001, aero_ratio=aero, aero_modes=1)
+    step = scipy.linalg.expm(model.state_matrix() * 0.05)
+    radius = float(np.max(np.abs(scipy.linalg.eigvals(step))))
+    for scale in (1.0, 0.999, 1.001 / radius, 1.0 / radius - 1e-6):
+        transition = step * scale
+        decays = float(np.max(np.abs(scipy.linalg.eigvals(transition)))) < 1.0
+        assert rv._decays_by_schur(transition) == decays, (aero, scale)
+    assert not rv._decays_by_schur(step[:9, :9])  # under 10 states scipy solves directly: the eigenvalues decide
 
 
 def test_the_held_covariance_is_the_long_exact_recursion():

@@ -28,6 +28,7 @@ import scipy.linalg
 import springlab
 from helpers.stay_cable import WINDY
 from springlab.cli.main import main
+from springlab.exact import cable as cb
 from springlab.exact.linearize import linearize
 from springlab.runs.run import run_scenario
 from springlab.scenes import get
@@ -170,6 +171,31 @@ def test_the_best_damper_is_within_the_universal_curves_stated_range():
     modes = [_damped_mode_1_here(99, 2, f * q["optimal_damper_n_s_m_exact"]) for f in (0.99, 1.0, 1.01)]
     zetas = [-m.real / abs(m) for m in modes]
     assert zetas[1] >= max(zetas[0], zetas[2]) and zetas[1] == pytest.approx(q["max_damping_ratio_exact"], rel=1e-12)
+
+
+def test_the_best_damper_by_newton_is_the_dense_searchs_and_falls_back_to_it(monkeypatch):
+    cable = CableModel.of(SCENE.case("damper", {}).model)
+    guess = math.log(math.sqrt(T * MU) * L / (math.pi * 6.0))
+    bounds = (guess - math.log(answers.SEARCH_FACTOR), guess + math.log(answers.SEARCH_FACTOR))
+    by_newton = answers._optimum_by_newton(cable, bounds)
+    by_eigenvalues = answers._optimum_by_eigenvalues(cable, bounds)
+    # each ratio of the dense search is good to N eps |lambda_max| / |lambda_1| (the state matrix's backward error;
+    # |lambda_max| is the damper's overdamped root c / m dx at most 30 times the optimum, or omega_N)
+    node_mass = MU * L / 100
+    largest = max(30.0 * by_eigenvalues[0] / node_mass, 2 * math.sqrt(T / MU) * 100 / L)
+    tolerance = 99 * EPS * largest / (math.pi * math.sqrt(T / MU) / L)
+    assert abs(by_newton[1] - by_eigenvalues[1]) <= tolerance
+    # the ratio is flat at the optimum: near it zeta = zeta_max / cosh(ln(c / c_opt)) (the universal curve), so two
+    # searches whose ratios differ by up to 2 tolerance find ln c within sqrt(4 tolerance / zeta_max), plus xatol
+    assert abs(math.log(by_newton[0] / by_eigenvalues[0])) <= math.sqrt(4 * tolerance / by_newton[1]) + 2e-9
+
+    # where Newton fails (or the damping is not diagonal) the search runs on the dense eigenvalues, as before
+    def fails(self, start, tendons=()):
+        raise ArithmeticError("the determinant's recurrence needs K tridiagonal")
+
+    monkeypatch.setattr(cb.LumpedCable, "eigenvalue_near", fails)
+    fallback = answers.damper_optimum(cable)
+    assert (fallback.coefficient_exact, fallback.ratio_exact) == by_eigenvalues
 
 
 # -- the wind ---------------------------------------------------------------------------------------------------

@@ -230,23 +230,33 @@ class Feedback(Variant):
         return case.memo(("feedback_exact", dt, steps), lambda: self._exact(case, dt, steps))
 
     def _held(
-        self, case: Case, dt: float, steps: int
+        self,
+        case: Case,
+        dt: float,
+        steps: int,
+        resume: tuple[np.ndarray, sampled_loop.PidLaw, list[bool], int] | None = None,
     ) -> tuple[np.ndarray, np.ndarray, list[bool], sampled_loop.PidLaw]:
-        """The exact loop for `steps` steps: (states, forces, clipped per sample, the law as it ends)."""
+        """The exact loop for `steps` steps: (states, forces, clipped per sample, the law as it ends).
+
+        `resume`: (the last state, the law, the clipped list, the samples done) of a run to continue from its end;
+        each step depends only on the state and the held force, so the steps are those a run from the start
+        would make, bit for bit.
+        """
         params = case.params
         a, b = belt_plant(case.model)
         row = output_row(self.encoder)[0]
         path = planned_path(params, self.encoder)
-        law = sampled_loop.PidLaw(self.pid(params), params["drive_force"])
-        saturated: list[bool] = []
+        if resume is None:
+            resume = (initial_vector(case), sampled_loop.PidLaw(self.pid(params), params["drive_force"]), [], 0)
+        start, law, saturated, first = resume
 
         def control(k: int, x: np.ndarray) -> float:
-            force = law.update(float(row @ x), *path.at(k))
+            force = law.update(float(row @ x), *path.at(first + k))
             saturated.append(law.saturated)
             return force
 
         per_sample = self.sample_steps(params, dt)
-        states, forces = sampled_loop.held_run(a, b, dt, steps, initial_vector(case), control, per_sample)
+        states, forces = sampled_loop.held_run(a, b, dt, steps, start, control, per_sample)
         return states, forces, saturated, law
 
     def _exact(self, case: Case, dt: float, steps: int) -> ExactLoop:
@@ -258,8 +268,11 @@ class Feedback(Variant):
         extra = self._certifying_samples(case, dt, states[-1], law)
         if extra is None:
             return ExactLoop(states, forces, np.array(saturated), False)
-        if extra:
-            states, forces, saturated, _ = self._held(case, dt, (samples + extra) * per_sample)
+        if extra:  # continued from the end, not run again from the start
+            more, more_forces, saturated, _ = self._held(
+                case, dt, extra * per_sample, resume=(states[-1], law, saturated, samples)
+            )
+            states, forces = np.concatenate([states, more[1:]]), np.concatenate([forces, more_forces])
         return ExactLoop(states, forces, np.array(saturated), True)
 
     def _certifying_samples(self, case: Case, dt: float, x: np.ndarray, law: sampled_loop.PidLaw) -> int | None:

@@ -11,6 +11,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
+
+import numpy as np
 
 from springlab.exact import cable as cb
 
@@ -29,6 +32,8 @@ def _optimize():  # noqa: ANN202 - the module
 SEARCH_FACTOR = 30.0
 #: the search's tolerance on log c (the ratio is flat at its optimum: c to about sqrt of it)
 SEARCH_XATOL = 1e-9
+#: machine epsilon
+EPS = float(np.finfo(float).eps)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -59,23 +64,63 @@ def mode_1_ratio(lumped: cb.LumpedCable) -> float:
 
 
 def damper_optimum(cable: CableModel) -> DamperOptimum:
-    """Mode 1's best damper at the damper's node, three ways (see DamperOptimum)."""
+    """Mode 1's best damper at the damper's node, three ways (see DamperOptimum).
+
+    The N-element model's optimum is a bounded Brent search on log c of mode 1's damping ratio, each ratio from
+    Newton on the model's determinant (`LumpedCable.eigenvalue_near`, started at the continuum's mode 1 with the same
+    damper): a tenth of a dense eigensolve of the state matrix each. The root at the optimum is confirmed to be
+    mode 1 of the dense eigenvalues (within their error, N eps |lambda_max|); where it is not, or Newton does not
+    apply (a damping matrix that is not diagonal) or fails, the search is made again on the dense eigenvalues.
+    """
     position = cable.damper_node * cable.cable.spacing(cable.size)  # where the model's damper sits
     ratio = position / cable.cable.length
     eta, zeta = cb.exact_optimum(1, ratio)
     eta_u, zeta_u = cb.universal_optimum(1, ratio)
+    impedance = cable.cable.impedance
+    guess = math.log(eta_u * impedance)
+    bounds = (guess - math.log(SEARCH_FACTOR), guess + math.log(SEARCH_FACTOR))
+    try:
+        coefficient, best = _optimum_by_newton(cable, bounds)
+    except ArithmeticError:
+        coefficient, best = _optimum_by_eigenvalues(cable, bounds)
+    return DamperOptimum(eta * impedance, zeta, coefficient, best, eta_u * impedance, zeta_u)
+
+
+def _search(negative_ratio: Callable[[float], float], bounds: tuple[float, float]) -> tuple[float, float]:
+    """(log c, zeta [-]) at the least of `negative_ratio` (of log c [ln N s/m]) within `bounds`: bounded Brent."""
+    found = _optimize().minimize_scalar(
+        negative_ratio, bounds=bounds, method="bounded", options={"xatol": SEARCH_XATOL}
+    )
+    return float(found.x), -float(found.fun)
+
+
+def _optimum_by_eigenvalues(cable: CableModel, bounds: tuple[float, float]) -> tuple[float, float]:
+    """The optimum's (c, zeta), each ratio from the dense eigenvalues of the state matrix."""
     bare = cable.without_damper()
+    log_c, best = _search(lambda log_c: -mode_1_ratio(bare.with_damper(cable.damper_node, math.exp(log_c))), bounds)
+    return math.exp(log_c), best
+
+
+def _optimum_by_newton(cable: CableModel, bounds: tuple[float, float]) -> tuple[float, float]:
+    """The optimum's (c, zeta), each ratio by Newton on the determinant; ArithmeticError where that is not mode 1."""
+    bare = cable.without_damper()
+    position = cable.damper_node * cable.cable.spacing(cable.size)
+    roots: dict[float, complex] = {}
 
     def negative_ratio(log_c: float) -> float:
-        return -mode_1_ratio(bare.with_damper(cable.damper_node, math.exp(log_c)))
+        coefficient = math.exp(log_c)
+        start = cb.damped_eigenvalue(cable.cable, 1, position, coefficient)
+        root = roots[log_c] = bare.with_damper(cable.damper_node, coefficient).eigenvalue_near(start)
+        return root.real / abs(root)
 
-    guess = math.log(eta_u * cable.cable.impedance)
-    span = math.log(SEARCH_FACTOR)
-    found = _optimize().minimize_scalar(
-        negative_ratio, bounds=(guess - span, guess + span), method="bounded", options={"xatol": SEARCH_XATOL}
-    )
-    impedance = cable.cable.impedance
-    return DamperOptimum(eta * impedance, zeta, math.exp(float(found.x)), -float(found.fun), eta_u * impedance, zeta_u)
+    log_c, best = _search(negative_ratio, bounds)
+    coefficient, root = math.exp(log_c), roots.get(log_c)
+    dense = bare.with_damper(cable.damper_node, coefficient).complex_modes()
+    values = np.concatenate([dense.oscillatory, dense.overdamped])
+    error = bare.size * EPS * float(np.max(np.abs(values)))
+    if root is None or not dense.oscillatory.size or abs(root - dense.oscillatory[0]) > error:
+        raise ArithmeticError(f"Newton's root at the optimum {root!r} is not mode 1 {dense.oscillatory[:1]!r}")
+    return coefficient, best
 
 
 def continuum_mode_1(cable: CableModel) -> complex:
@@ -128,5 +173,5 @@ def stabilising(cable: CableModel) -> Stabilising:
             break
         kappa = (1.0 - math.sqrt(1.0 - 4.0 * deficit**2)) / (2.0 * deficit)
         needed = max(needed, kappa / (mode.number * math.pi * ratio) * cable.cable.impedance)
-    c_stop = cb.stabilising_damper(bare, cable.damper_node, guess=needed)
+    c_stop = cb.stabilising_damper(bare, cable.damper_node, guess=needed, tendons=cable.aero)
     return Stabilising(c_stop, needed, bare.growth_rate())
