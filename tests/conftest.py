@@ -99,7 +99,8 @@ def stability_report():
 def stability_command(stability_report, tmp_path_factory):
     """`springlab stability --json --output DIR` as a user types it (the default amplification map), its report the
     session's `stability_report` (the command's own default report, computed once): run once and read by every
-    test of what the command prints and writes (tests/studies/test_stability.py, tests/scenes/test_every_command.py).
+    test of what the command prints and writes (tests/studies/test_stability.py, tests/scenes/test_every_command.py,
+    tests/cli/test_cli_usage.py).
     Returns (CliResult, DIR); the files are read-only, so no reader can change what the next one reads."""
     from springlab.studies import stability
 
