@@ -51,7 +51,8 @@ def plain_hold(settings: dict[str, float] | None = None, integrator: str = "eule
     mujoco.mj_resetDataKeyframe(model, data, model.key("grasp").id)
     mujoco.mj_forward(model, data)
     box = model.body("box").id
-    fingers = {model.body("left_finger").id, model.body("right_finger").id}
+    is_finger = np.zeros(model.nbody, bool)
+    is_finger[[model.body("left_finger").id, model.body("right_finger").id]] = True
     steps = round(hold_s / dt)
     times, where, grip = np.empty(steps + 1), np.empty((steps + 1, 3)), np.empty((steps + 1, 2))
     times[0], where[0], grip[0] = 0.0, data.xipos[box], data.qpos[:2]
@@ -59,9 +60,10 @@ def plain_hold(settings: dict[str, float] | None = None, integrator: str = "eule
     for k in range(1, steps + 1):
         mujoco.mj_step(model, data)
         times[k], where[k], grip[k] = data.time, data.xipos[box], data.qpos[:2]
-        bodies = [{int(model.geom_bodyid[g]) for g in data.contact[i].geom} for i in range(data.ncon)]
-        if lost is None and not any(box in pair and pair & fingers for pair in bodies):
-            lost = float(data.time)
+        if lost is None:  # the bodies of each contact's two geoms: is one of them the box against a finger?
+            pair = model.geom_bodyid[data.contact.geom]
+            if not np.any((pair[:, 0] == box) & is_finger[pair[:, 1]] | (pair[:, 1] == box) & is_finger[pair[:, 0]]):
+                lost = float(data.time)
     return times, where, grip, lost
 
 
