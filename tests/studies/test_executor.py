@@ -25,6 +25,7 @@ import pytest
 
 import springlab
 from helpers.paths import ROOT
+from helpers.timing import constant_time_run
 from springlab.cli.main import main
 from springlab.errors import BadInputError
 from springlab.studies import stability, tradeoff
@@ -67,7 +68,11 @@ def test_sweep_on_two_workers_equals_the_local_sweep(cluster):
         assert np.array_equal(local.column(name), remote.column(name), equal_nan=True)
 
 
-def test_tradeoff_grid_on_two_workers_equals_the_local_grid(cluster):
+def test_tradeoff_grid_on_two_workers_equals_the_local_grid(cluster, monkeypatch):
+    # errors and steps compared, no wall time: the timing runs (here, after either grid) take helpers/timing.py's
+    # constant
+    monkeypatch.setattr(tradeoff, "time_run", constant_time_run)
+
     def grid(executor):
         result = tradeoff.sweep("slider", "free", duration=0.5, timing_repeats=1, executor=executor)
         return [(r.integrator, r.dt, r.steps, r.max_rel_error, r.diverged) for r in result.runs]
