@@ -85,24 +85,27 @@ def roots(mu: float, count: int) -> np.ndarray:
 def _roots(mu: float, count: int) -> np.ndarray:
     """`roots`, computed once per (mu, count); callers get a copy."""
     out = np.empty(count)
+    # pole-free forms, scaled so the function is O(1): x sin x - mu cos x (mu <= 1) or x sin x / mu - cos x; the
+    # same for every n, as are Brent's search and tolerance (set up once: 4096 roots ask for them)
+    scale = 1.0 / mu if mu > 1.0 else 1.0
+
+    def f(x: float) -> float:
+        return x * math.sin(x) * scale - mu * scale * math.cos(x)
+
+    def df(x: float) -> float:
+        return (math.sin(x) + x * math.cos(x) + mu * math.sin(x)) * scale
+
+    brentq = _optimize().brentq if 0.0 < mu < math.inf else None
+    rtol = 4 * np.finfo(float).eps
     for n in range(1, count + 1):
         low, high = (n - 1) * math.pi, (n - 0.5) * math.pi
         if math.isinf(mu):
             out[n - 1] = high  # cos x = 0
             continue
-        if mu == 0.0:
+        if brentq is None:  # mu = 0
             out[n - 1] = low  # sin x = 0: fixed-fixed (the first root, 0, is the rigid bit on a massless spring)
             continue
-        # pole-free forms, scaled so the function is O(1): x sin x - mu cos x (mu <= 1) or x sin x / mu - cos x
-        scale = 1.0 / mu if mu > 1.0 else 1.0
-
-        def f(x: float, scale: float = scale) -> float:
-            return x * math.sin(x) * scale - mu * scale * math.cos(x)
-
-        def df(x: float, scale: float = scale) -> float:
-            return (math.sin(x) + x * math.cos(x) + mu * math.sin(x)) * scale
-
-        x = _optimize().brentq(f, low, high, xtol=1e-300, rtol=4 * np.finfo(float).eps, maxiter=500)
+        x = brentq(f, low, high, xtol=1e-300, rtol=rtol, maxiter=500)
         for _ in range(3):  # Newton polishes the last bits (brentq stops within a few ulp)
             step = f(x) / df(x)
             if not math.isfinite(step) or abs(step) > 1e-6 * max(x, 1.0):
