@@ -1,6 +1,7 @@
 """The simulate path: same numbers as a plain mj_step loop, deterministic, never a silent blow-up."""
 
 import copy
+import dataclasses
 import math
 
 import mujoco
@@ -61,6 +62,37 @@ def test_a_blow_up_that_mujoco_resets_silently_is_reported_as_divergence():
     # euler at omega*dt = 3 > 2.1: MuJoCo hits its 1e10 limit and auto-resets qpos to 0
     with pytest.raises(DivergedError, match="exceeds the euler stability limit"):
         springlab.run("slider", "free", integrator="euler", dt=0.3, duration=60.0)
+
+
+def test_the_divergence_step_is_the_first_non_finite_row_of_qpos_or_qvel():
+    # a rollout's record (time, qpos, qvel, one more column) summed whole, or qpos and qvel apart when cut: the
+    # first row with an inf or nan in qpos or qvel, whatever the other columns hold or a huge finite sum overflows to
+    from springlab.sim import simulate as sim
+
+    model = type("Sizes", (), {"nq": 3, "nv": 2, "na": 1})()
+    rows = 400
+
+    def record() -> np.ndarray:
+        states = np.random.default_rng(1).standard_normal((rows, 7))
+        states[:, 0] = np.arange(rows) * 0.01
+        return states
+
+    def first_bad(trajectory) -> int | None:
+        bad = ~(np.isfinite(trajectory.qpos).all(axis=1) & np.isfinite(trajectory.qvel).all(axis=1))
+        return int(np.flatnonzero(bad)[0]) if bad.any() else None
+
+    cases = []
+    for row, column, value in [(123, 2, np.nan), (77, 5, -np.inf), (300, 6, np.nan), (10, 1, 1e308)]:
+        states = record()
+        states[row, column] = value
+        states[row + 1, column] = value  # 1e308 twice: the sum overflows, the values are finite
+        cases.append(sim._split(model, states, "rk4", 0.01, 0.0))
+    cases.append(
+        dataclasses.replace(cases[0], qpos=cases[0].qpos[:100], qvel=cases[0].qvel[:100], time=cases[0].time[:100])
+    )
+    for trajectory in cases:
+        assert sim.divergence_step(trajectory) == first_bad(trajectory)
+    assert [sim.divergence_step(t) for t in cases] == [123, 77, None, None, None]
 
 
 def test_growth_below_mujoco_limits_is_still_divergence():

@@ -55,13 +55,38 @@ def _stable(a: np.ndarray, what: str) -> None:
 def continuous_covariance(a: np.ndarray, noise: np.ndarray) -> np.ndarray:
     """P with A P + P A^T + noise = 0 [state units^2], noise = B W B^T [state units^2 / s] (Bartels-Stewart).
 
+    scipy.linalg.solve_continuous_lyapunov's operations in its order, its real Schur form of A read for the decay
+    too (Re(lambda) on its diagonal: LAPACK standardizes a 2 x 2 block to equal diagonal entries), so a stable A
+    costs no eigensolve of its own; A's eigenvalues are asked only to word a failure.
+
     Raises
     ------
     BadInputError
         A has a mode that does not decay.
     """
-    _stable(a, "the model")
-    p = scipy.linalg.solve_continuous_lyapunov(a, -np.asarray(noise, float))
+    a = np.atleast_2d(np.asarray_chkfinite(a))
+    q = np.atleast_2d(np.asarray_chkfinite(-np.asarray(noise, float)))
+    if a.ndim != 2 or a.shape != q.shape or a.shape[0] != a.shape[1] or a.size == 0 or np.iscomplexobj(a):
+        _stable(a, "the model")
+        p = scipy.linalg.solve_continuous_lyapunov(a, q)
+        return 0.5 * (p + p.T)
+    schur_form, schur_basis = scipy.linalg.schur(a, output="real")
+    if not float(np.max(np.diag(schur_form))) < 0.0:
+        _stable(a, "the model")
+    f = schur_basis.conj().T.dot(q.dot(schur_basis))
+    (trsyl,) = scipy.linalg.get_lapack_funcs(("trsyl",), (schur_form, f))
+    y, scale, info = trsyl(schur_form, schur_form, f, tranb="T")
+    if info < 0:
+        raise ValueError(f"?TRSYL exited with the internal error illegal value in argument number {-info}.")
+    if info == 1:
+        warnings.warn(
+            "the model has an eigenvalue pair whose sum is about 0: the Lyapunov solution is obtained via perturbing"
+            " the coefficients",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+    y *= scale
+    p = schur_basis.dot(y).dot(schur_basis.conj().T)
     return 0.5 * (p + p.T)
 
 
@@ -170,9 +195,16 @@ def held_covariance(
 
     The held sample w_k ~ N(0, W / dt), so P = Phi P Phi^T + Gamma (W / dt) Gamma^T (module docstring). `hold`:
     (Phi, Gamma) of `zero_order_hold(a, b, dt)` when the caller has them already (None: computed here).
+
+    Raises
+    ------
+    BadInputError
+        A has a mode that does not decay: Phi = e^(A dt) has |mu| = e^(Re(lambda) dt) >= 1 there, read off the
+        Schur form the Lyapunov solve takes (`_decays_by_schur`); A's eigenvalues are asked only to word it.
     """
-    _stable(a, "the model")
     phi, gamma = zero_order_hold(a, b, dt) if hold is None else hold
+    if not _decays_by_schur(phi):
+        _stable(a, "the model")
     return discrete_covariance(phi, gamma @ (np.atleast_2d(intensity) / dt) @ gamma.T)
 
 

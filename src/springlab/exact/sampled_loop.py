@@ -46,6 +46,7 @@ __all__ = [
     "closed_loop",
     "critical_gain",
     "held_run",
+    "held_open_run",
     "held_run_error",
     "loop_response",
     "loop_transfer",
@@ -264,7 +265,7 @@ def margins(
 
     nyquist = 0.5 / pid.period
     grid = np.geomspace(lowest_hz, nyquist * (1 - 1e-9), points)
-    values = loop_response(phi, gamma, output, pid, grid)
+    values = _bracketing_response(phi, gamma, output, pid, grid)
 
     def response(f: float) -> complex:
         return complex(loop_response(phi, gamma, output, pid, np.array([f]))[0])
@@ -289,6 +290,50 @@ def margins(
         "phase_crossover_hz": phase_crossover,
         "gain_crossover_hz": gain_crossover,
     }
+
+
+#: how far from 0 [relative to the sizes of its terms] a value of the triangular form must be for its sign to be taken
+#: without the batched solves (both are good to about cond(z I - Phi) eps of those sizes: 1e-7 at the belt's
+#: rigid-body double pole on the grid's lowest frequency)
+_SIGN_MARGIN = 1e-5
+
+
+def _bracketing_response(
+    phi: np.ndarray, gamma: np.ndarray, output: np.ndarray, pid: Pid, frequency_hz: np.ndarray
+) -> np.ndarray:
+    """L on `margins`' grid, good for the signs the crossings are bracketed by: `loop_response`'s own values where
+    a sign is in doubt, the plant's triangular form elsewhere.
+
+    `margins` reads the grid only for the signs of Im L, Re L and |L| - 1 (Brent's method then refines each
+    crossing on `loop_response` itself). With Phi = Q T Q^H (complex Schur, T upper triangular),
+    C (z I - Phi)^-1 Gamma = (C Q) (z I - T)^-1 (Q^H Gamma), the solve a back substitution: n (n + 1) / 2 array
+    operations over the whole grid where the batched solves factor a 4 x 4 matrix per point, and as backward
+    stable. Every point where one of the three quantities lies within `_SIGN_MARGIN` of the sizes of the terms
+    summed for it is evaluated by `loop_response`, so every sign is the solves' own and the brackets, hence the
+    margins, are theirs bit for bit.
+    """
+    f = np.asarray(frequency_hz, dtype=float)
+    triangular, basis = scipy.linalg.schur(np.asarray(phi, dtype=complex), output="complex")
+    row = (np.asarray(output, dtype=float).reshape(1, -1) @ basis)[0]
+    column = basis.conj().T @ np.asarray(gamma, dtype=complex).reshape(-1)
+    z = np.exp(2j * math.pi * f * pid.period)
+    n = len(column)
+    solved: list[np.ndarray] = [np.empty(0, complex)] * n
+    for i in range(n - 1, -1, -1):  # (z I - T) y = Q^H Gamma from the last row up
+        rest = column[i] + sum((triangular[i, j] * solved[j] for j in range(i + 1, n)), np.zeros_like(z))
+        solved[i] = rest / (z - triangular[i, i])
+    law = pid.kp + pid.kd * (z - 1) / (pid.period * z)
+    if pid.ki > 0:
+        law = law + pid.ki * pid.period * z / (z - 1)
+    values = law * sum(row[i] * solved[i] for i in range(n))
+    size = np.abs(law) * sum(np.abs(row[i] * solved[i]) for i in range(n))
+    margin = _SIGN_MARGIN * np.maximum(size, 1.0)
+    doubtful = (
+        (np.abs(values.imag) <= margin) | (np.abs(values.real) <= margin) | (np.abs(np.abs(values) - 1) <= margin)
+    )
+    if doubtful.any():
+        values[doubtful] = loop_response(phi, gamma, output, pid, f[doubtful])
+    return values
 
 
 def spectral_radius(phi: np.ndarray, gamma: np.ndarray, output: np.ndarray, pid: Pid) -> float:
@@ -362,6 +407,28 @@ def held_run(
         state = phi.dot(state) + column * force
         x[j + 1] = state
     return x, np.array(forces, dtype=float)
+
+
+def held_open_run(
+    a: np.ndarray, b: np.ndarray, dt: float, x0: np.ndarray, forces: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """`held_run` of an open-loop force sequence u_j [input units] held over step j: (x (m + 1, n), u (m,)).
+
+    The same steps as `held_run(a, b, dt, len(forces), x0, lambda k, x: float(forces[k]))`, bit for bit (phi x_j
+    + gamma u_j, each gamma u_j the same product), with the products formed for every step at once and no call
+    per step: the loop is the step itself.
+    """
+    phi, gamma = zoh(a, b, dt)
+    phi = np.ascontiguousarray(phi)
+    u = np.asarray(forces, dtype=float)
+    pushes = gamma[:, 0][None, :] * u[:, None]  # row j: column * u_j, as held_run forms it
+    x = np.empty((len(u) + 1, len(a)))
+    x[0] = x0
+    state = x[0]
+    for j, push in enumerate(pushes):
+        state = phi.dot(state) + push
+        x[j + 1] = state
+    return x, u.copy()
 
 
 def held_maximum(
@@ -505,9 +572,15 @@ def held_run_error(
     change = 0.0
     phi, column = np.ascontiguousarray(phi), gamma[:, 0]
     current = error[0]
+    if response is None:  # open loop: every change 0, its product column * 0.0 formed once
+        still = column * change
+        for j, step_error in enumerate(local):
+            current = phi.dot(current) + still + step_error
+            error[j + 1] = current
+        return error
     for j, step_error in enumerate(local):
         if j % steps_per_sample == 0:
-            change = 0.0 if response is None else float(response(j // steps_per_sample, error[j]))
+            change = float(response(j // steps_per_sample, error[j]))
         current = phi.dot(current) + column * change + step_error  # as in held_run
         error[j + 1] = current
     return error

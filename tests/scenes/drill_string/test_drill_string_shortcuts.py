@@ -3,6 +3,8 @@
 * The continuum's peak speed of the start-up, searched only on the steps the series' slope bound leaves open,
   against the series evaluated on every step (with its angle: the other code path) and refined the same way.
 * The slope bound itself against the series' largest difference quotient on a grid 10 times finer than the run's.
+* The series' sums of sines and cosines on a run's grid by angle addition (`continuum._trig_sums`) against the
+  sines taken directly, within the round-off both carry.
 * The delay equation's history read in floats (`continuum._history`) against scipy's own OdeSolution of the same
   DOP853 solve: the same bits at every point, the steps' ends included.
 """
@@ -58,6 +60,26 @@ def test_the_slope_bound_holds_the_series_steepest_difference_quotient():
     steepest = float(np.max(np.abs(np.diff(w)) / np.diff(fine)))
     # a difference quotient is a mean of w' over its interval: never above the bound of |w'|
     assert steepest <= answers._slope_bound(ROD, drive)
+
+
+@pytest.mark.parametrize("steps, jitter", [(5000, 0.0), (1666, 0.0), (3000, 1e-7)])
+def test_the_sums_by_angle_addition_are_the_direct_sines(steps, jitter):
+    # a run's times: dt added step by step (uniform but for round-off), or a grid jittered past the addition's range
+    rng = np.random.default_rng(steps)
+    time = np.cumsum(np.full(steps + 1, DT)) - DT + jitter * rng.standard_normal(steps + 1)
+    w = ROD.frequencies(answers.CONTINUUM_MODES)
+    vectors = [rng.standard_normal(len(w)) / np.arange(1, len(w) + 1) ** 2, rng.standard_normal(len(w))]
+    sines, cosines = continuum._trig_sums(time, w, vectors, vectors)
+    phase = np.outer(time, w)
+    eps = np.finfo(float).eps
+    for v, by_addition, direct in zip(
+        vectors * 2, sines + cosines, [np.sin(phase) @ v for v in vectors] + [np.cos(phase) @ v for v in vectors]
+    ):
+        # each term: its phase w t rounded to eps of itself either way (w t_i + w D_j and w delta_k here), the
+        # products of the addition a few eps; each sum of N terms within N eps of the sum of the terms' sizes
+        terms = np.abs(v) * (4 * eps * np.abs(w) * np.max(np.abs(time)) + 8 * eps)
+        tolerance = float(np.sum(terms)) + 2 * len(w) * eps * float(np.sum(np.abs(v)))
+        assert np.max(np.abs(by_addition - direct)) <= tolerance
 
 
 def test_the_history_read_in_floats_is_scipys_dense_output_bit_for_bit():

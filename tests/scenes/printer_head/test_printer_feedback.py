@@ -57,6 +57,22 @@ def test_zero_order_hold_map_is_the_exponential_and_its_integral():
     assert gamma[:, 0] == pytest.approx(quadrature, rel=1e-12, abs=1e-12 * np.abs(quadrature).max())
 
 
+def test_the_open_loop_held_run_is_the_held_run_bit_for_bit():
+    # a chirp-like force held over each step from a deflected start: the open-loop path (no call per step) makes
+    # the same steps as the general one, and its error propagation without a law the same as the general loop's
+    a, b = control.belt_plant(_model())
+    dt, steps = PERIOD / SUBSTEPS, 3000
+    k = np.arange(steps)
+    force = 3.0 * np.sin(2e-5 * k * k) * np.cos(0.01 * k)
+    start = np.array([1e-3, -2e-3, 0.05, -0.01])
+    states, forces = sampled_loop.held_run(a, b, dt, steps, start, lambda j, x: float(force[j]))
+    open_states, open_forces = sampled_loop.held_open_run(a, b, dt, start, force)
+    assert np.array_equal(open_states, states) and np.array_equal(open_forces, forces)
+    error = sampled_loop.held_run_error(a, b, dt, 4, 1 / 120, states, forces)
+    general = sampled_loop.held_run_error(a, b, dt, 4, 1 / 120, states, forces, response=lambda j, e: 0.0)
+    assert np.array_equal(error, general)
+
+
 @pytest.mark.parametrize(
     ("encoder", "gains"), [("motor", MOTOR_GAINS), ("motor", PID_GAINS), ("carriage", CARRIAGE_GAINS)]
 )
@@ -93,6 +109,26 @@ def test_closed_loop_poles_are_the_roots_of_one_plus_the_loop_transfer(encoder, 
         # rigid body's slow pair) are known to sqrt(eps) only
         assert abs(1 + value) <= 1e-6 * max(1.0, abs(value))
     assert np.max(np.abs(poles)) < 1
+
+
+@pytest.mark.parametrize(
+    ("encoder", "gains"), [("motor", MOTOR_GAINS), ("motor", PID_GAINS), ("carriage", CARRIAGE_GAINS)]
+)
+def test_the_margins_grid_brackets_by_the_batched_solves_signs(encoder, gains):
+    # margins read their grid only for the signs of Im L, Re L and |L| - 1: the triangular form's grid gives the
+    # batched solves' signs everywhere, and its values are within the solves' conditioning (the belt's rigid-body
+    # double pole at z = 1: cond(z I - Phi) ~ 1 / |z - 1|^2 on the lowest frequency) of theirs
+    a, b = control.belt_plant(_model())
+    phi, gamma = sampled_loop.zoh(a, b, PERIOD)
+    pid = sampled_loop.Pid(*gains, PERIOD)
+    row = control.output_row(encoder)
+    grid = np.geomspace(0.01, 0.5 / PERIOD * (1 - 1e-9), 40001)
+    solved = sampled_loop.loop_response(phi, gamma, row, pid, grid)
+    bracketing = sampled_loop._bracketing_response(phi, gamma, row, pid, grid)
+    for part in (np.imag, np.real, lambda v: np.abs(v) - 1):
+        assert np.array_equal(np.sign(part(bracketing)), np.sign(part(solved)))
+    lowest = abs(np.exp(2j * math.pi * grid[0] * PERIOD) - 1)
+    assert np.max(np.abs(bracketing - solved) / np.abs(solved)) <= 64 * EPS / lowest**2
 
 
 def test_gain_margin_is_where_the_carriage_loop_loses_stability():

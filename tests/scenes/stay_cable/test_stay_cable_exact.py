@@ -409,6 +409,18 @@ def test_a_one_step_maps_decay_is_read_off_its_bilinear_schur_form(aero):
     assert not rv._decays_by_schur(step[:9, :9])  # under 10 states scipy solves directly: the eigenvalues decide
 
 
+def test_a_growing_model_has_no_held_or_continuous_covariance():
+    # rain-wind's negative damping without a damper: mode 1 grows, so no stationary covariance (the model's words,
+    # whether the decay was read off a Schur form or the eigenvalues)
+    model = cb.LumpedCable.build(CABLE, 19, structural_ratio=0.001, aero_ratio=-0.005, aero_modes=1)
+    b = np.zeros((38, 1))
+    b[19:, 0] = 1.0 / model.mass
+    with pytest.raises(BadInputError, match="the model has no stationary covariance: a mode does not decay"):
+        rv.held_covariance(model.state_matrix(), b, np.array([[1.0]]), 0.01)
+    with pytest.raises(BadInputError, match="the model has no stationary covariance: a mode does not decay"):
+        rv.continuous_covariance(model.state_matrix(), b @ b.T)
+
+
 def test_the_held_covariance_is_the_long_exact_recursion():
     n = 5
     model, b, w = _windy(n)

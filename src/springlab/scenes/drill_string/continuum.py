@@ -258,7 +258,7 @@ class Rod:
     def _modal_spin_up(
         self, t: np.ndarray, x: float, acceleration: float, ramp_time: float, modes: int, *, with_angle: bool
     ) -> tuple[np.ndarray | None, np.ndarray]:
-        """`modal_spin_up` computed (times x modes sines: a third of a second at 1500 x 4096); the angle None
+        """`modal_spin_up` computed (its times x modes sines and cosines summed by `_trig_sums`); the angle None
         unless `with_angle`."""
         alpha, ramp = acceleration, ramp_time
         on = t < ramp
@@ -271,22 +271,75 @@ class Rod:
         amplitude = alpha * (self.density * self.polar_moment / betas) / (omegas**2 * self.modal_masses(betas))
         amplitude *= np.sin(betas * x)
         switched = ~on
-        any_switched = bool(switched.any())
-        for chunk in range(0, modes, 512):  # (times x modes) in slices keeps memory flat
-            part = slice(chunk, chunk + 512)
-            w, a = omegas[part], amplitude[part]
-            phase = np.outer(t, w)
-            cos, sin = np.cos(phase), np.sin(phase)
-            # after the ramp, cos w(t - T_r) = cos wt cos wT_r + sin wt sin wT_r (and sin likewise):
-            # two (times x modes) tables of sines instead of four
-            cos_r, sin_r = np.cos(w * ramp), np.sin(w * ramp)
-            if with_angle:
-                angle += cos @ a - np.where(switched, cos @ (a * cos_r) + sin @ (a * sin_r), 0.0)
-            aw = a * w
-            # before the ramp's end the switched terms are where()'s 0.0: added as such, not computed
-            after = np.where(switched, sin @ (aw * cos_r) - cos @ (aw * sin_r), 0.0) if any_switched else 0.0
-            speed += -(sin @ aw) + after
+        # after the ramp, cos w(t - T_r) = cos wt cos wT_r + sin wt sin wT_r (and sin likewise): sums of sin wt and
+        # cos wt alone; before the ramp's end the switched terms are 0
+        cos_r, sin_r = np.cos(omegas * ramp), np.sin(omegas * ramp)
+        aw = amplitude * omegas
+        sines = [aw, aw * cos_r] + ([amplitude * sin_r] if with_angle else [])
+        cosines = [aw * sin_r] + ([amplitude, amplitude * cos_r] if with_angle else [])
+        sin_sums, cos_sums = _trig_sums(t, omegas, sines, cosines)
+        speed += -sin_sums[0] + np.where(switched, sin_sums[1] - cos_sums[0], 0.0)
+        if with_angle:
+            angle += cos_sums[1] - np.where(switched, cos_sums[2] + sin_sums[2], 0.0)
         return (angle if with_angle else None), speed
+
+
+#: rows from which `_trig_sums` takes a near-uniform grid by angle addition
+_ADDITION_ROWS = 256
+#: the largest w |delta| (the grid's departure from uniform, in radians) the addition's second-order correction takes
+_ADDITION_DEPARTURE = 1e-5
+
+
+def _trig_sums(
+    t: np.ndarray, w: np.ndarray, sines: list[np.ndarray], cosines: list[np.ndarray]
+) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """([sin(t w^T) @ v for v in sines], [cos(t w^T) @ u for u in cosines]) at times t [s] and frequencies w [rad/s].
+
+    A long grid that is uniform but for round-off (a run's times) is split into blocks of b rows, t_k = t_i + D_j +
+    delta_k (k = j b + i, D_j = t_(j b) - t_0), and sin(w t_k) = sin(w (t_i + D_j)) cos(w delta_k) +
+    cos(w (t_i + D_j)) sin(w delta_k), the first factors by angle addition from b + J rows of sines and cosines
+    (about 2 sqrt(len(t)) instead of len(t)) and the sums over w as matrix products; w delta_k (below
+    `_ADDITION_DEPARTURE`) enters to second order, its third-order term under 2e-16 of a term. Each term is good to a
+    few eps, as a sine taken directly is (both round the phase w t to eps of itself). A short or irregular grid
+    takes its sines directly.
+    """
+    n = len(t)
+    block = max(1, math.isqrt(max(n - 1, 0)) + 1)
+    starts = np.arange(0, n, block)
+    index = np.arange(n)
+    offsets = t[starts] - t[0]
+    departure = t - t[index % block] - offsets[index // block] if n >= _ADDITION_ROWS else None
+    scale = float(np.max(np.abs(w), initial=0.0))
+    if departure is None or not float(np.max(np.abs(departure)) * scale) <= _ADDITION_DEPARTURE:
+        sin_sums, cos_sums = [np.zeros(n) for _ in sines], [np.zeros(n) for _ in cosines]
+        for chunk in range(0, len(w), 512):  # (times x modes) in slices keeps memory flat
+            part = slice(chunk, chunk + 512)
+            phase = np.outer(t, w[part])
+            sine, cosine = np.sin(phase), np.cos(phase)
+            for total, v in zip(sin_sums, sines, strict=True):
+                total += sine @ v[part]
+            for total, u in zip(cos_sums, cosines, strict=True):
+                total += cosine @ u[part]
+        return sin_sums, cos_sums
+    base, shift = np.outer(t[:block], w), np.outer(offsets, w)
+    base_cos, base_sin, shift_cos, shift_sin = np.cos(base), np.sin(base), np.cos(shift), np.sin(shift)
+
+    def uniform(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(sin, cos)(w (t_i + D_j)) @ v for every row k, by angle addition and two matrix products each."""
+        with_cos, with_sin = (shift_cos * v).T, (shift_sin * v).T
+        sine = base_sin @ with_cos + base_cos @ with_sin  # (b, J): row i of block j
+        cosine = base_cos @ with_cos - base_sin @ with_sin
+        return sine.T.reshape(-1)[:n], cosine.T.reshape(-1)[:n]
+
+    half_square = 0.5 * departure * departure
+    sin_sums, cos_sums = [], []
+    for v in sines:
+        (s0, _), (_, c1), (s2, _) = uniform(v), uniform(w * v), uniform(w * w * v)
+        sin_sums.append(s0 + departure * c1 - half_square * s2)
+    for u in cosines:
+        (_, c0), (s1, _), (_, c2) = uniform(u), uniform(w * u), uniform(w * w * u)
+        cos_sums.append(c0 - departure * s1 - half_square * c2)
+    return sin_sums, cos_sums
 
 
 def top_speed(time: np.ndarray | float, acceleration: float, ramp_time: float) -> np.ndarray:
@@ -409,19 +462,23 @@ class WaveSolution:
         k = 0
         shifted = t - tau
         while shifted > 0:
-            # top_speed of a positive time, in floats: numpy's scalar clip costs more than the rest of the sum
-            total += alpha * min(shifted, ramp)
+            # top_speed of a positive time, in floats: numpy's scalar clip costs more than the rest of the sum, and
+            # min() as a call more than its comparison written out (the same value: min keeps the first of equals)
+            total += alpha * (ramp if ramp < shifted else shifted)
             k += 1
             shifted = t - (2 * k + 1) * tau
         pieces, starts = self._pieces, self._starts
         if not pieces:
             return total
+        find = bisect.bisect_right
         k = 1
         earlier = t - 2 * tau
         while earlier > 0:
-            start, end, dense = pieces[max(bisect.bisect_right(starts, earlier) - 1, 0)]
+            index = find(starts, earlier) - 1
+            start, end, dense = pieces[index if index > 0 else 0]
             if dense is not None:
-                total -= dense(min(max(earlier, start), end))  # type: ignore[operator]
+                inside = start if start > earlier else earlier  # clamped to the piece, as min(max(...)) does
+                total -= dense(end if end < inside else inside)  # type: ignore[operator]
             k += 1
             earlier = t - 2 * k * tau
         return total
@@ -556,13 +613,17 @@ class _DenseSpeed:
         self._last = len(steps) - 1
 
     def __call__(self, t: float) -> float:
-        segment = min(max(bisect.bisect_left(self._times, t) - 1, 0), self._last)
-        t_old, h, coefficients, y_old = self._steps[segment]
+        segment = bisect.bisect_left(self._times, t) - 1
+        segment = 0 if segment < 0 else (self._last if segment > self._last else segment)
+        t_old, h, c, y_old = self._steps[segment]
         x = (t - t_old) / h
         rest = 1 - x
+        if len(c) == 7:  # DOP853's seven rows, the loop below written out: the same operations in the same order
+            y = ((((((0.0 + c[0]) * x + c[1]) * rest + c[2]) * x + c[3]) * rest + c[4]) * x + c[5]) * rest
+            return (y + c[6]) * x + y_old
         y = 0.0
         odd = False
-        for f in coefficients:  # y += f, then y *= x (even rows) or 1 - x (odd rows): scipy's order
+        for f in c:  # y += f, then y *= x (even rows) or 1 - x (odd rows): scipy's order
             y = (y + f) * (rest if odd else x)
             odd = not odd
         return y + y_old
