@@ -11,6 +11,8 @@ import numpy as np
 from mujoco import rollout
 
 from springlab.sim.simulate import INTEGRATORS
+from springlab.studies.audit.audit import audit
+from springlab.studies.audit.sweep import default_grid, grid_for
 
 _FULL = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
 
@@ -83,6 +85,30 @@ def check_limits_honest(result, model):
             result.start.control,
         )
         assert not np.isfinite(run[1]).all(), "called unstable, but a run of it stays finite"
+
+
+def audit_coarsest(model, grid, **options):
+    """`audit(model, **options)` sweeping the `n` coarsest timesteps of the audit's default grid, grid = (top [s],
+    n) (sweep.default_grid below top, its largest timestep), for a test that reads the recommendation or no sweep.
+
+    The timesteps left out are finer than the recommendation's cheapest rival: asserted here, each costs more
+    counted work than the recommendation at every integrator, so none of them is ever the pick and the
+    recommendation is the default grid's. The limits, the constraints and the motion do not depend on the
+    swept timesteps; the finest ones were most of the sweep's CPU, and of the RK4 reference's below them.
+    """
+    top, swept = grid
+    dts = default_grid(top)[:swept]
+    result = audit(model, dts=dts, **options)
+    default = grid_for(result.stability, result.duration, result.own.dt)  # the audit's own grid here
+    assert dts == default[:swept]
+    pick = result.recommendation
+    if pick.integrator is not None:
+        # the default grid's next timestep (and so every finer one) costs more counted work than the pick at
+        # every integrator: steps scale as 1 / dt, each integrator's work per step is fixed
+        finest = min(dts)
+        cheapest = min(run.cost for run in result.runs if run.setting.dt == finest)
+        assert cheapest * finest / default[swept] > pick.row.cost
+    return result
 
 
 def stub_the_timer(monkeypatch) -> None:

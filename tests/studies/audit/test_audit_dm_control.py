@@ -28,10 +28,8 @@ import numpy as np
 import pytest
 from mujoco import rollout
 
-from helpers.audit import check_limits_honest
+from helpers.audit import audit_coarsest, check_limits_honest
 from springlab.sim.simulate import INTEGRATORS
-from springlab.studies.audit.audit import audit
-from springlab.studies.audit.sweep import default_grid, grid_for
 
 SUITE = pathlib.Path(dm_control.__file__).parent / "suite"
 _FULL = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
@@ -40,13 +38,13 @@ _FULL = int(mujoco.mjtState.mjSTATE_FULLPHYSICS)
 CONTACT_REFERENCE = 2e-5
 
 CASES = {
-    # model: (duration [s], tol [-], reference step [s], swept grid (`_audit_coarsest`) or None: the default
-    # grid): the smooth ones' fastest modes are 4.6 (pendulum), 3.9 (cartpole) and 7.2 rad/s (acrobot), so
-    # omega_max h <= 0.004 at h ~ 5e-4 s (module docstring); the cheetah's 4 finest timesteps, 2.3e-4 to
-    # 2.9e-5 s, were half its sweep's CPU
-    "pendulum": (1.0, 1e-3, 1e-3, None),
-    "cartpole": (1.0, 1e-3, 1e-3, None),
-    "acrobot": (1.0, 1e-3, 1e-3, None),
+    # model: (duration [s], tol [-], reference step [s], swept grid (helpers/audit.py: audit_coarsest)): the smooth
+    # ones' fastest modes are 4.6 (pendulum), 3.9 (cartpole) and 7.2 rad/s (acrobot), so omega_max h <= 0.004 at
+    # h ~ 5e-4 s (module docstring), and their picks are rk4 at 0.1 or 0.05 s, 10 or 20 steps: 3 or 4 timesteps of
+    # the 12 can cost as little; the cheetah's 4 finest timesteps, 2.3e-4 to 2.9e-5 s, were half its sweep's CPU
+    "pendulum": (1.0, 1e-3, 1e-3, (0.1, 3)),
+    "cartpole": (1.0, 1e-3, 1e-3, (0.1, 3)),
+    "acrobot": (1.0, 1e-3, 1e-3, (0.1, 4)),
     "cheetah": (0.3, 2e-2, CONTACT_REFERENCE, (0.03, 8)),
     # the humanoid: in ROBOTS below, lying on the floor (issue 25), where its contacts are the hard case
 }
@@ -71,32 +69,6 @@ def _states(model, integrator, dt, duration, start, times):
     return states[rows, 1 : 1 + work.nq], states[rows, 1 + work.nq : 1 + work.nq + work.nv]
 
 
-def _audit_coarsest(path, grid, **options):
-    """`audit(path, **options)` sweeping the `n` coarsest timesteps of the audit's default grid, grid = (top [s],
-    n) (sweep.default_grid below top, its largest timestep), or the whole default grid (grid None).
-
-    The timesteps left out are finer than the recommendation's cheapest rival: asserted here, each costs more
-    counted work than the recommendation at every integrator, so none of them is ever the pick and the
-    recommendation is the default grid's. The limits, the constraints and the motion do not depend on the
-    swept timesteps; the finest ones were most of the sweep's CPU.
-    """
-    if grid is None:
-        return audit(str(path), **options)
-    top, swept = grid
-    dts = default_grid(top)[:swept]
-    result = audit(str(path), dts=dts, **options)
-    default = grid_for(result.stability, result.duration, result.own.dt)  # the audit's own grid here
-    assert dts == default[:swept]
-    pick = result.recommendation
-    if pick.integrator is not None:
-        # the default grid's next timestep (and so every finer one) costs more counted work than the pick at
-        # every integrator: steps scale as 1 / dt, each integrator's work per step is fixed
-        finest = min(dts)
-        cheapest = min(run.cost for run in result.runs if run.setting.dt == finest)
-        assert cheapest * finest / default[swept] > pick.row.cost
-    return result
-
-
 def _error(model, qpos, qvel, ref_qpos, ref_qvel, origin):
     """max(|dq|_inf / max |q_ref - origin|_inf, |dv|_inf / max |v_ref|_inf) over the checkpoints."""
     dq = np.zeros(model.nv)
@@ -116,7 +88,7 @@ def _error(model, qpos, qvel, ref_qpos, ref_qvel, origin):
 def test_dm_control_model_audits_and_its_recommendation_meets_tol(name, untimed):
     duration, tol, reference_step, grid = CASES[name]
     path = SUITE / f"{name}.xml"
-    result = _audit_coarsest(path, grid, tol=tol, duration=duration)
+    result = audit_coarsest(str(path), grid, tol=tol, duration=duration)
     pick = result.recommendation
     assert pick.verified, result.message
     model = mujoco.MjModel.from_xml_path(str(path))
@@ -133,10 +105,10 @@ def test_dm_control_model_audits_and_its_recommendation_meets_tol(name, untimed)
 
 
 #: robot models with contacts, joint limits, dry friction or no position-dependent force (the reacher, as the
-#: swimmer): name -> (settle [s], duration [s], tol [-], reference step [s], swept grid (`_audit_coarsest`)); the
-#: walker and the humanoid audited lying on the floor. The reacher's fastest mode is 227 rad/s (omega_max h <= 0.012
-#: at h ~ 5e-5 s), the finger's 1510 rad/s (0.015 at ~1e-5 s; module docstring). The humanoid's 2e-5 and 4e-5 s
-#: left out took 15360 of the 21130 steps per integrator of its default sweep
+#: swimmer): name -> (settle [s], duration [s], tol [-], reference step [s], swept grid (helpers/audit.py:
+#: audit_coarsest)); the walker and the humanoid audited lying on the floor. The reacher's fastest mode is 227 rad/s
+#: (omega_max h <= 0.012 at h ~ 5e-5 s), the finger's 1510 rad/s (0.015 at ~1e-5 s; module docstring). The
+#: humanoid's 2e-5 and 4e-5 s left out took 15360 of the 21130 steps per integrator of its default sweep
 ROBOTS = {
     "reacher": (None, 1.0, 1e-3, 1e-4, (1 / 68, 6)),
     "finger": (None, 0.5, 1e-3, 2e-5, (0.05, 11)),
@@ -150,7 +122,7 @@ ROBOTS = {
 def test_robot_audit_reports_its_constraints_and_claims_only_what_runs_confirm(name, untimed):
     settle, duration, tol, reference_step, grid = ROBOTS[name]
     path = SUITE / f"{name}.xml"
-    result = _audit_coarsest(path, grid, settle_s=settle, tol=tol, duration=duration)
+    result = audit_coarsest(str(path), grid, settle_s=settle, tol=tol, duration=duration)
     model = mujoco.MjModel.from_xml_path(str(path))
     state = result.point_state
     # constraints are reported where MuJoCo has them, and then the limits come from runs
