@@ -73,6 +73,14 @@ def continuous_covariance(a: np.ndarray, noise: np.ndarray) -> np.ndarray:
     schur_form, schur_basis = scipy.linalg.schur(a, output="real")
     if not float(np.max(np.diag(schur_form))) < 0.0:
         _stable(a, "the model")
+    p = _bartels_stewart(schur_form, schur_basis, q, "the model has an eigenvalue pair whose sum is about 0")
+    return 0.5 * (p + p.T)
+
+
+def _bartels_stewart(schur_form: np.ndarray, schur_basis: np.ndarray, q: np.ndarray, pair: str) -> np.ndarray:
+    """X with A X + X A^H = Q given A = U T U^H (real Schur: T `schur_form`, U `schur_basis`): the tail of
+    scipy.linalg.solve_continuous_lyapunov past its Schur form, its operations in its order. `pair` words the
+    warning LAPACK's ?TRSYL raises for a near-singular equation (an eigenvalue pair summing to about 0)."""
     f = schur_basis.conj().T.dot(q.dot(schur_basis))
     (trsyl,) = scipy.linalg.get_lapack_funcs(("trsyl",), (schur_form, f))
     y, scale, info = trsyl(schur_form, schur_form, f, tranb="T")
@@ -80,14 +88,10 @@ def continuous_covariance(a: np.ndarray, noise: np.ndarray) -> np.ndarray:
         raise ValueError(f"?TRSYL exited with the internal error illegal value in argument number {-info}.")
     if info == 1:
         warnings.warn(
-            "the model has an eigenvalue pair whose sum is about 0: the Lyapunov solution is obtained via perturbing"
-            " the coefficients",
-            RuntimeWarning,
-            stacklevel=2,
+            f"{pair}: the Lyapunov solution is obtained via perturbing the coefficients", RuntimeWarning, stacklevel=3
         )
     y *= scale
-    p = schur_basis.dot(y).dot(schur_basis.conj().T)
-    return 0.5 * (p + p.T)
+    return schur_basis.dot(y).dot(schur_basis.conj().T)
 
 
 def zero_order_hold(a: np.ndarray, b: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
@@ -153,20 +157,8 @@ def solve_discrete_lyapunov(transition: np.ndarray, noise: np.ndarray) -> np.nda
     # scipy's _solve_discrete_lyapunov_bilinear, then solve_continuous_lyapunov(B^H, -C) past its Schur form
     c = 2 * np.dot(np.dot(plus_inverse, q), plus_h_inverse)
     q_continuous = np.atleast_2d(np.asarray_chkfinite(-c))
-    f = schur_basis.conj().T.dot(q_continuous.dot(schur_basis))
-    (trsyl,) = scipy.linalg.get_lapack_funcs(("trsyl",), (schur_form, f))
-    y, scale, info = trsyl(schur_form, schur_form, f, tranb="T")
-    if info < 0:
-        raise ValueError(f"?TRSYL exited with the internal error illegal value in argument number {-info}.")
-    if info == 1:
-        warnings.warn(
-            "the one-step map has an eigenvalue pair whose bilinear images sum to about 0: the Lyapunov solution"
-            " is obtained via perturbing the coefficients",
-            RuntimeWarning,
-            stacklevel=2,
-        )
-    y *= scale
-    return schur_basis.dot(y).dot(schur_basis.conj().T)
+    pair = "the one-step map has an eigenvalue pair whose bilinear images sum to about 0"
+    return _bartels_stewart(schur_form, schur_basis, q_continuous, pair)
 
 
 def _bilinear(a: np.ndarray) -> tuple[np.ndarray, ...]:
