@@ -236,10 +236,15 @@ def loop_response(
         np.broadcast_to(np.asarray(gamma, dtype=complex).reshape(n, 1), (z.size, n, 1)),
     )
     plant = (np.asarray(output, dtype=float).reshape(1, n) @ resolvent)[:, 0, 0]
+    return _law(pid, z) * plant
+
+
+def _law(pid: Pid, z: np.ndarray) -> np.ndarray:
+    """K(z) [input units / output units] of the discrete PID at the points z (derivative and integral by differences)."""
     law = pid.kp + pid.kd * (z - 1) / (pid.period * z)
     if pid.ki > 0:
         law = law + pid.ki * pid.period * z / (z - 1)
-    return law * plant
+    return law
 
 
 def margins(
@@ -322,9 +327,7 @@ def _bracketing_response(
     for i in range(n - 1, -1, -1):  # (z I - T) y = Q^H Gamma from the last row up
         rest = column[i] + sum((triangular[i, j] * solved[j] for j in range(i + 1, n)), np.zeros_like(z))
         solved[i] = rest / (z - triangular[i, i])
-    law = pid.kp + pid.kd * (z - 1) / (pid.period * z)
-    if pid.ki > 0:
-        law = law + pid.ki * pid.period * z / (z - 1)
+    law = _law(pid, z)
     values = law * sum(row[i] * solved[i] for i in range(n))
     size = np.abs(law) * sum(np.abs(row[i] * solved[i]) for i in range(n))
     margin = _SIGN_MARGIN * np.maximum(size, 1.0)
@@ -569,18 +572,12 @@ def held_run_error(
     augmented = np.column_stack([states[:-1], forces])
     local = -constant * augmented @ power.T
     error = np.zeros_like(states)
-    change = 0.0
     phi, column = np.ascontiguousarray(phi), gamma[:, 0]
     current = error[0]
-    if response is None:  # open loop: every change 0, its product column * 0.0 formed once
-        still = column * change
-        for j, step_error in enumerate(local):
-            current = phi.dot(current) + still + step_error
-            error[j + 1] = current
-        return error
+    push = column * 0.0  # Gamma du, formed where du changes (at a sample), not at every step
     for j, step_error in enumerate(local):
-        if j % steps_per_sample == 0:
-            change = float(response(j // steps_per_sample, error[j]))
-        current = phi.dot(current) + column * change + step_error  # as in held_run
+        if response is not None and j % steps_per_sample == 0:
+            push = column * float(response(j // steps_per_sample, error[j]))
+        current = phi.dot(current) + push + step_error  # as in held_run
         error[j + 1] = current
     return error
