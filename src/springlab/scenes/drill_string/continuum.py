@@ -327,21 +327,19 @@ def _trig_sums(
     base, shift = np.outer(t[:block], w), np.outer(offsets, w)
     base_cos, base_sin, shift_cos, shift_sin = np.cos(base), np.sin(base), np.cos(shift), np.sin(shift)
 
-    def uniform(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(sin, cos)(w (t_i + D_j)) @ v for every row k, by angle addition and two matrix products each."""
-        with_cos, with_sin = (shift_cos * v).T, (shift_sin * v).T
-        sine = base_sin @ with_cos + base_cos @ with_sin  # (b, J): row i of block j
-        cosine = base_cos @ with_cos - base_sin @ with_sin
-        return sine.T.reshape(-1)[:n], cosine.T.reshape(-1)[:n]
+    def sin_sum(v: np.ndarray) -> np.ndarray:
+        """sin(w (t_i + D_j)) @ v for every row k, by angle addition: two matrix products."""
+        summed = base_sin @ (shift_cos * v).T + base_cos @ (shift_sin * v).T  # (b, J): row i of block j
+        return summed.T.reshape(-1)[:n]
+
+    def cos_sum(v: np.ndarray) -> np.ndarray:
+        """cos(w (t_i + D_j)) @ v for every row k, by angle addition: two matrix products."""
+        summed = base_cos @ (shift_cos * v).T - base_sin @ (shift_sin * v).T
+        return summed.T.reshape(-1)[:n]
 
     half_square = 0.5 * departure * departure
-    sin_sums, cos_sums = [], []
-    for v in sines:
-        (s0, _), (_, c1), (s2, _) = uniform(v), uniform(w * v), uniform(w * w * v)
-        sin_sums.append(s0 + departure * c1 - half_square * s2)
-    for u in cosines:
-        (_, c0), (s1, _), (_, c2) = uniform(u), uniform(w * u), uniform(w * w * u)
-        cos_sums.append(c0 - departure * s1 - half_square * c2)
+    sin_sums = [sin_sum(v) + departure * cos_sum(w * v) - half_square * sin_sum(w * w * v) for v in sines]
+    cos_sums = [cos_sum(u) - departure * sin_sum(w * u) - half_square * cos_sum(w * w * u) for u in cosines]
     return sin_sums, cos_sums
 
 
